@@ -1,0 +1,100 @@
+"""Thruster pulse response: thrust profile, exact pulse impulse and the impulse ratio ``R``.
+
+Feldman & Lee (2006) §V describe a commanded pulse of width ``Δ`` (s): no thrust for the valve
+delay ``τd``; then an exponential rise with time constant ``τr`` towards the steady thrust ``F``;
+after the command ends the thrust is held for another ``τd`` and then decays with time constant
+``τf``. The profile used here (DESIGN.md §6) is
+
+* ``0``                              for ``t < τd``,
+* ``F (1 − e^{−t/τr})``              for ``τd ≤ t < Δ``,
+* ``F (1 − e^{−Δ/τr})``              for ``Δ ≤ t < Δ + τd``,
+* ``F (1 − e^{−Δ/τr}) e^{−(t−Δ−τd)/τf}``  for ``t ≥ Δ + τd``,
+
+whose integral is exactly the closed form printed in Feldman & Lee §V (valid for ``Δ ≥ τd``):
+``F [(Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}]``.
+
+All times in seconds, thrust in newtons. Functions broadcast over arrays and are differentiable.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+from jax import Array
+
+__all__ = [
+    "TAU_DELAY_S",
+    "TAU_RISE_S",
+    "TAU_FALL_S",
+    "thrust_profile",
+    "pulse_impulse",
+    "impulse_ratio",
+    "mix_ratio",
+    "pulse_impulse_until",
+]
+
+# Manufacturer's time constants (Feldman & Lee 2006 §V): delay 5 ms, rise 20 ms, fall 65 ms.
+TAU_DELAY_S = 0.005
+TAU_RISE_S = 0.020
+TAU_FALL_S = 0.065
+
+
+def thrust_profile(t_s, width_s, tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
+    """Thrust (N) at time ``t_s`` after the command of a pulse of width ``width_s`` (DESIGN §6)."""
+    t = jnp.asarray(t_s)
+    w, td, tr, tf = (jnp.asarray(x) for x in (width_s, tau_delay_s, tau_rise_s, tau_fall_s))
+    held = 1.0 - jnp.exp(-w / tr)
+    rising = jnp.where(t >= td, 1.0 - jnp.exp(-jnp.clip(t, 0.0) / tr), 0.0)
+    decay = held * jnp.exp(-jnp.clip(t - w - td, 0.0) / tf)
+    shape = jnp.where(t < w, rising, jnp.where(t < w + td, held, decay))
+    return thrust_n * shape
+
+
+def pulse_impulse(width_s, tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
+    """Impulse (N s) of one pulse: Feldman & Lee (2006) §V closed form.
+
+    ``F [(Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}]``; exact for the profile
+    of :func:`thrust_profile` when ``Δ ≥ τd``.
+    """
+    w, td, tr, tf = (jnp.asarray(x) for x in (width_s, tau_delay_s, tau_rise_s, tau_fall_s))
+    e_w = jnp.exp(-w / tr)
+    # Feldman & Lee (2006) §V, impulse of a pulse of commanded width Δ
+    return thrust_n * ((w + tf) + tr * (e_w - jnp.exp(-td / tr)) - (tf + td) * e_w)
+
+
+def impulse_ratio(width_s, tau_delay_s=TAU_DELAY_S, tau_rise_s=TAU_RISE_S,
+                  tau_fall_s=TAU_FALL_S) -> Array:
+    """``R = actual impulse / (F Δ)`` for one pulse (Feldman & Lee §V: 1.395 at 125 ms)."""
+    return pulse_impulse(width_s, tau_delay_s, tau_rise_s, tau_fall_s) / jnp.asarray(width_s)
+
+
+def mix_ratio(widths_s, counts=None, tau_delay_s=TAU_DELAY_S, tau_rise_s=TAU_RISE_S,
+              tau_fall_s=TAU_FALL_S) -> Array:
+    """``R`` of a pulse mix: total actual impulse over ``F Σ Δ`` (Feldman & Lee §V: 1.3406).
+
+    ``widths_s`` along the last axis; ``counts`` (same shape, default ones) repeats each width.
+    """
+    w = jnp.asarray(widths_s)
+    n = jnp.ones_like(w) if counts is None else jnp.asarray(counts, dtype=w.dtype)
+    imp = pulse_impulse(w, tau_delay_s, tau_rise_s, tau_fall_s)
+    return jnp.sum(n * imp, -1) / jnp.sum(n * w, -1)
+
+
+def pulse_impulse_until(t_s, width_s, tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
+    """Impulse (N s) a pulse has delivered by ``t_s`` after its command (integral of the profile).
+
+    Tends to :func:`pulse_impulse` as ``t → ∞``. Used to predict the accumulated angular impulse
+    at telemetry times that fall inside a pulse's tail.
+    """
+    t = jnp.asarray(t_s)
+    w, td, tr, tf = (jnp.asarray(x) for x in (width_s, tau_delay_s, tau_rise_s, tau_fall_s))
+    # Phase 1: rising, from td to min(t, w).
+    t1 = jnp.clip(t, td, jnp.maximum(w, td))
+    rise = (t1 - td) + tr * (jnp.exp(-t1 / tr) - jnp.exp(-td / tr))
+    held = 1.0 - jnp.exp(-w / tr)
+    # Phase 2: held, from w to min(t, w + td).
+    t2 = jnp.clip(t, w, w + td)
+    hold = held * (t2 - w)
+    # Phase 3: decaying, from w + td to t.
+    t3 = jnp.clip(t - w - td, 0.0)
+    tail = held * tf * (1.0 - jnp.exp(-t3 / tf))
+    return thrust_n * (rise + hold + tail)

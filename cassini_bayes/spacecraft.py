@@ -1,0 +1,282 @@
+"""Spacecraft model objects, loaded and validated from the TOML files under ``models/``.
+
+A model file (DESIGN.md §4) holds the *predicted* mass properties and the hardware geometry a
+calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
+Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants and their manufacturer
+ranges), ``[thrust]`` (predicted force). Unknown keys are errors, so a typo never goes unnoticed.
+
+Units: kg m² for inertias, m for lengths, s for time constants, N for thrust. Wheel axes are unit
+vectors in body axes (the columns of Feldman & Lee's ``T``, App. A).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cassini_bayes._paths import model_path
+from cassini_bayes.errors import InputError
+
+__all__ = ["Wheel", "Thrusters", "PulseConstants", "Spacecraft", "load_spacecraft",
+           "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
+
+# Feldman & Lee (2006) App. A: RWA → body matrix T; its columns are the spin axes of RWA1-3.
+_S2, _S3, _S6 = np.sqrt(2.0), np.sqrt(3.0), np.sqrt(6.0)
+CASSINI_T = np.array(
+    [[0.0, -1.0 / _S2, 1.0 / _S2], [_S2 / _S3, -1.0 / _S6, -1.0 / _S6], [1 / _S3, 1 / _S3, 1 / _S3]]
+)
+CASSINI_WHEEL_AXES = CASSINI_T.T.copy()  # rows: RWA1, RWA2, RWA3 spin axes (body)
+
+_UNIT_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Wheel:
+    """A reaction wheel: ``axis`` unit vector in body axes, ``inertia`` kg m² about it."""
+
+    name: str
+    axis: np.ndarray
+    inertia: float
+
+
+@dataclass(frozen=True)
+class Thrusters:
+    """Thruster geometry of Feldman & Lee Eq 16 (m) and the centre of mass ``com`` (m)."""
+
+    Lx: float = 1.234
+    Ly: float = 1.580
+    Lzy: float = 2.880
+    Lzz: float = 3.019
+    com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass(frozen=True)
+class PulseConstants:
+    """Thruster pulse time constants (s) and their manufacturer test ranges (Feldman & Lee §V)."""
+
+    tau_delay: float = 0.005
+    tau_rise: float = 0.020
+    tau_fall: float = 0.065
+    tau_delay_range: tuple[float, float] = (0.003, 0.007)
+    tau_rise_range: tuple[float, float] = (0.015, 0.025)
+    tau_fall_range: tuple[float, float] = (0.040, 0.090)
+
+
+@dataclass(frozen=True)
+class Spacecraft:
+    """A spacecraft model: predicted inertia with its knowledge requirements, wheels, thrusters.
+
+    Attributes
+    ----------
+    inertia : (3, 3) predicted inertia tensor about the centre of mass, body axes, kg m².
+    moi_uncertainty : fractional knowledge requirement on the moments (0.10 = ±10 %).
+    poi_uncertainty : knowledge requirement on the products, kg m².
+    wheels : the reaction wheels, in file order.
+    thrust : predicted steady thrust per thruster, N.
+    mass : spacecraft mass, kg (NaN when not given).
+    """
+
+    name: str
+    inertia: np.ndarray
+    moi_uncertainty: float
+    poi_uncertainty: float
+    wheels: tuple[Wheel, ...]
+    thrusters: Thrusters
+    pulse: PulseConstants = field(default_factory=PulseConstants)
+    thrust: float = 0.75
+    mass: float = float("nan")
+    description: str = ""
+    source: str = ""
+
+    @property
+    def wheel_axes(self) -> np.ndarray:
+        """(k, 3) unit spin axes, body axes."""
+        return np.stack([w.axis for w in self.wheels])
+
+    @property
+    def wheel_inertias(self) -> np.ndarray:
+        """(k,) spin inertias, kg m²."""
+        return np.array([w.inertia for w in self.wheels])
+
+    @property
+    def wheel_names(self) -> tuple[str, ...]:
+        return tuple(w.name for w in self.wheels)
+
+    def wheel(self, name: str) -> Wheel:
+        for w in self.wheels:
+            if w.name.upper() == name.upper():
+                return w
+        raise InputError(f"spacecraft model {self.name!r} has no wheel {name!r}; "
+                         f"it has {', '.join(self.wheel_names)}")
+
+    def with_inertia(self, inertia) -> "Spacecraft":
+        return replace(self, inertia=np.asarray(inertia, float))
+
+    def with_wheel_axis(self, name: str, axis) -> "Spacecraft":
+        axis = np.asarray(axis, float)
+        wheels = tuple(replace(w, axis=axis) if w.name.upper() == name.upper() else w
+                       for w in self.wheels)
+        return replace(self, wheels=wheels)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The TOML schema as a plain dict (for ``config.toml`` and ``truth.json``)."""
+        i = self.inertia
+        return {
+            "name": self.name,
+            "description": self.description,
+            "source": self.source,
+            "inertia": {"Ixx": float(i[0, 0]), "Iyy": float(i[1, 1]), "Izz": float(i[2, 2]),
+                        "Ixy": float(i[0, 1]), "Ixz": float(i[0, 2]), "Iyz": float(i[1, 2]),
+                        "moi_uncertainty": self.moi_uncertainty,
+                        "poi_uncertainty": self.poi_uncertainty},
+            "wheel": [{"name": w.name, "axis": [float(x) for x in w.axis],
+                       "inertia": float(w.inertia)} for w in self.wheels],
+            "thrusters": {"Lx": self.thrusters.Lx, "Ly": self.thrusters.Ly,
+                          "Lzy": self.thrusters.Lzy, "Lzz": self.thrusters.Lzz,
+                          "com": [float(x) for x in self.thrusters.com]},
+            "pulse": {k: (list(v) if isinstance(v, tuple) else v)
+                      for k, v in self.pulse.__dict__.items()},
+            "thrust": {"F": self.thrust},
+            **({"mass": {"kg": self.mass}} if np.isfinite(self.mass) else {}),
+        }
+
+
+_TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "pulse", "thrust",
+             "mass"}
+_INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
+_WHEEL_KEYS = {"name", "axis", "inertia"}
+_THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
+_PULSE_KEYS = set(PulseConstants.__dataclass_fields__)
+
+
+def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise InputError(f"unknown key '{where}{key}'; allowed: {', '.join(sorted(allowed))}",
+                             path=src)
+
+
+def _number(table: dict, key: str, where: str, src: str, default=None) -> float:
+    if key not in table:
+        if default is None:
+            raise InputError(f"missing required key '{where}{key}'", path=src)
+        return float(default)
+    v = table[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+        raise InputError(f"'{where}{key}' must be a finite number, got {v!r}", path=src)
+    return float(v)
+
+
+def _vector(value, key: str, src: str) -> np.ndarray:
+    try:
+        v = np.asarray(value, float)
+    except (TypeError, ValueError):
+        raise InputError(f"'{key}' must be a list of 3 numbers, got {value!r}", path=src) from None
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise InputError(f"'{key}' must be a list of 3 finite numbers, got {value!r}", path=src)
+    return v
+
+
+def check_physical_inertia(inertia: np.ndarray, what: str, src: str) -> None:
+    """Raise unless ``inertia`` is symmetric positive definite and obeys the triangle inequalities."""
+    eig = np.linalg.eigvalsh(inertia)
+    if eig[0] <= 0:
+        raise InputError(f"{what} is not positive definite (eigenvalues {np.round(eig, 3)} kg m^2);"
+                         " check the signs and magnitudes of the entries", path=src)
+    if eig[0] + eig[1] < eig[2] * (1 - 1e-12):
+        raise InputError(f"{what} violates the triangle inequality (principal moments "
+                         f"{np.round(eig, 3)} kg m^2): no rigid body has it", path=src)
+
+
+def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacecraft:
+    """Build and validate a :class:`Spacecraft` from the TOML schema (as a dict)."""
+    _check_keys(d, _TOP_KEYS, "", src)
+    if "inertia" not in d:
+        raise InputError("missing required section [inertia]", path=src)
+    ti = d["inertia"]
+    _check_keys(ti, _INERTIA_KEYS, "inertia.", src)
+    xx, yy, zz, xy, xz, yz = (_number(ti, k, "inertia.", src) for k in
+                              ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
+    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    if min(xx, yy, zz) <= 0:
+        raise InputError("inertia moments Ixx, Iyy, Izz must be positive (kg m^2)", path=src)
+    check_physical_inertia(inertia, "[inertia]", src)
+    moi = _number(ti, "moi_uncertainty", "inertia.", src, 0.10)
+    poi = _number(ti, "poi_uncertainty", "inertia.", src, 75.0)
+    if not 0 < moi < 1:
+        raise InputError(f"'inertia.moi_uncertainty' is a fraction in (0, 1), got {moi}", path=src)
+    if poi <= 0:
+        raise InputError(f"'inertia.poi_uncertainty' must be positive (kg m^2), got {poi}", path=src)
+
+    wheels_raw = d.get("wheel", [])
+    if not wheels_raw:
+        raise InputError("at least one [[wheel]] is required", path=src)
+    wheels = []
+    for i, w in enumerate(wheels_raw):
+        where = f"wheel[{i}]."
+        _check_keys(w, _WHEEL_KEYS, where, src)
+        if "name" not in w:
+            raise InputError(f"missing required key '{where}name'", path=src)
+        if "axis" not in w:
+            raise InputError(f"missing required key '{where}axis'", path=src)
+        axis = _vector(w["axis"], where + "axis", src)
+        if abs(np.linalg.norm(axis) - 1) > _UNIT_TOL:
+            raise InputError(f"'{where}axis' must be a unit vector (|axis| = "
+                             f"{np.linalg.norm(axis):.6f}); normalise it", path=src)
+        j = _number(w, "inertia", where, src)
+        if j <= 0:
+            raise InputError(f"'{where}inertia' must be positive (kg m^2), got {j}", path=src)
+        wheels.append(Wheel(str(w["name"]).upper(), axis / np.linalg.norm(axis), j))
+    names = [w.name for w in wheels]
+    if len(set(names)) != len(names):
+        raise InputError(f"wheel names must be unique, got {names}", path=src)
+
+    tt = d.get("thrusters")
+    if tt is None:
+        raise InputError("missing required section [thrusters]", path=src)
+    _check_keys(tt, _THRUSTER_KEYS, "thrusters.", src)
+    thr = Thrusters(*(_number(tt, k, "thrusters.", src) for k in ("Lx", "Ly", "Lzy", "Lzz")),
+                    com=_vector(tt.get("com", [0.0, 0.0, 0.0]), "thrusters.com", src))
+
+    tp = d.get("pulse", {})
+    _check_keys(tp, _PULSE_KEYS, "pulse.", src)
+    base = PulseConstants()
+    kw = {}
+    for k in ("tau_delay", "tau_rise", "tau_fall"):
+        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k))
+        if kw[k] <= 0:
+            raise InputError(f"'pulse.{k}' must be positive (s), got {kw[k]}", path=src)
+        rk = k + "_range"
+        lo, hi = tp.get(rk, getattr(base, rk))
+        if not 0 < lo < hi:
+            raise InputError(f"'pulse.{rk}' must be [low, high] with 0 < low < high (s)", path=src)
+        kw[rk] = (float(lo), float(hi))
+    thrust_t = d.get("thrust", {})
+    _check_keys(thrust_t, {"F"}, "thrust.", src)
+    thrust = _number(thrust_t, "F", "thrust.", src, 0.75)
+    mass_t = d.get("mass", {})
+    _check_keys(mass_t, {"kg"}, "mass.", src)
+    mass = _number(mass_t, "kg", "mass.", src, float("nan")) if mass_t else float("nan")
+    return Spacecraft(
+        name=str(d.get("name", Path(src).stem)), inertia=inertia, moi_uncertainty=moi,
+        poi_uncertainty=poi, wheels=tuple(wheels), thrusters=thr, pulse=PulseConstants(**kw),
+        thrust=thrust, mass=mass, description=str(d.get("description", "")),
+        source=str(d.get("source", "")),
+    )
+
+
+def load_spacecraft(path: str | Path) -> Spacecraft:
+    """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
+    p = model_path(str(path))
+    if not p.exists():
+        raise InputError(f"spacecraft model not found: {path} (give a path to a .toml file or a "
+                         f"name from models/)")
+    try:
+        d = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"not valid TOML: {e}", path=str(p)) from None
+    return spacecraft_from_dict(d, str(p))

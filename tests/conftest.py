@@ -1,0 +1,33 @@
+"""Test configuration: 64-bit JAX, strict rank promotion, fixed keys, CLI runner."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import jax  # noqa: E402
+import pytest  # noqa: E402
+
+import cassini_bayes  # noqa: E402,F401  (turns on x64)
+
+jax.config.update("jax_numpy_rank_promotion", "raise")
+
+
+@pytest.fixture
+def key():
+    return jax.random.key(20260315)
+
+
+@pytest.fixture
+def run_cli(capsys):
+    """Run ``cassini-bayes ARGS`` in-process; returns (exit_code, stdout, stderr)."""
+    from cassini_bayes.cli import main
+
+    def _run(*args):
+        code = main([str(a) for a in args])
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    return _run
