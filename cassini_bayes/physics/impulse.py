@@ -1,4 +1,22 @@
-"""Impulse model of Feldman & Lee (2006) Eqs 14-23 (pure JAX): thruster geometry.
+"""Impulse model of Feldman & Lee (2006) Eqs 14-23 (pure JAX).
+
+Integrating Euler's equation with wheels (Eq 14) from the first telemetry row ``t_0`` to ``t_i``
+gives (Eqs 15, 17)
+
+    V(t_i) = I Δω(t_i) + ΔH_RWA(t_i) + ΔG(t_i) = Q J(t_i),
+
+with ``Δω(t_i) = ω(t_i) − ω(t_0)``, ``ΔH_RWA`` the change of the wheel momentum in body axes,
+``ΔG(t_i) = ∫ ω × (I ω + H_RWA) dt`` (the gyroscopic impulse), ``Q`` the moment matrix of Eq 16 and
+``J(t_i)`` the (8,) accumulated thruster impulses. The paper takes ``J_s = F_s Δτ_s`` (cumulative
+on-time, Eq 17); :func:`impulse_from_pulses` gives the actual impulse of a pulse log under the
+pulse response of :mod:`cassini_bayes.physics.pulse` instead. The stacked regressions of Eqs 19-23
+are built by :func:`system_xy`, :func:`system_z`, :func:`system_zz`, :func:`system_zzz` and
+:func:`system_xyz` from ``V`` and the per-newton impulses ``j`` (N s per N of thrust, i.e. s).
+
+Everything here is pure JAX (jit/vmap/grad friendly): the NumPyro thrust model calls
+:func:`impulse_from_pulses` with traced time constants.
+
+Thruster geometry:
 
 Thrusters are ordered ``Z1 Z2 Z3 Z4 Y1 Y2 Y3 Y4`` (A-branch, DESIGN.md §3). Their locations are
 those listed with Eq 16: ``Z1..Z4`` at ``[±Lx, ±Ly, Lzz]`` and ``Y1..Y4`` at ``[±Lx, ±Ly, Lzy]``.
@@ -12,11 +30,25 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jax import Array
 
+from cassini_bayes.physics.pulse import pulse_impulse_until
+
 __all__ = [
     "THRUSTER_NAMES",
     "thruster_positions",
     "thruster_directions",
     "moment_matrix",
+    "delta_omega",
+    "delta_wheel_momentum",
+    "gyroscopic_impulse",
+    "impulse_lhs",
+    "impulse_from_on_times",
+    "impulse_from_pulses",
+    "angular_impulse",
+    "system_xy",
+    "system_z",
+    "system_zz",
+    "system_zzz",
+    "system_xyz",
 ]
 
 THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
@@ -46,3 +78,129 @@ def moment_matrix(lx_m, ly_m, lzy_m, lzz_m, com_m=(0.0, 0.0, 0.0)) -> Array:
     r = thruster_positions(lx_m, ly_m, lzy_m, lzz_m) - jnp.asarray(com_m)
     # Feldman & Lee Eq 16: Q = [(r_s - e) x d_s]_s
     return jnp.cross(r, _DIRECTIONS).T
+
+
+def delta_omega(omega_rad_s: Array) -> Array:
+    """``Δω(t_i) = ω(t_i) − ω(t_0)`` (rad/s), (n, 3); Feldman & Lee Eq 15."""
+    w = jnp.asarray(omega_rad_s)
+    return w - w[:1]
+
+
+def delta_wheel_momentum(h_wheels_body: Array) -> Array:
+    """``ΔH_RWA(t_i) = H_RWA(t_i) − H_RWA(t_0)`` (N m s, body axes), (n, 3); Feldman & Lee Eq 15."""
+    h = jnp.asarray(h_wheels_body)
+    return h - h[:1]
+
+
+def gyroscopic_impulse(t_s: Array, omega_rad_s: Array, inertia: Array,
+                       h_wheels_body: Array) -> Array:
+    """``ΔG(t_i) = ∫_{t_0}^{t_i} ω × (I ω + H_RWA) dt`` (N m s), (n, 3); Feldman & Lee Eq 15.
+
+    Cumulative trapezoidal rule on the telemetry samples (second order in the sample interval;
+    exact when the integrand is piecewise linear between samples). At Cassini's slow body rates
+    (mrad/s) the term is small, so the trapezoid's ``O(Δt²)`` error is far below the noise.
+    """
+    t = jnp.asarray(t_s)
+    w = jnp.asarray(omega_rad_s)
+    h_body = jnp.einsum("ij,nj->ni", jnp.asarray(inertia), w) + jnp.asarray(h_wheels_body)
+    f = jnp.cross(w, h_body)
+    steps = 0.5 * (f[1:] + f[:-1]) * jnp.diff(t)[:, None]
+    return jnp.concatenate([jnp.zeros_like(f[:1]), jnp.cumsum(steps, 0)], 0)
+
+
+def impulse_lhs(t_s: Array, omega_rad_s: Array, inertia: Array, h_wheels_body: Array) -> Array:
+    """Left side ``V(t_i) = I Δω + ΔH_RWA + ΔG`` (N m s), (n, 3); Feldman & Lee Eq 17.
+
+    ``t_s`` (n,) s; ``omega_rad_s`` (n, 3) body rates; ``inertia`` (3, 3) kg m²;
+    ``h_wheels_body`` (n, 3) wheel momentum in body axes (N m s).
+    """
+    i_dw = jnp.einsum("ij,nj->ni", jnp.asarray(inertia), delta_omega(omega_rad_s))
+    # Feldman & Lee Eq 17 (left side)
+    return (i_dw + delta_wheel_momentum(h_wheels_body)
+            + gyroscopic_impulse(t_s, omega_rad_s, inertia, h_wheels_body))
+
+
+def impulse_from_on_times(on_times_s: Array, thrust_n=1.0) -> Array:
+    """Accumulated impulse ``J_s = F_s Δτ_s`` (N s), (n, 8); Feldman & Lee Eq 17's assumption.
+
+    ``on_times_s`` (n, 8) cumulative on-times (s), counted from the first row (the first row is
+    subtracted, so any offset is harmless); ``thrust_n`` scalar or (8,) steady thrust (N). With
+    the default ``thrust_n = 1`` the result is the per-newton impulse ``Δτ`` (s).
+    """
+    tau = jnp.asarray(on_times_s)
+    # Feldman & Lee Eq 17: int T_PMS dt = Q [F_1 dtau_1, ..., F_8 dtau_8]
+    return (tau - tau[:1]) * jnp.asarray(thrust_n)
+
+
+def impulse_from_pulses(t_s: Array, t_on_s: Array, thruster: Array, width_s: Array,
+                        tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
+    """Accumulated actual impulse per thruster from a pulse log (N s), (n, 8).
+
+    Each pulse ``p`` (command time ``t_on_s[p]``, thruster index ``thruster[p]`` in ``0..7``,
+    commanded width ``width_s[p]``) contributes
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until` ``(t − t_on, width, τd, τr, τf)``,
+    the impulse it has actually delivered by time ``t`` (pulse response of Feldman & Lee §V, the
+    correction the paper applies to Eq 17 through the ratio ``R``). The result is counted from
+    the first telemetry time ``t_s[0]``, like ``Δω`` and ``ΔH_RWA``. Time constants in s may be
+    traced (differentiable); ``thrust_n`` scalar or (8,) N (default 1: per-newton impulse, s).
+    Memory is ``O(n × pulses)``.
+    """
+    t = jnp.asarray(t_s)
+    dt = t[:, None] - jnp.asarray(t_on_s)[None, :]
+    w = jnp.asarray(width_s)[None, :]
+    per_pulse = pulse_impulse_until(dt, w, tau_delay_s, tau_rise_s, tau_fall_s)
+    one_hot = (jnp.asarray(thruster)[:, None] == jnp.arange(8)[None, :]).astype(per_pulse.dtype)
+    j = per_pulse @ one_hot
+    return (j - j[:1]) * jnp.asarray(thrust_n)
+
+
+def angular_impulse(q_matrix: Array, impulse_ns: Array) -> Array:
+    """Thruster angular impulse ``Q J(t_i)`` (N m s), (n, 3); right side of Feldman & Lee Eq 17."""
+    return jnp.einsum("ks,ns->nk", jnp.asarray(q_matrix), jnp.asarray(impulse_ns))
+
+
+def system_xy(v: Array, j: Array, q_matrix: Array):
+    """``U_XY`` (2N, 4) and ``V_XY`` (2N,) of Feldman & Lee Eq 19, unknowns ``F_Z1 … F_Z4``.
+
+    ``v`` (N, 3) left side :func:`impulse_lhs`; ``j`` (N, 8) per-newton impulses (s).
+    As in Eq 18 the Y thrusters are left out of the X row: their X torques cancel when they fire
+    in the pairs {Y1, Y3}, {Y2, Y4} with equal impulse.
+    """
+    q = jnp.asarray(q_matrix)
+    # Feldman & Lee Eq 18-19: rows [Q_1s dtau_s ; Q_2s dtau_s], s = Z1..Z4
+    u = jnp.asarray(j)[:, None, :4] * q[None, :2, :4]
+    return u.reshape(-1, 4), jnp.asarray(v)[:, :2].reshape(-1)
+
+
+def system_z(v: Array, j: Array, q_matrix: Array):
+    """``U_Z`` (N, 4) and ``V_Z`` (N,) of Feldman & Lee Eq 20, unknowns ``F_Y1 … F_Y4``.
+
+    Rank 2 when Y1/Y3 and Y2/Y4 always fire in pairs (the paper's remark after Eq 20).
+    """
+    q = jnp.asarray(q_matrix)
+    # Feldman & Lee Eq 20: U_Z[i, s] = Q_3s dtau_s(t_i), s = Y1..Y4
+    return jnp.asarray(j)[:, 4:] * q[2, 4:], jnp.asarray(v)[:, 2]
+
+
+def system_zz(v: Array, j: Array, q_matrix: Array):
+    """``U_ZZ`` (N, 2) and ``V_Z`` of Feldman & Lee Eq 21: unknowns the pair means
+    ``((F_Y1 + F_Y3)/2, (F_Y2 + F_Y4)/2)``."""
+    u, vz = system_z(v, j, q_matrix)
+    # Feldman & Lee Eq 21: columns Q35 dtau5 + Q37 dtau7, Q36 dtau6 + Q38 dtau8
+    return jnp.stack([u[:, 0] + u[:, 2], u[:, 1] + u[:, 3]], -1), vz
+
+
+def system_zzz(v: Array, j: Array, q_matrix: Array):
+    """``U_ZZZ`` (N, 1) and ``V_Z`` of Feldman & Lee Eq 22: unknown the mean Y thrust."""
+    u, vz = system_z(v, j, q_matrix)
+    # Feldman & Lee Eq 22
+    return jnp.sum(u, -1, keepdims=True), vz
+
+
+def system_xyz(v: Array, j: Array, q_matrix: Array):
+    """``U_XYZ`` (3N, 1) and ``V_XYZ`` (3N,) of Feldman & Lee Eq 23: one thrust for all eight.
+
+    ``U_XYZ`` stacks ``Q J(t_i)`` per newton: every thruster's torque on every axis.
+    """
+    # Feldman & Lee Eq 23: rows sum_s Q_ks dtau_s(t_i), k = X, Y, Z
+    return angular_impulse(q_matrix, j).reshape(-1, 1), jnp.asarray(v).reshape(-1)

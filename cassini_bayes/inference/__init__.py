@@ -1,0 +1,1 @@
+"""cassini_bayes.inference."""
