@@ -1,18 +1,80 @@
-"""Telemetry and pulse-log containers (DESIGN.md §4).
+"""Telemetry and pulse-log containers, readers, writers and input validation (DESIGN.md §4).
 
-SI inside: wheel rates are rad/s in :class:`Telemetry` (rpm only in files). Readers, writers and
-validation live beside the containers in this module.
+SI inside: wheel rates are rad/s in :class:`Telemetry` (rpm only in files). Every problem with a
+file is an :class:`~cassini_bayes.errors.InputError` with one line naming the file, the column
+and/or the data row (1-based, header not counted, with its ``t``) and what to do about it.
+
+Validation rules and their tolerances
+-------------------------------------
+- Columns: ``t q1 q2 q3 q4 wx wy wz`` required; ``rwa1 … rwa4`` (rpm) optional — absent or
+  entirely empty means the wheel is off (NaN inside); ``on_Z1 … on_Y4`` (s) optional — when any is
+  present, a thruster without a column never fired. Header names are matched case-insensitively;
+  an unknown or duplicate column is an error (a typo must not silently drop data).
+- Values: numbers only; a required cell that is empty, NaN or infinite is an error; a wheel column
+  that is empty in some rows but not in others is an error.
+- Time: strictly increasing (a duplicate or a step back is an error naming both rows).
+- Quaternion norm: ``|‖q‖ − 1| ≤ QUAT_NORM_TOL`` (1e-3, telemetry rounding) is accepted and the row
+  renormalised; a larger deviation is an error. Rows within 1e-12 of unit norm are left bit-exact.
+- Quaternion sign: ``q`` and ``−q`` are the same attitude. Sign flips between consecutive rows are
+  accepted and removed with the rule of :func:`cassini_bayes.frames.quat_continuous` (a NumPy
+  twin here, tested equal), which only ever changes signs, never the attitude — a genuine
+  attitude jump passes through unchanged.
+- Wheel units: a wheel column is taken to be rad/s (an error) when the wheel is clearly spinning
+  (median ``|value| ≥ 1``) yet never exceeds ``RAD_S_SUSPECT_MAX`` = 12 in magnitude — in rpm that
+  would be a wheel idling between 1 and 12 rpm for the whole record, which Cassini avoids (wheels
+  are biased to hundreds of rpm, away from zero-crossing friction); in rad/s it is any wheel slower
+  than 115 rpm. Wheels at rest (noise about zero) and real rpm data over 0-2000 rpm never trip it.
+  ``check_units=False`` turns the unit checks off for genuinely slow wheels.
+- Body-rate units: ``|ω| > OMEGA_MAX`` (0.2 rad/s = 11.5 °/s, far above any Cassini slew rate of a
+  few mrad/s) is taken to be °/s or mrad/s. And where the attitude turns by more than 0.01 rad,
+  the body rate integrated up to the first row where the quaternions have turned by
+  ``min(0.1 rad, largest turn)`` must not exceed that angle by more than ten times (°/s gives
+  57×, mrad/s 1000×; rate noise adds only a random walk, far below ten times the angle).
+- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); width > 0; ``t_on`` strictly
+  increasing per thruster and no pulse starting before the previous pulse of the same thruster
+  has ended. A header-only pulse log is valid (no pulses). Against a telemetry
+  (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
+  and is dropped with a :class:`PulseSpanWarning`; one still on at the last sample is kept with a
+  warning (its on-time counts up to that sample); one already on at the first sample is an error
+  (the record would start in the middle of a thrust).
 """
 
 from __future__ import annotations
 
+import csv
+import os
+import tempfile
+import warnings
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
+from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
-__all__ = ["Telemetry", "PulseLog", "RPM_TO_RAD_S", "WHEEL_NAMES", "THRUSTER_NAMES"]
+__all__ = [
+    "Telemetry",
+    "PulseLog",
+    "RPM_TO_RAD_S",
+    "WHEEL_NAMES",
+    "THRUSTER_NAMES",
+    "QUAT_NORM_TOL",
+    "OMEGA_MAX",
+    "RAD_S_SUSPECT_MAX",
+    "PulseSpanWarning",
+    "read_telemetry",
+    "read_telemetry_many",
+    "write_telemetry",
+    "read_pulses",
+    "write_pulses",
+    "validate_telemetry",
+    "validate_pulses",
+    "check_pulses_in_span",
+    "cumulative_on_times",
+    "with_on_times",
+]
 
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
@@ -83,3 +145,641 @@ class PulseLog:
     @property
     def names(self) -> list[str]:
         return [THRUSTER_NAMES[i] for i in self.thruster]
+
+
+# --------------------------------------------------------------------------------------------
+# Tolerances (documented in the module docstring)
+
+QUAT_NORM_TOL = 1e-3
+"""Largest accepted ``|‖q‖ − 1|``; such rows are renormalised, larger is an error."""
+OMEGA_MAX = 0.2
+"""Largest plausible body rate, rad/s (11.5 °/s); above it the column is in the wrong unit."""
+RAD_S_SUSPECT_MAX = 12.0
+"""A spinning wheel (median ``|value| ≥ 1``) never above this magnitude is read as rad/s."""
+_EXACT_NORM = 1e-12  # rows this close to unit norm are left bit-exact
+_RATE_RATIO_MAX = 10.0  # |∫ω dt| over the quaternion angle turned above this → wrong unit
+_MIN_SWEEP_RAD = 0.01  # the ratio test needs the attitude to move at least this much
+
+_Q_COLS = ("q1", "q2", "q3", "q4")
+_W_COLS = ("wx", "wy", "wz")
+_RWA_COLS = tuple(n.lower() for n in WHEEL_NAMES)
+_ON_COLS = tuple(f"on_{n}" for n in THRUSTER_NAMES)
+_REQUIRED = ("t",) + _Q_COLS + _W_COLS
+_KNOWN = _REQUIRED + _RWA_COLS + _ON_COLS
+_PULSE_COLS = ("t_on", "thruster", "width")
+
+
+class PulseSpanWarning(UserWarning):
+    """Pulses outside the telemetry span were dropped, or one is still on at the last sample."""
+
+
+# --------------------------------------------------------------------------------------------
+# Raw tables: header + columns of strings (CSV) or objects (Parquet)
+
+
+def _check_readable(path: Path, what: str) -> None:
+    if not path.exists():
+        raise InputError(f"{what} file not found; check the path", path=str(path))
+    if path.is_dir():
+        raise InputError(f"is a directory, expected a {what} file (CSV or Parquet)",
+                         path=str(path))
+    if path.stat().st_size == 0:
+        raise InputError(f"{what} file is empty; expected a header line and data rows",
+                         path=str(path))
+
+
+def _is_parquet(path: Path) -> bool:
+    return path.suffix.lower() in (".parquet", ".pq")
+
+
+def _require_pyarrow(path: Path) -> None:
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise InputError("Parquet needs pyarrow, which is not installed; "
+                         "pip install 'cassini-bayes[parquet]' or use CSV",
+                         path=str(path)) from None
+
+
+def _read_table(path: Path, what: str,
+                allow_empty: bool = False) -> tuple[list[str], list[np.ndarray]]:
+    """Header names (stripped) and one array of raw cells per column; rows are data rows."""
+    _check_readable(path, what)
+    name = str(path)
+    if _is_parquet(path):
+        _require_pyarrow(path)
+        import pandas as pd
+
+        try:
+            df = pd.read_parquet(path)
+        except Exception as e:  # corrupt file: pyarrow's message, on one line
+            raise InputError(f"cannot read Parquet ({e}); re-export the file", path=name) from None
+        header = [str(c).strip() for c in df.columns]
+        cols = [df.iloc[:, j].to_numpy(dtype=object) for j in range(df.shape[1])]
+        if df.shape[0] == 0 and not allow_empty:
+            raise InputError(f"{what} file has a header but no data rows", path=name)
+        return header, cols
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
+    except UnicodeDecodeError:
+        raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
+                         path=name) from None
+    except csv.Error as e:
+        raise InputError(f"malformed CSV ({e}); re-export the file", path=name) from None
+    if not rows:
+        raise InputError(f"{what} file is empty; expected a header line and data rows", path=name)
+    header = [c.strip() for c in rows[0]]
+    data = rows[1:]
+    if not data and not allow_empty:
+        raise InputError(f"{what} file has a header but no data rows", path=name)
+    for i, r in enumerate(data, start=1):
+        if len(r) != len(header):
+            raise InputError(f"data row {i} has {len(r)} fields but the header has "
+                             f"{len(header)}; every row needs one value per column "
+                             "(leave a cell empty, keep the comma)", path=name)
+    cols = [np.array([r[j] for r in data], dtype=object) for j in range(len(header))]
+    return header, cols
+
+
+def _map_header(header: list[str], known: Sequence[str], path: str,
+                expected: str) -> dict[str, int]:
+    """Canonical column name → index; unknown and duplicate names are errors."""
+    canon = {k.lower(): k for k in known}
+    out: dict[str, int] = {}
+    for j, h in enumerate(header):
+        key = canon.get(h.lower())
+        if key is None:
+            shown = h if h else f"(blank, position {j + 1})"
+            raise InputError(f"unknown column '{shown}'; expected columns are {expected}; "
+                             "rename or remove it", path=path)
+        if key in out:
+            raise InputError(f"duplicate column '{key}' (positions {out[key] + 1} and {j + 1}); "
+                             "keep one", path=path)
+        out[key] = j
+    return out
+
+
+def _row_ref(i: int, t: np.ndarray | None) -> str:
+    """'data row 17 (t = 12.5 s)' for the 0-based index i."""
+    if t is not None and i < len(t) and np.isfinite(t[i]):
+        return f"data row {i + 1} (t = {t[i]:.10g} s)"
+    return f"data row {i + 1}"
+
+
+def _is_missing(c: object) -> bool:
+    """True for the missing-value markers of Parquet columns (None, NaN, pandas.NA, NaT)."""
+    import pandas as pd
+
+    try:
+        return bool(pd.isna(c))
+    except (TypeError, ValueError):
+        return False
+
+
+def _to_float(cells: np.ndarray, col: str, path: str) -> np.ndarray:
+    """Cells → float64; empty cells → NaN; non-numeric text is an error naming the row."""
+    try:  # fast path: every cell a number or blank
+        return np.array([c.strip() or "nan" if isinstance(c, str) else c for c in cells],
+                        dtype=float)
+    except (TypeError, ValueError):
+        pass  # find the offending cell below
+    out = np.empty(len(cells), dtype=float)
+    for i, c in enumerate(cells):
+        if c is None or (not isinstance(c, str) and _is_missing(c)):
+            out[i] = np.nan
+            continue
+        if isinstance(c, str):
+            c = c.strip()
+            if c == "":
+                out[i] = np.nan
+                continue
+        try:
+            out[i] = float(c)
+        except (TypeError, ValueError):
+            raise InputError(f"column '{col}', data row {i + 1}: '{c}' is not a number; "
+                             "fix or remove that row", path=path) from None
+    return out
+
+
+def _fail_nonfinite(x: np.ndarray, col: str, path: str, t: np.ndarray | None,
+                    fix: str = "fill it in or drop the row") -> None:
+    bad = ~np.isfinite(x)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        what = "is empty or NaN" if np.isnan(x[i]) else "is infinite"
+        raise InputError(f"column '{col}', {_row_ref(i, t)} {what}; {fix}", path=path)
+
+
+# --------------------------------------------------------------------------------------------
+# Validation of arrays (shared by the readers and by in-memory telemetry)
+
+
+def _check_time(t: np.ndarray, path: str, col: str = "t") -> None:
+    dt = np.diff(t)
+    bad = ~(dt > 0)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        kind = "repeats" if dt[i] == 0 else "goes back from"
+        raise InputError(f"column '{col}' is not strictly increasing: {_row_ref(i + 1, t)} "
+                         f"{kind} data row {i + 1} (t = {t[i]:.10g} s); sort the rows and drop "
+                         "duplicate samples", path=path)
+
+
+def _quat_continuous(q: np.ndarray) -> np.ndarray:
+    """NumPy twin of :func:`cassini_bayes.frames.quat_continuous` (same rule, no JAX dispatch).
+
+    Flips the sign of ``q`` after every row whose dot product with the previous row is negative,
+    so consecutive quaternions agree in sign; ``A(q)`` is unchanged row by row.
+    """
+    flips = np.concatenate([[False], np.sum(q[1:] * q[:-1], axis=1) < 0])
+    sign = np.where(np.cumsum(flips) % 2 == 1, -1.0, 1.0)
+    return q * sign[:, None]
+
+
+def _turn_angle(q: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """Rotation angle (rad) from attitude ``q0`` to each row of ``q``; 0 for ``q = ±q0``.
+
+    ``4 atan2(|q − s q0|, |q + s q0|)`` with ``s = sign(q·q0)``: accurate for tiny angles, where
+    the ``2 acos(|q·q0|)`` of :func:`cassini_bayes.frames.quat_error_angle` loses digits.
+    """
+    s = np.where(q @ q0 < 0, -1.0, 1.0)[:, None]
+    return 4.0 * np.arctan2(np.linalg.norm(q - s * q0, axis=1),
+                            np.linalg.norm(q + s * q0, axis=1))
+
+
+def _check_quaternions(q: np.ndarray, t: np.ndarray, path: str) -> np.ndarray:
+    """Renormalise near-unit rows, reject the rest, remove sign flips."""
+    norm = np.linalg.norm(q, axis=1)
+    dev = np.abs(norm - 1.0)
+    if np.any(dev > QUAT_NORM_TOL):
+        i = int(np.argmax(dev > QUAT_NORM_TOL))
+        raise InputError(f"columns q1..q4, {_row_ref(i, t)}: quaternion norm {norm[i]:.6g} is "
+                         f"not 1 (tolerance {QUAT_NORM_TOL:g}); q must be a unit quaternion, "
+                         "scalar last (q4) — check the column order and scaling", path=path)
+    fix = dev > _EXACT_NORM
+    if np.any(fix):
+        q = q.copy()
+        q[fix] = q[fix] / norm[fix, None]
+    return _quat_continuous(q)
+
+
+def _check_omega_units(t: np.ndarray, q: np.ndarray, w: np.ndarray, path: str) -> None:
+    mag = np.linalg.norm(w, axis=1)
+    if np.any(mag > OMEGA_MAX):
+        i = int(np.argmax(mag > OMEGA_MAX))
+        raise InputError(f"columns wx wy wz, {_row_ref(i, t)}: |ω| = {mag[i]:.4g} is absurd for "
+                         f"a spacecraft (> {OMEGA_MAX:g} rad/s); body rates must be in rad/s — "
+                         "divide deg/s by 57.2958 or mrad/s by 1000", path=path)
+    if len(t) < 3:
+        return
+    # The first time the attitude has turned by `turn` from row 0, compare the angle with the
+    # body-rate integral. Rate noise enters as a random walk (not a sum of |noise|), so correct
+    # rad/s data gives a ratio near 1; °/s gives 57 and mrad/s 1000.
+    excursion = _turn_angle(q, q[0])
+    if np.max(excursion) < _MIN_SWEEP_RAD:
+        return
+    turn = min(0.1, float(np.max(excursion)))
+    k = int(np.argmax(excursion >= turn))
+    steps = 0.5 * (w[1:k + 1] + w[:k]) * np.diff(t[:k + 1])[:, None]
+    integral = float(np.linalg.norm(np.sum(steps, axis=0)))
+    ratio = integral / excursion[k]
+    if ratio > _RATE_RATIO_MAX:
+        guess = "deg/s (divide by 57.2958)" if ratio < 300 else "mrad/s (divide by 1000)"
+        raise InputError(f"columns wx wy wz: by {_row_ref(k, t)} the body rates integrate to "
+                         f"{ratio:.3g}x the rotation the quaternions show ({excursion[k]:.3g} "
+                         f"rad); they look like {guess}; body rates must be in rad/s", path=path)
+
+
+def _check_wheel_units(col: str, rpm: np.ndarray, path: str) -> None:
+    a = np.abs(rpm[np.isfinite(rpm)])
+    if a.size == 0:
+        return
+    if np.median(a) >= 1.0 and np.max(a) <= RAD_S_SUSPECT_MAX:
+        raise InputError(f"column '{col}' looks like rad/s (max |value| {np.max(a):.3g}); wheel "
+                         "rates must be in rpm — multiply by 60/(2*pi) (for a wheel that really "
+                         "idles below 12 rpm: --no-unit-check, check_units=False)", path=path)
+
+
+def _check_on_times(on: np.ndarray, t: np.ndarray, cols: Sequence[str], path: str) -> None:
+    for k, col in enumerate(cols):
+        x = on[:, k]
+        d = np.diff(x)
+        if np.any(d < 0):
+            i = int(np.argmax(d < 0)) + 1
+            raise InputError(f"column '{col}', {_row_ref(i, t)}: cumulative on-time decreases "
+                             f"({x[i - 1]:.6g} → {x[i]:.6g} s); on_* columns are cumulative "
+                             "seconds of on-time — check the column", path=path)
+        too_fast = d > 2.0 * np.diff(t) + 0.1  # slack for on-times quantised in telemetry
+        if np.any(too_fast):
+            i = int(np.argmax(too_fast)) + 1
+            raise InputError(f"column '{col}', {_row_ref(i, t)}: on-time grows by {d[i - 1]:.6g} s "
+                             f"in {t[i] - t[i - 1]:.6g} s of time; on_* must be cumulative "
+                             "seconds (not ms, not counts)", path=path)
+
+
+def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry:
+    """Check an in-memory :class:`Telemetry` with the file rules; return it cleaned.
+
+    Shapes must agree (``n`` rows everywhere), values must be finite (NaN only for a wheel that is
+    off for the whole record), time strictly increasing; quaternions are renormalised within
+    :data:`QUAT_NORM_TOL` and made sign-continuous.
+
+    Returns
+    -------
+    Telemetry
+        The same data as float64 NumPy arrays, ``q`` renormalised and sign-continuous.
+    """
+    path = tel.source
+    t = np.asarray(tel.t, dtype=float)
+    q = np.asarray(tel.q, dtype=float)
+    w = np.asarray(tel.omega, dtype=float)
+    r = np.asarray(tel.wheel_rates, dtype=float)
+    on = None if tel.on_times is None else np.asarray(tel.on_times, dtype=float)
+    n = t.shape[0] if t.ndim == 1 else -1
+    expect = {"t": (t, (n,)), "q": (q, (n, 4)), "omega": (w, (n, 3)),
+              "wheel_rates": (r, (n, len(tel.wheel_names)))}
+    if on is not None:
+        expect["on_times"] = (on, (n, len(THRUSTER_NAMES)))
+    for name, (x, shape) in expect.items():
+        if n < 0 or x.shape != shape:
+            raise InputError(f"mismatched lengths: '{name}' has shape {x.shape}, expected {shape} "
+                             f"(t has {t.shape}); every series needs one row per sample",
+                             path=path)
+    if n < 2:
+        raise InputError(f"only {n} sample(s); telemetry needs at least two rows", path=path)
+    _fail_nonfinite(t, "t", path, None)
+    _check_time(t, path)
+    for j, c in enumerate(_Q_COLS):
+        _fail_nonfinite(q[:, j], c, path, t)
+    for j, c in enumerate(_W_COLS):
+        _fail_nonfinite(w[:, j], c, path, t)
+    for j, name in enumerate(tel.wheel_names):
+        x = r[:, j]
+        if np.any(np.isnan(x)) and not np.all(np.isnan(x)):
+            _fail_nonfinite(x, name.lower(), path, t,
+                            fix="a wheel that is off must be empty in every row; fill the gap")
+        if np.any(np.isinf(x)):
+            _fail_nonfinite(x, name.lower(), path, t)
+        if check_units:
+            _check_wheel_units(name.lower(), x / RPM_TO_RAD_S, path)
+    if on is not None:
+        for k, c in enumerate(_ON_COLS):
+            _fail_nonfinite(on[:, k], c, path, t)
+        _check_on_times(on, t, _ON_COLS, path)
+    q = _check_quaternions(q, t, path)
+    if check_units:
+        _check_omega_units(t, q, w, path)
+    return Telemetry(t, q, w, r, tuple(tel.wheel_names), on, path)
+
+
+# --------------------------------------------------------------------------------------------
+# Telemetry files
+
+
+def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Telemetry:
+    """Read and validate a telemetry file (CSV, or Parquet where pyarrow is installed).
+
+    Parameters
+    ----------
+    path : the file; columns as DESIGN.md §4 (``t`` s, ``q1..q4``, ``wx wy wz`` rad/s,
+        ``rwa1..rwa4`` rpm, optional ``on_Z1..on_Y4`` s).
+    check_units : run the rad/s-vs-rpm and rad/s-vs-°/s heuristics (see the module docstring).
+
+    Returns
+    -------
+    Telemetry
+        SI units (wheel rates rad/s; NaN for a wheel that is off), ``q`` renormalised and
+        sign-continuous, ``on_times`` re-based to 0 at the first row (or ``None``).
+
+    Raises
+    ------
+    InputError
+        One line naming the file, column and/or row, and the fix.
+    """
+    p = Path(path)
+    name = str(path)
+    header, cells = _read_table(p, "telemetry")
+    idx = _map_header(header, _KNOWN, name,
+                      "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)")
+    for c in _REQUIRED:
+        if c not in idx:
+            raise InputError(f"missing column '{c}'; a telemetry file needs "
+                             f"{' '.join(_REQUIRED)} (and rwa1..rwa4 in rpm)", path=name)
+    cols = {c: _to_float(cells[j], c, name) for c, j in idx.items()}
+    t = cols["t"]
+    _fail_nonfinite(t, "t", name, None, fix="every row needs a time")
+    _check_time(t, name)
+    n = len(t)
+    q = np.stack([cols[c] for c in _Q_COLS], axis=1)
+    w = np.stack([cols[c] for c in _W_COLS], axis=1)
+    rpm = np.stack([cols.get(c, np.full(n, np.nan)) for c in _RWA_COLS], axis=1)
+    on = None
+    if any(c in cols for c in _ON_COLS):
+        on = np.stack([cols.get(c, np.zeros(n)) for c in _ON_COLS], axis=1)
+        for k, c in enumerate(_ON_COLS):
+            _fail_nonfinite(on[:, k], c, name, t)
+        on = on - on[0]
+    tel = Telemetry(t, q, w, rpm * RPM_TO_RAD_S, WHEEL_NAMES, on, name)
+    return validate_telemetry(tel, check_units=check_units)
+
+
+def read_telemetry_many(paths: Iterable[str | os.PathLike], *,
+                        check_units: bool = True) -> list[Telemetry]:
+    """Read several telemetry files (e.g. one per slew); errors name the offending file."""
+    paths = list(paths)
+    if not paths:
+        raise InputError("no telemetry files given; pass at least one CSV")
+    return [read_telemetry(p, check_units=check_units) for p in paths]
+
+
+def _atomic_write(path: Path, force: bool, write) -> None:
+    """Write via a temporary file in the same directory, then ``os.replace``."""
+    if path.exists() and not force:
+        raise InputError("already exists; choose another path or pass force=True to overwrite",
+                         path=str(path))
+    if not path.parent.exists():
+        raise InputError(f"directory '{path.parent}' does not exist; create it first",
+                         path=str(path))
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _cell(x: object) -> str:
+    """Shortest text that reads back to the same float (Python's repr); NaN → empty cell."""
+    if isinstance(x, float):
+        return "" if x != x else repr(x)
+    return str(x)
+
+
+def _write_csv(path: Path, columns: dict[str, list]) -> None:
+    names = list(columns)
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        f.write(",".join(names) + "\n")
+        for row in zip(*(columns[c] for c in names)):
+            f.write(",".join(map(_cell, row)) + "\n")
+
+
+def _write_frame(path: Path, columns: dict[str, object], force: bool) -> None:
+    """Write columns as CSV (repr-precision floats) or Parquet, atomically."""
+    if _is_parquet(path):
+        _require_pyarrow(path)
+        import pandas as pd
+
+        df = pd.DataFrame(columns)
+        _atomic_write(path, force, lambda tmp: df.to_parquet(tmp, index=False))
+    else:
+        lists = {c: (v.tolist() if isinstance(v, np.ndarray) else list(v))
+                 for c, v in columns.items()}
+        _atomic_write(path, force, lambda tmp: _write_csv(tmp, lists))
+
+
+def write_telemetry(path: str | os.PathLike, tel: Telemetry, *, force: bool = False) -> None:
+    """Write a telemetry file in the §4 format (wheel rates in rpm), atomically.
+
+    Floats are written with Python's shortest round-trip ``repr``, so :func:`read_telemetry`
+    returns the same ``t``, ``q``, ``omega`` bit for bit and wheel rates to within one rounding
+    of the rpm ↔ rad/s conversion. The data are written as given (sign flips of ``q`` included);
+    a wheel that is off (all NaN) is an empty column. ``.parquet`` paths are written as Parquet
+    (needs pyarrow).
+
+    Raises
+    ------
+    InputError
+        The file exists and ``force`` is false; or the telemetry fails :func:`validate_telemetry`.
+    """
+    p = Path(path)
+    validate_telemetry(tel, check_units=False)  # errors only: the file gets the data as given
+    q = np.asarray(tel.q, dtype=float)
+    omega = np.asarray(tel.omega, dtype=float)
+    rates = np.asarray(tel.wheel_rates, dtype=float)
+    cols: dict[str, object] = {"t": np.asarray(tel.t, dtype=float)}
+    for j, c in enumerate(_Q_COLS):
+        cols[c] = q[:, j]
+    for j, c in enumerate(_W_COLS):
+        cols[c] = omega[:, j]
+    for j, name in enumerate(tel.wheel_names):
+        cols[name.lower()] = rates[:, j] / RPM_TO_RAD_S
+    if tel.on_times is not None:
+        on = np.asarray(tel.on_times, dtype=float)
+        for k, c in enumerate(_ON_COLS):
+            cols[c] = on[:, k]
+    _write_frame(p, cols, force)
+
+
+# --------------------------------------------------------------------------------------------
+# Pulse logs
+
+
+def validate_pulses(log: PulseLog) -> PulseLog:
+    """Check a :class:`PulseLog`: lengths, finite values, width > 0, per-thruster order, overlap.
+
+    Returns the log sorted by ``t_on`` (stable), as NumPy arrays.
+    """
+    path = log.source
+    t_on = np.asarray(log.t_on, dtype=float)
+    thr = np.asarray(log.thruster)
+    width = np.asarray(log.width, dtype=float)
+    if not (t_on.ndim == thr.ndim == width.ndim == 1 and len(t_on) == len(thr) == len(width)):
+        raise InputError(f"mismatched lengths: t_on {t_on.shape}, thruster {thr.shape}, width "
+                         f"{width.shape}; one entry per pulse", path=path)
+    if thr.size and (not np.issubdtype(thr.dtype, np.integer)
+                     or thr.min() < 0 or thr.max() >= len(THRUSTER_NAMES)):
+        raise InputError("thruster indices must be integers 0..7 (Z1..Y4)", path=path)
+    thr = thr.astype(int)
+    _fail_nonfinite(t_on, "t_on", path, None)
+    _fail_nonfinite(width, "width", path, None)
+    if np.any(width <= 0):
+        i = int(np.argmax(width <= 0))
+        raise InputError(f"column 'width', data row {i + 1} (t_on = {t_on[i]:.10g} s): width "
+                         f"{width[i]:.6g} s must be positive; drop the row", path=path)
+    for k, name in enumerate(THRUSTER_NAMES):
+        rows = np.flatnonzero(thr == k)
+        if rows.size < 2:
+            continue
+        t, w = t_on[rows], width[rows]
+        d = np.diff(t)
+        if np.any(d <= 0):
+            i = int(np.argmax(d <= 0))
+            raise InputError(f"thruster {name}: t_on is not increasing — data row {rows[i + 1] + 1}"
+                             f" (t_on = {t[i + 1]:.10g} s) follows data row {rows[i] + 1} "
+                             f"(t_on = {t[i]:.10g} s); sort the log by time, one pulse per "
+                             "command", path=path)
+        ov = t[:-1] + w[:-1] > t[1:]
+        if np.any(ov):
+            i = int(np.argmax(ov))
+            raise InputError(f"thruster {name}: overlapping pulses — data row {rows[i] + 1} "
+                             f"(t_on = {t[i]:.10g} s, width {w[i]:.6g} s) is still on at data row "
+                             f"{rows[i + 1] + 1} (t_on = {t[i + 1]:.10g} s); merge them into one "
+                             "pulse", path=path)
+    order = np.argsort(t_on, kind="stable")
+    return PulseLog(t_on[order], thr[order], width[order], path)
+
+
+def read_pulses(path: str | os.PathLike) -> PulseLog:
+    """Read and validate a pulse log: columns ``t_on`` (s), ``thruster`` (Z1..Y4), ``width`` (s).
+
+    Returns
+    -------
+    PulseLog
+        Sorted by ``t_on``; thruster as indices into ``THRUSTER_NAMES``.
+    """
+    p = Path(path)
+    name = str(path)
+    header, cells = _read_table(p, "pulse-log", allow_empty=True)
+    idx = _map_header(header, _PULSE_COLS, name, "t_on thruster width")
+    for c in _PULSE_COLS:
+        if c not in idx:
+            raise InputError(f"missing column '{c}'; a pulse log needs t_on (s), thruster "
+                             "(Z1..Y4), width (s)", path=name)
+    t_on = _to_float(cells[idx["t_on"]], "t_on", name)
+    width = _to_float(cells[idx["width"]], "width", name)
+    _fail_nonfinite(t_on, "t_on", name, None, fix="every pulse needs a command time")
+    _fail_nonfinite(width, "width", name, None, fix="every pulse needs a width in seconds")
+    lookup = {n.lower(): k for k, n in enumerate(THRUSTER_NAMES)}
+    thr = np.empty(len(t_on), dtype=int)
+    for i, c in enumerate(cells[idx["thruster"]]):
+        key = "" if c is None else str(c).strip().lower()
+        if key not in lookup:
+            raise InputError(f"column 'thruster', data row {i + 1} (t_on = {t_on[i]:.10g} s): "
+                             f"unknown thruster '{c}'; expected one of "
+                             f"{' '.join(THRUSTER_NAMES)}", path=name)
+        thr[i] = lookup[key]
+    return validate_pulses(PulseLog(t_on, thr, width, name))
+
+
+def write_pulses(path: str | os.PathLike, log: PulseLog, *, force: bool = False) -> None:
+    """Write a pulse log (``t_on``, ``thruster`` name, ``width``) atomically, full precision."""
+    log = validate_pulses(log)
+    cols = {"t_on": log.t_on, "thruster": [THRUSTER_NAMES[i] for i in log.thruster],
+            "width": log.width}
+    _write_frame(Path(path), cols, force)
+
+
+def check_pulses_in_span(log: PulseLog, tel: Telemetry) -> PulseLog:
+    """Keep the pulses that can affect the telemetry span ``[t[0], t[-1]]``.
+
+    - A pulse entirely before the first or from the last sample on cannot change the telemetry:
+      it is dropped with a :class:`PulseSpanWarning`.
+    - A pulse still on at the last sample is kept with a :class:`PulseSpanWarning`: the data
+      see its on-time up to the last sample, which is what :func:`cumulative_on_times` counts.
+    - A pulse already on at the first sample is an :class:`InputError`: the record starts in the
+      middle of a thrust, so neither the on-time "since the first row" nor the first sample's
+      rates describe a quiescent start; extend the telemetry or drop the pulse.
+    """
+    t0, t1 = float(tel.t[0]), float(tel.t[-1])
+    end = log.t_on + log.width
+    at_start = (log.t_on < t0) & (end > t0)
+    if np.any(at_start):
+        i = int(np.argmax(at_start))
+        raise InputError(f"pulse of {THRUSTER_NAMES[log.thruster[i]]} at t_on = "
+                         f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is on across the "
+                         f"first telemetry sample (t = {t0:.10g} s) of {tel.source}; start the "
+                         "telemetry earlier or drop that pulse", path=log.source)
+    at_end = (log.t_on < t1) & (end > t1)
+    if np.any(at_end):
+        warnings.warn(f"{log.source}: {int(at_end.sum())} pulse(s) still on at the last sample "
+                      f"t = {t1:.10g} s of {tel.source}; their on-time is counted up to it",
+                      PulseSpanWarning, stacklevel=2)
+    outside = (end <= t0) | (log.t_on >= t1)
+    if np.any(outside):
+        warnings.warn(f"{log.source}: {int(outside.sum())} of {len(outside)} pulses lie outside "
+                      f"the telemetry span {t0:.10g}..{t1:.10g} s of {tel.source} and are ignored",
+                      PulseSpanWarning, stacklevel=2)
+        keep = ~outside
+        return PulseLog(log.t_on[keep], log.thruster[keep], log.width[keep], log.source)
+    return log
+
+
+def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:
+    """Cumulative commanded on-time of each thruster at times ``t``, since ``t[0]``.
+
+    A pulse of width ``w`` commanded at ``t_on`` contributes ``clip(t − t_on, 0, w)``; the sum is
+    re-based so row 0 is zero (DESIGN.md §4 ``on_*`` columns).
+
+    Parameters
+    ----------
+    pulses : the pulse log (validated: per thruster sorted and non-overlapping).
+    t : (n,) sample times, s.
+
+    Returns
+    -------
+    (n, 8) on-times in s, columns ``Z1 … Y4``.
+    """
+    pulses = validate_pulses(pulses)
+    t = np.asarray(t, dtype=float)
+    out = np.zeros((t.shape[0], len(THRUSTER_NAMES)))
+    for k in range(len(THRUSTER_NAMES)):
+        m = pulses.thruster == k
+        if not np.any(m):
+            continue
+        t_on, w = pulses.t_on[m], pulses.width[m]
+        done = np.concatenate([[0.0], np.cumsum(w)])  # on-time of pulses 0..j-1, all complete
+        j = np.searchsorted(t_on, t, side="right") - 1  # last pulse started at or before t
+        started = j >= 0
+        jj = np.maximum(j, 0)
+        active = np.where(started, np.clip(t - t_on[jj], 0.0, w[jj]), 0.0)
+        out[:, k] = np.where(started, done[jj] + active, 0.0)
+    return out - out[:1]
+
+
+def with_on_times(tel: Telemetry, pulses: PulseLog | None) -> Telemetry:
+    """The telemetry with ``on_times`` filled from the pulse log when the file had none.
+
+    The pulse log is first checked against the telemetry span (:func:`check_pulses_in_span`:
+    may warn with :class:`PulseSpanWarning` or raise :class:`InputError`).
+    """
+    if tel.on_times is not None or pulses is None:
+        return tel
+    pulses = check_pulses_in_span(pulses, tel)
+    return Telemetry(tel.t, tel.q, tel.omega, tel.wheel_rates, tel.wheel_names,
+                     cumulative_on_times(pulses, tel.t), tel.source)

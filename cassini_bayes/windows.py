@@ -1,0 +1,192 @@
+"""Quiet periods, slews between them, and ``T0:T1`` window arguments.
+
+A *quiet period* is a stretch of telemetry where the spacecraft is quiescent: the body rate is
+small, every wheel that is on holds its rate, and no thruster fires. The papers anchor their
+estimates on such stretches — Feldman & Lee's momentum model on the quiescent samples before and
+after each RWA slew, Brown's RWA4 calibration on "Time A" / "Time B" windows (Brown §III-IV) —
+and ``cassini-bayes check`` lists them. Everything here is NumPy on the arrays of a
+:class:`~cassini_bayes.telemetry.Telemetry` (SI units).
+
+Detection (per sample, then runs of at least ``min_duration_s``): with a centred moving window
+of ``smooth_s`` seconds (converted to samples with the median sample spacing),
+
+- ``max |ω| ≤ rate_max`` (rad/s) over the window,
+- ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored),
+- no cumulative thruster on-time grows within the window (when the telemetry has on-times).
+
+The window makes a single noisy sample or a thruster pulse exclude its neighbourhood too, so a
+quiet period never starts in the middle of a wheel ramp or a pulse's thrust tail.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from cassini_bayes.errors import InputError
+from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
+
+__all__ = ["quiet_mask", "quiet_periods", "slew_windows", "split_slews", "parse_window"]
+
+Window = tuple[float, float]
+
+
+def _moving_range(x: np.ndarray, half: int) -> np.ndarray:
+    """``max − min`` of ``x`` over samples ``i − half … i + half`` (edges padded), per column."""
+    if half == 0:
+        return np.zeros_like(x)
+    padded = np.pad(x, [(half, half)] + [(0, 0)] * (x.ndim - 1), mode="edge")
+    view = sliding_window_view(padded, 2 * half + 1, axis=0)
+    return view.max(axis=-1) - view.min(axis=-1)
+
+
+def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
+    if half == 0:
+        return x
+    padded = np.pad(x, (half, half), mode="edge")
+    return sliding_window_view(padded, 2 * half + 1).max(axis=-1)
+
+
+def quiet_mask(
+    tel: Telemetry,
+    *,
+    rate_max: float = 1e-3,
+    wheel_tol_rpm: float = 2.0,
+    smooth_s: float = 10.0,
+) -> np.ndarray:
+    """Boolean (n,) mask of quiescent samples (criteria in the module docstring).
+
+    Parameters
+    ----------
+    tel : the telemetry.
+    rate_max : largest body-rate magnitude of a quiet sample, rad/s. The default 1 mrad/s admits
+        Brown's RCS-method drift (~0.3 mrad/s) and excludes slews in progress.
+    wheel_tol_rpm : largest change of any running wheel's rate within the window, rpm.
+    smooth_s : width of the centred moving window, s.
+    """
+    t = np.asarray(tel.t, dtype=float)
+    n = t.shape[0]
+    if n < 2:
+        return np.zeros(n, dtype=bool)
+    dt = float(np.median(np.diff(t)))
+    half = int(round(0.5 * smooth_s / dt)) if dt > 0 else 0
+    rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
+    quiet = _moving_max(rate, half) <= rate_max
+    rates = np.asarray(tel.wheel_rates, dtype=float)
+    running = np.all(np.isfinite(rates), axis=0)
+    if np.any(running):
+        spread_rpm = _moving_range(rates[:, running], half) / RPM_TO_RAD_S
+        quiet &= np.all(spread_rpm <= wheel_tol_rpm, axis=1)
+    if tel.on_times is not None:
+        # a sample is loud when on-time grows into or out of it, or anywhere in its window
+        growth = np.zeros(n, dtype=bool)
+        step = np.any(np.diff(np.asarray(tel.on_times, dtype=float), axis=0) > 0, axis=1)
+        growth[1:] |= step
+        growth[:-1] |= step
+        quiet &= ~(_moving_max(growth.astype(float), half) > 0)
+    return quiet
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Inclusive index ranges of the runs of True in ``mask``."""
+    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    d = np.diff(m)
+    starts = np.flatnonzero(d == 1)
+    ends = np.flatnonzero(d == -1) - 1
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def quiet_periods(
+    tel: Telemetry,
+    *,
+    min_duration_s: float = 60.0,
+    rate_max: float = 1e-3,
+    wheel_tol_rpm: float = 2.0,
+    smooth_s: float = 10.0,
+) -> list[Window]:
+    """Quiet periods of at least ``min_duration_s`` seconds, as ``(t0, t1)`` sample times, s.
+
+    See :func:`quiet_mask` for the criteria; returned in time order, non-overlapping.
+    """
+    mask = quiet_mask(tel, rate_max=rate_max, wheel_tol_rpm=wheel_tol_rpm, smooth_s=smooth_s)
+    t = np.asarray(tel.t, dtype=float)
+    return [(float(t[a]), float(t[b])) for a, b in _runs(mask)
+            if t[b] - t[a] >= min_duration_s]
+
+
+def slew_windows(quiet: list[Window]) -> list[Window]:
+    """The gaps between consecutive quiet periods: ``(end of quiet i, start of quiet i+1)``."""
+    return [(a[1], b[0]) for a, b in zip(quiet[:-1], quiet[1:])]
+
+
+def split_slews(
+    tel: Telemetry,
+    quiet: list[Window] | None = None,
+    *,
+    margin_s: float | None = 30.0,
+    **criteria: float,
+) -> list[Telemetry]:
+    """Cut the telemetry into slews, each with quiescent samples on both sides.
+
+    Segment ``i`` runs from ``margin_s`` seconds before the end of quiet period ``i`` to
+    ``margin_s`` seconds after the start of quiet period ``i+1`` (clipped to the quiet periods;
+    ``margin_s=None`` keeps the whole quiet periods), so a momentum model can anchor on quiescent
+    samples before and after the slew (Feldman & Lee §III).
+
+    Parameters
+    ----------
+    tel : the telemetry.
+    quiet : quiet periods; detected with ``criteria`` (see :func:`quiet_periods`) when omitted.
+    margin_s : quiescent seconds kept on each side, s.
+    """
+    if quiet is None:
+        quiet = quiet_periods(tel, **criteria)
+    out = []
+    for a, b in zip(quiet[:-1], quiet[1:]):
+        t0 = a[0] if margin_s is None else max(a[0], a[1] - margin_s)
+        t1 = b[1] if margin_s is None else min(b[1], b[0] + margin_s)
+        out.append(tel.slice(t0, t1))
+    return out
+
+
+_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_WINDOW = re.compile(rf"^\s*({_NUM})?\s*:\s*({_NUM})?\s*$")
+
+
+def parse_window(text: str, t: np.ndarray | None = None, *, option: str = "window") -> Window:
+    """Parse ``"T0:T1"`` (seconds) into ``(t0, t1)``.
+
+    ``T0`` or ``T1`` may be left out (``":600"``, ``"1200:"``) when ``t`` is given: the data's
+    first or last time is used. With ``t`` the window must lie within ``[t[0], t[-1]]`` and hold
+    at least two samples.
+
+    Raises
+    ------
+    InputError
+        Bad syntax, ``T0 ≥ T1``, or a window outside the data; the message names ``option``.
+    """
+    m = _WINDOW.match(str(text))
+    if m is None:
+        raise InputError(f"--{option} '{text}': expected T0:T1 in seconds, e.g. 120:540")
+    a, b = m.group(1), m.group(2)
+    if (a is None or b is None) and t is None:
+        raise InputError(f"--{option} '{text}': give both ends, T0:T1 in seconds")
+    if t is not None:
+        t = np.asarray(t, dtype=float)
+        lo, hi = float(t[0]), float(t[-1])
+    t0 = float(a) if a is not None else lo
+    t1 = float(b) if b is not None else hi
+    if not t0 < t1:
+        raise InputError(f"--{option} '{text}': start {t0:g} s is not before end {t1:g} s; "
+                         "write T0:T1 with T0 < T1")
+    if t is not None:
+        if t0 < lo or t1 > hi:
+            raise InputError(f"--{option} '{text}' lies outside the data ({lo:.10g} to "
+                             f"{hi:.10g} s); choose a window inside the telemetry")
+        inside = int(np.count_nonzero((t >= t0) & (t <= t1)))
+        if inside < 2:
+            raise InputError(f"--{option} '{text}' holds {inside} sample(s); widen it to at least "
+                             "two samples")
+    return (t0, t1)

@@ -1,0 +1,117 @@
+"""Quiet-period detection, slew splitting and ``T0:T1`` parsing on a synthetic series."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cassini_bayes.errors import InputError
+from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, with_on_times
+from cassini_bayes.windows import (
+    parse_window,
+    quiet_mask,
+    quiet_periods,
+    slew_windows,
+    split_slews,
+)
+
+DT = 0.5  # s
+
+
+def _series(seed: int = 0) -> tuple[Telemetry, list[tuple[float, float]]]:
+    """Three quiet stretches separated by two wheel slews, with realistic noise.
+
+    0-300 s quiet; 300-400 s slew (wheel ramps 600 → 1400 rpm, |ω| up to 2 mrad/s);
+    400-900 s quiet; 900-1000 s slew back; 1000-1300 s quiet. Noise: 1e-5 rad/s on ω,
+    0.2 rpm on the wheels. Known quiet periods shrink by the 10 s moving window (5 s per side).
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 1300.0 + DT / 2, DT)
+    n = t.size
+    up = np.clip((t - 300.0) / 100.0, 0, 1) - np.clip((t - 900.0) / 100.0, 0, 1)
+    rpm = 600.0 + 800.0 * up
+    slewing = ((t > 300) & (t < 400)) | ((t > 900) & (t < 1000))
+    wz = np.where(slewing, 2e-3 * np.sin(np.pi * ((t - 300.0) % 600.0) / 100.0), 0.0)
+    w = np.stack([np.zeros(n), np.zeros(n), wz], 1) + rng.normal(0, 1e-5, (n, 3))
+    ang = np.concatenate([[0.0], np.cumsum(0.5 * (wz[1:] + wz[:-1]) * DT)])
+    q = np.stack([np.zeros(n), np.zeros(n), np.sin(ang / 2), np.cos(ang / 2)], 1)
+    rates = np.stack([rpm, -rpm, np.full(n, 300.0), np.full(n, np.nan)], 1)
+    rates[:, :3] += rng.normal(0, 0.2, (n, 3))
+    tel = Telemetry(t, q, w, rates * RPM_TO_RAD_S, source="synthetic")
+    return tel, [(0.0, 300.0), (400.0, 900.0), (1000.0, 1300.0)]
+
+
+@pytest.fixture(scope="module")
+def series():
+    return _series()
+
+
+def test_quiet_periods_found(series):
+    tel, truth = series
+    found = quiet_periods(tel, min_duration_s=60.0)
+    assert len(found) == 3
+    for (a, b), (ta, tb) in zip(found, truth):
+        # inside the true quiet stretch, eroded by at most the 5 s half-window plus 2 s of the
+        # slew's gentle start (wheel change below 2 rpm)
+        assert ta <= a <= ta + 8.0 if ta > 0 else a == 0.0
+        assert tb - 8.0 <= b <= tb if tb < 1300 else b == 1300.0
+    assert slew_windows(found) == [(found[0][1], found[1][0]), (found[1][1], found[2][0])]
+
+
+def test_min_duration_and_thresholds(series):
+    tel, _ = series
+    assert len(quiet_periods(tel, min_duration_s=400.0)) == 1  # only the 500 s middle one
+    assert quiet_periods(tel, min_duration_s=60.0, wheel_tol_rpm=0.01) == []  # noise > tol
+    everything = quiet_periods(tel, min_duration_s=60.0, rate_max=1.0, wheel_tol_rpm=1e4)
+    assert everything == [(0.0, 1300.0)]
+
+
+def test_thruster_pulse_breaks_a_quiet_period(series):
+    tel, _ = series
+    log = PulseLog(np.array([600.05]), np.array([5]), np.array([0.05]))
+    found = quiet_periods(with_on_times(tel, log), min_duration_s=60.0)
+    assert len(found) == 4
+    assert found[1][1] < 600.05 < found[2][0]
+    assert found[2][0] - found[1][1] <= 12.0  # only the pulse's 10 s neighbourhood is lost
+
+
+def test_off_wheel_is_ignored_and_mask_shape(series):
+    tel, _ = series
+    mask = quiet_mask(tel)
+    assert mask.shape == tel.t.shape and mask.dtype == bool
+    assert mask[0] and not mask[np.searchsorted(tel.t, 350.0)]
+
+
+def test_split_slews(series):
+    tel, _ = series
+    parts = split_slews(tel, margin_s=30.0)
+    assert len(parts) == 2
+    for part, (a, b) in zip(parts, [(300.0, 400.0), (900.0, 1000.0)]):
+        assert a - 40.0 <= part.t[0] <= a - 25.0
+        assert b + 25.0 <= part.t[-1] <= b + 40.0
+        assert np.ptp(part.wheel_rate("RWA1")) > 700 * RPM_TO_RAD_S  # the whole ramp is inside
+    whole = split_slews(tel, margin_s=None)
+    assert whole[0].t[0] == 0.0
+
+
+def test_parse_window():
+    t = np.arange(0.0, 1000.0, 1.0)
+    assert parse_window("120:540") == (120.0, 540.0)
+    assert parse_window(" 1.5e2 : 6e2 ", t) == (150.0, 600.0)
+    assert parse_window(":600", t) == (0.0, 600.0)
+    assert parse_window("900:", t) == (900.0, 999.0)
+    bad = {
+        "120-540": "expected T0:T1",
+        "a:b": "expected T0:T1",
+        "540:120": "start 540 s is not before end 120 s",
+        "100:100": "is not before",
+        "-5:100": r"outside the data \(0 to 999 s\)",
+        "900:1200": "outside the data",
+        "10.2:10.8": r"holds 0 sample\(s\)",
+    }
+    for text, needle in bad.items():
+        with pytest.raises(InputError, match=needle) as info:
+            parse_window(text, t, option="window-a")
+        assert f"--window-a '{text}'" in str(info.value)
+    with pytest.raises(InputError, match="give both ends"):
+        parse_window(":600")
