@@ -56,7 +56,7 @@ def dcm(q: Array) -> Array:
     """
     q = quat_normalize(q)
     qv, q4 = q[..., :3], q[..., 3]
-    eye = jnp.eye(3, dtype=q.dtype)
+    eye = jnp.broadcast_to(jnp.eye(3, dtype=q.dtype), q.shape[:-1] + (3, 3))
     return (
         (q4**2 - jnp.sum(qv * qv, -1))[..., None, None] * eye
         + 2.0 * qv[..., :, None] * qv[..., None, :]

@@ -75,9 +75,14 @@ def moment_matrix(lx_m, ly_m, lzy_m, lzz_m, com_m=(0.0, 0.0, 0.0)) -> Array:
 
     Column ``s`` is ``(r_s − e) × d_s`` with ``e = [eX, eY, eZ]`` the centre of mass (m).
     """
-    r = thruster_positions(lx_m, ly_m, lzy_m, lzz_m) - jnp.asarray(com_m)
+    r = thruster_positions(lx_m, ly_m, lzy_m, lzz_m) - jnp.asarray(com_m)[None, :]
     # Feldman & Lee Eq 16: Q = [(r_s - e) x d_s]_s
     return jnp.cross(r, _DIRECTIONS).T
+
+
+def _per_thruster(thrust_n) -> Array:
+    """Thrust (N) as a (1, 8) row: a scalar applies to all eight thrusters."""
+    return jnp.broadcast_to(jnp.asarray(thrust_n, dtype=float), (8,))[None, :]
 
 
 def delta_omega(omega_rad_s: Array) -> Array:
@@ -129,7 +134,7 @@ def impulse_from_on_times(on_times_s: Array, thrust_n=1.0) -> Array:
     """
     tau = jnp.asarray(on_times_s)
     # Feldman & Lee Eq 17: int T_PMS dt = Q [F_1 dtau_1, ..., F_8 dtau_8]
-    return (tau - tau[:1]) * jnp.asarray(thrust_n)
+    return (tau - tau[:1]) * _per_thruster(thrust_n)
 
 
 def impulse_from_pulses(t_s: Array, t_on_s: Array, thruster: Array, width_s: Array,
@@ -151,7 +156,7 @@ def impulse_from_pulses(t_s: Array, t_on_s: Array, thruster: Array, width_s: Arr
     per_pulse = pulse_impulse_until(dt, w, tau_delay_s, tau_rise_s, tau_fall_s)
     one_hot = (jnp.asarray(thruster)[:, None] == jnp.arange(8)[None, :]).astype(per_pulse.dtype)
     j = per_pulse @ one_hot
-    return (j - j[:1]) * jnp.asarray(thrust_n)
+    return (j - j[:1]) * _per_thruster(thrust_n)
 
 
 def angular_impulse(q_matrix: Array, impulse_ns: Array) -> Array:
@@ -179,7 +184,7 @@ def system_z(v: Array, j: Array, q_matrix: Array):
     """
     q = jnp.asarray(q_matrix)
     # Feldman & Lee Eq 20: U_Z[i, s] = Q_3s dtau_s(t_i), s = Y1..Y4
-    return jnp.asarray(j)[:, 4:] * q[2, 4:], jnp.asarray(v)[:, 2]
+    return jnp.asarray(j)[:, 4:] * q[None, 2, 4:], jnp.asarray(v)[:, 2]
 
 
 def system_zz(v: Array, j: Array, q_matrix: Array):

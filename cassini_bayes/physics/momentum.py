@@ -61,7 +61,8 @@ def wheel_momentum_body(rates_rad_s: Array, axes: Array, inertias_kgm2: Array) -
     NaN rates (a wheel that is off) count as zero.
     """
     rates = jnp.nan_to_num(jnp.asarray(rates_rad_s))
-    return (rates * jnp.asarray(inertias_kgm2)) @ jnp.asarray(axes)
+    j = jnp.broadcast_to(jnp.asarray(inertias_kgm2, dtype=rates.dtype), rates.shape)
+    return (rates * j) @ jnp.asarray(axes)
 
 
 def inertial_momentum(q: Array, omega_rad_s: Array, inertia: Array, h_wheels_body: Array) -> Array:

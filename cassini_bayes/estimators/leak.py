@@ -1,0 +1,64 @@
+"""Thruster-leak monitor quantities (Lee, §3.2, Eqs 10-11).
+
+The residual momentum ``R(t) = ∫ (I ω̇ + ω × (I ω + H) − T_RWA − T_PMS^f) dt`` (Eq 10) grows when a
+thruster leaks. With the wheels' reaction torque ``T_RWA = −Ḣ_RWA`` it integrates to
+``R(t) = I Δω + ΔH_RWA + ΔG − Q J(t)``: the left side of Feldman & Lee Eq 17 minus the modelled
+thruster angular impulse. The correction for thruster-to-thruster variation is Eq 11.
+"""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+
+from cassini_bayes.physics.impulse import angular_impulse, impulse_lhs
+
+__all__ = ["residual_momentum", "leak_torque", "momentum_correction", "LEAK_THRESHOLD_NMS",
+           "ETA", "Z_ARM_M"]
+
+_lhs = jax.jit(impulse_lhs)
+
+LEAK_THRESHOLD_NMS = 50.0  # Lee §3.2: R_T
+ETA = 0.05                 # Lee Eq 11: thruster-to-thruster variation at launch
+Z_ARM_M = 1.6              # Lee Eq 11: mean moment arm of the Z-facing thrusters, m
+
+
+def residual_momentum(t_s, omega_rad_s, inertia, h_wheels_body, q_matrix,
+                      impulse_ns) -> np.ndarray:
+    """Residual momentum ``R(t_i)`` (N m s), (n, 3), Lee Eq 10.
+
+    ``impulse_ns`` (n, 8): modelled accumulated thruster impulses (N s, e.g. ``F Δτ``);
+    ``q_matrix`` (3, 8) moment matrix (m). Other arguments as in
+    :func:`cassini_bayes.physics.impulse.impulse_lhs`.
+    """
+    v = _lhs(np.asarray(t_s, float), np.asarray(omega_rad_s, float), np.asarray(inertia),
+                    np.asarray(h_wheels_body, float))
+    # Lee Eq 10 with T_RWA = -dH_RWA/dt: R = I dw + dH_RWA + dG - Q J
+    return np.asarray(v - angular_impulse(q_matrix, impulse_ns))
+
+
+def leak_torque(q_matrix, thruster: int, leak_fraction: float, thrust_n: float = 1.0) -> np.ndarray:
+    """Torque (N m), (3,), of a thruster leaking ``leak_fraction`` of its thrust ``thrust_n``.
+
+    Column ``thruster`` of ``Q`` (Feldman & Lee Eq 16) scaled: a 10 % Z1 leak at 1 N gives
+    (−0.158, +0.1234, 0) N m; Lee §3.2 prints −0.158 and +0.124.
+    """
+    return leak_fraction * thrust_n * np.asarray(q_matrix, float)[:, thruster]
+
+
+def momentum_correction(delta_j_ns, eta: float = ETA, arm_m: float = Z_ARM_M) -> np.ndarray:
+    """Correction ``R^corr`` (N m s), (3,), for thruster-to-thruster variation, Lee Eq 11.
+
+    ``delta_j_ns`` (8,) impulses (N s) accumulated by ``Z1 … Y4`` over the last sample time.
+    X: ``2 η · 1.6 · |ΔJ_Z3 + ΔJ_Z4 − ΔJ_Z1 − ΔJ_Z2|`` exactly as printed. The paper computes
+    Y and Z "similarly"; here Y pairs the Z thrusters by the sign of their Y arm
+    (``|ΔJ_Z1 + ΔJ_Z4 − ΔJ_Z2 − ΔJ_Z3|``) and Z pairs the Y thrusters by the sign of their Z arm
+    (``|ΔJ_Y2 + ΔJ_Y4 − ΔJ_Y1 − ΔJ_Y3|``), both with the same factor ``2 η · arm_m`` (our reading).
+    """
+    dj = np.asarray(delta_j_ns, float)
+    z1, z2, z3, z4, y1, y2, y3, y4 = (dj[..., k] for k in range(8))
+    # Lee Eq 11: dJ_x = |dJ_Z3 + dJ_Z4 - dJ_Z1 - dJ_Z2|, R_x^corr = 2 eta 1.6 dJ_x
+    dj_x = np.abs(z3 + z4 - z1 - z2)
+    dj_y = np.abs(z1 + z4 - z2 - z3)
+    dj_z = np.abs(y2 + y4 - y1 - y3)
+    return 2.0 * eta * arm_m * np.stack([dj_x, dj_y, dj_z], -1)

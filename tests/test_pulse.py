@@ -1,0 +1,68 @@
+"""Tier (a): thruster pulse response of Feldman & Lee §V (closed form vs. numerical integral)."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from cassini_bayes.physics.pulse import (impulse_ratio, mix_ratio, pulse_impulse,
+                                         pulse_impulse_until, thrust_profile)
+
+CASES = [(0.125, 0.005, 0.020, 0.065), (0.250, 0.005, 0.020, 0.065), (0.125, 0.005, 0.020, 0.040),
+         (0.750, 0.003, 0.015, 0.090), (0.010, 0.005, 0.025, 0.040)]
+
+
+_profile = jax.jit(thrust_profile)
+
+
+def _integral(width, td, tr, tf, upper):
+    f = lambda t: float(_profile(t, width, td, tr, tf))  # noqa: E731
+    pts = [p for p in (td, width, width + td) if p < upper]
+    return quad(f, 0.0, upper, points=pts or None, limit=200, epsabs=1e-14, epsrel=1e-12)[0]
+
+
+@pytest.mark.parametrize("width, td, tr, tf", CASES)
+def test_closed_form_equals_integral_of_profile(width, td, tr, tf):
+    """The §V closed form is the exact area under the thrust profile (for Δ ≥ τd)."""
+    if width < td:
+        pytest.skip("the printed closed form assumes Δ ≥ τd")
+    total = _integral(width, td, tr, tf, width + td + 40 * tf)
+    assert np.isclose(float(pulse_impulse(width, td, tr, tf)), total, rtol=1e-9, atol=1e-13)
+
+
+@pytest.mark.parametrize("width, td, tr, tf", CASES)
+def test_impulse_until_equals_partial_integral(width, td, tr, tf):
+    for upper in (0.5 * td, td + 0.3 * width, width, width + 0.5 * td, width + td + tf, 5.0):
+        got = float(pulse_impulse_until(upper, width, td, tr, tf))
+        assert np.isclose(got, _integral(width, td, tr, tf, upper), rtol=1e-9, atol=1e-13)
+    assert float(pulse_impulse_until(-1.0, width, td, tr, tf)) == 0.0
+
+
+def test_impulse_until_derivative_is_the_profile():
+    width, td, tr, tf = CASES[0]
+    d = jax.grad(lambda t: pulse_impulse_until(t, width, td, tr, tf))
+    for t in (0.001, 0.05, 0.127, 0.2, 0.5):
+        assert np.isclose(float(d(t)), float(thrust_profile(t, width, td, tr, tf)), atol=1e-12)
+
+
+def test_impulse_until_tends_to_pulse_impulse():
+    width, td, tr, tf = CASES[0]
+    assert np.isclose(float(pulse_impulse_until(100.0, width, td, tr, tf)),
+                      float(pulse_impulse(width, td, tr, tf)), rtol=1e-14)
+
+
+def test_thrust_scales_linearly_and_ratio_above_one_when_fall_exceeds_rise():
+    assert np.isclose(float(pulse_impulse(0.125, 0.005, 0.02, 0.065, thrust_n=0.75)),
+                      0.75 * float(pulse_impulse(0.125, 0.005, 0.02, 0.065)))
+    assert float(impulse_ratio(0.125)) > 1.0
+    assert float(impulse_ratio(0.125, tau_rise_s=0.05, tau_fall_s=0.02)) < 1.0
+
+
+def test_gradients_in_time_constants_are_finite_and_match_differences():
+    f = lambda tf: mix_ratio(jnp.array([0.125, 0.25]), jnp.array([3.0, 1.0]), tau_fall_s=tf)  # noqa
+    g = float(jax.grad(f)(0.065))
+    h = 1e-6
+    assert np.isclose(g, (float(f(0.065 + h)) - float(f(0.065 - h))) / (2 * h), rtol=1e-6)
