@@ -1,0 +1,47 @@
+"""``cassini-bayes experiment experiments/NAME.toml --out DIR``: run one experiment."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+ORDER = 50
+
+
+def experiment(
+    file: Path = typer.Argument(..., help="Experiment file (experiments/NAME.toml), or a run "
+                                          "directory's config.toml to re-run it."),
+    out: Path = typer.Option(..., "--out", help="Run directory to write (must not exist)."),
+    seed: int = typer.Option(None, "--seed", help="Seed of the run's jax.random key "
+                                                  "(default: the file's [run] seed, else 0)."),
+    force: bool = typer.Option(False, "--force", help="Replace --out if it exists."),
+    quick: bool = typer.Option(False, "--quick", help="Small settings (for tests and previews)."),
+) -> None:
+    """Run one experiment: DIR/results.json, DIR/report.html, DIR/config.toml, DIR/figures/."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # headless
+    from rich.console import Console
+
+    from cassini_bayes.experiments import load_experiment, run_experiment
+
+    if seed is not None and seed < 0:
+        from cassini_bayes.errors import InputError
+
+        raise InputError(f"--seed must be a non-negative integer, got {seed}")
+    exp = load_experiment(file)
+    console = Console(stderr=True)
+    with console.status(f"running {exp.name} ({exp.kind.name})"):
+        rec = run_experiment(exp, out, seed=seed, quick=quick, force=force)
+    checks = rec.output.checks
+    n_fail = sum(c.passed is False for c in checks)
+    n_pass = sum(c.passed is True for c in checks)
+    console.print(f"{exp.name}: {n_pass} pass, {n_fail} fail against the papers "
+                  f"({rec.elapsed_s:.2f} s)")
+    typer.echo(str(rec.path / "report.html"))
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    """Add ``experiment`` to the ``cassini-bayes`` command."""
+    app.command("experiment")(experiment)

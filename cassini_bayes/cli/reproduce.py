@@ -1,0 +1,72 @@
+"""``cassini-bayes reproduce --out DIR``: every paper reproduction, one report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+ORDER = 5
+
+
+def reproduce(
+    out: Path = typer.Option(..., "--out", help="Directory to write (must not exist)."),
+    seed: int = typer.Option(0, "--seed", help="Master seed; each experiment folds in its name."),
+    quick: bool = typer.Option(False, "--quick", help="Small settings (tests, previews)."),
+    force: bool = typer.Option(False, "--force", help="Replace --out if it exists."),
+    experiments_dir: Path = typer.Option(None, "--experiments", hidden=True,
+                                         help="Directory of experiment files (default: the "
+                                              "shipped experiments/)."),
+) -> None:
+    """Run every experiment in experiments/ and write DIR/report.html: the papers beside ours."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # headless
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from cassini_bayes._paths import EXPERIMENTS_DIR
+    from cassini_bayes.errors import InputError
+    from cassini_bayes.experiments import discover_experiments
+    from cassini_bayes.experiments import reproduce as run_all
+    from cassini_bayes.experiments._core import prepare_out_dir
+
+    if seed < 0:
+        raise InputError(f"--seed must be a non-negative integer, got {seed}")
+    experiments_dir = experiments_dir or EXPERIMENTS_DIR
+    prepare_out_dir(out, force)            # fail on user errors before any progress is drawn
+    discover_experiments(experiments_dir)
+    console = Console(stderr=True)
+    columns = (TextColumn("[bold]{task.description}"), BarColumn(),
+               TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=False) as progress:
+        task = progress.add_task("reproduce", total=None)
+
+        def on_event(event: str, i: int, n: int, message: str) -> None:
+            if event == "start":
+                progress.update(task, total=n, description=f"{message}")
+            elif event == "progress" and message:
+                progress.update(task, description=message)
+            elif event == "done":
+                progress.update(task, advance=1, description=f"{message} done")
+            elif event == "failed":
+                progress.update(task, advance=1)
+                progress.console.print(f"[red]failed[/red] {message}")
+
+        result = run_all(out, seed=seed, quick=quick, force=force,
+                         experiments_dir=experiments_dir, on_event=on_event)
+    for f, reason in result.skipped:
+        console.print(f"skipped {Path(f).name}: {reason}")
+    n_fail = result.checks_failed
+    console.print(f"{len(result.statuses)} experiments in {result.elapsed_s:.1f} s; "
+                  f"{n_fail} check(s) outside the papers' values or budgets")
+    typer.echo(str(result.out / "report.html"))
+    if result.failed:
+        console.print(f"[red]error:[/red] experiment(s) failed: {', '.join(result.failed)} "
+                      f"(see {result.out / 'report.html'})")
+        raise typer.Exit(1)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    """Add ``reproduce`` to the ``cassini-bayes`` command."""
+    app.command("reproduce")(reproduce)
