@@ -1,0 +1,183 @@
+"""Reading a run directory (DESIGN.md §4) for the report: ``posterior.nc``, ``summary.json``,
+``config.toml``.
+
+Only ``posterior.nc`` is required. A missing ``summary.json`` costs the baseline/truth columns (the
+kind is then recognised from the posterior's variable names); a missing ``config.toml`` costs the
+configuration listing. Anything present but unreadable is an
+:class:`~cassini_bayes.errors.InputError`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cassini_bayes.errors import InputError
+
+__all__ = ["RunData", "load_run", "flatten_draws", "KINDS"]
+
+KINDS = ("inertia", "thrust", "rwa4")
+INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
+THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
+F_NAMES = ("F",) + tuple(f"F_{t}" for t in THRUSTER_NAMES)
+U4_NAMES = ("u4_x", "u4_y", "u4_z")
+
+
+@dataclass(frozen=True)
+class RunData:
+    """Everything the report reads from one run directory.
+
+    Attributes
+    ----------
+    run_dir : Path
+        The directory (resolved).
+    idata : arviz.InferenceData
+        ``posterior.nc``, loaded eagerly (the file is closed).
+    summary : dict
+        ``summary.json`` (empty when absent).
+    config_text : str or None
+        ``config.toml`` verbatim, or ``None`` when absent.
+    kind : str
+        ``"inertia"``, ``"thrust"`` or ``"rwa4"`` (from the summary, else from variable names),
+        or ``"unknown"``.
+    notes : tuple of str
+        What was missing, for the report's warnings.
+    """
+
+    run_dir: Path
+    idata: Any
+    summary: dict = field(default_factory=dict)
+    config_text: str | None = None
+    kind: str = "unknown"
+    notes: tuple[str, ...] = ()
+
+    def has_group(self, name: str) -> bool:
+        """Whether the InferenceData has group ``name`` with at least one variable."""
+        return name in self.idata.groups() and len(getattr(self.idata, name).data_vars) > 0
+
+
+def _infer_kind(names: set[str]) -> str:
+    # most specific first: an RWA4 or thrust fit may carry the inertia entries as nuisances
+    if set(U4_NAMES) <= names:
+        return "rwa4"
+    if names & set(TAU_NAMES) or names & set(F_NAMES):
+        return "thrust"
+    if set(INERTIA_NAMES) <= names:
+        return "inertia"
+    return "unknown"
+
+
+def load_run(run_dir: str | Path) -> RunData:
+    """Load a run directory for reporting.
+
+    Parameters
+    ----------
+    run_dir : str or Path
+        A directory written by ``fit``/``experiment``/``sbc``.
+
+    Raises
+    ------
+    InputError
+        The directory or its ``posterior.nc`` does not exist, or a file cannot be read.
+    """
+    import arviz as az
+
+    run_dir = Path(run_dir)
+    if not run_dir.is_dir():
+        raise InputError(f"{run_dir}: run directory not found; pass the --out directory of a fit")
+    nc = run_dir / "posterior.nc"
+    if not nc.is_file():
+        raise InputError(
+            f"{nc}: not found; a run directory must hold posterior.nc (run `cassini-bayes fit ...` "
+            "or pass the right directory)"
+        )
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with az.rc_context({"data.load": "eager"}):
+                idata = az.from_netcdf(nc)
+    except Exception as e:  # netCDF/HDF5 errors have many types
+        raise InputError(f"{nc}: cannot be read as ArviZ InferenceData ({type(e).__name__}: {e})")
+    if "posterior" not in idata.groups() or not idata.posterior.data_vars:
+        raise InputError(f"{nc}: has no posterior group; re-run the fit that wrote it")
+
+    notes: list[str] = []
+    summary: dict = {}
+    sj = run_dir / "summary.json"
+    if sj.is_file():
+        try:
+            summary = json.loads(sj.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as e:
+            raise InputError(f"{sj}: not valid JSON ({e}); re-run the fit or fix the file")
+        if not isinstance(summary, dict):
+            raise InputError(f"{sj}: expected a JSON object at the top level")
+    else:
+        notes.append("summary.json not found: baseline and truth columns are empty")
+
+    config_text = None
+    ct = run_dir / "config.toml"
+    if ct.is_file():
+        config_text = ct.read_text(encoding="utf-8", errors="replace")
+        try:
+            tomllib.loads(config_text)
+        except tomllib.TOMLDecodeError as e:
+            notes.append(f"config.toml is not valid TOML ({e})")
+
+    kind = summary.get("kind") or _infer_kind(set(idata.posterior.data_vars))
+    if kind not in KINDS:
+        notes.append(f"unknown run kind {kind!r}: kind-specific sections are skipped")
+    return RunData(run_dir.resolve(), idata, summary, config_text, str(kind), tuple(notes))
+
+
+def flatten_draws(ds, names) -> dict[str, np.ndarray]:
+    """Flatten variables of a (chain, draw, ...) dataset into scalar components.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A posterior or prior group.
+    names : iterable of str
+        Variables to take; names not in ``ds`` are skipped.
+
+    Returns
+    -------
+    dict
+        ``label -> array (chain, draw)``; labels follow ArviZ: ``"F"`` for a scalar, ``"F[Z1]"``
+        for a component (coordinate values joined by ``", "``).
+    """
+    out: dict[str, np.ndarray] = {}
+    for name in names:
+        if name not in ds.data_vars:
+            continue
+        da = ds[name]
+        if "chain" not in da.dims or "draw" not in da.dims:
+            continue
+        da = da.transpose("chain", "draw", ...)
+        extra = [d for d in da.dims if d not in ("chain", "draw")]
+        vals = np.asarray(da.values, dtype=float)
+        if not extra:
+            out[name] = vals
+            continue
+        coords = [list(da.coords[d].values) if d in da.coords else list(range(da.sizes[d]))
+                  for d in extra]
+        for idx in np.ndindex(*[da.sizes[d] for d in extra]):
+            label = ", ".join(str(coords[k][i]) for k, i in enumerate(idx))
+            out[f"{name}[{label}]"] = vals[(slice(None), slice(None)) + idx]
+    return out
+
+
+def finite_or_none(x: Any) -> float | None:
+    """``float(x)`` when it is a finite number, else ``None`` (JSON nulls, NaN, strings)."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None

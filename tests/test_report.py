@@ -1,0 +1,329 @@
+"""Diagnostic reports: self-contained HTML per run directory, for every kind of run.
+
+The run directories are synthetic but shaped like the fit's (DESIGN.md §4): ArviZ InferenceData
+with posterior (4 chains), prior, sample_stats (diverging, energy), observed_data and a
+``residuals`` group, plus summary.json and config.toml. The numbers are drawn from known normals,
+so the report's flags (weak identification, truth in the 90 % interval) have known answers.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from cassini_bayes.report import build_report, html_page, section, table
+from cassini_bayes.report.html import Raw, figure
+from cassini_bayes.report.rundata import load_run
+from cassini_bayes.report.tables import diagnostics, parameter_names, parameter_rows
+
+INERTIA = {"Ixx": 7403.0, "Iyy": 6174.0, "Izz": 3727.0, "Ixy": -129.0, "Ixz": -12.0, "Iyz": 147.0}
+THRUSTERS = ["Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4"]
+TAUS = {"tau_delay": 0.005, "tau_rise": 0.020, "tau_fall": 0.065}
+RWA1 = np.array([0.0, 0.816497, 0.577350])
+
+# Expected section ids per kind (report/build.py)
+COMMON = ["diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals", "energy",
+          "configuration"]
+SECTIONS = {
+    "inertia": COMMON + ["pair"],
+    "thrust": COMMON + ["pair"],
+    "rwa4": COMMON + ["axis"],
+}
+# trace, rank, prior-vs-posterior, residuals, energy + pair (inertia/thrust) or sky (rwa4)
+# (inertia: two residual figures, the momentum residual and the whitened one)
+N_FIGURES = {"inertia": 7, "thrust": 6, "rwa4": 6}
+
+
+def _stats(x):
+    x = np.asarray(x).ravel()
+    q05, q50, q95 = np.quantile(x, [0.05, 0.5, 0.95])
+    return {"mean": float(x.mean()), "sd": float(x.std(ddof=1)), "q05": float(q05),
+            "q50": float(q50), "q95": float(q95), "r_hat": 1.0, "ess_bulk": 700.0,
+            "ess_tail": 650.0}
+
+
+def _draws(rng, chains, draws, spec):
+    """{name: (mean, sd)} -> {name: (chains, draws)} normal draws."""
+    return {k: m + s * rng.standard_normal((chains, draws)) for k, (m, s) in spec.items()}
+
+
+def make_run(root: Path, kind: str, *, draws: int = 200, prior: bool = True,
+             residuals: bool = True, energy: bool = True, seed: int = 0) -> Path:
+    """Write a synthetic run directory of ``kind`` under ``root`` and return it."""
+    import arviz as az
+
+    rng = np.random.default_rng(seed)
+    chains = 4
+    run = root / f"{kind}-run"
+    run.mkdir(parents=True)
+    dims, coords = {}, {"axis": ["x", "y", "z"]}
+    truth = None
+    extra = {}
+    extra_groups = {}
+    file_idx = None
+    if kind == "inertia":
+        post_spec = {k: (v + 3.0, 8.0 if k[1] == k[2] else 4.0) for k, v in INERTIA.items()}
+        prior_spec = {k: (v, 0.10 * v if k[1] == k[2] else 75.0) for k, v in INERTIA.items()}
+        posterior = _draws(rng, chains, draws, post_spec)
+        posterior["sigma_H"] = np.abs(0.002 + 1e-4 * rng.standard_normal((chains, draws)))
+        posterior["H0"] = 5.0 + 0.01 * rng.standard_normal((chains, draws, 3))
+        dims["H0"] = ["axis"]
+        truth = dict(INERTIA)
+        baseline = {k: v + 1.0 for k, v in INERTIA.items()}
+        # two slew files concatenated along t, each on its own clock (as inference/inertia.py)
+        t = np.concatenate([np.arange(0.0, 900.0, 2.0), np.arange(0.0, 600.0, 2.0)])
+        file_idx = np.repeat([0, 1], [450, 300])
+        res = 0.002 * rng.standard_normal((t.size, 3))
+        extra_groups["constant_data"] = xr.Dataset(
+            {"prior_sd": ("param", [prior_spec[k][1] for k in INERTIA])},
+            coords={"param": list(INERTIA)})
+    elif kind == "thrust":
+        post_spec = {f"F_{s}": (0.74, 0.02) for s in THRUSTERS[:4]}
+        # Y thrusters fire in pairs (Feldman & Lee Eqs 20-21): individually prior-dominated
+        post_spec |= {f"F_{s}": (0.75, 0.19) for s in THRUSTERS[4:]}
+        post_spec |= {k: (v, 0.1 * v) for k, v in TAUS.items()}
+        prior_spec = {f"F_{s}": (0.75, 0.2) for s in THRUSTERS}
+        prior_spec |= {k: (v, 0.3 * v) for k, v in TAUS.items()}
+        posterior = _draws(rng, chains, draws, post_spec)
+        posterior["sigma_J"] = np.abs(1e-3 + 1e-4 * rng.standard_normal((chains, draws)))
+        truth = {f"F_{s}": 0.74 for s in THRUSTERS} | TAUS
+        baseline = {f"F_{s}": 0.73 for s in THRUSTERS}
+        t = np.sort(rng.uniform(0, 600, 40))
+        res = 1e-3 * rng.standard_normal((t.size, 3))
+    elif kind == "rwa4":
+        u_true = np.array([0.05, 0.80, 0.597])
+        u_true /= np.linalg.norm(u_true)
+        x = u_true + np.radians(0.4) * rng.standard_normal((chains, draws, 3))
+        u = x / np.linalg.norm(x, axis=-1, keepdims=True)
+        posterior = {n: u[..., i] for i, n in enumerate(["u4_x", "u4_y", "u4_z"])}
+        posterior["sigma_w"] = np.abs(1e-4 + 1e-5 * rng.standard_normal((chains, draws)))
+        z = rng.standard_normal((1, 2000, 3))
+        zu = z / np.linalg.norm(z, axis=-1, keepdims=True)
+        prior_draws = {n: zu[..., i] for i, n in enumerate(["u4_x", "u4_y", "u4_z"])}
+        truth = {"u4": u_true.tolist()}
+        baseline = {"u4_x": float(u_true[0] + 0.004), "u4_y": float(u_true[1]),
+                    "u4_z": float(u_true[2] - 0.003)}
+        flat = u.reshape(-1, 3)
+        m = flat.mean(0) / np.linalg.norm(flat.mean(0))
+        ang = np.degrees(np.arccos(np.clip(flat @ m, -1, 1)))
+        extra["direction"] = {"mean": m.tolist(), "cone_deg": {
+            k: float(np.quantile(ang, int(k) / 100)) for k in ("50", "90", "95")}}
+        t = np.arange(0.0, 300.0, 1.0)
+        res = 1e-5 * rng.standard_normal((t.size, 3))
+    else:  # pragma: no cover
+        raise ValueError(kind)
+    if kind != "rwa4":
+        prior_draws = _draws(rng, 1, 1000, prior_spec)
+
+    sample_stats = {"diverging": np.zeros((chains, draws), bool),
+                    "tree_depth": np.full((chains, draws), 3)}
+    if energy:
+        sample_stats["energy"] = 10 + 2.0 * rng.standard_normal((chains, draws)).cumsum(1) * 0.1 \
+            + rng.standard_normal((chains, draws))
+    idata = az.from_dict(
+        posterior=posterior,
+        prior=prior_draws if prior else None,
+        sample_stats=sample_stats,
+        observed_data={"Gamma": rng.standard_normal((50, 3))},
+        dims=dims | {"Gamma": ["t_obs", "axis"]},
+        coords=coords,
+    )
+    if residuals:
+        coords_r = {"t": t, "axis": ["x", "y", "z"]}
+        data = {"residual": (("t", "axis"), res, {"units": "N m s"})}
+        if file_idx is not None:
+            coords_r["file"] = ("t", file_idx)
+            data["residual_std"] = (("t", "axis"), res / 0.002,
+                                    {"units": "1", "description": "whitened body residual"})
+        extra_groups["residuals"] = xr.Dataset(data, coords=coords_r)
+    if extra_groups:
+        idata.add_groups(extra_groups)
+    idata.to_netcdf(str(run / "posterior.nc"))
+
+    names = [n for n in posterior if not n.startswith(("sigma", "H0"))]
+    summary = {
+        "kind": kind,
+        "parameters": {n: _stats(posterior[n]) for n in names},
+        "baseline": baseline,
+        "diagnostics": {"divergences": 0, "max_r_hat": 1.003, "min_ess_bulk": 600.0,
+                        "converged": True},
+        "seed": seed,
+        "version": "0.1.0",
+        "truth": truth,
+        "warnings": ["synthetic <test> run"],
+    } | extra
+    (run / "summary.json").write_text(json.dumps(summary, indent=1))
+    (run / "config.toml").write_text(
+        f'kind = "{kind}"\nseed = {seed}\nversion = "0.1.0"\n'
+        f"[sampler]\nchains = 4\ndraws = {draws}\n")
+    return run
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    """One built report per kind: {kind: (run_dir, html)}."""
+    out = {}
+    for kind in ("inertia", "thrust", "rwa4"):
+        root = tmp_path_factory.mktemp(kind)
+        run = make_run(root, kind, draws=1000 if kind == "inertia" else 200)
+        path = build_report(run)
+        out[kind] = (run, path.read_text(encoding="utf-8"))
+    return out
+
+
+def _section_ids(html: str) -> set[str]:
+    return set(re.findall(r'<section id="([^"]+)">', html))
+
+
+def _assert_self_contained(html: str) -> None:
+    # no external resources: nothing loaded over the network, no scripts, no external CSS/fonts
+    assert not re.search(r'(src|href)\s*=\s*["\']?\s*(https?:)?//', html, re.I)
+    assert "<script" not in html.lower()
+    assert "<link" not in html.lower()
+    assert "@import" not in html and "url(" not in html
+    imgs = re.findall(r'<img[^>]*\ssrc="([^"]*)"', html)
+    assert imgs, "no figures embedded"
+    for src in imgs:
+        assert src.startswith("data:image/png;base64,")
+        png = base64.b64decode(src.split(",", 1)[1], validate=True)
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("kind", ["inertia", "thrust", "rwa4"])
+def test_report_is_self_contained_with_every_section(reports, kind):
+    run, html = reports[kind]
+    assert (run / "report.html").is_file()
+    _assert_self_contained(html)
+    assert set(SECTIONS[kind]) <= _section_ids(html)
+    assert len(re.findall(r"<img ", html)) == N_FIGURES[kind]
+    assert "Not available" not in html  # every group is there in these runs
+    assert "could not be drawn" not in html
+    # header: kind, run dir, seed, version, converged badge, warnings (escaped)
+    assert "CONVERGED" in html and str(run.resolve()) in html
+    assert "synthetic &lt;test&gt; run" in html and "<test>" not in html
+    # under a few MB even for 4 chains x 1000 draws (inertia)
+    assert len(html.encode()) < 3_000_000
+
+
+def test_inertia_report_tables(reports):
+    run, html = reports["inertia"]
+    for name in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "H0[x]", "sigma_H"):
+        assert f"<td class=\"l\">{name}</td>" in html
+    assert "energy BFMI" in html and "least squares" in html and "contraction" in html
+    loaded = load_run(run)
+    names = parameter_names(loaded)
+    assert names == list(INERTIA)
+    diag = diagnostics(loaded, names)
+    assert diag.chains == 4 and diag.draws == 1000 and diag.divergences == 0
+    assert diag.bfmi is not None and diag.bfmi.shape == (4,)
+    rows = {r.label: r for r in parameter_rows(loaded, names, diag)}
+    # posterior sd 8 against prior sd 740: contraction ~ 1 - (8/740)^2, identified
+    assert rows["Ixx"].contraction == pytest.approx(1 - (8 / 740.3) ** 2, abs=1e-3)
+    assert rows["Ixx"].flag == "" and rows["Ixx"].unit == "kg m²"
+    assert rows["Ixx"].baseline == INERTIA["Ixx"] + 1.0 and rows["Ixx"].truth == INERTIA["Ixx"]
+    assert "Whitened body residual of the momentum model" in html
+    # without prior draws, the prior sd stated in constant_data still gives the contraction
+    idata = loaded.idata.copy()
+    del idata["prior"]
+    no_prior = dataclasses.replace(loaded, idata=idata)
+    rows = {r.label: r for r in parameter_rows(no_prior, names, diag)}
+    assert rows["Ixx"].prior_sd == pytest.approx(740.3)
+    assert rows["Ixx"].contraction == pytest.approx(1 - (8 / 740.3) ** 2, abs=1e-3)
+
+
+def test_thrust_report_flags_prior_dominated_y_thrusters(reports):
+    run, html = reports["thrust"]
+    loaded = load_run(run)
+    names = parameter_names(loaded)
+    rows = {r.label: r for r in parameter_rows(loaded, names, diagnostics(loaded, names))}
+    # Y thrusters: posterior sd 0.19 against prior sd 0.2 -> contraction ~0.1, flagged;
+    # Z thrusters: 0.02 against 0.2 -> contraction ~0.99, identified
+    for s in ("Y1", "Y2", "Y3", "Y4"):
+        assert rows[f"F_{s}"].flag in ("weakly identified", "prior-dominated")
+        assert rows[f"F_{s}"].contraction < 0.5
+    for s in ("Z1", "Z2", "Z3", "Z4"):
+        assert rows[f"F_{s}"].flag == "" and rows[f"F_{s}"].contraction > 0.9
+    assert "weakly identified (posterior/prior contraction &lt; 0.5): F_Y1" in html
+    assert "impulse model (Feldman &amp; Lee Eq 17)" in html
+
+
+def test_rwa4_report_has_axis_plot_and_direction_table(reports):
+    run, html = reports["rwa4"]
+    assert "RWA1 target" in html and "posterior mean error (angle to truth)" in html
+    m = re.search(r"angle to RWA1 target \[0, 0.816497, 0.577350\]</td><td>([0-9.]+)°", html)
+    assert m is not None
+    summary = json.loads((run / "summary.json").read_text())
+    mean = np.array(summary["direction"]["mean"])
+    expected = np.degrees(np.arccos(mean @ RWA1 / np.linalg.norm(RWA1)))
+    assert float(m.group(1)) == pytest.approx(expected, abs=2e-3)
+
+
+def test_cli_report_rebuilds_the_page(tmp_path, run_cli):
+    run = make_run(tmp_path, "rwa4", draws=100)
+    page = run / "report.html"
+    page.write_text("stale")
+    code, out, err = run_cli("report", run)
+    assert code == 0, err
+    html = page.read_text()
+    assert html.startswith("<!DOCTYPE html>") and "stale" not in html
+    assert out.strip() == str(page.resolve())
+    assert not list(run.glob(".report.html.*"))  # no temporary file left behind
+    _assert_self_contained(html)
+
+
+def test_cli_report_missing_posterior_is_one_line_exit_2(tmp_path, run_cli):
+    code, out, err = run_cli("report", tmp_path)
+    assert code == 2
+    assert err.count("\n") == 1 and "posterior.nc" in err and "Traceback" not in err
+    code, _, err = run_cli("report", tmp_path / "nope")
+    assert code == 2 and err.count("\n") == 1 and "not found" in err
+
+
+def test_report_without_prior_residuals_or_energy(tmp_path):
+    run = make_run(tmp_path, "rwa4", draws=100, prior=False, residuals=False, energy=False)
+    (run / "config.toml").unlink()
+    summary = json.loads((run / "summary.json").read_text())
+    summary["diagnostics"]["converged"] = False
+    (run / "summary.json").write_text(json.dumps(summary))
+    # a fit building its run in a temporary directory names the final one
+    html = build_report(run, display_dir="/runs/final").read_text()
+    assert "/runs/final" in html and str(run) not in html
+    _assert_self_contained(html)
+    assert set(SECTIONS["rwa4"]) <= _section_ids(html)
+    assert "Not available: prior draws" in html
+    assert "Not available: model residuals" in html
+    assert "Not available: energy plot" in html
+    assert "Not available: config.toml" in html
+    assert "unknown (no prior)" in html
+    assert "could not be drawn" not in html
+    assert '<span class="badge fail">NOT CONVERGED</span>' in html
+
+
+def test_report_out_option_and_missing_summary(tmp_path):
+    run = make_run(tmp_path, "rwa4", draws=100, residuals=False)
+    (run / "summary.json").unlink()
+    out = build_report(run, out=tmp_path / "elsewhere.html")
+    html = out.read_text()
+    assert out == tmp_path / "elsewhere.html" and not (run / "report.html").exists()
+    assert "summary.json not found" in html and "rwa4 run" in html  # kind from the variables
+    assert "Not available: model residuals" in html
+    # the direction comes from the draws when summary.json does not give it
+    assert "posterior mean direction" in html and "50 % cone radius" in html
+
+
+def test_page_helpers_escape_and_link():
+    page = html_page("A <b> title", [
+        section("One & two", table(["x<", "y"], [["<script>", Raw("<em>ok</em>")]])),
+        section("Figs", figure(b"\x89PNG\r\n\x1a\nfake", "cap <i>")),
+    ])
+    assert "<title>A &lt;b&gt; title</title>" in page
+    assert "&lt;script&gt;" in page and "<em>ok</em>" in page and "x&lt;" in page
+    assert 'href="#one-two"' in page and "cap &lt;i&gt;" in page
+    _assert_self_contained(page)
