@@ -28,6 +28,7 @@ the paper says, Y2 with Y4 turns the spacecraft about +Z).
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from cassini_bayes.physics.pulse import pulse_impulse_until
@@ -53,8 +54,8 @@ __all__ = [
 
 THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
 
-_SIGNS_XY = jnp.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
-_DIRECTIONS = jnp.array(
+_SIGNS_XY = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
+_DIRECTIONS = np.array(
     [[0, 0, -1]] * 4 + [[0, -1, 0], [0, -1, 0], [0, 1, 0], [0, 1, 0]], dtype=float
 )
 
@@ -67,7 +68,7 @@ def thruster_positions(lx_m, ly_m, lzy_m, lzz_m) -> Array:
 
 def thruster_directions() -> Array:
     """Unit thrust directions (8, 3) in body axes (see the module docstring)."""
-    return _DIRECTIONS
+    return jnp.asarray(_DIRECTIONS)
 
 
 def moment_matrix(lx_m, ly_m, lzy_m, lzz_m, com_m=(0.0, 0.0, 0.0)) -> Array:

@@ -1,0 +1,221 @@
+"""``cassini-bayes fit inertia ...`` (DESIGN.md §5), and the pieces every ``fit`` command shares.
+
+Shared by ``fit thrust`` and ``fit rwa4`` (add them as their own ``register`` in a module of this
+package, or beside ``inertia`` here):
+
+* the common options as ready-made ``typer.Option`` defaults: :data:`SEED`, :data:`CHAINS`,
+  :data:`WARMUP`, :data:`DRAWS`, :data:`STRICT`, :data:`FORCE`, :data:`OUT`;
+* :func:`sampler_settings` — options → :class:`~cassini_bayes.inference.runner.SamplerSettings`
+  (progress bar only on a terminal);
+* :func:`write_fit_run` — writes the run directory atomically (``posterior.nc``,
+  ``summary.json``, ``config.toml``, ``report.html``), prints the result and the warnings, and
+  under ``--strict`` raises :class:`~cassini_bayes.errors.NotConvergedError` (exit 3) *after*
+  writing everything;
+* :func:`collect_warnings` — turns Python warnings raised during a fit into lines for the summary.
+
+The seed becomes a ``jax.random`` key exactly once, here, with ``jax.random.key(seed)``.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+import typer
+
+ORDER = 20
+
+
+def _request_host_devices() -> None:
+    """One JAX CPU device per core, so NUTS chains run in parallel (``chain_method="parallel"``).
+
+    Must run before JAX initialises its backend, hence at import of this module (the CLI imports
+    its command modules at start-up) and without importing ``cassini_bayes.inference``. A no-op
+    when ``XLA_FLAGS`` already sets a device count or the backend is already up.
+    """
+    import os
+
+    import jax
+
+    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
+        return
+    try:
+        jax.config.update("jax_num_cpu_devices", max(1, os.cpu_count() or 1))
+    except RuntimeError:  # backend already initialised
+        pass
+
+
+_request_host_devices()
+
+SEED = typer.Option(0, "--seed", help="Seed of the run's jax.random key.")
+CHAINS = typer.Option(4, "--chains", min=1, help="Number of NUTS chains.")
+WARMUP = typer.Option(1000, "--warmup", min=10, help="Warmup (adaptation) iterations per chain.")
+DRAWS = typer.Option(1000, "--draws", min=10, help="Kept draws per chain.")
+STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sampler did not "
+                                              "converge (outputs are still written).")
+FORCE = typer.Option(False, "--force", help="Replace --out if it exists.")
+OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
+
+
+def sampler_settings(chains: int, warmup: int, draws: int):
+    """The runner's settings from the common options; the progress bar only on a terminal."""
+    from cassini_bayes.inference.runner import SamplerSettings
+
+    return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
+                           progress=sys.stderr.isatty())
+
+
+@contextmanager
+def collect_warnings() -> Iterator[list[str]]:
+    """Record ``warnings.warn`` messages raised inside the block as one-line strings."""
+    lines: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield lines
+    for w in caught:
+        if issubclass(w.category, (DeprecationWarning, FutureWarning)):
+            continue
+        msg = " ".join(str(w.message).split())
+        if msg not in lines:
+            lines.append(msg)
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(stderr=True, highlight=False)
+
+
+def write_fit_run(out: Path, *, force: bool, strict: bool, idata, summary: dict,
+                  config: dict) -> Path:
+    """Write the run directory, report what happened, and enforce ``--strict``.
+
+    Returns the final directory. Raises ``NotConvergedError`` under ``strict`` when
+    ``summary["diagnostics"]["converged"]`` is false — after the directory is complete.
+    """
+    from cassini_bayes.errors import NotConvergedError
+    from cassini_bayes.rundir import (RunDir, write_config, write_posterior, write_report,
+                                      write_summary)
+
+    with RunDir(out, force=force) as rd:
+        write_posterior(rd.path, idata)
+        write_summary(rd.path, summary)
+        write_config(rd.path, config)
+        with collect_warnings() as report_warnings:
+            write_report(rd.path, display_dir=rd.final, summary=summary)
+    console = _console()
+    for line in list(summary.get("warnings", [])) + report_warnings:
+        console.print(f"[yellow]warning:[/yellow] {line}")
+    d = summary["diagnostics"]
+    status = "[green]converged[/green]" if d["converged"] else "[red]NOT converged[/red]"
+    console.print(f"{summary['kind']}: {status} (max R-hat {d['max_r_hat']:.4f}, min bulk ESS "
+                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences) -> {rd.final}")
+    typer.echo(str(rd.final))
+    if not d["converged"]:
+        msg = (f"{rd.final}: the sampler did not converge (max R-hat {d['max_r_hat']:.4f}, min "
+               f"bulk ESS {d['min_ess_bulk']:.0f}, {d['divergences']} divergences); outputs "
+               "written with converged = false — run longer (--warmup/--draws) or check the data")
+        if strict:
+            raise NotConvergedError(msg)
+        console.print(f"[yellow]warning:[/yellow] {msg}")
+    return rd.final
+
+
+def _inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
+    """The paper's all-axes least squares (Feldman & Lee Eq 11) on the same data, or ``None``.
+
+    One file: :func:`cassini_bayes.estimators.inertia.fit_all_axes`. Several files: their Eq 11
+    systems (each anchored on its own first sample) stacked into one least-squares problem.
+    """
+    import numpy as np
+
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, stacked_system, wheel_momentum_body
+
+    try:
+        from cassini_bayes.estimators.inertia import fit_all_axes
+
+        parts, msgs = [], []
+        for tel in telemetries:
+            names = tel.active_wheels()
+            rates = np.stack([np.nan_to_num(tel.wheel_rate(n)) for n in names], 1)
+            axes = np.stack([spacecraft.wheel(n).axis for n in names])
+            js = np.array([spacecraft.wheel(n).inertia for n in names])
+            h = np.asarray(wheel_momentum_body(rates, axes, js))
+            parts.append((tel.q, tel.omega, h))
+        if len(parts) == 1:
+            fit = fit_all_axes(*parts[0])
+            pi, msgs = fit.pi, list(fit.warnings)
+        else:
+            systems = [stacked_system(*p) for p in parts]
+            s = np.concatenate([np.asarray(a) for a, _ in systems])
+            g = np.concatenate([np.asarray(b) for _, b in systems])
+            pi = np.linalg.lstsq(s, g, rcond=None)[0]
+        return {n: float(v) for n, v in zip(INERTIA_NAMES, pi)}, [f"baseline: {m}" for m in msgs]
+    except Exception as e:  # the baseline must never sink the Bayesian fit
+        return None, [f"baseline (Feldman & Lee Eq 11 least squares) unavailable: "
+                      f"{' '.join(str(e).split())}"]
+
+
+def fit_inertia_cmd(
+    telemetry: list[Path] = typer.Option(..., "--telemetry", help="RWA-slew telemetry CSV "
+                                         "(repeat, or list several after one --telemetry)."),
+    spacecraft: str = typer.Option(..., "--spacecraft", help="Spacecraft model TOML (prior)."),
+    out: Path = OUT,
+    seed: int = SEED,
+    chains: int = CHAINS,
+    warmup: int = WARMUP,
+    draws: int = DRAWS,
+    strict: bool = STRICT,
+    force: bool = FORCE,
+    torque: bool = typer.Option(True, "--torque/--no-torque",
+                                help="Include a constant inertial external torque per file."),
+    more: list[Path] = typer.Argument(None, hidden=True, help="More telemetry files, as in "
+                                      "--telemetry A.csv B.csv."),
+) -> None:
+    """Posterior of the inertia tensor from RWA slews (shared I, per-file momentum)."""
+    import jax
+
+    from cassini_bayes import __version__
+    from cassini_bayes.inference.inertia import NOISE_NAMES, fit_inertia
+    from cassini_bayes.inference.summary import build_summary
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+    from cassini_bayes.rundir import RunDir, file_record
+    from cassini_bayes.spacecraft import load_spacecraft
+    from cassini_bayes.telemetry import read_telemetry_many
+
+    telemetry = list(telemetry) + list(more or [])
+    RunDir(out, force=force)  # refuse a bad --out before any work
+    sc = load_spacecraft(spacecraft)
+    tels = read_telemetry_many(telemetry)
+    settings = sampler_settings(chains, warmup, draws)
+    key = jax.random.key(seed)  # the one place the seed becomes a key
+    with collect_warnings() as warns:
+        post = fit_inertia(key, tels, sc, torque=torque, settings=settings)
+    baseline, base_warns = _inertia_baseline(tels, sc)
+    summary = build_summary(
+        "inertia", post.idata, parameters=INERTIA_NAMES, diagnostics=post.diagnostics,
+        baseline=baseline, seed=seed, warnings=warns + base_warns,
+        nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES])
+    from cassini_bayes._paths import model_path
+
+    config = {
+        "command": "fit inertia",
+        "version": __version__,
+        "seed": seed,
+        "inputs": {"telemetry": [file_record(p) for p in telemetry],
+                   "spacecraft": file_record(model_path(spacecraft))},
+        "options": {"torque": torque},
+        "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
+                                          "progress": False},
+        "spacecraft": sc.to_dict(),
+    }
+    write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
+                  config=config)
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    """Add ``fit inertia`` to the ``fit`` group."""
+    groups["fit"].command("inertia")(fit_inertia_cmd)
