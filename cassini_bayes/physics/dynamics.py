@@ -1,4 +1,4 @@
-"""Rigid spacecraft with reaction wheels: equations of motion and a fixed-step integrator (pure JAX).
+"""Rigid spacecraft with reaction wheels: equations of motion, fixed-step integrator (pure JAX).
 
 Equations (body axes, DESIGN.md §6; Feldman & Lee (2006) §III and Lee Eq 10):
 
@@ -29,7 +29,8 @@ thruster/external torques held (zero-order hold, as the flight software commands
   step) is rotated to inertial axes with the attitude at mid-step.
 
 Consequences used by the tests: without torques ``H_N`` is constant to round-off (the conservation
-the inertia method relies on); with torques ``ΔH_N`` equals the accumulated inertial impulse exactly;
+the inertia method relies on); with torques ``ΔH_N`` equals the accumulated inertial impulse
+exactly;
 the attitude converges with order 4 in ``dt``.
 """
 
@@ -134,6 +135,18 @@ def _dexpinv(phi: Array, omega: Array) -> Array:
     return omega + 0.5 * c + jnp.cross(phi, c) / 12.0
 
 
+def _rotate(phi: Array, v: Array) -> Array:
+    """``dcm(rotvec_to_quat(φ)) @ v`` by Rodrigues' formula (the frame turns by φ):
+    ``v − (sin θ/θ) φ × v + ((1 − cos θ)/θ²) φ × (φ × v)``, with series near θ = 0."""
+    th2 = jnp.sum(phi * phi)
+    small = th2 < 1e-8
+    th = jnp.sqrt(jnp.where(small, 1.0, th2))
+    a = jnp.where(small, 1.0 - th2 / 6.0 + th2 * th2 / 120.0, jnp.sin(th) / th)
+    b = jnp.where(small, 0.5 - th2 / 24.0 + th2 * th2 / 720.0, (1.0 - jnp.cos(th)) / (th * th))
+    c = jnp.cross(phi, v)
+    return v - a * c + b * jnp.cross(phi, c)
+
+
 def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
          body_impulse: Array, inertial_torque: Array) -> tuple[DynState, Array]:
     """Advance the state by ``dt`` seconds (see the module docstring).
@@ -158,8 +171,7 @@ def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
     dh_n = a0.T @ body_impulse + inertial_torque * dt
 
     def rate(phi, s):
-        a = dcm(rotvec_to_quat(phi)) @ a0
-        h_body = a @ (state.h_inertial + s * dh_n)
+        h_body = _rotate(phi, a0 @ (state.h_inertial + s * dh_n))
         # I ω̇ + ω × (I ω + H_w) + Ḣ_w = T  in the form ω = I_s⁻¹ (A H_N − Σ h_k g_k)
         return _omega(plant, h_body, state.h_wheels + (s * dt) * motor_torque)
 
@@ -170,8 +182,8 @@ def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
     k4 = _dexpinv(dt * k3, rate(dt * k3, 1.0))
     phi = (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     q1 = quat_normalize(quat_multiply(rotvec_to_quat(phi), state.q))
-    a_mid = dcm(quat_multiply(rotvec_to_quat(0.5 * phi), state.q))
-    impulse_n = a_mid.T @ body_impulse
+    # A(q_mid)ᵀ b with A(q_mid) = R(φ/2) A0, and R(φ/2)ᵀ b = R(−φ/2) b
+    impulse_n = a0.T @ _rotate(-0.5 * phi, body_impulse)
     new = DynState(q1, state.h_inertial + impulse_n + inertial_torque * dt,
                    state.h_wheels + motor_torque * dt)
     return new, impulse_n

@@ -1,0 +1,139 @@
+"""``cassini-bayes simulate SCENARIO.toml --out DIR [--seed N] [--force]``.
+
+Writes ``DIR/telemetry.csv`` (noisy telemetry, DESIGN.md §4), ``DIR/pulses.csv`` (when thrusters
+fired) and ``DIR/truth.json`` (every true parameter, the noise levels, the quiet windows and the
+noise-free momentum check), atomically: everything is written into a temporary directory beside
+``DIR`` and renamed at the end, so a half-written run never appears under the final name. An
+existing ``DIR`` is refused unless ``--force``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import jax
+import numpy as np
+import typer
+from rich.console import Console
+
+from cassini_bayes import __version__
+from cassini_bayes.errors import InputError
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.physics.momentum import INERTIA_NAMES
+from cassini_bayes.simulate import SimResult, load_scenario, quiet_windows, simulate
+from cassini_bayes.telemetry import write_pulses, write_telemetry
+
+ORDER = 20
+
+
+def truth_document(result: SimResult, seed: int) -> dict:
+    """Everything true about a simulated run, as plain JSON-able data (SI units)."""
+    s, p, a = result.scenario, result.params, result.arrays
+    h = np.asarray(a.h_inertial)
+    drift = float(np.max(np.linalg.norm(h - h[0] - np.asarray(a.impulse_inertial), axis=1))
+                  / max(np.linalg.norm(h[0]), 1e-300))
+    windows = [{"name": w.name, "t0_s": w.t0_s, "t1_s": w.t1_s, "source": "scenario"}
+               for w in s.windows]
+    windows += [{"name": f"quiet{i}", "t0_s": t0, "t1_s": t1, "source": "detected"}
+                for i, (t0, t1) in enumerate(quiet_windows(result))]
+    inertia = dict(zip(INERTIA_NAMES, map(float, np.asarray(p.inertia))))
+    return {
+        "scenario": s.name,
+        "scenario_file": s.source,
+        "description": s.description,
+        "seed": seed,
+        "version": __version__,
+        "truth_model": s.truth_model_path,
+        "prior_model": s.prior_model_path,
+        "inertia_kgm2": inertia,
+        "wheels": [{"name": n, "on": bool(on), "axis": [float(x) for x in ax],
+                    "inertia_kgm2": float(j)}
+                   for n, on, ax, j in zip(s.wheel_names, s.wheels_on, s.truth.wheel_axes,
+                                           s.truth.wheel_inertias)],
+        "rwa4_axis": ([float(x) for x in s.truth.wheel("RWA4").axis]
+                      if "RWA4" in s.wheel_names else None),
+        "believed_axes": [list(a) for a in s.rwa.believed_axes],
+        "thrust_n": dict(zip(THRUSTER_NAMES, map(float, np.asarray(p.thrust_n)))),
+        "tau_delay_s": float(p.tau_s[0]),
+        "tau_rise_s": float(p.tau_s[1]),
+        "tau_fall_s": float(p.tau_s[2]),
+        "external_torque_inertial_nm": [float(x) for x in np.asarray(p.torque_inertial_nm)],
+        "external_torque_body_nm": [float(x) for x in np.asarray(p.torque_body_nm)],
+        "external_torque_inertial_rate_nm_s": [float(x) for x in
+                                               np.asarray(p.torque_inertial_rate_nm_s)],
+        "noise": {"gyro_rad_s": s.noise.gyro_rad_s, "star_tracker_rad": s.noise.star_tracker_rad,
+                  "tach_noise_rpm": s.noise.tach_noise_rpm,
+                  "tach_quantum_rpm": s.noise.tach_quantum_rpm,
+                  "on_time_resolution_s": 0.1},
+        "run": {"duration_s": s.duration_s, "dt_s": s.dt_s,
+                "sample_period_s": s.sample_period_s, "control": s.control},
+        "quiet_windows": windows,
+        "h_inertial_start_nms": [float(x) for x in h[0]],
+        "h_inertial_end_nms": [float(x) for x in h[-1]],
+        "thruster_impulse_ns": dict(zip(THRUSTER_NAMES,
+                                        map(float, np.asarray(a.thruster_impulse)[-1]))),
+        "momentum_balance_rel_error": drift,
+        "max_pointing_error_rad": float(np.max(np.linalg.norm(a.pointing_error, axis=1))),
+        "n_pulses": 0 if result.pulses is None else int(result.pulses.t_on.size),
+    }
+
+
+def write_run(result: SimResult, out: Path, seed: int, force: bool = False) -> None:
+    """Write a simulated run into ``out`` atomically (temporary sibling directory, then rename)."""
+    out = Path(out)
+    if out.exists() and not force:
+        raise InputError(f"{out} exists; choose another --out or pass --force to replace it")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    umask = os.umask(0)
+    os.umask(umask)
+    tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the run directory is an ordinary one
+    try:
+        write_telemetry(tmp / "telemetry.csv", result.telemetry)
+        if result.pulses is not None:
+            write_pulses(tmp / "pulses.csv", result.pulses)
+        (tmp / "truth.json").write_text(json.dumps(truth_document(result, seed), indent=2) + "\n")
+        if out.exists():
+            old = out.with_name(f".{out.name}.old")
+            if old.exists():
+                shutil.rmtree(old)
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    @app.command("simulate")
+    def simulate_cmd(
+        scenario: Path = typer.Argument(..., help="Scenario TOML (experiments/scenarios/…)."),
+        out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
+        seed: int | None = typer.Option(None, "--seed", help="Seed of the sensor noise "
+                                        "(default: the scenario's)."),
+        force: bool = typer.Option(False, "--force", help="Replace an existing --out."),
+    ) -> None:
+        """Simulate a scenario: telemetry.csv, pulses.csv (if thrusters fire), truth.json."""
+        console = Console(stderr=True, highlight=False)
+        sc = load_scenario(scenario)
+        if Path(out).exists() and not force:
+            raise InputError(f"{out} exists; choose another --out or pass --force to replace it")
+        seed_ = sc.seed if seed is None else seed
+        if seed_ < 0:
+            raise InputError(f"--seed must be a non-negative integer, got {seed_}")
+        t0 = time.perf_counter()
+        with console.status(f"simulating {sc.name}: {sc.n_steps} steps of {sc.dt_s} s, "
+                            f"{sc.n_samples} samples (compiling on first use)…"):
+            result = simulate(jax.random.key(seed_), sc)
+            write_run(result, out, seed_, force)
+        n_p = 0 if result.pulses is None else result.pulses.t_on.size
+        console.print(f"[green]✓[/green] {sc.name}: {sc.n_samples} samples, {n_p} pulses, "
+                      f"{time.perf_counter() - t0:.1f} s → {out}")

@@ -1,0 +1,470 @@
+"""Run a scenario: closed-loop dynamics + controllers + sensors, one compiled ``lax.scan``.
+
+``simulate(key, scenario) -> SimResult`` gives the truth and the noisy telemetry as the package's
+containers; ``simulate_batch(keys, scenario, truth=None)`` runs many replicates as one compiled,
+vmapped call and returns raw arrays (:class:`SimArrays` with a leading batch axis). The true
+parameters (:class:`TruthParams`: inertia, wheel axes incl. RWA4, thrust, pulse time constants,
+external torques) and the noise levels are traced inputs, so simulation-based calibration can vmap
+over prior draws without recompiling; only the scenario's shape and its controller settings are
+compile-time constants.
+
+Internals: the run is ``n_samples − 1`` telemetry periods, each ``steps_per_sample`` fixed steps
+of :func:`cassini_bayes.physics.dynamics.step`. Controllers act once per step (zero-order hold;
+the RCS controller on the 1/8 s command grid). Each thruster keeps a ring of its last
+:data:`PULSE_RING` pulses; the impulse of a step is the exact integral of the pulse profile over
+the step, ``F [g(t+dt − t_on) − g(t − t_on)]`` with ``g`` = :func:`pulse_impulse_until`.
+The controllers see the true state (the on-board attitude estimate is taken as perfect; its
+errors are far below the star-tracker noise put on the telemetry), while they use the *prior*
+model's inertia and the *believed* wheel axes. Sensor noise is added to the samples afterwards,
+so the noisy telemetry and the truth come from one trajectory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from cassini_bayes.physics import dynamics
+from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
+from cassini_bayes.physics.pulse import pulse_impulse_until
+from cassini_bayes.simulate import controllers as ctl
+from cassini_bayes.simulate.scenario import Scenario
+from cassini_bayes.simulate.sensors import NoiseParams, measure
+from cassini_bayes.telemetry import PulseLog, Telemetry
+
+__all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_params", "simulate",
+           "simulate_arrays", "simulate_batch", "pulse_log", "quiet_windows", "PULSE_RING",
+           "trace_count"]
+
+PULSE_RING = 6           # pulses remembered per thruster (older tails are < 1e-8 of a pulse)
+_TRACES = [0]            # incremented each time the core is traced (compile-once test)
+
+
+def trace_count() -> int:
+    """How many times the simulation core has been traced (for recompilation tests)."""
+    return _TRACES[0]
+
+
+class TruthParams(NamedTuple):
+    """True parameters of a run (all traceable arrays; SI units).
+
+    inertia : (6,) ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` kg m², incl. wheels.
+    wheel_axes : (k, 3) true unit spin axes (RWA4 wherever it really is).
+    wheel_inertias : (k,) spin inertias, kg m² (0 for a wheel that is off).
+    thrust_n : (8,) steady thrust per thruster ``Z1 … Y4``, N.
+    tau_s : (3,) ``(tau_delay, tau_rise, tau_fall)``, s.
+    torque_inertial_nm : (3,) external torque at t = 0, inertial axes, N m.
+    torque_body_nm : (3,) constant external torque, body axes, N m.
+    torque_inertial_rate_nm_s : (3,) slow linear change of the inertial torque, N m/s
+        (``T_N(t) = T_N + Ṫ_N t``, integrated exactly).
+    """
+
+    inertia: Array
+    wheel_axes: Array
+    wheel_inertias: Array
+    thrust_n: Array
+    tau_s: Array
+    torque_inertial_nm: Array
+    torque_body_nm: Array
+    torque_inertial_rate_nm_s: Array
+
+
+class SimArrays(NamedTuple):
+    """Raw simulation output; leading axis = samples (and a batch axis first when batched).
+
+    t : (n,) s. q, omega, wheel_rates : true attitude, body rate (rad/s), wheel rates (rad/s).
+    q_meas, omega_meas, wheel_rates_meas : the same through the sensors.
+    h_inertial : (n, 3) true total inertial momentum, N m s.
+    impulse_inertial : (n, 3) cumulative angular impulse of the body-fixed torques (thrusters and
+        body-axis external torque) in inertial axes, N m s.
+    impulse_body : (n, 3) the same accumulated in body axes (no rotation), N m s.
+    thruster_impulse : (n, 8) cumulative impulse of each thruster, N s.
+    on_times : (n, 8) cumulative commanded on-time, s.
+    pointing_error : (n, 3) attitude error w.r.t. the command, rad.
+    pulse_units : (n_steps, 8) int8 widths (units of 1/8 s) commanded at each step (empty when
+        the scenario fires no thrusters).
+    """
+
+    t: Array
+    q: Array
+    omega: Array
+    wheel_rates: Array
+    q_meas: Array
+    omega_meas: Array
+    wheel_rates_meas: Array
+    h_inertial: Array
+    impulse_inertial: Array
+    impulse_body: Array
+    thruster_impulse: Array
+    on_times: Array
+    pointing_error: Array
+    pulse_units: Array
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """One simulated run as the package's containers (NumPy, SI units).
+
+    truth : noise-free :class:`Telemetry` (on-times included when thrusters can fire).
+    telemetry : noisy :class:`Telemetry`, what a calibration sees.
+    pulses : :class:`PulseLog` of every commanded pulse, or ``None`` when none fired.
+    arrays : the raw :class:`SimArrays` (momentum, impulses, pointing error …).
+    params : the :class:`TruthParams` used.
+    """
+
+    scenario: Scenario
+    truth: Telemetry
+    telemetry: Telemetry
+    pulses: PulseLog | None
+    arrays: SimArrays
+    params: TruthParams
+
+
+@dataclass(frozen=True)
+class _Config:
+    """Compile-time constants of a scenario (hashable)."""
+
+    n_out: int
+    sps: int
+    dt: float
+    control: str
+    thrusters: bool
+    on: tuple[bool, ...]
+    kp: float
+    kd: float
+    rate_gain_s: float
+    width_gain: float
+    max_units: int
+    min_off_s: float
+    wheel_gain: float
+
+
+def truth_params(scenario: Scenario) -> TruthParams:
+    """The scenario's true parameters as arrays."""
+    sc = scenario.truth
+    on = np.array(scenario.wheels_on, float)
+    return TruthParams(
+        inertia=jnp.asarray(inertia_vector(sc.inertia)),
+        wheel_axes=jnp.asarray(sc.wheel_axes),
+        wheel_inertias=jnp.asarray(sc.wheel_inertias * on),
+        thrust_n=jnp.asarray(scenario.thrust_n),
+        tau_s=jnp.asarray([sc.pulse.tau_delay, sc.pulse.tau_rise, sc.pulse.tau_fall]),
+        torque_inertial_nm=jnp.asarray(scenario.external_torque_inertial_nm),
+        torque_body_nm=jnp.asarray(scenario.external_torque_body_nm),
+        torque_inertial_rate_nm_s=jnp.asarray(scenario.external_torque_inertial_rate_nm_s),
+    )
+
+
+def noise_params(scenario: Scenario) -> NoiseParams:
+    """The scenario's noise levels as arrays."""
+    n = scenario.noise
+    return NoiseParams(*(jnp.asarray(float(x)) for x in
+                         (n.gyro_rad_s, n.star_tracker_rad, n.tach_quantum_rpm,
+                          n.tach_noise_rpm)))
+
+
+def _config(s: Scenario) -> _Config:
+    wn, z = s.rwa.bandwidth_rad_s, s.rwa.damping
+    return _Config(
+        n_out=s.n_samples - 1, sps=s.steps_per_sample, dt=s.dt_s, control=s.control,
+        thrusters=s.uses_thrusters, on=s.wheels_on, kp=wn * wn, kd=2 * z * wn,
+        rate_gain_s=s.rcs.rate_gain_s, width_gain=s.rcs.width_gain_s_per_rad,
+        max_units=int(round(s.rcs.max_pulse_s / ctl.COMMAND_RESOLUTION_S)),
+        min_off_s=s.rcs.min_off_s, wheel_gain=s.rcs.wheel_rate_gain_per_s)
+
+
+def _plan(s: Scenario) -> np.ndarray:
+    """Per-step commands (n_out, sps, P): ``cmd(10)`` then, with thrusters, open-loop pulse units
+    (8), dead-bands (3), wheel ramp targets (k) and torque limits (k)."""
+    n = s.n_steps
+    t = np.arange(n) * s.dt_s
+    slews = [(sl.t_start_s, sl.axis, sl.angle_rad, sl.rate_rad_s, sl.accel_rad_s2)
+             for sl in s.slews]
+    cols = [ctl.command_profile(t, s.q0, slews)]
+    if s.uses_thrusters:
+        k = len(s.wheels_on)
+        forced = np.zeros((n, 8))
+        for p in s.pulses:
+            i = int(round(p.t_on_s / s.dt_s))
+            if i < n:
+                forced[i, p.thruster] = max(forced[i, p.thruster],
+                                            round(p.width_s / ctl.COMMAND_RESOLUTION_S))
+        db = np.broadcast_to(np.asarray(s.rcs.deadband_rad), (n, 3)).copy()
+        for c in s.deadbands:
+            db[t >= c.t_s - 1e-9] = c.deadband_rad
+        target = np.zeros((n, k))
+        tmax = np.zeros((n, k))
+        for r in sorted(s.wheel_ramps, key=lambda r: r.t_start_s):
+            m = t >= r.t_start_s - 1e-9
+            target[m, r.wheel] = r.target_rad_s
+            tmax[m, r.wheel] = r.torque_nm
+        cols += [forced, db, target, tmax]
+    plan = np.concatenate(cols, axis=1)
+    return plan.reshape(s.n_samples - 1, s.steps_per_sample, -1)
+
+
+def _sample_commands(s: Scenario) -> np.ndarray:
+    """Commanded ``[q, ω, α]`` (n_samples, 10) at the telemetry times (for the pointing error)."""
+    slews = [(sl.t_start_s, sl.axis, sl.angle_rad, sl.rate_rad_s, sl.accel_rad_s2)
+             for sl in s.slews]
+    return ctl.command_profile(np.arange(s.n_samples) * s.sample_period_s, s.q0, slews)
+
+
+def _controller_arrays(s: Scenario) -> dict[str, Array]:
+    on = np.array(s.wheels_on, float)
+    believed = np.asarray(s.rwa.believed_axes) * on[:, None]
+    th = s.truth.thrusters
+    return {
+        "inertia_ctrl": jnp.asarray(s.prior.inertia),
+        "axes_believed": jnp.asarray(believed),
+        "axes_pinv": jnp.asarray(np.linalg.pinv(believed.T)),
+        "wheel_j_ctrl": jnp.asarray(s.prior.wheel_inertias * on),
+        "q_matrix": moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com),
+        "pairs": jnp.asarray(ctl.pair_matrix()),
+        "q0": jnp.asarray(s.q0),
+        "w0": jnp.asarray(s.rates0_rad_s),
+        "rho0": jnp.asarray(s.wheel0_rad_s),
+        "cmd_samples": jnp.asarray(_sample_commands(s)),
+    }
+
+
+def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg: _Config):
+    _TRACES[0] += 1
+    dt = cfg.dt
+    k = truth.wheel_axes.shape[0]
+    on = jnp.asarray(cfg.on)
+    plant = dynamics.make_plant(inertia_matrix(truth.inertia), truth.wheel_axes,
+                                truth.wheel_inertias)
+    state0 = dynamics.state_from_rates(carr["q0"], carr["w0"], carr["rho0"], plant)
+    td, tr, tf = truth.tau_s[0], truth.tau_s[1], truth.tau_s[2]
+
+    def one_step(carry, xs):
+        state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b, cum_n = carry
+        i, row = xs
+        t = i * dt
+        cmd = row[:10]
+        omega = dynamics.body_rate(state, plant)
+        rho = dynamics.wheel_rates(state, plant, omega)
+        if cfg.control == "rwa":
+            u = ctl.rwa_wheel_torques(state.q, omega, rho, cmd, carr["inertia_ctrl"],
+                                      carr["axes_believed"], carr["axes_pinv"],
+                                      carr["wheel_j_ctrl"], cfg.kp, cfg.kd)
+        else:
+            u = ctl.wheel_ramp_torques(rho, row[21:21 + k], row[21 + k:21 + 2 * k],
+                                       truth.wheel_inertias, cfg.wheel_gain)
+        u = jnp.where(on, u, 0.0)
+        body_imp = truth.torque_body_nm * dt
+        if cfg.thrusters:
+            forced = row[10:18]
+            units = forced
+            if cfg.control == "rcs":
+                free = t >= free_at - 1e-9
+                auto = ctl.rcs_commands(state.q, omega, cmd, row[18:21], free, carr["pairs"],
+                                        cfg.rate_gain_s, cfg.width_gain, cfg.max_units)
+                units = jnp.maximum(units, auto)
+            fire = units > 0
+            width = units * ctl.COMMAND_RESOLUTION_S
+            ring_t = jnp.where(fire[:, None], jnp.concatenate(
+                [jnp.full((8, 1), t), ring_t[:, :-1]], 1), ring_t)
+            ring_w = jnp.where(fire[:, None], jnp.concatenate(
+                [width[:, None], ring_w[:, :-1]], 1), ring_w)
+            ring_g = jnp.where(fire[:, None], jnp.concatenate(
+                [jnp.zeros((8, 1)), ring_g[:, :-1]], 1), ring_g)
+            free_at = jnp.where(fire, t + width + cfg.min_off_s, free_at)
+            # Exact impulse of each pulse over [t, t + dt] (Feldman & Lee §V profile):
+            # g(t + dt − t_on) − g(t − t_on), the second term carried from the previous step.
+            # Skipped (exactly: the carried g makes a later difference catch up) while every
+            # remembered pulse is over and its tail below e^-40.
+            busy = jnp.any(t + dt < ring_t + ring_w + td + 40.0 * tf)
+
+            def pulse_step(ring_g):
+                g1 = pulse_impulse_until(t + dt - ring_t, ring_w, td, tr, tf)
+                over = jnp.clip(jnp.minimum(t + dt, ring_t + ring_w) - jnp.maximum(t, ring_t),
+                                0.0)
+                return truth.thrust_n * jnp.sum(g1 - ring_g, axis=1), g1, jnp.sum(over, axis=1)
+
+            def idle(ring_g):
+                return jnp.zeros(8), ring_g, jnp.zeros(8)
+
+            j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (8,) N s
+            cum_on = cum_on + on_step
+            cum_thr = cum_thr + j_step
+            body_imp = body_imp + carr["q_matrix"] @ j_step                      # Eq 16
+            out_units = units.astype(jnp.int8)
+        else:
+            out_units = jnp.zeros((8,), jnp.int8)[:0]
+        # linear-in-time inertial torque: its mean over the step is its value at mid-step
+        t_n = truth.torque_inertial_nm + truth.torque_inertial_rate_nm_s * (t + 0.5 * dt)
+        state, imp_n = dynamics.step(state, plant, dt, u, body_imp, t_n)
+        carry = (state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b + body_imp,
+                 cum_n + imp_n)
+        return carry, out_units
+
+    def one_sample(carry, xs):
+        j, rows, cmd_end = xs
+        idx = j * cfg.sps + jnp.arange(cfg.sps)
+        carry, units = jax.lax.scan(one_step, carry, (idx, rows))
+        return carry, (_observe(carry, cmd_end), units)
+
+    def _observe(carry, cmd):
+        state = carry[0]
+        omega = dynamics.body_rate(state, plant)
+        rho = jnp.where(on, dynamics.wheel_rates(state, plant, omega), jnp.nan)
+        err = ctl.attitude_error(state.q, cmd[:4])
+        return (state.q, omega, rho, state.h_inertial, carry[8], carry[7], carry[6], carry[5],
+                err)
+
+    z8 = jnp.zeros(8)
+    carry0 = (state0, jnp.full((8, PULSE_RING), -1e9), jnp.zeros((8, PULSE_RING)),
+              jnp.zeros((8, PULSE_RING)), jnp.full(8, -1.0), z8, z8, jnp.zeros(3), jnp.zeros(3))
+    obs0 = _observe(carry0, carr["cmd_samples"][0])
+    _, (obs, units) = jax.lax.scan(one_sample, carry0, (jnp.arange(cfg.n_out), plan,
+                                                         carr["cmd_samples"][1:]))
+    cols = [jnp.concatenate([o0[None], o], 0) for o0, o in zip(obs0, obs)]
+    q, omega, rho, h_n, imp_n, imp_b, thr, on_t, err = cols
+    q_m, w_m, rho_m = measure(key, q, omega, rho, noise)
+    t = jnp.arange(cfg.n_out + 1) * (cfg.sps * dt)
+    return SimArrays(t, q, omega, rho, q_m, w_m, rho_m, h_n, imp_n, imp_b, thr, on_t, err,
+                     units.reshape(-1, 8) if cfg.thrusters else jnp.zeros((0, 8), jnp.int8))
+
+
+_core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))
+
+
+def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched):
+    # A shared truth stays unbatched: its mass properties are then hoisted out of the vmapped
+    # loop, ~10x faster than carrying one copy per replicate.
+    axes = 0 if truth_batched else None
+    return jax.vmap(_simulate_core, in_axes=(0, axes, None, None, None, None))(
+        keys, truth, noise, plan, carr, cfg)
+
+
+_batch_jit = jax.jit(_batch_core, static_argnames=("cfg", "truth_batched"))
+
+
+_PREPARED: dict[int, tuple] = {}   # id(scenario) → (scenario, plan, controller arrays), a few
+
+
+def _prepared(s: Scenario):
+    """Plan and controller arrays of a scenario, cached for the last few scenarios used."""
+    hit = _PREPARED.get(id(s))
+    if hit is not None and hit[0] is s:
+        return hit[1], hit[2]
+    plan, carr = jnp.asarray(_plan(s)), _controller_arrays(s)
+    if len(_PREPARED) >= 8:
+        _PREPARED.pop(next(iter(_PREPARED)))
+    _PREPARED[id(s)] = (s, plan, carr)
+    return plan, carr
+
+
+def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = None,
+                    noise: NoiseParams | None = None) -> SimArrays:
+    """One run as raw arrays (compiled once per scenario shape); ``truth``: the file's."""
+    truth = truth_params(scenario) if truth is None else truth
+    noise = noise_params(scenario) if noise is None else noise
+    plan, carr = _prepared(scenario)
+    return _core_jit(key, truth, noise, plan, carr, cfg=_config(scenario))
+
+
+def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = None,
+                   noise: NoiseParams | None = None) -> SimArrays:
+    """Replicates of a scenario as one compiled, vmapped call.
+
+    Parameters
+    ----------
+    keys : (b,) jax.random keys, one per replicate (sensor noise).
+    scenario : the scenario.
+    truth : optional :class:`TruthParams` with a leading batch axis (b, ...) to vary the true
+        parameters per replicate (e.g. prior draws for SBC); default: the scenario's, shared.
+        New draws of the same shape reuse the compiled program (no recompilation).
+    noise : optional noise levels (shared).
+
+    Returns
+    -------
+    :class:`SimArrays` with a leading batch axis.
+    """
+    batched = truth is not None
+    truth = truth_params(scenario) if truth is None else truth
+    noise = noise_params(scenario) if noise is None else noise
+    plan, carr = _prepared(scenario)
+    return _batch_jit(keys, truth, noise, plan, carr, cfg=_config(scenario),
+                      truth_batched=batched)
+
+
+def _telemetry(s: Scenario, t, q, w, rho, on_times, source) -> Telemetry:
+    return Telemetry(t=np.asarray(t), q=np.asarray(q), omega=np.asarray(w),
+                     wheel_rates=np.asarray(rho), wheel_names=s.wheel_names,
+                     on_times=np.asarray(on_times) if s.uses_thrusters else None, source=source)
+
+
+def pulse_log(arrays: SimArrays, scenario: Scenario) -> PulseLog | None:
+    """The commanded pulses of one run (``None`` when none fired)."""
+    units = np.asarray(arrays.pulse_units)
+    if units.size == 0 or not units.any():
+        return None
+    step, thr = np.nonzero(units)
+    order = np.lexsort((thr, step))
+    step, thr = step[order], thr[order]
+    return PulseLog(t_on=step * scenario.dt_s, thruster=thr.astype(int),
+                    width=units[step, thr].astype(float) * ctl.COMMAND_RESOLUTION_S,
+                    source=f"<simulated {scenario.name}>")
+
+
+def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -> SimResult:
+    """Simulate a scenario: the truth beside the noisy telemetry and the pulse log.
+
+    Parameters
+    ----------
+    key : jax.random key for the sensor noise.
+    scenario : a loaded :class:`Scenario`.
+    truth : optional override of the true parameters.
+    """
+    params = truth_params(scenario) if truth is None else truth
+    arr = jax.tree_util.tree_map(np.asarray, simulate_arrays(key, scenario, params))
+    src = f"<simulated {scenario.name}>"
+    tel_truth = _telemetry(scenario, arr.t, arr.q, arr.omega, arr.wheel_rates, arr.on_times, src)
+    tel = _telemetry(scenario, arr.t, arr.q_meas, arr.omega_meas, arr.wheel_rates_meas,
+                     arr.on_times, src)
+    return SimResult(scenario, tel_truth, tel, pulse_log(arr, scenario), arr, params)
+
+
+def quiet_windows(result: SimResult, settle_s: float = 120.0,
+                  min_length_s: float = 120.0) -> list[tuple[float, float]]:
+    """Quiet windows ``[(t0, t1), …]`` of a run: no slew commanded, no wheel biasing
+    (wheel torques below 1e-4 N m), no thruster impulse, at least ``settle_s`` after any of them,
+    and at least ``min_length_s`` long. Computed from the truth."""
+    a, s = result.arrays, result.scenario
+    t = np.asarray(a.t)
+    active = np.zeros(t.size, bool)
+    for sl in s.slews:
+        active |= (t >= sl.t_start_s) & (t <= sl.t_end_s)
+    j = np.asarray(result.params.wheel_inertias)
+    rho = np.nan_to_num(np.asarray(a.wheel_rates))
+    torque = np.abs(np.diff(rho, axis=0)) * j / np.diff(t)[:, None]
+    busy = np.any(torque > 1e-4, axis=1)
+    imp = np.any(np.abs(np.diff(np.asarray(a.thruster_impulse), axis=0)) > 1e-12, axis=1)
+    active[1:] |= busy | imp
+    active[:-1] |= busy | imp
+    # grow the activity by the settling time
+    last = np.where(active, t, -np.inf)
+    last = np.maximum.accumulate(last)
+    quiet = ~active & (t - last > settle_s)
+    out = []
+    i = 0
+    while i < t.size:
+        if quiet[i]:
+            k = i
+            while k + 1 < t.size and quiet[k + 1]:
+                k += 1
+            if t[k] - t[i] >= min_length_s:
+                out.append((float(t[i]), float(t[k])))
+            i = k + 1
+        else:
+            i += 1
+    return out

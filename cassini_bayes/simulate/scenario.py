@@ -1,0 +1,513 @@
+"""Simulation scenarios: TOML files under ``experiments/scenarios/``, loaded and validated.
+
+A scenario names its truth (a spacecraft model file plus overrides), the prior model the
+calibration starts from, the run (duration, integration step, telemetry period, controller), the
+commanded events (slews, wheel biasing ramps, dead-band changes, open-loop pulses), the sensor
+noise and the seed. Unknown keys, missing required values and impossible values are
+:class:`~cassini_bayes.errors.InputError` with one line naming the key. Schema::
+
+    name = "..."                 description = "..."          seed = 0
+    [run]       duration_s, dt_s, sample_period_s, control = "rwa" | "rcs"
+    [truth]     model = "models/…toml" (required); optional overrides:
+                inertia = {Ixx = …, …}, thrust_n = 0.75 | [8 values], tau_delay_s, tau_rise_s,
+                tau_fall_s, rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
+                external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3]
+    [prior]     model = "…" (required)
+    [initial]   wheels_on = ["RWA1", …] (required), q = [q1, q2, q3, q4], rates_rad_s = [3],
+                wheel_rpm = {RWA1 = …}
+    [rwa_controller]  bandwidth_rad_s, damping, believed_axis = {RWA4 = "RWA1" | [x, y, z]}
+    [rcs_controller]  deadband_mrad = [3], rate_gain_s, width_gain_s_per_mrad, max_pulse_s,
+                      min_off_s, wheel_rate_gain_per_s
+    [[slew]]         t_start_s, axis = [3] (unit), angle_deg, rate_mrad_s, accel_mrad_s2
+    [[wheel_ramp]]   wheel, t_start_s, target_rpm, torque_nm
+    [[deadband]]     t_s, deadband_mrad = [3]
+    [[pulse]]        t_on_s, thruster = "Z1"…"Y4", width_s
+    [noise]     gyro_rad_s, star_tracker_rad, tach_quantum_rpm, tach_noise_rpm
+    [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cassini_bayes._paths import ROOT, SCENARIOS_DIR
+from cassini_bayes.errors import InputError
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.spacecraft import Spacecraft, check_physical_inertia, load_spacecraft
+from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
+
+__all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "Window",
+           "RwaControl", "RcsControl", "Scenario", "load_scenario", "scenario_from_dict",
+           "scenario_path"]
+
+RPM = 2.0 * np.pi / 60.0
+_UNIT_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Slew:
+    """Eigen-axis slew about a body ``axis`` (unit) by ``angle_rad``; trapezoidal rate profile."""
+
+    t_start_s: float
+    axis: tuple[float, float, float]
+    angle_rad: float
+    rate_rad_s: float
+    accel_rad_s2: float
+
+    @property
+    def t_end_s(self) -> float:
+        return self.t_start_s + slew_duration(self.angle_rad, self.rate_rad_s, self.accel_rad_s2)
+
+
+@dataclass(frozen=True)
+class WheelRamp:
+    """Bias wheel ``wheel`` (index) towards ``target_rad_s`` with motor torque ≤ ``torque_nm``."""
+
+    wheel: int
+    t_start_s: float
+    target_rad_s: float
+    torque_nm: float
+
+
+@dataclass(frozen=True)
+class DeadbandChange:
+    """From ``t_s`` on, RCS dead-bands ``deadband_rad`` (3,) about X, Y, Z."""
+
+    t_s: float
+    deadband_rad: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class PulseCommand:
+    """Open-loop thruster pulse: ``thruster`` index 0..7, command time and width (s)."""
+
+    t_on_s: float
+    thruster: int
+    width_s: float
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Sensor noise (1σ unless said otherwise).
+
+    gyro_rad_s : white noise on each body-rate sample, rad/s.
+    star_tracker_rad : attitude noise per axis, a small rotation, rad.
+    tach_quantum_rpm : wheel-rate quantization step, rpm (0 = none).
+    tach_noise_rpm : white noise on wheel rates before quantization, rpm.
+    """
+
+    gyro_rad_s: float = 0.0
+    star_tracker_rad: float = 0.0
+    tach_quantum_rpm: float = 0.0
+    tach_noise_rpm: float = 0.0
+
+
+@dataclass(frozen=True)
+class Window:
+    """A named quiet window ``[t0_s, t1_s]`` reported with the truth."""
+
+    name: str
+    t0_s: float
+    t1_s: float
+
+
+@dataclass(frozen=True)
+class RwaControl:
+    """RWA PD controller: bandwidth (rad/s), damping ratio, believed wheel axes (k, 3)."""
+
+    bandwidth_rad_s: float = 0.1
+    damping: float = 0.7
+    believed_axes: tuple[tuple[float, float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class RcsControl:
+    """RCS dead-band controller settings (SI)."""
+
+    deadband_rad: tuple[float, float, float] = (2e-3, 2e-3, 2e-3)
+    rate_gain_s: float = 10.0
+    width_gain_s_per_rad: float = 125.0
+    max_pulse_s: float = 0.75
+    min_off_s: float = 0.5
+    wheel_rate_gain_per_s: float = 0.5
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario (SI units). See the module docstring for the file schema."""
+
+    name: str
+    description: str
+    source: str
+    seed: int
+    duration_s: float
+    dt_s: float
+    sample_period_s: float
+    control: str
+    truth: Spacecraft
+    thrust_n: tuple[float, ...]
+    prior: Spacecraft
+    wheels_on: tuple[bool, ...]
+    q0: tuple[float, float, float, float]
+    rates0_rad_s: tuple[float, float, float]
+    wheel0_rad_s: tuple[float, ...]
+    rwa: RwaControl
+    rcs: RcsControl
+    external_torque_inertial_nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    external_torque_body_nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    external_torque_inertial_rate_nm_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    slews: tuple[Slew, ...] = ()
+    wheel_ramps: tuple[WheelRamp, ...] = ()
+    deadbands: tuple[DeadbandChange, ...] = ()
+    pulses: tuple[PulseCommand, ...] = ()
+    noise: Noise = field(default_factory=Noise)
+    windows: tuple[Window, ...] = ()
+    truth_model_path: str = ""
+    prior_model_path: str = ""
+
+    @property
+    def n_steps(self) -> int:
+        return int(round(self.duration_s / self.dt_s))
+
+    @property
+    def steps_per_sample(self) -> int:
+        return int(round(self.sample_period_s / self.dt_s))
+
+    @property
+    def n_samples(self) -> int:
+        return self.n_steps // self.steps_per_sample + 1
+
+    @property
+    def uses_thrusters(self) -> bool:
+        return self.control == "rcs" or bool(self.pulses)
+
+    @property
+    def wheel_names(self) -> tuple[str, ...]:
+        return self.truth.wheel_names
+
+
+def scenario_path(name: str) -> Path:
+    """Path of a scenario: a file path, or the stem of a file under ``experiments/scenarios/``."""
+    p = Path(name)
+    if p.suffix != ".toml":
+        p = p.with_suffix(".toml")
+    return p if p.is_absolute() or p.exists() else SCENARIOS_DIR / p.name
+
+
+class _Reader:
+    """Typed, key-checked access to a TOML table; every error names ``src`` and the key."""
+
+    def __init__(self, table: Any, where: str, src: str, allowed: set[str]):
+        if not isinstance(table, dict):
+            raise InputError(f"'{where.rstrip('.')}' must be a table", path=src)
+        self.t, self.where, self.src = table, where, src
+        for key in table:
+            if key not in allowed:
+                raise InputError(f"unknown key '{where}{key}'; allowed: "
+                                 f"{', '.join(sorted(allowed))}", path=src)
+
+    def err(self, key: str, msg: str) -> InputError:
+        return InputError(f"'{self.where}{key}' {msg}", path=self.src)
+
+    def has(self, key: str) -> bool:
+        return key in self.t
+
+    def num(self, key: str, default=None, *, positive=False, nonneg=False) -> float:
+        if key not in self.t:
+            if default is None:
+                raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
+            return float(default)
+        v = self.t[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            raise self.err(key, f"must be a finite number, got {v!r}")
+        if positive and v <= 0:
+            raise self.err(key, f"must be positive, got {v}")
+        if nonneg and v < 0:
+            raise self.err(key, f"must not be negative, got {v}")
+        return float(v)
+
+    def vec(self, key: str, n: int = 3, default=None, *, unit=False, nonneg=False) -> np.ndarray:
+        if key not in self.t:
+            if default is None:
+                raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
+            return np.asarray(default, float)
+        v = self.t[key]
+        try:
+            a = np.asarray(v, float)
+        except (TypeError, ValueError):
+            raise self.err(key, f"must be a list of {n} numbers, got {v!r}") from None
+        if a.shape != (n,) or not np.all(np.isfinite(a)):
+            raise self.err(key, f"must be a list of {n} finite numbers, got {v!r}")
+        if unit and abs(np.linalg.norm(a) - 1.0) > _UNIT_TOL:
+            raise self.err(key, f"must be a unit vector (|v| = {np.linalg.norm(a):.6f}); "
+                                "normalise it")
+        if nonneg and np.any(a < 0):
+            raise self.err(key, f"must not have negative entries, got {v!r}")
+        return a
+
+    def str_(self, key: str, default=None) -> str:
+        if key not in self.t:
+            if default is None:
+                raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
+            return default
+        v = self.t[key]
+        if not isinstance(v, str):
+            raise self.err(key, f"must be a string, got {v!r}")
+        return v
+
+    def sub(self, key: str, allowed: set[str], required=False) -> "_Reader":
+        if key not in self.t:
+            if required:
+                raise InputError(f"missing required section [{self.where}{key}]", path=self.src)
+            return _Reader({}, f"{self.where}{key}.", self.src, allowed)
+        return _Reader(self.t[key], f"{self.where}{key}.", self.src, allowed)
+
+    def items(self, key: str, allowed: set[str]) -> list["_Reader"]:
+        v = self.t.get(key, [])
+        if not isinstance(v, list):
+            raise self.err(key, "must be an array of tables ([[...]])")
+        return [_Reader(x, f"{self.where}{key}[{i}].", self.src, allowed) for i, x in enumerate(v)]
+
+
+def _model(name: str, key: str, src: str) -> tuple[Spacecraft, str]:
+    p = Path(name)
+    if not p.is_absolute() and not p.exists() and (ROOT / p).exists():
+        p = ROOT / p
+    try:
+        return load_spacecraft(p), str(p)
+    except InputError as e:
+        raise InputError(f"'{key}': {e}", path=src) from None
+
+
+def _wheel_index(sc: Spacecraft, name: str, key: str, src: str) -> int:
+    names = [n.upper() for n in sc.wheel_names]
+    if str(name).upper() not in names:
+        raise InputError(f"'{key}' names no wheel of the model: {name!r} (have "
+                         f"{', '.join(names)})", path=src)
+    return names.index(str(name).upper())
+
+
+def _check_time(r: _Reader, key: str, t: float, duration: float) -> None:
+    if not 0.0 <= t <= duration:
+        raise r.err(key, f"= {t} s lies outside the run [0, {duration}] s")
+
+
+def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
+    """Build and validate a :class:`Scenario` from the TOML schema (as a dict)."""
+    top = _Reader(d, "", src, {"name", "description", "seed", "run", "truth", "prior", "initial",
+                               "rwa_controller", "rcs_controller", "slew", "wheel_ramp",
+                               "deadband", "pulse", "noise", "window"})
+    run = top.sub("run", {"duration_s", "dt_s", "sample_period_s", "control"}, required=True)
+    duration = run.num("duration_s", positive=True)
+    dt = run.num("dt_s", positive=True)
+    period = run.num("sample_period_s", positive=True)
+    control = run.str_("control")
+    if control not in ("rwa", "rcs"):
+        raise run.err("control", f"must be \"rwa\" or \"rcs\", got {control!r}")
+    if abs(period / dt - round(period / dt)) > 1e-9 or round(period / dt) < 1:
+        raise run.err("sample_period_s", f"= {period} must be a whole number of steps dt_s = {dt}")
+    if abs(duration / period - round(duration / period)) > 1e-9:
+        raise run.err("duration_s", f"= {duration} must be a whole number of sample periods")
+    if abs(period / 0.1 - round(period / 0.1)) > 1e-9:
+        raise run.err("sample_period_s", "must be a multiple of 0.1 s (the on-time telemetry "
+                                         "resolution)")
+
+    tr = top.sub("truth", {"model", "inertia", "thrust_n", "tau_delay_s", "tau_rise_s",
+                           "tau_fall_s", "rwa4_axis", "external_torque_inertial_nm",
+                           "external_torque_body_nm", "external_torque_inertial_rate_nm_s"},
+                    required=True)
+    truth, truth_path = _model(tr.str_("model"), "truth.model", src)
+    ti = tr.sub("inertia", {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"})
+    i0 = truth.inertia
+    xx, yy, zz = (ti.num(k, i0[j, j], positive=True) for j, k in enumerate(("Ixx", "Iyy", "Izz")))
+    xy, xz, yz = ti.num("Ixy", i0[0, 1]), ti.num("Ixz", i0[0, 2]), ti.num("Iyz", i0[1, 2])
+    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    check_physical_inertia(inertia, "[truth.inertia]", src)
+    truth = truth.with_inertia(inertia)
+    if tr.has("thrust_n"):
+        v = tr.t["thrust_n"]
+        thrust = (np.full(8, tr.num("thrust_n", positive=True)) if not isinstance(v, list)
+                  else tr.vec("thrust_n", 8, nonneg=True))
+        if np.any(thrust <= 0):
+            raise tr.err("thrust_n", "must be positive (N)")
+    else:
+        thrust = np.full(8, truth.thrust)
+    pulse = truth.pulse
+    pulse = replace(pulse, tau_delay=tr.num("tau_delay_s", pulse.tau_delay, positive=True),
+                    tau_rise=tr.num("tau_rise_s", pulse.tau_rise, positive=True),
+                    tau_fall=tr.num("tau_fall_s", pulse.tau_fall, positive=True))
+    truth = replace(truth, pulse=pulse, thrust=float(np.mean(thrust)))
+    if tr.has("rwa4_axis"):
+        axis = tr.vec("rwa4_axis", unit=True)
+        _wheel_index(truth, "RWA4", "truth.rwa4_axis", src)
+        truth = truth.with_wheel_axis("RWA4", axis / np.linalg.norm(axis))
+    ext_n = tr.vec("external_torque_inertial_nm", default=np.zeros(3))
+    ext_b = tr.vec("external_torque_body_nm", default=np.zeros(3))
+    ext_rate = tr.vec("external_torque_inertial_rate_nm_s", default=np.zeros(3))
+
+    pr = top.sub("prior", {"model"}, required=True)
+    prior, prior_path = _model(pr.str_("model"), "prior.model", src)
+    if prior.wheel_names != truth.wheel_names:
+        raise InputError("'prior.model' must have the same wheels as 'truth.model'", path=src)
+
+    k = len(truth.wheels)
+    ini = top.sub("initial", {"wheels_on", "q", "rates_rad_s", "wheel_rpm"}, required=True)
+    on_names = ini.t.get("wheels_on")
+    if on_names is None:
+        raise InputError("missing required key 'initial.wheels_on'", path=src)
+    if not isinstance(on_names, list):
+        raise ini.err("wheels_on", "must be a list of wheel names")
+    on = [False] * k
+    for n in on_names:
+        on[_wheel_index(truth, n, "initial.wheels_on", src)] = True
+    q0 = ini.vec("q", 4, default=[0.0, 0.0, 0.0, 1.0], unit=True)
+    w0 = ini.vec("rates_rad_s", default=np.zeros(3))
+    rpm = ini.sub("wheel_rpm", set(truth.wheel_names) | {n.lower() for n in truth.wheel_names})
+    rho0 = np.zeros(k)
+    for name in rpm.t:
+        j = _wheel_index(truth, name, f"initial.wheel_rpm.{name}", src)
+        if not on[j]:
+            raise rpm.err(name, "gives a rate for a wheel that is not in 'initial.wheels_on'")
+        rho0[j] = rpm.num(name) * RPM
+
+    rc = top.sub("rwa_controller", {"bandwidth_rad_s", "damping", "believed_axis"})
+    believed = prior.wheel_axes.copy()
+    ba = rc.sub("believed_axis", set(truth.wheel_names))
+    for name, v in ba.t.items():
+        j = _wheel_index(truth, name, f"rwa_controller.believed_axis.{name}", src)
+        if isinstance(v, str):
+            believed[j] = prior.wheel_axes[_wheel_index(prior, v,
+                                                        f"rwa_controller.believed_axis.{name}",
+                                                        src)]
+        else:
+            believed[j] = ba.vec(name, unit=True)
+    rwa = RwaControl(rc.num("bandwidth_rad_s", 0.1, positive=True),
+                     rc.num("damping", 0.7, positive=True),
+                     tuple(tuple(float(x) for x in a) for a in believed))
+    if control == "rwa" and sum(on) < 3:
+        raise ini.err("wheels_on", "needs at least three wheels under RWA control")
+    if control == "rwa":
+        g = believed[np.array(on)]
+        if np.linalg.matrix_rank(g, tol=1e-3) < 3:
+            raise InputError("the believed axes of the wheels on do not span 3-D; check "
+                             "'rwa_controller.believed_axis'", path=src)
+
+    cc = top.sub("rcs_controller", {"deadband_mrad", "rate_gain_s", "width_gain_s_per_mrad",
+                                    "max_pulse_s", "min_off_s", "wheel_rate_gain_per_s"})
+    db = cc.vec("deadband_mrad", default=[2.0, 2.0, 2.0])
+    if np.any(db <= 0):
+        raise cc.err("deadband_mrad", "must be positive (mrad)")
+    max_pulse = cc.num("max_pulse_s", 0.75, positive=True)
+    if max_pulse < MIN_PULSE_S or abs(max_pulse / COMMAND_RESOLUTION_S
+                                      - round(max_pulse / COMMAND_RESOLUTION_S)) > 1e-9:
+        raise cc.err("max_pulse_s", "must be a multiple of 0.125 s, at least 0.125 s")
+    rcs = RcsControl(tuple(db * 1e-3), cc.num("rate_gain_s", 10.0, nonneg=True),
+                     cc.num("width_gain_s_per_mrad", 0.125, nonneg=True) * 1e3, max_pulse,
+                     cc.num("min_off_s", 0.5, nonneg=True),
+                     cc.num("wheel_rate_gain_per_s", 0.5, positive=True))
+
+    slews = []
+    for r in top.items("slew", {"t_start_s", "axis", "angle_deg", "rate_mrad_s",
+                                "accel_mrad_s2"}):
+        t0 = r.num("t_start_s")
+        _check_time(r, "t_start_s", t0, duration)
+        s = Slew(t0, tuple(r.vec("axis", unit=True)), np.deg2rad(r.num("angle_deg")),
+                 r.num("rate_mrad_s", positive=True) * 1e-3,
+                 r.num("accel_mrad_s2", positive=True) * 1e-3)
+        if s.t_end_s > duration:
+            raise r.err("t_start_s", f"slew ends at {s.t_end_s:.1f} s, after the run "
+                                     f"({duration} s)")
+        if slews and t0 < slews[-1].t_end_s:
+            raise r.err("t_start_s", f"= {t0} s starts before the previous slew ends "
+                                     f"({slews[-1].t_end_s:.1f} s); slews run one at a time")
+        slews.append(s)
+    if slews and control != "rwa":
+        raise InputError("[[slew]] needs 'run.control = \"rwa\"'", path=src)
+
+    ramps = []
+    for r in top.items("wheel_ramp", {"wheel", "t_start_s", "target_rpm", "torque_nm"}):
+        j = _wheel_index(truth, r.str_("wheel"), r.where + "wheel", src)
+        if not on[j]:
+            raise r.err("wheel", "is not in 'initial.wheels_on'")
+        t0 = r.num("t_start_s")
+        _check_time(r, "t_start_s", t0, duration)
+        ramps.append(WheelRamp(j, t0, r.num("target_rpm") * RPM, r.num("torque_nm",
+                                                                       positive=True)))
+    if ramps and control != "rcs":
+        raise InputError("[[wheel_ramp]] needs 'run.control = \"rcs\"' (under RWA control the "
+                         "attitude controller drives the wheels)", path=src)
+    deadbands = []
+    for r in top.items("deadband", {"t_s", "deadband_mrad"}):
+        t0 = r.num("t_s")
+        _check_time(r, "t_s", t0, duration)
+        v = r.vec("deadband_mrad")
+        if np.any(v <= 0):
+            raise r.err("deadband_mrad", "must be positive (mrad)")
+        deadbands.append(DeadbandChange(t0, tuple(v * 1e-3)))
+    pulses = []
+    for r in top.items("pulse", {"t_on_s", "thruster", "width_s"}):
+        name = r.str_("thruster").upper()
+        if name not in THRUSTER_NAMES:
+            raise r.err("thruster", f"must be one of {', '.join(THRUSTER_NAMES)}, got {name!r}")
+        t0 = r.num("t_on_s")
+        _check_time(r, "t_on_s", t0, duration)
+        w = r.num("width_s", positive=True)
+        for key, val in (("t_on_s", t0), ("width_s", w)):
+            if abs(val / COMMAND_RESOLUTION_S - round(val / COMMAND_RESOLUTION_S)) > 1e-9:
+                raise r.err(key, f"= {val} is not on the 1/8 s command grid")
+        if w < MIN_PULSE_S:
+            raise r.err("width_s", f"= {w} s is below the 125 ms minimum pulse")
+        pulses.append(PulseCommand(t0, THRUSTER_NAMES.index(name), w))
+    if (control == "rcs" or pulses) and abs(dt - COMMAND_RESOLUTION_S) > 1e-12:
+        raise run.err("dt_s", "must be 0.125 s when thrusters fire (the 1/8 s command "
+                              "resolution)")
+
+    nz = top.sub("noise", {"gyro_rad_s", "star_tracker_rad", "tach_quantum_rpm",
+                           "tach_noise_rpm"})
+    noise = Noise(nz.num("gyro_rad_s", 0.0, nonneg=True),
+                  nz.num("star_tracker_rad", 0.0, nonneg=True),
+                  nz.num("tach_quantum_rpm", 0.0, nonneg=True),
+                  nz.num("tach_noise_rpm", 0.0, nonneg=True))
+    windows = []
+    for r in top.items("window", {"name", "t0_s", "t1_s"}):
+        t0, t1 = r.num("t0_s"), r.num("t1_s")
+        _check_time(r, "t0_s", t0, duration)
+        _check_time(r, "t1_s", t1, duration)
+        if t1 <= t0:
+            raise r.err("t1_s", f"= {t1} must be after t0_s = {t0}")
+        windows.append(Window(r.str_("name"), t0, t1))
+    seed = top.t.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise top.err("seed", f"must be a non-negative integer, got {seed!r}")
+
+    return Scenario(
+        name=top.str_("name", Path(src).stem), description=top.str_("description", ""),
+        source=src, seed=seed, duration_s=duration, dt_s=dt, sample_period_s=period,
+        control=control, truth=truth, thrust_n=tuple(float(x) for x in thrust), prior=prior,
+        wheels_on=tuple(on), q0=tuple(q0 / np.linalg.norm(q0)), rates0_rad_s=tuple(w0),
+        wheel0_rad_s=tuple(rho0), rwa=rwa, rcs=rcs,
+        external_torque_inertial_nm=tuple(ext_n), external_torque_body_nm=tuple(ext_b),
+        external_torque_inertial_rate_nm_s=tuple(ext_rate),
+        slews=tuple(slews), wheel_ramps=tuple(ramps),
+        deadbands=tuple(sorted(deadbands, key=lambda c: c.t_s)),
+        pulses=tuple(pulses), noise=noise, windows=tuple(windows),
+        truth_model_path=truth_path, prior_model_path=prior_path,
+    )
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
+    p = scenario_path(str(path))
+    if not p.exists():
+        raise InputError(f"scenario not found: {path} (give a path to a .toml file or a name "
+                         f"from experiments/scenarios/)")
+    try:
+        d = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as e:
+        raise InputError(f"not valid TOML: {e}", path=str(p)) from None
+    return scenario_from_dict(d, str(p))
