@@ -13,6 +13,11 @@ import pytest  # noqa: E402
 import cassini_bayes  # noqa: E402,F401  (turns on x64)
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
+# Persistent compilation cache: test workers (pytest -n) and reruns share compiled programs, which
+# dominate the suite's run time on a 2-core machine.
+_CACHE = os.path.join(os.path.dirname(__file__), os.pardir, ".pytest_cache", "jax")
+jax.config.update("jax_compilation_cache_dir", os.path.abspath(_CACHE))
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 
 
 @pytest.fixture
