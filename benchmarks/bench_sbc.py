@@ -1,0 +1,112 @@
+"""Benchmark: SBC replicates per minute, per model and batch size, on this machine.
+
+    python benchmarks/bench_sbc.py [--models toy,inertia] [--batches 1,8,16,32] [--repeat 2]
+
+For each model and batch size ``B`` it runs :func:`cassini_bayes.analysis.campaign.run_batch`
+(the unit of work of every executor: prior draws, vmapped simulation, fits, ranks) once to compile,
+then ``--repeat`` more batches, and reports the warm throughput ``60 B / seconds-per-batch``
+(compilation excluded and reported separately). For the toy model it also times the obvious
+alternative, a loop of ``numpyro.infer.MCMC`` (same NUTS settings, chains vectorised,
+``jit_model_args=True``) over replicates, as the baseline of the ratio.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+import warnings
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import jax  # noqa: E402
+import numpy as np  # noqa: E402
+
+import cassini_bayes  # noqa: E402,F401
+from cassini_bayes.analysis.campaign import run_batch  # noqa: E402
+from cassini_bayes.analysis.sbc_models import ModelSpec, build_model  # noqa: E402
+
+
+def time_batches(spec: ModelSpec, batch: int, repeat: int) -> tuple[float, float]:
+    """(compile-and-first-batch seconds, warm seconds per batch)."""
+    t0 = time.perf_counter()
+    run_batch(spec, 0, 0, batch)
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for b in range(1, repeat + 1):
+        run_batch(spec, 0, b, batch)
+    return first, (time.perf_counter() - t0) / repeat
+
+
+def mcmc_loop_baseline(n: int) -> tuple[float, float]:
+    """Toy model fitted by a loop of numpyro.infer.MCMC: (first run s, warm s per replicate)."""
+    import jax.numpy as jnp
+    import numpyro
+    import numpyro.distributions as dist
+    from numpyro.infer import MCMC, NUTS
+
+    model_cfg = build_model(ModelSpec.make("toy")).settings
+    x = jnp.linspace(-1.0, 1.0, model_cfg["n_obs"])
+
+    def model(y):
+        a = numpyro.sample("alpha", dist.Normal(0.0, 1.0))
+        b = numpyro.sample("beta", dist.Normal(0.0, 1.0))
+        s = numpyro.sample("sigma", dist.LogNormal(jnp.log(0.5), 0.3))
+        numpyro.sample("y", dist.Normal(a + b * x, s), obs=y)
+
+    mcmc = MCMC(NUTS(model), num_warmup=model_cfg["num_warmup"],
+                num_samples=model_cfg["num_draws"], num_chains=model_cfg["num_chains"],
+                chain_method="vectorized", progress_bar=False, jit_model_args=True)
+    ys = np.random.default_rng(0).normal(size=(n + 1, model_cfg["n_obs"]))
+    t0 = time.perf_counter()
+    mcmc.run(jax.random.key(0), jnp.asarray(ys[0]))
+    jax.block_until_ready(mcmc.get_samples())
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for i in range(1, n + 1):
+        mcmc.run(jax.random.key(i), jnp.asarray(ys[i]))
+        jax.block_until_ready(mcmc.get_samples())
+    return first, (time.perf_counter() - t0) / n
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--models", default="toy", help="comma-separated: toy, inertia")
+    ap.add_argument("--batches", default="1,8,16,32", help="batch sizes for the toy model")
+    ap.add_argument("--inertia-batch", type=int, default=4)
+    ap.add_argument("--repeat", type=int, default=2, help="warm batches timed per setting")
+    ap.add_argument("--mcmc-loop", type=int, default=4,
+                    help="replicates timed for the MCMC-loop baseline (0: skip)")
+    args = ap.parse_args(argv)
+    warnings.simplefilter("ignore")
+    print(f"jax {jax.__version__}, devices {jax.devices()}, cpu count {os.cpu_count()}")
+    rows = []
+    for name in args.models.split(","):
+        spec = ModelSpec.make(name)
+        sizes = ([int(b) for b in args.batches.split(",")] if name == "toy"
+                 else [args.inertia_batch])
+        for b in sizes:
+            first, warm = time_batches(spec, b, args.repeat)
+            how = "vmapped batch" if build_model(spec).vectorized else "batch (fits one by one)"
+            rows.append((name, f"{how} B={b}", first, warm / b, 60 * b / warm))
+            print(f"{rows[-1][0]:8s} {rows[-1][1]:28s} first {first:7.1f} s   "
+                  f"{warm / b:7.3f} s/replicate   {60 * b / warm:8.1f} replicates/min",
+                  flush=True)
+        if name == "toy" and args.mcmc_loop:
+            first, per = mcmc_loop_baseline(args.mcmc_loop)
+            rows.append((name, "loop of numpyro MCMC", first, per, 60 / per))
+            print(f"{name:8s} {'loop of numpyro MCMC':28s} first {first:7.1f} s   "
+                  f"{per:7.3f} s/replicate   {60 / per:8.1f} replicates/min", flush=True)
+    best = {}
+    for name, how, _, per, rate in rows:
+        if "batch" in how:
+            best[name] = max(best.get(name, 0.0), rate)
+    for name, how, _, per, rate in rows:
+        if how.startswith("loop") and name in best:
+            print(f"{name}: best vmapped batch / MCMC loop = {best[name] / rate:.1f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,454 @@
+"""SBC campaigns: replicates in vectorised batches, checkpoints, resume, local or Dask executors.
+
+A campaign of ``N`` replicates of a model (:mod:`cassini_bayes.analysis.sbc_models`) is cut into
+batches of ``B`` replicates. Batch ``b`` always holds replicates ``bB … bB + B − 1`` and replicate
+``i`` always uses the key ``fold_in(key(seed), i)`` (split into prior, simulation, fit and
+tie-breaking keys), so a replicate's result depends on ``(seed, i, B)`` only — not on which
+batches ran before, on which worker, or whether the campaign was interrupted. (``B`` enters only
+through floating-point rounding of the vectorised programs; a resumed campaign must keep its ``B``
+and the manifest check enforces it.) A last batch that runs past ``N`` is computed whole (the
+compiled program keeps one shape) and its extra replicates are ignored.
+
+Each batch: one ``jax.vmap`` draws the parameters and simulates the data of all ``B`` replicates;
+one ``jax.vmap`` of the model's sampler fits them (every replicate's chains advance in lock-step in
+one compiled program; see :func:`cassini_bayes.analysis.sbc_models.nuts_fit`); ranks of the truth
+among the thinned draws come from :func:`cassini_bayes.analysis.sbc.ranks`. Measured on the 2-core
+machine (``benchmarks/bench_sbc.py``, toy model, 2 chains × 150 + 150, shared with other jobs):
+B = 1, 8, 16, 32 give about 1050, 1010, 1570, 1380 replicates/min once compiled (lock-step NUTS
+wastes little on a model whose trees have similar depths; B = 16 is the default), against about 4
+replicates/min for a loop calling ``numpyro.infer.MCMC.run`` per replicate, which re-traces its
+sampler on every call.
+
+Checkpoints: ``WORKDIR/manifest.json`` records what the campaign is (model, options, scenario
+hash, seed, batch size, package version); every finished batch is written to
+``WORKDIR/batch_NNNNNN.npz`` atomically (temporary file, then ``os.replace``), so a campaign
+killed at any moment leaves only whole batches. :func:`run_campaign` on the same ``WORKDIR`` skips
+the batches already there and runs the rest: the result equals an uninterrupted run bit for bit.
+
+Executors: ``local`` runs the batches in this process; ``dask`` submits them to a Dask cluster
+(``scheduler`` address, or a ``LocalCluster`` when none is given). A task carries only plain data
+(:class:`~cassini_bayes.analysis.sbc_models.ModelSpec`, seed, batch index, batch size); the worker
+rebuilds the adapter (compiling once per worker process) and returns NumPy arrays; the client
+writes the checkpoints, so workers need no shared file system, only ``cassini_bayes`` installed.
+Both executors run the same function on the same keys and give identical ranks.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import json
+import math
+import os
+import tempfile
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from cassini_bayes import __version__
+from cassini_bayes.analysis.sbc import ranks
+from cassini_bayes.analysis.sbc_models import ModelSpec, SbcModel, build_model
+from cassini_bayes.errors import InputError
+
+__all__ = [
+    "BatchResult",
+    "CampaignResult",
+    "EXECUTORS",
+    "run_batch",
+    "run_campaign",
+    "replicate_keys",
+    "load_checkpoints",
+]
+
+EXECUTORS = ("local", "dask")
+_FIELDS = ("index", "truth", "draws", "rank", "n_divergent", "rhat", "failed")
+
+
+class BatchResult(NamedTuple):
+    """Results of one batch of ``B`` replicates (``P`` parameters, ``L`` thinned draws).
+
+    Attributes
+    ----------
+    index : numpy.ndarray
+        Replicate indices ``bB … bB + B − 1``, shape ``(B,)``.
+    truth : numpy.ndarray
+        Parameters drawn from the prior, shape ``(B, P)``.
+    draws : numpy.ndarray
+        Thinned posterior draws (chains concatenated), shape ``(B, P, L)``.
+    rank : numpy.ndarray
+        Rank of the truth among the draws, ``0..L``, or ``-1`` for a failed replicate, ``(B, P)``.
+    n_divergent : numpy.ndarray
+        Divergent transitions after warm-up, shape ``(B,)``.
+    rhat : numpy.ndarray
+        Split R-hat of the thinned chains (NaN when too short), shape ``(B, P)``.
+    failed : numpy.ndarray
+        Non-finite truth or draws, shape ``(B,)``.
+    """
+
+    index: np.ndarray
+    truth: np.ndarray
+    draws: np.ndarray
+    rank: np.ndarray
+    n_divergent: np.ndarray
+    rhat: np.ndarray
+    failed: np.ndarray
+
+
+class CampaignResult(NamedTuple):
+    """A finished campaign: the first ``N`` replicates, in replicate order.
+
+    Attributes
+    ----------
+    names : tuple of str
+        Parameter names (the ``P`` columns).
+    truth, draws, rank, n_divergent, rhat, failed : numpy.ndarray
+        As in :class:`BatchResult`, stacked over replicates ``0..N−1``.
+    converged : numpy.ndarray
+        No divergence and every R-hat ≤ the model's ``rhat_max``, shape ``(N,)``.
+    n_draws : int
+        ``L``.
+    seed, batch_size : int
+        Campaign identity.
+    batches_run : int
+        Batches computed by this call (the rest came from checkpoints).
+    settings : dict
+        The model's settings.
+    """
+
+    names: tuple[str, ...]
+    truth: np.ndarray
+    draws: np.ndarray
+    rank: np.ndarray
+    n_divergent: np.ndarray
+    rhat: np.ndarray
+    failed: np.ndarray
+    converged: np.ndarray
+    n_draws: int
+    seed: int
+    batch_size: int
+    batches_run: int
+    settings: dict
+
+
+def replicate_keys(seed: int, index: np.ndarray) -> jax.Array:
+    """Keys of replicates ``index``: ``fold_in(key(seed), i)`` — independent of batching."""
+    root = jax.random.key(seed)
+    return jax.vmap(lambda i: jax.random.fold_in(root, i))(jnp.asarray(index, dtype=jnp.uint32))
+
+
+@functools.lru_cache(maxsize=16)
+def _programs(spec: ModelSpec) -> tuple[SbcModel, Callable, Callable, Callable]:
+    """Compiled batch programs of a model: simulate, fit, rank (cached per process).
+
+    The fit program is cached by the model's ``fit`` function, so two specs sharing a sampler
+    (e.g. the same model with another simulator setting) share one compilation.
+    """
+    model = build_model(spec)
+    names = model.parameter_names
+
+    def simulate_one(key):
+        k_prior, k_sim, _, _ = jax.random.split(key, 4)
+        params = model.prior_sample(k_prior)
+        truth = jnp.stack([jnp.asarray(params[n], dtype=jnp.float64) for n in names])
+        return truth, model.simulate(k_sim, params)
+
+    if model.simulate_batch is None:
+        simulate_batch = jax.jit(jax.vmap(simulate_one))
+    else:
+        def simulate_batch(keys):
+            split = jax.vmap(lambda k: jax.random.split(k, 4))(keys)
+            params, data = model.simulate_batch(split[:, 0], split[:, 1])
+            truth = np.stack([np.asarray(params[n], dtype=np.float64) for n in names], axis=1)
+            return truth, data
+
+    return (model, simulate_batch, _fit_program(model.fit, names, model.vectorized),
+            _rank_program())
+
+
+@functools.lru_cache(maxsize=16)
+def _fit_program(fit: Callable, names: tuple[str, ...], vectorized: bool) -> Callable:
+    """``(keys (B,), data (B, ...)) -> (draws (B, P, L), chains (B, P, C, D), n_div (B,))``."""
+
+    def fit_one(key, data):
+        _, _, k_fit, _ = jax.random.split(key, 4)
+        out = fit(k_fit, data)
+        chains = jnp.stack([out.draws[n] for n in names])  # (P, chains, draws)
+        draws = jnp.reshape(chains, (chains.shape[0], -1))  # (P, chains * draws)
+        return draws, chains, jnp.asarray(out.n_divergent)
+
+    if vectorized:
+        return jax.jit(jax.vmap(fit_one))
+
+    def fit_batch(keys, data):
+        # One replicate whose fit raises (a numerical failure, an unidentifiable draw) must not
+        # sink its batch: it is recorded with NaN draws and counted as a failure.
+        outs: list = [None] * keys.shape[0]
+        for i in range(keys.shape[0]):
+            try:
+                outs[i] = fit_one(keys[i], jax.tree.map(lambda a, i=i: a[i], data))
+            except Exception as e:  # noqa: BLE001 - any failure of one fit is recorded
+                warnings.warn(f"SBC replicate fit failed ({type(e).__name__}: {e}); "
+                              "recorded as a failure", RuntimeWarning, stacklevel=2)
+        good = next((o for o in outs if o is not None), None)
+        if good is None:
+            raise RuntimeError("every fit of the batch failed; see the warnings above")
+        nan = tuple(jnp.full_like(x, jnp.nan, dtype=jnp.float64) for x in good[:2]) + (
+            jnp.asarray(0),)
+        outs = [o if o is not None else nan for o in outs]
+        return tuple(jnp.stack([jnp.asarray(o[k]) for o in outs]) for k in range(3))
+
+    return fit_batch
+
+
+@functools.lru_cache(maxsize=1)
+def _rank_program() -> Callable:
+    def rank_one(key, draws, truth):
+        _, _, _, k_rank = jax.random.split(key, 4)
+        return ranks(k_rank, draws, truth)
+
+    return jax.jit(jax.vmap(rank_one))
+
+
+def _split_rhat(chains: np.ndarray) -> np.ndarray:
+    """Split R-hat per replicate and parameter from ``(B, P, chains, draws)`` thinned draws."""
+    from numpyro.diagnostics import split_gelman_rubin
+
+    b, p, _, d = chains.shape
+    if d < 4:
+        return np.full((b, p), np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(split_gelman_rubin(np.transpose(chains, (2, 3, 0, 1))))
+
+
+def run_batch(spec: ModelSpec, seed: int, batch_index: int, batch_size: int) -> dict[str, Any]:
+    """Simulate, fit and rank replicates ``batch_index·B … (batch_index+1)·B − 1``.
+
+    This is the unit of work of every executor (a Dask task runs exactly this); its arguments
+    and result are plain, picklable data.
+
+    Returns
+    -------
+    dict
+        The fields of :class:`BatchResult` as NumPy arrays.
+    """
+    _, simulate_batch, fit_batch, rank_batch = _programs(spec)
+    index = np.arange(batch_index * batch_size, (batch_index + 1) * batch_size, dtype=np.int64)
+    keys = replicate_keys(seed, index)
+    truth, data = simulate_batch(keys)
+    draws, chains, n_div = fit_batch(keys, data)
+    rank = np.asarray(rank_batch(keys, draws, truth))
+    truth, draws = np.asarray(truth), np.asarray(draws)
+    failed = ~(np.isfinite(truth).all(axis=1) & np.isfinite(draws).all(axis=(1, 2)))
+    rank = np.where(failed[:, None], -1, rank)
+    return BatchResult(index, truth, draws, rank, np.asarray(n_div, dtype=np.int64),
+                       _split_rhat(np.asarray(chains)), failed)._asdict()
+
+
+# ------------------------------------------------------------------------------ checkpoints
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _batch_path(workdir: Path, b: int) -> Path:
+    return workdir / f"batch_{b:06d}.npz"
+
+
+def _save_batch(workdir: Path, b: int, result: dict[str, Any]) -> None:
+    """Write one batch atomically: temporary file in the same directory, then ``os.replace``."""
+    fd, tmp = tempfile.mkstemp(prefix=f".batch_{b:06d}.", suffix=".npz.tmp", dir=workdir)
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private; keep the usual mode
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **{k: result[k] for k in _FIELDS})
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, _batch_path(workdir, b))
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _load_batch(workdir: Path, b: int) -> dict[str, np.ndarray] | None:
+    path = _batch_path(workdir, b)
+    if not path.exists():
+        return None
+    try:
+        with np.load(path) as z:
+            return {k: z[k] for k in _FIELDS}
+    except (OSError, ValueError, KeyError):  # unreadable: recompute it
+        return None
+
+
+def load_checkpoints(workdir: str | os.PathLike, n_batches: int) -> dict[int, dict]:
+    """The readable batch checkpoints ``0..n_batches−1`` in ``workdir``, by batch index."""
+    workdir = Path(workdir)
+    out = {}
+    for b in range(n_batches):
+        res = _load_batch(workdir, b)
+        if res is not None:
+            out[b] = res
+    return out
+
+
+def _manifest(spec: ModelSpec, model: SbcModel, seed: int, batch_size: int) -> dict[str, Any]:
+    scenario_hash = (hashlib.sha256(spec.scenario_text.encode()).hexdigest()
+                     if spec.scenario_text else None)
+    return {"model": spec.name, "options": {k: v for k, v in spec.options},
+            "scenario_sha256": scenario_hash, "seed": int(seed), "batch_size": int(batch_size),
+            "parameter_names": list(model.parameter_names), "version": __version__}
+
+
+def _check_manifest(workdir: Path, manifest: dict[str, Any]) -> None:
+    path = workdir / "manifest.json"
+    if path.exists():
+        try:
+            old = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError):
+            old = None
+        if old != json.loads(json.dumps(manifest)):
+            raise InputError(
+                f"{workdir}: holds checkpoints of a different campaign (model, options, scenario, "
+                "seed, batch size or version differ); start over with --force or use another --out")
+        return
+    workdir.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=".manifest.", dir=workdir)
+    os.chmod(tmp, 0o666 & ~_umask())
+    with os.fdopen(fd, "w") as f:
+        json.dump(manifest, f, indent=2)
+    os.replace(tmp, path)
+
+
+# -------------------------------------------------------------------------------- executors
+
+
+def _local_executor(spec, seed, batch_size, todo: Sequence[int]) -> Iterator[tuple[int, dict]]:
+    for b in todo:
+        yield b, run_batch(spec, seed, b, batch_size)
+
+
+@contextlib.contextmanager
+def _dask_client(scheduler: str | None, n_workers: int | None, processes: bool,
+                 timeout_s: float):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError("the dask executor needs dask.distributed: "
+                         "pip install 'dask[distributed]'") from None
+    if scheduler:
+        try:
+            client = Client(scheduler, timeout=f"{timeout_s}s")
+        except (OSError, TimeoutError) as e:
+            raise InputError(f"cannot reach the Dask scheduler at {scheduler!r} ({e}); check the "
+                             "address or omit --scheduler for a local cluster") from None
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    n = n_workers or max(1, min(2, os.cpu_count() or 1))
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client
+
+
+def _dask_executor(client, spec, seed, batch_size, todo: Sequence[int]):
+    from dask.distributed import as_completed
+
+    futures = {client.submit(run_batch, spec, seed, b, batch_size, pure=False): b for b in todo}
+    try:
+        for fut in as_completed(futures):
+            yield futures[fut], fut.result()
+    finally:
+        for fut in futures:
+            fut.cancel()
+
+
+def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike, *,
+                 seed: int = 0, batch_size: int = 16, executor: str = "local",
+                 scheduler: str | None = None, n_workers: int | None = None,
+                 dask_processes: bool = True, scheduler_timeout_s: float = 20.0,
+                 on_batch: Callable[[int, int, int], None] | None = None) -> CampaignResult:
+    """Run (or resume) an SBC campaign and return its replicates.
+
+    Parameters
+    ----------
+    spec : ModelSpec
+        Which model, scenario and options.
+    n_replicates : int
+        ``N``.
+    workdir : path
+        Checkpoint directory; batches already there (of the same campaign) are not recomputed.
+    seed : int
+        Root seed; replicate ``i`` uses ``fold_in(key(seed), i)``.
+    batch_size : int
+        ``B``, replicates per vectorised batch.
+    executor : {"local", "dask"}
+        Where batches run.
+    scheduler : str, optional
+        Dask scheduler address (``tcp://host:8786``); a ``LocalCluster`` when omitted.
+    n_workers : int, optional
+        Workers of that local cluster (default ``min(2, cpu_count)``).
+    dask_processes : bool
+        Local cluster workers as processes (default) or threads of this process.
+    scheduler_timeout_s : float
+        How long to try to reach ``scheduler`` before giving up, s.
+    on_batch : callable, optional
+        ``on_batch(batch_index, batches_done, batches_total)`` after each batch is checkpointed;
+        an exception raised there stops the campaign (its finished batches stay on disk).
+
+    Returns
+    -------
+    CampaignResult
+    """
+    if n_replicates < 1:
+        raise InputError(f"--replicates must be at least 1, got {n_replicates}")
+    if batch_size < 1:
+        raise InputError(f"--batch must be at least 1, got {batch_size}")
+    if executor not in EXECUTORS:
+        raise InputError(f"unknown executor {executor!r}; use one of {', '.join(EXECUTORS)}")
+    if scheduler and executor != "dask":
+        raise InputError("--scheduler needs --executor dask")
+    workdir = Path(workdir)
+    model = build_model(spec)
+    _check_manifest(workdir, _manifest(spec, model, seed, batch_size))
+
+    n_batches = math.ceil(n_replicates / batch_size)
+    done = load_checkpoints(workdir, n_batches)
+    todo = [b for b in range(n_batches) if b not in done]
+    if on_batch is not None and done:
+        on_batch(-1, len(done), n_batches)
+
+    with contextlib.ExitStack() as stack:
+        if executor == "dask" and todo:
+            client = stack.enter_context(_dask_client(scheduler, n_workers, dask_processes,
+                                                      scheduler_timeout_s))
+            results = _dask_executor(client, spec, seed, batch_size, todo)
+        else:
+            results = _local_executor(spec, seed, batch_size, todo)
+        stack.callback(getattr(results, "close", lambda: None))
+        for b, res in results:
+            _save_batch(workdir, b, res)
+            done[b] = res
+            if on_batch is not None:
+                on_batch(b, len(done), n_batches)
+
+    cat = {k: np.concatenate([done[b][k] for b in range(n_batches)])[:n_replicates]
+           for k in _FIELDS}
+    with np.errstate(invalid="ignore"):
+        rhat_ok = np.all(np.nan_to_num(cat["rhat"], nan=1.0) <= model.rhat_max, axis=1)
+    converged = (cat["n_divergent"] == 0) & rhat_ok & ~cat["failed"]
+    return CampaignResult(model.parameter_names, cat["truth"], cat["draws"], cat["rank"],
+                          cat["n_divergent"], cat["rhat"], cat["failed"], converged,
+                          int(cat["draws"].shape[-1]), int(seed), int(batch_size), len(todo),
+                          dict(model.settings))

@@ -1,0 +1,212 @@
+"""SBC campaigns: determinism, checkpoints and resume, Dask executor (``analysis.campaign``).
+
+All campaigns here run the toy model with the same batch size as ``test_sbc.py``, so the session
+compiles its sampler once.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+
+import jax
+import numpy as np
+import pytest
+
+from cassini_bayes.analysis import campaign
+from cassini_bayes.analysis.campaign import replicate_keys, run_campaign
+from cassini_bayes.analysis.sbc_models import ModelSpec, build_model
+from cassini_bayes.errors import InputError
+
+BATCH = 16
+N = 40  # three batches, the last one partly past N
+SEED = 7
+SPEC = ModelSpec.make("toy")
+
+
+def _assert_same(a, b):
+    assert a.names == b.names
+    for field in ("truth", "draws", "rank", "n_divergent", "rhat", "failed", "converged"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """An uninterrupted local campaign."""
+    return run_campaign(SPEC, N, tmp_path_factory.mktemp("ref"), seed=SEED, batch_size=BATCH)
+
+
+def test_reference_campaign_shapes(reference):
+    res = reference
+    assert res.names == ("alpha", "beta", "sigma")
+    assert res.n_draws == 100  # 2 chains x 150 draws, thinned by 3
+    assert res.rank.shape == (N, 3) and res.draws.shape == (N, 3, 100)
+    assert res.rank.min() >= 0 and res.rank.max() <= res.n_draws
+    assert res.batches_run == 3 and not res.failed.any()
+
+
+def test_sampler_compiles_once_and_is_shared_by_simulator_variants(reference, tmp_path):
+    run_campaign(SPEC, N, tmp_path, seed=SEED + 3, batch_size=BATCH)  # new data, same shapes
+    fit_program = campaign._programs(SPEC)[2]
+    assert fit_program._cache_size() == 1
+    # A simulator-only variant (used as the mis-specified model) reuses the same program.
+    assert campaign._programs(ModelSpec.make("toy", simulator_noise_factor=2.0))[2] is fit_program
+
+
+def test_replicate_keys_do_not_depend_on_batching():
+    all_keys = np.asarray(jax.random.key_data(replicate_keys(SEED, np.arange(48))))
+    some = jax.random.key_data(replicate_keys(SEED, np.array([17, 40])))
+    np.testing.assert_array_equal(all_keys[[17, 40]], some)
+
+
+def test_same_seed_same_ranks_other_seed_other_ranks(reference, tmp_path):
+    again = run_campaign(SPEC, N, tmp_path / "a", seed=SEED, batch_size=BATCH)
+    _assert_same(reference, again)
+    other = run_campaign(SPEC, BATCH, tmp_path / "b", seed=SEED + 1, batch_size=BATCH)
+    assert not np.array_equal(other.rank, reference.rank[:BATCH])
+
+
+def test_resume_after_interruption_equals_uninterrupted_run(reference, tmp_path):
+    work = tmp_path / "work"
+    seen = []
+
+    def stop_after_first_batch(b, n_done, n_total):
+        seen.append(b)
+        if n_done == 1:
+            raise KeyboardInterrupt  # what a Ctrl-C or a kill between batches looks like
+
+    with pytest.raises(KeyboardInterrupt):
+        run_campaign(SPEC, N, work, seed=SEED, batch_size=BATCH, on_batch=stop_after_first_batch)
+    assert sorted(p.name for p in work.glob("batch_*.npz")) == ["batch_000000.npz"]
+    # A kill in the middle of writing leaves at most a temporary file, never a partial batch.
+    (work / ".batch_000001.abcd.npz.tmp").write_bytes(b"half a file")
+
+    resumed = run_campaign(SPEC, N, work, seed=SEED, batch_size=BATCH)
+    assert resumed.batches_run == 2  # batch 0 came from its checkpoint
+    _assert_same(reference, resumed)
+
+
+def test_unreadable_checkpoint_is_recomputed(reference, tmp_path):
+    work = tmp_path / "work"
+    run_campaign(SPEC, BATCH, work, seed=SEED, batch_size=BATCH)
+    (work / "batch_000000.npz").write_bytes(b"not an npz")
+    res = run_campaign(SPEC, BATCH, work, seed=SEED, batch_size=BATCH)
+    assert res.batches_run == 1
+    np.testing.assert_array_equal(res.rank, reference.rank[:BATCH])
+
+
+def test_extending_a_campaign_reuses_its_batches(reference, tmp_path):
+    work = tmp_path / "work"
+    first = run_campaign(SPEC, 20, work, seed=SEED, batch_size=BATCH)
+    assert first.batches_run == 2
+    more = run_campaign(SPEC, N, work, seed=SEED, batch_size=BATCH)
+    assert more.batches_run == 1
+    _assert_same(reference, more)
+
+
+def test_checkpoints_of_another_campaign_are_refused(tmp_path):
+    work = tmp_path / "work"
+    run_campaign(SPEC, 1, work, seed=SEED, batch_size=BATCH)
+    manifest = json.loads((work / "manifest.json").read_text())
+    assert manifest["seed"] == SEED and manifest["batch_size"] == BATCH
+    with pytest.raises(InputError, match="different campaign"):
+        run_campaign(SPEC, 1, work, seed=SEED + 1, batch_size=BATCH)
+
+
+def test_bad_settings_are_input_errors(tmp_path):
+    with pytest.raises(InputError, match="replicates"):
+        run_campaign(SPEC, 0, tmp_path, batch_size=BATCH)
+    with pytest.raises(InputError, match="executor"):
+        run_campaign(SPEC, 1, tmp_path, batch_size=BATCH, executor="spark")
+    with pytest.raises(InputError, match="unknown SBC model"):
+        build_model(ModelSpec.make("nosuch"))
+
+
+def test_dask_task_is_plain_picklable_data():
+    # What a remote worker receives: the function by reference and plain-data arguments.
+    fn, spec = pickle.loads(pickle.dumps((campaign.run_batch, SPEC)))
+    assert fn is campaign.run_batch and spec == SPEC
+
+
+def test_dask_executor_gives_identical_ranks(reference, tmp_path):
+    pytest.importorskip("dask.distributed")
+    # A 2-worker LocalCluster (threads of this process, so the compiled sampler is shared).
+    res = run_campaign(SPEC, N, tmp_path / "dask", seed=SEED, batch_size=BATCH,
+                       executor="dask", n_workers=2, dask_processes=False)
+    assert res.batches_run == 3
+    _assert_same(reference, res)
+
+
+def test_dask_scheduler_that_cannot_be_reached_is_an_input_error(tmp_path):
+    pytest.importorskip("dask.distributed")
+    with pytest.raises(InputError, match="Dask scheduler"):
+        run_campaign(SPEC, 1, tmp_path, seed=SEED, batch_size=BATCH, executor="dask",
+                     scheduler="tcp://127.0.0.1:9", scheduler_timeout_s=1)
+
+
+@pytest.mark.slow
+def test_dask_process_workers_give_identical_ranks(reference, tmp_path):
+    res = run_campaign(SPEC, N, tmp_path / "dask", seed=SEED, batch_size=BATCH,
+                       executor="dask", n_workers=2, dask_processes=True)
+    _assert_same(reference, res)
+
+
+def test_cli_resume_finishes_an_interrupted_campaign(run_cli, reference, tmp_path):
+    from cassini_bayes.cli.sbc import work_dir
+
+    out = tmp_path / "run"
+
+    def stop(b, n_done, n_total):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):  # the campaign the CLI would have started, killed
+        run_campaign(SPEC, N, work_dir(out), seed=SEED, batch_size=BATCH, on_batch=stop)
+    args = ("sbc", "toy", "--replicates", N, "--batch", BATCH, "--seed", SEED, "--out", out)
+    code, _, stderr = run_cli(*args)
+    assert code == 2 and "--resume" in stderr and not out.exists()
+    code, _, stderr = run_cli(*args, "--resume")
+    assert code == 0, stderr
+    with np.load(out / "replicates.npz") as z:
+        np.testing.assert_array_equal(z["rank"], reference.rank)
+        np.testing.assert_array_equal(z["draws"], reference.draws)
+    assert not work_dir(out).exists()
+    assert json.loads((out / "summary.json").read_text())["replicates"] == N
+
+
+# A model with exact posterior draws (normal mean, known noise) fitted one replicate at a time,
+# whose fit raises for some replicates: the non-vectorised path and failure accounting.
+def _exact_normal(spec):
+    import jax.numpy as jnp
+
+    from cassini_bayes.analysis.sbc_models import SbcFit, SbcModel
+
+    n_obs = 5
+
+    def prior_sample(key):
+        return {"theta": jax.random.normal(key)}
+
+    def simulate(key, params):
+        return params["theta"] + jax.random.normal(key, (n_obs,))
+
+    def fit(key, y):
+        y = np.asarray(y)
+        if y[0] > 1.5:
+            raise FloatingPointError("pretend the sampler blew up")
+        post_var = 1.0 / (1.0 + n_obs)
+        draws = post_var * y.sum() + np.sqrt(post_var) * jax.random.normal(key, (2, 50))
+        return SbcFit({"theta": jnp.asarray(draws)}, jnp.asarray(0))
+
+    return SbcModel("exact-normal", ("theta",), prior_sample, simulate, fit, vectorized=False)
+
+
+def test_failed_fits_are_counted_not_fatal(tmp_path):
+    from cassini_bayes.analysis.sbc_models import register
+
+    register("_exact_normal_flaky")(_exact_normal)
+    spec = ModelSpec.make("_exact_normal_flaky")
+    with pytest.warns(RuntimeWarning, match="recorded as a failure"):
+        res = run_campaign(spec, 32, tmp_path, seed=SEED, batch_size=8)
+    assert 0 < res.failed.sum() < 32
+    assert np.all(res.rank[res.failed] == -1) and not res.converged[res.failed].any()
+    ok = res.rank[~res.failed, 0]
+    assert ok.min() >= 0 and ok.max() <= res.n_draws == 100
