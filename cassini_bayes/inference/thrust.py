@@ -1,0 +1,688 @@
+"""Thrust and pulse time-constant posterior from wheel-biasing events (Feldman & Lee 2006 §V).
+
+Model
+-----
+Event ``e`` (one telemetry file and its pulse log) obeys the integrated Euler equation
+(Feldman & Lee Eq 17, :mod:`cassini_bayes.physics.impulse`)
+
+    V_e(t_i) = I Δω(t_i) + ΔH_RWA(t_i) + ΔG(t_i) = Q · (F ⊙ j_e(t_i; τd, τr, τf)),
+
+where ``j_s(t_i)`` is the *actual* impulse per newton that thruster ``s`` has delivered by
+``t_i``: every commanded pulse of width ``Δ`` contributes the integral of the thrust profile of
+:mod:`cassini_bayes.physics.pulse` (Feldman & Lee §V closed form once the pulse has decayed), so
+the likelihood depends on the time constants directly rather than through the paper's ratio
+``R``. The time constants are shared by all events (same thrusters, same valves); the thrust is
+one mean ``F`` (Eq 23), one per branch ``F_Z``/``F_Y``, or one per thruster ``F_Z1 … F_Y4``
+(Eqs 19-20), shared by the events too (pool only events of one epoch).
+
+Error model (why the cumulative form, with a free offset)
+---------------------------------------------------------
+With white gyro noise ``n_i`` and wheel-rate noise ``ν_i`` the measured left side is
+``V(t_i) = V_true(t_i) + [I n_i + Σ J_k ν_ki g_k] − [I n_0 + Σ J_k ν_k0 g_k] + δG_i``. The bracket
+at ``t_0`` is common to every sample of the event: it is an unknown constant offset ``b_e``, not
+a random walk. With ``b_e`` a free parameter the residuals ``V − Q J − b_e`` are independent,
+``N(0, B_e)`` with ``B_e = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` — the calibrated model. (Increments
+between samples would instead be MA(1)-correlated with lag-one correlation −½.) ``δG_i``, the
+error of the gyroscopic impulse integrated from noisy rates, is a random walk but ~10× below the
+gyro term on the shipped scenarios (|H_RWA| ≤ 30 N m s, 1 µrad/s gyro noise); it is neglected.
+``b_e`` has a flat prior and is integrated out analytically:
+
+    log p(V_e | θ) = Σ_i log N(r_i − r̄; 0, B_e) + (3/2) log 2π + ½ log|B_e| − (3/2) log n_e.
+
+Priors, stated in the physical parameters
+-----------------------------------------
+* ``log F ~ Normal(log F_pred, 0.3)`` per thrust parameter, ``F_pred`` the spacecraft model's
+  predicted thrust: the flight history (0.97 N at launch, 0.75 N at SOI, 0.69 N at the Probe
+  relay) moves by ~30 %.
+* ``log τ ~ Normal(log √(lo·hi), ln(hi/lo)/4)`` for each time constant with the manufacturer's test
+  range ``[lo, hi]`` of the spacecraft model's ``[pulse]`` section (rise 15-25 ms, fall 40-90 ms,
+  delay 3-7 ms): the test range is the central ±2σ, 95.4 % of the prior mass.
+* ``σ_ω``, ``σ_ρ`` per event: ``log σ ~ Normal(log σ̂, 1)`` around the data's own white-noise
+  levels (:func:`rate_noise_levels`).
+* Inertia: fixed at the spacecraft model's prediction, or (``inertia=`` an :class:`InertiaGaussian`,
+  e.g. from an inertia run's posterior) sampled jointly from that Gaussian.
+
+The parameters are first made non-dimensional: ``f_z``, ``tau_z`` (prior standard normals),
+``noise_z`` (log σ in units of 0.1) and ``inertia_z`` (whitened by the Gaussian's Cholesky
+factor). The data pin ``F`` far below its prior width (posterior sd of ``f_z`` ~ 0.004 on
+``fsds_biasing``, under the 1e-2 scale NUTS adapts well, DESIGN.md §7), so the sampler sees
+``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace approximation of the posterior
+(:func:`laplace`); the density is exact in ``θ`` (constant Jacobian), the affine map only
+conditions the geometry.
+
+Identification
+--------------
+Combinations of thrusts the data cannot separate keep their prior: a thruster that never fires,
+or in the paper's Z-row-only regression the pairs ``F_Y1``/``F_Y3``, ``F_Y2``/``F_Y4`` that fire
+together (Eq 20). Here all three torque axes are used, so the X torque of a pair
+(``Lzy (F_Y1 − F_Y3)``) separates pair members where the data resolve it; what is not resolved
+shows as a posterior equal to the prior (``ThrustProblem.fired`` lists which thrusters fired).
+"""
+
+from __future__ import annotations
+
+import warnings
+from functools import lru_cache
+from pathlib import Path
+from typing import NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import numpyro
+import numpyro.distributions as dist
+from numpyro.distributions import constraints
+
+from cassini_bayes.errors import InputError
+from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
+from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
+from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
+from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.telemetry import PulseLog, Telemetry, check_pulses_in_span
+
+__all__ = [
+    "TAU_NAMES",
+    "MODES",
+    "THRUST_PRIOR_LOG_SD",
+    "InertiaGaussian",
+    "inertia_from_run",
+    "TauPrior",
+    "tau_prior",
+    "thrust_names",
+    "ThrustProblem",
+    "prepare_thrust",
+    "pulse_increments",
+    "laplace",
+    "rate_noise_levels",
+    "thrust_model",
+    "sample_thrust_prior",
+    "ThrustPosterior",
+    "fit_thrust",
+]
+
+TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
+MODES = ("mean", "branch", "thruster")
+THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
+NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
+_NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
+_NOISE_FLOORS = np.array([1e-9, 1e-7])
+# A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
+_TAIL_S = 1.5
+_BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
+
+
+# --------------------------------------------------------------------------------------------
+# Priors
+# --------------------------------------------------------------------------------------------
+
+class InertiaGaussian(NamedTuple):
+    """Gaussian knowledge of the inertia entries ``(Ixx … Iyz)``: ``mean`` (6,) kg m², ``cov``
+    (6, 6) (kg m²)²; e.g. an inertia run's posterior mean and covariance."""
+
+    mean: np.ndarray
+    cov: np.ndarray
+
+
+def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
+    """Posterior mean and covariance of ``Ixx … Iyz`` from an inertia run directory.
+
+    Reads ``RUN_DIR/posterior.nc`` (an earlier ``cassini-bayes fit inertia``). Raises
+    :class:`InputError` when the file is missing or holds no inertia draws.
+    """
+    import arviz as az
+
+    path = Path(run_dir) / "posterior.nc"
+    if not path.is_file():
+        raise InputError(f"--inertia-posterior {run_dir}: no posterior.nc there; give the run "
+                         "directory of an earlier 'cassini-bayes fit inertia'")
+    try:
+        idata = az.from_netcdf(path)
+        post = idata.posterior
+        draws = np.stack([np.asarray(post[n].values, float).ravel() for n in INERTIA_NAMES], -1)
+    except KeyError as e:
+        raise InputError(f"{path}: no inertia draws ({e.args[0]} missing); give the run "
+                         "directory of an inertia fit") from None
+    except Exception as e:  # unreadable netCDF
+        raise InputError(f"{path}: cannot read it ({type(e).__name__}); give the run directory "
+                         "of an inertia fit") from None
+    if draws.shape[0] < 10 or not np.all(np.isfinite(draws)):
+        raise InputError(f"{path}: too few or non-finite inertia draws; re-run the inertia fit")
+    cov = np.cov(draws, rowvar=False)
+    return InertiaGaussian(draws.mean(0), 0.5 * (cov + cov.T))
+
+
+class TauPrior(NamedTuple):
+    """Log-normal prior of ``(τd, τr, τf)``: ``log_mean`` (3,) log s, ``log_sd`` (3,)."""
+
+    log_mean: np.ndarray
+    log_sd: np.ndarray
+
+
+def tau_prior(spacecraft: Spacecraft) -> TauPrior:
+    """Prior of the time constants from the model's manufacturer test ranges (module docstring)."""
+    p = spacecraft.pulse
+    ranges = np.array([p.tau_delay_range, p.tau_rise_range, p.tau_fall_range], float)
+    lo, hi = ranges[:, 0], ranges[:, 1]
+    if np.any(lo <= 0) or np.any(hi <= lo):
+        raise InputError(f"spacecraft model {spacecraft.name!r}: [pulse] tau_*_range must be "
+                         "positive [low, high] with low < high (s)", path=spacecraft.source or None)
+    return TauPrior(0.5 * (np.log(lo) + np.log(hi)), (np.log(hi) - np.log(lo)) / 4.0)
+
+
+def thrust_names(mode: str) -> tuple[str, ...]:
+    """Names of the thrust parameters of a mode: ``F``; ``F_Z, F_Y``; ``F_Z1 … F_Y4``."""
+    if mode == "mean":
+        return ("F",)
+    if mode == "branch":
+        return ("F_Z", "F_Y")
+    if mode == "thruster":
+        return tuple(f"F_{s}" for s in THRUSTER_NAMES)
+    raise InputError(f"--mode {mode!r}: choose one of {', '.join(MODES)}")
+
+
+def _thrust_index(mode: str) -> np.ndarray:
+    """(8,) index of the thrust parameter that drives each thruster."""
+    return {"mean": np.zeros(8, int), "branch": _BRANCH_INDEX,
+            "thruster": np.arange(8)}[mode]
+
+
+# --------------------------------------------------------------------------------------------
+# Data preparation
+# --------------------------------------------------------------------------------------------
+
+class ThrustProblem(NamedTuple):
+    """Everything the thrust model needs, prepared once (SI units).
+
+    Attributes
+    ----------
+    model_kwargs : arrays for :func:`thrust_model` (events padded to common lengths).
+    mode : ``"mean"``, ``"branch"`` or ``"thruster"``.
+    names : thrust parameter names of the mode.
+    thrust_pred : predicted thrust (prior centre), N.
+    tau : :class:`TauPrior`.
+    inertia : :class:`InertiaGaussian` when the inertia is sampled, else ``None``.
+    inertia_fixed : (3, 3) kg m² used when not sampled.
+    sources : ``(telemetry, pulses)`` file names per event.
+    n_samples, n_pulses : per event.
+    fired : (8,) bool, thrusters with at least one pulse in any event.
+    noise_hat : (E, 2) data noise levels (σ_ω rad/s, σ_ρ rad/s).
+    """
+
+    model_kwargs: dict
+    mode: str
+    names: tuple[str, ...]
+    thrust_pred: float
+    tau: TauPrior
+    inertia: InertiaGaussian | None
+    inertia_fixed: np.ndarray
+    sources: tuple[tuple[str, str], ...]
+    n_samples: np.ndarray
+    n_pulses: np.ndarray
+    fired: np.ndarray
+    noise_hat: np.ndarray
+
+
+def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
+    """Body wheel momentum (n, 3) N m s and the wheel noise matrix Σ J² g gᵀ (3, 3)."""
+    h = np.zeros((tel.n, 3))
+    wcov = np.zeros((3, 3))
+    for name in tel.active_wheels():
+        w = spacecraft.wheel(name)
+        rate = np.nan_to_num(np.asarray(tel.wheel_rate(name), float))
+        h += w.inertia * rate[:, None] * w.axis[None, :]
+        wcov += w.inertia**2 * np.outer(w.axis, w.axis)
+    return h, wcov
+
+
+def _second_diff_sd(x: np.ndarray) -> float:
+    """Robust sd of white noise on a smooth signal: MAD of second differences / √6."""
+    if x.shape[0] < 4:
+        return 0.0
+    d = np.diff(x, n=2, axis=0).ravel()
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
+
+
+def rate_noise_levels(tel: Telemetry) -> np.ndarray:
+    """White-noise levels ``(σ_ω, σ_ρ)`` (rad/s) of the body and wheel rates of one file.
+
+    Median absolute deviation of second differences ÷ √6 (the sd of white noise; the median
+    ignores the few samples where a pulse or a wheel ramp bends the signal), floored at 1e-9 and
+    1e-7 rad/s so noise-free data stay finite. Only the centre of a wide prior.
+    """
+    rates = np.asarray(tel.wheel_rates, float)
+    active = np.any(np.isfinite(rates), axis=0)
+    s_r = _second_diff_sd(rates[:, active]) if active.any() else 0.0
+    s_w = _second_diff_sd(np.asarray(tel.omega, float))
+    return np.maximum(np.array([s_w, s_r]), _NOISE_FLOORS)
+
+
+def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
+    """Sample index of each pulse's first sample at or after its command (n when none)."""
+    return np.searchsorted(t, log.t_on, side="left")
+
+
+def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
+                   mode: str = "mean", inertia: InertiaGaussian | None = None) -> ThrustProblem:
+    """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
+
+    Raises
+    ------
+    InputError
+        No event, a pulse log with no pulse inside its telemetry span (nothing to calibrate), an
+        unknown mode, too few samples.
+    """
+    names = thrust_names(mode)
+    if not events:
+        raise InputError("no biasing event given; pass --telemetry F.csv --pulses P.csv")
+    logs, tels = [], []
+    for tel, log in events:
+        if log is None:
+            raise InputError("thrust calibration needs the pulse log of every event (--pulses "
+                             "P.csv, columns t_on, thruster, width)", path=tel.source)
+        if tel.n < 10:
+            raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            log = check_pulses_in_span(log, tel)
+        if log.t_on.size == 0:
+            raise InputError(f"no pulse of {log.source} falls inside the telemetry span "
+                             f"{tel.t[0]:.10g}..{tel.t[-1]:.10g} s; thrust calibration needs an "
+                             "event in which thrusters fire", path=tel.source)
+        if not tel.active_wheels():
+            raise InputError("no wheel rates (rwa1..rwa4, rpm); a biasing event needs them",
+                             path=tel.source)
+        logs.append(log)
+        tels.append(tel)
+
+    n_max = max(t.n for t in tels)
+    m_max = max(len(lg.t_on) for lg in logs)
+    dt_min = min(float(np.min(np.diff(t.t))) for t in tels)
+    w_max = max(float(np.max(lg.width)) for lg in logs)
+    # samples a pulse's thrust can still change after its first sample (≥ 1, static)
+    k_slots = int(np.ceil((w_max + 0.02 + _TAIL_S) / dt_min)) + 1
+    n_ev = len(tels)
+    t_a = np.zeros((n_ev, n_max))
+    w_a = np.zeros((n_ev, n_max, 3))
+    h_a = np.zeros((n_ev, n_max, 3))
+    mask = np.zeros((n_ev, n_max))
+    ton = np.zeros((n_ev, m_max))
+    thr = np.zeros((n_ev, m_max), int)
+    wid = np.zeros((n_ev, m_max))
+    slot = np.full((n_ev, m_max), n_max)
+    wcov = np.zeros((n_ev, 3, 3))
+    noise = np.zeros((n_ev, 2))
+    fired = np.zeros(8, bool)
+    for e, (tel, log) in enumerate(zip(tels, logs)):
+        n, m = tel.n, len(log.t_on)
+        t = np.asarray(tel.t, float)
+        h, wc = _wheel_momentum(tel, spacecraft)
+        # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
+        t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
+        w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
+        h_a[e] = np.r_[h, np.repeat(h[-1:], n_max - n, 0)]
+        mask[e, :n] = 1.0
+        ton[e, :m] = log.t_on
+        thr[e, :m] = log.thruster
+        wid[e, :m] = log.width      # padded pulses: width 0 → no impulse, slot n_max → dropped
+        slot[e, :m] = _pulse_slots(t, log)
+        wcov[e] = wc
+        noise[e] = rate_noise_levels(tel)
+        fired[np.unique(log.thruster)] = True
+
+    th = spacecraft.thrusters
+    q_mat = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    tp = tau_prior(spacecraft)
+    i_fixed = np.asarray(spacecraft.inertia, float)
+    if inertia is not None:
+        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
+        i_mean, i_tril = np.asarray(inertia.mean, float), tril
+    else:
+        i_mean, i_tril = np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
+    kw = dict(
+        t=jnp.asarray(t_a), omega=jnp.asarray(w_a), h_wheels=jnp.asarray(h_a),
+        mask=jnp.asarray(mask), t_on=jnp.asarray(ton), thruster=jnp.asarray(thr),
+        width=jnp.asarray(wid), slot=jnp.asarray(slot),
+        slot_offsets=jnp.arange(k_slots), q_matrix=jnp.asarray(q_mat),
+        wheel_cov=jnp.asarray(wcov), log_noise_hat=jnp.asarray(np.log(noise)),
+        tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
+        f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
+        inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
+    )
+    n_f = len(names)
+    dim = n_f + 3 + 2 * n_ev + (6 if inertia is not None else 0)
+    centre, tril = laplace(lambda th: _log_density(th, kw, n_f, inertia is not None),
+                           np.zeros(dim))
+    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
+    return ThrustProblem(
+        model_kwargs=kw, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
+        inertia=inertia, inertia_fixed=i_fixed,
+        sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
+        n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
+        fired=fired, noise_hat=noise)
+
+
+# --------------------------------------------------------------------------------------------
+# Model
+# --------------------------------------------------------------------------------------------
+
+def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, tau_rise, tau_fall):
+    """Accumulated actual impulse per newton (n, 8), s — the sparse form of
+    :func:`~cassini_bayes.physics.impulse.impulse_from_pulses`.
+
+    A pulse changes ``j`` only at its first ``K = len(slot_offsets)`` samples at or after its
+    command (``slot`` (m,) = index of the first); there its increments are the differences of
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`, and at sample ``slot + K`` the rest
+    of the full pulse impulse (Feldman & Lee §V closed form, :func:`pulse_impulse`) is added. A
+    cumulative sum over samples gives ``j``. ``O(m K)`` instead of ``O(n m)`` work; identical to
+    the dense form when every pulse has decayed ``K`` samples after its command.
+    """
+    n = t.shape[0]
+    idx = slot[:, None] + slot_offsets[None, :]                       # (m, K)
+    t_s = t[jnp.clip(idx, 0, n - 1)]
+    until = pulse_impulse_until(t_s - t_on[:, None], width[:, None], tau_delay, tau_rise,
+                                tau_fall)
+    until = jnp.where(idx < n, until, 0.0)
+    inc = jnp.diff(until, axis=1, prepend=jnp.zeros_like(until[:, :1]))
+    # Feldman & Lee §V: impulse of the whole pulse; what remains after the K samples
+    full = pulse_impulse(width, tau_delay, tau_rise, tau_fall)
+    rest = full - until[:, -1]
+    idx_all = jnp.concatenate([idx, slot[:, None] + slot_offsets.shape[0]], 1)
+    inc_all = jnp.concatenate([inc, rest[:, None]], 1)
+    cols = jnp.broadcast_to(thruster[:, None], idx_all.shape)
+    grid = jnp.zeros((n, 8)).at[idx_all, cols].add(inc_all, mode="drop")
+    return jnp.cumsum(grid, 0)
+
+
+def _inv3(b):
+    """Inverse and log-determinant of a symmetric positive-definite 3×3 matrix (closed form:
+    LAPACK calls on 3×3 matrices cost far more than the arithmetic)."""
+    c00 = b[1, 1] * b[2, 2] - b[1, 2] * b[2, 1]
+    c01 = b[0, 2] * b[2, 1] - b[0, 1] * b[2, 2]
+    c02 = b[0, 1] * b[1, 2] - b[0, 2] * b[1, 1]
+    c11 = b[0, 0] * b[2, 2] - b[0, 2] * b[2, 0]
+    c12 = b[0, 2] * b[1, 0] - b[0, 0] * b[1, 2]
+    c22 = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
+    det = b[0, 0] * c00 + b[0, 1] * c01 + b[0, 2] * c02
+    adj = jnp.array([[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]])
+    return adj / det, jnp.log(det)
+
+
+def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width,
+                  slot, slot_offsets, q_matrix, wheel_cov):
+    """Marginal log-likelihood of one event (offset integrated out) and its residual (n, 3)."""
+    v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
+    j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
+    r = v - (j * f8[None, :]) @ q_matrix.T                             # Feldman & Lee Eq 17
+    n = jnp.sum(mask)
+    r_bar = jnp.sum(r * mask[:, None], 0, keepdims=True) / n
+    d = r - r_bar
+    s2 = jnp.exp(2.0 * log_sigma)
+    b = s2[0] * inertia @ inertia + s2[1] * wheel_cov
+    b_inv, logdet = _inv3(b)
+    quad = jnp.einsum("ni,ij,nj->n", d, b_inv, d)
+    ll_i = -0.5 * (quad + logdet + 3.0 * jnp.log(2.0 * jnp.pi))
+    ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) + 0.5 * logdet - 1.5 * jnp.log(n)
+    return ll, d
+
+
+_EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0)
+
+
+def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
+    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,), ``noise_z`` (E, 2) and
+    ``inertia_z`` (6,) or ``None``."""
+    f_z = theta[:n_f]
+    tau_z = theta[n_f:n_f + 3]
+    noise_z = theta[n_f + 3:n_f + 3 + 2 * n_ev].reshape(n_ev, 2)
+    inertia_z = theta[n_f + 3 + 2 * n_ev:] if sample_inertia else None
+    return f_z, tau_z, noise_z, inertia_z
+
+
+def _physical(theta, kw, n_f: int, sample_inertia: bool):
+    """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
+    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2), ``π`` (6,) kg m²."""
+    n_ev = kw["log_noise_hat"].shape[0]
+    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
+    tau = jnp.exp(kw["tau_mu"] + kw["tau_sd"] * tau_z)
+    log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z
+    pi = kw["inertia_mean"]
+    if sample_inertia:
+        pi = pi + kw["inertia_tril"] @ inertia_z
+    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi
+
+
+def _log_density(theta, kw, n_f: int, sample_inertia: bool):
+    """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring)."""
+    n_ev = kw["log_noise_hat"].shape[0]
+    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z))
+                 + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_z))
+                 + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
+    if sample_inertia:
+        log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
+    _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
+    ll, _ = jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
+        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw["t"], kw["omega"],
+        kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
+        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"])
+    return log_prior + jnp.sum(ll)
+
+
+def laplace(log_density, theta0) -> tuple[np.ndarray, np.ndarray]:
+    """Mode and Cholesky factor of the inverse negative Hessian of ``log_density`` (a jittable
+    function of one vector), found by L-BFGS from ``theta0``.
+
+    Used only to centre and whiten the sampler's coordinates (``θ = centre + tril w``): the
+    posterior itself is exact whatever the centring. Directions of non-positive curvature get
+    unit scale.
+    """
+    import scipy.optimize
+
+    hess = jax.jit(jax.hessian(lambda x: -log_density(x)))
+    vg = jax.jit(jax.value_and_grad(lambda x: -log_density(x)))
+
+    def fun(x):
+        v, g = vg(jnp.asarray(x))
+        return float(v), np.asarray(g, float)
+
+    x0 = np.asarray(theta0, float)
+    best = x0
+    if np.isfinite(fun(x0)[0]):
+        res = scipy.optimize.minimize(fun, x0, jac=True, method="L-BFGS-B",
+                                      options={"maxiter": 200})
+        if np.isfinite(res.fun):
+            best = res.x
+    h = np.asarray(hess(jnp.asarray(best)), float)
+    h = 0.5 * (h + h.T)
+    w, v = np.linalg.eigh(h)
+    w = np.where(np.isfinite(w) & (w > 1e-12), w, 1.0)
+    cov = (v / w) @ v.T
+    return best, np.linalg.cholesky(0.5 * (cov + cov.T))
+
+
+def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
+    w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), centre.shape))
+    theta = centre + tril @ w
+    numpyro.factor("log_density", _log_density(theta, kw, len(names), sample_inertia))
+    thrust, _, tau, log_sigma, pi = _physical(theta, kw, len(names), sample_inertia)
+    for i, name in enumerate(names):
+        numpyro.deterministic(name, thrust[i])
+    for i, name in enumerate(TAU_NAMES):
+        numpyro.deterministic(name, tau[i])
+    sig = jnp.exp(log_sigma)
+    numpyro.deterministic("sigma_omega", sig[:, 0])
+    numpyro.deterministic("sigma_rho", sig[:, 1])
+    if sample_inertia:
+        for i, name in enumerate(INERTIA_NAMES):
+            numpyro.deterministic(name, pi[i])
+
+
+@lru_cache(maxsize=None)
+def thrust_model(mode: str, sample_inertia: bool = False):
+    """The NumPyro model (one function object per mode, so compiled samplers are reused).
+
+    Call it with ``**ThrustProblem.model_kwargs``. Posterior sites: the thrust names of the mode
+    (N), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
+    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``.
+    """
+    names = thrust_names(mode)
+
+    def model(**kwargs):
+        return _model(names=names, sample_inertia=sample_inertia, **kwargs)
+
+    model.__name__ = f"thrust_model_{mode}_{'inertia' if sample_inertia else 'fixed'}"
+    return model
+
+
+def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.ndarray]:
+    """``n`` draws of the physical parameters from the stated prior (module docstring)."""
+    k_f, k_t, k_s, k_i = jax.random.split(key, 4)
+    kw = problem.model_kwargs
+    n_ev = kw["log_noise_hat"].shape[0]
+    f_z = jax.random.normal(k_f, (n, len(problem.names)))
+    tau_z = jax.random.normal(k_t, (n, 3))
+    noise_z = jax.random.normal(k_s, (n, n_ev, 2)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
+    thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
+    tau = np.exp(problem.tau.log_mean + problem.tau.log_sd * np.asarray(tau_z))
+    out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
+    out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
+    sig = np.exp(np.asarray(kw["log_noise_hat"])[None] + _NOISE_STEP * np.asarray(noise_z))
+    out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]
+    if problem.inertia is not None:
+        z = np.asarray(jax.random.normal(k_i, (n, 6)))
+        pi = np.asarray(problem.inertia.mean) + z @ np.linalg.cholesky(
+            np.asarray(problem.inertia.cov) + 1e-9 * np.eye(6)).T
+        out.update({name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)})
+    return out
+
+
+@jax.jit
+def _residuals_jit(i_m, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width,
+                   slot, slot_offsets, q_matrix, wheel_cov):
+    return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
+        i_m, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot,
+        slot_offsets, q_matrix, wheel_cov)
+
+
+def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None) -> np.ndarray:
+    """Offset-free residuals ``V − Q (F ⊙ j) − b̂`` (E, n_max, 3) N m s at given parameters
+    (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2)); padded rows are 0."""
+    kw = problem.model_kwargs
+    idx = np.asarray(kw["f_index"])
+    f8 = np.asarray(thrust, float)[idx]
+    pi = np.asarray(kw["inertia_mean"]) if pi is None else np.asarray(pi, float)
+    _, d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
+                          tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
+                          kw["t"], kw["omega"], kw["h_wheels"], kw["mask"], kw["t_on"],
+                          kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
+                          kw["q_matrix"], kw["wheel_cov"])
+    return np.asarray(d) * np.asarray(kw["mask"])[..., None]
+
+
+# --------------------------------------------------------------------------------------------
+# The fit
+# --------------------------------------------------------------------------------------------
+
+class ThrustPosterior(NamedTuple):
+    """Result of :func:`fit_thrust`: the InferenceData, its diagnostics and the problem."""
+
+    idata: object
+    diagnostics: object
+    problem: ThrustProblem
+
+
+def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
+               mode: str = "mean", inertia: InertiaGaussian | None = None, settings=None,
+               prior_draws: int = 500) -> ThrustPosterior:
+    """Posterior of the thrust and the pulse time constants from one or more biasing events.
+
+    Parameters
+    ----------
+    key : jax.random key.
+    events : ``(telemetry, pulse log)`` per biasing event; they share ``τ`` and the thrust.
+    spacecraft : model giving the predicted thrust, time-constant ranges, geometry of Eq 16,
+        wheels and (unless ``inertia`` is given) the fixed inertia.
+    mode : ``"mean"`` (``F``), ``"branch"`` (``F_Z``, ``F_Y``) or ``"thruster"`` (``F_Z1 … F_Y4``).
+    inertia : sample the inertia jointly from this Gaussian (e.g. :func:`inertia_from_run`).
+    settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
+    prior_draws : number of prior draws stored in the ``prior`` group.
+
+    Returns
+    -------
+    ThrustPosterior
+        ``idata`` with ``posterior`` (thrust names in N, ``tau_*`` in s, ``sigma_omega``,
+        ``sigma_rho`` per event, inertia entries when sampled, sampler coordinates),
+        ``sample_stats``, ``prior``, ``observed_data`` (``v``: the left side of Eq 17 at the
+        fixed/prior-mean inertia, N m s), ``constant_data`` (prior centres and scales) and
+        ``residuals`` (posterior-mean offset-free residuals, N m s).
+    """
+    import xarray as xr
+
+    from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
+
+    settings = settings or SamplerSettings()
+    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia)
+    unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
+    if mode == "thruster" and unfired:
+        warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
+                      "prior-dominated", stacklevel=2)
+    kw = problem.model_kwargs
+    n_ev = len(problem.sources)
+    sample_inertia = inertia is not None
+    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw["centre"].shape[0])}
+    dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"]}
+    idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs=kw, settings=settings,
+                     coords=coords, dims=dims,
+                     prior=lambda k, n: sample_thrust_prior(k, problem, n),
+                     prior_draws=prior_draws)
+
+    post = idata.posterior
+    f_mean = np.array([float(post[n].mean()) for n in problem.names])
+    tau_mean = np.array([float(post[n].mean()) for n in TAU_NAMES])
+    sig = np.stack([np.exp(np.log(post[n]).mean(("chain", "draw")).values)
+                    for n in ("sigma_omega", "sigma_rho")], -1)
+    pi_mean = (np.array([float(post[n].mean()) for n in INERTIA_NAMES]) if sample_inertia
+               else None)
+    d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean)
+    m = np.asarray(kw["mask"]) > 0
+    t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
+    ev_all = np.concatenate([np.full(int(m[e].sum()), e) for e in range(n_ev)])
+    r_all = np.concatenate([d[e][m[e]] for e in range(n_ev)])
+    i_fix = inertia_matrix(jnp.asarray(kw["inertia_mean"]))
+    v_all = np.concatenate([np.asarray(impulse_lhs(kw["t"][e], kw["omega"][e], i_fix,
+                                                   kw["h_wheels"][e]))[m[e]]
+                            for e in range(n_ev)])
+    t_coord = {"t": ("t", t_all, {"units": "s"}), "axis": ["x", "y", "z"],
+               "event": ("t", ev_all)}
+    residuals = xr.Dataset(
+        {"residual": (("t", "axis"), r_all, {"units": "N m s", "frame": "body",
+                                             "description": "posterior-mean impulse residual "
+                                                            "(Eq 17, offset removed)"})},
+        coords=t_coord)
+    observed = xr.Dataset({"v": (("t", "axis"), v_all, {"units": "N m s"})}, coords=t_coord,
+                          attrs={"sources": [f"{a} + {b}" for a, b in problem.sources]})
+    constant = xr.Dataset(
+        {"tau_prior_log_mean": ("tau", problem.tau.log_mean),
+         "tau_prior_log_sd": ("tau", problem.tau.log_sd),
+         "thrust_prior_median": ((), problem.thrust_pred, {"units": "N"}),
+         "thrust_prior_log_sd": ((), THRUST_PRIOR_LOG_SD),
+         "fired": ("thruster", problem.fired.astype(int)),
+         "n_pulses": ("event", problem.n_pulses),
+         "noise_hat": (("event", "noise"), problem.noise_hat)},
+        coords={"tau": list(TAU_NAMES), "thruster": list(THRUSTER_NAMES),
+                "event": np.arange(n_ev), "noise": ["omega", "rho"]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        for name in ("observed_data", "constant_data", "residuals"):
+            if name in idata.groups():
+                del idata[name]
+        idata.add_groups({"observed_data": observed, "constant_data": constant,
+                          "residuals": residuals})
+    names = list(problem.names) + list(TAU_NAMES) + ["sigma_omega", "sigma_rho"]
+    if sample_inertia:
+        names += list(INERTIA_NAMES)
+    return ThrustPosterior(idata, diagnostics(idata, names), problem)

@@ -1,0 +1,172 @@
+"""Thrust and pulse time-constant posterior (cassini_bayes.inference.thrust).
+
+Fast tests check the model's pieces exactly; the recovery tests simulate biasing events and
+sample, so they are marked ``slow``.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy import stats
+
+from cassini_bayes.errors import InputError
+from cassini_bayes.inference.thrust import (TAU_NAMES, pulse_increments, prepare_thrust,
+                                            tau_prior, thrust_names)
+from cassini_bayes.physics.impulse import impulse_from_pulses
+from cassini_bayes.spacecraft import load_spacecraft
+from cassini_bayes.telemetry import PulseLog, Telemetry
+
+
+def _pulses(seed=0, n_pulses=40, span=200.0):
+    rng = np.random.default_rng(seed)
+    t_on = np.sort(rng.uniform(1.0, span - 5.0, n_pulses)).round(3)
+    thr = rng.integers(0, 8, n_pulses)
+    width = rng.choice([0.125, 0.25, 0.5, 0.75], n_pulses)
+    return t_on, thr, width
+
+
+def test_sparse_pulse_impulse_equals_dense():
+    """The O(m K) accumulation equals physics.impulse_from_pulses (Feldman & Lee §V profile)."""
+    t = np.arange(0.0, 200.0, 1.0)
+    t_on, thr, width = _pulses()
+    slot = np.searchsorted(t, t_on)
+    k = int(np.ceil((0.75 + 0.02 + 1.5) / 1.0)) + 1
+    for tau in [(0.005, 0.020, 0.065), (0.003, 0.015, 0.090)]:
+        sparse = pulse_increments(jnp.asarray(t), jnp.asarray(t_on), jnp.asarray(thr),
+                                  jnp.asarray(width), jnp.asarray(slot), jnp.arange(k), *tau)
+        dense = impulse_from_pulses(t, t_on, thr, width, *tau)
+        np.testing.assert_allclose(np.asarray(sparse), np.asarray(dense), atol=1e-10)
+
+
+def test_tau_prior_holds_manufacturer_ranges():
+    """The test ranges (Feldman & Lee §V: delay 3-7, rise 15-25, fall 40-90 ms) are ±2σ."""
+    sc = load_spacecraft("models/fsds.toml")
+    tp = tau_prior(sc)
+    ranges = [sc.pulse.tau_delay_range, sc.pulse.tau_rise_range, sc.pulse.tau_fall_range]
+    for mu, sd, (lo, hi) in zip(tp.log_mean, tp.log_sd, ranges):
+        d = stats.lognorm(s=sd, scale=np.exp(mu))
+        assert d.cdf(hi) - d.cdf(lo) == pytest.approx(0.9545, abs=1e-3)
+
+
+def test_names_and_modes():
+    assert thrust_names("mean") == ("F",)
+    assert thrust_names("branch") == ("F_Z", "F_Y")
+    assert thrust_names("thruster")[0] == "F_Z1" and thrust_names("thruster")[-1] == "F_Y4"
+    assert TAU_NAMES == ("tau_delay", "tau_rise", "tau_fall")
+    with pytest.raises(InputError, match="--mode"):
+        thrust_names("per-day")
+
+
+def _quiet_telemetry(n=60):
+    t = np.arange(float(n))
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    w = np.zeros((n, 3))
+    rates = np.full((n, 4), np.nan)
+    rates[:, :3] = 10.0
+    return Telemetry(t, q, w, rates, source="quiet.csv")
+
+
+def test_bad_inputs_are_input_errors():
+    sc = load_spacecraft("models/fsds.toml")
+    tel = _quiet_telemetry()
+    with pytest.raises(InputError, match="pulse log"):
+        prepare_thrust([(tel, None)], sc)
+    outside = PulseLog(np.array([500.0]), np.array([5]), np.array([0.125]), "p.csv")
+    with pytest.raises(InputError, match="no pulse"):
+        prepare_thrust([(tel, outside)], sc)
+    with pytest.raises(InputError, match="no biasing event"):
+        prepare_thrust([], sc)
+
+
+# --------------------------------------------------------------------------------------------
+# Recovery on simulated biasing events (slow: simulation + NUTS)
+# --------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def fsds():
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    sc = load_scenario("fsds_biasing")
+    r = simulate(jax.random.key(11), sc)
+    return sc, (r.telemetry, r.pulses)
+
+
+@pytest.fixture(scope="module")
+def days():
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    out = []
+    for name in ("biasing_day028", "biasing_day049"):
+        sc = load_scenario(name)
+        r = simulate(jax.random.key(12), sc)
+        out.append((sc, (r.telemetry, r.pulses)))
+    return out
+
+
+def _settings(n=400, chains=4):
+    from cassini_bayes.inference.runner import SamplerSettings
+
+    return SamplerSettings(chains=chains, warmup=n, draws=n)
+
+
+@pytest.mark.slow
+def test_fsds_thrust_covers_truth(fsds):
+    """Mean thrust of the FSDS test (truth 0.75 N): inside the 90 % interval and within the
+    papers' ±10 %; the posterior is wider than with the time constants fixed at the truth."""
+    from cassini_bayes.inference.thrust import fit_thrust
+
+    sc, ev = fsds
+    post = fit_thrust(jax.random.key(1), [ev], sc.prior, mode="mean", settings=_settings())
+    f = post.idata.posterior["F"].values.ravel()
+    q05, q95 = np.quantile(f, [0.05, 0.95])
+    assert q05 < 0.75 < q95
+    assert abs(f.mean() - 0.75) / 0.75 < 0.10
+    assert post.diagnostics.divergences == 0
+
+
+@pytest.mark.slow
+def test_unfired_thrusters_are_prior_dominated(fsds):
+    """Only Y2, Y4 fire in the FSDS test: the other six keep their prior (contraction ≈ 0)."""
+    from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, fit_thrust
+
+    sc, ev = fsds
+    post = fit_thrust(jax.random.key(2), [ev], sc.prior, mode="thruster", settings=_settings())
+    assert list(post.problem.fired) == [False] * 5 + [True, False, True]
+    for name in ("F_Z1", "F_Z2", "F_Z3", "F_Z4", "F_Y1", "F_Y3"):
+        sd = np.log(post.idata.posterior[name].values.ravel()).std()
+        # prior sd of log F is 0.3; the sd of ~1600 draws is within ±15 % of it (≫ 3σ)
+        assert 1.0 - sd / THRUST_PRIOR_LOG_SD == pytest.approx(0.0, abs=0.15)
+    for name in ("F_Y2", "F_Y4"):
+        f = post.idata.posterior[name].values.ravel()
+        assert f.std() < 0.1 * THRUST_PRIOR_LOG_SD * f.mean()
+        assert abs(f.mean() - 0.75) / 0.75 < 0.10
+
+
+@pytest.mark.slow
+def test_pooled_events_learn_tau_fall_better(days):
+    """Two Table 2 events of different pulse mixes constrain τf better than one."""
+    from cassini_bayes.inference.thrust import fit_thrust
+
+    (sc, ev1), (_, ev2) = days
+    one = fit_thrust(jax.random.key(3), [ev1], sc.prior, settings=_settings())
+    both = fit_thrust(jax.random.key(3), [ev1, ev2], sc.prior, settings=_settings())
+    sd_one = float(one.idata.posterior["tau_fall"].std())
+    sd_both = float(both.idata.posterior["tau_fall"].std())
+    assert sd_both < sd_one
+    f = both.idata.posterior["F"].values.ravel()
+    assert np.quantile(f, 0.01) < 0.699 < np.quantile(f, 0.99)
+
+
+@pytest.mark.slow
+def test_default_settings_converge(fsds):
+    """Default sampler settings (4 × 1000 + 1000) converge on fsds_biasing."""
+    from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.inference.thrust import fit_thrust
+
+    sc, ev = fsds
+    post = fit_thrust(jax.random.key(4), [ev], sc.prior, settings=SamplerSettings())
+    d = post.diagnostics
+    assert d.max_r_hat <= 1.01 and d.min_ess_bulk >= 400 and d.divergences == 0
