@@ -28,6 +28,8 @@ def main(argv=None) -> None:
     ap.add_argument("--warmup", type=int, default=1000)
     ap.add_argument("--draws", type=int, default=1000)
     ap.add_argument("--chain-method", default=None)
+    ap.add_argument("--robust", action="store_true",
+                    help="the robust model (gyro/wheel nuisance parameters, issue 7)")
     args = ap.parse_args(argv)
 
     import jax
@@ -49,19 +51,21 @@ def main(argv=None) -> None:
     s = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws,
                         chain_method=args.chain_method)
     print(f"samples {tel_a.n}, chains {s.chains} × ({s.warmup} warmup + {s.draws} draws), "
-          f"{jax.local_device_count()} host devices, cpu count {os.cpu_count()}")
+          f"{jax.local_device_count()} host devices, cpu count {os.cpu_count()}, "
+          f"{'robust' if args.robust else 'idealised'} model")
 
     t0 = time.perf_counter()
-    fit_inertia(jax.random.key(0), [tel_a], sc, settings=s)
+    fit_inertia(jax.random.key(0), [tel_a], sc, settings=s, robust=args.robust)
     t_first = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    res = fit_inertia(jax.random.key(1), [tel_b], sc, settings=s)
+    res = fit_inertia(jax.random.key(1), [tel_b], sc, settings=s, robust=args.robust)
     t_second = time.perf_counter() - t0
 
-    problem = prepare_inertia([tel_b], sc)
+    problem = prepare_inertia([tel_b], sc, robust=args.robust)
     t0 = time.perf_counter()
-    idata = run_nuts(jax.random.key(2), inertia_model(True), model_kwargs=problem.model_kwargs,
+    idata = run_nuts(jax.random.key(2), inertia_model(True, args.robust),
+                     model_kwargs=problem.model_kwargs,
                      settings=s, prior_draws=0)
     t_sampler = time.perf_counter() - t0
 

@@ -3,7 +3,9 @@
 A model file (DESIGN.md §4) holds the *predicted* mass properties and the hardware geometry a
 calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
 Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants and their manufacturer
-ranges), ``[thrust]`` (predicted force). Unknown keys are errors, so a typo never goes unnoticed.
+ranges), ``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
+sensors and wheels, the priors of the robust models' nuisance parameters; :class:`Knowledge`).
+Unknown keys are errors, so a typo never goes unnoticed.
 
 Units: kg m² for inertias, m for lengths, s for time constants, N for thrust. Wheel axes are unit
 vectors in body axes (the columns of Feldman & Lee's ``T``, App. A).
@@ -21,7 +23,8 @@ import numpy as np
 from cassini_bayes._paths import model_path
 from cassini_bayes.errors import InputError
 
-__all__ = ["Wheel", "Thrusters", "PulseConstants", "Spacecraft", "load_spacecraft",
+__all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
+           "tilted_axis", "load_spacecraft",
            "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
 
 # Feldman & Lee (2006) App. A: RWA → body matrix T; its columns are the spin axes of RWA1-3.
@@ -32,6 +35,27 @@ CASSINI_T = np.array(
 CASSINI_WHEEL_AXES = CASSINI_T.T.copy()  # rows: RWA1, RWA2, RWA3 spin axes (body)
 
 _UNIT_TOL = 1e-6
+
+
+def wheel_tilt_basis(axis) -> np.ndarray:
+    """(2, 3) orthonormal pair ``u_1, u_2`` perpendicular to the unit spin ``axis``.
+
+    The two small-angle tilt directions of a wheel axis (a rotation about the axis itself changes
+    nothing): ``u_1 = axis × e / |axis × e|`` with ``e`` the body axis least aligned with ``axis``,
+    ``u_2 = axis × u_1``. Shared by the simulator (true axes) and the robust models (nuisance).
+    """
+    g = np.asarray(axis, float) / np.linalg.norm(axis)
+    e = np.zeros(3)
+    e[np.argmin(np.abs(g))] = 1.0
+    u1 = np.cross(g, e)
+    u1 /= np.linalg.norm(u1)
+    return np.stack([u1, np.cross(g, u1)])
+
+
+def tilted_axis(axis, tilt_rad) -> np.ndarray:
+    """The unit ``axis`` tilted by ``tilt_rad = (a_1, a_2)`` rad along :func:`wheel_tilt_basis`."""
+    g = np.asarray(axis, float) + np.asarray(tilt_rad, float) @ wheel_tilt_basis(axis)
+    return g / np.linalg.norm(g)
 
 
 @dataclass(frozen=True)
@@ -67,6 +91,25 @@ class PulseConstants:
 
 
 @dataclass(frozen=True)
+class Knowledge:
+    """How well the gyro and the wheels are known: one standard deviation each.
+
+    The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
+    From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``) and
+    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``axis_sd_deg``). The defaults are conservative
+    engineering values, not numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per
+    axis, a gyro scale-factor error of 5e-4 (500 ppm) per axis, a common wheel spin-inertia error of
+    0.5 % and a wheel spin-axis misalignment of 0.2 deg per tilt component (Brown §III.A finds the
+    re-articulated RWA4 0.53 deg from its nominal axis; the fixed wheels are known better).
+    """
+
+    gyro_bias_sd_rad_s: float = 5e-7
+    gyro_scale_factor_sd: float = 5e-4
+    wheel_inertia_sd_frac: float = 0.005
+    wheel_axis_sd_deg: float = 0.2
+
+
+@dataclass(frozen=True)
 class Spacecraft:
     """A spacecraft model: predicted inertia with its knowledge requirements, wheels, thrusters.
 
@@ -91,6 +134,7 @@ class Spacecraft:
     mass: float = float("nan")
     description: str = ""
     source: str = ""
+    knowledge: Knowledge = field(default_factory=Knowledge)
 
     @property
     def wheel_axes(self) -> np.ndarray:
@@ -142,11 +186,18 @@ class Spacecraft:
                       for k, v in self.pulse.__dict__.items()},
             "thrust": {"F": self.thrust},
             **({"mass": {"kg": self.mass}} if np.isfinite(self.mass) else {}),
+            "gyro": {"bias_sd_rad_s": self.knowledge.gyro_bias_sd_rad_s,
+                     "scale_factor_sd": self.knowledge.gyro_scale_factor_sd},
+            "wheel_knowledge": {"inertia_sd_frac": self.knowledge.wheel_inertia_sd_frac,
+                                "axis_sd_deg": self.knowledge.wheel_axis_sd_deg},
         }
 
 
 _TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "pulse", "thrust",
-             "mass"}
+             "mass", "gyro", "wheel_knowledge"}
+_GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
+_WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
+                         "axis_sd_deg": "wheel_axis_sd_deg"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia"}
 _THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
@@ -265,8 +316,32 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
         name=str(d.get("name", Path(src).stem)), inertia=inertia, moi_uncertainty=moi,
         poi_uncertainty=poi, wheels=tuple(wheels), thrusters=thr, pulse=PulseConstants(**kw),
         thrust=thrust, mass=mass, description=str(d.get("description", "")),
-        source=str(d.get("source", "")),
+        source=str(d.get("source", "")), knowledge=_knowledge(d, src),
     )
+
+
+def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
+    """The optional ``[gyro]`` and ``[wheel_knowledge]`` sections (one sd each, ≥ 0)."""
+    base = Knowledge()
+    kw = {}
+    for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS)):
+        table = d.get(section, {})
+        if not isinstance(table, dict):
+            raise InputError(f"'{section}' must be a table [{section}]", path=src)
+        _check_keys(table, set(keys), f"{section}.", src)
+        for key, attr in keys.items():
+            v = _number(table, key, f"{section}.", src, getattr(base, attr))
+            if v < 0:
+                raise InputError(f"'{section}.{key}' is a standard deviation and must be >= 0, "
+                                 f"got {v}", path=src)
+            kw[attr] = v
+    if kw["wheel_inertia_sd_frac"] >= 0.5:
+        raise InputError("'wheel_knowledge.inertia_sd_frac' is a fraction (0.005 = 0.5 %), got "
+                         f"{kw['wheel_inertia_sd_frac']}", path=src)
+    if kw["wheel_axis_sd_deg"] > 10:
+        raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "
+                         f"(<= 10), got {kw['wheel_axis_sd_deg']}", path=src)
+    return Knowledge(**kw)
 
 
 def load_spacecraft(path: str | Path) -> Spacecraft:

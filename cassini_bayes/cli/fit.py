@@ -172,6 +172,11 @@ def fit_inertia_cmd(
     force: bool = FORCE,
     torque: bool = typer.Option(True, "--torque/--no-torque",
                                 help="Include a constant inertial external torque per file."),
+    idealised: bool = typer.Option(False, "--idealised",
+                                   help="The papers' idealised model: no gyro bias/scale factor, "
+                                        "wheel inertia or axis errors (default: the robust model "
+                                        "with those as nuisance parameters, priors from the "
+                                        "spacecraft model's [gyro] and [wheel_knowledge])."),
     more: list[Path] = typer.Argument(None, hidden=True, help="More telemetry files, as in "
                                       "--telemetry A.csv B.csv."),
 ) -> None:
@@ -179,7 +184,8 @@ def fit_inertia_cmd(
     import jax
 
     from cassini_bayes import __version__
-    from cassini_bayes.inference.inertia import NOISE_NAMES, fit_inertia
+    from cassini_bayes.inference.inertia import NOISE_NAMES, ROBUST_SITES, fit_inertia
+    from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.physics.momentum import INERTIA_NAMES
     from cassini_bayes.rundir import RunDir, file_record
@@ -193,12 +199,16 @@ def fit_inertia_cmd(
     settings = sampler_settings(chains, warmup, draws)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
-        post = fit_inertia(key, tels, sc, torque=torque, settings=settings)
+        post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings)
     baseline, base_warns = _inertia_baseline(tels, sc)
     summary = build_summary(
         "inertia", post.idata, parameters=INERTIA_NAMES, diagnostics=post.diagnostics,
         baseline=baseline, seed=seed, warnings=warns + base_warns,
-        nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES])
+        nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES]
+        + ([] if idealised else list(ROBUST_SITES)))
+    post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
+    summary["model"] = "idealised" if idealised else "robust"
+    summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
     from cassini_bayes._paths import model_path
 
     config = {
@@ -207,7 +217,7 @@ def fit_inertia_cmd(
         "seed": seed,
         "inputs": {"telemetry": [file_record(p) for p in telemetry],
                    "spacecraft": file_record(model_path(spacecraft))},
-        "options": {"torque": torque},
+        "options": {"torque": torque, "idealised": idealised},
         "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
                                           "progress": False},
         "spacecraft": sc.to_dict(),

@@ -69,6 +69,8 @@ def truth_document(result: SimResult, seed: int) -> dict:
         "noise": {"gyro_rad_s": s.noise.gyro_rad_s, "star_tracker_rad": s.noise.star_tracker_rad,
                   "tach_noise_rpm": s.noise.tach_noise_rpm,
                   "tach_quantum_rpm": s.noise.tach_quantum_rpm,
+                  "gyro_bias_rad_s": list(s.noise.gyro_bias_rad_s),
+                  "gyro_scale_factor": list(s.noise.gyro_scale_factor),
                   "on_time_resolution_s": 0.1},
         "run": {"duration_s": s.duration_s, "dt_s": s.dt_s,
                 "sample_period_s": s.sample_period_s, "control": s.control},

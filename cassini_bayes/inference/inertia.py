@@ -21,6 +21,22 @@ the design note. Because the rate noise enters through ``I`` itself (errors in v
 likelihood stays calibrated when ω, ρ and q are all noisy, not only the paper's ``Γ``. The wheel
 spin inertias ``J_k`` are known (Psiaki 2005: otherwise the scale of ``I`` is unidentified).
 
+Robust model (``robust=True``; the CLI's default)
+-------------------------------------------------
+Flight telemetry carries errors the papers' model leaves out. The robust model adds, as nuisance
+parameters with priors from the spacecraft model's ``[gyro]``/``[wheel_knowledge]`` sections
+(:class:`~cassini_bayes.spacecraft.Knowledge`): a gyro bias per axis and file and a gyro
+scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a common wheel spin-inertia
+scale ``c`` and two small tilts of each active wheel's spin axis. All enter the residual
+linearly to first order (:mod:`cassini_bayes.inference.nuisance`), so the sufficient-statistics
+likelihood below keeps its O(P²) cost (P grows by 3F + 4 + 2K). The scale ``c`` does not enter the
+likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and the wheel inertias together leaves every
+momentum balance unchanged (Psiaki 2005), so the data see ``π̃ = π/(1 + c)`` and the model sets
+``π = (1 + c) π̃`` with ``c`` at its prior — its posterior equals its prior and the moments'
+posterior sd carries it (≈ 0.5 % with the default knowledge). The constant external torque ``T_N``
+is in both models (``torque=True``), prior sd 15 µN m per axis (Feldman & Lee App. A bound;
+Brown quotes solar/gas torques of the same few-µN m order).
+
 Physical inertia by construction
 --------------------------------
 ``Σ = ½ tr(I) 1 − I`` (the second-moment matrix of the mass distribution) is positive definite
@@ -111,6 +127,7 @@ __all__ = [
     "momentum_residuals",
     "InertiaPosterior",
     "fit_inertia",
+    "ROBUST_SITES",
 ]
 
 H0_PRIOR_SD_NMS = 100.0       # N m s per axis: 4 wheels × 34 N m s capacity (Brown §I)
@@ -252,10 +269,16 @@ class InertiaProblem(NamedTuple):
     noise_hat : (F, 3) data noise levels σ̂ (rad/s, rad/s, rad), second-difference estimate.
     noise_eb : (F, 3) empirical-Bayes noise levels σ* (same units) fixing ``B̂_t``.
     residual_data : per-sample arrays (structure of arrays) for :func:`momentum_residuals`.
-    laplace_mean, laplace_sd : Laplace approximation of the posterior of ``π`` (kg m²).
+    laplace_mean, laplace_sd : Laplace approximation of the posterior of ``π`` (kg m²); robust:
+        ``π = (1 + c) π̃`` with the wheel scale ``c`` at its prior (nuisance.py), to first order.
     information_ratio : (6,) eigenvalues of ``D F D`` (data information of π with H_0/T_N
         profiled, ``D`` the prior sd): < 1 means that direction is prior-dominated.
     weak_directions : human-readable list of prior-dominated parameter combinations.
+    robust : whether the robust nuisance parameters ``ν`` are in the model.
+    layout : :class:`~cassini_bayes.inference.nuisance.NuisanceLayout` of ``ν`` (always built).
+    sensitivity : :class:`~cassini_bayes.inference.sensitivity.Sensitivity` of ``π`` to every
+        effect, linearised at the mode.
+    robust_cols : (N, 3, R) body columns of ``ν`` (robust only), to correct the residuals.
     """
 
     model_kwargs: dict
@@ -274,6 +297,10 @@ class InertiaProblem(NamedTuple):
     information_ratio: np.ndarray
     weak_directions: tuple[str, ...]
     residual_data: dict
+    robust: bool = False
+    layout: object = None
+    sensitivity: object = None
+    robust_cols: np.ndarray | None = None
 
 
 def _wheel_arrays(tel: Telemetry, spacecraft: Spacecraft):
@@ -305,20 +332,28 @@ def _body_cov_terms(inertia: np.ndarray, wheel_cov: np.ndarray, h_body: np.ndarr
 
 
 def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
-                    torque: bool = True, max_iter: int = 20) -> InertiaProblem:
+                    torque: bool = True, robust: bool = False,
+                    max_iter: int = 20) -> InertiaProblem:
     """Prepare the inertia problem: arrays, noise covariance, sufficient statistics, checks.
 
     Steps (all NumPy, O(N) once):
 
-    1. per file: DCMs, wheel momentum, the regressor, the data noise levels ``σ̂``;
+    1. per file: DCMs, wheel momentum, the regressor, the data noise levels ``σ̂``, and the
+       columns of every effect the model may carry (``H_0``, ``T_N``, the robust nuisance
+       parameters ``ν`` of :mod:`cassini_bayes.inference.nuisance`);
     2. iterated generalised least squares with empirical-Bayes noise levels: alternate the GLS
-       posterior mode of ``θ = (π, H_0,f, T_N,f)`` (prior included) and a Fisher-scoring step of
-       ``log σ_f`` (3 per file, prior ``N(log σ̂, 1)``) on the Gaussian likelihood with covariance
-       ``B_t(σ, I, h_t)``, until the steps are < 1e-6;
+       posterior mode of ``θ = (π, H_0,f, T_N,f[, ν])`` (prior included) and a Fisher-scoring step
+       of ``log σ_f`` (3 per file, prior ``N(log σ̂, 1)``) on the Gaussian likelihood with
+       covariance ``B_t(σ, I, h_t)``, until the steps are < 1e-6 (the robust columns, linear in
+       ``ν`` around the current mode ``I*``, are rebuilt each step);
     3. per file, the sufficient statistics of the quadratic form
        ``Q_f(θ) = Σ_t e_tᵀ B̂_t⁻¹ e_t`` around the mode ``θ*``: ``F_f``, ``g_f``, ``Q_f(θ*)``;
     4. the Laplace approximation (mode, covariance) that centres and whitens the sampler's
-       coordinates, and the identifiability check.
+       coordinates, the identifiability check, and the linearised sensitivity of ``π`` to every
+       effect (:func:`cassini_bayes.inference.sensitivity.linear_sensitivity`).
+
+    ``robust`` adds the nuisance parameters ``ν`` (gyro bias per file, gyro scale factor, wheel
+    spin-inertia scale, wheel spin-axis tilts) with priors from ``spacecraft.knowledge``.
 
     Raises
     ------
@@ -328,12 +363,30 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     InputError
         A telemetry file has too few samples or no wheel rates.
     """
+    from cassini_bayes.inference.nuisance import nuisance_layout, robust_columns
+    from cassini_bayes.inference.sensitivity import linear_sensitivity
+
     if not telemetries:
         raise InputError("no telemetry given; pass at least one slew file")
     prior = inertia_prior(spacecraft)
     n_files = len(telemetries)
-    n_nuis = 6 if torque else 3
-    p_tot = 6 + n_nuis * n_files
+    # Full parameter vector (every effect); the model uses the subset ``active``.
+    #   [π (6), (H_0 (3), T_N (3)) per file, ν (R)]
+    wheels_any = []
+    for tel in telemetries:
+        for name in tel.active_wheels():
+            if spacecraft.wheel(name).name not in wheels_any:
+                wheels_any.append(spacecraft.wheel(name).name)
+    layout = nuisance_layout(spacecraft, n_files, wheels_any)
+    p_base = 6 + 6 * n_files
+    p_full = p_base + layout.size
+    active = list(range(6))
+    for f in range(n_files):
+        active += list(range(6 + 6 * f, 6 + 6 * f + (6 if torque else 3)))
+    if robust:
+        active += list(range(p_base, p_full))
+    active = np.asarray(active)
+    p_tot = active.size
 
     files = []
     for f, tel in enumerate(telemetries):
@@ -348,16 +401,33 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
             jnp.asarray(js)))
         t = np.asarray(tel.t, float)
         dt = t - t[0]
-        cols = np.zeros((tel.n, 3, p_tot))  # e_t = cols_t θ − y_t (body axes)
+        cols = np.zeros((tel.n, 3, p_full))  # e_t = cols_t θ − y_t (body axes)
         cols[:, :, :6] = reg
-        j0 = 6 + n_nuis * f
+        j0 = 6 + 6 * f
         cols[:, :, j0:j0 + 3] = -a
-        if torque:
-            cols[:, :, j0 + 3:j0 + 6] = -a * dt[:, None, None]
+        cols[:, :, j0 + 3:j0 + 6] = -a * dt[:, None, None]
+        names = [spacecraft.wheel(n).name for n in tel.active_wheels()]
         files.append(dict(t=t, dt=dt, a=a, h_w=h_w, w=w, cols=cols, y=-h_w,
+                          wheel_h={n: rates[:, k] * js[k] for k, n in enumerate(names)},
                           wcov=np.einsum("k,ki,kj->ij", js**2, axes, axes),
                           s_hat=_noise_from_arrays(w, rates, inc),
                           q=np.asarray(quat_continuous(jnp.asarray(q_in)))))
+
+    def set_robust_columns(pi):
+        i_star = np.asarray(inertia_matrix(pi if is_physical(pi) else prior.mean))
+        for f, fd in enumerate(files):
+            fd["cols"][:, :, p_base:] = robust_columns(layout, f, i_star, fd["w"], fd["h_w"],
+                                                       fd["wheel_h"], fd["a"], fd["t"])
+
+    set_robust_columns(prior.mean)
+    # The wheel spin-inertia scale c is not in the likelihood: the data see only the momentum
+    # balance normalised by (1 + c), i.e. π/(1 + c), H_0/(1 + c), T_N/(1 + c) (nuisance.py), so
+    # the fitted columns drop it; the model maps π = (1 + c) π̃. (Keeping ``c H_w`` as a linear
+    # column with a fixed noise covariance would let the fit shrink the noise term along the
+    # unidentified scale and drag c many prior sd low.) The sensitivity keeps the column.
+    c_index = p_base + layout.slices["wheel_inertia"].start
+    fit_mask = np.ones(p_full)
+    fit_mask[c_index] = 0.0
 
     # Excitation: the body rates must rise above their own noise (errors in variables: a regressor
     # made of noise carries no information even though least squares would use it).
@@ -373,19 +443,23 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         warnings.warn(f"{telemetries[f].source}: body rates at their noise level (rms/noise "
                       f"{snr[f]:.2g}); this file adds no information on the inertia", stacklevel=2)
 
-    nuis_prec = np.tile(np.r_[np.full(3, H0_PRIOR_SD_NMS**-2),
-                              np.full(3, TORQUE_PRIOR_SD_NM**-2)][:n_nuis], n_files)
-    prior_prec = np.r_[prior.sd**-2, nuis_prec]
-    prior_mean = np.r_[prior.mean, np.zeros(p_tot - 6)]
+    # Prior of the full vector (sd; a zero sd pins the effect at zero).
+    full_sd = np.r_[prior.sd, np.tile(np.r_[np.full(3, H0_PRIOR_SD_NMS),
+                                            np.full(3, TORQUE_PRIOR_SD_NM)], n_files), layout.sd]
+    full_prec = 1.0 / np.maximum(full_sd, 1e-300)**2
+    full_prec = np.minimum(full_prec, 1e30)
+    full_mean = np.r_[prior.mean, np.zeros(p_full - 6)]
+    prior_prec = full_prec[active]
+    prior_mean = full_mean[active]
     log_s = np.log(np.stack([fd["s_hat"] for fd in files]))
     log_s_hat = log_s.copy()
-    theta = prior_mean.copy()
+    theta_full = full_mean.copy()
 
-    def weights(f, th, ls):
+    def weights(f, th_full, ls):
         fd = files[f]
-        i_m = np.asarray(inertia_matrix(th[:6] if is_physical(th[:6]) else prior.mean))
-        j0 = 6 + n_nuis * f
-        h_n = th[j0:j0 + 3] + (np.outer(fd["dt"], th[j0 + 3:j0 + 6]) if torque else 0.0)
+        i_m = np.asarray(inertia_matrix(th_full[:6] if is_physical(th_full[:6]) else prior.mean))
+        j0 = 6 + 6 * f
+        h_n = th_full[j0:j0 + 3] + np.outer(fd["dt"], th_full[j0 + 3:j0 + 6])
         h_body = np.einsum("nij,nj->ni", fd["a"], np.broadcast_to(h_n, fd["w"].shape))
         terms = _body_cov_terms(i_m, fd["wcov"], h_body)
         s2 = np.exp(2 * ls)
@@ -396,16 +470,20 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         info = np.zeros((p_tot, p_tot))
         rhs = np.zeros(p_tot)
         for f, fd in enumerate(files):
-            w_inv, _, _ = weights(f, theta, log_s[f])
-            wc = np.einsum("nij,njq->niq", w_inv, fd["cols"])
-            info += np.einsum("nip,niq->pq", fd["cols"], wc, optimize=True)
+            w_inv, _, _ = weights(f, theta_full, log_s[f])
+            c = (fd["cols"] * fit_mask)[:, :, active]
+            wc = np.einsum("nij,njq->niq", w_inv, c)
+            info += np.einsum("nip,niq->pq", c, wc, optimize=True)
             rhs += np.einsum("niq,ni->q", wc, fd["y"], optimize=True)
-        theta = np.linalg.solve(info + np.diag(prior_prec), rhs + prior_prec * prior_mean)
+        theta_full = full_mean.copy()
+        theta_full[active] = np.linalg.solve(info + np.diag(prior_prec),
+                                             rhs + prior_prec * prior_mean)
+        if robust:
+            set_robust_columns(theta_full[:6])
         max_step = 0.0
-        noise_info = np.zeros((n_files, 3, 3))
         for f, fd in enumerate(files):
-            w_inv, terms, _ = weights(f, theta, log_s[f])
-            e = np.einsum("nip,p->ni", fd["cols"], theta) - fd["y"]
+            w_inv, terms, _ = weights(f, theta_full, log_s[f])
+            e = np.einsum("nip,p->ni", fd["cols"] * fit_mask, theta_full) - fd["y"]
             we = np.einsum("nij,nj->ni", w_inv, e)
             s2 = np.exp(2 * log_s[f])
             d = [2 * s2[j] * terms[j] for j in range(3)]
@@ -419,27 +497,33 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
             step = np.clip(np.linalg.solve(fisher, grad), -1.0, 1.0)
             log_s[f] += step
             max_step = max(max_step, float(np.abs(step).max()))
-            noise_info[f] = fisher
         if max_step < 1e-6:
             break
+    theta = theta_full[active]
+    set_robust_columns(theta[:6])  # the linearisation point I* at the mode (also for sensitivity)
 
-    # Sufficient statistics at the mode, with the empirical-Bayes noise covariance B̂_t.
-    info = np.zeros((p_tot, p_tot))
+    # Sufficient statistics at the mode, with the empirical-Bayes noise covariance B̂_t; the
+    # information of the full vector (every effect) feeds the sensitivity analysis.
+    info_full = np.zeros((p_full, p_full))
     fmat = np.zeros((n_files, p_tot, p_tot))
     gvec = np.zeros((n_files, p_tot))
     q_star = np.zeros(n_files)
     n_obs = np.zeros(n_files)
     for f, fd in enumerate(files):
-        w_inv, _, _ = weights(f, theta, log_s[f])
-        wc = np.einsum("nij,njq->niq", w_inv, fd["cols"])
-        fmat[f] = np.einsum("nip,niq->pq", fd["cols"], wc, optimize=True)
-        e = np.einsum("nip,p->ni", fd["cols"], theta) - fd["y"]
-        gvec[f] = np.einsum("niq,ni->q", wc, e, optimize=True)
+        w_inv, _, _ = weights(f, theta_full, log_s[f])
+        wc_full = np.einsum("nij,njq->niq", w_inv, fd["cols"])
+        f_full = np.einsum("nip,niq->pq", fd["cols"], wc_full, optimize=True)
+        info_full += f_full
+        f_fit = f_full * np.outer(fit_mask, fit_mask)
+        fmat[f] = f_fit[np.ix_(active, active)]
+        e = np.einsum("nip,p->ni", fd["cols"] * fit_mask, theta_full) - fd["y"]
+        gvec[f] = np.einsum("niq,ni->q", (wc_full * fit_mask)[:, :, active], e, optimize=True)
         q_star[f] = np.einsum("ni,nij,nj->", e, w_inv, e)
         n_obs[f] = 3 * e.shape[0]
-        info += fmat[f]
+    info = (info_full * np.outer(fit_mask, fit_mask))[np.ix_(active, active)]
+    nuis_prec = prior_prec[6:]
 
-    # Data information of π with the nuisance (H_0, T_N) profiled out under their priors.
+    # Data information of π with the nuisance (H_0, T_N, ν) profiled out under their priors.
     f_nn = info[6:, 6:] + np.diag(nuis_prec)
     f_pi = info[:6, :6] - info[:6, 6:] @ np.linalg.solve(f_nn, info[6:, :6])
     dmat = np.diag(prior.sd)
@@ -467,6 +551,12 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     tril = np.linalg.cholesky(0.5 * (cov_theta + cov_theta.T))
     centre = np.r_[lp_c, theta[6:]]
 
+    groups = {"external_torque": np.concatenate([np.arange(9 + 6 * f, 12 + 6 * f)
+                                                 for f in range(n_files)])}
+    for name, sl in layout.slices.items():
+        groups[name] = p_base + np.arange(p_full - p_base)[sl]
+    sens = linear_sensitivity(info_full, full_prec, full_sd, active, groups)
+
     model_kwargs = dict(
         fmat=jnp.asarray(fmat), gvec=jnp.asarray(gvec), q_star=jnp.asarray(q_star),
         n_obs=jnp.asarray(n_obs), theta_star=jnp.asarray(theta),
@@ -474,6 +564,8 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         pi_mean=jnp.asarray(prior.mean), pi_sd=jnp.asarray(prior.sd),
         log_noise=jnp.asarray(log_s),
     )
+    if robust:
+        model_kwargs["nu_sd"] = jnp.asarray(layout.sd)
     onehot = np.concatenate([np.full(fd["t"].size, f) for f, fd in enumerate(files)])
     onehot = (onehot[None, :] == np.arange(n_files)[:, None]).astype(float)
     residual_data = dict(
@@ -494,8 +586,11 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         h_wheels=np.concatenate([fd["h_w"] for fd in files]),
         q=np.concatenate([fd["q"] for fd in files]), sources=tuple(t.source for t in telemetries),
         noise_hat=np.exp(log_s_hat), noise_eb=np.exp(log_s), laplace_mean=theta[:6],
-        laplace_sd=np.sqrt(np.diag(cov)[:6]), information_ratio=ratio, weak_directions=weak,
-        residual_data=residual_data)
+        laplace_sd=np.sqrt(np.diag(cov)[:6] + (robust * theta[:6] * full_sd[c_index])**2),
+        information_ratio=ratio, weak_directions=weak,
+        residual_data=residual_data, robust=robust, layout=layout, sensitivity=sens,
+        robust_cols=(np.concatenate([fd["cols"][:, :, p_base:] for fd in files])
+                     if robust else None))
 
 
 # --------------------------------------------------------------------------------------------
@@ -504,7 +599,8 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
 
 def _unpack(theta, n_files: int, torque: bool):
     lp = theta[:6]
-    nuis = theta[6:].reshape(n_files, 6 if torque else 3)
+    n_nuis = 6 if torque else 3
+    nuis = theta[6:6 + n_nuis * n_files].reshape(n_files, n_nuis)
     h0 = nuis[:, :3]
     tq = nuis[:, 3:6] if torque else jnp.zeros_like(h0)
     return lp, h0, tq
@@ -546,7 +642,7 @@ def _log_jacobian(lp):
 
 
 def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise,
-           torque: bool):
+           torque: bool, nu_sd=None):
     n_files = log_noise.shape[0]
     p_tot = centre.shape[0]
     z = numpyro.sample("z", dist.ImproperUniform(constraints.real_vector, (), (p_tot,)))
@@ -554,15 +650,35 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
     u = numpyro.sample("noise_z", dist.Normal(0.0, jnp.sqrt(0.5 * n_obs)).to_event(1))
     log_scale = u / jnp.sqrt(0.5 * n_obs)
     theta = centre + tril @ z
-    lp, h0, tq = _unpack(theta, n_files, torque)
-    pi = pi_from_cholesky_params(lp)
+    lp, h0_t, tq_t = _unpack(theta, n_files, torque)
+    pi_t = pi_from_cholesky_params(lp)
+    nu = theta[6 + (6 if torque else 3) * n_files:]
+    # Robust model: the likelihood sees π̃ = π/(1 + c), H̃_0, T̃_N (c the wheel spin-inertia
+    # scale, nuisance.py); the physical values are (1 + c) times those. Idealised: c = 0.
+    c = nu[3 * n_files + 3] if nu_sd is not None else 0.0
+    pi, h0, tq = (1.0 + c) * pi_t, (1.0 + c) * h0_t, (1.0 + c) * tq_t
 
     # Prior, in physical coordinates (module docstring); the affine part of z → θ has a constant
-    # Jacobian, the log-Cholesky map's is added here.
+    # Jacobian, the log-Cholesky map's is added here, and (π̃, H̃_0, T̃_N) → (π, H_0, T_N) at
+    # fixed c contributes (6 + 3F [+ 3F]) log(1 + c).
     log_prior = (jnp.sum(dist.Normal(pi_mean, pi_sd).log_prob(pi)) + _log_jacobian(lp)
                  + jnp.sum(dist.Normal(0.0, H0_PRIOR_SD_NMS).log_prob(h0)))
     if torque:
         log_prior += jnp.sum(dist.Normal(0.0, TORQUE_PRIOR_SD_NM).log_prob(tq))
+    if nu_sd is not None:
+        log_prior += (6 + (6 if torque else 3) * n_files) * jnp.log1p(c)
+        # Robust nuisance ν ~ N(0, sd from the spacecraft model's knowledge); see nuisance.py.
+        # The body torque, like T_N, is (1 + c) times what the likelihood sees.
+        n_tilt = nu_sd.shape[0] - 6 * n_files - 4
+        body = 3 * n_files + 4 + n_tilt
+        nu_phys = jnp.concatenate([nu[:body], (1.0 + c) * nu[body:]])
+        log_prior += jnp.sum(-0.5 * (nu_phys / nu_sd)**2) + 3 * n_files * jnp.log1p(c)
+        numpyro.deterministic("gyro_bias", nu[:3 * n_files].reshape(n_files, 3))
+        numpyro.deterministic("gyro_scale", nu[3 * n_files:3 * n_files + 3])
+        numpyro.deterministic("wheel_scale", nu[3 * n_files + 3])
+        numpyro.deterministic("wheel_tilt",
+                              nu[3 * n_files + 4:3 * n_files + 4 + n_tilt].reshape(n_tilt // 2, 2))
+        numpyro.deterministic("T_body", nu_phys[body:].reshape(n_files, 3))
     numpyro.factor("prior", log_prior)
 
     for i, name in enumerate(INERTIA_NAMES):
@@ -576,7 +692,7 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
         numpyro.deterministic(name, sig[:, i])
 
     # Likelihood from sufficient statistics: Σ_t e_tᵀ B̂_t⁻¹ e_t = δᵀFδ + 2gᵀδ + Q*, δ = θ − θ*.
-    phys = jnp.concatenate([pi, _pack(h0, tq, torque)])
+    phys = jnp.concatenate([pi_t, _pack(h0_t, tq_t, torque), nu])
     delta = phys - theta_star
     quad = (jnp.einsum("p,fpq,q->f", delta, fmat, delta) + 2.0 * gvec @ delta + q_star)
     numpyro.factor("loglik", jnp.sum(-0.5 * quad * jnp.exp(-2.0 * log_scale)
@@ -588,19 +704,24 @@ def _pack(h0, tq, torque: bool):
 
 
 @lru_cache(maxsize=None)
-def inertia_model(torque: bool):
-    """The NumPyro model function (one object per ``torque`` flag, so compiled code is reused).
+def inertia_model(torque: bool, robust: bool = False):
+    """The NumPyro model function (one object per flag pair, so compiled code is reused).
 
     Call it with ``**InertiaProblem.model_kwargs`` (per-file sufficient statistics, so its shapes
-    depend on the number of files and ``torque`` only, not on the number of samples). Posterior
-    sites: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis) N m when
-    ``torque``, ``noise_scale`` (file), ``sigma_omega``, ``sigma_rho`` (rad/s) and
-    ``sigma_theta`` (rad) per file, and the sampler's ``z``, ``noise_z``.
+    depend on the number of files, wheels and the flags only, not on the number of samples).
+    Posterior sites: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis) N m
+    when ``torque``, ``noise_scale`` (file), ``sigma_omega``, ``sigma_rho`` (rad/s) and
+    ``sigma_theta`` (rad) per file, and the sampler's ``z``, ``noise_z``; when ``robust`` also
+    ``gyro_bias`` (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale`` (fraction) and
+    ``wheel_tilt`` (wheel, tilt) rad and ``T_body`` (file, axis) N m, a body-fixed external
+    torque (:mod:`cassini_bayes.inference.nuisance`).
     """
     def model(**kwargs):
+        if not robust:
+            kwargs.pop("nu_sd", None)
         return _model(torque=torque, **kwargs)
 
-    model.__name__ = f"inertia_model_torque_{torque}"
+    model.__name__ = f"inertia_model_torque_{torque}_robust_{robust}"
     model.__doc__ = _model.__doc__
     return model
 
@@ -610,13 +731,15 @@ def inertia_model(torque: bool):
 # --------------------------------------------------------------------------------------------
 
 def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: bool = True,
-                 log_noise=None, max_rounds: int = 100) -> dict[str, np.ndarray]:
+                 log_noise=None, layout=None, max_rounds: int = 100) -> dict[str, np.ndarray]:
     """``n`` draws from the stated prior (module docstring), ``π`` by rejection of non-physical.
 
     Returns a dict: ``Ixx … Iyz`` (n,), ``H0`` (n, F, 3), ``T_N`` (n, F, 3) when ``torque``, and
     ``noise_scale`` and the noise levels (n, F) when ``log_noise`` (F, 3), the log of the
-    empirical-Bayes levels ``σ*``, is given. The same function gives the
-    simulator and SBC their truth, so the model's prior and the truth's prior agree exactly.
+    empirical-Bayes levels ``σ*``, is given; with a robust ``layout``
+    (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`) also ``gyro_bias`` (n, F, 3),
+    ``gyro_scale`` (n, 3), ``wheel_scale`` (n,), ``wheel_tilt`` (n, K, 2). The same function gives
+    the simulator and SBC their truth, so the model's prior and the truth's prior agree exactly.
     """
     key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
     kept = []
@@ -644,6 +767,15 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
         ls = np.asarray(log_noise) + log_scale[..., None]
         for i, name in enumerate(NOISE_NAMES):
             out[name] = np.exp(ls[..., i])
+    if layout is not None:
+        nu = layout.sd * np.asarray(jax.random.normal(jax.random.fold_in(key_s, 1),
+                                                      (n, layout.size)))
+        sl = layout.slices
+        out["gyro_bias"] = nu[:, sl["gyro_bias"]].reshape(n, layout.n_files, 3)
+        out["gyro_scale"] = nu[:, sl["gyro_scale"]]
+        out["wheel_scale"] = nu[:, sl["wheel_inertia"].start]
+        out["wheel_tilt"] = nu[:, sl["wheel_axes"]].reshape(n, len(layout.wheels), 2)
+        out["T_body"] = nu[:, sl["body_torque"]].reshape(n, layout.n_files, 3)
     return out
 
 
@@ -659,14 +791,20 @@ def _residuals_jit(pi, h0, tq, log_sigma, data):
     return r, std[..., 0]
 
 
-def momentum_residuals(problem: InertiaProblem, pi, h0, tq, sigma) -> tuple[np.ndarray, np.ndarray]:
+def momentum_residuals(problem: InertiaProblem, pi, h0, tq, sigma,
+                       nu=None) -> tuple[np.ndarray, np.ndarray]:
     """Momentum residuals at given parameters (e.g. posterior means).
 
     Returns ``r`` (N, 3) N m s, ``A(q_t)ᵀ(I ω_t + H_w,t) − H_0 − T_N (t − t_0)`` in inertial axes,
     and ``std`` (N, 3), the body residual whitened by the Cholesky factor of ``B_t``: ~N(0, 1) when
-    the noise model fits. ``h0``, ``tq`` (F, 3); ``sigma`` (F, 3) the noise scales.
+    the noise model fits. ``h0``, ``tq`` (F, 3); ``sigma`` (F, 3) the noise scales; ``nu`` (R,)
+    the robust nuisance vector (robust problems only): its linear correction of the body momentum
+    is included.
     """
     data = problem.residual_data
+    if nu is not None and problem.robust_cols is not None:
+        corr = np.einsum("nir,r->in", problem.robust_cols, np.asarray(nu, float))
+        data = dict(data, h_wheels_t=data["h_wheels_t"] + jnp.asarray(corr))
     r, std = _residuals_jit(jnp.asarray(pi), jnp.asarray(h0), jnp.asarray(tq),
                             jnp.log(jnp.asarray(sigma)), data)
     return np.asarray(r), np.asarray(std)
@@ -690,10 +828,13 @@ class InertiaPosterior(NamedTuple):
 
 
 AXES = ("x", "y", "z")
+# Posterior sites of the robust nuisance vector ν, in its order (nuisance.py).
+ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_tilt", "T_body")
 
 
 def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
-                torque: bool = True, settings=None, prior_draws: int = 500) -> InertiaPosterior:
+                torque: bool = True, robust: bool = False, settings=None,
+                prior_draws: int = 500) -> InertiaPosterior:
     """Posterior of the inertia tensor from one or more RWA-slew telemetry files.
 
     Parameters
@@ -703,6 +844,10 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     spacecraft : the model giving the prior (predicted tensor, knowledge requirements) and the
         wheel axes and spin inertias.
     torque : include the constant inertial external torque ``T_N`` per file.
+    robust : include the sensor and actuator nuisance parameters (gyro bias per file, gyro scale
+        factor, wheel spin-inertia scale, wheel spin-axis tilts; priors from
+        ``spacecraft.knowledge``; :mod:`cassini_bayes.inference.nuisance`). The CLI's default;
+        ``False`` (the idealised model of the papers) here so that existing callers keep it.
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
 
@@ -713,7 +858,9 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
 
         * ``posterior``: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis)
           N m, ``sigma_omega``/``sigma_rho`` (file) rad/s, ``sigma_theta`` (file) rad, and the
-          sampler's non-dimensional ``z``, ``noise_z``;
+          sampler's non-dimensional ``z``, ``noise_z``; when ``robust`` also ``gyro_bias``
+          (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale``, ``wheel_tilt`` (wheel,
+          tilt) rad;
         * ``sample_stats`` (NUTS), ``prior`` (same names, drawn from the stated prior);
         * ``observed_data``: ``omega`` (t, axis) rad/s, ``q`` (t, quat), ``h_wheels`` (t, axis)
           N m s (wheel momentum in body axes), ``file`` (t);
@@ -736,22 +883,25 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
-    problem = prepare_inertia(telemetries, spacecraft, torque=torque)
+    problem = prepare_inertia(telemetries, spacecraft, torque=torque, robust=robust)
     _warn_weak(problem)
     n_files = len(telemetries)
     kw = problem.model_kwargs
     coords = {"file": np.arange(n_files), "axis": list(AXES), "noise": list(NOISE_NAMES),
-              "z_dim": np.arange(kw["centre"].shape[0]), "noise_z_dim": np.arange(n_files)}
+              "z_dim": np.arange(kw["centre"].shape[0]), "noise_z_dim": np.arange(n_files),
+              "wheel": list(problem.layout.wheels), "tilt": ["u1", "u2"]}
     dims = {"H0": ["file", "axis"], "T_N": ["file", "axis"], "z": ["z_dim"],
             "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
+            "gyro_bias": ["file", "axis"], "gyro_scale": ["axis"], "wheel_tilt": ["wheel", "tilt"],
+            "T_body": ["file", "axis"],
             **{name: ["file"] for name in NOISE_NAMES}}
     log_nh = np.asarray(kw["log_noise"])
 
     def prior(key_prior, n):
         return sample_prior(key_prior, problem.prior, n, n_files=n_files, torque=torque,
-                            log_noise=log_nh)
+                            log_noise=log_nh, layout=problem.layout if robust else None)
 
-    idata = run_nuts(key, inertia_model(torque), model_kwargs=kw, settings=settings,
+    idata = run_nuts(key, inertia_model(torque, robust), model_kwargs=kw, settings=settings,
                      coords=coords, dims=dims, prior=prior, prior_draws=prior_draws)
 
     post = idata.posterior
@@ -760,7 +910,17 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     tq_mean = post["T_N"].mean(("chain", "draw")).values if torque else np.zeros_like(h0_mean)
     sig_mean = np.stack([np.exp(np.log(post[n]).mean(("chain", "draw")).values)
                          for n in NOISE_NAMES], -1)
-    r, std = momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean)
+    nu_mean = None
+    if robust:
+        nu_mean = np.concatenate([post[name].mean(("chain", "draw")).values.reshape(-1)
+                                  for name in ROBUST_SITES])
+    if robust:  # the residual is that of π̃ = π/(1 + c) (nuisance.py); c has no column there
+        sl = problem.layout.slices["wheel_inertia"].start
+        scale = 1.0 + nu_mean[sl]
+        nu_mean[sl] = 0.0
+        nu_mean[problem.layout.slices["body_torque"]] /= scale
+        pi_mean, h0_mean, tq_mean = pi_mean / scale, h0_mean / scale, tq_mean / scale
+    r, std = momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean, nu_mean)
 
     t_coord = {"t": ("t", problem.t, {"units": "s"}), "axis": list(AXES),
                "file": ("t", problem.file_idx)}
@@ -793,5 +953,6 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
                 del idata[name]
         idata.add_groups({"observed_data": observed, "constant_data": constant,
                           "residuals": residuals})
-    names = list(INERTIA_NAMES) + ["H0"] + (["T_N"] if torque else []) + ["noise_scale"]
+    names = (list(INERTIA_NAMES) + ["H0"] + (["T_N"] if torque else []) + ["noise_scale"]
+             + (list(ROBUST_SITES) if robust else []))
     return InertiaPosterior(idata, diagnostics(idata, names), problem)

@@ -134,6 +134,8 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
     if run.kind in ("inertia", "thrust"):
         sections.append(_pair_section(run, fig))
     sections.append(_residuals_section(run, fig))
+    from cassini_bayes.report.sensitivity import sensitivity_section  # issue 7: additive hook
+    sections += [s for s in [sensitivity_section(run.summary)] if s is not None]
     if run.kind == "rwa4":
         sections.append(_axis_section(run, fig))
     sections.append(_energy_section(run, diag, fig))

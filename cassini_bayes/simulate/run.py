@@ -166,7 +166,9 @@ def noise_params(scenario: Scenario) -> NoiseParams:
     n = scenario.noise
     return NoiseParams(*(jnp.asarray(float(x)) for x in
                          (n.gyro_rad_s, n.star_tracker_rad, n.tach_quantum_rpm,
-                          n.tach_noise_rpm)))
+                          n.tach_noise_rpm)),
+                       gyro_bias_rad_s=jnp.asarray(n.gyro_bias_rad_s, float),
+                       gyro_scale_factor=jnp.asarray(n.gyro_scale_factor, float))
 
 
 def _config(s: Scenario) -> _Config:

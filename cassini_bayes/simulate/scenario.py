@@ -11,7 +11,10 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [truth]     model = "models/…toml" (required); optional overrides:
                 inertia = {Ixx = …, …}, thrust_n = 0.75 | [8 values], tau_delay_s, tau_rise_s,
                 tau_fall_s, rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
-                external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3]
+                external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3],
+                wheel_inertia_scale = 1.0 (true spin inertias = scale × the model file's),
+                wheel_axis_tilt_deg = {RWA1 = [a1, a2], …} (true axes tilted along
+                ``spacecraft.wheel_tilt_basis``; the prior model keeps the nominal ones)
     [prior]     model = "…" (required)
     [initial]   wheels_on = ["RWA1", …] (required), q = [q1, q2, q3, q4], rates_rad_s = [3],
                 wheel_rpm = {RWA1 = …}
@@ -22,7 +25,8 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [[wheel_ramp]]   wheel, t_start_s, target_rpm, torque_nm
     [[deadband]]     t_s, deadband_mrad = [3]
     [[pulse]]        t_on_s, thruster = "Z1"…"Y4", width_s
-    [noise]     gyro_rad_s, star_tracker_rad, tach_quantum_rpm, tach_noise_rpm
+    [noise]     gyro_rad_s, star_tracker_rad, tach_quantum_rpm, tach_noise_rpm,
+                gyro_bias_rad_s = [3], gyro_scale_factor = [3]  (ω_meas = (1 + s) ω + b + noise)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
 """
 
@@ -38,7 +42,8 @@ import numpy as np
 from cassini_bayes._paths import ROOT, SCENARIOS_DIR
 from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
-from cassini_bayes.spacecraft import Spacecraft, check_physical_inertia, load_spacecraft
+from cassini_bayes.spacecraft import (Spacecraft, check_physical_inertia, load_spacecraft,
+                                      tilted_axis)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
 
 __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "Window",
@@ -99,12 +104,16 @@ class Noise:
     star_tracker_rad : attitude noise per axis, a small rotation, rad.
     tach_quantum_rpm : wheel-rate quantization step, rpm (0 = none).
     tach_noise_rpm : white noise on wheel rates before quantization, rpm.
+    gyro_bias_rad_s : constant gyro bias per body axis, rad/s (issue 7; 0 = none).
+    gyro_scale_factor : gyro scale-factor error per body axis, fraction (0 = none).
     """
 
     gyro_rad_s: float = 0.0
     star_tracker_rad: float = 0.0
     tach_quantum_rpm: float = 0.0
     tach_noise_rpm: float = 0.0
+    gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    gyro_scale_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -319,7 +328,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 
     tr = top.sub("truth", {"model", "inertia", "thrust_n", "tau_delay_s", "tau_rise_s",
                            "tau_fall_s", "rwa4_axis", "external_torque_inertial_nm",
-                           "external_torque_body_nm", "external_torque_inertial_rate_nm_s"},
+                           "external_torque_body_nm", "external_torque_inertial_rate_nm_s",
+                           "wheel_inertia_scale", "wheel_axis_tilt_deg"},
                     required=True)
     truth, truth_path = _model(tr.str_("model"), "truth.model", src)
     ti = tr.sub("inertia", {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"})
@@ -346,6 +356,21 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         axis = tr.vec("rwa4_axis", unit=True)
         _wheel_index(truth, "RWA4", "truth.rwa4_axis", src)
         truth = truth.with_wheel_axis("RWA4", axis / np.linalg.norm(axis))
+    # Issue 7: true wheels differing from the model file (the prior model keeps its own).
+    j_scale = tr.num("wheel_inertia_scale", 1.0, positive=True)
+    if abs(j_scale - 1.0) >= 0.5:
+        raise tr.err("wheel_inertia_scale", f"= {j_scale} must be close to 1 (a fractional error)")
+    tilts = tr.sub("wheel_axis_tilt_deg", set(truth.wheel_names))
+    wheels = []
+    for w in truth.wheels:
+        axis = w.axis
+        if w.name in tilts.t:
+            a = tilts.vec(w.name, 2)
+            if np.any(np.abs(a) > 10.0):
+                raise tilts.err(w.name, "tilts are small angles in degrees (|a| <= 10)")
+            axis = tilted_axis(axis, np.deg2rad(a))
+        wheels.append(replace(w, axis=axis, inertia=w.inertia * j_scale))
+    truth = replace(truth, wheels=tuple(wheels))
     ext_n = tr.vec("external_torque_inertial_nm", default=np.zeros(3))
     ext_b = tr.vec("external_torque_body_nm", default=np.zeros(3))
     ext_rate = tr.vec("external_torque_inertial_rate_nm_s", default=np.zeros(3))
@@ -468,11 +493,16 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
                               "resolution)")
 
     nz = top.sub("noise", {"gyro_rad_s", "star_tracker_rad", "tach_quantum_rpm",
-                           "tach_noise_rpm"})
+                           "tach_noise_rpm", "gyro_bias_rad_s", "gyro_scale_factor"})
+    gyro_scale = nz.vec("gyro_scale_factor", default=[0.0, 0.0, 0.0])
+    if np.any(np.abs(gyro_scale) >= 0.1):
+        raise nz.err("gyro_scale_factor", "is a small fractional error (|s| < 0.1)")
     noise = Noise(nz.num("gyro_rad_s", 0.0, nonneg=True),
                   nz.num("star_tracker_rad", 0.0, nonneg=True),
                   nz.num("tach_quantum_rpm", 0.0, nonneg=True),
-                  nz.num("tach_noise_rpm", 0.0, nonneg=True))
+                  nz.num("tach_noise_rpm", 0.0, nonneg=True),
+                  tuple(float(x) for x in nz.vec("gyro_bias_rad_s", default=[0.0, 0.0, 0.0])),
+                  tuple(float(x) for x in gyro_scale))
     windows = []
     for r in top.items("window", {"name", "t0_s", "t1_s"}):
         t0, t1 = r.num("t0_s"), r.num("t1_s")

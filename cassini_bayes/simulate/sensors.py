@@ -1,6 +1,7 @@
 """Sensor models: what telemetry reports of the true state (pure JAX, keyed).
 
-* gyro (IRU): white noise on each body-rate sample, rad/s;
+* gyro (IRU): white noise on each body-rate sample, rad/s, and optionally a constant bias ``b``
+  (rad/s) and scale-factor error ``s`` per axis: ``ω_meas = (1 + s) ω + b + noise`` (issue 7);
 * attitude (star tracker / attitude estimate): a small random rotation per sample,
   ``q_meas = small_rotation_quat(δθ) ⊗ q``, ``δθ ~ N(0, σ²)`` per axis, rad;
 * wheel tachometers: white noise (rpm) and quantization to ``tach_quantum_rpm``;
@@ -34,6 +35,8 @@ class NoiseParams(NamedTuple):
     star_tracker_rad: Array
     tach_quantum_rpm: Array
     tach_noise_rpm: Array
+    gyro_bias_rad_s: Array | float = 0.0       # (3,) constant gyro bias, rad/s
+    gyro_scale_factor: Array | float = 0.0     # (3,) gyro scale-factor error (fraction)
 
 
 def measure(key: Array, q: Array, omega: Array, wheel_rates: Array, noise: NoiseParams):
@@ -42,7 +45,10 @@ def measure(key: Array, q: Array, omega: Array, wheel_rates: Array, noise: Noise
     Returns wheel rates in rad/s (after quantization in rpm, as the tachometers count).
     """
     k_g, k_s, k_t = jax.random.split(key, 3)
-    w_meas = omega + noise.gyro_rad_s * jax.random.normal(k_g, omega.shape, omega.dtype)
+    scale = jnp.broadcast_to(jnp.asarray(noise.gyro_scale_factor, omega.dtype), (3,))
+    bias = jnp.broadcast_to(jnp.asarray(noise.gyro_bias_rad_s, omega.dtype), (3,))
+    w_meas = ((1.0 + scale[None, :]) * omega + bias[None, :]
+              + noise.gyro_rad_s * jax.random.normal(k_g, omega.shape, omega.dtype))
     dth = noise.star_tracker_rad * jax.random.normal(k_s, q.shape[:-1] + (3,), q.dtype)
     q_meas = quat_normalize(quat_multiply(small_rotation_quat(dth), q))
     rpm = wheel_rates * RPM_PER_RAD_S
