@@ -26,6 +26,8 @@ from typing import Iterator
 
 import typer
 
+from cassini_bayes import __version__
+
 ORDER = 20
 
 
@@ -183,7 +185,6 @@ def fit_inertia_cmd(
     """Posterior of the inertia tensor from RWA slews (shared I, per-file momentum)."""
     import jax
 
-    from cassini_bayes import __version__
     from cassini_bayes.inference.inertia import NOISE_NAMES, ROBUST_SITES, fit_inertia
     from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
@@ -211,19 +212,27 @@ def fit_inertia_cmd(
     summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
     from cassini_bayes._paths import model_path
 
-    config = {
-        "command": "fit inertia",
-        "version": __version__,
-        "seed": seed,
-        "inputs": {"telemetry": [file_record(p) for p in telemetry],
-                   "spacecraft": file_record(model_path(spacecraft))},
-        "options": {"torque": torque, "idealised": idealised},
-        "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
-                                          "progress": False},
-        "spacecraft": sc.to_dict(),
-    }
+    config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": [file_record(p) for p in telemetry],
+                                "spacecraft": file_record(model_path(spacecraft))},
+                        options={"torque": torque, "idealised": idealised})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
+
+
+def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: dict,
+               options: dict) -> dict:
+    """The resolved inputs of a fit, written as ``config.toml`` (DESIGN.md §4): enough to re-run."""
+    return {
+        "command": command,
+        "version": __version__,
+        "seed": seed,
+        "inputs": inputs,
+        "options": options,
+        "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
+                                          "progress": False},
+        "spacecraft": spacecraft.to_dict(),
+    }
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

@@ -12,7 +12,8 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
-                                   collect_warnings, sampler_settings, write_fit_run)
+                                   collect_warnings, fit_config, sampler_settings,
+                                   write_fit_run)
 
 ORDER = 22
 
@@ -40,7 +41,6 @@ def fit_rwa4_cmd(
     """Posterior of the RWA4 spin axis, with the inertia uncertainty sampled jointly."""
     import jax
 
-    from cassini_bayes import __version__
     from cassini_bayes._paths import model_path
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, U4_NAMES, fit_rwa4
@@ -83,22 +83,15 @@ def fit_rwa4_cmd(
     summary["method"] = method
     summary["prior"] = prior
     summary["windows"] = [{"a": list(a), "b": list(b)} for a, b in pr.pairs]
-    config = {
-        "command": "fit rwa4",
-        "version": __version__,
-        "seed": seed,
-        "inputs": {"telemetry": file_record(telemetry),
-                   "spacecraft": file_record(model_path(spacecraft)),
-                   **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
-                      if inertia_posterior is not None else {})},
-        "options": {"method": method, "prior": prior,
-                    "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
-                    "window_b": [f"{b[0]:.10g}:{b[1]:.10g}" for _, b in pr.pairs],
-                    "windows_detected": pairs is None},
-        "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
-                                          "progress": False},
-        "spacecraft": sc.to_dict(),
-    }
+    config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": file_record(telemetry),
+                                "spacecraft": file_record(model_path(spacecraft)),
+                                **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
+                                   if inertia_posterior is not None else {})},
+                        options={"method": method, "prior": prior,
+                                 "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
+                                 "window_b": [f"{b[0]:.10g}:{b[1]:.10g}" for _, b in pr.pairs],
+                                 "windows_detected": pairs is None})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 

@@ -11,7 +11,8 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
-                                   collect_warnings, sampler_settings, write_fit_run)
+                                   collect_warnings, fit_config, sampler_settings,
+                                   write_fit_run)
 
 ORDER = 21
 
@@ -86,7 +87,6 @@ def fit_thrust_cmd(
     """Posterior of the thrust and the pulse time constants from biasing events."""
     import jax
 
-    from cassini_bayes import __version__
     from cassini_bayes._paths import model_path
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.summary import build_summary
@@ -123,20 +123,13 @@ def fit_thrust_cmd(
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,
                             nuisance=nuisance, warnings=warns + base_warns)
     summary["mode"] = mode
-    config = {
-        "command": "fit thrust",
-        "version": __version__,
-        "seed": seed,
-        "inputs": {"telemetry": [file_record(p) for p in telemetry],
-                   "pulses": [file_record(p) for p in pulses],
-                   "spacecraft": file_record(model_path(spacecraft)),
-                   **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
-                      if inertia_posterior is not None else {})},
-        "options": {"mode": mode},
-        "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
-                                          "progress": False},
-        "spacecraft": sc.to_dict(),
-    }
+    config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": [file_record(p) for p in telemetry],
+                                "pulses": [file_record(p) for p in pulses],
+                                "spacecraft": file_record(model_path(spacecraft)),
+                                **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
+                                   if inertia_posterior is not None else {})},
+                        options={"mode": mode})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 
