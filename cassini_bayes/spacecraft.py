@@ -13,7 +13,6 @@ vectors in body axes (the columns of Feldman & Lee's ``T``, App. A).
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import model_path
+from cassini_bayes._toml import read_toml
 from cassini_bayes.errors import InputError
 
 __all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
@@ -347,11 +347,5 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
 def load_spacecraft(path: str | Path) -> Spacecraft:
     """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
     p = model_path(str(path))
-    if not p.exists():
-        raise InputError(f"spacecraft model not found: {path} (give a path to a .toml file or a "
-                         f"name from models/)")
-    try:
-        d = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"not valid TOML: {e}", path=str(p)) from None
+    d = read_toml(p, "spacecraft model", "models/")
     return spacecraft_from_dict(d, str(p))

@@ -32,7 +32,6 @@ noise and the seed. Unknown keys, missing required values and impossible values 
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -40,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import ROOT, SCENARIOS_DIR
+from cassini_bayes._toml import read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.spacecraft import (Spacecraft, check_physical_inertia, load_spacecraft,
@@ -533,11 +533,5 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 def load_scenario(path: str | Path) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
     p = scenario_path(str(path))
-    if not p.exists():
-        raise InputError(f"scenario not found: {path} (give a path to a .toml file or a name "
-                         f"from experiments/scenarios/)")
-    try:
-        d = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"not valid TOML: {e}", path=str(p)) from None
+    d = read_toml(p, "scenario", "experiments/scenarios/")
     return scenario_from_dict(d, str(p))
