@@ -52,7 +52,7 @@ density near ``x = 0``; it can only matter when the data are uninformative, in w
 
 Finally the sampler sees ``w`` with ``θ = centre + tril w`` (``θ`` = ``y``, the prior-whitened
 log-Cholesky inertia coordinates and the log noise scales), ``centre``/``tril`` a Laplace
-approximation (:func:`cassini_bayes.inference.thrust.laplace`): on the RCS method the data fix
+approximation (:func:`cassini_bayes.inference.laplace.laplace`): on the RCS method the data fix
 ``|I Δω| = J_4 |Δρ_4|`` far more tightly than the inertia prior, a direction NUTS would otherwise
 have to find. The density is exact in ``θ``; the affine map only conditions the geometry.
 """
@@ -76,7 +76,8 @@ from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_mult
 from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_prior,
                                              is_physical, pi_from_cholesky_params)
 from cassini_bayes.inference.sphere import direction_summary
-from cassini_bayes.inference.thrust import InertiaGaussian, laplace, rate_noise_levels
+from cassini_bayes.inference.laplace import laplace
+from cassini_bayes.inference.thrust import InertiaGaussian, rate_noise_levels
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry

@@ -37,18 +37,28 @@ Priors, stated in the physical parameters
 * ``log τ ~ Normal(log √(lo·hi), ln(hi/lo)/4)`` for each time constant with the manufacturer's test
   range ``[lo, hi]`` of the spacecraft model's ``[pulse]`` section (rise 15-25 ms, fall 40-90 ms,
   delay 3-7 ms): the test range is the central ±2σ, 95.4 % of the prior mass.
-* ``σ_ω``, ``σ_ρ`` per event: ``log σ ~ Normal(log σ̂, 1)`` around the data's own white-noise
-  levels (:func:`rate_noise_levels`).
+* Noise, per event: ``(σ_ω, σ_ρ) = s_e (σ̂_ω, σ̂_ρ)`` with ``log s_e ~ Normal(0, 1)``, ``σ̂`` the
+  data's own white-noise levels (:func:`rate_noise_levels`). One scale, not two: the gyro term of
+  ``B_e`` outweighs the wheel term ~100× on the shipped scenarios, so a free ``σ_ρ`` is
+  unidentified below ``σ̂_ρ`` and cut off sharply above it — a one-sided cliff NUTS handles badly
+  (measured: divergences and bulk ESS ~100 on two Table 2 events); the mix of the two comes from
+  the data, the overall level is learned.
 * Inertia: fixed at the spacecraft model's prediction, or (``inertia=`` an :class:`InertiaGaussian`,
   e.g. from an inertia run's posterior) sampled jointly from that Gaussian.
 
-The parameters are first made non-dimensional: ``f_z``, ``tau_z`` (prior standard normals),
-``noise_z`` (log σ in units of 0.1) and ``inertia_z`` (whitened by the Gaussian's Cholesky
-factor). The data pin ``F`` far below its prior width (posterior sd of ``f_z`` ~ 0.004 on
-``fsds_biasing``, under the 1e-2 scale NUTS adapts well, DESIGN.md §7), so the sampler sees
-``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace approximation of the posterior
-(:func:`laplace`); the density is exact in ``θ`` (constant Jacobian), the affine map only
-conditions the geometry.
+Sampler coordinates
+-------------------
+Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
+``c = τf − τr e^{−τd/τr}`` (:func:`long_pulse_excess`; a long pulse delivers ``F (Δ + c)``) to
+~1e-4 of their prior widths, and leave ``τd``, ``τr`` near their prior: the posterior of
+``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls (step
+sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
+``f_z`` (prior-whitened ``log F``), ``z_d``, ``z_r`` (prior-whitened ``log τd``, ``log τr``),
+``c_z`` (``c = c_mu + 0.01 s · c_z``, ``τf = c + τr e^{−τd/τr}``, the prior of ``τf`` carried over
+by its Jacobian), ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
+Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
+Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
+density is exact in ``θ``; the maps only condition the geometry.
 
 Identification
 --------------
@@ -74,6 +84,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
@@ -92,7 +103,7 @@ __all__ = [
     "ThrustProblem",
     "prepare_thrust",
     "pulse_increments",
-    "laplace",
+    "long_pulse_excess",
     "rate_noise_levels",
     "thrust_model",
     "sample_thrust_prior",
@@ -105,6 +116,7 @@ MODES = ("mean", "branch", "thruster")
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 _NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
+C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler coordinate
 _NOISE_FLOORS = np.array([1e-9, 1e-7])
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
 _TAIL_S = 1.5
@@ -348,11 +360,12 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         slot_offsets=jnp.arange(k_slots), q_matrix=jnp.asarray(q_mat),
         wheel_cov=jnp.asarray(wcov), log_noise_hat=jnp.asarray(np.log(noise)),
         tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
+        c_mu=jnp.asarray(float(long_pulse_excess(*np.exp(tp.log_mean)))),
         f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
         inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
     )
     n_f = len(names)
-    dim = n_f + 3 + 2 * n_ev + (6 if inertia is not None else 0)
+    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
     centre, tril = laplace(lambda th: _log_density(th, kw, n_f, inertia is not None),
                            np.zeros(dim))
     kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
@@ -432,13 +445,47 @@ _EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0)
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
-    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,), ``noise_z`` (E, 2) and
-    ``inertia_z`` (6,) or ``None``."""
+    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(z_d, z_r, c_z)``,
+    ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
     tau_z = theta[n_f:n_f + 3]
-    noise_z = theta[n_f + 3:n_f + 3 + 2 * n_ev].reshape(n_ev, 2)
-    inertia_z = theta[n_f + 3 + 2 * n_ev:] if sample_inertia else None
+    noise_z = theta[n_f + 3:n_f + 3 + n_ev]
+    inertia_z = theta[n_f + 3 + n_ev:] if sample_inertia else None
     return f_z, tau_z, noise_z, inertia_z
+
+
+def long_pulse_excess(tau_delay, tau_rise, tau_fall):
+    """``c = τf − τr e^{−τd/τr}`` (s): a pulse of width ``Δ ≫ τr`` delivers ``F (Δ + c)``.
+
+    The limit ``e^{−Δ/τr} → 0`` of Feldman & Lee §V's closed form
+    ``(Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}``; for the 125 ms minimum
+    pulse ``e^{−Δ/τr} ≈ 0.002``. Pulse logs of widths ≥ 125 ms determine ``F`` and ``c`` and
+    little else: the time constants lie on the curved surface ``c(τ) = const``.
+    """
+    return tau_fall - tau_rise * jnp.exp(-tau_delay / tau_rise)
+
+
+def _tau_from_z(tau_z, kw):
+    """Time constants (3,) s from the sampler's ``(z_d, z_r, c_z)`` and the log-Jacobian of
+    ``z_f ↦ c`` that makes the prior exact.
+
+    ``τd``, ``τr`` keep their prior-whitened log coordinates; the third coordinate is the
+    long-pulse excess ``c = c_mu + C_SCALE c_z`` (:func:`long_pulse_excess`), and
+    ``τf = c + τr e^{−τd/τr}``. Sampling ``c`` instead of ``τf`` makes the narrow ridge of the
+    likelihood (``c`` known to microseconds from hundreds of pulses, DESIGN.md §7) a coordinate
+    axis instead of a curve in ``log τ``. The prior density of ``z_f = (log τf − μ_f)/s_f`` is
+    carried over with ``|∂z_f/∂c| = 1/(s_f τf)``. Invalid values (``τf ≤ 0``) give ``τf = NaN``.
+    """
+    log_d = kw["tau_mu"][0] + kw["tau_sd"][0] * tau_z[0]
+    log_r = kw["tau_mu"][1] + kw["tau_sd"][1] * tau_z[1]
+    t_d, t_r = jnp.exp(log_d), jnp.exp(log_r)
+    c = kw["c_mu"] + C_SCALE_S * tau_z[2]
+    t_f = c + t_r * jnp.exp(-t_d / t_r)
+    ok = t_f > 0.0
+    t_f = jnp.where(ok, t_f, jnp.nan)
+    z_f = (jnp.log(t_f) - kw["tau_mu"][2]) / kw["tau_sd"][2]
+    log_jac = -jnp.log(kw["tau_sd"][2] * t_f) + jnp.log(C_SCALE_S)
+    return jnp.stack([t_d, t_r, t_f]), jnp.stack([tau_z[0], tau_z[1], z_f]), log_jac
 
 
 def _physical(theta, kw, n_f: int, sample_inertia: bool):
@@ -447,8 +494,8 @@ def _physical(theta, kw, n_f: int, sample_inertia: bool):
     n_ev = kw["log_noise_hat"].shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
     thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
-    tau = jnp.exp(kw["tau_mu"] + kw["tau_sd"] * tau_z)
-    log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z
+    tau, _, _ = _tau_from_z(tau_z, kw)
+    log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
     pi = kw["inertia_mean"]
     if sample_inertia:
         pi = pi + kw["inertia_tril"] @ inertia_z
@@ -459,8 +506,9 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring)."""
     n_ev = kw["log_noise_hat"].shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    _, tau_std, log_jac = _tau_from_z(tau_z, kw)
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z))
-                 + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_z))
+                 + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_std)) + log_jac
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
@@ -469,39 +517,8 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
         inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw["t"], kw["omega"],
         kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
         kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"])
-    return log_prior + jnp.sum(ll)
-
-
-def laplace(log_density, theta0) -> tuple[np.ndarray, np.ndarray]:
-    """Mode and Cholesky factor of the inverse negative Hessian of ``log_density`` (a jittable
-    function of one vector), found by L-BFGS from ``theta0``.
-
-    Used only to centre and whiten the sampler's coordinates (``θ = centre + tril w``): the
-    posterior itself is exact whatever the centring. Directions of non-positive curvature get
-    unit scale.
-    """
-    import scipy.optimize
-
-    hess = jax.jit(jax.hessian(lambda x: -log_density(x)))
-    vg = jax.jit(jax.value_and_grad(lambda x: -log_density(x)))
-
-    def fun(x):
-        v, g = vg(jnp.asarray(x))
-        return float(v), np.asarray(g, float)
-
-    x0 = np.asarray(theta0, float)
-    best = x0
-    if np.isfinite(fun(x0)[0]):
-        res = scipy.optimize.minimize(fun, x0, jac=True, method="L-BFGS-B",
-                                      options={"maxiter": 200})
-        if np.isfinite(res.fun):
-            best = res.x
-    h = np.asarray(hess(jnp.asarray(best)), float)
-    h = 0.5 * (h + h.T)
-    w, v = np.linalg.eigh(h)
-    w = np.where(np.isfinite(w) & (w > 1e-12), w, 1.0)
-    cov = (v / w) @ v.T
-    return best, np.linalg.cholesky(0.5 * (cov + cov.T))
+    out = log_prior + jnp.sum(ll)
+    return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
 
 def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
@@ -545,7 +562,7 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     n_ev = kw["log_noise_hat"].shape[0]
     f_z = jax.random.normal(k_f, (n, len(problem.names)))
     tau_z = jax.random.normal(k_t, (n, 3))
-    noise_z = jax.random.normal(k_s, (n, n_ev, 2)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
+    noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
     thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
     tau = np.exp(problem.tau.log_mean + problem.tau.log_sd * np.asarray(tau_z))
     out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
