@@ -170,3 +170,29 @@ def test_default_settings_converge(fsds):
     post = fit_thrust(jax.random.key(4), [ev], sc.prior, settings=SamplerSettings())
     d = post.diagnostics
     assert d.max_r_hat <= 1.01 and d.min_ess_bulk >= 400 and d.divergences == 0
+
+
+# --------------------------------------------------------------------------------------------
+# Robust model (nuisance parameters)
+# --------------------------------------------------------------------------------------------
+
+def test_robust_columns_torque_and_wheel_scale():
+    """The external-torque columns are (t − t0)·1 and the wheel-scale column is −H_w: the
+    linear terms of the predicted Eq 17 left side (module docstring)."""
+    from cassini_bayes.inference.nuisance import nuisance_layout
+    from cassini_bayes.inference.thrust import _nuisance_columns
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    sc = load_spacecraft("cassini_post_probe")
+    layout = nuisance_layout(sc, 2, ("RWA1", "RWA2"))
+    t = np.linspace(10.0, 20.0, 11)
+    h = np.outer(np.linspace(0.0, 5.0, 11), [1.0, 2.0, 3.0])
+    per_wheel = {"RWA1": np.linspace(0.0, 5.0, 11), "RWA2": np.zeros(11)}
+    cols = _nuisance_columns(layout, 1, t, np.zeros((11, 3)), np.asarray(sc.inertia), h,
+                             per_wheel)
+    tq = layout.slices["body_torque"].start + 3
+    np.testing.assert_allclose(cols[:, :, tq:tq + 3], (t - 10.0)[:, None, None] * np.eye(3))
+    np.testing.assert_allclose(cols[:, :, layout.slices["wheel_inertia"].start], -h)
+    # the other event's bias and torque columns are zero
+    assert not cols[:, :, 0:3].any()
+    assert not cols[:, :, tq - 3:tq].any()

@@ -83,6 +83,12 @@ def fit_thrust_cmd(
     draws: int = DRAWS,
     strict: bool = STRICT,
     force: bool = FORCE,
+    idealised: bool = typer.Option(False, "--idealised",
+                                   help="The papers' idealised model: no gyro bias/scale factor, "
+                                        "wheel inertia or axis errors, no external torque "
+                                        "(default: the robust model with those as nuisance "
+                                        "parameters, priors from the spacecraft model's [gyro] "
+                                        "and [wheel_knowledge])."),
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""
     import jax
@@ -112,24 +118,30 @@ def fit_thrust_cmd(
     settings = sampler_settings(chains, warmup, draws)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
-        post = fit_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings)
+        post = fit_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
+                          robust=not idealised)
     baseline, base_warns = thrust_baseline(events, sc, mode)
     names = list(thrust_names(mode)) + list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
     if inertia is not None:
         from cassini_bayes.physics.momentum import INERTIA_NAMES
         nuisance += list(INERTIA_NAMES)
+    if not idealised:
+        from cassini_bayes.inference.nuisance import EFFECTS
+        nuisance += [EFFECTS[e] for e in ("gyro_bias", "gyro_scale", "wheel_inertia",
+                                          "wheel_axes", "body_torque")]
     summary = build_summary("thrust", post.idata, parameters=names,
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,
                             nuisance=nuisance, warnings=warns + base_warns)
     summary["mode"] = mode
+    summary["model"] = "idealised" if idealised else "robust"
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": [file_record(p) for p in telemetry],
                                 "pulses": [file_record(p) for p in pulses],
                                 "spacecraft": file_record(model_path(spacecraft)),
                                 **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
                                    if inertia_posterior is not None else {})},
-                        options={"mode": mode})
+                        options={"mode": mode, "model": "idealised" if idealised else "robust"})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 

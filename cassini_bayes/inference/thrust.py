@@ -60,6 +60,26 @@ Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre`
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
 density is exact in ``θ``; the maps only condition the geometry.
 
+Robust model (``robust=True``, the CLI default; Lee 003 §4.1, Psiaki 2005)
+-------------------------------------------------------------------------
+Nuisance parameters ``ν`` with zero-mean Normal priors from the spacecraft model's knowledge
+sections (:func:`cassini_bayes.inference.nuisance.nuisance_layout`, the same layout and priors as
+the robust inertia model), each entering the predicted left side of Eq 17 linearly:
+
+* body-fixed external torque ``T_e`` (N m, per event): ``+ T_e (t − t_0)`` (the attitude is held in
+  the dead-band, so body and inertial axes agree to milliradians);
+* gyro bias ``b_e`` (rad/s, per event): the integrated gyroscopic term gains
+  ``∫ b × H_w dt = −[C_t]_× b``, ``C_t = ∫_{t_0}^{t} H_w ds`` (the constant ``I b`` is absorbed by
+  the offset);
+* gyro scale factors ``s``: ``+ I diag(ω_meas) s``;
+* common wheel spin-inertia error ``c``: the true wheel momentum is ``(1 + c) H_w``, so the left side
+  computed with the model's wheels is ``Q F j − c H_w(t)``;
+* wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj J_k ρ_k u_kj``.
+
+``c`` is confounded with the thrust scale (``F`` balances the wheel momentum the event builds): the
+thrust posterior widens by about the prior sd of ``c`` (0.5 % by default) instead of claiming the
+0.01 % that the idealised model claims on clean data.
+
 Identification
 --------------
 Combinations of thrusts the data cannot separate keep their prior: a thruster that never fires,
@@ -85,6 +105,7 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.laplace import laplace
+from cassini_bayes.inference.nuisance import EFFECTS, nuisance_layout
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
@@ -218,6 +239,8 @@ class ThrustProblem(NamedTuple):
     n_samples, n_pulses : per event.
     fired : (8,) bool, thrusters with at least one pulse in any event.
     noise_hat : (E, 2) data noise levels (σ_ω rad/s, σ_ρ rad/s).
+    layout : the nuisance layout (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`)
+        of the robust model, ``None`` for the idealised one.
     """
 
     model_kwargs: dict
@@ -232,18 +255,53 @@ class ThrustProblem(NamedTuple):
     n_pulses: np.ndarray
     fired: np.ndarray
     noise_hat: np.ndarray
+    layout: object = None
 
 
 def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
-    """Body wheel momentum (n, 3) N m s and the wheel noise matrix Σ J² g gᵀ (3, 3)."""
+    """Body wheel momentum (n, 3) N m s, the wheel noise matrix Σ J² g gᵀ (3, 3) and each active
+    wheel's ``J_k ρ_k`` (n,) N m s."""
     h = np.zeros((tel.n, 3))
     wcov = np.zeros((3, 3))
+    per_wheel = {}
     for name in tel.active_wheels():
         w = spacecraft.wheel(name)
         rate = np.nan_to_num(np.asarray(tel.wheel_rate(name), float))
+        per_wheel[name] = w.inertia * rate
         h += w.inertia * rate[:, None] * w.axis[None, :]
         wcov += w.inertia**2 * np.outer(w.axis, w.axis)
-    return h, wcov
+    return h, wcov, per_wheel
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) cross-product matrices ``[v]_×``."""
+    z = np.zeros(v.shape[:-1])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+
+
+def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia: np.ndarray,
+                      h: np.ndarray, per_wheel: dict) -> np.ndarray:
+    """(n, 3, R) columns of ``ν`` in the predicted left side of event ``e`` (module docstring)."""
+    n = t.shape[0]
+    cols = np.zeros((n, 3, layout.size))
+    sl = layout.slices
+    dt = (t - t[0])[:, None]
+    c_t = np.concatenate([np.zeros((1, 3)),
+                          np.cumsum(0.5 * (h[1:] + h[:-1]) * np.diff(t)[:, None], 0)])
+    b0 = sl["gyro_bias"].start + 3 * e
+    cols[:, :, b0:b0 + 3] = -_skew(c_t)                                  # ∫ b × H_w dt
+    cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
+    cols[:, :, sl["wheel_inertia"].start] = -h                            # −c H_w
+    a0 = sl["wheel_axes"].start
+    for k, name in enumerate(layout.wheels):
+        if name in per_wheel:
+            for j in range(2):
+                cols[:, :, a0 + 2 * k + j] = -per_wheel[name][:, None] * layout.tilt_u[k, j]
+    t0 = sl["body_torque"].start + 3 * e
+    cols[:, :, t0:t0 + 3] = dt[:, :, None] * np.eye(3)[None]              # T_e (t − t_0)
+    return cols
 
 
 def _second_diff_sd(x: np.ndarray) -> float:
@@ -277,8 +335,12 @@ def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
 
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
-                   mode: str = "mean", inertia: InertiaGaussian | None = None) -> ThrustProblem:
+                   mode: str = "mean", inertia: InertiaGaussian | None = None,
+                   robust: bool = False) -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
+
+    ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
+    external torque).
 
     Raises
     ------
@@ -327,10 +389,19 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     wcov = np.zeros((n_ev, 3, 3))
     noise = np.zeros((n_ev, 2))
     fired = np.zeros(8, bool)
+    i_fixed = np.asarray(spacecraft.inertia, float)
+    i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
+    wheels = sorted({w for tel in tels for w in tel.active_wheels()})
+    layout = nuisance_layout(spacecraft, n_ev, wheels if robust else ())
+    n_nu = layout.size if robust else 0
+    nu_cols = np.zeros((n_ev, n_max, 3, n_nu))
     for e, (tel, log) in enumerate(zip(tels, logs)):
         n, m = tel.n, len(log.t_on)
         t = np.asarray(tel.t, float)
-        h, wc = _wheel_momentum(tel, spacecraft)
+        h, wc, per_wheel = _wheel_momentum(tel, spacecraft)
+        if robust:
+            nu_cols[e, :n] = _nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
+                                               h, per_wheel)
         # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
         t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
         w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
@@ -347,7 +418,6 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     th = spacecraft.thrusters
     q_mat = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
     tp = tau_prior(spacecraft)
-    i_fixed = np.asarray(spacecraft.inertia, float)
     if inertia is not None:
         tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
         i_mean, i_tril = np.asarray(inertia.mean, float), tril
@@ -363,9 +433,10 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         c_mu=jnp.asarray(float(long_pulse_excess(*np.exp(tp.log_mean)))),
         f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
         inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
+        nu_cols=jnp.asarray(nu_cols), nu_sd=jnp.asarray(layout.sd if robust else np.zeros(0)),
     )
     n_f = len(names)
-    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
+    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0) + n_nu
     centre, tril = laplace(lambda th: _log_density(th, kw, n_f, inertia is not None),
                            np.zeros(dim))
     kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
@@ -374,7 +445,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         inertia=inertia, inertia_fixed=i_fixed,
         sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
-        fired=fired, noise_hat=noise)
+        fired=fired, noise_hat=noise, layout=layout if robust else None)
 
 
 # --------------------------------------------------------------------------------------------
@@ -423,12 +494,13 @@ def _inv3(b):
     return adj / det, jnp.log(det)
 
 
-def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width,
-                  slot, slot_offsets, q_matrix, wheel_cov):
+def _event_loglik(inertia, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster,
+                  width, slot, slot_offsets, q_matrix, wheel_cov, nu_cols):
     """Marginal log-likelihood of one event (offset integrated out) and its residual (n, 3)."""
     v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
     j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
-    r = v - (j * f8[None, :]) @ q_matrix.T                             # Feldman & Lee Eq 17
+    # Feldman & Lee Eq 17, plus the robust model's linear nuisance terms (module docstring)
+    r = v - (j * f8[None, :]) @ q_matrix.T - nu_cols @ nu
     n = jnp.sum(mask)
     r_bar = jnp.sum(r * mask[:, None], 0, keepdims=True) / n
     d = r - r_bar
@@ -441,17 +513,20 @@ def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, t
     return ll, d
 
 
-_EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0)
+_EVENT_AXES = (None, None, None, 0, None, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0)
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
     """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(z_d, z_r, c_z)``,
-    ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
+    ``noise_z`` (E,), ``inertia_z`` (6,) or ``None`` and ``nu_z`` (R,) (prior-whitened
+    nuisance parameters; R = 0 for the idealised model)."""
     f_z = theta[:n_f]
     tau_z = theta[n_f:n_f + 3]
     noise_z = theta[n_f + 3:n_f + 3 + n_ev]
-    inertia_z = theta[n_f + 3 + n_ev:] if sample_inertia else None
-    return f_z, tau_z, noise_z, inertia_z
+    k = n_f + 3 + n_ev
+    inertia_z = theta[k:k + 6] if sample_inertia else None
+    nu_z = theta[k + 6:] if sample_inertia else theta[k:]
+    return f_z, tau_z, noise_z, inertia_z, nu_z
 
 
 def long_pulse_excess(tau_delay, tau_rise, tau_fall):
@@ -490,33 +565,34 @@ def _tau_from_z(tau_z, kw):
 
 def _physical(theta, kw, n_f: int, sample_inertia: bool):
     """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
-    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2), ``π`` (6,) kg m²."""
+    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2), ``π`` (6,) kg m², ``ν`` (R,)."""
     n_ev = kw["log_noise_hat"].shape[0]
-    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, tau_z, noise_z, inertia_z, nu_z = _unpack(theta, n_f, n_ev, sample_inertia)
     thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
     tau, _, _ = _tau_from_z(tau_z, kw)
     log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
     pi = kw["inertia_mean"]
     if sample_inertia:
         pi = pi + kw["inertia_tril"] @ inertia_z
-    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi
+    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi, kw["nu_sd"] * nu_z
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring)."""
     n_ev = kw["log_noise_hat"].shape[0]
-    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, tau_z, noise_z, inertia_z, nu_z = _unpack(theta, n_f, n_ev, sample_inertia)
     _, tau_std, log_jac = _tau_from_z(tau_z, kw)
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z))
                  + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_std)) + log_jac
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
-    _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
+    log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(nu_z))
+    _, f8, tau, log_sigma, pi, nu = _physical(theta, kw, n_f, sample_inertia)
     ll, _ = jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
-        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw["t"], kw["omega"],
+        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, nu, kw["t"], kw["omega"],
         kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
-        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"])
+        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"])
     out = log_prior + jnp.sum(ll)
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
@@ -525,7 +601,7 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
     w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), centre.shape))
     theta = centre + tril @ w
     numpyro.factor("log_density", _log_density(theta, kw, len(names), sample_inertia))
-    thrust, _, tau, log_sigma, pi = _physical(theta, kw, len(names), sample_inertia)
+    thrust, _, tau, log_sigma, pi, nu = _physical(theta, kw, len(names), sample_inertia)
     for i, name in enumerate(names):
         numpyro.deterministic(name, thrust[i])
     for i, name in enumerate(TAU_NAMES):
@@ -536,6 +612,22 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
     if sample_inertia:
         for i, name in enumerate(INERTIA_NAMES):
             numpyro.deterministic(name, pi[i])
+    if nu.shape[0]:
+        for site, value in _split_nuisance(nu, sig.shape[0]).items():
+            numpyro.deterministic(site, value)
+
+
+def _split_nuisance(nu, n_ev: int) -> dict:
+    """The robust nuisance vector ``ν`` as named sites (layout of
+    :func:`~cassini_bayes.inference.nuisance.nuisance_layout`): ``gyro_bias`` (E, 3) rad/s,
+    ``gyro_scale`` (3,), ``wheel_scale`` (), ``wheel_tilt`` (K, 2) rad, ``T_body`` (E, 3) N m."""
+    b = 3 * n_ev
+    end = nu.shape[0] - 3 * n_ev
+    return {EFFECTS["gyro_bias"]: nu[:b].reshape(n_ev, 3),
+            EFFECTS["gyro_scale"]: nu[b:b + 3],
+            EFFECTS["wheel_inertia"]: nu[b + 3],
+            EFFECTS["wheel_axes"]: nu[b + 4:end].reshape(-1, 2),
+            EFFECTS["body_torque"]: nu[end:].reshape(n_ev, 3)}
 
 
 @lru_cache(maxsize=None)
@@ -544,7 +636,8 @@ def thrust_model(mode: str, sample_inertia: bool = False):
 
     Call it with ``**ThrustProblem.model_kwargs``. Posterior sites: the thrust names of the mode
     (N), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
-    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``.
+    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, the nuisance sites of
+    :func:`_split_nuisance` when the problem is robust, and the sampler's whitened ``w``.
     """
     names = thrust_names(mode)
 
@@ -578,25 +671,28 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
 
 
 @jax.jit
-def _residuals_jit(i_m, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width,
-                   slot, slot_offsets, q_matrix, wheel_cov):
+def _residuals_jit(i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width,
+                   slot, slot_offsets, q_matrix, wheel_cov, nu_cols):
     return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
-        i_m, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot,
-        slot_offsets, q_matrix, wheel_cov)
+        i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width, slot,
+        slot_offsets, q_matrix, wheel_cov, nu_cols)
 
 
-def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None) -> np.ndarray:
-    """Offset-free residuals ``V − Q (F ⊙ j) − b̂`` (E, n_max, 3) N m s at given parameters
-    (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2)); padded rows are 0."""
+def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
+                      nu=None) -> np.ndarray:
+    """Offset-free residuals ``V − Q (F ⊙ j) − cols ν − b̂`` (E, n_max, 3) N m s at given
+    parameters (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2), robust
+    nuisance ``nu`` (R,), default 0); padded rows are 0."""
     kw = problem.model_kwargs
     idx = np.asarray(kw["f_index"])
     f8 = np.asarray(thrust, float)[idx]
     pi = np.asarray(kw["inertia_mean"]) if pi is None else np.asarray(pi, float)
+    nu = np.zeros(kw["nu_sd"].shape[0]) if nu is None else np.asarray(nu, float)
     _, d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
                           tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
-                          kw["t"], kw["omega"], kw["h_wheels"], kw["mask"], kw["t_on"],
-                          kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-                          kw["q_matrix"], kw["wheel_cov"])
+                          jnp.asarray(nu), kw["t"], kw["omega"], kw["h_wheels"], kw["mask"],
+                          kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
+                          kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"])
     return np.asarray(d) * np.asarray(kw["mask"])[..., None]
 
 
@@ -614,7 +710,7 @@ class ThrustPosterior(NamedTuple):
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                mode: str = "mean", inertia: InertiaGaussian | None = None, settings=None,
-               prior_draws: int = 500) -> ThrustPosterior:
+               prior_draws: int = 500, robust: bool = False) -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
     Parameters
@@ -627,6 +723,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     inertia : sample the inertia jointly from this Gaussian (e.g. :func:`inertia_from_run`).
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
+    robust : add the nuisance parameters (gyro bias and scale, wheel inertia scale and tilts,
+        external torque; module docstring).
 
     Returns
     -------
@@ -642,7 +740,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
-    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia)
+    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust)
     unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
@@ -652,6 +750,12 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     sample_inertia = inertia is not None
     coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw["centre"].shape[0])}
     dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"]}
+    if robust:
+        coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
+                       "tilt": ["u1", "u2"]})
+        dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
+                     EFFECTS["wheel_axes"]: ["wheel", "tilt"],
+                     EFFECTS["body_torque"]: ["event", "axis"]})
     idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs=kw, settings=settings,
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
@@ -664,7 +768,12 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                     for n in ("sigma_omega", "sigma_rho")], -1)
     pi_mean = (np.array([float(post[n].mean()) for n in INERTIA_NAMES]) if sample_inertia
                else None)
-    d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean)
+    nu_mean = None
+    if robust:
+        nu_mean = np.concatenate([np.asarray(post[EFFECTS[e]].mean(("chain", "draw"))).ravel()
+                                  for e in ("gyro_bias", "gyro_scale", "wheel_inertia",
+                                            "wheel_axes", "body_torque")])
+    d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean, nu_mean)
     m = np.asarray(kw["mask"]) > 0
     t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
     ev_all = np.concatenate([np.full(int(m[e].sum()), e) for e in range(n_ev)])
@@ -702,4 +811,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     names = list(problem.names) + list(TAU_NAMES) + ["sigma_omega", "sigma_rho"]
     if sample_inertia:
         names += list(INERTIA_NAMES)
+    if robust:
+        names += [EFFECTS[e] for e in ("gyro_bias", "gyro_scale", "wheel_inertia", "wheel_axes",
+                                       "body_torque")]
     return ThrustPosterior(idata, diagnostics(idata, names), problem)
