@@ -59,6 +59,8 @@ __all__ = [
     "register",
     "registered_kinds",
     "check_fact",
+    "convergence_check",
+    "coverage_check",
     "png",
     "load_experiment",
     "experiment_from_dict",
@@ -109,6 +111,37 @@ class Check:
         return {"label": self.label, "ours": _json_float(self.ours), "unit": self.unit,
                 "fact_id": self.fact_id, "paper": self.paper, "passed": self.passed,
                 "note": self.note}
+
+
+def convergence_check(what: str, diagnostics, quick: bool = False) -> Check:
+    """A check row saying whether a fit's sampler converged (max R-hat ≤ 1.01, min bulk ESS ≥
+    400, no divergences). Under ``--quick`` the runs are too short to judge: the row is shown
+    but not counted (``passed=None``)."""
+    d = diagnostics
+    note = (f"min bulk ESS {d.min_ess_bulk:.0f}, {d.divergences} divergences "
+            "(R-hat ≤ 1.01, ESS ≥ 400, no divergences)")
+    if quick:
+        note += "; --quick: too few draws to judge, not counted"
+    return Check(f"{what}: sampler converged", float(d.max_r_hat), "max R-hat", decimals=3,
+                 passed=None if quick else bool(d.converged), note=note)
+
+
+def coverage_check(label: str, covered: int, total: int, nominal: float = 0.90) -> Check:
+    """A check row: do posterior intervals of nominal level ``nominal`` cover the truth at that
+    rate? ``covered`` of ``total`` intervals contain the truth; the row passes when an exact
+    two-sided binomial test does not reject ``p = nominal`` at the 5 % level (a calibrated
+    posterior fails 5 % of the time with independent intervals). The note gives the binomial
+    standard error."""
+    from scipy.stats import binomtest
+
+    if total <= 0:
+        return Check(label, float("nan"), "%", passed=None, note="no intervals")
+    rate = covered / total
+    p_value = float(binomtest(covered, total, nominal).pvalue)
+    se = (nominal * (1.0 - nominal) / total) ** 0.5
+    return Check(label, 100.0 * rate, "%", decimals=0, passed=p_value >= 0.05,
+                 note=f"{covered} of {total}; nominal {100 * nominal:g} % ± {100 * se:.0f} % "
+                      f"(binomial sd); exact binomial p = {p_value:.2f} (fails below 0.05)")
 
 
 def check_fact(fact_id: str, ours: float, *, label: str | None = None, note: str = "",

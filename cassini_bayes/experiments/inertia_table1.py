@@ -35,6 +35,8 @@ from cassini_bayes.experiments._core import (
     FigureOut,
     Table,
     check_fact,
+    convergence_check,
+    coverage_check,
     png,
     register,
 )
@@ -253,10 +255,7 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
                 checks.append(_table1_check(epoch, i, name, pred, paper_est, err_post[i],
                                             err_q[:, i]))
         d = post.diagnostics
-        checks.append(Check(f"{_EPOCH_LABEL[epoch]}: sampler converged", float(d.max_r_hat),
-                            "max R-hat", decimals=3, passed=bool(d.converged),
-                            note=f"min bulk ESS {d.min_ess_bulk:.0f}, {d.divergences} "
-                                 "divergences (R-hat ≤ 1.01, ESS ≥ 400, no divergences)"))
+        checks.append(convergence_check(_EPOCH_LABEL[epoch], d, ctx.quick))
         worst_moment = float(np.max(np.abs(acc_post[:_MOMENTS])))
         checks.append(check_fact("inertia_accuracy_pct", worst_moment,
                                  label=f"{_EPOCH_LABEL[epoch]}: worst moment error of the "
@@ -279,8 +278,8 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
 
     n_cov = sum(int(np.sum(r["covered_90"])) for r in results.values())
     n_all = 6 * len(results)
-    checks.append(Check("posterior 90 % intervals containing the truth", 100.0 * n_cov / n_all,
-                        "%", decimals=0, note=f"{n_cov} of {n_all} entries; nominal 90 %"))
+    checks.append(coverage_check("posterior 90 % intervals containing the truth (all epochs)",
+                                 n_cov, n_all))
     notes = [
         "Each epoch's scenario simulates the slews with the paper's flight estimate as the truth "
         "and starts the calibration from the prediction; the prior is the prediction with the "

@@ -32,6 +32,8 @@ from cassini_bayes.experiments._core import (
     FigureOut,
     Table,
     check_fact,
+    convergence_check,
+    coverage_check,
     png,
     register,
 )
@@ -57,14 +59,6 @@ def tau_variance_share(f_draws: np.ndarray, tau_draws: np.ndarray) -> float:
     resid = f_draws - x @ coef
     v = float(np.var(f_draws))
     return float(np.clip(1.0 - np.var(resid) / v, 0.0, 1.0)) if v > 0 else 0.0
-
-
-def _converged_check(what: str, d) -> Check:
-    """A check row saying whether a fit's sampler converged (R-hat, bulk ESS, divergences)."""
-    return Check(f"{what}: sampler converged", float(d.max_r_hat), "max R-hat", decimals=3,
-                 passed=bool(d.converged),
-                 note=f"min bulk ESS {d.min_ess_bulk:.0f}, {d.divergences} divergences "
-                      "(R-hat ≤ 1.01, ESS ≥ 400, no divergences)")
 
 
 def _day(name: str) -> int | None:
@@ -146,6 +140,8 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     q05, q95 = np.quantile(f_all, [0.05, 0.95])
     half90_pct = 100 * 0.5 * (q95 - q05) / f_mean
     sd_tau_pct = 100 * f_sd * np.sqrt(share) / f_mean
+    t05, t95 = np.quantile(td, [0.05, 0.95], axis=0)
+    n_cov = int(q05 <= f_true <= q95) + int(np.sum((t05 <= tau_true) & (tau_true <= t95)))
     sub = Path("fits") / "pooled"
     write_fit_run(ctx.workdir / sub, kind="thrust", posterior=post,
                   parameters=fnames + list(TAU_NAMES), seed=seed,
@@ -214,10 +210,12 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         Check("posterior: thrust sd attributable to the time constants", float(sd_tau_pct), "%",
               decimals=2, note=f"{100 * share:.0f} % of Var(F) explained by τ (R² of F on τ); "
                                f"total sd {100 * f_sd / f_mean:.2f} %"),
-        _converged_check("pooled thrust posterior", post.diagnostics),
+        convergence_check("pooled thrust posterior", post.diagnostics, ctx.quick),
         Check("pooled posterior 90 % interval contains the true thrust",
               float(q05 <= f_true <= q95), "", decimals=0,
               passed=bool(q05 <= f_true <= q95), note=f"[{q05:.4f}, {q95:.4f}] N"),
+        coverage_check("pooled posterior: 90 % intervals of F, τd, τr, τf containing the "
+                       "truth", n_cov, 1 + len(TAU_NAMES)),
     ]
     tables = (
         Table("Table 2: thrust (N), paper beside ours",
