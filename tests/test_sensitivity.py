@@ -114,3 +114,22 @@ def test_summary_block_and_report_section(base):
     html = sensitivity_section({"sensitivity": block})
     assert "Sensitivity to neglected effects" in str(html)
     assert sensitivity_section({}) is None
+
+
+def test_posterior_sensitivity_is_the_regression_slope_at_prior_scale():
+    """y = 2 x1 − 3 x2 + independent noise over the draws: pinning (x1, x2) at a prior-size
+    error (sd 0.1, 0.2) moves y by √((2·0.1)² + (3·0.2)²); an unrelated group moves it ~0."""
+    from cassini_bayes.inference.sensitivity import posterior_sensitivity
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(20000, 2))
+    z = rng.normal(size=(20000, 1))
+    y = 2.0 * x[:, 0] - 3.0 * x[:, 1] + rng.normal(size=20000)
+    block = posterior_sensitivity({"F": y}, {"wheel_inertia": (x, np.array([0.1, 0.2])),
+                                             "gyro_bias": (z, np.array([1.0]))}, {"F": "N"})
+    entry = block["wheel_inertia"]["parameters"]["F"]
+    assert entry["units"] == "N" and block["wheel_inertia"]["modelled"]
+    # slope error ~ 1/√20000 ≈ 0.007 per coefficient: 1 % tolerance is > 5σ
+    assert entry["shift"] == pytest.approx(np.hypot(0.2, 0.6), rel=0.01)
+    assert entry["shift_in_sd"] == pytest.approx(np.hypot(0.2, 0.6) / y.std(ddof=1), rel=0.01)
+    assert block["gyro_bias"]["parameters"]["F"]["shift"] < 0.03

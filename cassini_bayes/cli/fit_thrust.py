@@ -65,6 +65,31 @@ def thrust_baseline(events, spacecraft, mode: str) -> tuple[dict | None, list[st
     return (out or None), msgs
 
 
+def thrust_sensitivity(post) -> dict:
+    """``sensitivity`` block of a robust thrust fit: how far each nuisance effect of prior size
+    would move the thrust and time constants if it were left out (posterior regression,
+    :func:`cassini_bayes.inference.sensitivity.posterior_sensitivity`)."""
+    import numpy as np
+
+    from cassini_bayes.inference.nuisance import EFFECTS
+    from cassini_bayes.inference.sensitivity import posterior_sensitivity
+    from cassini_bayes.inference.thrust import TAU_NAMES
+
+    post_ds = post.idata.posterior
+    layout = post.problem.layout
+
+    def flat(name):
+        v = np.asarray(post_ds[name].values, float)
+        return v.reshape(v.shape[0] * v.shape[1], -1)
+
+    names = list(post.problem.names) + list(TAU_NAMES)
+    targets = {n: flat(n)[:, 0] for n in names}
+    groups = {e: (flat(EFFECTS[e]), layout.sd[layout.slices[e]])
+              for e in ("gyro_bias", "gyro_scale", "wheel_inertia", "wheel_axes", "body_torque")}
+    units = {n: ("N" if n.startswith("F") else "s") for n in names}
+    return posterior_sensitivity(targets, groups, units)
+
+
 def fit_thrust_cmd(
     telemetry: list[Path] = typer.Option(..., "--telemetry", help="Biasing-event telemetry CSV "
                                          "(repeat for several events)."),
@@ -135,6 +160,8 @@ def fit_thrust_cmd(
                             nuisance=nuisance, warnings=warns + base_warns)
     summary["mode"] = mode
     summary["model"] = "idealised" if idealised else "robust"
+    if not idealised:
+        summary["sensitivity"] = thrust_sensitivity(post)
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": [file_record(p) for p in telemetry],
                                 "pulses": [file_record(p) for p in pulses],

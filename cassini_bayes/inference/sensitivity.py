@@ -17,6 +17,12 @@ how far an effect of typical size would push an estimate that ignores it. ``mode
 whether the fit carried the effect (then it is already inside the posterior's width; the shift
 says how much the idealised model would have been off). ``shift_in_sd`` divides by the run's own
 posterior sd: a value above ~1 means an idealised fit's interval would be overconfident.
+
+Models without a closed-form information matrix (the thrust model) use the same idea on the
+robust posterior's draws (:func:`posterior_sensitivity`): the linear regression ``β`` of a target
+(e.g. ``F``) on an effect's parameters over the draws is the posterior's own answer to "how does
+the estimate move if this effect is pinned", and ``√(Σ_j β_j² d_j²)`` its shift for an effect of
+prior size.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ import numpy as np
 
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 
-__all__ = ["Sensitivity", "linear_sensitivity", "sensitivity_block"]
+__all__ = ["Sensitivity", "linear_sensitivity", "sensitivity_block", "posterior_sensitivity"]
 
 
 class Sensitivity(NamedTuple):
@@ -88,4 +94,40 @@ def sensitivity_block(sens: Sensitivity, posterior_sd: Mapping[str, float]) -> d
             params[p] = {"shift": shift,
                          "shift_in_sd": (shift / sd) if sd and np.isfinite(sd) and sd > 0 else None}
         out[name] = {"modelled": bool(sens.modelled[e]), "parameters": params}
+    return out
+
+
+def posterior_sensitivity(targets: Mapping[str, np.ndarray],
+                          groups: Mapping[str, tuple[np.ndarray, np.ndarray]],
+                          units: Mapping[str, str] | None = None) -> dict:
+    """The ``sensitivity`` block of ``summary.json`` from a robust fit's posterior draws.
+
+    Parameters
+    ----------
+    targets : parameter name → (n,) posterior draws (e.g. ``F`` in N).
+    groups : effect name → ``(draws (n, k), prior_sd (k,))`` of its nuisance parameters.
+    units : parameter name → unit, recorded beside each shift.
+
+    Returns
+    -------
+    dict
+        As :func:`sensitivity_block` (every effect ``modelled``), each parameter entry also
+        holding ``units``.
+    """
+    units = dict(units or {})
+    out = {}
+    for effect, (x, sd) in groups.items():
+        x = np.asarray(x, float).reshape(np.shape(x)[0], -1)
+        sd = np.asarray(sd, float).ravel()
+        xc = x - x.mean(0)
+        params = {}
+        for name, y in targets.items():
+            y = np.asarray(y, float).ravel()
+            beta, *_ = np.linalg.lstsq(xc, y - y.mean(), rcond=None)
+            shift = float(np.sqrt(np.sum((beta * sd) ** 2)))
+            y_sd = float(y.std(ddof=1))
+            params[name] = {"shift": shift,
+                            "shift_in_sd": shift / y_sd if y_sd > 0 else None,
+                            "units": units.get(name, "")}
+        out[effect] = {"modelled": True, "parameters": params}
     return out

@@ -18,6 +18,15 @@ _LABELS = {"external_torque": "external torque T_N", "gyro_bias": "gyro bias",
            "wheel_axes": "wheel spin-axis tilts", "body_torque": "body-fixed torque T_body"}
 
 
+def _unit(block: dict, param: str) -> str:
+    """Unit of ``param`` in the block (``units`` of its entries; inertia blocks: kg m²)."""
+    for entry in block.values():
+        u = entry.get("parameters", {}).get(param, {}).get("units")
+        if u is not None:
+            return u
+    return "kg m²"
+
+
 def sensitivity_section(summary: dict) -> Section | None:
     """The "Sensitivity to neglected effects" section, or ``None`` without a block."""
     block = summary.get("sensitivity") if isinstance(summary, dict) else None
@@ -33,18 +42,23 @@ def sensitivity_section(summary: dict) -> Section | None:
         for p in names:
             v = params.get(p, {})
             x = v.get("shift_in_sd")
-            cells.append(f"{fmt(v.get('shift'), 1)} ({fmt(x, 1)} sd)")
+            shift = v.get("shift")
+            shown = (f"{shift:.3g}" if isinstance(shift, (int, float)) and abs(shift) < 1
+                     else fmt(shift, 1))
+            cells.append(f"{shown} ({fmt(x, 1)} sd)")
             cls.append("warn" if (x is not None and x > 1 and not entry.get("modelled")) else "")
         rows.append(cells)
         classes.append(cls)
     body = [
-        table(["effect", "in model"] + [f"{p} kg m²" for p in names], rows, left=2,
-              classes=classes),
+        table(["effect", "in model"] + [f"{p} {_unit(block, p)}".strip() for p in names], rows,
+              left=2, classes=classes),
         paragraph(
-            "Shift of each inertia entry that an effect of its prior size (one sd, from the "
+            "Shift of each estimate that an effect of its prior size (one sd, from the "
             "spacecraft model's [gyro] and [wheel_knowledge] sections and the T_N prior of "
             "Feldman & Lee App. A) causes in a fit that leaves it out — the linearised check Lee "
-            "recommends, from the data information at the posterior mode. In brackets: the shift "
+            "recommends, from the data information at the posterior mode (thrust fits: from the "
+            "regression of the estimate on the effect's parameters over the posterior draws). "
+            "In brackets: the shift "
             "in units of this run's posterior sd; above 1 for an effect not in the model means "
             "this run's intervals are too narrow for it. Effects in the model are already in the "
             "posterior width.", note=True),
