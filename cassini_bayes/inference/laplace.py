@@ -16,7 +16,8 @@ negligible.
 
 from __future__ import annotations
 
-from typing import Callable
+from functools import lru_cache
+from typing import Any, Callable
 
 import jax
 import jax.numpy as jnp
@@ -37,13 +38,28 @@ def _whitening(h: np.ndarray) -> np.ndarray:
     return np.linalg.cholesky(0.5 * (cov + cov.T))
 
 
-def laplace(log_density: Callable, theta0, *, rounds: int = 6) -> tuple[np.ndarray, np.ndarray]:
+@lru_cache(maxsize=64)
+def _compiled(log_density: Callable):
+    """Jitted value-and-gradient and Hessian of ``−log_density(θ, data)``, one pair per
+    function object: problems of the same shapes reuse the compiled code."""
+    def nll(x, data):
+        return -log_density(x, data)
+
+    return jax.jit(jax.value_and_grad(nll)), jax.jit(jax.hessian(nll))
+
+
+def laplace(log_density: Callable, theta0, data: Any = None, *,
+            rounds: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Mode and Cholesky factor of the inverse negative Hessian of ``log_density``.
 
     Parameters
     ----------
-    log_density : jittable function of one vector (the model's log prior + log likelihood).
+    log_density : jittable ``f(θ, data)`` (the model's log prior + log likelihood). Pass a
+        module-level function (not a fresh closure) so that its compiled derivatives are reused
+        across problems of the same shapes; with ``data=None`` a one-argument ``f(θ)`` is
+        accepted too.
     theta0 : starting point.
+    data : pytree of arrays passed to ``log_density`` as its second argument.
     rounds : at most this many Newton solves, each in coordinates whitened by the Hessian of the
         previous round's end point.
 
@@ -55,8 +71,25 @@ def laplace(log_density: Callable, theta0, *, rounds: int = 6) -> tuple[np.ndarr
     """
     import scipy.optimize
 
-    nll = jax.jit(jax.value_and_grad(lambda x: -log_density(x)))
-    hess = jax.jit(jax.hessian(lambda x: -log_density(x)))
+    if data is None:
+        one_arg = log_density
+        vg_, hess_ = jax.jit(jax.value_and_grad(lambda x: -one_arg(x))), \
+            jax.jit(jax.hessian(lambda x: -one_arg(x)))
+
+        def nll(x):
+            return vg_(x)
+
+        def hess(x):
+            return hess_(x)
+    else:
+        vg_, hess_ = _compiled(log_density)
+
+        def nll(x):
+            return vg_(x, data)
+
+        def hess(x):
+            return hess_(x, data)
+
     x = np.asarray(theta0, float)
     if not np.isfinite(float(nll(jnp.asarray(x))[0])):
         return x, np.eye(x.size)

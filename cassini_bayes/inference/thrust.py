@@ -142,6 +142,7 @@ _NOISE_FLOORS = np.array([1e-9, 1e-7])
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
 _TAIL_S = 1.5
 _BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
+_PULSE_BUCKET = 64
 
 
 # --------------------------------------------------------------------------------------------
@@ -372,7 +373,9 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         tels.append(tel)
 
     n_max = max(t.n for t in tels)
-    m_max = max(len(lg.t_on) for lg in logs)
+    # pulse arrays padded to a multiple of _PULSE_BUCKET: events whose pulse counts differ a
+    # little (seeds of one scenario, SBC replicates) share shapes, so one compiled sampler
+    m_max = -(-max(len(lg.t_on) for lg in logs) // _PULSE_BUCKET) * _PULSE_BUCKET
     dt_min = min(float(np.min(np.diff(t.t))) for t in tels)
     w_max = max(float(np.max(lg.width)) for lg in logs)
     # samples a pulse's thrust can still change after its first sample (≥ 1, static)
@@ -437,8 +440,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     )
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0) + n_nu
-    centre, tril = laplace(lambda th: _log_density(th, kw, n_f, inertia is not None),
-                           np.zeros(dim))
+    centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
     kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
     return ThrustProblem(
         model_kwargs=kw, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
@@ -595,6 +597,16 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
         kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"])
     out = log_prior + jnp.sum(ll)
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
+
+
+@lru_cache(maxsize=None)
+def _laplace_density(n_f: int, sample_inertia: bool):
+    """``f(θ, kw)`` for :func:`~cassini_bayes.inference.laplace.laplace`, one function object
+    per layout so that its compiled derivatives are reused."""
+    def f(theta, kw):
+        return _log_density(theta, kw, n_f, sample_inertia)
+
+    return f
 
 
 def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
