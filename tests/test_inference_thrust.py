@@ -196,3 +196,38 @@ def test_robust_columns_torque_and_wheel_scale():
     # the other event's bias and torque columns are zero
     assert not cols[:, :, 0:3].any()
     assert not cols[:, :, tq - 3:tq].any()
+
+
+@pytest.mark.slow
+def test_robust_model_covers_what_the_idealised_misses():
+    """Issue 7 on a Table 2 event whose true wheels are 1 % heavier than the model file says and
+    whose spacecraft feels 20 µN m: the idealised posterior of F excludes the truth (it is ~1 %
+    off with a ~0.15 % sd), the robust one covers it. Fixed keys; a calibrated robust posterior
+    misses with probability 10 % (a 2-sd wheel-scale error makes the idealised miss certain)."""
+    import tomllib
+
+    from cassini_bayes.inference.thrust import fit_thrust
+    from cassini_bayes.simulate.scenario import scenario_from_dict, scenario_path
+
+    d = tomllib.loads(scenario_path("biasing_day028").read_text())
+    d["truth"]["wheel_inertia_scale"] = 1.01
+    d["truth"]["external_torque_body_nm"] = [1.2e-5, -1.0e-5, 1.2e-5]
+    sc = scenario_from_dict(d)
+    r = simulate_event(sc)
+    found = {}
+    for robust in (False, True):
+        post = fit_thrust(jax.random.key(5), [r], sc.prior, robust=robust, settings=_settings())
+        f = post.idata.posterior["F"].values.ravel()
+        found[robust] = np.quantile(f, [0.05, 0.95])
+        assert post.diagnostics.divergences == 0
+    lo, hi = found[False]
+    assert not lo <= 0.699 <= hi, found
+    lo, hi = found[True]
+    assert lo <= 0.699 <= hi, found
+
+
+def simulate_event(sc):
+    from cassini_bayes.simulate import simulate
+
+    r = simulate(jax.random.key(13), sc)
+    return r.telemetry, r.pulses
