@@ -47,10 +47,10 @@ def _numpyro_runs(args, tel, prior_sc):
 
     s = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws)
     t0 = time.perf_counter()
-    fit_inertia(jax.random.key(10), [tel], prior_sc, settings=s)
+    fit_inertia(jax.random.key(10), [tel], prior_sc, robust=False, settings=s)
     t_first = time.perf_counter() - t0
     t0 = time.perf_counter()
-    res = fit_inertia(jax.random.key(11), [tel], prior_sc, settings=s)
+    res = fit_inertia(jax.random.key(11), [tel], prior_sc, robust=False, settings=s)
     t_second = time.perf_counter() - t0
     problem = prepare_inertia([tel], prior_sc)
     t0 = time.perf_counter()

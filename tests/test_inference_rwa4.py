@@ -69,6 +69,8 @@ def test_bad_inputs_are_input_errors():
                         source="tel.csv")
     with pytest.raises(InputError, match="RWA4"):
         prepare_rwa4(no_rwa4, sc, method="rcs", pairs=pairs)
+    with pytest.raises(InputError, match="RWA1"):
+        prepare_rwa4(steady, sc, method="rcs", pairs=pairs, wheel="RWA1")
 
 
 # --------------------------------------------------------------------------------------------
@@ -82,30 +84,63 @@ def _sim(name, seed):
     return sc, simulate(jax.random.key(seed), sc)
 
 
-def _settings(n=400):
+def _settings(n=1000):
     from cassini_bayes.inference.runner import SamplerSettings
 
     return SamplerSettings(chains=4, warmup=n, draws=n)
 
 
 def _check(post, truth, tol_deg):
+    """Axis within ``tol_deg``, truth inside the 90 % cone, unit draws, and converged: R-hat ≤
+    1.01, bulk ESS ≥ 400, no divergences (the acceptance criteria of issue 4)."""
     mean = np.array(post.direction["mean"])
     err = angles_deg(mean[None], truth)[0]
     assert err < tol_deg
     assert err < post.direction["cone_deg"]["90"] or err < 0.05
     u = np.stack([post.idata.posterior[n].values.ravel() for n in ("u4_x", "u4_y", "u4_z")], -1)
     np.testing.assert_allclose(np.linalg.norm(u, axis=1), 1.0, atol=1e-12)
+    d = post.diagnostics
+    assert d.divergences == 0 and d.max_r_hat <= 1.01 and d.min_ess_bulk >= 400, d
+
+
+@pytest.mark.slow
+def test_whitened_axes_are_gaussian():
+    """The sampler's coordinates are a near-standard normal on both methods: along every
+    whitened axis the log density at ±1 is within 0.5 of −0.5 and at ±3 within 1.5 of −4.5 (a
+    curved ridge or a cliff shows up as hundreds of log-units; the old ``x = R u`` chart gave
+    −1200 at ±1). At ±3 only the RCS chart is checked: the prior-dominated log-Cholesky inertia
+    coordinates of the RWA chart are skewed by the near physical boundary (−3.3 and −11.2 at
+    ∓3 on one axis, seed 21), which NUTS's fits still handle (0 divergences measured)."""
+    from cassini_bayes.inference.rwa4 import _LOG_DENSITY
+
+    for name, method in (("rwa4_rcs", "rcs"), ("rwa4_rwa", "rwa")):
+        sc, r = _sim(name, 21)
+        p = prepare_rwa4(r.telemetry, sc.prior, method=method)
+        assert p.chart == method
+        kw = p.model_kwargs
+        f = jax.jit(lambda w, kw=kw, c=p.chart: _LOG_DENSITY[c](kw["centre"] + kw["tril"] @ w,
+                                                                kw))
+        n = kw["centre"].shape[0]
+        l0 = float(f(jnp.zeros(n)))
+        for i in range(n):
+            checks = ((-1, -0.5, 0.5), (1, -0.5, 0.5))
+            if method == "rcs":
+                checks += ((-3, -4.5, 1.5), (3, -4.5, 1.5))
+            for step, expected, tol in checks:
+                got = float(f(jnp.zeros(n).at[i].set(step))) - l0
+                assert abs(got - expected) < tol, (name, i, step, got)
 
 
 @pytest.mark.slow
 def test_rcs_method_recovers_axis_within_3_deg():
-    """Brown §III.B: RCS method, inertia prior ±10 % / ±75 kg m² sampled jointly: within 3°."""
+    """Brown §III.B: RCS method, inertia prior ±10 % / ±75 kg m² sampled jointly: within 3°,
+    default sampler settings converge. One fixed seed; on seeds 21-23 the error was 0.55-0.6° and
+    the 90 % cone ≈ 5.9°, so a false failure needs a > 5σ excursion."""
     from cassini_bayes.inference.rwa4 import fit_rwa4
 
     sc, r = _sim("rwa4_rcs", 21)
     post = fit_rwa4(jax.random.key(5), r.telemetry, sc.prior, method="rcs", settings=_settings())
     _check(post, sc.truth.wheel("RWA4").axis, 3.0)
-    assert post.diagnostics.divergences == 0
 
 
 @pytest.mark.slow

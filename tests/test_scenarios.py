@@ -230,3 +230,70 @@ def test_overrides_per_thruster_and_believed_vector():
     d["truth"]["thrust_n"] = [0.7] * 7
     with pytest.raises(InputError, match="truth.thrust_n"):
         scenario_from_dict(d)
+
+
+# ---- `_real` variants (issue 7): the same events with realistic error sources -----------------
+
+REAL = ["slew_2000_03_15_real", "slews_pre_soi_real", "slews_post_prm_real",
+        "slews_post_probe_real", "biasing_day028_real", "rwa4_rcs_real", "rwa4_rwa_real"]
+_EVENTS = ("run", "initial", "slew", "wheel_ramp", "deadband", "pulse", "window", "prior")
+
+
+def _balance(res):
+    """max |ΔH_N − body-fixed impulse − ∫ T_N dt| relative to the largest of |H_N|, |ΔH_N|."""
+    a, p = res.arrays, res.params
+    t = np.asarray(a.t)[:, None]
+    h = np.asarray(a.h_inertial)
+    inertial = np.asarray(p.torque_inertial_nm) * t + 0.5 * np.asarray(
+        p.torque_inertial_rate_nm_s) * t * t
+    miss = h - h[0] - np.asarray(a.impulse_inertial) - inertial
+    scale = max(np.max(np.linalg.norm(h, axis=1)), np.max(np.linalg.norm(h - h[0], axis=1)))
+    return np.max(np.linalg.norm(miss, axis=1)) / scale
+
+
+@pytest.mark.parametrize("name", REAL)
+def test_real_variants_same_events_with_every_error_on(name):
+    base = name.removesuffix("_real")
+    real, nominal = _dict(name), _dict(base)
+    for key in _EVENTS:                      # only the errors differ from the nominal scenario
+        if key == "window":
+            assert [w | {"name": 0} for w in real.get(key, [])] == \
+                [w | {"name": 0} for w in nominal.get(key, [])]
+        else:
+            assert real.get(key) == nominal.get(key), key
+    assert real["truth"]["inertia"] == nominal["truth"]["inertia"]
+    s = load_scenario(name)
+    assert s.name == name
+    n = s.noise
+    assert np.all(np.abs(n.gyro_bias_rad_s) > 0) and np.all(np.abs(n.gyro_scale_factor) > 0)
+    assert np.any(s.external_torque_body_nm) and s.truth.wheel_inertias[0] != \
+        s.prior.wheel_inertias[0]
+    if name != "slew_2000_03_15_real":       # the March 2000 variant predates these two effects
+        assert s.flex is not None and n.time_tag_jitter_s > 0
+
+
+@pytest.fixture(scope="module")
+def short_real_runs():
+    """The `_real` variants cut to 480 s (one compiled program per controller set-up; the RWA4 RCS
+    ramp starts at 420 s)."""
+    return {n: simulate(jax.random.key(i), _truncated(n, 480.0)) for i, n in enumerate(REAL)}
+
+
+def test_real_variants_simulate(short_real_runs):
+    for name, res in short_real_runs.items():
+        a, tel = res.arrays, res.telemetry
+        assert np.all(np.isfinite(tel.omega)) and np.all(np.isfinite(tel.q)), name
+        assert np.all(np.diff(tel.t) > 0), name
+        jitter = res.scenario.noise.time_tag_jitter_s
+        assert (np.std(tel.t - res.truth.t) > 0) == (jitter > 0), name
+        assert (np.max(np.abs(a.flex_eta)) > 0) == (res.scenario.flex is not None), name
+        # momentum changes only by the external torques and the thrusters
+        assert _balance(res) < 1e-9, (name, _balance(res))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", REAL)
+def test_full_real_variants_momentum_balance(name):
+    res = simulate(jax.random.key(0), load_scenario(name))
+    assert _balance(res) < 1e-9
+    assert np.max(np.abs(res.arrays.pointing_error[:, :2])) < (0.16 if "rcs" in name else 2e-3)

@@ -71,7 +71,11 @@ def truth_document(result: SimResult, seed: int) -> dict:
                   "tach_quantum_rpm": s.noise.tach_quantum_rpm,
                   "gyro_bias_rad_s": list(s.noise.gyro_bias_rad_s),
                   "gyro_scale_factor": list(s.noise.gyro_scale_factor),
+                  "time_tag_jitter_s": s.noise.time_tag_jitter_s,
                   "on_time_resolution_s": 0.1},
+        "flex_mode": (None if s.flex is None else
+                      {"freq_hz": s.flex.freq_hz, "damping": s.flex.damping,
+                       "coupling_kg05_m": [float(x) for x in s.flex.coupling]}),
         "run": {"duration_s": s.duration_s, "dt_s": s.dt_s,
                 "sample_period_s": s.sample_period_s, "control": s.control},
         "quiet_windows": windows,

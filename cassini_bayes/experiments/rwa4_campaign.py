@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 import tomllib
 import warnings
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -338,12 +337,8 @@ def flight_test_scenario(scenario_name: str):
 
 
 def _flight_test(key, settings) -> dict[str, Any]:
-    """The flight-test variant: RWA1's axis by Brown Eq 3 (least squares) and by the posterior.
-
-    :func:`~cassini_bayes.inference.rwa4.fit_rwa4` solves for the wheel named RWA4, so the
-    telemetry's RWA1 column is presented as RWA4 to a copy of the spacecraft whose RWA4 has RWA1's
-    spin inertia (a relabelling: the estimate is RWA1's axis).
-    """
+    """The flight-test variant: RWA1's axis by Brown Eq 3 (least squares) and by the posterior
+    (:func:`~cassini_bayes.inference.rwa4.fit_rwa4` with ``wheel="RWA1"``)."""
     from cassini_bayes.inference.rwa4 import detect_windows, fit_rwa4
     from cassini_bayes.estimators.baseline import fit_rwa4_baseline
     from cassini_bayes.simulate import simulate
@@ -353,7 +348,7 @@ def _flight_test(key, settings) -> dict[str, Any]:
     sim = simulate(k_sim, scenario)
     tel = sim.telemetry
     truth = np.asarray(scenario.truth.wheel("RWA1").axis, float)
-    pairs = detect_windows(tel, "rwa")
+    pairs = detect_windows(tel, "rwa", wheel="RWA1")
     ls = fit_rwa4_baseline(tel, scenario.prior, "rwa", [a for a, _ in pairs],
                            [b for _, b in pairs], wheel="RWA1")
     out = {"truth": truth.tolist(), "ls": np.asarray(ls.axis, float).tolist(),
@@ -361,18 +356,11 @@ def _flight_test(key, settings) -> dict[str, Any]:
            "pairs": [[list(a), list(b)] for a, b in pairs]}
     if settings["posterior_runs"] < 1:
         return out
-    swap = {"RWA1": "RWA4", "RWA4": "RWA1"}      # RWA4 is off in this scenario
-    names = tuple(swap.get(n.upper(), n) for n in tel.wheel_names)
-    tel4 = replace(tel, wheel_names=names)
-    rwa1 = scenario.prior.wheel("RWA1")
-    wheels = tuple(replace(w, inertia=rwa1.inertia, axis=rwa1.axis) if w.name.upper() == "RWA4"
-                   else w for w in scenario.prior.wheels)
-    sc4 = replace(scenario.prior, wheels=wheels)
     seed, fkey = fit_seed(k_fit)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        post = fit_rwa4(fkey, tel4, sc4, method="rwa", pairs=pairs, prior=settings["prior"],
-                        settings=sampler(settings))
+        post = fit_rwa4(fkey, tel, scenario.prior, method="rwa", pairs=pairs,
+                        prior=settings["prior"], settings=sampler(settings), wheel="RWA1")
     mean = np.asarray(post.direction["mean"], float)
     out.update(post_error_deg=_angle_deg(mean, truth),
                cone_deg={k: float(v) for k, v in post.direction["cone_deg"].items()},

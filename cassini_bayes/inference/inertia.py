@@ -833,7 +833,7 @@ ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_tilt", "T_body"
 
 
 def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
-                torque: bool = True, robust: bool = False, settings=None,
+                torque: bool = True, robust: bool = True, settings=None,
                 prior_draws: int = 500) -> InertiaPosterior:
     """Posterior of the inertia tensor from one or more RWA-slew telemetry files.
 
@@ -846,8 +846,9 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     torque : include the constant inertial external torque ``T_N`` per file.
     robust : include the sensor and actuator nuisance parameters (gyro bias per file, gyro scale
         factor, wheel spin-inertia scale, wheel spin-axis tilts; priors from
-        ``spacecraft.knowledge``; :mod:`cassini_bayes.inference.nuisance`). The CLI's default;
-        ``False`` (the idealised model of the papers) here so that existing callers keep it.
+        ``spacecraft.knowledge``; :mod:`cassini_bayes.inference.nuisance`). The default, as on
+        the CLI: flight data always carry these errors. ``False`` is the papers' idealised model
+        (for clean simulations and comparisons with the papers).
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
 

@@ -107,10 +107,16 @@ def laplace(log_density: Callable, theta0, data: Any = None, *,
 
         def fun(z):
             v, gz = nll(x_j + t_j @ jnp.asarray(z))
-            return float(v), np.asarray(t_j.T @ gz, float)
+            v, gz = float(v), np.asarray(t_j.T @ gz, float)
+            if not (np.isfinite(v) and np.all(np.isfinite(gz))):
+                return np.inf, np.zeros_like(gz)     # outside the support: step rejected
+            return v, gz
 
         def hfun(z):
-            return np.asarray(t_j.T @ hess(x_j + t_j @ jnp.asarray(z)) @ t_j, float)
+            hz = np.asarray(t_j.T @ hess(x_j + t_j @ jnp.asarray(z)) @ t_j, float)
+            # a trial point where the curvature is not finite (e.g. at the edge of the
+            # support): use the whitened identity, the curvature at the round's start
+            return hz if np.all(np.isfinite(hz)) else np.eye(x.size)
 
         res = scipy.optimize.minimize(fun, np.zeros(x.size), jac=True, hess=hfun,
                                       method="trust-exact", options={"maxiter": 200})

@@ -24,7 +24,7 @@ the window means, Brown's own information, are used.
 Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives the body covariance
 ``B = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` (``g_4 = u4``) per sample, rotated to inertial axes and
 averaged over each window; the levels are fixed at the data's own white-noise estimates σ̂ (three
-numbers per pair cannot estimate them; the sampler's three noise coordinates are prior-only).
+numbers per pair cannot estimate them).
 A constant external torque (Brown: ≈ 3e-6 N m, i.e. < 0.1° over 30 minutes) is neglected.
 
 Priors
@@ -36,25 +36,38 @@ Priors
 * Inertia: the spacecraft model's predicted tensor with its knowledge requirements as 1σ (the
   prior of :mod:`cassini_bayes.inference.inertia`), or a Gaussian (an inertia run's posterior);
   sampled jointly, so the mass-property error is part of the posterior (Brown's Monte Carlo
-  analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). The inertia is
-  parameterised through the Cholesky factor of its second-moment matrix (every draw physical).
+  analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). Every draw is
+  physical (positive definite, triangle inequalities); see "Sampler coordinates".
 
-Sphere parameterisation
------------------------
-Stan's ``unit_vector``: ``x ∈ R³`` with a rotation-invariant density, ``u4 = x/|x|``; any radial
-density leaves ``u4`` uniform. We use ``p(x) ∝ exp(−½(|x| − R)²)`` with ``R = 1/σ̂_u``, ``σ̂_u``
-(rad) the smallest angular sd of the likelihood at the least-squares axis (with the prior-mean
-inertia), and sample ``y = x − R û_LS``. Then the radial and tangential sds of ``x`` are both of
-order one (DESIGN.md §7 scaling pitfall) and the "funnel" of the plain construction (tangential
-scale ∝ |x|) varies by only ±3/R. An antipodal mode would be separated from ``R û`` by the low
-density near ``x = 0``; it can only matter when the data are uninformative, in which case
-``R = 1``, the sampler moves freely over the sphere, and the wide cone radii say so.
+Sampler coordinates
+-------------------
+The axis is written in the gnomonic chart about the least-squares axis ``u0`` (tangent basis
+``E``): ``u = (u0 + Eᵀ v)/√(1 + |v|²)``, ``v ∈ R²``; a uniform density on the sphere is
+``(1 + |v|²)^(−3/2)`` in ``v``. The chart covers the hemisphere about ``u0``, which holds the
+posterior whenever the data determine the axis at all (:func:`prepare_rwa4` refuses data whose
+Laplace direction sd exceeds ``MAX_SD_DIRECTION_DEG``). The inertia is ``π = μ + L ξ`` with
+``ξ ~ N(0, 1)`` (``L`` the prior's Cholesky factor), truncated to physical tensors. The
+boundary is near: on Cassini ``Iyy + Izz − Ixx`` is 3.2σ from its bound, so a hard cut (−∞) makes
+NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
 
-Finally the sampler sees ``w`` with ``θ = centre + tril w`` (``θ`` = ``y``, the prior-whitened
-log-Cholesky inertia coordinates and the log noise scales), ``centre``/``tril`` a Laplace
-approximation (:func:`cassini_bayes.inference.laplace.laplace`): on the RCS method the data fix
-``|I Δω| = J_4 |Δρ_4|`` far more tightly than the inertia prior, a direction NUTS would otherwise
-have to find. The density is exact in ``θ``; the affine map only conditions the geometry.
+* RWA method: ``θ = (v, ζ)``; the data fix ``u`` and barely touch ``π``, which is sampled in
+  the prior-whitened log-Cholesky coordinates ``ζ`` of the second-moment matrix (physical by
+  construction, exact truncated-Gaussian prior through the map's Jacobian).
+* RCS method: the pair's balance is ``J₄ R (z + u)`` with ``z = R⁻¹(M π + Δk)/J₄`` (``R`` the
+  change of ``⟨ρ₄ Aᵀ⟩``, ``M π`` that of ``⟨Aᵀ I ω⟩``): the data fix ``z = −u``, i.e. ``|z| = 1``
+  (a curved ellipsoid in ``π``) and the direction of ``z`` (another sphere). In Cartesian ``π``
+  and ``u`` this is a narrow curved ridge that NUTS cannot follow (checked: whitened axes of the
+  earlier ``x = R u`` construction dropped by −1200 log-units at ±1 instead of −0.5). So the
+  three combinations ``z`` of ``ξ`` are sampled in polar form, ``z = −e^ρ g(v_z)`` with the same
+  chart ``g``, plus the three prior-only complements ``w``: ``θ = (v, ρ, v_z, w)``, Jacobian
+  ``e^{3ρ} (1 + |v_z|²)^(−3/2)``; the constraint becomes ``ρ ≈ 0``, ``v_z ≈ v``, linear. Here
+  ``π`` is linear in ``θ`` and the truncation is the smooth factor of
+  :func:`_log_physical_factor`.
+
+Finally the sampler sees ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace
+approximation (:func:`cassini_bayes.inference.laplace.laplace`). The density is exact in ``θ``;
+the affine map only conditions the geometry. Check (``rwa4_rcs``, seed 21): along every whitened
+axis the log density at ±1, ±3 is within 0.5 of the Gaussian −0.5, −4.5.
 """
 
 from __future__ import annotations
@@ -75,8 +88,8 @@ from cassini_bayes.estimators.rwa4 import fit_axis_rcs, fit_axis_rwa
 from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
 from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_prior,
                                              is_physical, pi_from_cholesky_params)
-from cassini_bayes.inference.sphere import direction_summary
 from cassini_bayes.inference.laplace import laplace
+from cassini_bayes.inference.sphere import direction_summary
 from cassini_bayes.inference.thrust import InertiaGaussian, rate_noise_levels
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
@@ -89,6 +102,7 @@ __all__ = [
     "CONE_ANGLE_DEG",
     "CONE_SD_DEG",
     "MIN_SPIN_CHANGE_RPM",
+    "WHEEL",
     "detect_windows",
     "Rwa4Problem",
     "prepare_rwa4",
@@ -103,12 +117,12 @@ METHODS = ("rcs", "rwa")
 PRIORS = ("uniform", "cone")
 CONE_ANGLE_DEG = float(np.degrees(np.arccos(1.0 / np.sqrt(3.0))))   # 54.7356°, Brown §I
 CONE_SD_DEG = 1.0
-MIN_SPIN_CHANGE_RPM = 10.0   # smaller RWA4 changes between A and B cannot calibrate the axis
-NOISE_NAMES = ("sigma_omega", "sigma_rho", "sigma_theta")
-NOISE_PRIOR_LOG_SD = 1.0
-_NOISE_STEP = 0.1
+MIN_SPIN_CHANGE_RPM = 10.0   # smaller spin changes between A and B cannot calibrate the axis
+MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
+WHEEL = "RWA4"               # the wheel solved for by default
 _NOISE_FLOORS = np.array([1e-9, 1e-7, 1e-9])
-_WHEEL = "RWA4"
+_DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
+_MARGIN_FRACTION = 4.0       # physical-factor scale s = (prior mean's margin) / this
 
 Window = tuple[float, float]
 
@@ -117,25 +131,39 @@ Window = tuple[float, float]
 # Windows
 # --------------------------------------------------------------------------------------------
 
-def _median_rpm(tel: Telemetry, w: Window) -> float:
+def _wheel_name(tel: Telemetry, wheel: str) -> str:
+    """The telemetry's spelling of ``wheel``; InputError when it is absent or not running."""
+    names = {n.upper(): n for n in tel.wheel_names}
+    name = names.get(str(wheel).upper())
+    if name is None or name not in tel.active_wheels():
+        raise InputError(f"no {wheel} rates (column {str(wheel).lower()}, rpm); the spin-axis "
+                         f"calibration needs {wheel} running", path=tel.source)
+    return name
+
+
+def _median_rpm(tel: Telemetry, w: Window, wheel: str) -> float:
     m = (tel.t >= w[0]) & (tel.t <= w[1])
-    return float(np.nanmedian(np.asarray(tel.wheel_rate(_WHEEL), float)[m]) / RPM_TO_RAD_S)
+    return float(np.nanmedian(np.asarray(tel.wheel_rate(wheel), float)[m]) / RPM_TO_RAD_S)
 
 
-def detect_windows(tel: Telemetry, method: str) -> list[tuple[Window, Window]]:
+def detect_windows(tel: Telemetry, method: str,
+                   wheel: str = WHEEL) -> list[tuple[Window, Window]]:
     """Time A / Time B window pairs from the quiet periods (:func:`cassini_bayes.windows.
     quiet_periods`).
 
-    * RCS: the two consecutive quiet periods across the largest change of RWA4's median rate.
+    * RCS: the two consecutive quiet periods across the largest change of ``wheel``'s median
+      rate.
     * RWA: consecutive quiet periods paired in order, ``(Q0, Q1), (Q2, Q3), …`` — Brown's "Time A"
       before and "Time B" after the first slew of each slew pair.
 
     Raises
     ------
     InputError
-        Fewer than two quiet periods; for RCS, no RWA4 spin change of ``MIN_SPIN_CHANGE_RPM``.
+        Fewer than two quiet periods; for RCS, no spin change of ``MIN_SPIN_CHANGE_RPM``.
     """
     from cassini_bayes.windows import quiet_periods
+
+    wheel = _wheel_name(tel, wheel) if method == "rcs" else wheel
 
     quiet = quiet_periods(tel)
     if len(quiet) < 2:
@@ -144,13 +172,14 @@ def detect_windows(tel: Telemetry, method: str) -> list[tuple[Window, Window]]:
                          "Time B: give them with --window-a T0:T1 --window-b T0:T1",
                          path=tel.source)
     if method == "rcs":
-        rpm = np.array([_median_rpm(tel, w) for w in quiet])
+        rpm = np.array([_median_rpm(tel, w, wheel) for w in quiet])
         jumps = np.abs(np.diff(rpm))
         k = int(np.nanargmax(jumps))
         if not jumps[k] >= MIN_SPIN_CHANGE_RPM:
-            raise InputError(f"no RWA4 spin change between quiet periods (largest {jumps[k]:.3g} "
-                             f"rpm < {MIN_SPIN_CHANGE_RPM:g} rpm); the RCS method needs RWA4 "
-                             "spun up or down between Time A and Time B", path=tel.source)
+            raise InputError(f"no {wheel} spin change between quiet periods (largest "
+                             f"{jumps[k]:.3g} rpm < {MIN_SPIN_CHANGE_RPM:g} rpm); the RCS method "
+                             f"needs {wheel} spun up or down between Time A and Time B",
+                             path=tel.source)
         return [(quiet[k], quiet[k + 1])]
     return [(quiet[i], quiet[i + 1]) for i in range(0, len(quiet) - 1, 2)]
 
@@ -170,11 +199,12 @@ class Rwa4Problem(NamedTuple):
     inertia : the Gaussian inertia prior (mean (6,), cov (6, 6), kg m²).
     inertia_source : ``"spacecraft"`` or ``"posterior"``.
     baseline : the least-squares axis (Brown Eq 1 or Eq 3 at the prior-mean inertia), (3,).
-    radius : ``R`` of the sphere parameterisation (module docstring).
-    sd_direction_deg : the likelihood's smallest angular sd at the baseline, deg.
-    spin_change_rpm : change of RWA4's mean rate from A to B, per pair.
+    sd_direction_deg : the Laplace approximation's largest angular sd of the axis, deg.
+    spin_change_rpm : change of the wheel's mean rate from A to B, per pair.
     noise_hat : (3,) σ̂ (rad/s, rad/s, rad).
     source : the telemetry file.
+    wheel : the wheel solved for.
+    chart : ``"rcs"`` (balance coordinates) or ``"rwa"`` (direct), module docstring.
     """
 
     model_kwargs: dict
@@ -184,11 +214,12 @@ class Rwa4Problem(NamedTuple):
     inertia: InertiaGaussian
     inertia_source: str
     baseline: np.ndarray
-    radius: float
     sd_direction_deg: float
     spin_change_rpm: np.ndarray
     noise_hat: np.ndarray
     source: str
+    wheel: str
+    chart: str
 
 
 def _attitude_noise(q: np.ndarray) -> float:
@@ -237,40 +268,15 @@ def _loglik(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov):
 
 
 def _tangent_basis(u: np.ndarray) -> np.ndarray:
+    """(2, 3) orthonormal basis of the plane perpendicular to the unit vector ``u``."""
     e = np.eye(3)[int(np.argmin(np.abs(u)))]
     e1 = np.cross(u, e)
     e1 /= np.linalg.norm(e1)
     return np.stack([e1, np.cross(u, e1)])
 
 
-def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
-                 pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
-                 inertia: InertiaGaussian | None = None) -> Rwa4Problem:
-    """Prepare the RWA4 problem from one telemetry file and its window pairs.
-
-    Parameters
-    ----------
-    tel : telemetry with RWA4 running (and, for the RWA method, RWA2/RWA3).
-    spacecraft : wheel axes/inertias (the RWA4 axis in the model is ignored) and inertia prior.
-    method : ``"rcs"`` (Brown Eq 1) or ``"rwa"`` (Brown Eq 3).
-    pairs : ``[(A, B), …]`` windows in s; detected (:func:`detect_windows`) when ``None``.
-    prior : ``"uniform"`` or ``"cone"``.
-    inertia : Gaussian inertia prior; default the spacecraft model's knowledge requirements.
-
-    Raises
-    ------
-    InputError
-        Unknown method/prior, no RWA4 rates, windows outside the data or overlapping, thrusters
-        firing inside a window, no RWA4 spin change (RCS), data that cannot determine the axis.
-    """
-    if method not in METHODS:
-        raise InputError(f"--method {method!r}: choose one of {', '.join(METHODS)}")
-    if prior not in PRIORS:
-        raise InputError(f"--prior {prior!r}: choose one of {', '.join(PRIORS)}")
-    if _WHEEL not in tel.wheel_names or _WHEEL not in tel.active_wheels():
-        raise InputError("no RWA4 rates (column rwa4, rpm); the RWA4 calibration needs RWA4 "
-                         "running", path=tel.source)
-    pairs = detect_windows(tel, method) if pairs is None else [tuple(p) for p in pairs]
+def _check_windows(tel: Telemetry, pairs, method: str) -> None:
+    """One-line InputErrors for window pairs the calibration cannot use."""
     if not pairs:
         raise InputError("no window pair; give --window-a T0:T1 --window-b T0:T1",
                          path=tel.source)
@@ -301,18 +307,107 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                                  "momentum is not conserved there: choose a quiet window",
                                  path=tel.source)
 
+
+def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
+    """σ̂ (3,): gyro (rad/s), wheel rate (rad/s), attitude (rad), medians over the windows
+    (quiet: the robust white-noise estimate is cleanest there)."""
+    t = np.asarray(tel.t, float)
+    levels = np.array([rate_noise_levels(tel.slice(*w))[:2] for w in windows], float)
+    s_q = np.median([_attitude_noise(q[(t >= w[0]) & (t <= w[1])]) for w in windows])
+    return np.maximum(np.array([*np.median(levels, axis=0), s_q]), _NOISE_FLOORS)
+
+
+def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
+    """The window averages of :func:`_loglik` (its docstring), as JAX arrays."""
+    a_all = np.asarray(dcm(jnp.asarray(q)))
+    h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
+                   else np.zeros((q.shape[0], 3)))
+    reg = np.asarray(regressor(jnp.asarray(omega)))
+    rho = np.nan_to_num(rates[:, k_u])
+    m_pi, r_u, k_h, n_w, t_aa = [], [], [], [], []
+    for ma, mb in masks:
+        for m in (ma, mb):
+            at = np.swapaxes(a_all[m], -1, -2)                          # body → inertial
+            m_pi.append(np.einsum("nij,njk->ik", at, reg[m]) / m.sum())
+            r_u.append(np.einsum("n,nij->ij", rho[m], at) / m.sum())
+            k_h.append(np.einsum("nij,nj->i", at, h_known_all[m]) / m.sum())
+            n_w.append(float(m.sum()))
+            t_aa.append(np.einsum("nja,nkb->jakb", a_all[m], a_all[m]) / m.sum())
+    known_cov = sum((js[k]**2 * np.outer(axes[k], axes[k]) for k in known), np.zeros((3, 3)))
+    return dict(m_pi=jnp.asarray(np.stack(m_pi)), r_u=jnp.asarray(np.stack(r_u)),
+                k_h=jnp.asarray(np.stack(k_h)), n_w=jnp.asarray(np.array(n_w)),
+                t_aa=jnp.asarray(np.stack(t_aa)), j4=jnp.asarray(js[k_u]),
+                known_cov=jnp.asarray(known_cov))
+
+
+def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
+    """The RCS method's linearising change of inertia coordinates (module docstring).
+
+    With ``π = μ + L ξ`` the pair's balance is ``J₄ R (z + u4)`` with ``R = ΔR_u`` and
+    ``z = a + K ξ``, ``a = R⁻¹(M μ + Δk)/J₄``, ``K = R⁻¹ M L/J₄`` (``M = Δm_π``). Returns ``a``
+    (3,) and ``Q⁻¹`` (6, 6) with ``ξ = Q⁻¹ [z − a; w]``, the rows of ``Q`` being ``K`` and an
+    orthonormal basis ``w`` of the prior-whitened inertia directions the balance does not see;
+    ``None`` when ``R`` or ``K`` is singular (no spin change or no drift).
+    """
+    j4 = float(data["j4"])
+    r = np.asarray(data["r_u"][1] - data["r_u"][0])
+    m = np.asarray(data["m_pi"][1] - data["m_pi"][0])
+    dk = np.asarray(data["k_h"][1] - data["k_h"][0])
+    if np.linalg.cond(r) > 1e8:
+        return None
+    a = np.linalg.solve(r, m @ pi_mean + dk) / j4
+    k = np.linalg.solve(r, m @ pi_chol) / j4
+    _, s, vt = np.linalg.svd(k)
+    if not s[-1] > 1e-8 * s[0]:
+        return None
+    return a, np.linalg.inv(np.concatenate([k, vt[3:]], 0))
+
+
+def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
+                 pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
+                 inertia: InertiaGaussian | None = None, wheel: str = WHEEL) -> Rwa4Problem:
+    """Prepare the spin-axis problem of ``wheel`` from one telemetry file and its window pairs.
+
+    Parameters
+    ----------
+    tel : telemetry with the wheel running (and, for the RWA method, the known wheels).
+    spacecraft : wheel axes/inertias (the solved wheel's axis in the model is ignored) and the
+        inertia prior.
+    method : ``"rcs"`` (Brown Eq 1) or ``"rwa"`` (Brown Eq 3).
+    pairs : ``[(A, B), …]`` windows in s; detected (:func:`detect_windows`) when ``None``.
+    prior : ``"uniform"`` or ``"cone"``.
+    inertia : Gaussian inertia prior; default the spacecraft model's knowledge requirements.
+    wheel : the wheel whose axis is solved for (default RWA4; Brown's flight test: RWA1).
+
+    Raises
+    ------
+    InputError
+        Unknown method/prior/wheel, no rates of the wheel, windows outside the data or
+        overlapping, thrusters firing inside a window, no spin change (RCS), data that cannot
+        determine the axis.
+    """
+    if method not in METHODS:
+        raise InputError(f"--method {method!r}: choose one of {', '.join(METHODS)}")
+    if prior not in PRIORS:
+        raise InputError(f"--prior {prior!r}: choose one of {', '.join(PRIORS)}")
+    wheel = _wheel_name(tel, wheel)
+    pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
+        [tuple(p) for p in pairs]
+    _check_windows(tel, pairs, method)
+
+    t = np.asarray(tel.t, float)
     names = tel.wheel_names
-    k4 = names.index(_WHEEL)
+    k_u = names.index(wheel)
     rates = np.asarray(tel.wheel_rates, float)
     axes = np.stack([spacecraft.wheel(n).axis for n in names])
     js = np.array([spacecraft.wheel(n).inertia for n in names])
     active = np.any(np.isfinite(rates), axis=0)
-    known = [k for k in range(len(names)) if k != k4 and active[k]]
+    known = [k for k in range(len(names)) if k != k_u and active[k]]
     masks = [((t >= a[0]) & (t <= a[1]), (t >= b[0]) & (t <= b[1])) for a, b in pairs]
-    rho4 = np.nan_to_num(rates[:, k4])
-    spin = np.array([(rho4[mb].mean() - rho4[ma].mean()) / RPM_TO_RAD_S for ma, mb in masks])
+    rho = np.nan_to_num(rates[:, k_u])
+    spin = np.array([(rho[mb].mean() - rho[ma].mean()) / RPM_TO_RAD_S for ma, mb in masks])
     if method == "rcs" and abs(spin[0]) < MIN_SPIN_CHANGE_RPM:
-        raise InputError(f"RWA4 changes by {spin[0]:.3g} rpm between Time A and Time B "
+        raise InputError(f"{wheel} changes by {spin[0]:.3g} rpm between Time A and Time B "
                          f"(< {MIN_SPIN_CHANGE_RPM:g} rpm): no spin change to calibrate from",
                          path=tel.source)
 
@@ -324,145 +419,162 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     i_mean = np.asarray(inertia.mean, float)
     if not is_physical(i_mean):
         raise InputError("the inertia prior mean is not a physical inertia tensor")
-    i_pred = np.asarray(inertia_matrix(i_mean))
+    i_chol = np.linalg.cholesky(np.asarray(inertia.cov, float))
 
-    # Least-squares baseline (Brown Eq 1 / Eq 3), also the sampler's centre.
+    # Least-squares baseline (Brown Eq 1 / Eq 3), also the chart's centre.
     q = np.asarray(quat_continuous(np.asarray(tel.q, float)))
     omega = np.asarray(tel.omega, float)
+    i_pred = np.asarray(inertia_matrix(i_mean))
     if method == "rcs":
         fit = fit_axis_rcs(q, omega, rates, axes, js, i_pred, masks[0][0], masks[0][1],
-                           unknown=k4)
+                           unknown=k_u)
     else:
-        fit = fit_axis_rwa(q, omega, rates, axes, js, masks, unknown=k4, inertia=i_pred)
+        fit = fit_axis_rwa(q, omega, rates, axes, js, masks, unknown=k_u, inertia=i_pred)
     u_ls = np.asarray(fit.axis, float)
 
-    known_cov = sum((js[k]**2 * np.outer(axes[k], axes[k]) for k in known), np.zeros((3, 3)))
-    # noise levels from the window samples only (quiet: the robust estimate is cleanest there)
-    s_w, s_r = [], []
-    for w in windows:
-        part = tel.slice(*w)
-        s_w.append(rate_noise_levels(part)[0])
-        s_r.append(rate_noise_levels(part)[1])
-    s_q = max(np.median([_attitude_noise(q[(t >= w[0]) & (t <= w[1])]) for w in windows]), 0.0)
-    noise = np.maximum(np.array([np.median(s_w), np.median(s_r), s_q]), _NOISE_FLOORS)
-
-    a_all = np.asarray(dcm(jnp.asarray(q)))
-    h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
-                   else np.zeros((t.shape[0], 3)))
-    reg = np.asarray(regressor(jnp.asarray(omega)))
-    m_pi, r_u, k_h, n_w, t_aa = [], [], [], [], []
-    for ma, mb in masks:
-        for m in (ma, mb):
-            at = np.swapaxes(a_all[m], -1, -2)                          # body → inertial
-            m_pi.append(np.einsum("nij,njk->ik", at, reg[m]) / m.sum())
-            r_u.append(np.einsum("n,nij->ij", rho4[m], at) / m.sum())
-            k_h.append(np.einsum("nij,nj->i", at, h_known_all[m]) / m.sum())
-            n_w.append(float(m.sum()))
-            t_aa.append(np.einsum("nja,nkb->jakb", a_all[m], a_all[m]) / m.sum())
-    data = dict(m_pi=jnp.asarray(np.stack(m_pi)), r_u=jnp.asarray(np.stack(r_u)),
-                k_h=jnp.asarray(np.stack(k_h)), n_w=jnp.asarray(np.array(n_w)),
-                t_aa=jnp.asarray(np.stack(t_aa)), j4=jnp.asarray(js[k4]),
-                known_cov=jnp.asarray(known_cov))
-
-    # Angular resolution of the likelihood at the baseline (prior-mean inertia, σ̂).
-    basis = _tangent_basis(u_ls)
-
-    def ll_tangent(v):
-        u = jnp.asarray(u_ls) + v @ jnp.asarray(basis)
-        return _loglik(u / jnp.linalg.norm(u), jnp.asarray(i_mean), jnp.log(jnp.asarray(noise)),
-                       **data)
-
-    info = -np.asarray(jax.jit(jax.hessian(ll_tangent))(jnp.zeros(2)))
-    eig = np.linalg.eigvalsh(0.5 * (info + info.T))
-    sd_min = 1.0 / np.sqrt(eig.max()) if eig.max() > 0 else np.inf
-    radius = float(np.clip(1.0 / sd_min, 1.0, 1e5)) if np.isfinite(sd_min) else 1.0
-
-    # Inertia coordinates: log-Cholesky around the prior mean, whitened by the prior covariance.
-    lp_c = cholesky_params_from_pi(i_mean)
-    jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
-    jinv = np.linalg.inv(jac)
-    cov_lp = jinv @ np.asarray(inertia.cov) @ jinv.T
-    tril = np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T))
-    prec_chol = np.linalg.cholesky(np.linalg.inv(np.asarray(inertia.cov)))
-
-    kw = dict(data, x0=jnp.asarray(radius * u_ls), radius=jnp.asarray(radius),
-              lp_centre=jnp.asarray(lp_c), lp_tril=jnp.asarray(tril),
-              pi_mean=jnp.asarray(i_mean), pi_prec_chol=jnp.asarray(prec_chol),
+    noise = _noise_levels(tel, q, [w for p in pairs for w in p])
+    data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
+    kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
+              pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),
+              margin_scale=jnp.asarray(float(_physical_margin(jnp.asarray(i_mean)))
+                                       / _MARGIN_FRACTION),
+              cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
               cone_angle=jnp.asarray(np.radians(CONE_ANGLE_DEG)),
               cone_sd=jnp.asarray(np.radians(CONE_SD_DEG)))
-    centre, tril_w = laplace(lambda th: _log_density(th, kw, prior == "cone"), np.zeros(12))
-    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril_w)
+    theta0 = np.zeros(_DIM)
+    chart = "rwa"
+    lp_c = cholesky_params_from_pi(i_mean)
+    jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
+    cov_lp = np.linalg.solve(jac, np.linalg.solve(jac, np.asarray(inertia.cov)).T)
+    kw["lp_centre"] = jnp.asarray(lp_c)
+    kw["lp_tril"] = jnp.asarray(np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)))
+    if method == "rcs":
+        bal = _balance_map(data, i_mean, i_chol)
+        if bal is not None:
+            chart = "rcs"
+            kw["z_offset"], kw["q_inv"] = jnp.asarray(bal[0]), jnp.asarray(bal[1])
+            theta0[2] = np.log(np.linalg.norm(bal[0]))
+    centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
+    cov_v = (tril @ tril.T)[:2, :2]
+    sd_dir = float(np.degrees(np.sqrt(np.linalg.eigvalsh(cov_v)[-1])))
+    if not sd_dir < MAX_SD_DIRECTION_DEG:
+        raise InputError(f"the data determine the {wheel} axis only to ±{sd_dir:.3g}° "
+                         f"(Laplace sd > {MAX_SD_DIRECTION_DEG:g}°): no excitation between the "
+                         "windows; choose windows across a spin change (RCS) or a slew (RWA)",
+                         path=tel.source)
+    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
     return Rwa4Problem(
         model_kwargs=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
-        inertia_source=i_src, baseline=u_ls, radius=radius,
-        sd_direction_deg=float(np.degrees(sd_min)), spin_change_rpm=spin, noise_hat=noise,
-        source=tel.source)
+        inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
+        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart)
 
 
 # --------------------------------------------------------------------------------------------
 # Model
 # --------------------------------------------------------------------------------------------
 
-def _physical(theta, kw):
-    """``u4`` (3,), ``π`` (6,) kg m², ``log σ`` (3,), ``|x|`` and ``log|∂π/∂lp|`` of the vector
-    ``θ = (y (3), inertia_z (6), noise_z (3))``."""
-    x = kw["x0"] + theta[:3]
-    r = jnp.linalg.norm(x)
-    lp = kw["lp_centre"] + kw["lp_tril"] @ theta[3:9]
+def _gnomonic(v, kw):
+    """Unit vector of the gnomonic chart ``v`` (2,) about ``u0`` and ``log dΩ/dv``."""
+    s = 1.0 + jnp.sum(v**2)
+    u = (kw["u0"] + v @ kw["basis"]) / jnp.sqrt(s)
+    return u, -1.5 * jnp.log(s)
+
+
+def _physical_rwa(theta, kw):
+    """``u`` (3,), ``π`` (6,) kg m², ``ξ = L⁻¹(π − μ)`` and the log Jacobian of
+    ``θ = (v (2), ζ (6))``: log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by
+    construction, :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
+    u, log_jac = _gnomonic(theta[:2], kw)
+    lp = kw["lp_centre"] + kw["lp_tril"] @ theta[2:8]
     pi = pi_from_cholesky_params(lp)
+    xi = jax.scipy.linalg.solve_triangular(kw["pi_chol"], pi - kw["pi_mean"], lower=True)
     # log|det ∂π/∂lp| up to a constant: exp of the diagonal gives Σ lp_ii, L → L Lᵀ gives
     # 2³ L00³ L11² L22, Σ → I = tr(Σ) 1 − Σ is linear
-    logdet = 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
-    # noise scales fixed at the data's σ̂: three numbers per window pair cannot estimate them
-    return x / r, pi, kw["log_noise_hat"], r, logdet
+    return u, pi, xi, log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
 
 
-def _log_density(theta, kw, cone: bool):
-    """Log prior + log likelihood at ``θ`` (module docstring)."""
-    u, pi, log_sigma, r, logdet = _physical(theta, kw)
-    # u4 = x/|x| with a rotation-invariant density of x: uniform u4 (module docstring)
-    log_prior = -0.5 * (r - kw["radius"]) ** 2
-    if cone:
-        angle = jnp.arccos(jnp.clip(u[2], -1.0, 1.0))
-        log_prior += -0.5 * ((angle - kw["cone_angle"]) / kw["cone_sd"]) ** 2
-    # Gaussian prior of π (physical by construction), Jacobian of the Cholesky map
-    w = kw["pi_prec_chol"].T @ (pi - kw["pi_mean"])
-    log_prior += -0.5 * jnp.sum(w**2) + logdet
-    log_prior += jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP)
-                         .log_prob(theta[9:12]))
+def _physical_rcs(theta, kw):
+    """As :func:`_physical_rwa` for ``θ = (v (2), log|z| (1), v_z (2), w (3))``: ``z = −|z|
+    g(v_z)`` with the chart ``g`` of ``u``, ``ξ = Q⁻¹ [z − a; w]`` (:func:`_balance_map`)."""
+    u, log_jac = _gnomonic(theta[:2], kw)
+    z_dir, log_jac_z = _gnomonic(theta[3:5], kw)
+    z = -jnp.exp(theta[2]) * z_dir
+    xi = kw["q_inv"] @ jnp.concatenate([z - kw["z_offset"], theta[5:8]])
+    pi = kw["pi_mean"] + kw["pi_chol"] @ xi
+    # d³z = |z|³ d log|z| dΩ; π linear in ξ: the physical truncation is an explicit factor
+    return u, pi, xi, (log_jac + log_jac_z + 3.0 * theta[2]
+                       + _log_physical_factor(pi, kw["margin_scale"]))
+
+
+def _physical_margin(pi):
+    """Smallest eigenvalue (kg m²) of ``½ tr(I) 1 − I``: positive exactly when ``I`` is positive
+    definite and obeys the triangle inequalities (the smallest second moment of the mass)."""
+    i_m = inertia_matrix(pi)
+    return jnp.linalg.eigvalsh(0.5 * jnp.trace(i_m) * jnp.eye(3) - i_m)[0]
+
+
+def _log_physical_factor(pi, scale):
+    """``log(1 − exp(−m/s))`` for margin ``m > 0`` (:func:`_physical_margin`), ``−∞`` for
+    ``m ≤ 0``: the physical truncation of the inertia prior, made smooth so that NUTS
+    trajectories are turned back before the boundary instead of diverging on a cliff there (with
+    a hard cut, ``rwa4_rwa`` gave 69 divergences in 4000 draws; with ``s`` = 1/12 of the margin,
+    ``rwa4_rcs`` still gave 1). ``s`` = 1/4 of the prior mean's margin: the factor is 0.98 at the
+    mean, 0.86 half-way to the boundary — a stated softening of the prior near the boundary."""
+    m = _physical_margin(pi)
+    safe = jnp.where(m > 0, m, 1.0)
+    return jnp.where(m > 0, jnp.log(-jnp.expm1(-safe / scale)), -jnp.inf)
+
+
+def _log_density_with(physical, theta, kw):
+    u, pi, xi, log_jac = physical(theta, kw)
+    # Gaussian inertia prior (physical truncation in the chart's Jacobian term); uniform u on
+    # the sphere (chart Jacobian), times the articulation-cone factor when chosen
+    log_prior = -0.5 * jnp.sum(xi**2) + log_jac
+    angle = jnp.arccos(jnp.clip(u[2], -1.0, 1.0))
+    log_prior += -0.5 * kw["cone_weight"] * ((angle - kw["cone_angle"]) / kw["cone_sd"]) ** 2
     data = {k: kw[k] for k in _DATA_KEYS}
-    return log_prior + _loglik(u, pi, log_sigma, **data)
+    return log_prior + _loglik(u, pi, kw["log_noise_hat"], **data)
+
+
+def _log_density_rcs(theta, kw):
+    """Log prior + log likelihood, RCS chart (module docstring)."""
+    return _log_density_with(_physical_rcs, theta, kw)
+
+
+def _log_density_rwa(theta, kw):
+    """Log prior + log likelihood, direct chart (module docstring)."""
+    return _log_density_with(_physical_rwa, theta, kw)
 
 
 _DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov")
-
-
-def _model(*, centre, tril, cone: bool, **kw):
-    w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), centre.shape))
-    theta = centre + tril @ w
-    numpyro.factor("log_density", _log_density(theta, kw, cone))
-    u, pi, log_sigma, _, _ = _physical(theta, kw)
-    for i, name in enumerate(U4_NAMES):
-        numpyro.deterministic(name, u[i])
-    for i, name in enumerate(INERTIA_NAMES):
-        numpyro.deterministic(name, pi[i])
+_LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
+_PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
 
 
 @lru_cache(maxsize=None)
-def rwa4_model(prior: str = "uniform"):
-    """The NumPyro model (one function object per prior, so compiled samplers are reused).
+def rwa4_model(chart: str = "rwa"):
+    """The NumPyro model of a chart (``Rwa4Problem.chart``); one function object per chart, so
+    compiled samplers are reused.
 
-    Call it with ``**Rwa4Problem.model_kwargs``. Posterior sites: ``u4_x``, ``u4_y``, ``u4_z``,
-    ``Ixx … Iyz`` (kg m²), ``sigma_omega``, ``sigma_rho`` (rad/s), ``sigma_theta`` (rad) and the
-    sampler's whitened ``w`` (``θ = centre + tril w``, ``θ = (y, inertia_z, noise_z)``).
+    Call it with ``**Rwa4Problem.model_kwargs``. Posterior sites: ``u4_x``, ``u4_y``, ``u4_z``
+    (the solved wheel's axis), ``Ixx … Iyz`` (kg m²) and the sampler's whitened ``w``
+    (``θ = centre + tril w``).
     """
-    cone = prior == "cone"
+    log_density, physical = _LOG_DENSITY[chart], _PHYSICAL[chart]
 
-    def model(**kwargs):
-        return _model(cone=cone, **kwargs)
+    def model(*, centre, tril, **kw):
+        w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (),
+                                                     centre.shape))
+        theta = centre + tril @ w
+        numpyro.factor("log_density", log_density(theta, kw))
+        u, pi, _, _ = physical(theta, kw)
+        for i, name in enumerate(U4_NAMES):
+            numpyro.deterministic(name, u[i])
+        for i, name in enumerate(INERTIA_NAMES):
+            numpyro.deterministic(name, pi[i])
 
-    model.__name__ = f"rwa4_model_{prior}"
+    model.__name__ = f"rwa4_model_{chart}"
     return model
 
 
@@ -483,8 +595,8 @@ def _sample_u4(key, n: int, cone: bool) -> np.ndarray:
 
 
 def sample_rwa4_prior(key, problem: Rwa4Problem, n: int) -> dict[str, np.ndarray]:
-    """``n`` draws of ``u4``, the inertia entries and the noise scales from the stated prior."""
-    k_u, k_i, k_s = jax.random.split(key, 3)
+    """``n`` draws of ``u4`` and the inertia entries from the stated prior."""
+    k_u, k_i = jax.random.split(key)
     u = _sample_u4(k_u, n, problem.prior == "cone")
     out = {name: u[:, i] for i, name in enumerate(U4_NAMES)}
     chol = np.linalg.cholesky(np.asarray(problem.inertia.cov))
@@ -496,9 +608,6 @@ def sample_rwa4_prior(key, problem: Rwa4Problem, n: int) -> dict[str, np.ndarray
         r += 1
     pi = np.concatenate(kept)[:n]
     out.update({name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)})
-    ls = np.log(problem.noise_hat) + NOISE_PRIOR_LOG_SD * np.asarray(
-        jax.random.normal(k_s, (n, 3)))
-    out.update({name: np.exp(ls[:, i]) for i, name in enumerate(NOISE_NAMES)})
     return out
 
 
@@ -519,27 +628,31 @@ class Rwa4Posterior(NamedTuple):
 def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
              pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
              inertia: InertiaGaussian | None = None, settings=None,
-             prior_draws: int = 500) -> Rwa4Posterior:
-    """Posterior of the RWA4 spin axis (unit vector, body axes) with the inertia sampled jointly.
+             prior_draws: int = 500, wheel: str = WHEEL) -> Rwa4Posterior:
+    """Posterior of a wheel's spin axis (unit vector, body axes; default RWA4) with the inertia
+    sampled jointly.
 
     Parameters
     ----------
     key : jax.random key.
     tel : the calibration telemetry.
-    spacecraft : wheels and the inertia prior (its RWA4 axis is not used).
+    spacecraft : wheels and the inertia prior (the solved wheel's axis is not used).
     method : ``"rcs"`` (Brown Eq 1) or ``"rwa"`` (Brown Eq 3).
     pairs : ``[(A, B), …]`` windows (s); detected from quiet periods when ``None``.
     prior : ``"uniform"`` on the sphere or ``"cone"`` (articulation cone).
     inertia : Gaussian inertia prior (e.g. :func:`~cassini_bayes.inference.thrust.
         inertia_from_run`); default the spacecraft model's knowledge requirements.
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
+    wheel : the wheel solved for (``u4_*`` is its axis), e.g. ``"RWA1"`` for Brown's flight
+        test with RWA2 and RWA3 known.
 
     Returns
     -------
     Rwa4Posterior
-        ``idata`` groups ``posterior`` (``u4_*``, ``Ixx … Iyz``, noise scales, sampler
-        coordinates), ``sample_stats``, ``prior``, ``observed_data`` (window samples: ``omega``
-        rad/s, ``rho4`` rad/s, ``group``), ``constant_data`` (baseline axis, windows, R).
+        ``idata`` groups ``posterior`` (``u4_*``, ``Ixx … Iyz``, sampler coordinates ``w``),
+        ``sample_stats``, ``prior``, ``observed_data`` (window means: ``h_known_mean`` N m s,
+        ``rho4_attitude_mean`` rad/s, ``n_samples``), ``constant_data`` (baseline axis,
+        windows, spin change, inertia prior).
     """
     import xarray as xr
 
@@ -547,12 +660,12 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
 
     settings = settings or SamplerSettings()
     problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
-                           inertia=inertia)
+                           inertia=inertia, wheel=wheel)
     kw = problem.model_kwargs
-    coords = {"w_dim": np.arange(12)}
+    coords = {"w_dim": np.arange(_DIM)}
     dims = {"w": ["w_dim"]}
-    idata = run_nuts(key, rwa4_model(prior), model_kwargs=kw, settings=settings, coords=coords,
-                     dims=dims, prior=lambda k, n: sample_rwa4_prior(k, problem, n),
+    idata = run_nuts(key, rwa4_model(problem.chart), model_kwargs=kw, settings=settings,
+                     coords=coords, dims=dims, prior=lambda k, n: sample_rwa4_prior(k, problem, n),
                      prior_draws=prior_draws)
     post = idata.posterior
     draws = np.stack([post[n].values.ravel() for n in U4_NAMES], -1)
@@ -571,7 +684,6 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
         {"baseline": ("axis", problem.baseline),
          "windows": (("pair", "edge"), win, {"units": "s"}),
          "spin_change_rpm": ("pair", problem.spin_change_rpm),
-         "radius": ((), problem.radius),
          "prior_inertia_mean": ("param", np.asarray(problem.inertia.mean)),
          "prior_inertia_sd": ("param", np.sqrt(np.diag(np.asarray(problem.inertia.cov))))},
         coords={"axis": ["x", "y", "z"], "pair": np.arange(win.shape[0]),

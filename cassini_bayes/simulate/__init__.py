@@ -6,7 +6,8 @@ Public API (re-exported from the private modules):
 * :func:`simulate` ``(key, scenario) -> SimResult`` — truth, noisy telemetry, pulse log;
 * :func:`simulate_batch` ``(keys, scenario, truth=None) -> SimArrays`` — replicates in one
   compiled, vmapped call (truth parameters may be batched too, for SBC);
-* :class:`TruthParams`, :func:`truth_params`, :func:`quiet_windows`.
+* :class:`TruthParams`, :func:`truth_params`, :func:`quiet_windows`;
+* :class:`FlexMode` — the optional flexible/slosh mode (hybrid coordinates).
 """
 
 from cassini_bayes.simulate.run import (
@@ -23,11 +24,13 @@ from cassini_bayes.simulate.run import (
     trace_count,
     truth_params,
 )
-from cassini_bayes.simulate.scenario import Noise, Scenario, load_scenario, scenario_from_dict
+from cassini_bayes.simulate.scenario import (FlexMode, Noise, Scenario, load_scenario,
+                                            scenario_from_dict)
 from cassini_bayes.simulate.sensors import NoiseParams
 
 __all__ = [
     "PULSE_RING",
+    "FlexMode",
     "Noise",
     "NoiseParams",
     "Scenario",

@@ -16,7 +16,17 @@ the step, ``F [g(t+dt − t_on) − g(t − t_on)]`` with ``g`` = :func:`pulse_i
 The controllers see the true state (the on-board attitude estimate is taken as perfect; its
 errors are far below the star-tracker noise put on the telemetry), while they use the *prior*
 model's inertia and the *believed* wheel axes. Sensor noise is added to the samples afterwards,
-so the noisy telemetry and the truth come from one trajectory.
+so the noisy telemetry and the truth come from one trajectory; with time-tag jitter the noisy
+telemetry carries the jittered times (``SimArrays.t_meas``), the truth the true ones.
+
+Flexible or slosh mode (issue 7, :class:`~cassini_bayes.simulate.scenario.FlexMode`): in hybrid
+coordinates the mode is a momentum store exactly like a wheel — spin inertia ``|δ|²`` about
+``δ/|δ|``, relative rate ``η̇/|δ|`` and absolute momentum ``p = |δ| (η̇ + δ·ω)`` — whose
+"motor torque" is its spring and damper, ``ṗ = −|δ| (Ω² η + 2ζΩ η̇)``. It rides in the
+integrator as one extra wheel (so ``H_N`` stays exactly conserved), the torque evaluated at
+``η + η̇ dt/2`` and ``η`` advanced by the trapezoid rule: a second-order, area-preserving step,
+stable for ``Ω dt < 2`` (the scenario asks ``Ω dt ≤ 0.5``). The mode never shows in the wheel
+telemetry.
 """
 
 from __future__ import annotations
@@ -35,7 +45,7 @@ from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.simulate import controllers as ctl
 from cassini_bayes.simulate.scenario import Scenario
-from cassini_bayes.simulate.sensors import NoiseParams, measure
+from cassini_bayes.simulate.sensors import NoiseParams, measure, time_tags
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_params", "simulate",
@@ -63,6 +73,8 @@ class TruthParams(NamedTuple):
     torque_body_nm : (3,) constant external torque, body axes, N m.
     torque_inertial_rate_nm_s : (3,) slow linear change of the inertial torque, N m/s
         (``T_N(t) = T_N + Ṫ_N t``, integrated exactly).
+    flex_freq_rad_s, flex_damping, flex_coupling : the flexible/slosh mode's ``Ω`` (rad/s), ``ζ``
+        and ``δ`` (3,) kg^½ m (zeros, and ignored, when the scenario has no mode).
     """
 
     inertia: Array
@@ -73,6 +85,9 @@ class TruthParams(NamedTuple):
     torque_inertial_nm: Array
     torque_body_nm: Array
     torque_inertial_rate_nm_s: Array
+    flex_freq_rad_s: Array
+    flex_damping: Array
+    flex_coupling: Array
 
 
 class SimArrays(NamedTuple):
@@ -89,6 +104,8 @@ class SimArrays(NamedTuple):
     pointing_error : (n, 3) attitude error w.r.t. the command, rad.
     pulse_units : (n_steps, 8) int8 widths (units of 1/8 s) commanded at each step (empty when
         the scenario fires no thrusters).
+    t_meas : (n,) recorded (time-tag-jittered) sample times, s; equal to ``t`` without jitter.
+    flex_eta : (n,) modal coordinate ``η`` of the flexible/slosh mode, kg^½ m (zeros without).
     """
 
     t: Array
@@ -105,6 +122,8 @@ class SimArrays(NamedTuple):
     on_times: Array
     pointing_error: Array
     pulse_units: Array
+    t_meas: Array
+    flex_eta: Array
 
 
 @dataclass(frozen=True)
@@ -143,12 +162,14 @@ class _Config:
     max_units: int
     min_off_s: float
     wheel_gain: float
+    flex: bool
 
 
 def truth_params(scenario: Scenario) -> TruthParams:
     """The scenario's true parameters as arrays."""
     sc = scenario.truth
     on = np.array(scenario.wheels_on, float)
+    fm = scenario.flex
     return TruthParams(
         inertia=jnp.asarray(inertia_vector(sc.inertia)),
         wheel_axes=jnp.asarray(sc.wheel_axes),
@@ -158,6 +179,9 @@ def truth_params(scenario: Scenario) -> TruthParams:
         torque_inertial_nm=jnp.asarray(scenario.external_torque_inertial_nm),
         torque_body_nm=jnp.asarray(scenario.external_torque_body_nm),
         torque_inertial_rate_nm_s=jnp.asarray(scenario.external_torque_inertial_rate_nm_s),
+        flex_freq_rad_s=jnp.asarray(0.0 if fm is None else 2.0 * np.pi * fm.freq_hz),
+        flex_damping=jnp.asarray(0.0 if fm is None else fm.damping),
+        flex_coupling=jnp.asarray(np.zeros(3) if fm is None else fm.coupling),
     )
 
 
@@ -168,7 +192,8 @@ def noise_params(scenario: Scenario) -> NoiseParams:
                          (n.gyro_rad_s, n.star_tracker_rad, n.tach_quantum_rpm,
                           n.tach_noise_rpm)),
                        gyro_bias_rad_s=jnp.asarray(n.gyro_bias_rad_s, float),
-                       gyro_scale_factor=jnp.asarray(n.gyro_scale_factor, float))
+                       gyro_scale_factor=jnp.asarray(n.gyro_scale_factor, float),
+                       time_tag_jitter_s=jnp.asarray(float(n.time_tag_jitter_s)))
 
 
 def _config(s: Scenario) -> _Config:
@@ -178,7 +203,8 @@ def _config(s: Scenario) -> _Config:
         thrusters=s.uses_thrusters, on=s.wheels_on, kp=wn * wn, kd=2 * z * wn,
         rate_gain_s=s.rcs.rate_gain_s, width_gain=s.rcs.width_gain_s_per_rad,
         max_units=int(round(s.rcs.max_pulse_s / ctl.COMMAND_RESOLUTION_S)),
-        min_off_s=s.rcs.min_off_s, wheel_gain=s.rcs.wheel_rate_gain_per_s)
+        min_off_s=s.rcs.min_off_s, wheel_gain=s.rcs.wheel_rate_gain_per_s,
+        flex=s.flex is not None)
 
 
 def _plan(s: Scenario) -> np.ndarray:
@@ -236,23 +262,42 @@ def _controller_arrays(s: Scenario) -> dict[str, Array]:
     }
 
 
+def _plant(truth: TruthParams, cfg: _Config):
+    """The true plant — with the flexible/slosh mode as one more wheel when the scenario has one
+    (module docstring) — and ``|δ|`` (1.0 without a mode)."""
+    inertia = inertia_matrix(truth.inertia)
+    if not cfg.flex:
+        return dynamics.make_plant(inertia, truth.wheel_axes, truth.wheel_inertias), 1.0
+    d = truth.flex_coupling
+    dn = jnp.sqrt(jnp.sum(d * d))
+    axis = d / jnp.where(dn > 0, dn, 1.0)
+    plant = dynamics.make_plant(inertia, jnp.concatenate([truth.wheel_axes, axis[None]], 0),
+                                jnp.concatenate([truth.wheel_inertias, (dn * dn)[None]]))
+    return plant, dn
+
+
 def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg: _Config):
     _TRACES[0] += 1
     dt = cfg.dt
     k = truth.wheel_axes.shape[0]
     on = jnp.asarray(cfg.on)
-    plant = dynamics.make_plant(inertia_matrix(truth.inertia), truth.wheel_axes,
-                                truth.wheel_inertias)
-    state0 = dynamics.state_from_rates(carr["q0"], carr["w0"], carr["rho0"], plant)
+    plant, d_norm = _plant(truth, cfg)
+    rho0 = jnp.concatenate([carr["rho0"], jnp.zeros(1)]) if cfg.flex else carr["rho0"]
+    state0 = dynamics.state_from_rates(carr["q0"], carr["w0"], rho0, plant)
     td, tr, tf = truth.tau_s[0], truth.tau_s[1], truth.tau_s[2]
+    w_flex, z_flex = truth.flex_freq_rad_s, truth.flex_damping
+
+    def eta_rate(state, omega):
+        # η̇ = |δ| × the mode's "wheel rate" ρ_mode = η̇ / |δ|
+        return d_norm * dynamics.wheel_rates(state, plant, omega)[k]
 
     def one_step(carry, xs):
-        state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b, cum_n = carry
+        state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b, cum_n, eta = carry
         i, row = xs
         t = i * dt
         cmd = row[:10]
         omega = dynamics.body_rate(state, plant)
-        rho = dynamics.wheel_rates(state, plant, omega)
+        rho = dynamics.wheel_rates(state, plant, omega)[:k]
         if cfg.control == "rwa":
             u = ctl.rwa_wheel_torques(state.q, omega, rho, cmd, carr["inertia_ctrl"],
                                       carr["axes_believed"], carr["axes_pinv"],
@@ -303,9 +348,17 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
             out_units = jnp.zeros((8,), jnp.int8)[:0]
         # linear-in-time inertial torque: its mean over the step is its value at mid-step
         t_n = truth.torque_inertial_nm + truth.torque_inertial_rate_nm_s * (t + 0.5 * dt)
+        if cfg.flex:
+            # The mode's spring and damper, ṗ = −|δ| (Ω² η + 2ζΩ η̇), at η + η̇ dt/2.
+            eta_dot = eta_rate(state, omega)
+            u_mode = -d_norm * (w_flex * w_flex * (eta + 0.5 * dt * eta_dot)
+                                + 2.0 * z_flex * w_flex * eta_dot)
+            u = jnp.concatenate([u, u_mode[None]])
         state, imp_n = dynamics.step(state, plant, dt, u, body_imp, t_n)
+        if cfg.flex:
+            eta = eta + 0.5 * dt * (eta_dot + eta_rate(state, dynamics.body_rate(state, plant)))
         carry = (state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b + body_imp,
-                 cum_n + imp_n)
+                 cum_n + imp_n, eta)
         return carry, out_units
 
     def one_sample(carry, xs):
@@ -317,23 +370,26 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
     def _observe(carry, cmd):
         state = carry[0]
         omega = dynamics.body_rate(state, plant)
-        rho = jnp.where(on, dynamics.wheel_rates(state, plant, omega), jnp.nan)
+        rho = jnp.where(on, dynamics.wheel_rates(state, plant, omega)[:k], jnp.nan)
         err = ctl.attitude_error(state.q, cmd[:4])
         return (state.q, omega, rho, state.h_inertial, carry[8], carry[7], carry[6], carry[5],
-                err)
+                err, carry[9])
 
     z8 = jnp.zeros(8)
     carry0 = (state0, jnp.full((8, PULSE_RING), -1e9), jnp.zeros((8, PULSE_RING)),
-              jnp.zeros((8, PULSE_RING)), jnp.full(8, -1.0), z8, z8, jnp.zeros(3), jnp.zeros(3))
+              jnp.zeros((8, PULSE_RING)), jnp.full(8, -1.0), z8, z8, jnp.zeros(3), jnp.zeros(3),
+              jnp.zeros(()))
     obs0 = _observe(carry0, carr["cmd_samples"][0])
     _, (obs, units) = jax.lax.scan(one_sample, carry0, (jnp.arange(cfg.n_out), plan,
                                                          carr["cmd_samples"][1:]))
     cols = [jnp.concatenate([o0[None], o], 0) for o0, o in zip(obs0, obs)]
-    q, omega, rho, h_n, imp_n, imp_b, thr, on_t, err = cols
+    q, omega, rho, h_n, imp_n, imp_b, thr, on_t, err, eta = cols
     q_m, w_m, rho_m = measure(key, q, omega, rho, noise)
     t = jnp.arange(cfg.n_out + 1) * (cfg.sps * dt)
+    t_m = time_tags(jax.random.fold_in(key, 1), t, noise)   # own stream: q/ω/ρ noise unchanged
     return SimArrays(t, q, omega, rho, q_m, w_m, rho_m, h_n, imp_n, imp_b, thr, on_t, err,
-                     units.reshape(-1, 8) if cfg.thrusters else jnp.zeros((0, 8), jnp.int8))
+                     units.reshape(-1, 8) if cfg.thrusters else jnp.zeros((0, 8), jnp.int8),
+                     t_m, eta)
 
 
 _core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))
@@ -431,7 +487,7 @@ def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -
     arr = jax.tree_util.tree_map(np.asarray, simulate_arrays(key, scenario, params))
     src = f"<simulated {scenario.name}>"
     tel_truth = _telemetry(scenario, arr.t, arr.q, arr.omega, arr.wheel_rates, arr.on_times, src)
-    tel = _telemetry(scenario, arr.t, arr.q_meas, arr.omega_meas, arr.wheel_rates_meas,
+    tel = _telemetry(scenario, arr.t_meas, arr.q_meas, arr.omega_meas, arr.wheel_rates_meas,
                      arr.on_times, src)
     return SimResult(scenario, tel_truth, tel, pulse_log(arr, scenario), arr, params)
 

@@ -26,7 +26,10 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [[deadband]]     t_s, deadband_mrad = [3]
     [[pulse]]        t_on_s, thruster = "Z1"…"Y4", width_s
     [noise]     gyro_rad_s, star_tracker_rad, tach_quantum_rpm, tach_noise_rpm,
-                gyro_bias_rad_s = [3], gyro_scale_factor = [3]  (ω_meas = (1 + s) ω + b + noise)
+                gyro_bias_rad_s = [3], gyro_scale_factor = [3]  (ω_meas = (1 + s) ω + b + noise),
+                time_tag_jitter_s (sd of each sample's time-tag error, ≤ sample_period_s / 20)
+    [flex_mode] freq_hz, damping, coupling = [3] (kg^½ m): one flexible or slosh mode
+                (:class:`FlexMode`; off when the section is absent)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
 """
 
@@ -46,7 +49,7 @@ from cassini_bayes.spacecraft import (Spacecraft, check_physical_inertia, load_s
                                       tilted_axis)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
 
-__all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "Window",
+__all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "FlexMode", "Window",
            "RwaControl", "RcsControl", "Scenario", "load_scenario", "scenario_from_dict",
            "scenario_path"]
 
@@ -106,6 +109,7 @@ class Noise:
     tach_noise_rpm : white noise on wheel rates before quantization, rpm.
     gyro_bias_rad_s : constant gyro bias per body axis, rad/s (issue 7; 0 = none).
     gyro_scale_factor : gyro scale-factor error per body axis, fraction (0 = none).
+    time_tag_jitter_s : sd of the white error of each sample's recorded time, s (0 = none).
     """
 
     gyro_rad_s: float = 0.0
@@ -114,6 +118,34 @@ class Noise:
     tach_noise_rpm: float = 0.0
     gyro_bias_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gyro_scale_factor: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    time_tag_jitter_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class FlexMode:
+    """One flexible-appendage or propellant-slosh mode in hybrid coordinates (issue 7).
+
+    Modal coordinate ``η`` (unit modal mass, kg^½ m), body rate ``ω``, wheels ``H_w``::
+
+        H = I ω + H_w + δ η̇                       (total body-axis momentum)
+        η̈ + 2 ζ Ω η̇ + Ω² η + δ · ω̇ = 0            (the mode, cantilevered on the body)
+
+    ``I`` is the whole spacecraft's inertia with the appendage or propellant frozen (what the
+    calibrations estimate: ``η̇ = 0`` gives Feldman & Lee Eq 3); ``I − δ δᵀ`` must stay positive
+    definite. For a spring-mass (or pendulum) slosh mass ``m`` at ``r`` from the centre of mass
+    moving along the unit ``e``, ``δ = √m r × e``; for a cantilevered boom, ``δ`` is its modal
+    momentum coefficient. Cassini's magnetometer boom: 0.7 Hz, ζ 0.2-1 %; the RPWS antennas:
+    0.13 Hz, ζ 0.2 % (Feldman & Lee §II). Held free (no body rotation) the body-coupled mode rings
+    at ``Ω / √(1 − δᵀ I⁻¹ δ)``.
+
+    freq_hz : ``Ω / 2π``, the cantilevered frequency, Hz.
+    damping : ``ζ``, fraction of critical.
+    coupling : ``δ`` (3,), body axes, kg^½ m.
+    """
+
+    freq_hz: float
+    damping: float
+    coupling: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -175,6 +207,7 @@ class Scenario:
     deadbands: tuple[DeadbandChange, ...] = ()
     pulses: tuple[PulseCommand, ...] = ()
     noise: Noise = field(default_factory=Noise)
+    flex: FlexMode | None = None
     windows: tuple[Window, ...] = ()
     truth_model_path: str = ""
     prior_model_path: str = ""
@@ -306,11 +339,33 @@ def _check_time(r: _Reader, key: str, t: float, duration: float) -> None:
         raise r.err(key, f"= {t} s lies outside the run [0, {duration}] s")
 
 
+def _flex_mode(top: _Reader, inertia: np.ndarray, dt: float, src: str) -> FlexMode | None:
+    """The optional ``[flex_mode]`` section, checked against the truth inertia and the step."""
+    if not top.has("flex_mode"):
+        return None
+    fm = top.sub("flex_mode", {"freq_hz", "damping", "coupling"})
+    f = fm.num("freq_hz", positive=True)
+    zeta = fm.num("damping", nonneg=True)
+    if zeta >= 1.0:
+        raise fm.err("damping", f"= {zeta} must be below 1 (a fraction of critical damping)")
+    if 2.0 * np.pi * f * dt > 0.5:
+        raise fm.err("freq_hz", f"= {f} Hz is too fast for run.dt_s = {dt} s (need 2π f dt <= "
+                                "0.5); shorten dt_s")
+    delta = fm.vec("coupling")
+    if not np.any(delta):
+        raise fm.err("coupling", "must not be zero (drop [flex_mode] to switch the mode off)")
+    share = float(delta @ np.linalg.solve(inertia, delta))
+    if share >= 0.5:
+        raise fm.err("coupling", f"is too large for the truth inertia (δᵀ I⁻¹ δ = {share:.3g}; "
+                                 "must be below 0.5)")
+    return FlexMode(f, zeta, tuple(float(x) for x in delta))
+
+
 def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     """Build and validate a :class:`Scenario` from the TOML schema (as a dict)."""
     top = _Reader(d, "", src, {"name", "description", "seed", "run", "truth", "prior", "initial",
                                "rwa_controller", "rcs_controller", "slew", "wheel_ramp",
-                               "deadband", "pulse", "noise", "window"})
+                               "deadband", "pulse", "noise", "window", "flex_mode"})
     run = top.sub("run", {"duration_s", "dt_s", "sample_period_s", "control"}, required=True)
     duration = run.num("duration_s", positive=True)
     dt = run.num("dt_s", positive=True)
@@ -493,16 +548,22 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
                               "resolution)")
 
     nz = top.sub("noise", {"gyro_rad_s", "star_tracker_rad", "tach_quantum_rpm",
-                           "tach_noise_rpm", "gyro_bias_rad_s", "gyro_scale_factor"})
+                           "tach_noise_rpm", "gyro_bias_rad_s", "gyro_scale_factor",
+                           "time_tag_jitter_s"})
     gyro_scale = nz.vec("gyro_scale_factor", default=[0.0, 0.0, 0.0])
     if np.any(np.abs(gyro_scale) >= 0.1):
         raise nz.err("gyro_scale_factor", "is a small fractional error (|s| < 0.1)")
+    jitter = nz.num("time_tag_jitter_s", 0.0, nonneg=True)
+    if jitter > period / 20.0:
+        raise nz.err("time_tag_jitter_s", f"= {jitter} s must be at most sample_period_s / 20 = "
+                                          f"{period / 20.0} s (time tags must stay increasing)")
     noise = Noise(nz.num("gyro_rad_s", 0.0, nonneg=True),
                   nz.num("star_tracker_rad", 0.0, nonneg=True),
                   nz.num("tach_quantum_rpm", 0.0, nonneg=True),
                   nz.num("tach_noise_rpm", 0.0, nonneg=True),
                   tuple(float(x) for x in nz.vec("gyro_bias_rad_s", default=[0.0, 0.0, 0.0])),
-                  tuple(float(x) for x in gyro_scale))
+                  tuple(float(x) for x in gyro_scale), jitter)
+    flex = _flex_mode(top, truth.inertia, dt, src)
     windows = []
     for r in top.items("window", {"name", "t0_s", "t1_s"}):
         t0, t1 = r.num("t0_s"), r.num("t1_s")
@@ -525,7 +586,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         external_torque_inertial_rate_nm_s=tuple(ext_rate),
         slews=tuple(slews), wheel_ramps=tuple(ramps),
         deadbands=tuple(sorted(deadbands, key=lambda c: c.t_s)),
-        pulses=tuple(pulses), noise=noise, windows=tuple(windows),
+        pulses=tuple(pulses), noise=noise, flex=flex, windows=tuple(windows),
         truth_model_path=truth_path, prior_model_path=prior_path,
     )
 

@@ -5,6 +5,8 @@
 * attitude (star tracker / attitude estimate): a small random rotation per sample,
   ``q_meas = small_rotation_quat(δθ) ⊗ q``, ``δθ ~ N(0, σ²)`` per axis, rad;
 * wheel tachometers: white noise (rpm) and quantization to ``tach_quantum_rpm``;
+* time tags (issue 7): each sample's recorded time is its true time plus white noise of sd
+  ``time_tag_jitter_s`` (s), ``t_rec = t + σ_t ε``; the values are those at the true time;
 * thruster on-time counters: the commanded on-time accumulated up to each sample. The counters
   tick at 10 Hz (0.1 s resolution); scenarios sample on multiples of 0.1 s and pulses start on the
   1/8 s command grid, so the reported counters are the exact commanded on-times at the sample.
@@ -23,7 +25,7 @@ from jax import Array
 
 from cassini_bayes.frames import quat_multiply, quat_normalize, small_rotation_quat
 
-__all__ = ["NoiseParams", "measure"]
+__all__ = ["NoiseParams", "measure", "time_tags"]
 
 RPM_PER_RAD_S = 60.0 / (2.0 * jnp.pi)
 
@@ -37,6 +39,7 @@ class NoiseParams(NamedTuple):
     tach_noise_rpm: Array
     gyro_bias_rad_s: Array | float = 0.0       # (3,) constant gyro bias, rad/s
     gyro_scale_factor: Array | float = 0.0     # (3,) gyro scale-factor error (fraction)
+    time_tag_jitter_s: Array | float = 0.0     # sd of each sample's time-tag error, s
 
 
 def measure(key: Array, q: Array, omega: Array, wheel_rates: Array, noise: NoiseParams):
@@ -57,3 +60,12 @@ def measure(key: Array, q: Array, omega: Array, wheel_rates: Array, noise: Noise
     safe = jnp.where(quantum > 0, quantum, 1.0)
     rpm = jnp.where(quantum > 0, jnp.round(rpm / safe) * safe, rpm)
     return q_meas, w_meas, rpm / RPM_PER_RAD_S
+
+
+def time_tags(key: Array, t: Array, noise: NoiseParams) -> Array:
+    """Recorded sample times ``t + σ_t ε`` (s) of true times ``t`` (n,), ``ε ~ N(0, 1)``.
+
+    The scenario keeps ``σ_t`` below 1/20 of the telemetry period, so the tags stay increasing
+    (a swap needs a 14-sigma draw).
+    """
+    return t + noise.time_tag_jitter_s * jax.random.normal(key, t.shape, t.dtype)
