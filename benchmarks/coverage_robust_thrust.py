@@ -1,4 +1,4 @@
-"""Coverage campaign: robust vs idealised thrust posteriors on biasing events with real-world errors.
+"""Coverage campaign: robust vs idealised thrust posteriors on biasing events with real errors.
 
 For each seed: draw the truth's sensor and actuator errors at the scale of the robust model's
 prior (the spacecraft model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias and scale

@@ -119,7 +119,8 @@ def test_fsds_thrust_covers_truth(fsds):
     from cassini_bayes.inference.thrust import fit_thrust
 
     sc, ev = fsds
-    post = fit_thrust(jax.random.key(1), [ev], sc.prior, mode="mean", settings=_settings())
+    post = fit_thrust(jax.random.key(1), [ev], sc.prior, mode="mean", robust=False,
+                      settings=_settings())
     f = post.idata.posterior["F"].values.ravel()
     q05, q95 = np.quantile(f, [0.05, 0.95])
     assert q05 < 0.75 < q95
@@ -133,7 +134,8 @@ def test_unfired_thrusters_are_prior_dominated(fsds):
     from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, fit_thrust
 
     sc, ev = fsds
-    post = fit_thrust(jax.random.key(2), [ev], sc.prior, mode="thruster", settings=_settings())
+    post = fit_thrust(jax.random.key(2), [ev], sc.prior, mode="thruster", robust=False,
+                      settings=_settings())
     assert list(post.problem.fired) == [False] * 5 + [True, False, True]
     for name in ("F_Z1", "F_Z2", "F_Z3", "F_Z4", "F_Y1", "F_Y3"):
         sd = np.log(post.idata.posterior[name].values.ravel()).std()
@@ -151,8 +153,9 @@ def test_pooled_events_learn_tau_fall_better(days):
     from cassini_bayes.inference.thrust import fit_thrust
 
     (sc, ev1), (_, ev2) = days
-    one = fit_thrust(jax.random.key(3), [ev1], sc.prior, settings=_settings())
-    both = fit_thrust(jax.random.key(3), [ev1, ev2], sc.prior, settings=_settings())
+    one = fit_thrust(jax.random.key(3), [ev1], sc.prior, robust=False, settings=_settings())
+    both = fit_thrust(jax.random.key(3), [ev1, ev2], sc.prior, robust=False,
+                      settings=_settings())
     sd_one = float(one.idata.posterior["tau_fall"].std())
     sd_both = float(both.idata.posterior["tau_fall"].std())
     assert sd_both < sd_one
@@ -167,7 +170,7 @@ def test_default_settings_converge(fsds):
     from cassini_bayes.inference.thrust import fit_thrust
 
     sc, ev = fsds
-    post = fit_thrust(jax.random.key(4), [ev], sc.prior, settings=SamplerSettings())
+    post = fit_thrust(jax.random.key(4), [ev], sc.prior, robust=False, settings=SamplerSettings())
     d = post.diagnostics
     assert d.max_r_hat <= 1.01 and d.min_ess_bulk >= 400 and d.divergences == 0
 

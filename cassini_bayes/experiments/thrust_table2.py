@@ -130,7 +130,8 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     seed, fkey = fit_seed(k_pool)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        post = fit_thrust(fkey, events, sc, mode=settings["mode"], settings=sampler(settings))
+        post = fit_thrust(fkey, events, sc, mode=settings["mode"], robust=False,  # clean events
+                          settings=sampler(settings))
     fnames = list(post.problem.names)
     fd = _draws(post.idata, fnames)
     td = _draws(post.idata, TAU_NAMES)
@@ -167,7 +168,8 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
             _, ekey = fit_seed(jax.random.fold_in(k_each, i))
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                pe = fit_thrust(ekey, [ev], sc, mode="mean", settings=sampler(settings))
+                pe = fit_thrust(ekey, [ev], sc, mode="mean", robust=False,
+                                settings=sampler(settings))
             f = _draws(pe.idata, ["F"])[:, 0]
             results["events"][name].update(
                 post_mean_n=float(f.mean()), post_sd_n=float(f.std(ddof=1)),

@@ -60,7 +60,7 @@ Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre`
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
 density is exact in ``θ``; the maps only condition the geometry.
 
-Robust model (``robust=True``, the CLI default; Lee 003 §4.1, Psiaki 2005)
+Robust model (``robust=True``, the default; Lee 003 §4.1, Psiaki 2005)
 -------------------------------------------------------------------------
 Nuisance parameters ``ν`` with zero-mean Normal priors from the spacecraft model's knowledge
 sections (:func:`cassini_bayes.inference.nuisance.nuisance_layout`, the same layout and priors as
@@ -72,8 +72,8 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   ``∫ b × H_w dt = −[C_t]_× b``, ``C_t = ∫_{t_0}^{t} H_w ds`` (the constant ``I b`` is absorbed by
   the offset);
 * gyro scale factors ``s``: ``+ I diag(ω_meas) s``;
-* common wheel spin-inertia error ``c``: the true wheel momentum is ``(1 + c) H_w``, so the left side
-  computed with the model's wheels is ``Q F j − c H_w(t)``;
+* common wheel spin-inertia error ``c``: the true wheel momentum is ``(1 + c) H_w``, so the left
+  side computed with the model's wheels is ``Q F j − c H_w(t)``;
 * wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj J_k ρ_k u_kj``.
 
 ``c`` is confounded with the thrust scale (``F`` balances the wheel momentum the event builds): the
@@ -722,7 +722,7 @@ class ThrustPosterior(NamedTuple):
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                mode: str = "mean", inertia: InertiaGaussian | None = None, settings=None,
-               prior_draws: int = 500, robust: bool = False) -> ThrustPosterior:
+               prior_draws: int = 500, robust: bool = True) -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
     Parameters
@@ -736,7 +736,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
     robust : add the nuisance parameters (gyro bias and scale, wheel inertia scale and tilts,
-        external torque; module docstring).
+        external torque; module docstring). The default, as on the CLI; ``False`` is the
+        papers' idealised model (clean simulations, comparisons with the papers).
 
     Returns
     -------
