@@ -9,7 +9,8 @@ import pytest
 from scipy import stats
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.inference.rwa4 import _inv3, prepare_rwa4
+from cassini_bayes.inference.rwa4 import prepare_rwa4
+from cassini_bayes.inference.thrust import inv3_spd
 from cassini_bayes.inference.sphere import angles_deg, direction_summary, mean_direction
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -37,7 +38,7 @@ def test_inv3_matches_numpy():
     rng = np.random.default_rng(1)
     m = rng.normal(size=(5, 3, 3))
     b = m @ np.swapaxes(m, -1, -2) + 0.1 * np.eye(3)
-    inv, logdet = _inv3(jnp.asarray(b))
+    inv, logdet = inv3_spd(jnp.asarray(b))
     np.testing.assert_allclose(np.asarray(inv), np.linalg.inv(b), rtol=1e-9)
     np.testing.assert_allclose(np.asarray(logdet), np.linalg.slogdet(b)[1], rtol=1e-12)
 

@@ -85,7 +85,7 @@ def thrust_sensitivity(post) -> dict:
     names = list(post.problem.names) + list(TAU_NAMES)
     targets = {n: flat(n)[:, 0] for n in names}
     groups = {e: (flat(EFFECTS[e]), layout.sd[layout.slices[e]])
-              for e in ("gyro_bias", "gyro_scale", "wheel_inertia", "wheel_axes", "body_torque")}
+              for e in EFFECTS}
     units = {n: ("N" if n.startswith("F") else "s") for n in names}
     return posterior_sensitivity(targets, groups, units)
 
@@ -153,8 +153,7 @@ def fit_thrust_cmd(
         nuisance += list(INERTIA_NAMES)
     if not idealised:
         from cassini_bayes.inference.nuisance import EFFECTS
-        nuisance += [EFFECTS[e] for e in ("gyro_bias", "gyro_scale", "wheel_inertia",
-                                          "wheel_axes", "body_torque")]
+        nuisance += list(EFFECTS.values())
     summary = build_summary("thrust", post.idata, parameters=names,
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,
                             nuisance=nuisance, warnings=warns + base_warns)

@@ -48,7 +48,7 @@ def _compiled(log_density: Callable):
     return jax.jit(jax.value_and_grad(nll)), jax.jit(jax.hessian(nll))
 
 
-def laplace(log_density: Callable, theta0, data: Any = None, *,
+def laplace(log_density: Callable, theta0, data: Any, *,
             rounds: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Mode and Cholesky factor of the inverse negative Hessian of ``log_density``.
 
@@ -56,8 +56,7 @@ def laplace(log_density: Callable, theta0, data: Any = None, *,
     ----------
     log_density : jittable ``f(θ, data)`` (the model's log prior + log likelihood). Pass a
         module-level function (not a fresh closure) so that its compiled derivatives are reused
-        across problems of the same shapes; with ``data=None`` a one-argument ``f(θ)`` is
-        accepted too.
+        across problems of the same shapes.
     theta0 : starting point.
     data : pytree of arrays passed to ``log_density`` as its second argument.
     rounds : at most this many Newton solves, each in coordinates whitened by the Hessian of the
@@ -71,24 +70,13 @@ def laplace(log_density: Callable, theta0, data: Any = None, *,
     """
     import scipy.optimize
 
-    if data is None:
-        one_arg = log_density
-        vg_, hess_ = jax.jit(jax.value_and_grad(lambda x: -one_arg(x))), \
-            jax.jit(jax.hessian(lambda x: -one_arg(x)))
+    vg_, hess_ = _compiled(log_density)
 
-        def nll(x):
-            return vg_(x)
+    def nll(x):
+        return vg_(x, data)
 
-        def hess(x):
-            return hess_(x)
-    else:
-        vg_, hess_ = _compiled(log_density)
-
-        def nll(x):
-            return vg_(x, data)
-
-        def hess(x):
-            return hess_(x, data)
+    def hess(x):
+        return hess_(x, data)
 
     x = np.asarray(theta0, float)
     if not np.isfinite(float(nll(jnp.asarray(x))[0])):

@@ -90,7 +90,7 @@ from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_pr
                                              is_physical, pi_from_cholesky_params)
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.sphere import direction_summary
-from cassini_bayes.inference.thrust import InertiaGaussian, rate_noise_levels
+from cassini_bayes.inference.thrust import InertiaGaussian, inv3_spd, rate_noise_levels
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -231,21 +231,6 @@ def _attitude_noise(q: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
-def _inv3(b):
-    """Inverse and log-determinant of batches (..., 3, 3) of symmetric positive-definite
-    matrices, in closed form (LAPACK calls on 3×3 matrices cost far more than the arithmetic)."""
-    c00 = b[..., 1, 1] * b[..., 2, 2] - b[..., 1, 2] * b[..., 1, 2]
-    c11 = b[..., 0, 0] * b[..., 2, 2] - b[..., 0, 2] * b[..., 0, 2]
-    c22 = b[..., 0, 0] * b[..., 1, 1] - b[..., 0, 1] * b[..., 0, 1]
-    c01 = b[..., 0, 2] * b[..., 1, 2] - b[..., 0, 1] * b[..., 2, 2]
-    c02 = b[..., 0, 1] * b[..., 1, 2] - b[..., 0, 2] * b[..., 1, 1]
-    c12 = b[..., 0, 1] * b[..., 0, 2] - b[..., 0, 0] * b[..., 1, 2]
-    det = b[..., 0, 0] * c00 + b[..., 0, 1] * c01 + b[..., 0, 2] * c02
-    adj = jnp.stack([jnp.stack([c00, c01, c02], -1), jnp.stack([c01, c11, c12], -1),
-                     jnp.stack([c02, c12, c22], -1)], -2)
-    return adj / det[..., None, None], jnp.log(det)
-
-
 def _loglik(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov):
     """Log-likelihood of the window-mean momentum balance of each A/B pair (Brown Eqs 1, 3):
 
@@ -262,7 +247,7 @@ def _loglik(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov):
     b = s2[0] * (i_m @ i_m) + s2[1] * (known_cov + j4**2 * jnp.outer(u, u))
     c_w = jnp.einsum("wjakb,jk->wab", t_aa, b) / n_w[:, None, None]
     cov = c_w[1::2] + c_w[0::2]
-    cov_inv, logdet = _inv3(cov)
+    cov_inv, logdet = inv3_spd(cov)
     quad = jnp.einsum("gi,gij,gj->g", d, cov_inv, d)
     return -0.5 * jnp.sum(quad + logdet + 3.0 * jnp.log(2.0 * jnp.pi))
 

@@ -104,6 +104,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.frames import skew
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.nuisance import EFFECTS, nuisance_layout
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
@@ -124,6 +125,7 @@ __all__ = [
     "ThrustProblem",
     "prepare_thrust",
     "pulse_increments",
+    "inv3_spd",
     "long_pulse_excess",
     "rate_noise_levels",
     "thrust_model",
@@ -274,14 +276,6 @@ def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
     return h, wcov, per_wheel
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) cross-product matrices ``[v]_×``."""
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
-                     np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
-
-
 def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia: np.ndarray,
                       h: np.ndarray, per_wheel: dict) -> np.ndarray:
     """(n, 3, R) columns of ``ν`` in the predicted left side of event ``e`` (module docstring)."""
@@ -292,7 +286,7 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
     c_t = np.concatenate([np.zeros((1, 3)),
                           np.cumsum(0.5 * (h[1:] + h[:-1]) * np.diff(t)[:, None], 0)])
     b0 = sl["gyro_bias"].start + 3 * e
-    cols[:, :, b0:b0 + 3] = -_skew(c_t)                                  # ∫ b × H_w dt
+    cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
     cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
     cols[:, :, sl["wheel_inertia"].start] = -h                            # −c H_w
     a0 = sl["wheel_axes"].start
@@ -482,18 +476,19 @@ def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, ta
     return jnp.cumsum(grid, 0)
 
 
-def _inv3(b):
-    """Inverse and log-determinant of a symmetric positive-definite 3×3 matrix (closed form:
-    LAPACK calls on 3×3 matrices cost far more than the arithmetic)."""
-    c00 = b[1, 1] * b[2, 2] - b[1, 2] * b[2, 1]
-    c01 = b[0, 2] * b[2, 1] - b[0, 1] * b[2, 2]
-    c02 = b[0, 1] * b[1, 2] - b[0, 2] * b[1, 1]
-    c11 = b[0, 0] * b[2, 2] - b[0, 2] * b[2, 0]
-    c12 = b[0, 2] * b[1, 0] - b[0, 0] * b[1, 2]
-    c22 = b[0, 0] * b[1, 1] - b[0, 1] * b[1, 0]
-    det = b[0, 0] * c00 + b[0, 1] * c01 + b[0, 2] * c02
-    adj = jnp.array([[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]])
-    return adj / det, jnp.log(det)
+def inv3_spd(b):
+    """Inverse and log-determinant of batches (..., 3, 3) of symmetric positive-definite
+    matrices, in closed form (LAPACK calls on 3×3 matrices cost far more than the arithmetic)."""
+    c00 = b[..., 1, 1] * b[..., 2, 2] - b[..., 1, 2] * b[..., 1, 2]
+    c11 = b[..., 0, 0] * b[..., 2, 2] - b[..., 0, 2] * b[..., 0, 2]
+    c22 = b[..., 0, 0] * b[..., 1, 1] - b[..., 0, 1] * b[..., 0, 1]
+    c01 = b[..., 0, 2] * b[..., 1, 2] - b[..., 0, 1] * b[..., 2, 2]
+    c02 = b[..., 0, 1] * b[..., 1, 2] - b[..., 0, 2] * b[..., 1, 1]
+    c12 = b[..., 0, 1] * b[..., 0, 2] - b[..., 0, 0] * b[..., 1, 2]
+    det = b[..., 0, 0] * c00 + b[..., 0, 1] * c01 + b[..., 0, 2] * c02
+    adj = jnp.stack([jnp.stack([c00, c01, c02], -1), jnp.stack([c01, c11, c12], -1),
+                     jnp.stack([c02, c12, c22], -1)], -2)
+    return adj / det[..., None, None], jnp.log(det)
 
 
 def _event_loglik(inertia, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster,
@@ -508,7 +503,7 @@ def _event_loglik(inertia, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_o
     d = r - r_bar
     s2 = jnp.exp(2.0 * log_sigma)
     b = s2[0] * inertia @ inertia + s2[1] * wheel_cov
-    b_inv, logdet = _inv3(b)
+    b_inv, logdet = inv3_spd(b)
     quad = jnp.einsum("ni,ij,nj->n", d, b_inv, d)
     ll_i = -0.5 * (quad + logdet + 3.0 * jnp.log(2.0 * jnp.pi))
     ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) + 0.5 * logdet - 1.5 * jnp.log(n)
@@ -784,8 +779,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     nu_mean = None
     if robust:
         nu_mean = np.concatenate([np.asarray(post[EFFECTS[e]].mean(("chain", "draw"))).ravel()
-                                  for e in ("gyro_bias", "gyro_scale", "wheel_inertia",
-                                            "wheel_axes", "body_torque")])
+                                  for e in EFFECTS])   # the layout's order
     d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean, nu_mean)
     m = np.asarray(kw["mask"]) > 0
     t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
@@ -825,6 +819,5 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     if sample_inertia:
         names += list(INERTIA_NAMES)
     if robust:
-        names += [EFFECTS[e] for e in ("gyro_bias", "gyro_scale", "wheel_inertia", "wheel_axes",
-                                       "body_torque")]
+        names += list(EFFECTS.values())
     return ThrustPosterior(idata, diagnostics(idata, names), problem)
