@@ -102,3 +102,7 @@ def test_fit_rwa4_end_to_end(run_cli, tmp_path):
     d = s["direction"]
     assert set(d) == {"mean", "cone_deg"} and set(d["cone_deg"]) == {"50", "90", "95"}
     assert angles_deg(np.array(d["mean"])[None], sc.truth.wheel("RWA4").axis)[0] < 3.0
+    assert s["model"] == "robust"
+    sens = s["sensitivity"]
+    assert set(sens) == {"gyro_bias", "gyro_scale", "wheel_inertia", "body_torque"}
+    assert all(e["modelled"] and e["parameters"]["axis"]["units"] == "deg" for e in sens.values())

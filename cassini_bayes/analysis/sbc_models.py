@@ -890,7 +890,7 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     def fit(key, arrays):
         tel = _telemetry(arrays, scenario, "<sbc rwa4 replicate>")
         post = fit_rwa4(key, tel, spacecraft, method="rcs", pairs=pairs, prior=opts["prior"],
-                        settings=settings, prior_draws=0)
+                        settings=settings, prior_draws=0, robust=False)
         return _thinned(post.idata, names, thin)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}

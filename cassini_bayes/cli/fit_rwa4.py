@@ -18,6 +18,25 @@ from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARM
 ORDER = 22
 
 
+def rwa4_sensitivity(post) -> dict:
+    """``sensitivity`` block of an RWA4 fit: the RMS axis shift (deg) each nuisance effect of
+    prior size causes in a model that leaves it out
+    (:func:`cassini_bayes.inference.rwa4.axis_sensitivity`), and that shift over the posterior's
+    RMS angle about its mean direction."""
+    import numpy as np
+
+    from cassini_bayes.inference.rwa4 import U4_NAMES, axis_sensitivity
+    from cassini_bayes.inference.sphere import angles_deg
+
+    draws = np.stack([post.idata.posterior[n].values.ravel() for n in U4_NAMES], -1)
+    rms = float(np.sqrt(np.mean(angles_deg(draws, np.asarray(post.direction["mean"])) ** 2)))
+    return {effect: {"modelled": post.problem.robust,
+                     "parameters": {"axis": {"shift": shift,
+                                             "shift_in_sd": shift / rms if rms > 0 else None,
+                                             "units": "deg"}}}
+            for effect, shift in axis_sensitivity(post.problem).items()}
+
+
 def fit_rwa4_cmd(
     method: str = typer.Option(..., "--method", help="rcs (Brown Eq 1) or rwa (Brown Eq 3)."),
     telemetry: Path = typer.Option(..., "--telemetry", help="Calibration telemetry CSV."),
@@ -31,6 +50,11 @@ def fit_rwa4_cmd(
     inertia_posterior: Path = typer.Option(None, "--inertia-posterior", help="Run directory of "
                                            "an inertia fit: its posterior becomes the inertia "
                                            "prior (default: the model's knowledge requirements)."),
+    idealised: bool = typer.Option(False, "--idealised",
+                                   help="Brown's idealised model: no gyro bias/scale factor, "
+                                        "wheel spin-inertia or known-wheel axis errors, no "
+                                        "external torque (default: the robust model with those "
+                                        "integrated out)."),
     seed: int = SEED,
     chains: int = CHAINS,
     warmup: int = WARMUP,
@@ -72,7 +96,7 @@ def fit_rwa4_cmd(
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior, inertia=inertia,
-                        settings=settings)
+                        settings=settings, robust=not idealised)
     pr = post.problem
     baseline = {n: float(v) for n, v in zip(U4_NAMES, pr.baseline)}
     summary = build_summary(
@@ -83,12 +107,15 @@ def fit_rwa4_cmd(
     summary["method"] = method
     summary["prior"] = prior
     summary["windows"] = [{"a": list(a), "b": list(b)} for a, b in pr.pairs]
+    summary["model"] = "idealised" if idealised else "robust"
+    summary["sensitivity"] = rwa4_sensitivity(post)
     config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": file_record(telemetry),
                                 "spacecraft": file_record(model_path(spacecraft)),
                                 **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
                                    if inertia_posterior is not None else {})},
                         options={"method": method, "prior": prior,
+                                 "model": "idealised" if idealised else "robust",
                                  "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
                                  "window_b": [f"{b[0]:.10g}:{b[1]:.10g}" for _, b in pr.pairs],
                                  "windows_detected": pairs is None})

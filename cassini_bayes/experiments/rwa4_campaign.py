@@ -128,7 +128,8 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 post = fit_rwa4(fkey, tel, scenario.prior, method=method, pairs=pairs,
-                                prior=settings["prior"], settings=sampler(settings))
+                                prior=settings["prior"], settings=sampler(settings),
+                                robust=settings["model"] == "robust")
             mean = np.asarray(post.direction["mean"], float)
             cones = {k: float(v) for k, v in post.direction["cone_deg"].items()}
             err_post = _angle_deg(mean, axis)
@@ -144,6 +145,7 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
                               config={"command": f"experiment {label} (run {i})",
                                       "scenario": scenario.name,
                                       "options": {"method": method, "prior": settings["prior"],
+                                                  "model": settings["model"],
                                                   "windows": run["windows"]},
                                       "truth_axis": axis.tolist(),
                                       "sampler": sampler(settings)._asdict(),
@@ -264,8 +266,10 @@ def _plot(runs, label, budget_deg):
     return fig
 
 
+# model: the scenarios are clean simulations (no sensor, wheel or torque errors), so Brown's
+# idealised model is the right one; "robust" integrates those effects out (issue 7)
 _COMMON = {"posterior_runs": 1, "chains": 2, "warmup": 150, "draws": 150, "prior": "cone",
-           "reports": 1}
+           "reports": 1, "model": "idealised"}
 _QUICK = {"n_runs": 2, "posterior_runs": 0, "warmup": 50, "draws": 50}
 
 
@@ -273,7 +277,7 @@ _QUICK = {"n_runs": 2, "posterior_runs": 0, "warmup": 50, "draws": 50}
     "rwa4_rcs_campaign",
     defaults={"scenario": "rwa4_rcs", "n_runs": 10, "phi_range_deg": [-30.0, 210.0], **_COMMON},
     quick=_QUICK,
-    choices={"prior": ("uniform", "cone")},
+    choices={"prior": ("uniform", "cone"), "model": ("idealised", "robust")},
     order=60,
     description="RWA4 axis by the RCS method: Brown's 10-run campaign with posteriors",
 )
@@ -284,7 +288,8 @@ def rwa4_rcs_campaign(key, settings, ctx) -> ExperimentOutput:
     (articulation range between the hard stops, RWA1 at 90°), ``posterior_runs`` (how many of
     the runs, the first ones, also get the posterior; least squares runs on all), ``prior`` (axis
     prior of the posterior), ``chains/warmup/draws`` (NUTS), ``reports`` (posterior runs that
-    also get a run directory with a diagnostic report).
+    also get a run directory with a diagnostic report), ``model`` (``idealised``, Brown's, or
+    ``robust``).
     """
     from cassini_bayes.simulate import load_scenario
 
@@ -360,7 +365,8 @@ def _flight_test(key, settings) -> dict[str, Any]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         post = fit_rwa4(fkey, tel, scenario.prior, method="rwa", pairs=pairs,
-                        prior=settings["prior"], settings=sampler(settings), wheel="RWA1")
+                        prior=settings["prior"], settings=sampler(settings), wheel="RWA1",
+                        robust=settings["model"] == "robust")
     mean = np.asarray(post.direction["mean"], float)
     out.update(post_error_deg=_angle_deg(mean, truth),
                cone_deg={k: float(v) for k, v in post.direction["cone_deg"].items()},
@@ -373,7 +379,7 @@ def _flight_test(key, settings) -> dict[str, Any]:
     defaults={"scenario": "rwa4_rwa", "n_runs": 12, "max_from_rwa1_deg": 10.0,
               "flight_test": True, **_COMMON},
     quick={**_QUICK, "flight_test": False},
-    choices={"prior": ("uniform", "cone")},
+    choices={"prior": ("uniform", "cone"), "model": ("idealised", "robust")},
     order=70,
     description="RWA4 axis by the RWA method: Brown's 12-run campaign and the flight test",
 )
@@ -383,7 +389,7 @@ def rwa4_rwa_campaign(key, settings, ctx) -> ExperimentOutput:
     Settings: ``scenario`` (RWA-method scenario; the controller believes RWA4 is at RWA1),
     ``n_runs``, ``max_from_rwa1_deg`` (largest angle between the true RWA4 axis and RWA1),
     ``flight_test`` (also the flight-test variant: RWA1 solved with RWA2, RWA3 known),
-    ``posterior_runs``, ``prior``, ``chains/warmup/draws``, ``reports``.
+    ``posterior_runs``, ``prior``, ``chains/warmup/draws``, ``reports``, ``model``.
     """
     from cassini_bayes.simulate import load_scenario
 

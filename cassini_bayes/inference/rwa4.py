@@ -25,7 +25,20 @@ Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives 
 ``B = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` (``g_4 = u4``) per sample, rotated to inertial axes and
 averaged over each window; the levels are fixed at the data's own white-noise estimates σ̂ (three
 numbers per pair cannot estimate them).
-A constant external torque (Brown: ≈ 3e-6 N m, i.e. < 0.1° over 30 minutes) is neglected.
+
+Robust model (issue 7; the default)
+-----------------------------------
+Brown's balance also moves with effects his least squares leaves out, each small and entering
+``d_g`` linearly (:mod:`cassini_bayes.inference.nuisance`, the inertia and thrust models' layout
+and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a common wheel
+spin-inertia scale (``J_k → (1 + c) J_k`` on every wheel, the solved one included), tilts of the
+*known* wheels' axes (the solved wheel's axis is the unknown) and a body-fixed external torque
+(``∫ A(q_s)ᵀ ds T_B`` between the windows; Brown: ≈ 3e-6 N m, < 0.1° for the RCS method). With
+zero-mean Normal priors they are integrated out exactly: ``d ~ N(0, C + D Σ_ν Dᵀ)`` over all
+pairs together (one effect is shared by every pair). The RWA method feels them most: 0.2° tilts
+of RWA2 and RWA3, whose momenta match RWA4's, move Brown's axis by tenths of a degree, 20–50× the
+idealised posterior's width on ``rwa4_rwa_real``; :func:`axis_sensitivity` reports each effect's
+shift. ``robust=False`` is Brown's idealised model.
 
 Priors
 ------
@@ -90,7 +103,8 @@ from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_pr
                                              is_physical, pi_from_cholesky_params)
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.sphere import direction_summary
-from cassini_bayes.inference.thrust import InertiaGaussian, inv3_spd, rate_noise_levels
+from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
+from cassini_bayes.inference.thrust import InertiaGaussian, rate_noise_levels
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -110,6 +124,7 @@ __all__ = [
     "sample_rwa4_prior",
     "Rwa4Posterior",
     "fit_rwa4",
+    "axis_sensitivity",
 ]
 
 U4_NAMES = ("u4_x", "u4_y", "u4_z")
@@ -205,6 +220,9 @@ class Rwa4Problem(NamedTuple):
     source : the telemetry file.
     wheel : the wheel solved for.
     chart : ``"rcs"`` (balance coordinates) or ``"rwa"`` (direct), module docstring.
+    layout : the nuisance layout of the robust model's effects (built for either model).
+    nuisance : their columns (:func:`_nuisance_means`; in ``model_kwargs`` only when ``robust``).
+    robust : whether the likelihood integrates the effects out.
     """
 
     model_kwargs: dict
@@ -220,6 +238,9 @@ class Rwa4Problem(NamedTuple):
     source: str
     wheel: str
     chart: str
+    layout: NuisanceLayout
+    nuisance: dict
+    robust: bool
 
 
 def _attitude_noise(q: np.ndarray) -> float:
@@ -231,25 +252,54 @@ def _attitude_noise(q: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
-def _loglik(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov):
-    """Log-likelihood of the window-mean momentum balance of each A/B pair (Brown Eqs 1, 3):
-
-    ``d_g = ⟨Aᵀ(I ω + h_known + J_4 ρ_4 u4)⟩_B − ⟨…⟩_A ~ N(0, C_A/n_A + C_B/n_B)``,
-    ``C_w = ⟨A_iᵀ B A_i⟩_w``, ``B = σ_ω² I I + σ_ρ² (Σ_known J_k² g_k g_kᵀ + J_4² u4 u4ᵀ)``.
-    Window arrays (index ``w = 2g`` for A, ``2g + 1`` for B): ``m_pi`` (W, 3, 6) with
-    ``⟨Aᵀ I ω⟩ = m_pi π``; ``r_u`` (W, 3, 3) = ``⟨ρ_4 Aᵀ⟩``; ``k_h`` (W, 3) = ``⟨Aᵀ h_known⟩``;
-    ``n_w`` (W,) sample counts; ``t_aa`` (W, 3, 3, 3, 3) = ``⟨A_jk A_lm⟩``.
-    """
-    i_m = inertia_matrix(pi)
+def _balance(u, pi, *, m_pi, r_u, k_h, j4):
+    """Change of the window-mean inertial momentum per pair, ``d_g`` (G, 3) N m s (Brown Eqs 1,
+    3): ``⟨Aᵀ(I ω + h_known + J_4 ρ_4 u4)⟩_B − ⟨…⟩_A``, zero for a perfect model."""
     h = m_pi @ pi + j4 * r_u @ u + k_h                                  # (W, 3) inertial means
-    d = h[1::2] - h[0::2]                                               # B − A per pair
+    return h[1::2] - h[0::2]
+
+
+def _noise_cov(u, pi, log_sigma, *, n_w, t_aa, j4, known_cov):
+    """(G, 3, 3) covariance of ``d_g`` from white gyro and wheel-rate noise:
+    ``C_A/n_A + C_B/n_B``, ``C_w = ⟨A_iᵀ B A_i⟩_w``,
+    ``B = σ_ω² I I + σ_ρ² (Σ_known J_k² g_k g_kᵀ + J_4² u4 u4ᵀ)``."""
+    i_m = inertia_matrix(pi)
     s2 = jnp.exp(2.0 * log_sigma)
     b = s2[0] * (i_m @ i_m) + s2[1] * (known_cov + j4**2 * jnp.outer(u, u))
     c_w = jnp.einsum("wjakb,jk->wab", t_aa, b) / n_w[:, None, None]
-    cov = c_w[1::2] + c_w[0::2]
-    cov_inv, logdet = inv3_spd(cov)
-    quad = jnp.einsum("gi,gij,gj->g", d, cov_inv, d)
-    return -0.5 * jnp.sum(quad + logdet + 3.0 * jnp.log(2.0 * jnp.pi))
+    return c_w[1::2] + c_w[0::2]
+
+
+def _nuisance_cols(u, *, r_u, j4, nu_cols, nu_wheel):
+    """(G, 3, R) columns of the robust nuisance vector ``ν`` in ``d_g``: the fixed inertial
+    columns of :func:`_nuisance_means` plus the solved wheel's part of the common wheel
+    spin-inertia scale, ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
+    d_r = (r_u[1::2] - r_u[0::2]) @ u                                  # (G, 3)
+    return nu_cols + j4 * d_r[:, :, None] * nu_wheel[None, None, :]
+
+
+def _loglik(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov, nu_cols, nu_sd,
+            nu_wheel):
+    """Log-likelihood of the window-mean momentum balance of all A/B pairs (Brown Eqs 1, 3):
+    ``d = (d_1 … d_G) ~ N(0, blockdiag(C_g) + D diag(ν_sd²) Dᵀ)``.
+
+    ``d_g`` is :func:`_balance`, ``C_g`` :func:`_noise_cov`; ``D`` (:func:`_nuisance_cols`)
+    holds the robust model's nuisance effects, which enter ``d`` linearly with zero-mean Normal
+    priors and are integrated out exactly (``R = 0`` columns: the idealised model). One effect
+    is shared by every pair, so the pairs are correlated. Window arrays (index ``w = 2g`` for A,
+    ``2g + 1`` for B): ``m_pi`` (W, 3, 6) with ``⟨Aᵀ I ω⟩ = m_pi π``; ``r_u`` (W, 3, 3) =
+    ``⟨ρ_4 Aᵀ⟩``; ``k_h`` (W, 3) = ``⟨Aᵀ h_known⟩``; ``n_w`` (W,) sample counts; ``t_aa``
+    (W, 3, 3, 3, 3) = ``⟨A_jk A_lm⟩``.
+    """
+    d = _balance(u, pi, m_pi=m_pi, r_u=r_u, k_h=k_h, j4=j4).ravel()
+    cov = jax.scipy.linalg.block_diag(*_noise_cov(u, pi, log_sigma, n_w=n_w, t_aa=t_aa, j4=j4,
+                                                  known_cov=known_cov))
+    cols = _nuisance_cols(u, r_u=r_u, j4=j4, nu_cols=nu_cols, nu_wheel=nu_wheel)
+    cols = cols.reshape(d.shape[0], -1) * nu_sd[None, :]
+    chol = jnp.linalg.cholesky(cov + cols @ cols.T)
+    r = jax.scipy.linalg.solve_triangular(chol, d, lower=True)
+    logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(chol)))
+    return -0.5 * (r @ r + logdet + d.shape[0] * jnp.log(2.0 * jnp.pi))
 
 
 def _tangent_basis(u: np.ndarray) -> np.ndarray:
@@ -325,6 +375,36 @@ def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
                 known_cov=jnp.asarray(known_cov))
 
 
+def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
+                    t, inertia) -> dict:
+    """The robust model's nuisance columns of ``d_g`` (:func:`_loglik`), as JAX arrays.
+
+    The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
+    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the common wheel
+    spin-inertia scale on the known wheels; the known wheels' axis tilts; a body-fixed torque
+    through ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the
+    momentum, B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the wheel-scale
+    column, whose solved-wheel part :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
+    """
+    a_all = np.asarray(dcm(jnp.asarray(q)))
+    rho = np.nan_to_num(rates)
+    wheel_h = {names[k]: js[k] * rho[:, k] for k in known}
+    h_known = sum((wheel_h[names[k]][:, None] * axes[k] for k in known),
+                  np.zeros((q.shape[0], 3)))
+    cols = robust_columns(layout, 0, inertia, omega, h_known, wheel_h, a_all, t)
+    inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
+    diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
+    one_hot = np.zeros(layout.size)
+    one_hot[layout.slices["wheel_inertia"]] = 1.0
+    return dict(nu_cols=jnp.asarray(np.stack(diff)), nu_sd=jnp.asarray(layout.sd),
+                nu_wheel=jnp.asarray(one_hot))
+
+
+def _no_nuisance(n_pairs: int) -> dict:
+    """The idealised model: no nuisance columns (R = 0)."""
+    return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
+
+
 def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
     """The RCS method's linearising change of inertia coordinates (module docstring).
 
@@ -350,7 +430,8 @@ def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
 
 def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                  pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
-                 inertia: InertiaGaussian | None = None, wheel: str = WHEEL) -> Rwa4Problem:
+                 inertia: InertiaGaussian | None = None, wheel: str = WHEEL,
+                 robust: bool = True) -> Rwa4Problem:
     """Prepare the spin-axis problem of ``wheel`` from one telemetry file and its window pairs.
 
     Parameters
@@ -363,6 +444,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     prior : ``"uniform"`` or ``"cone"``.
     inertia : Gaussian inertia prior; default the spacecraft model's knowledge requirements.
     wheel : the wheel whose axis is solved for (default RWA4; Brown's flight test: RWA1).
+    robust : integrate out the nuisance effects of the module docstring ("Robust model"), with
+        the priors of the spacecraft model's ``Knowledge``; ``False``: Brown's idealised model.
 
     Raises
     ------
@@ -419,6 +502,9 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
 
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
+    layout = nuisance_layout(spacecraft, 1, [names[k] for k in known])
+    nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
+    data.update(nuisance if robust else _no_nuisance(len(pairs)))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),
@@ -452,7 +538,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     return Rwa4Problem(
         model_kwargs=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
         inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
-        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart)
+        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
+        nuisance=nuisance, robust=robust)
 
 
 # --------------------------------------------------------------------------------------------
@@ -532,7 +619,8 @@ def _log_density_rwa(theta, kw):
     return _log_density_with(_physical_rwa, theta, kw)
 
 
-_DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov")
+_DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov", "nu_cols", "nu_sd",
+              "nu_wheel")
 _LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
 _PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
 
@@ -600,6 +688,48 @@ def sample_rwa4_prior(key, problem: Rwa4Problem, n: int) -> dict[str, np.ndarray
 # The fit
 # --------------------------------------------------------------------------------------------
 
+def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
+    """RMS shift of the axis (deg) each nuisance effect of prior size would cause in a model that
+    leaves it out (Lee §4.1 made quantitative, as :mod:`~cassini_bayes.inference.sensitivity`).
+
+    Linearised at the Laplace centre ``θ*``: the data ``d`` (:func:`_balance`) gain ``D_e ν_e``
+    from effect ``e``, which moves the idealised model's mode by
+    ``Δθ = H⁻¹ Jᵀ C⁻¹ D_e ν_e`` (``H`` the idealised log density's negative Hessian, ``J`` =
+    ∂d/∂θ, ``C`` the noise covariance); with ``ν_e ~ N(0, diag sd_e²)`` the axis shift ``U Δθ``
+    (``U`` = ∂u/∂θ) has covariance ``U K diag(sd_e²) Kᵀ Uᵀ``, reported as √trace in degrees.
+    """
+    kw = dict(problem.model_kwargs)
+    centre = kw.pop("centre")
+    kw.pop("tril")
+    ideal = {**kw, **_no_nuisance(len(problem.pairs))}
+    physical = _PHYSICAL[problem.chart]
+    log_density = _LOG_DENSITY[problem.chart]
+
+    def balance(theta):
+        u, pi, _, _ = physical(theta, kw)
+        return _balance(u, pi, m_pi=kw["m_pi"], r_u=kw["r_u"], k_h=kw["k_h"],
+                        j4=kw["j4"]).ravel()
+
+    u, pi, _, _ = physical(centre, kw)
+    hess = -np.asarray(jax.hessian(lambda th: log_density(th, ideal))(centre))
+    jac = np.asarray(jax.jacfwd(balance)(centre))
+    jac_u = np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(centre))
+    noise = jax.scipy.linalg.block_diag(*_noise_cov(
+        u, pi, kw["log_noise_hat"], n_w=kw["n_w"], t_aa=kw["t_aa"], j4=kw["j4"],
+        known_cov=kw["known_cov"]))
+    cols = np.asarray(_nuisance_cols(u, r_u=kw["r_u"], j4=kw["j4"],
+                                     nu_cols=problem.nuisance["nu_cols"],
+                                     nu_wheel=problem.nuisance["nu_wheel"]))
+    cols = cols.reshape(jac.shape[0], -1)
+    gain = jac_u @ np.linalg.solve(hess, jac.T @ np.linalg.solve(np.asarray(noise), cols))
+    out = {}
+    for effect, sl in problem.layout.slices.items():
+        k = gain[:, sl] * problem.layout.sd[sl]
+        if k.size:
+            out[effect] = float(np.degrees(np.sqrt(np.sum(k * k))))
+    return out
+
+
 class Rwa4Posterior(NamedTuple):
     """Result of :func:`fit_rwa4`: InferenceData, diagnostics, problem and the direction summary
     (``{"mean": [x, y, z], "cone_deg": {"50": …, "90": …, "95": …}}``)."""
@@ -613,7 +743,7 @@ class Rwa4Posterior(NamedTuple):
 def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
              pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
              inertia: InertiaGaussian | None = None, settings=None,
-             prior_draws: int = 500, wheel: str = WHEEL) -> Rwa4Posterior:
+             prior_draws: int = 500, wheel: str = WHEEL, robust: bool = True) -> Rwa4Posterior:
     """Posterior of a wheel's spin axis (unit vector, body axes; default RWA4) with the inertia
     sampled jointly.
 
@@ -630,6 +760,9 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     wheel : the wheel solved for (``u4_*`` is its axis), e.g. ``"RWA1"`` for Brown's flight
         test with RWA2 and RWA3 known.
+    robust : the robust model (default: gyro bias and scale factor, wheel spin-inertia scale,
+        the known wheels' axis tilts and a body-fixed torque integrated out; module docstring)
+        or, ``False``, Brown's idealised model.
 
     Returns
     -------
@@ -645,7 +778,7 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
 
     settings = settings or SamplerSettings()
     problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
-                           inertia=inertia, wheel=wheel)
+                           inertia=inertia, wheel=wheel, robust=robust)
     kw = problem.model_kwargs
     coords = {"w_dim": np.arange(_DIM)}
     dims = {"w": ["w_dim"]}
