@@ -5,14 +5,15 @@ For each scenario family (``rwa4_rcs_real``: Brown §III.B, RCS method; ``rwa4_r
 robust model's prior (the prior model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias
 and scale factor per axis, a common wheel spin-inertia error, two tilt angles of each *known*
 wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the file's
-flexible mode, time-tag jitter and true RWA4 axis, simulate, and fit both models (Brown's
+flexible mode, time-tag jitter and true RWA4 axis (and its inertia, unless ``--draw-inertia``
+draws it from the fit's inertia prior), simulate, and fit both models (Brown's
 idealised one and the robust one) with the nominal spacecraft model. Prints, per family and
 model, how often the truth lies inside the posterior's 90 % cone (with the binomial sd), the
 worst and median axis error against Brown's budgets (RCS ≤ 3°, RWA ≤ 1°), the median 90 % cone,
 and the convergence record. Not a test.
 
     python benchmarks/coverage_robust_rwa4.py [--seeds 20] [--families rwa4_rcs_real rwa4_rwa_real]
-        [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
+        [--first-seed 0] [--draw-inertia] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
 """
 
 from __future__ import annotations
@@ -28,17 +29,21 @@ BUDGET_DEG = {"rcs": 3.0, "rwa": 1.0}   # Brown §III.B / §III.C
 MODELS = ("idealised", "robust")
 
 
-def _scenario_with_errors(base: dict, key, knowledge):
-    """The scenario dict with the truth's errors drawn at the knowledge priors' scale."""
+def _scenario_with_errors(base: dict, key, prior, draw_inertia: bool):
+    """The scenario dict with the truth's errors drawn at the knowledge priors' scale (``prior``
+    the prior spacecraft model) and, with ``draw_inertia``, the true inertia drawn from the fit's
+    inertia prior (Normal(predicted, knowledge sd²), physical draws only)."""
     import copy
 
     import jax
     import numpy as np
 
+    from cassini_bayes.inference.inertia import INERTIA_NAMES, inertia_prior, is_physical
     from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
 
     d = copy.deepcopy(base)
-    k_b, k_s, k_c, k_a, k_t = jax.random.split(key, 5)
+    k_b, k_s, k_c, k_a, k_t, k_i = jax.random.split(key, 6)
+    knowledge = prior.knowledge
     known = [w for w in d["initial"]["wheels_on"] if w != "RWA4"]
     truth, noise = d["truth"], d["noise"]
     noise["gyro_bias_rad_s"] = (knowledge.gyro_bias_sd_rad_s
@@ -52,10 +57,18 @@ def _scenario_with_errors(base: dict, key, knowledge):
     truth["wheel_axis_tilt_deg"] = {w: tilts[i].tolist() for i, w in enumerate(known)}
     truth["external_torque_body_nm"] = (BODY_TORQUE_PRIOR_SD_NM * np.asarray(
         jax.random.normal(k_t, (3,)))).tolist()
+    if draw_inertia:
+        ip = inertia_prior(prior)
+        for r in range(1000):
+            pi = ip.mean + ip.sd * np.asarray(jax.random.normal(jax.random.fold_in(k_i, r), (6,)))
+            if is_physical(pi):
+                break
+        truth["inertia"] = dict(zip(INERTIA_NAMES, pi.tolist()))
     return d
 
 
-def run_family(family: str, seeds: int, settings) -> dict:
+def run_family(family: str, seeds: int, settings, first: int = 0,
+               draw_inertia: bool = False) -> dict:
     """Fit both models on ``seeds`` error draws of one family; per-model lists of results."""
     import jax
     import numpy as np
@@ -70,11 +83,11 @@ def run_family(family: str, seeds: int, settings) -> dict:
     base = tomllib.loads(path.read_text())
     out = {m: [] for m in MODELS}
     t0 = time.perf_counter()
-    for seed in range(seeds):
+    for seed in range(first, first + seeds):
         k_err, k_sim, k_fit = jax.random.split(jax.random.key(3000 + seed), 3)
         nominal = scenario_from_dict(base, src=str(path))
-        scenario = scenario_from_dict(_scenario_with_errors(base, k_err, nominal.prior.knowledge),
-                                      src=str(path))
+        scenario = scenario_from_dict(_scenario_with_errors(base, k_err, nominal.prior,
+                                                            draw_inertia), src=str(path))
         sim = simulate(k_sim, scenario)
         u_true = np.asarray(sim.params.wheel_axes)[list(scenario.wheel_names).index("RWA4")]
         line = []
@@ -115,6 +128,9 @@ def report(family: str, res: dict) -> None:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--draw-inertia", action="store_true",
+                    help="draw the true inertia from the fit's prior too (default: the file's)")
     ap.add_argument("--families", nargs="+", default=list(FAMILIES), choices=list(FAMILIES))
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
@@ -126,7 +142,8 @@ def main(argv=None) -> None:
 
     settings = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws)
     t0 = time.perf_counter()
-    results = {f: run_family(f, args.seeds, settings) for f in args.families}
+    results = {f: run_family(f, args.seeds, settings, args.first_seed, args.draw_inertia)
+               for f in args.families}
     print(f"\n{args.seeds} seeds per family, errors at the knowledge priors' scale; "
           f"{args.chains} chains x {args.draws} draws; {time.perf_counter() - t0:.0f} s")
     for f, res in results.items():
