@@ -11,7 +11,7 @@ binomial standard error, the median posterior sd of ``F``, the worst ``|F − tr
 papers' ±10 % budget) and the convergence record. Not a test.
 
     python benchmarks/coverage_robust_thrust.py [--seeds 20] [--scenario biasing_day028]
-        [--chains 4] [--warmup 300] [--draws 300]
+        [--chains 4] [--warmup 300] [--draws 300] [--models idealised robust]
 """
 
 from __future__ import annotations
@@ -55,6 +55,8 @@ def main(argv=None) -> None:
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
     ap.add_argument("--draws", type=int, default=300)
+    ap.add_argument("--models", nargs="+", default=["idealised", "robust"],
+                    choices=["idealised", "robust"])
     args = ap.parse_args(argv)
 
     import jax
@@ -69,7 +71,7 @@ def main(argv=None) -> None:
     base = tomllib.loads(path.read_text())
     settings = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws)
     names = ("F",) + TAU_NAMES
-    models = ("idealised", "robust")
+    models = tuple(args.models)
     hits = {m: [] for m in models}
     f_sd = {m: [] for m in models}
     f_err = {m: [] for m in models}

@@ -95,18 +95,21 @@ class Knowledge:
     """How well the gyro and the wheels are known: one standard deviation each.
 
     The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
-    From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``) and
-    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``axis_sd_deg``). The defaults are conservative
-    engineering values, not numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per
-    axis, a gyro scale-factor error of 5e-4 (500 ppm) per axis, a common wheel spin-inertia error of
-    0.5 % and a wheel spin-axis misalignment of 0.2 deg per tilt component (Brown §III.A finds the
-    re-articulated RWA4 0.53 deg from its nominal axis; the fixed wheels are known better).
+    From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``),
+    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``axis_sd_deg``) and ``[telemetry_knowledge]``
+    (``time_tag_sd_s``). The defaults are conservative engineering values, not numbers from the
+    papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro scale-factor error of 5e-4
+    (500 ppm) per axis, a common wheel spin-inertia error of 0.5 %, a wheel spin-axis misalignment
+    of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4 0.53 deg from its
+    nominal axis; the fixed wheels are known better) and a white time-tag error of 10 ms per
+    telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
     """
 
     gyro_bias_sd_rad_s: float = 5e-7
     gyro_scale_factor_sd: float = 5e-4
     wheel_inertia_sd_frac: float = 0.005
     wheel_axis_sd_deg: float = 0.2
+    time_tag_sd_s: float = 0.01
 
 
 @dataclass(frozen=True)
@@ -190,14 +193,16 @@ class Spacecraft:
                      "scale_factor_sd": self.knowledge.gyro_scale_factor_sd},
             "wheel_knowledge": {"inertia_sd_frac": self.knowledge.wheel_inertia_sd_frac,
                                 "axis_sd_deg": self.knowledge.wheel_axis_sd_deg},
+            "telemetry_knowledge": {"time_tag_sd_s": self.knowledge.time_tag_sd_s},
         }
 
 
 _TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "pulse", "thrust",
-             "mass", "gyro", "wheel_knowledge"}
+             "mass", "gyro", "wheel_knowledge", "telemetry_knowledge"}
 _GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
 _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "axis_sd_deg": "wheel_axis_sd_deg"}
+_TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia"}
 _THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
@@ -321,10 +326,12 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
 
 
 def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
-    """The optional ``[gyro]`` and ``[wheel_knowledge]`` sections (one sd each, ≥ 0)."""
+    """The optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections (one
+    sd each, ≥ 0)."""
     base = Knowledge()
     kw = {}
-    for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS)):
+    for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
+                          ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS)):
         table = d.get(section, {})
         if not isinstance(table, dict):
             raise InputError(f"'{section}' must be a table [{section}]", path=src)
@@ -341,6 +348,9 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "
                          f"(<= 10), got {kw['wheel_axis_sd_deg']}", path=src)
+    if kw["time_tag_sd_s"] > 1.0:
+        raise InputError("'telemetry_knowledge.time_tag_sd_s' is a time-tag error in seconds "
+                         f"(<= 1), got {kw['time_tag_sd_s']}", path=src)
     return Knowledge(**kw)
 
 

@@ -1,4 +1,4 @@
-"""Optional ``[gyro]`` and ``[wheel_knowledge]`` sections of a spacecraft model (priors of the
+"""Optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections of a spacecraft model (priors of the
 robust models' nuisance parameters): defaults, values read, bad values rejected clearly."""
 
 from __future__ import annotations
@@ -24,9 +24,10 @@ def test_defaults_when_absent():
 
 def test_sections_are_read(tmp_path):
     text = GOOD + ("\n[gyro]\nbias_sd_rad_s = 1e-6\nscale_factor_sd = 2e-4\n"
-                   "\n[wheel_knowledge]\ninertia_sd_frac = 0.01\naxis_sd_deg = 0.5\n")
+                   "\n[wheel_knowledge]\ninertia_sd_frac = 0.01\naxis_sd_deg = 0.5\n"
+                   "\n[telemetry_knowledge]\ntime_tag_sd_s = 0.02\n")
     k = load_spacecraft(_write(tmp_path, text)).knowledge
-    assert k == Knowledge(1e-6, 2e-4, 0.01, 0.5)
+    assert k == Knowledge(1e-6, 2e-4, 0.01, 0.5, 0.02)
 
 
 def test_partial_section_keeps_other_defaults(tmp_path):
@@ -47,6 +48,7 @@ def test_round_trip_through_dict():
     ("[wheel_knowledge]\ninertia_sd_frac = 5.0\n", "fraction"),
     ("[wheel_knowledge]\naxis_sd_deg = 45.0\n", "degrees"),
     ("[wheel_knowledge]\naxes = 1.0\n", "wheel_knowledge.axes"),
+    ("[telemetry_knowledge]\ntime_tag_sd_s = 5.0\n", "seconds"),
 ])
 def test_bad_values_are_one_line_errors(tmp_path, extra, needle):
     with pytest.raises(InputError, match=needle):
