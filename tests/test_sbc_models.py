@@ -195,12 +195,17 @@ def test_rwa4_tiny_sbc_runs_and_detects_wrong_wheel_inertia(tmp_path):
     of some inertia entry and the 95 % intervals miss it. Checked through coverage of the worst
     moment (both replicates outside the 95 % interval; probability < 0.25 % per parameter for a
     calibrated posterior).
+
+    Seed 6: with J4 doubled the spin-up can carry the attitude past the scenario's 400 mrad
+    dead-band, and a thruster firing inside a window makes that replicate's fit refuse (a
+    recorded failure); of the 14 replicates of seeds 5-11 only seed 5's first did.
     """
     spec = ModelSpec.make("rwa4", **TINY)
-    ok, res = _sbc(tmp_path / "ok", spec, 2, seed=5)
+    ok, res = _sbc(tmp_path / "ok", spec, 2, seed=6)
     assert res.failed.sum() == 0 and res.rank.min() >= 0 and res.rank.max() <= res.n_draws
-    bad, _ = _sbc(tmp_path / "bad", ModelSpec.make("rwa4", rwa4_inertia_factor=2.0, **TINY), 2,
-                  seed=5)
+    bad, res_bad = _sbc(tmp_path / "bad", ModelSpec.make("rwa4", rwa4_inertia_factor=2.0,
+                                                         **TINY), 2, seed=6)
+    assert res_bad.failed.sum() == 0
     cov95 = min(bad.parameters[n].coverage.observed[-1] for n in ("Ixx", "Iyy", "Izz"))
     assert cov95 == 0.0
 

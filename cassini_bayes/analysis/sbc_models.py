@@ -787,12 +787,13 @@ def _draw_rwa4_truth(key, mean, sd, cone: bool):
 
     Same distribution as :func:`cassini_bayes.inference.rwa4.sample_rwa4_prior`: ``u4`` uniform
     on the sphere (a normalised standard normal), times the articulation-cone factor when
-    ``cone`` (rejection); ``π ~ Normal(mean, diag sd²)`` truncated to physical tensors.
+    ``cone`` (rejection); ``π`` from ``Normal(mean, diag sd²)`` times the model's smooth
+    physical factor, by the model's own sampler
+    (:func:`~cassini_bayes.inference.rwa4.sample_inertia_prior`).
     """
     import numpy as np
 
-    from cassini_bayes.inference.inertia import is_physical
-    from cassini_bayes.inference.rwa4 import CONE_ANGLE_DEG, CONE_SD_DEG
+    from cassini_bayes.inference.rwa4 import CONE_ANGLE_DEG, CONE_SD_DEG, sample_inertia_prior
 
     k_u, k_i = jax.random.split(key)
     for r in range(10_000):
@@ -803,11 +804,7 @@ def _draw_rwa4_truth(key, mean, sd, cone: bool):
         if not cone or float(jax.random.uniform(k_a)) < np.exp(
                 -0.5 * ((theta - CONE_ANGLE_DEG) / CONE_SD_DEG) ** 2):
             break
-    for r in range(1000):
-        pi = mean + sd * np.asarray(jax.random.normal(jax.random.fold_in(k_i, r), (6,)))
-        if is_physical(pi):
-            break
-    return u, pi
+    return u, sample_inertia_prior(k_i, mean, np.diag(np.asarray(sd, float) ** 2), 1)[0]
 
 
 @register("rwa4")
@@ -816,11 +813,12 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
 
     Truth per replicate, from the prior :func:`~cassini_bayes.inference.rwa4.fit_rwa4` states:
     ``u4`` uniform on the sphere (option ``prior="cone"``: the articulation-cone prior) and the
-    inertia ``π ~ Normal(predicted, knowledge sd²)`` truncated to physical tensors
+    inertia ``π ~ Normal(predicted, knowledge sd²)`` times the model's smooth physical factor
     (:func:`~cassini_bayes.inference.inertia.inertia_prior` of the ``[prior]`` model; see
     :func:`_draw_rwa4_truth`). They go into ``TruthParams.wheel_axes`` (RWA4's row) and
     ``inertia``; the rest is the scenario's. Data: the scenario (default :data:`RWA4_SCENARIO`)
-    through :func:`~cassini_bayes.simulate.run.simulate_batch`. Fit: ``fit_rwa4(method="rcs")``
+    through :func:`~cassini_bayes.simulate.run.simulate_batch`. Fit: ``fit_rwa4(method="rcs",
+    robust=False)`` (the simulator draws no nuisance errors: SBC checks the idealised model)
     with the scenario's ``A``/``B`` windows as the pair (detected from quiet periods when the
     scenario names none).
 

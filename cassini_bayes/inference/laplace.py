@@ -30,12 +30,21 @@ _DECREMENT_TOL = 1e-8      # Newton decrement (log-density units) at which the m
 
 def _whitening(h: np.ndarray) -> np.ndarray:
     """Cholesky factor of the inverse of the symmetric matrix ``h``; directions of non-positive
-    or non-finite curvature get unit scale."""
+    or non-finite curvature get unit scale.
+
+    Computed without a Cholesky decomposition, which can fail ("not positive definite") on the
+    rounding of an inverse with condition number ~1e16 (the likely source of the one failed
+    replicate of a 208-replicate RWA4 SBC: the other Cholesky decompositions of its preparation
+    factor the same prior matrices in every replicate): with
+    ``h = V W Vᵀ``, ``A = V W^{−½}`` is a square root of ``h⁻¹``; the QR decomposition
+    ``Aᵀ = Q R`` gives ``h⁻¹ = A Aᵀ = Rᵀ R``, i.e. the lower Cholesky factor ``Rᵀ`` (signs made
+    positive on the diagonal)."""
     h = 0.5 * (h + h.T)
     w, v = np.linalg.eigh(h)
     w = np.where(np.isfinite(w) & (w > 1e-12), w, 1.0)
-    cov = (v / w) @ v.T
-    return np.linalg.cholesky(0.5 * (cov + cov.T))
+    r = np.linalg.qr((v / np.sqrt(w)).T, mode="r")
+    sign = np.where(np.diag(r) < 0, -1.0, 1.0)
+    return (sign[:, None] * r).T
 
 
 @lru_cache(maxsize=64)

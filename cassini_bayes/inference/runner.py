@@ -188,6 +188,12 @@ def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable
             return potential_energy(model, (), kwargs, z)
 
         init_kernel, sample_kernel = hmc(potential_fn=pot, algo="NUTS")
+        # a start outside a hard support (e.g. RWA4's physical inertia) leaves the chain stuck:
+        # halve it toward w = 0 (the Laplace centre) until the density is finite; finite starts
+        # are left as they are
+        init_z = lax.while_loop(
+            lambda c: ~jnp.isfinite(pot(c[0])) & (c[1] < 30),
+            lambda c: (jax.tree.map(lambda x: 0.5 * x, c[0]), c[1] + 1), (init_z, 0))[0]
         state = init_kernel(init_z, s.warmup, dense_mass=s.dense_mass,
                             target_accept_prob=s.target_accept, max_tree_depth=s.max_tree_depth,
                             rng_key=key)

@@ -49,8 +49,14 @@ Priors
 * Inertia: the spacecraft model's predicted tensor with its knowledge requirements as 1σ (the
   prior of :mod:`cassini_bayes.inference.inertia`), or a Gaussian (an inertia run's posterior);
   sampled jointly, so the mass-property error is part of the posterior (Brown's Monte Carlo
-  analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). Every draw is
-  physical (positive definite, triangle inequalities); see "Sampler coordinates".
+  analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). The stated
+  prior, the same in both charts and in :func:`sample_inertia_prior` (SBC truths included), is
+  this Gaussian times the physical factor ``1 − exp(−(m/s)³)`` (:func:`_log_physical_factor`):
+  ``m`` the smallest eigenvalue of the second moment ``½ tr(I) 1 − I`` (positive exactly for
+  positive-definite tensors obeying the triangle inequalities), ``s`` half its value at the
+  prior mean. The factor is 0 for unphysical tensors, 1 − 3e-4 at the mean, 0.63 half-way to
+  the boundary: a stated softening of the truncation near the boundary, which NUTS needs (see
+  "Sampler coordinates").
 
 Sampler coordinates
 -------------------
@@ -59,13 +65,14 @@ The axis is written in the gnomonic chart about the least-squares axis ``u0`` (t
 ``(1 + |v|²)^(−3/2)`` in ``v``. The chart covers the hemisphere about ``u0``, which holds the
 posterior whenever the data determine the axis at all (:func:`prepare_rwa4` refuses data whose
 Laplace direction sd exceeds ``MAX_SD_DIRECTION_DEG``). The inertia is ``π = μ + L ξ`` with
-``ξ ~ N(0, 1)`` (``L`` the prior's Cholesky factor), truncated to physical tensors. The
-boundary is near: on Cassini ``Iyy + Izz − Ixx`` is 3.2σ from its bound, so a hard cut (−∞) makes
-NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
+``ξ ~ N(0, 1)`` (``L`` the prior's Cholesky factor) times the physical factor. The boundary is
+near: on Cassini it is 3.16σ from the prior mean along the worst direction of ``ξ``, so a hard
+cut (−∞) makes NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
 
 * RWA method: ``θ = (v, ζ)``; the data fix ``u`` and barely touch ``π``, which is sampled in
   the prior-whitened log-Cholesky coordinates ``ζ`` of the second-moment matrix (physical by
-  construction, exact truncated-Gaussian prior through the map's Jacobian).
+  construction, the boundary at infinity; the prior density through the map's Jacobian, times
+  the physical factor, which is ``≈ (m/s)³`` there: linear in ``log m``, so smooth in ``ζ``).
 * RCS method: the pair's balance is ``J₄ R (z + u)`` with ``z = R⁻¹(M π + Δk)/J₄`` (``R`` the
   change of ``⟨ρ₄ Aᵀ⟩``, ``M π`` that of ``⟨Aᵀ I ω⟩``): the data fix ``z = −u``, i.e. ``|z| = 1``
   (a curved ellipsoid in ``π``) and the direction of ``z`` (another sphere). In Cartesian ``π``
@@ -74,13 +81,25 @@ NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
   three combinations ``z`` of ``ξ`` are sampled in polar form, ``z = −e^ρ g(v_z)`` with the same
   chart ``g``, plus the three prior-only complements ``w``: ``θ = (v, ρ, v_z, w)``, Jacobian
   ``e^{3ρ} (1 + |v_z|²)^(−3/2)``; the constraint becomes ``ρ ≈ 0``, ``v_z ≈ v``, linear. Here
-  ``π`` is linear in ``θ`` and the truncation is the smooth factor of
-  :func:`_log_physical_factor`.
+  ``π`` is linear in ``θ`` and the boundary is at a finite distance, where the physical factor
+  turns trajectories back. It matters: the ridge ``v_z ≈ v`` moves ``u`` and ``ξ`` together (a
+  3σ move of the axis along it is several prior σ of ``ξ``), so the axis posterior is limited by
+  the inertia prior and the boundary, and NUTS reaches the factor's barrier in many fits. The
+  first factor, ``1 − exp(−m/s)`` with ``s`` = ¼ of the mean's margin, is ``≈ m/s`` near the
+  boundary: a log barrier whose curvature at a turning point of energy ``K`` grows as ``e^{2K}``
+  (1004 divergences in a 208-replicate SBC; 37 on ten of its divergent replicates refitted).
+  The cubic factor with ``s`` = ½ grows as ``e^{2K/3}``: 1 on the same ten (2 × 300 draws
+  each; :func:`_log_physical_factor`), and 7 single divergences in the 208-replicate SBC
+  (``docs/sbc/rwa4``). A map sending the boundary to infinity along rays from the prior mean
+  (tried) bends the narrow ridge wherever it compresses (a whitened axis fell to −848 at −3):
+  229 on the ten.
 
 Finally the sampler sees ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace
 approximation (:func:`cassini_bayes.inference.laplace.laplace`). The density is exact in ``θ``;
 the affine map only conditions the geometry. Check (``rwa4_rcs``, seed 21): along every whitened
-axis the log density at ±1, ±3 is within 0.5 of the Gaussian −0.5, −4.5.
+axis the log density at ±1, ±3 is within 0.5 of the Gaussian −0.5, −4.5. On SBC replicates the
+physical factor's barrier shows at ±3 (up to 6.7 below −4.5 on six replicates, within 0.11 at
+±1): a soft, finite wall, no cliff.
 """
 
 from __future__ import annotations
@@ -122,6 +141,7 @@ __all__ = [
     "prepare_rwa4",
     "rwa4_model",
     "sample_rwa4_prior",
+    "sample_inertia_prior",
     "Rwa4Posterior",
     "fit_rwa4",
     "axis_sensitivity",
@@ -137,7 +157,8 @@ MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not det
 WHEEL = "RWA4"               # the wheel solved for by default
 _NOISE_FLOORS = np.array([1e-9, 1e-7, 1e-9])
 _DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
-_MARGIN_FRACTION = 4.0       # physical-factor scale s = (prior mean's margin) / this
+_MARGIN_FRACTION = 2.0       # physical-factor scale s = (prior mean's margin) / this
+_FACTOR_POWER = 3            # the physical factor is 1 − exp(−(m/s)^this)
 
 Window = tuple[float, float]
 
@@ -508,8 +529,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),
-              margin_scale=jnp.asarray(float(_physical_margin(jnp.asarray(i_mean)))
-                                       / _MARGIN_FRACTION),
+              margin_scale=_margin_scale(i_mean),
               cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
               cone_angle=jnp.asarray(np.radians(CONE_ANGLE_DEG)),
               cone_sd=jnp.asarray(np.radians(CONE_SD_DEG)))
@@ -555,15 +575,17 @@ def _gnomonic(v, kw):
 
 def _physical_rwa(theta, kw):
     """``u`` (3,), ``π`` (6,) kg m², ``ξ = L⁻¹(π − μ)`` and the log Jacobian of
-    ``θ = (v (2), ζ (6))``: log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by
-    construction, :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
+    ``θ = (v (2), ζ (6))`` plus the log physical factor (:func:`_log_physical_factor`):
+    log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by construction,
+    :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
     u, log_jac = _gnomonic(theta[:2], kw)
     lp = kw["lp_centre"] + kw["lp_tril"] @ theta[2:8]
     pi = pi_from_cholesky_params(lp)
     xi = jax.scipy.linalg.solve_triangular(kw["pi_chol"], pi - kw["pi_mean"], lower=True)
     # log|det ∂π/∂lp| up to a constant: exp of the diagonal gives Σ lp_ii, L → L Lᵀ gives
     # 2³ L00³ L11² L22, Σ → I = tr(Σ) 1 − Σ is linear
-    return u, pi, xi, log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
+    return u, pi, xi, (log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
+                       + _log_physical_factor(pi, kw["margin_scale"]))
 
 
 def _physical_rcs(theta, kw):
@@ -586,16 +608,28 @@ def _physical_margin(pi):
     return jnp.linalg.eigvalsh(0.5 * jnp.trace(i_m) * jnp.eye(3) - i_m)[0]
 
 
+def _margin_scale(mean) -> jax.Array:
+    """The physical factor's scale ``s`` (kg m²): the prior mean's margin / ``_MARGIN_FRACTION``."""
+    return jnp.asarray(float(_physical_margin(jnp.asarray(mean, float))) / _MARGIN_FRACTION)
+
+
 def _log_physical_factor(pi, scale):
-    """``log(1 − exp(−m/s))`` for margin ``m > 0`` (:func:`_physical_margin`), ``−∞`` for
+    """``log(1 − exp(−(m/s)³))`` for margin ``m > 0`` (:func:`_physical_margin`), ``−∞`` for
     ``m ≤ 0``: the physical truncation of the inertia prior, made smooth so that NUTS
-    trajectories are turned back before the boundary instead of diverging on a cliff there (with
-    a hard cut, ``rwa4_rwa`` gave 69 divergences in 4000 draws; with ``s`` = 1/12 of the margin,
-    ``rwa4_rcs`` still gave 1). ``s`` = 1/4 of the prior mean's margin: the factor is 0.98 at the
-    mean, 0.86 half-way to the boundary — a stated softening of the prior near the boundary."""
+    trajectories are turned back before the boundary instead of diverging on a cliff there.
+
+    ``s`` (kg m²) = ½ the prior mean's margin (:data:`_MARGIN_FRACTION`), power 3
+    (:data:`_FACTOR_POWER`): the factor is 1 − 3e-4 at the mean, 0.63 half-way to the boundary,
+    and near it ``≈ (m/s)³``, a log barrier ``3 log m`` whose curvature at a NUTS turning point of
+    energy ``K`` grows as ``e^{2K/3}``. The earlier ``1 − exp(−m/s)`` with ``s`` = ¼ of the
+    margin (``e^{2K}``) gave 1004 divergences in a 208-replicate SBC and 37 when ten of its
+    divergent replicates were refitted (2 × 300 draws each); this factor gave 1 on the same ten
+    and 1 on replicates 0–23 (both times replicate 4, the smallest truth margin). A hard cut
+    (``rwa4_rwa``: 69 divergences in 4000 draws) is worse still.
+    """
     m = _physical_margin(pi)
     safe = jnp.where(m > 0, m, 1.0)
-    return jnp.where(m > 0, jnp.log(-jnp.expm1(-safe / scale)), -jnp.inf)
+    return jnp.where(m > 0, jnp.log(-jnp.expm1(-(safe / scale) ** _FACTOR_POWER)), -jnp.inf)
 
 
 def _log_density_with(physical, theta, kw):
@@ -667,19 +701,37 @@ def _sample_u4(key, n: int, cone: bool) -> np.ndarray:
     return np.concatenate(out)[:n]
 
 
+_log_factors = jax.jit(jax.vmap(_log_physical_factor, in_axes=(0, None)))
+
+
+def sample_inertia_prior(key, mean, cov, n: int) -> np.ndarray:
+    """``n`` draws (n, 6) kg m² of the stated inertia prior of both charts: ``Normal(mean, cov)``
+    times the physical factor :func:`_log_physical_factor` (scale from ``mean`` as in
+    :func:`prepare_rwa4`), by rejection: a Gaussian draw is kept with probability
+    ``exp(_log_physical_factor)`` (0 when unphysical). The one sampler of this prior, used by
+    :func:`sample_rwa4_prior` and the SBC truth draws."""
+    mean = np.asarray(mean, float)
+    chol = np.linalg.cholesky(np.asarray(cov, float))
+    scale = _margin_scale(mean)
+    kept, have = [], 0
+    for r in range(1000):
+        k_g, k_a = jax.random.split(jax.random.fold_in(key, r))
+        pi = mean + np.asarray(jax.random.normal(k_g, (2 * n + 16, 6))) @ chol.T
+        log_v = np.log(np.asarray(jax.random.uniform(k_a, (pi.shape[0],))))
+        kept.append(pi[log_v < np.asarray(_log_factors(jnp.asarray(pi), scale))])
+        have += kept[-1].shape[0]
+        if have >= n:
+            return np.concatenate(kept)[:n]
+    raise InputError("the inertia prior puts almost no mass on physical tensors (< 1e-3 of "
+                     "draws kept); check the prior mean and its uncertainties")
+
+
 def sample_rwa4_prior(key, problem: Rwa4Problem, n: int) -> dict[str, np.ndarray]:
     """``n`` draws of ``u4`` and the inertia entries from the stated prior."""
     k_u, k_i = jax.random.split(key)
     u = _sample_u4(k_u, n, problem.prior == "cone")
     out = {name: u[:, i] for i, name in enumerate(U4_NAMES)}
-    chol = np.linalg.cholesky(np.asarray(problem.inertia.cov))
-    kept, r = [], 0
-    while sum(k.shape[0] for k in kept) < n and r < 100:
-        z = np.asarray(jax.random.normal(jax.random.fold_in(k_i, r), (2 * n + 16, 6)))
-        pi = np.asarray(problem.inertia.mean) + z @ chol.T
-        kept.append(pi[is_physical(pi)])
-        r += 1
-    pi = np.concatenate(kept)[:n]
+    pi = sample_inertia_prior(k_i, problem.inertia.mean, problem.inertia.cov, n)
     out.update({name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)})
     return out
 
