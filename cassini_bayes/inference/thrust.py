@@ -79,7 +79,8 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
   thrusters' torque at ``t_i`` times ``δ`` — noise only on the samples taken during a pulse, which
   carry the timing information of the time constants, so it enters the sample's covariance
-  (:func:`_event_loglik`) instead of a parameter. Without it the robust fits of 20 error draws
+  (:func:`time_tag_columns`, evaluated once at the prior's time constants and the predicted
+  thrust) instead of a parameter. Without it the robust fits of 20 error draws
   of ``biasing_day028_real`` (10 ms jitter, flexible mode) covered ``τr`` and ``τf`` in 6 of 20
   90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd), refits
   without the jitter did not (≤ 2.7 sd).
@@ -439,8 +440,13 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
         inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
         nu_cols=jnp.asarray(nu_cols), nu_sd=jnp.asarray(layout.sd if robust else np.zeros(0)),
-        time_tag_sd=jnp.asarray(spacecraft.knowledge.time_tag_sd_s if robust else 0.0),
     )
+    sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
+    kw["time_tag_cols"] = jax.vmap(
+        time_tag_columns, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None))(
+        kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
+        tuple(jnp.asarray(x) for x in np.exp(tp.log_mean)),
+        jnp.full(8, float(spacecraft.thrust)), kw["q_matrix"], jnp.asarray(sd_t))
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0) + n_nu
     centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
@@ -501,26 +507,35 @@ def inv3_spd(b):
 
 
 def _event_loglik(inertia, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster,
-                  width, slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_sd):
+                  width, slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
     """Marginal log-likelihood of one event (offset integrated out) and its residual (n, 3).
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
-    robust terms) with covariance ``B + σ_t² m_i m_iᵀ``: white gyro and wheel-rate noise ``B``
-    (module docstring) and, with a time-tag error of sd ``σ_t`` (s), the impulse the thrusters
-    deliver in it, ``m_i = Q (F ⊙ ∂j/∂t(t_i))`` — the thrusters' torque at the sample, non-zero
-    only for samples taken during a pulse (the timing information of the time constants). The
-    offset ``b`` (flat prior) is integrated out exactly: ``b̂`` the precision-weighted mean,
-    ``+ (3/2) log 2π − ½ log|Σ_i P_i|``; with ``σ_t = 0`` this is the plain mean and
-    ``− (3/2) log n + ½ log|B|``.
+    robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
+    docstring) and the time-tag term ``m_i`` = ``time_tag_cols`` (:func:`time_tag_columns`). The
+    offset ``b`` (flat prior) is integrated out exactly (:func:`offset_marginal`).
     """
     v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
-    j, j_dot = jax.jvp(lambda tt: pulse_increments(tt, t_on, thruster, width, slot,
-                                                   slot_offsets, *tau), (t,), (jnp.ones_like(t),))
+    j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
     # Feldman & Lee Eq 17, plus the robust model's linear nuisance terms (module docstring)
     r = v - (j * f8[None, :]) @ q_matrix.T - nu_cols @ nu
-    m = time_tag_sd * (j_dot * f8[None, :]) @ q_matrix.T               # (n, 3) N m s
     s2 = jnp.exp(2.0 * log_sigma)
-    return offset_marginal(r, s2[0] * inertia @ inertia + s2[1] * wheel_cov, m, mask)
+    return offset_marginal(r, s2[0] * inertia @ inertia + s2[1] * wheel_cov, time_tag_cols,
+                           mask)
+
+
+def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_matrix,
+                     time_tag_sd):
+    """(n, 3) N m s: ``σ_t`` times the thrusters' torque at each sample, ``Q (F ⊙ ∂j/∂t)`` —
+    the momentum a time-tag error of sd ``σ_t`` (s) puts between a sample and the impulse
+    predicted for it (module docstring, "Robust model"). ``∂j/∂t`` is exact (forward-mode
+    derivative of :func:`pulse_increments` in the sample times); ``τ`` (3,) s and ``f8`` (8,) N
+    are the prior's median time constants and the predicted thrust: a variance term evaluated
+    once, at the prior, so the sampler sees a fixed covariance (evaluated at each draw it made
+    some fits take tens of minutes)."""
+    _, j_dot = jax.jvp(lambda tt: pulse_increments(tt, t_on, thruster, width, slot,
+                                                   slot_offsets, *tau), (t,), (jnp.ones_like(t),))
+    return time_tag_sd * (j_dot * f8[None, :]) @ q_matrix.T
 
 
 def offset_marginal(r, b, m, mask):
@@ -540,7 +555,7 @@ def offset_marginal(r, b, m, mask):
     return jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet, d
 
 
-_EVENT_AXES = (None, None, None, 0, None, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, None)
+_EVENT_AXES = (None, None, None, 0, None, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, 0)
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
@@ -619,7 +634,7 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     ll, _ = jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
         inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, nu, kw["t"], kw["omega"],
         kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
-        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_sd"])
+        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
     out = log_prior + jnp.sum(ll)
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
@@ -709,10 +724,10 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
 
 @jax.jit
 def _residuals_jit(i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width,
-                   slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_sd):
+                   slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
     return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
         i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width, slot,
-        slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_sd)
+        slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols)
 
 
 def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
@@ -730,7 +745,7 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
                           jnp.asarray(nu), kw["t"], kw["omega"], kw["h_wheels"], kw["mask"],
                           kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
                           kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"],
-                          kw["time_tag_sd"])
+                          kw["time_tag_cols"])
     return np.asarray(d) * np.asarray(kw["mask"])[..., None]
 
 
