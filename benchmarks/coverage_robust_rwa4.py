@@ -73,7 +73,7 @@ def run_family(family: str, seeds: int, settings, first: int = 0,
     import jax
     import numpy as np
 
-    from cassini_bayes.inference.rwa4 import U4_NAMES, fit_rwa4
+    from cassini_bayes.inference.rwa4 import fit_rwa4
     from cassini_bayes.inference.sphere import angles_deg
     from cassini_bayes.simulate import simulate
     from cassini_bayes.simulate.scenario import scenario_from_dict, scenario_path
