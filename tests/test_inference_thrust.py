@@ -63,15 +63,56 @@ def test_offset_marginal_matches_dense_gaussian():
            + block_diag(*[np.outer(x, x) for x in m[:n]]))
     dense = multivariate_normal(np.zeros(3 * n), cov).logpdf(r[:n].ravel()) \
         + 1.5 * np.log(2 * np.pi * big)
-    got, d = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.asarray(m), jnp.asarray(mask))
+    none = jnp.zeros((n + 2, 3, 0))
+    got = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.asarray(m), jnp.asarray(mask),
+                          none).loglik
     assert float(got) == pytest.approx(dense, abs=1e-4)
-    got0, d0 = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.zeros((n + 2, 3)),
-                               jnp.asarray(mask))
+    got0, _, _, d0 = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.zeros((n + 2, 3)),
+                                     jnp.asarray(mask), none)
     res = r[:n] - r[:n].mean(0)
     closed = (multivariate_normal(np.zeros(3), b).logpdf(res).sum() + 1.5 * np.log(2 * np.pi)
               + 0.5 * np.linalg.slogdet(b)[1] - 1.5 * np.log(n))
     assert float(got0) == pytest.approx(closed, abs=1e-9)
     np.testing.assert_allclose(np.asarray(d0)[:n], res, atol=1e-12)
+
+
+def test_nuisance_marginal_matches_dense_gaussian():
+    """Offsets of two events (flat) and a nuisance ``ν ~ N(0, diag(sd²))`` shared by both,
+    integrated out by :func:`offset_marginal` per event and :func:`nuisance_marginal` over the
+    events, equal the dense Gaussian of all samples with covariance
+    ``⊕(B_e + m_i m_iᵀ) + D diag(sd²) Dᵀ + offsets`` (flat offsets as N(0, V I), V → ∞, times
+    (2π V)^{3/2} each); and the conditional mean of ``ν`` equals the dense regression's."""
+    from scipy.linalg import block_diag
+    from scipy.stats import multivariate_normal
+
+    from cassini_bayes.inference.thrust import nuisance_marginal, offset_marginal
+
+    rng = np.random.default_rng(4)
+    n, n_nu, big = 5, 4, 1e6
+    sd = np.array([0.5, 2.0, 1.0, 0.3])
+    ev = []
+    for e in range(2):
+        a = rng.normal(size=(3, 3))
+        ev.append(dict(b=a @ a.T + 0.5 * np.eye(3), r=rng.normal(size=(n, 3)) + 4.0 * e,
+                       m=rng.normal(size=(n, 3)), d=rng.normal(size=(n, 3, n_nu))))
+    total, info, score = 0.0, 0.0, 0.0
+    for x in ev:
+        om = offset_marginal(jnp.asarray(x["r"]), jnp.asarray(x["b"]), jnp.asarray(x["m"]),
+                             jnp.ones(n), jnp.asarray(x["d"]))
+        total, info, score = total + om.loglik, info + om.info, score + om.score
+    ll_nu, mean, _ = nuisance_marginal(info, score, jnp.asarray(sd))
+    got = float(total + ll_nu)
+
+    blocks = [np.kron(np.eye(n), x["b"]) + block_diag(*[np.outer(v, v) for v in x["m"]])
+              + np.kron(np.ones((n, n)), big * np.eye(3)) for x in ev]
+    d_all = np.concatenate([x["d"].reshape(3 * n, n_nu) for x in ev])
+    cov = block_diag(*blocks) + d_all @ np.diag(sd**2) @ d_all.T
+    r_all = np.concatenate([x["r"].ravel() for x in ev])
+    dense = multivariate_normal(np.zeros(6 * n), cov).logpdf(r_all) + 2 * 1.5 * np.log(
+        2 * np.pi * big)
+    assert got == pytest.approx(dense, abs=1e-4)
+    nu_mean = np.diag(sd**2) @ d_all.T @ np.linalg.solve(cov, r_all)
+    np.testing.assert_allclose(sd * np.asarray(mean), nu_mean, rtol=1e-4, atol=1e-8)
 
 
 def test_tau_prior_holds_manufacturer_ranges():

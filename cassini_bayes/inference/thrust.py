@@ -85,6 +85,18 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd), refits
   without the jitter did not (≤ 2.7 sd).
 
+``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
+rather than sampled (as in the robust RWA4 model): per event the offset is removed
+(:func:`offset_marginal`), leaving a log-likelihood quadratic in ``ν``; the events' terms add,
+and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky, R ≈ 20). The sampler
+keeps the 5-dimensional geometry of the idealised model; :func:`fit_thrust` then draws ``ν``
+from its exact Gaussian conditional at each draw, so the posterior's nuisance sites are joint
+posterior draws. Sampled instead (21 coordinates on one event), the time-tag term left a
+banana: the conditional mean of the torque about Z moved with ``τr²`` by about one conditional
+sd per unit of whitened ``τr``, which no affine whitening removes — 84 divergences and R-hat up
+to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the worst of those
+(seed 14: 5 divergences, tree depth 4-5) has none, at tree depth 2-3.
+
 ``c`` is confounded with the thrust scale (``F`` balances the wheel momentum the event builds): the
 thrust posterior widens by about the prior sd of ``c`` (0.5 % by default) instead of claiming the
 0.01 % that the idealised model claims on clean data.
@@ -448,7 +460,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         tuple(jnp.asarray(x) for x in np.exp(tp.log_mean)),
         jnp.full(8, float(spacecraft.thrust)), kw["q_matrix"], jnp.asarray(sd_t))
     n_f = len(names)
-    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0) + n_nu
+    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
     centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
     kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
     return ThrustProblem(
@@ -506,22 +518,29 @@ def inv3_spd(b):
     return adj / det[..., None, None], jnp.log(det)
 
 
-def _event_loglik(inertia, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster,
+def _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
+                    slot_offsets, q_matrix):
+    """``r = V(t_i) − Q (F ⊙ j(t_i))`` (n, 3) N m s: Feldman & Lee Eq 17, left minus right."""
+    v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
+    j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
+    return v - (j * f8[None, :]) @ q_matrix.T                        # Feldman & Lee Eq 17
+
+
+def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster,
                   width, slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
-    """Marginal log-likelihood of one event (offset integrated out) and its residual (n, 3).
+    """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``.
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
     docstring) and the time-tag term ``m_i`` = ``time_tag_cols`` (:func:`time_tag_columns`). The
-    offset ``b`` (flat prior) is integrated out exactly (:func:`offset_marginal`).
+    offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
+    :func:`nuisance_marginal` over all events.
     """
-    v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
-    j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
-    # Feldman & Lee Eq 17, plus the robust model's linear nuisance terms (module docstring)
-    r = v - (j * f8[None, :]) @ q_matrix.T - nu_cols @ nu
+    r = _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
+                        slot_offsets, q_matrix)
     s2 = jnp.exp(2.0 * log_sigma)
     return offset_marginal(r, s2[0] * inertia @ inertia + s2[1] * wheel_cov, time_tag_cols,
-                           mask)
+                           mask, nu_cols)
 
 
 def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_matrix,
@@ -538,12 +557,26 @@ def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_ma
     return time_tag_sd * (j_dot * f8[None, :]) @ q_matrix.T
 
 
-def offset_marginal(r, b, m, mask):
-    """``log ∫ Π_i N(r_i − β; 0, B + m_i m_iᵀ) dβ`` over a flat offset ``β`` (3,), and the
-    residuals ``r − β̂`` (n, 3), ``β̂`` the precision-weighted mean; rows with ``mask`` 0 are left
-    out. The per-sample precisions come from Sherman–Morrison,
-    ``(B + m mᵀ)⁻¹ = B⁻¹ − B⁻¹m mᵀB⁻¹/(1 + mᵀB⁻¹m)``; the integral adds
-    ``(3/2) log 2π − ½ log|Σ_i P_i|``."""
+class OffsetMarginal(NamedTuple):
+    """What :func:`offset_marginal` returns for one event."""
+
+    loglik: object      # log ∫ Π_i N(r_i − β; 0, Σ_i) dβ at ν = 0
+    info: object        # (R, R) Σ D̄_iᵀ P_i D̄_i: the event's information on ν, offset removed
+    score: object       # (R,) Σ D̄_iᵀ P_i d_i: the linear term, ∂ loglik/∂ν at ν = 0
+    resid: object       # (n, 3) r − β̂, N m s
+
+
+def offset_marginal(r, b, m, mask, cols):
+    """The flat offset ``β`` (3,) of one event integrated out, exactly, with per-sample
+    covariances ``Σ_i = B + m_i m_iᵀ``; rows with ``mask`` 0 are left out.
+
+    The per-sample precisions ``P_i`` come from Sherman–Morrison,
+    ``(B + m mᵀ)⁻¹ = B⁻¹ − B⁻¹m mᵀB⁻¹/(1 + mᵀB⁻¹m)``; ``β̂ = (Σ P_i)⁻¹ Σ P_i r_i`` and the
+    integral adds ``(3/2) log 2π − ½ log|Σ_i P_i|``. ``cols`` (n, 3, R) are the columns of the
+    nuisance ``ν`` in the residual ``r_i − cols_i ν``: the log-likelihood is exactly quadratic in
+    ``ν``, ``loglik − ½ νᵀ info ν + scoreᵀ ν`` (:class:`OffsetMarginal`), with the columns'
+    offset part removed (``D̄_i = D_i − (Σ P)⁻¹ Σ P_j D_j``), so the events' terms add up.
+    """
     b_inv, logdet = inv3_spd(b)
     u = m @ b_inv
     g = 1.0 + jnp.sum(u * m, -1)
@@ -552,23 +585,38 @@ def offset_marginal(r, b, m, mask):
     d = r - (p_inv @ jnp.einsum("nij,nj->i", prec, r))[None, :]
     quad = jnp.einsum("ni,nij,nj->n", d, prec, d)
     ll_i = -0.5 * (quad + logdet + jnp.log(g) + 3.0 * jnp.log(2.0 * jnp.pi))
-    return jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet, d
+    ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet
+    pd = jnp.einsum("nij,njr->nir", prec, cols)                       # P_i D_i
+    s_bd = jnp.sum(pd, 0)                                             # Σ P_i D_i (3, R)
+    info = jnp.einsum("nir,nis->rs", cols, pd) - s_bd.T @ p_inv @ s_bd
+    score = jnp.einsum("nir,ni->r", pd, d)
+    return OffsetMarginal(ll, info, score, d)
 
 
-_EVENT_AXES = (None, None, None, 0, None, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, 0)
+def nuisance_marginal(info, score, nu_sd):
+    """``log ∫ exp(scoreᵀν − ½ νᵀ info ν) N(ν; 0, diag(nu_sd²)) dν`` and the Gaussian
+    conditional of the whitened ``z = ν / nu_sd``: its mean ``A⁻¹ s̃`` and the lower Cholesky
+    factor ``L`` of ``A = diag(sd) info diag(sd) + I`` (the conditional covariance is
+    ``A⁻¹ = L⁻ᵀ L⁻¹``). The integral is ``½ s̃ᵀ A⁻¹ s̃ − log|L|``, ``s̃ = sd ⊙ score``."""
+    a = nu_sd[:, None] * info * nu_sd[None, :] + jnp.eye(nu_sd.shape[0])
+    chol = jnp.linalg.cholesky(0.5 * (a + a.T))
+    y = jax.scipy.linalg.solve_triangular(chol, nu_sd * score, lower=True)
+    mean = jax.scipy.linalg.solve_triangular(chol.T, y, lower=False)
+    return 0.5 * y @ y - jnp.sum(jnp.log(jnp.diag(chol))), mean, chol
+
+
+_EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, 0)
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
     """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(z_d, z_r, c_z)``,
-    ``noise_z`` (E,), ``inertia_z`` (6,) or ``None`` and ``nu_z`` (R,) (prior-whitened
-    nuisance parameters; R = 0 for the idealised model)."""
+    ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
     tau_z = theta[n_f:n_f + 3]
     noise_z = theta[n_f + 3:n_f + 3 + n_ev]
     k = n_f + 3 + n_ev
     inertia_z = theta[k:k + 6] if sample_inertia else None
-    nu_z = theta[k + 6:] if sample_inertia else theta[k:]
-    return f_z, tau_z, noise_z, inertia_z, nu_z
+    return f_z, tau_z, noise_z, inertia_z
 
 
 def long_pulse_excess(tau_delay, tau_rise, tau_fall):
@@ -607,36 +655,63 @@ def _tau_from_z(tau_z, kw):
 
 def _physical(theta, kw, n_f: int, sample_inertia: bool):
     """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
-    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2), ``π`` (6,) kg m², ``ν`` (R,)."""
+    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2) and ``π`` (6,) kg m²."""
     n_ev = kw["log_noise_hat"].shape[0]
-    f_z, tau_z, noise_z, inertia_z, nu_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
     thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
     tau, _, _ = _tau_from_z(tau_z, kw)
     log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
     pi = kw["inertia_mean"]
     if sample_inertia:
         pi = pi + kw["inertia_tril"] @ inertia_z
-    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi, kw["nu_sd"] * nu_z
+    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi
+
+
+def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
+    """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
+    _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
+    return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
+        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw["t"], kw["omega"],
+        kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
+        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
-    """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring)."""
+    """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring);
+    the offsets and the robust model's nuisance ``ν`` are integrated out exactly."""
     n_ev = kw["log_noise_hat"].shape[0]
-    f_z, tau_z, noise_z, inertia_z, nu_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
     _, tau_std, log_jac = _tau_from_z(tau_z, kw)
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z))
                  + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_std)) + log_jac
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
-    log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(nu_z))
-    _, f8, tau, log_sigma, pi, nu = _physical(theta, kw, n_f, sample_inertia)
-    ll, _ = jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
-        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, nu, kw["t"], kw["omega"],
-        kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
-        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
-    out = log_prior + jnp.sum(ll)
+    st = _event_stats(theta, kw, n_f, sample_inertia)
+    out = log_prior + jnp.sum(st.loglik)
+    if kw["nu_sd"].shape[0]:
+        out += nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw["nu_sd"])[0]
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
+
+
+@lru_cache(maxsize=None)
+def _nuisance_sampler(n_f: int, sample_inertia: bool):
+    """Jitted ``(w (S, P), eps (S, R), kw) -> ν (S, R)``: a draw of ``ν`` from its exact Gaussian
+    conditional given each draw of the sampled parameters (:func:`nuisance_marginal`), so that
+    ``(θ, ν)`` are draws of the joint posterior. Batched to bound the memory (``n × 3 × R`` per
+    draw)."""
+    def one(args, kw):
+        w, eps = args
+        st = _event_stats(kw["centre"] + kw["tril"] @ w, kw, n_f, sample_inertia)
+        _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw["nu_sd"])
+        z = mean + jax.scipy.linalg.solve_triangular(chol.T, eps, lower=False)
+        return kw["nu_sd"] * z
+
+    @jax.jit
+    def draws(w, eps, kw):
+        return jax.lax.map(lambda a: one(a, kw), (w, eps), batch_size=32)
+
+    return draws
 
 
 @lru_cache(maxsize=None)
@@ -653,7 +728,7 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
     w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), centre.shape))
     theta = centre + tril @ w
     numpyro.factor("log_density", _log_density(theta, kw, len(names), sample_inertia))
-    thrust, _, tau, log_sigma, pi, nu = _physical(theta, kw, len(names), sample_inertia)
+    thrust, _, tau, log_sigma, pi = _physical(theta, kw, len(names), sample_inertia)
     for i, name in enumerate(names):
         numpyro.deterministic(name, thrust[i])
     for i, name in enumerate(TAU_NAMES):
@@ -664,22 +739,21 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
     if sample_inertia:
         for i, name in enumerate(INERTIA_NAMES):
             numpyro.deterministic(name, pi[i])
-    if nu.shape[0]:
-        for site, value in _split_nuisance(nu, sig.shape[0]).items():
-            numpyro.deterministic(site, value)
 
 
 def _split_nuisance(nu, n_ev: int) -> dict:
-    """The robust nuisance vector ``ν`` as named sites (layout of
-    :func:`~cassini_bayes.inference.nuisance.nuisance_layout`): ``gyro_bias`` (E, 3) rad/s,
-    ``gyro_scale`` (3,), ``wheel_scale`` (), ``wheel_tilt`` (K, 2) rad, ``T_body`` (E, 3) N m."""
+    """The robust nuisance vectors ``ν`` (..., R) as named sites (layout of
+    :func:`~cassini_bayes.inference.nuisance.nuisance_layout`): ``gyro_bias`` (..., E, 3) rad/s,
+    ``gyro_scale`` (..., 3), ``wheel_scale`` (...), ``wheel_tilt`` (..., K, 2) rad, ``T_body``
+    (..., E, 3) N m."""
+    lead = nu.shape[:-1]
     b = 3 * n_ev
-    end = nu.shape[0] - 3 * n_ev
-    return {EFFECTS["gyro_bias"]: nu[:b].reshape(n_ev, 3),
-            EFFECTS["gyro_scale"]: nu[b:b + 3],
-            EFFECTS["wheel_inertia"]: nu[b + 3],
-            EFFECTS["wheel_axes"]: nu[b + 4:end].reshape(-1, 2),
-            EFFECTS["body_torque"]: nu[end:].reshape(n_ev, 3)}
+    end = nu.shape[-1] - 3 * n_ev
+    return {EFFECTS["gyro_bias"]: nu[..., :b].reshape(lead + (n_ev, 3)),
+            EFFECTS["gyro_scale"]: nu[..., b:b + 3],
+            EFFECTS["wheel_inertia"]: nu[..., b + 3],
+            EFFECTS["wheel_axes"]: nu[..., b + 4:end].reshape(lead + (-1, 2)),
+            EFFECTS["body_torque"]: nu[..., end:].reshape(lead + (n_ev, 3))}
 
 
 @lru_cache(maxsize=None)
@@ -688,8 +762,8 @@ def thrust_model(mode: str, sample_inertia: bool = False):
 
     Call it with ``**ThrustProblem.model_kwargs``. Posterior sites: the thrust names of the mode
     (N), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
-    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, the nuisance sites of
-    :func:`_split_nuisance` when the problem is robust, and the sampler's whitened ``w``.
+    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``
+    (the robust model's nuisance ``ν`` is integrated out; :func:`fit_thrust` adds its draws).
     """
     names = thrust_names(mode)
 
@@ -725,9 +799,16 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
 @jax.jit
 def _residuals_jit(i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width,
                    slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
-    return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
-        i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width, slot,
-        slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols)
+    def one(log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot, wheel_cov, nu_cols,
+            time_tag_cols):
+        r = _event_residual(i_m, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
+                            slot_offsets, q_matrix) - nu_cols @ nu
+        s2 = jnp.exp(2.0 * log_sigma)
+        return offset_marginal(r, s2[0] * i_m @ i_m + s2[1] * wheel_cov, time_tag_cols, mask,
+                               nu_cols[..., :0]).resid
+
+    return jax.vmap(one)(log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot,
+                         wheel_cov, nu_cols, time_tag_cols)
 
 
 def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
@@ -740,12 +821,11 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     f8 = np.asarray(thrust, float)[idx]
     pi = np.asarray(kw["inertia_mean"]) if pi is None else np.asarray(pi, float)
     nu = np.zeros(kw["nu_sd"].shape[0]) if nu is None else np.asarray(nu, float)
-    _, d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
-                          tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
-                          jnp.asarray(nu), kw["t"], kw["omega"], kw["h_wheels"], kw["mask"],
-                          kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
-                          kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"],
-                          kw["time_tag_cols"])
+    d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
+                       tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
+                       jnp.asarray(nu), kw["t"], kw["omega"], kw["h_wheels"], kw["mask"],
+                       kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
+                       kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
     return np.asarray(d) * np.asarray(kw["mask"])[..., None]
 
 
@@ -759,6 +839,29 @@ class ThrustPosterior(NamedTuple):
     idata: object
     diagnostics: object
     problem: ThrustProblem
+
+
+def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool,
+                        coords: dict, dims: dict) -> None:
+    """Add the robust model's nuisance sites (:func:`_split_nuisance`) to the posterior: one
+    draw of ``ν`` from its exact conditional per draw of the sampler (:func:`_nuisance_sampler`),
+    so the sites are draws of the joint posterior."""
+    import xarray as xr
+
+    kw = problem.model_kwargs
+    w = np.asarray(idata.posterior["w"].values)
+    n_chain, n_draw, dim = w.shape
+    n_nu = kw["nu_sd"].shape[0]
+    eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
+    nu = np.asarray(_nuisance_sampler(len(problem.names), sample_inertia)(
+        jnp.asarray(w.reshape(-1, dim)), eps, kw))
+    n_ev = kw["log_noise_hat"].shape[0]
+    for site, v in _split_nuisance(nu.reshape(n_chain, n_draw, n_nu), n_ev).items():
+        site_dims = tuple(dims.get(site, ()))
+        idata.posterior[site] = xr.DataArray(
+            v, dims=("chain", "draw") + site_dims,
+            coords={"chain": idata.posterior.chain, "draw": idata.posterior.draw,
+                    **{d: coords[d] for d in site_dims}})
 
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -814,6 +917,9 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
+    if robust:
+        _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem, sample_inertia, coords,
+                            dims)
 
     post = idata.posterior
     f_mean = np.array([float(post[n].mean()) for n in problem.names])
