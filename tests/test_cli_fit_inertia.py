@@ -33,7 +33,8 @@ def run(tmp_path_factory, csv):
 
     out = tmp_path_factory.mktemp("runs") / "inertia"
     code = main(["fit", "inertia", "--telemetry", str(csv), "--spacecraft",
-                 "cassini_2000_03_15", "--out", str(out), "--seed", "7", *SMALL])
+                 "cassini_2000_03_15", "--out", str(out), "--seed", "7", *SMALL,
+                 "--target-accept", "0.95"])
     return code, out
 
 
@@ -62,6 +63,7 @@ def test_writes_the_run_directory(run, csv):
     assert cfg["seed"] == 7 and cfg["version"] == "0.1.0"
     assert cfg["inputs"]["telemetry"][0]["path"] == str(csv.resolve())
     assert len(cfg["inputs"]["telemetry"][0]["sha256"]) == 64
+    assert cfg["sampler"]["target_accept"] == 0.95
     assert cfg["sampler"]["draws"] == 400 and cfg["spacecraft"]["inertia"]["Ixx"] == 8810.8
 
     idata = az.from_netcdf(out / "posterior.nc")

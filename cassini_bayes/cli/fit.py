@@ -4,7 +4,7 @@ Shared by ``fit thrust`` and ``fit rwa4`` (add them as their own ``register`` in
 package, or beside ``inertia`` here):
 
 * the common options as ready-made ``typer.Option`` defaults: :data:`SEED`, :data:`CHAINS`,
-  :data:`WARMUP`, :data:`DRAWS`, :data:`STRICT`, :data:`FORCE`, :data:`OUT`;
+  :data:`WARMUP`, :data:`DRAWS`, :data:`TARGET_ACCEPT`, :data:`STRICT`, :data:`FORCE`, :data:`OUT`;
 * :func:`sampler_settings` — options → :class:`~cassini_bayes.inference.runner.SamplerSettings`
   (progress bar only on a terminal);
 * :func:`write_fit_run` — writes the run directory atomically (``posterior.nc``,
@@ -56,18 +56,22 @@ SEED = typer.Option(0, "--seed", help="Seed of the run's jax.random key.")
 CHAINS = typer.Option(4, "--chains", min=1, help="Number of NUTS chains.")
 WARMUP = typer.Option(1000, "--warmup", min=10, help="Warmup (adaptation) iterations per chain.")
 DRAWS = typer.Option(1000, "--draws", min=10, help="Kept draws per chain.")
+TARGET_ACCEPT = typer.Option(0.9, "--target-accept", min=0.5, max=0.999,
+                             help="NUTS target acceptance probability: raise it (e.g. 0.95) "
+                                  "when a fit reports divergent transitions; smaller steps, "
+                                  "longer trees.")
 STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sampler did not "
                                               "converge (outputs are still written).")
 FORCE = typer.Option(False, "--force", help="Replace --out if it exists.")
 OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
 
 
-def sampler_settings(chains: int, warmup: int, draws: int):
+def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float = 0.9):
     """The runner's settings from the common options; the progress bar only on a terminal."""
     from cassini_bayes.inference.runner import SamplerSettings
 
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
-                           progress=sys.stderr.isatty())
+                           target_accept=target_accept, progress=sys.stderr.isatty())
 
 
 @contextmanager
@@ -119,7 +123,8 @@ def write_fit_run(out: Path, *, force: bool, strict: bool, idata, summary: dict,
     if not d["converged"]:
         msg = (f"{rd.final}: the sampler did not converge (max R-hat {d['max_r_hat']:.4f}, min "
                f"bulk ESS {d['min_ess_bulk']:.0f}, {d['divergences']} divergences); outputs "
-               "written with converged = false — run longer (--warmup/--draws) or check the data")
+               "written with converged = false — run longer (--warmup/--draws), raise "
+               "--target-accept if it diverged, or check the data")
         if strict:
             raise NotConvergedError(msg)
         console.print(f"[yellow]warning:[/yellow] {msg}")
@@ -170,6 +175,7 @@ def fit_inertia_cmd(
     chains: int = CHAINS,
     warmup: int = WARMUP,
     draws: int = DRAWS,
+    target_accept: float = TARGET_ACCEPT,
     strict: bool = STRICT,
     force: bool = FORCE,
     torque: bool = typer.Option(True, "--torque/--no-torque",
@@ -197,7 +203,7 @@ def fit_inertia_cmd(
     RunDir(out, force=force)  # refuse a bad --out before any work
     sc = load_spacecraft(spacecraft)
     tels = read_telemetry_many(telemetry)
-    settings = sampler_settings(chains, warmup, draws)
+    settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings)

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import typer
 
-from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
-                                   collect_warnings, fit_config, sampler_settings,
+from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, TARGET_ACCEPT,
+                                   WARMUP, collect_warnings, fit_config, sampler_settings,
                                    write_fit_run)
 
 ORDER = 22
@@ -59,6 +59,7 @@ def fit_rwa4_cmd(
     chains: int = CHAINS,
     warmup: int = WARMUP,
     draws: int = DRAWS,
+    target_accept: float = TARGET_ACCEPT,
     strict: bool = STRICT,
     force: bool = FORCE,
 ) -> None:
@@ -92,7 +93,7 @@ def fit_rwa4_cmd(
     if window_a:
         pairs = [(parse_window(a, tel.t, option="window-a"),
                   parse_window(b, tel.t, option="window-b")) for a, b in zip(window_a, window_b)]
-    settings = sampler_settings(chains, warmup, draws)
+    settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior, inertia=inertia,

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import typer
 
-from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
-                                   collect_warnings, fit_config, sampler_settings,
+from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, TARGET_ACCEPT,
+                                   WARMUP, collect_warnings, fit_config, sampler_settings,
                                    write_fit_run)
 
 ORDER = 21
@@ -106,6 +106,7 @@ def fit_thrust_cmd(
     chains: int = CHAINS,
     warmup: int = WARMUP,
     draws: int = DRAWS,
+    target_accept: float = TARGET_ACCEPT,
     strict: bool = STRICT,
     force: bool = FORCE,
     idealised: bool = typer.Option(False, "--idealised",
@@ -140,7 +141,7 @@ def fit_thrust_cmd(
     sc = load_spacecraft(spacecraft)
     inertia = inertia_from_run(inertia_posterior) if inertia_posterior is not None else None
     events = [(read_telemetry(t), read_pulses(p)) for t, p in zip(telemetry, pulses)]
-    settings = sampler_settings(chains, warmup, draws)
+    settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
