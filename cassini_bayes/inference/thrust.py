@@ -89,7 +89,7 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
 rather than sampled (as in the robust RWA4 model): per event the offset is removed
 (:func:`offset_marginal`), leaving a log-likelihood quadratic in ``ν``; the events' terms add,
 and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky, R ≈ 20). The sampler
-keeps the 5-dimensional geometry of the idealised model; :func:`fit_thrust` then draws ``ν``
+keeps the idealised model's coordinates (5 for one event and one ``F``); :func:`fit_thrust` then draws ``ν``
 from its exact Gaussian conditional at each draw, so the posterior's nuisance sites are joint
 posterior draws. Sampled instead (21 coordinates on one event), the time-tag term left a
 banana: the conditional mean of the torque about Z moved with ``τr²`` by about one conditional
