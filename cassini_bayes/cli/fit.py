@@ -32,7 +32,10 @@ ORDER = 20
 
 
 def _request_host_devices() -> None:
-    """One JAX CPU device per core, so NUTS chains run in parallel (``chain_method="parallel"``).
+    """One JAX CPU device per core, and at least one per default chain (4), so NUTS chains run in
+    parallel (``chain_method="parallel"``) even on a 2-core machine: there 4 chains on 4 devices
+    (threads) sampled a robust thrust fit of ``biasing_day028_real`` in 40 s, 4 chains
+    vectorised on 2 devices in 77 s (lock-step: every iteration waits for the deepest tree).
 
     Must run before JAX initialises its backend, hence at import of this module (the CLI imports
     its command modules at start-up) and without importing ``cassini_bayes.inference``. A no-op
@@ -45,7 +48,7 @@ def _request_host_devices() -> None:
     if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
         return
     try:
-        jax.config.update("jax_num_cpu_devices", max(1, os.cpu_count() or 1))
+        jax.config.update("jax_num_cpu_devices", max(4, os.cpu_count() or 1))
     except RuntimeError:  # backend already initialised
         pass
 

@@ -13,7 +13,8 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
   a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
-  the deepest tree). The CLI asks JAX for one CPU device per core before the backend starts
+  the deepest tree). The CLI asks JAX for one CPU device per core, and at least 4 (the default
+  chains; more threads than cores still beats lock-step), before the backend starts
   (``jax_num_cpu_devices``); measured with benchmarks/bench_inertia.py on the 2-core machine,
   4 × 2000 iterations: 1.8 s parallel vs 3.1 s vectorized (loaded machine),
 * shows a rich progress bar when asked (``jax.debug.callback`` every 50 iterations; compiled in
@@ -123,7 +124,8 @@ class Diagnostics(NamedTuple):
 
 
 def request_host_devices(n: int | None = None) -> None:
-    """Ask JAX for ``n`` CPU devices (default: the CPU count) so chains can run in parallel.
+    """Ask JAX for ``n`` CPU devices (default: the CPU count, at least 4, the default number of
+    chains) so chains can run in parallel.
 
     Only effective before JAX initialises its backend (the CLI calls it first thing); harmless
     afterwards. Leaves an explicit ``--xla_force_host_platform_device_count`` in ``XLA_FLAGS``
@@ -131,7 +133,7 @@ def request_host_devices(n: int | None = None) -> None:
     """
     if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
         return
-    n = max(1, n or os.cpu_count() or 1)
+    n = max(1, n or max(4, os.cpu_count() or 1))
     try:
         jax.config.update("jax_num_cpu_devices", n)
     except RuntimeError:  # backend already initialised

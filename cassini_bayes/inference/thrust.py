@@ -577,19 +577,23 @@ def offset_marginal(r, b, m, mask, cols):
     ``ν``, ``loglik − ½ νᵀ info ν + scoreᵀ ν`` (:class:`OffsetMarginal`), with the columns'
     offset part removed (``D̄_i = D_i − (Σ P)⁻¹ Σ P_j D_j``), so the events' terms add up.
     """
+    # Products of the n 3×3 blocks are written as broadcasts and sums, not batched einsums:
+    # XLA on the CPU runs a batched matrix product of 3×3 blocks as n tiny GEMMs (measured:
+    # 5× slower over a whole log-density gradient).
     b_inv, logdet = inv3_spd(b)
     u = m @ b_inv
     g = 1.0 + jnp.sum(u * m, -1)
     prec = (b_inv[None] - u[:, :, None] * u[:, None, :] / g[:, None, None]) * mask[:, None, None]
     p_inv, p_logdet = inv3_spd(jnp.sum(prec, 0))
-    d = r - (p_inv @ jnp.einsum("nij,nj->i", prec, r))[None, :]
-    quad = jnp.einsum("ni,nij,nj->n", d, prec, d)
+    d = r - (p_inv @ jnp.sum(prec * r[:, None, :], (0, 2)))[None, :]
+    quad = jnp.sum(d[:, :, None] * prec * d[:, None, :], (1, 2))
     ll_i = -0.5 * (quad + logdet + jnp.log(g) + 3.0 * jnp.log(2.0 * jnp.pi))
     ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet
-    pd = jnp.einsum("nij,njr->nir", prec, cols)                       # P_i D_i
+    flat = (3 * cols.shape[0], cols.shape[-1])
+    pd = jnp.sum(prec[..., None] * cols[:, None, :, :], 2)           # P_i D_i (n, 3, R)
     s_bd = jnp.sum(pd, 0)                                             # Σ P_i D_i (3, R)
-    info = jnp.einsum("nir,nis->rs", cols, pd) - s_bd.T @ p_inv @ s_bd
-    score = jnp.einsum("nir,ni->r", pd, d)
+    info = cols.reshape(flat).T @ pd.reshape(flat) - s_bd.T @ p_inv @ s_bd
+    score = pd.reshape(flat).T @ d.reshape(-1)
     return OffsetMarginal(ll, info, score, d)
 
 
