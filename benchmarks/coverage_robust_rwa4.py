@@ -13,8 +13,8 @@ worst and median axis error against Brown's budgets (RCS ≤ 3°, RWA ≤ 1°), 
 and the convergence record. Not a test.
 
     python benchmarks/coverage_robust_rwa4.py [--seeds 20] [--families rwa4_rcs_real rwa4_rwa_real]
-        [--first-seed 0] [--draw-inertia] [--models idealised robust] [--chains 4] [--warmup 300] [--draws 300]
-        [--target-accept 0.9] [--json out.json]
+        [--first-seed 0] [--draw-inertia] [--models idealised robust] [--chains 4]
+        [--warmup 300] [--draws 300] [--target-accept 0.9] [--json out.json]
 """
 
 from __future__ import annotations

@@ -27,33 +27,14 @@ from typing import Iterator
 import typer
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import request_host_devices
 
 ORDER = 20
 
 
-def _request_host_devices() -> None:
-    """One JAX CPU device per core, and at least one per default chain (4), so NUTS chains run in
-    parallel (``chain_method="parallel"``) even on a 2-core machine: there 4 chains on 4 devices
-    (threads) sampled a robust thrust fit of ``biasing_day028_real`` in 40 s, 4 chains
-    vectorised on 2 devices in 77 s (lock-step: every iteration waits for the deepest tree).
-
-    Must run before JAX initialises its backend, hence at import of this module (the CLI imports
-    its command modules at start-up) and without importing ``cassini_bayes.inference``. A no-op
-    when ``XLA_FLAGS`` already sets a device count or the backend is already up.
-    """
-    import os
-
-    import jax
-
-    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
-        return
-    try:
-        jax.config.update("jax_num_cpu_devices", max(4, os.cpu_count() or 1))
-    except RuntimeError:  # backend already initialised
-        pass
-
-
-_request_host_devices()
+# one JAX CPU device per core and at least 4, before anything starts the backend (the CLI imports
+# its command modules at start-up)
+request_host_devices()
 
 SEED = typer.Option(0, "--seed", help="Seed of the run's jax.random key.")
 CHAINS = typer.Option(4, "--chains", min=1, help="Number of NUTS chains.")

@@ -36,7 +36,6 @@ divergences from ``sample_stats.diverging``. ``converged`` means ``max R-hat ≤
 
 from __future__ import annotations
 
-import os
 from typing import Callable, Mapping, NamedTuple, Sequence
 
 import arviz as az
@@ -48,6 +47,8 @@ from jax import lax
 from numpyro.infer import Predictive
 from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
+
+from cassini_bayes._devices import request_host_devices
 
 __all__ = [
     "SamplerSettings",
@@ -121,23 +122,6 @@ class Diagnostics(NamedTuple):
         if self.divergences:
             bad.append(f"{self.divergences} divergent transitions")
         return "; ".join(bad)
-
-
-def request_host_devices(n: int | None = None) -> None:
-    """Ask JAX for ``n`` CPU devices (default: the CPU count, at least 4, the default number of
-    chains) so chains can run in parallel.
-
-    Only effective before JAX initialises its backend (the CLI calls it first thing); harmless
-    afterwards. Leaves an explicit ``--xla_force_host_platform_device_count`` in ``XLA_FLAGS``
-    alone.
-    """
-    if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
-        return
-    n = max(1, n or max(4, os.cpu_count() or 1))
-    try:
-        jax.config.update("jax_num_cpu_devices", n)
-    except RuntimeError:  # backend already initialised
-        pass
 
 
 def choose_chain_method(chains: int) -> str:
