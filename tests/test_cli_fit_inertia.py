@@ -12,6 +12,7 @@ import pytest
 
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import Telemetry, write_telemetry
+from margins import assert_mixed, assert_verdict_consistent
 from test_inference_inertia import make_slews
 
 SMALL = ["--chains", "4", "--warmup", "400", "--draws", "400"]
@@ -54,7 +55,8 @@ def test_writes_the_run_directory(run, csv):
     assert set(summary["baseline"]) == set(INERTIA)
     assert {"divergences", "max_r_hat", "min_ess_bulk", "converged"} <= set(
         summary["diagnostics"])
-    assert summary["diagnostics"]["converged"] is True
+    assert_mixed(summary["diagnostics"])
+    assert_verdict_consistent(summary["diagnostics"])
     # the least-squares baseline and the posterior agree on rich data (within 1 %)
     for name in INERTIA[:3]:
         assert abs(summary["baseline"][name] / summary["parameters"][name]["mean"] - 1) < 0.01
@@ -109,4 +111,6 @@ def test_strict_exits_3_but_writes_everything(tmp_path, csv, run_cli):
     assert code == 3 and "did not converge" in err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["diagnostics"]["converged"] is False
+    with pytest.raises(AssertionError):  # the tests' margins fail on an unmixed run too
+        assert_mixed(summary["diagnostics"])
     assert (out / "posterior.nc").exists() and (out / "report.html").exists()

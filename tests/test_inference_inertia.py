@@ -24,14 +24,15 @@ from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import Telemetry
 from kinematics import slew_segments, wheels_for_conserved_momentum
+from margins import assert_mixed
 
 # Feldman & Lee (2006) Eq 8: the flight estimate of 2000-03-15, used as the synthetic truth.
 TRUTH = np.array([[8655.2, -144.0, 132.1], [-144.0, 7922.7, 192.1], [132.1, 192.1, 4586.2]])
 H0 = np.array([3.0, -2.0, 5.0])          # N m s
 TORQUE = np.array([5e-6, -3e-6, 2e-6])   # N m
 NOISE = (2e-6, 5e-3, 2e-5)               # rad/s gyro, rad/s wheel rate, rad attitude
-# 4 × 1000 draws, the default: with 4 × 400 the max split R-hat over ~15 parameters scatters
-# around 1.01 from run to run (seen 1.0106 on a clean clone) although the chains agree.
+# 4 × 1000 draws, the default; mixing is asserted with the margins of tests/margins.py (with
+# 4 × 400 the max split R-hat over ~15 parameters scatters around 1.01 across machines).
 SMALL = SamplerSettings(chains=4, warmup=400, draws=1000)
 
 
@@ -110,10 +111,7 @@ def test_prior_scales_are_the_knowledge_requirements(sc):
 # ---- the posterior -----------------------------------------------------------------------
 
 def test_converges_and_covers_truth(fit):
-    d = fit.diagnostics
-    assert d.divergences == 0
-    assert d.max_r_hat <= 1.01, d
-    assert d.min_ess_bulk >= 400, d
+    assert_mixed(fit.diagnostics)
     post = fit.idata.posterior
     truth = np.asarray(inertia_vector(TRUTH))
     inside = []
@@ -165,7 +163,7 @@ def test_two_files_share_inertia(sc):
     res = fit_inertia(jax.random.key(1), [tel_a, tel_b], sc, robust=False, settings=SMALL)
     h0 = res.idata.posterior["H0"].mean(("chain", "draw")).values
     np.testing.assert_allclose(h0, [[3.0, -2.0, 5.0], [-4.0, 1.0, 2.0]], atol=0.01)
-    assert res.diagnostics.converged, res.diagnostics
+    assert_mixed(res.diagnostics)
 
 
 def test_weak_z_excitation_widens_izz(sc, fit):
@@ -191,5 +189,4 @@ def test_full_size_default_settings(sc):
     """Default settings (4 × 1000) on ~3600 samples: every bulk ESS ≥ 1000, R-hat ≤ 1.01."""
     tel = make_slews(jax.random.key(31), sc, dt=0.5)
     res = fit_inertia(jax.random.key(2), [tel], sc, robust=False)
-    assert res.diagnostics.converged
-    assert res.diagnostics.min_ess_bulk >= 1000
+    assert_mixed(res.diagnostics, ess_bulk_min=1000)
