@@ -710,8 +710,10 @@ def _thrust(spec: ModelSpec) -> SbcModel:
         if log is None:
             raise RuntimeError("no thruster fired in this replicate")
         tel = _telemetry(arrays, scenario, "<sbc thrust replicate>")
+        # the replicates' inertia is the model's prediction, so the fit holds it there: SBC of
+        # the stated model, whose inertia prior is then a point
         post = fit_thrust(key, [(tel, log)], spacecraft, mode="mean", settings=settings,
-                          prior_draws=0, robust=robust)
+                          prior_draws=0, robust=robust, inertia="fixed")
         return _thinned(post.idata, names, thin)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}

@@ -101,7 +101,12 @@ def fit_thrust_cmd(
                              "(F_Z1 ... F_Y4)."),
     inertia_posterior: Path = typer.Option(None, "--inertia-posterior", help="Run directory of "
                                            "an inertia fit: its posterior becomes the inertia "
-                                           "prior (default: inertia fixed at the model's)."),
+                                           "prior (default: the spacecraft model's inertia and "
+                                           "its stated uncertainty)."),
+    fix_inertia: bool = typer.Option(False, "--fix-inertia", help="Hold the inertia at the "
+                                     "spacecraft model's prediction (the papers' practice; the "
+                                     "default with --idealised). A wrong fixed inertia biases "
+                                     "the thrust."),
     seed: int = SEED,
     chains: int = CHAINS,
     warmup: int = WARMUP,
@@ -139,7 +144,10 @@ def fit_thrust_cmd(
                          "file(s); give one pulse log per telemetry file, in the same order")
     RunDir(out, force=force)  # refuse a bad --out before any work
     sc = load_spacecraft(spacecraft)
-    inertia = inertia_from_run(inertia_posterior) if inertia_posterior is not None else None
+    if fix_inertia and inertia_posterior is not None:
+        raise InputError("--fix-inertia and --inertia-posterior exclude each other; give one")
+    inertia = (inertia_from_run(inertia_posterior) if inertia_posterior is not None
+               else "fixed" if fix_inertia else None)
     events = [(read_telemetry(t), read_pulses(p)) for t, p in zip(telemetry, pulses)]
     settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
@@ -149,7 +157,7 @@ def fit_thrust_cmd(
     baseline, base_warns = thrust_baseline(events, sc, mode)
     names = list(thrust_names(mode)) + list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
-    if inertia is not None:
+    if "Ixx" in post.idata.posterior:   # the inertia was sampled
         from cassini_bayes.physics.momentum import INERTIA_NAMES
         nuisance += list(INERTIA_NAMES)
     if not idealised:
@@ -168,7 +176,10 @@ def fit_thrust_cmd(
                                 "spacecraft": file_record(model_path(spacecraft)),
                                 **({"inertia_posterior": str(Path(inertia_posterior).resolve())}
                                    if inertia_posterior is not None else {})},
-                        options={"mode": mode, "model": "idealised" if idealised else "robust"})
+                        options={"mode": mode, "model": "idealised" if idealised else "robust",
+                                 "inertia": ("posterior" if inertia_posterior is not None
+                                             else "sampled" if "Ixx" in post.idata.posterior
+                                             else "fixed")})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 

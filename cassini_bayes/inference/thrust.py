@@ -43,8 +43,10 @@ Priors, stated in the physical parameters
   unidentified below ``σ̂_ρ`` and cut off sharply above it — a one-sided cliff NUTS handles badly
   (measured: divergences and bulk ESS ~100 on two Table 2 events); the mix of the two comes from
   the data, the overall level is learned.
-* Inertia: fixed at the spacecraft model's prediction, or (``inertia=`` an :class:`InertiaGaussian`,
-  e.g. from an inertia run's posterior) sampled jointly from that Gaussian.
+* Inertia: sampled jointly from a Gaussian — the model file's knowledge (±10 % moments, ±75 kg m²
+  products; the robust model's default) or an inertia run's posterior — or fixed at the model
+  file's prediction (the papers' idealised model). The likelihood then carries the Jacobian
+  ``|det I|`` per sample that maps the data (rates) to ``V`` (:func:`_event_loglik`).
 
 Sampler coordinates
 -------------------
@@ -140,6 +142,8 @@ __all__ = [
     "THRUST_PRIOR_LOG_SD",
     "InertiaGaussian",
     "inertia_from_run",
+    "inertia_prior_gaussian",
+    "resolve_inertia",
     "TauPrior",
     "tau_prior",
     "thrust_names",
@@ -206,6 +210,32 @@ def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
         raise InputError(f"{path}: too few or non-finite inertia draws; re-run the inertia fit")
     cov = np.cov(draws, rowvar=False)
     return InertiaGaussian(draws.mean(0), 0.5 * (cov + cov.T))
+
+
+def inertia_prior_gaussian(spacecraft: Spacecraft) -> InertiaGaussian:
+    """The model file's inertia knowledge as a Gaussian: mean the predicted tensor, independent
+    sd ``moi_uncertainty × moment`` and ``poi_uncertainty`` (the inertia model's prior,
+    :func:`cassini_bayes.inference.inertia.inertia_prior`, without its truncation to physical
+    tensors, which ±10 % about a physical prediction does not reach)."""
+    from cassini_bayes.inference.inertia import inertia_prior
+
+    prior = inertia_prior(spacecraft)
+    return InertiaGaussian(prior.mean, np.diag(prior.sd ** 2))
+
+
+def resolve_inertia(inertia: InertiaGaussian | str | None, spacecraft: Spacecraft,
+                    robust: bool) -> InertiaGaussian | None:
+    """The inertia's Gaussian, or ``None`` for a fixed inertia, from :func:`fit_thrust`'s
+    ``inertia`` argument."""
+    if inertia is None:
+        inertia = "prior" if robust else "fixed"
+    if isinstance(inertia, InertiaGaussian):
+        return inertia
+    if inertia == "prior":
+        return inertia_prior_gaussian(spacecraft)
+    if inertia == "fixed":
+        return None
+    raise InputError(f"inertia = {inertia!r}: give an InertiaGaussian, 'prior' or 'fixed'")
 
 
 class TauPrior(NamedTuple):
@@ -535,11 +565,22 @@ def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, t
     docstring) and the time-tag term ``m_i`` = ``time_tag_cols`` (:func:`time_tag_columns`). The
     offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
     :func:`nuisance_marginal` over all events.
+
+    The measurements are the gyro rates, not ``V``: ``V`` is the rates mapped through ``I``, so
+    the density of the data is that of ``V`` times the Jacobian ``|det I|`` per sample (for any
+    ``B``, ``N(I⁻¹r; 0, I⁻¹ B I⁻ᵀ) = |det I| N(r; 0, B)``), less one for the offset's integral.
+    With the inertia fixed this is a constant; with the inertia sampled it is what keeps the
+    likelihood invariant under the unidentifiable common scale of ``I``, ``F`` and the wheel
+    inertias. Without it the density of ``V`` alone grows as ``|det I|⁻ⁿ`` when all three shrink
+    together: on a 480-sample event whose true inertia was 3 % above the model's, the sampled
+    inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
     """
     r = _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
                         slot_offsets, q_matrix)
-    return offset_marginal(r, _noise_cov(inertia, log_sigma, wheel_cov), time_tag_cols, mask,
-                           nu_cols)
+    st = offset_marginal(r, _noise_cov(inertia, log_sigma, wheel_cov), time_tag_cols, mask,
+                         nu_cols)
+    log_jacobian = (jnp.sum(mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
+    return st._replace(loglik=st.loglik + log_jacobian)
 
 
 def _noise_cov(inertia, log_sigma, wheel_cov):
@@ -874,7 +915,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
 
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
-               mode: str = "mean", inertia: InertiaGaussian | None = None, settings=None,
+               mode: str = "mean", inertia: InertiaGaussian | str | None = None, settings=None,
                prior_draws: int = 500, robust: bool = True) -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
@@ -883,9 +924,15 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     key : jax.random key.
     events : ``(telemetry, pulse log)`` per biasing event; they share ``τ`` and the thrust.
     spacecraft : model giving the predicted thrust, time-constant ranges, geometry of Eq 16,
-        wheels and (unless ``inertia`` is given) the fixed inertia.
+        wheels and the inertia's prediction and knowledge.
     mode : ``"mean"`` (``F``), ``"branch"`` (``F_Z``, ``F_Y``) or ``"thruster"`` (``F_Z1 … F_Y4``).
-    inertia : sample the inertia jointly from this Gaussian (e.g. :func:`inertia_from_run`).
+    inertia : how the spacecraft inertia enters. An :class:`InertiaGaussian` (e.g.
+        :func:`inertia_from_run`, an inertia fit's posterior) or ``"prior"`` (the model file's
+        knowledge, :func:`inertia_prior_gaussian`): sampled jointly. ``"fixed"``: held at the
+        model file's prediction. ``None`` (default): ``"prior"`` for the robust model, ``"fixed"``
+        for the idealised one (the papers' model). A fixed inertia that is not the truth is a
+        closed world: the momentum the pulses put into the body rates is ``I Δω``, so a 3 %
+        inertia error moved ``F`` 3 % (12 sd) on a Table 2 event, through the wheel scale.
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
     robust : add the nuisance parameters (gyro bias and scale, wheel inertia scale and tilts,
@@ -906,6 +953,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
+    inertia = resolve_inertia(inertia, spacecraft, robust)
     problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust)
     unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
     if mode == "thruster" and unfired:
