@@ -124,7 +124,7 @@ def fit_thrust_cmd(
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.inference.thrust import (MODES, TAU_NAMES, fit_thrust, inertia_from_run,
                                                 thrust_names)
-    from cassini_bayes.rundir import RunDir, file_record
+    from cassini_bayes.rundir import check_out, file_record
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
@@ -137,7 +137,8 @@ def fit_thrust_cmd(
     if len(pulses) != len(telemetry):
         raise InputError(f"{len(telemetry)} --telemetry file(s) but {len(pulses)} --pulses "
                          "file(s); give one pulse log per telemetry file, in the same order")
-    RunDir(out, force=force)  # refuse a bad --out before any work
+    check_out(out, force=force, inputs=[*telemetry, *pulses, model_path(spacecraft),
+                                        *([inertia_posterior] if inertia_posterior else [])])
     sc = load_spacecraft(spacecraft)
     inertia = inertia_from_run(inertia_posterior) if inertia_posterior is not None else None
     events = [(read_telemetry(t), read_pulses(p)) for t, p in zip(telemetry, pulses)]
