@@ -27,6 +27,7 @@ import os
 import pkgutil
 import sys
 import traceback
+import warnings
 
 import typer
 
@@ -93,6 +94,11 @@ def _err(line: str) -> None:
     print(" ".join(line.split()), file=sys.stderr)
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Python warnings as one ``warning:`` line each (no source line)."""
+    print(f"warning: {' '.join(str(message).split())}", file=file or sys.stderr)
+
+
 def _usage_error(e: Exception) -> int:
     """Print a Click usage error as the command's usage line plus one error line."""
     ctx = getattr(e, "ctx", None)
@@ -133,7 +139,9 @@ def main(argv: list[str] | None = None) -> int:
         main(["--help"])
         return 2
     try:
-        rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
     except InputError as e:
         _err(f"error: {e}")
         return 2
@@ -160,8 +168,9 @@ def main(argv: list[str] | None = None) -> int:
                 return 130
             _err("error: aborted")
             return 1
-        if kind == "NoArgsIsHelpError":  # a group given no command: its help
-            print(e.format_message(), file=sys.stderr)
+        if kind == "NoArgsIsHelpError":  # a group given no command: its help (rich prints it)
+            if e.format_message().strip():
+                print(e.format_message(), file=sys.stderr)
             return 2
         if kind == "UsageError":
             return _usage_error(e)

@@ -6,6 +6,7 @@ or a file of the run directory other than ``report.html``, is refused.
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import typer
@@ -24,14 +25,19 @@ def report(
     matplotlib.use("Agg")  # headless: never open a window from the command line
     from cassini_bayes.report import build_report
 
-    if out is not None:
-        _prepare_page(Path(out), Path(run_dir))
-    path = build_report(run_dir, out=out)
+    created = None if out is None else _prepare_page(Path(out), Path(run_dir))
+    try:
+        path = build_report(run_dir, out=out)
+    except BaseException:
+        if created is not None:  # leave no empty folders behind
+            shutil.rmtree(created, ignore_errors=True)
+        raise
     typer.echo(str(path))
 
 
-def _prepare_page(out: Path, run_dir: Path) -> None:
-    """Refuse a bad ``--out`` page before any work; create its missing folders."""
+def _prepare_page(out: Path, run_dir: Path) -> Path | None:
+    """Refuse a bad ``--out`` page before any work; create its missing folders and return the
+    first one created (None if none)."""
     from cassini_bayes.errors import InputError
     from cassini_bayes.rundir import check_writable
 
@@ -44,7 +50,9 @@ def _prepare_page(out: Path, run_dir: Path) -> None:
         raise InputError(f"is a file of the run directory {run_dir}; the report may only replace "
                          "report.html there: choose another --out", path=str(out))
     check_writable(page.parent, str(out))
+    created = next((a for a in reversed(page.parents) if not a.exists()), None)
     page.parent.mkdir(parents=True, exist_ok=True)
+    return created
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:

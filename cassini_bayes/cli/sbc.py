@@ -134,8 +134,15 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                       on_batch=on_batch)
             except KeyboardInterrupt:
                 n_done = len(list(work.glob("batch_*.npz")))
+                if not n_done:
+                    shutil.rmtree(work, ignore_errors=True)
+                    raise
                 raise Interrupted(f"{n_done} finished batch(es) are checkpointed in {work}; run "
                                   "the same command with --resume to continue") from None
+            except BaseException:
+                if not any(work.glob("batch_*.npz")):  # nothing worth resuming: leave no trace
+                    shutil.rmtree(work, ignore_errors=True)
+                raise
         summary = write_run(out, spec, result, alpha=alpha, executor=executor, force=force)
         shutil.rmtree(work, ignore_errors=True)
         _print_summary(summary, out)
