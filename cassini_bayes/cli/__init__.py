@@ -25,7 +25,9 @@ import errno
 import importlib
 import os
 import pkgutil
+import signal
 import sys
+import threading
 import traceback
 import warnings
 
@@ -99,6 +101,32 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"warning: {' '.join(str(message).split())}", file=file or sys.stderr)
 
 
+@contextlib.contextmanager
+def _ctrl_c_never_lost():
+    """Deliver Ctrl-C again when Python swallowed it.
+
+    A KeyboardInterrupt raised while a garbage-collector callback (JAX registers one) or a
+    ``__del__`` runs cannot propagate: Python reports it as "Exception ignored" and the run goes
+    on as if no key was pressed. Such a swallowed interrupt reaches ``sys.unraisablehook``; this
+    sends SIGINT to the process again a moment later, when it can land.
+    """
+    previous = sys.unraisablehook
+
+    def hook(unraisable) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+            timer.daemon = True
+            timer.start()
+            return
+        previous(unraisable)
+
+    sys.unraisablehook = hook
+    try:
+        yield
+    finally:
+        sys.unraisablehook = previous
+
+
 def _usage_error(e: Exception) -> int:
     """Print a Click usage error as the command's usage line plus one error line."""
     ctx = getattr(e, "ctx", None)
@@ -139,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         main(["--help"])
         return 2
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _ctrl_c_never_lost():
             warnings.showwarning = _show_warning
             rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
     except InputError as e:
