@@ -81,7 +81,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         scheduler: str | None = typer.Option(None, "--scheduler",
                                              help="Dask scheduler address (default: a local "
                                              "cluster)."),
-        workers: int | None = typer.Option(None, "--workers", min=1, help="Workers of the local Dask "
+        workers: int | None = typer.Option(None, "--workers", min=1,
+                                           help="Workers of the local Dask "
                                            "cluster (default min(2, CPU count)); with "
                                            "--executor dask and no --scheduler."),
         batch: int = typer.Option(16, "--batch", min=1, help="Replicates per vectorised batch."),
