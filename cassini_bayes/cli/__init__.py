@@ -14,8 +14,9 @@ usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSIN
   error (a bug: the line says how to see the traceback);
 - 130 interrupted (Ctrl-C): nothing half-written is left under the output's name.
 
-The usage errors come from Click, which typer vendors as ``typer._click`` since 0.16 and took from
-the ``click`` package before: they are recognised by class name, so any typer release works.
+The usage errors come from Click, which recent typer releases vendor as ``typer._click`` and older
+ones took from the ``click`` package: they are recognised by class name, so any typer release
+works.
 """
 
 from __future__ import annotations
@@ -213,7 +214,7 @@ def main(argv: list[str] | None = None) -> int:
         _err(f"error: internal error ({type(e).__name__}): {e}")
         _err(f"(a bug in cassini-bayes: rerun with {_DEBUG_ENV}=1 for the traceback)")
         return 1
-    if rv == 130:  # typer >= 0.16 turns Ctrl-C into a returned 130
+    if rv == 130:  # recent typer turns Ctrl-C into a returned 130 (no command returns 130)
         _err("interrupted")
         return 130
     return rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
