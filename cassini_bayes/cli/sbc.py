@@ -56,7 +56,7 @@ from cassini_bayes.rundir import RunDir, check_out
 
 ORDER = 60
 
-__all__ = ["register", "write_run", "work_dir", "parse_options"]
+__all__ = ["register", "write_run", "work_dir", "parse_options", "check_sampler_options"]
 
 
 def work_dir(out: Path) -> Path:
