@@ -1,8 +1,12 @@
-"""Where the shipped data lives: ``models/`` and ``experiments/`` beside the package."""
+"""Where the shipped data lives (``models/``, ``experiments/`` beside the package), and how a
+user's input path is resolved and checked."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+from cassini_bayes.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS_DIR = ROOT / "models"
@@ -10,9 +14,39 @@ EXPERIMENTS_DIR = ROOT / "experiments"
 SCENARIOS_DIR = EXPERIMENTS_DIR / "scenarios"
 
 
-def model_path(name: str) -> Path:
-    """Path of a shipped spacecraft model, by file name or stem (``"cassini_post_probe"``)."""
-    p = Path(name)
-    if p.suffix != ".toml":
-        p = p.with_suffix(".toml")
-    return p if p.is_absolute() or p.exists() else MODELS_DIR / p.name
+def model_path(name: str | os.PathLike) -> Path:
+    """Path of a spacecraft model: a file, or the name of a shipped one.
+
+    ``name`` as given (or with ``.toml`` appended) when that file exists. Otherwise a bare name
+    without a directory part (``cassini_post_probe`` or ``cassini_post_probe.toml``) is the
+    shipped model of that name under ``models/``; a path with a directory part that does not
+    exist is an :class:`InputError` naming it (never a silent fall-back to a shipped model).
+    """
+    p = Path(name).expanduser()
+    candidates = [p] if p.suffix == ".toml" else [p, p.with_name(p.name + ".toml")]
+    for c in candidates:
+        if c.is_dir():
+            raise InputError("is a directory; give a spacecraft model .toml file", path=str(name))
+        if c.exists():
+            return c
+    if len(p.parts) == 1:
+        return MODELS_DIR / candidates[-1].name
+    raise InputError("spacecraft model not found (give the path of a .toml file, or the name of "
+                     f"one in {MODELS_DIR})", path=str(name))
+
+
+def text_file(path: str | os.PathLike, what: str) -> str:
+    """The contents of a user's UTF-8 text input file; an :class:`InputError` naming it when it
+    is missing, a directory, unreadable or not UTF-8 text."""
+    p = Path(path)
+    if p.is_dir():
+        raise InputError(f"is a directory; give the {what} file itself", path=str(path))
+    try:
+        return p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{what} not found; check the path", path=str(path)) from None
+    except OSError as e:
+        raise InputError(f"cannot read the {what} ({e.strerror})", path=str(path)) from None
+    except UnicodeDecodeError:
+        raise InputError(f"is not a UTF-8 text file; give the {what} (TOML)",
+                         path=str(path)) from None

@@ -29,3 +29,7 @@ class UnidentifiableError(InputError):
 
 class NotConvergedError(CassiniError):
     """Sampler diagnostics failed and ``--strict`` was asked for."""
+
+
+class Interrupted(CassiniError):
+    """The user interrupted a run (Ctrl-C); the message says what was kept and how to go on."""

@@ -1,14 +1,28 @@
-"""Atomic run directories (DESIGN.md §4), shared by ``fit``, ``experiment`` and ``sbc``.
+"""Output directories of every command: checked before any work, written atomically.
 
-A run directory holds ``posterior.nc``, ``summary.json``, ``config.toml`` and ``report.html``.
-Everything is written into a hidden temporary sibling (``.NAME.tmp-…``, same file system) which is
-renamed into place only when all files are complete, so a crash or Ctrl-C never leaves a
-half-written run under the final name. An existing non-empty ``--out`` is refused unless
-``force``; then the old directory is first renamed aside (``.NAME.old-…``), the new one renamed in,
-and the old one deleted — at no moment does ``NAME`` hold a mixture of the two.
+A run directory (``fit``, ``experiment``, ``sbc``, ``simulate``, ``reproduce``) is written into a
+hidden temporary sibling (``.NAME.tmp-…``, same file system) which becomes ``NAME`` only when all
+its files are complete, so a crash, a full disk or Ctrl-C never leaves a half-written run under the
+final name.
+
+What ``--out`` may be (:func:`check_out`, run before any work starts):
+
+- a new path (missing parents are created at the end), or an empty directory;
+- an existing non-empty directory only with ``force``, and only when this package wrote it
+  (:func:`is_package_output`): ``--force`` never deletes a user's folder;
+- never a directory holding (or being) one of the run's own input files, even with ``force``;
+- its nearest existing ancestor must be a directory we can create entries in (tried by creating
+  and removing a temporary directory there).
+
+Replacing an old run (``force``) swaps the two directories with one atomic
+``renameat2(RENAME_EXCHANGE)`` where the OS offers it, so a kill at any moment leaves either the
+old or the new run under ``NAME``; elsewhere the old run is renamed aside just before the new one
+is renamed in. The old run is deleted last.
 
 Usage::
 
+    check_out(out, force=force, inputs=[telemetry_csv, model_toml])  # before any work
+    ...
     with RunDir(out, force=force) as rd:          # rd.path is the temporary directory
         write_posterior(rd.path, idata)
         write_summary(rd.path, summary)
@@ -19,20 +33,127 @@ Usage::
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import hashlib
 import json
 import math
 import os
 import shutil
 import tempfile
+import tomllib
 import warnings
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
 from cassini_bayes.errors import InputError
 
-__all__ = ["RunDir", "file_record", "write_posterior", "write_summary", "write_config",
-           "write_report", "minimal_report_html"]
+__all__ = ["RunDir", "check_out", "check_writable", "is_package_output", "file_record",
+           "write_posterior", "write_summary", "write_config", "write_report",
+           "minimal_report_html"]
+
+
+def _read_toml(path: Path) -> dict | None:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return None
+
+
+def _read_json(path: Path) -> dict | None:
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return d if isinstance(d, dict) else None
+
+
+def is_package_output(path: str | os.PathLike) -> bool:
+    """Whether the directory ``path`` was written by cassini-bayes (so ``--force`` may replace it).
+
+    Recognised by the record each command writes, carrying the package ``version``:
+    ``config.toml`` with ``command`` and ``version`` (``fit``, ``sbc``) or a ``[run]`` table with
+    ``version`` (``experiment``); ``truth.json`` with ``scenario`` and ``version``
+    (``simulate``); ``results.json`` with ``seed`` and ``version`` (``reproduce``).
+    """
+    p = Path(path)
+    cfg = _read_toml(p / "config.toml") or {}
+    if {"command", "version"} <= cfg.keys():
+        return True
+    if isinstance(cfg.get("run"), dict) and "version" in cfg["run"] and "kind" in cfg:
+        return True
+    truth = _read_json(p / "truth.json") or {}
+    if {"scenario", "version"} <= truth.keys():
+        return True
+    results = _read_json(p / "results.json") or {}
+    return {"seed", "version"} <= results.keys()
+
+
+def check_writable(path: Path, out: str) -> None:
+    """Refuse (naming ``out``) unless ``path``'s nearest existing ancestor is a directory we can
+    create entries in: tried by creating and removing a temporary directory there."""
+    anc = path
+    while not anc.exists() and anc != anc.parent:
+        anc = anc.parent
+    if not anc.is_dir():
+        raise InputError(f"cannot create it: {anc} is not a directory; choose another --out",
+                         path=out)
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".cassini-bayes-probe-", dir=anc))
+    except OSError as e:
+        raise InputError(f"cannot write in {anc} ({e.strerror}); choose another --out",
+                         path=out) from None
+
+
+def check_out(out: str | os.PathLike, *, force: bool = False,
+              inputs: Iterable[str | os.PathLike] = ()) -> Path:
+    """Refuse a bad ``--out`` before any work (module docstring); returns it, absolute.
+
+    ``inputs`` are the run's input files and directories: ``out`` may not be, or contain, any of
+    them, even with ``force``.
+    """
+    shown = str(out)
+    final = Path(out).expanduser().resolve()
+    for i in inputs:
+        ip = Path(i).expanduser().resolve()
+        if ip == final or final in ip.parents:
+            raise InputError(f"holds this run's input {i}; --out must be a new directory "
+                             "(--force never replaces the inputs)", path=shown)
+    if final.exists():
+        if not final.is_dir():
+            raise InputError("exists and is not a directory; choose another --out", path=shown)
+        if any(final.iterdir()):
+            if not force:
+                raise InputError("already exists and is not empty; choose another --out or "
+                                 "pass --force to replace it", path=shown)
+            if not is_package_output(final):
+                raise InputError("is not a cassini-bayes output directory (no config.toml, "
+                                 "truth.json or results.json written by cassini-bayes); --force "
+                                 "replaces only those: choose another --out", path=shown)
+    check_writable(final.parent, shown)
+    return final
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap the directories ``a`` and ``b`` in one atomic step (Linux ``renameat2``).
+
+    Returns False where the OS or file system cannot (the caller falls back to two renames).
+    """
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
+                          ctypes.c_uint]
+    at_fdcwd, rename_exchange = -100, 2  # <fcntl.h>, <linux/fs.h>
+    rc = renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange)
+    if rc == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP):
+        return False
+    raise OSError(err, os.strerror(err), str(b))
 
 
 class RunDir:
@@ -44,17 +165,11 @@ class RunDir:
     path : the temporary directory to write into (inside the context).
     """
 
-    def __init__(self, out: str | os.PathLike, *, force: bool = False):
-        self.final = Path(out).expanduser().resolve()
+    def __init__(self, out: str | os.PathLike, *, force: bool = False,
+                 inputs: Iterable[str | os.PathLike] = ()):
+        self.final = check_out(out, force=force, inputs=inputs)
         self.force = force
         self.path: Path | None = None
-        if self.final.exists():
-            if not self.final.is_dir():
-                raise InputError("exists and is not a directory; choose another --out",
-                                 path=str(out))
-            if any(self.final.iterdir()) and not force:
-                raise InputError("already exists and is not empty; choose another --out or "
-                                 "pass --force to replace it", path=str(out))
 
     def __enter__(self) -> "RunDir":
         parent = self.final.parent
@@ -64,31 +179,42 @@ class RunDir:
             raise InputError(f"cannot create the parent directory: {e.strerror}",
                              path=str(parent)) from None
         self.path = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.tmp-", dir=parent))
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(self.path, 0o777 & ~umask)  # mkdtemp makes it private; a run directory is not
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         if exc_type is not None:
             shutil.rmtree(self.path, ignore_errors=True)
             return False
-        self.commit()
+        try:
+            self.commit()
+        except BaseException:
+            shutil.rmtree(self.path, ignore_errors=True)
+            raise
         return False
 
     def commit(self) -> None:
-        """Move the finished temporary directory to its final name."""
-        old = None
-        if self.final.exists():
+        """Move the finished temporary directory to its final name (atomic swap if it exists)."""
+        if self.final.exists() and any(self.final.iterdir()):
+            # the old run may have appeared while this one was computed: check again
+            check_out(self.final, force=self.force)
+            if _exchange(self.path, self.final):
+                shutil.rmtree(self.path, ignore_errors=True)  # now holds the old run
+                return
             old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-",
                                         dir=self.final.parent))
             os.rmdir(old)
             os.replace(self.final, old)
-        try:
-            os.replace(self.path, self.final)
-        except OSError:
-            if old is not None:  # put the old run back
-                os.replace(old, self.final)
-            raise
-        if old is not None:
+            try:
+                os.replace(self.path, self.final)
+            except BaseException:
+                os.replace(old, self.final)  # put the old run back
+                raise
             shutil.rmtree(old, ignore_errors=True)
+            return
+        os.replace(self.path, self.final)  # new, or an empty directory
 
 
 def file_record(path: str | os.PathLike) -> dict[str, str]:

@@ -77,8 +77,13 @@ def test_existing_out_refused_without_force(tmp_path, run_cli):
     assert code == 2 and "--force" in err and len(err.strip().splitlines()) == 1
     assert (out / "keep.txt").exists()
     code, _, err = run_cli("experiment", src, "--out", out, "--quick", "--force")
+    assert code == 2 and "not a cassini-bayes output" in err  # --force spares a user's folder
+    assert (out / "keep.txt").exists()
+    run = tmp_path / "run2"
+    assert run_cli("experiment", src, "--out", run, "--quick")[0] == 0
+    code, _, err = run_cli("experiment", src, "--out", run, "--quick", "--force", "--seed", 3)
     assert code == 0, err
-    assert not (out / "keep.txt").exists() and (out / "results.json").exists()
+    assert json.loads((run / "results.json").read_text())["seed"] == 3
 
 
 def _write(tmp_path: Path, text: str) -> Path:

@@ -2,21 +2,32 @@
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
+import os
 import tomllib
 
 import arviz as az
 import numpy as np
 import pytest
 
+from cassini_bayes import rundir
 from cassini_bayes.errors import InputError
-from cassini_bayes.rundir import (RunDir, file_record, minimal_report_html, write_config,
-                                  write_posterior, write_summary)
+from cassini_bayes.rundir import (RunDir, check_out, file_record, is_package_output,
+                                  minimal_report_html, write_config, write_posterior,
+                                  write_summary)
 
 
 def _siblings(path):
     return sorted(p.name for p in path.parent.iterdir())
+
+
+def _old_run(out):
+    """A run directory as a cassini-bayes fit leaves it (recognised by its config.toml)."""
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    (out / "config.toml").write_text('command = "fit inertia"\nversion = "0.1.0"\n')
 
 
 def test_written_only_on_success(tmp_path):
@@ -53,10 +64,12 @@ def test_refuses_non_empty_without_force(tmp_path):
     assert (empty / "new.txt").exists()
 
 
-def test_force_replaces_atomically(tmp_path):
+@pytest.mark.parametrize("swap", [True, False], ids=["renameat2", "two-renames"])
+def test_force_replaces_atomically(tmp_path, monkeypatch, swap):
+    if not swap:  # a file system without RENAME_EXCHANGE
+        monkeypatch.setattr(rundir, "_exchange", lambda a, b: False)
     out = tmp_path / "run"
-    out.mkdir()
-    (out / "old.txt").write_text("old")
+    _old_run(out)
     with RunDir(out, force=True) as rd:
         (rd.path / "new.txt").write_text("new")
         assert (out / "old.txt").exists()  # the old run stays intact until the new one is done
@@ -66,13 +79,88 @@ def test_force_replaces_atomically(tmp_path):
 
 def test_force_failure_keeps_old_run(tmp_path):
     out = tmp_path / "run"
-    out.mkdir()
-    (out / "old.txt").write_text("old")
+    _old_run(out)
     with pytest.raises(RuntimeError):
         with RunDir(out, force=True) as rd:
             (rd.path / "new.txt").write_text("new")
             raise RuntimeError("crash")
-    assert sorted(p.name for p in out.iterdir()) == ["old.txt"]
+    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "old.txt"]
+    assert _siblings(out) == ["run"]
+
+
+def test_full_disk_while_writing_keeps_old_run(tmp_path):
+    out = tmp_path / "run"
+    _old_run(out)
+    with pytest.raises(OSError):
+        with RunDir(out, force=True) as rd:
+            (rd.path / "summary.json").write_text("{}")
+            raise OSError(errno.ENOSPC, "No space left on device", str(rd.path / "posterior.nc"))
+    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "old.txt"]
+    assert _siblings(out) == ["run"]
+
+
+def test_exchange_swaps_in_one_step(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    (a / "new").write_text("")
+    (b / "old").write_text("")
+    if not rundir._exchange(a, b):
+        pytest.skip("no renameat2(RENAME_EXCHANGE) here")
+    assert [p.name for p in b.iterdir()] == ["new"] and [p.name for p in a.iterdir()] == ["old"]
+
+
+def test_force_refuses_a_users_folder(tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("precious")
+    with pytest.raises(InputError, match="not a cassini-bayes output"):
+        RunDir(out, force=True)
+    (out / "config.toml").write_text('version = "1"\n')  # a config.toml of something else
+    with pytest.raises(InputError, match="not a cassini-bayes output"):
+        check_out(out, force=True)
+    assert (out / "notes.txt").read_text() == "precious"
+
+
+@pytest.mark.parametrize("name, text", [
+    ("config.toml", 'command = "sbc"\nversion = "0.1.0"\n'),                 # fit, sbc
+    ("config.toml", 'kind = "impulse_ratio"\n[run]\nversion = "0.1.0"\n'),  # experiment
+    ("truth.json", '{"scenario": "s", "version": "0.1.0"}'),                  # simulate
+    ("results.json", '{"seed": 0, "version": "0.1.0"}'),                      # reproduce
+])
+def test_package_outputs_are_recognised(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    assert is_package_output(tmp_path)
+    (tmp_path / name).write_bytes(b"\xff\xfe binary")
+    assert not is_package_output(tmp_path)
+
+
+def test_out_may_not_hold_the_inputs(tmp_path):
+    run = tmp_path / "sim"
+    run.mkdir()
+    (run / "truth.json").write_text('{"scenario": "s", "version": "0.1.0"}')
+    csv = run / "telemetry.csv"
+    csv.write_text("t\n0\n")
+    for out in (run, tmp_path, csv):
+        with pytest.raises(InputError, match="input"):
+            check_out(out, force=True, inputs=[csv])
+    assert check_out(tmp_path / "new", inputs=[csv]) == (tmp_path / "new").resolve()
+
+
+def test_parent_must_be_a_writable_directory(tmp_path):
+    f = tmp_path / "file"
+    f.write_text("x")
+    with pytest.raises(InputError, match="not a directory"):
+        check_out(f / "run")
+    assert check_out(tmp_path / "a" / "b" / "run")  # missing parents are fine...
+    assert not (tmp_path / "a").exists()           # ...and not created by the check
+    if os.geteuid() != 0:  # root writes anywhere
+        ro = tmp_path / "ro"
+        ro.mkdir()
+        ro.chmod(0o555)
+        with pytest.raises(InputError, match="cannot write"):
+            check_out(ro / "run")
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
 
 def test_refuses_a_file(tmp_path):

@@ -24,6 +24,7 @@ hash, seed, batch size, package version); every finished batch is written to
 ``WORKDIR/batch_NNNNNN.npz`` atomically (temporary file, then ``os.replace``), so a campaign
 killed at any moment leaves only whole batches. :func:`run_campaign` on the same ``WORKDIR`` skips
 the batches already there and runs the rest: the result equals an uninterrupted run bit for bit.
+A damaged batch file (truncated by a full disk, say) is recomputed, with a warning.
 
 Executors: ``local`` runs the batches in this process; ``dask`` submits them to a Dask cluster
 (``scheduler`` address, or a ``LocalCluster`` when none is given). A task carries only plain data
@@ -43,6 +44,8 @@ import math
 import os
 import tempfile
 import warnings
+import zipfile
+import zlib
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -286,7 +289,10 @@ def _load_batch(workdir: Path, b: int) -> dict[str, np.ndarray] | None:
     try:
         with np.load(path) as z:
             return {k: z[k] for k in _FIELDS}
-    except (OSError, ValueError, KeyError):  # unreadable: recompute it
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as e:
+        # truncated or damaged: the batch is recomputed (same keys, same result)
+        warnings.warn(f"{path}: unreadable checkpoint ({type(e).__name__}); recomputing that "
+                      "batch", RuntimeWarning, stacklevel=2)
         return None
 
 
@@ -314,8 +320,9 @@ def _check_manifest(workdir: Path, manifest: dict[str, Any]) -> None:
     if path.exists():
         try:
             old = json.loads(path.read_text())
-        except (OSError, json.JSONDecodeError):
-            old = None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+            raise InputError(f"{path}: the checkpoint manifest is unreadable; start the "
+                             "campaign over with --force") from None
         if old != json.loads(json.dumps(manifest)):
             raise InputError(
                 f"{workdir}: holds checkpoints of a different campaign (model, options, scenario, "
@@ -348,7 +355,7 @@ def _dask_client(scheduler: str | None, n_workers: int | None, processes: bool,
     if scheduler:
         try:
             client = Client(scheduler, timeout=f"{timeout_s}s")
-        except (OSError, TimeoutError) as e:
+        except (OSError, TimeoutError, ValueError) as e:  # unreachable, or a malformed address
             raise InputError(f"cannot reach the Dask scheduler at {scheduler!r} ({e}); check the "
                              "address or omit --scheduler for a local cluster") from None
         try:

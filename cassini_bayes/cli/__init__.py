@@ -4,21 +4,38 @@ Each sub-command lives in its own module of this package and exposes ``register(
 modules are discovered here, so adding a command never edits this file. ``groups["fit"]`` is the
 ``cassini-bayes fit`` group. ``ORDER`` (an int, default 100) sorts the commands in ``--help``.
 
-User errors (:class:`cassini_bayes.errors.InputError`) are printed as one line on stderr with exit
-status 2; a run that did not converge under ``--strict`` exits 3. No traceback is ever shown for
-either.
+One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
+usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``):
+
+- 0 success; 2 a usage error (unknown command or option, a missing or out-of-range value; no
+  arguments at all prints the help) or bad input (:class:`cassini_bayes.errors.InputError`);
+- 3 a run that did not converge under ``--strict`` (its outputs are written);
+- 1 an operating-system error (full disk, no permission: the line names the path) or an internal
+  error (a bug: the line says how to see the traceback);
+- 130 interrupted (Ctrl-C): nothing half-written is left under the output's name.
+
+The usage errors come from Click, which recent typer releases vendor as ``typer._click`` and older
+ones took from the ``click`` package: they are recognised by class name, so any typer release
+works.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import importlib
+import os
 import pkgutil
+import signal
 import sys
+import threading
+import traceback
+import warnings
 
 import typer
 
 from cassini_bayes import __version__
-from cassini_bayes.errors import InputError, NotConvergedError
+from cassini_bayes.errors import InputError, Interrupted, NotConvergedError
 
 app = typer.Typer(
     name="cassini-bayes",
@@ -62,32 +79,162 @@ def _register_all() -> None:
 _register_all()
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script: run the app, turning user errors into one line."""
+_DEBUG_ENV = "CASSINI_BAYES_DEBUG"
+
+
+def _click_kind(e: BaseException) -> str | None:
+    """``"Exit"``, ``"Abort"``, ``"NoArgsIsHelpError"``, ``"UsageError"`` or ``"ClickException"``
+    for an exception of Click (``click`` or ``typer._click``) or typer, else None."""
+    names = [c.__name__ for c in type(e).__mro__
+             if c.__module__.split(".")[0] in ("click", "typer")]
+    for kind in ("Exit", "Abort", "NoArgsIsHelpError", "UsageError", "ClickException"):
+        if kind in names:
+            return kind
+    return None
+
+
+def _err(line: str) -> None:
+    print(" ".join(line.split()), file=sys.stderr)
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Python warnings as one ``warning:`` line each (no source line)."""
+    print(f"warning: {' '.join(str(message).split())}", file=file or sys.stderr)
+
+
+@contextlib.contextmanager
+def _ctrl_c_never_lost():
+    """Deliver Ctrl-C again when Python swallowed it.
+
+    A KeyboardInterrupt raised while a garbage-collector callback (JAX registers one) or a
+    ``__del__`` runs cannot propagate: Python reports it as "Exception ignored" and the run goes
+    on as if no key was pressed. Such a swallowed interrupt reaches ``sys.unraisablehook``; this
+    sends SIGINT to the process again a moment later, when it can land.
+    """
+    previous = sys.unraisablehook
+
+    def hook(unraisable) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+            timer.daemon = True
+            timer.start()
+            return
+        previous(unraisable)
+
+    sys.unraisablehook = hook
     try:
-        app(args=argv, prog_name="cassini-bayes", standalone_mode=False)
+        yield
+    finally:
+        sys.unraisablehook = previous
+
+
+def _usage_error(e: Exception) -> int:
+    """Print a Click usage error as the command's usage line plus one error line."""
+    ctx = getattr(e, "ctx", None)
+    command = getattr(ctx, "command_path", None) or "cassini-bayes"
+    if ctx is not None:
+        try:
+            print(ctx.get_usage(), file=sys.stderr)
+        except Exception:  # noqa: BLE001 - the usage line is a courtesy
+            pass
+    try:
+        msg = e.format_message()
+    except Exception:  # noqa: BLE001
+        msg = str(e)
+    _err(f"error: {msg.rstrip('.')}. Try '{command} --help'.")
+    return 2
+
+
+def _os_error(e: OSError) -> int:
+    if e.errno == errno.EPIPE:  # stdout closed by the reader (`| head`): stop quietly
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+    where = ": ".join(str(f) for f in (e.filename, e.filename2) if f is not None)
+    reason = e.strerror or str(e)
+    _err(f"error: {where + ': ' if where else ''}{reason}"
+         + (" (free some space and run again)" if e.errno == errno.ENOSPC else ""))
+    return 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``cassini-bayes ARGV`` (default ``sys.argv[1:]``); returns the exit status.
+
+    Never raises and never prints a traceback (module docstring), except with
+    ``CASSINI_BAYES_DEBUG=1`` set for an internal error.
+    """
+    args = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    if not args:  # the help, as a usage error (Click >= 8.2 does so for groups too)
+        main(["--help"])
+        return 2
+    try:
+        with warnings.catch_warnings(), _ctrl_c_never_lost():
+            warnings.showwarning = _show_warning
+            rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
     except InputError as e:
-        print(f"error: {e}", file=sys.stderr)
+        _err(f"error: {e}")
         return 2
     except NotConvergedError as e:
-        print(f"error: {e}", file=sys.stderr)
+        _err(f"error: {e}")
         return 3
-    except typer.Exit as e:
-        return e.exit_code
-    except typer.Abort:
-        print("aborted", file=sys.stderr)
+    except Interrupted as e:
+        _err(f"interrupted: {e}")
         return 130
-    except Exception as e:  # click usage errors
-        import click
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+    except OSError as e:
+        return _os_error(e)
+    except SystemExit as e:  # Click's own exit on a closed pipe
+        return e.code if isinstance(e.code, int) else 1
+    except Exception as e:  # noqa: BLE001 - the one place every other error ends
+        kind = _click_kind(e)
+        if kind == "Exit":
+            return int(getattr(e, "exit_code", 0) or 0)
+        if kind == "Abort":  # older Click turns Ctrl-C (and end of input) into Abort
+            if isinstance(e.__context__, KeyboardInterrupt):
+                _err("interrupted")
+                return 130
+            _err("error: aborted")
+            return 1
+        if kind == "NoArgsIsHelpError":  # a group given no command: its help (rich prints it)
+            if e.format_message().strip():
+                print(e.format_message(), file=sys.stderr)
+            return 2
+        if kind == "UsageError":
+            return _usage_error(e)
+        if kind == "ClickException":
+            _err(f"error: {e.format_message()}")
+            return int(getattr(e, "exit_code", 1))
+        if isinstance(e, UnicodeDecodeError):
+            _err(f"error: an input file is not UTF-8 text ({e}); check the file arguments")
+            return 2
+        if os.environ.get(_DEBUG_ENV):
+            traceback.print_exc()
+        _err(f"error: internal error ({type(e).__name__}): {e}")
+        _err(f"(a bug in cassini-bayes: rerun with {_DEBUG_ENV}=1 for the traceback)")
+        return 1
+    if rv == 130:  # recent typer turns Ctrl-C into a returned 130 (no command returns 130)
+        _err("interrupted")
+        return 130
+    return rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
 
-        if isinstance(e, click.exceptions.ClickException):
-            e.show()
-            return e.exit_code
-        if isinstance(e, click.exceptions.Exit):
-            return e.exit_code
-        raise
-    return 0
+
+def entry() -> None:
+    """The console script: :func:`main` on ``sys.argv``, then end the process.
+
+    After an interrupt the process ends with ``os._exit(130)`` once stdout and stderr are
+    flushed: JAX's threads can still be running then, and the interpreter's normal shutdown can
+    crash (segfault) under them. Everything the run writes is already cleaned up by then.
+    """
+    code = main()
+    if code == 130:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(130)
+    sys.exit(code)
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import typer
 
+from cassini_bayes.cli._options import check_seed, seed_option
+
 ORDER = 50
 
 
@@ -13,9 +15,10 @@ def experiment(
     file: Path = typer.Argument(..., help="Experiment file (experiments/NAME.toml), or a run "
                                           "directory's config.toml to re-run it."),
     out: Path = typer.Option(..., "--out", help="Run directory to write (must not exist)."),
-    seed: int = typer.Option(None, "--seed", help="Seed of the run's jax.random key "
-                                                  "(default: the file's [run] seed, else 0)."),
-    force: bool = typer.Option(False, "--force", help="Replace --out if it exists."),
+    seed: int = seed_option(None, "Seed of the run's jax.random key (default: the file's "
+                                  "[run] seed, else 0)."),
+    force: bool = typer.Option(False, "--force", help="Replace --out if it is a run directory "
+                               "cassini-bayes wrote."),
     quick: bool = typer.Option(False, "--quick", help="Small settings (for tests and previews)."),
 ) -> None:
     """Run one experiment: DIR/results.json, DIR/report.html, DIR/config.toml, DIR/figures/."""
@@ -24,13 +27,15 @@ def experiment(
     matplotlib.use("Agg")  # headless
     from rich.console import Console
 
+    from cassini_bayes._paths import text_file
     from cassini_bayes.experiments import load_experiment, run_experiment
+    from cassini_bayes.rundir import check_out
 
-    if seed is not None and seed < 0:
-        from cassini_bayes.errors import InputError
-
-        raise InputError(f"--seed must be a non-negative integer, got {seed}")
+    text_file(file, "experiment")  # a directory or a binary file: one line
+    check_out(out, force=force, inputs=[file])
     exp = load_experiment(file)
+    if seed is None and exp.seed is not None:
+        check_seed(exp.seed, str(file))
     console = Console(stderr=True)
     with console.status(f"running {exp.name} ({exp.kind.name})"):
         rec = run_experiment(exp, out, seed=seed, quick=quick, force=force)

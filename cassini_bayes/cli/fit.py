@@ -28,6 +28,7 @@ import typer
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.cli._options import seed_option
 
 ORDER = 20
 
@@ -36,7 +37,7 @@ ORDER = 20
 # its command modules at start-up)
 request_host_devices()
 
-SEED = typer.Option(0, "--seed", help="Seed of the run's jax.random key.")
+SEED = seed_option(0, "Seed of the run's jax.random key.")
 CHAINS = typer.Option(4, "--chains", min=1, help="Number of NUTS chains.")
 WARMUP = typer.Option(1000, "--warmup", min=10, help="Warmup (adaptation) iterations per chain.")
 DRAWS = typer.Option(1000, "--draws", min=10, help="Kept draws per chain.")
@@ -46,7 +47,8 @@ TARGET_ACCEPT = typer.Option(0.9, "--target-accept", min=0.5, max=0.999,
                                   "longer trees.")
 STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sampler did not "
                                               "converge (outputs are still written).")
-FORCE = typer.Option(False, "--force", help="Replace --out if it exists.")
+FORCE = typer.Option(False, "--force", help="Replace --out if it is a run directory "
+                                             "cassini-bayes wrote (never a user's folder).")
 OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
 
 
@@ -179,12 +181,13 @@ def fit_inertia_cmd(
     from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.physics.momentum import INERTIA_NAMES
-    from cassini_bayes.rundir import RunDir, file_record
+    from cassini_bayes._paths import model_path
+    from cassini_bayes.rundir import check_out, file_record
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_telemetry_many
 
     telemetry = list(telemetry) + list(more or [])
-    RunDir(out, force=force)  # refuse a bad --out before any work
+    check_out(out, force=force, inputs=[*telemetry, model_path(spacecraft)])  # before any work
     sc = load_spacecraft(spacecraft)
     tels = read_telemetry_many(telemetry)
     settings = sampler_settings(chains, warmup, draws, target_accept)
@@ -200,8 +203,6 @@ def fit_inertia_cmd(
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "idealised" if idealised else "robust"
     summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
-    from cassini_bayes._paths import model_path
-
     config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": [file_record(p) for p in telemetry],
                                 "spacecraft": file_record(model_path(spacecraft))},

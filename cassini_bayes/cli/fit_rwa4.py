@@ -72,7 +72,7 @@ def fit_rwa4_cmd(
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.inference.thrust import inertia_from_run
     from cassini_bayes.physics.momentum import INERTIA_NAMES
-    from cassini_bayes.rundir import RunDir, file_record
+    from cassini_bayes.rundir import check_out, file_record
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_telemetry
     from cassini_bayes.windows import parse_window
@@ -85,7 +85,8 @@ def fit_rwa4_cmd(
     if len(window_a) != len(window_b):
         raise InputError(f"{len(window_a)} --window-a but {len(window_b)} --window-b; give them "
                          "in pairs (Time A, Time B), paired in order")
-    RunDir(out, force=force)  # refuse a bad --out before any work
+    check_out(out, force=force, inputs=[telemetry, model_path(spacecraft),
+                                        *([inertia_posterior] if inertia_posterior else [])])
     sc = load_spacecraft(spacecraft)
     inertia = inertia_from_run(inertia_posterior) if inertia_posterior is not None else None
     tel = read_telemetry(telemetry)

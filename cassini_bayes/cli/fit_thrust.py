@@ -129,7 +129,7 @@ def fit_thrust_cmd(
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.inference.thrust import (MODES, TAU_NAMES, fit_thrust, inertia_from_run,
                                                 thrust_names)
-    from cassini_bayes.rundir import RunDir, file_record
+    from cassini_bayes.rundir import check_out, file_record
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
@@ -142,7 +142,8 @@ def fit_thrust_cmd(
     if len(pulses) != len(telemetry):
         raise InputError(f"{len(telemetry)} --telemetry file(s) but {len(pulses)} --pulses "
                          "file(s); give one pulse log per telemetry file, in the same order")
-    RunDir(out, force=force)  # refuse a bad --out before any work
+    check_out(out, force=force, inputs=[*telemetry, *pulses, model_path(spacecraft),
+                                        *([inertia_posterior] if inertia_posterior else [])])
     sc = load_spacecraft(spacecraft)
     if fix_inertia and inertia_posterior is not None:
         raise InputError("--fix-inertia and --inertia-posterior exclude each other; give one")

@@ -6,14 +6,17 @@ from pathlib import Path
 
 import typer
 
+from cassini_bayes.cli._options import seed_option
+
 ORDER = 5
 
 
 def reproduce(
     out: Path = typer.Option(..., "--out", help="Directory to write (must not exist)."),
-    seed: int = typer.Option(0, "--seed", help="Master seed; each experiment folds in its name."),
+    seed: int = seed_option(0, "Master seed; each experiment folds in its name."),
     quick: bool = typer.Option(False, "--quick", help="Small settings (tests, previews)."),
-    force: bool = typer.Option(False, "--force", help="Replace --out if it exists."),
+    force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                               "cassini-bayes wrote."),
     experiments_dir: Path = typer.Option(None, "--experiments", hidden=True,
                                          help="Directory of experiment files (default: the "
                                               "shipped experiments/)."),
@@ -26,15 +29,12 @@ def reproduce(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from cassini_bayes._paths import EXPERIMENTS_DIR
-    from cassini_bayes.errors import InputError
     from cassini_bayes.experiments import discover_experiments
     from cassini_bayes.experiments import reproduce as run_all
-    from cassini_bayes.experiments._core import prepare_out_dir
+    from cassini_bayes.rundir import check_out
 
-    if seed < 0:
-        raise InputError(f"--seed must be a non-negative integer, got {seed}")
     experiments_dir = experiments_dir or EXPERIMENTS_DIR
-    prepare_out_dir(out, force)            # fail on user errors before any progress is drawn
+    check_out(out, force=force, inputs=[experiments_dir])  # before any progress is drawn
     discover_experiments(experiments_dir)
     console = Console(stderr=True)
     columns = (TextColumn("[bold]{task.description}"), BarColumn(),

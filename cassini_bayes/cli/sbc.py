@@ -18,8 +18,9 @@ Runs an SBC campaign (:mod:`cassini_bayes.analysis.campaign`) of a registered mo
 
 While it runs, finished batches are checkpointed in the hidden sibling ``.DIR.sbc-work``; a
 campaign that was interrupted continues from there with ``--resume`` (same seed and batch size
-give exactly the replicates of an uninterrupted run). ``--force`` discards both a previous result
-and any checkpoints.
+give exactly the replicates of an uninterrupted run). ``--force`` discards any checkpoints and
+replaces a previous result — only a directory this package wrote
+(:func:`cassini_bayes.rundir.check_out`), and only once the new result is complete.
 
 ``--set KEY=VALUE`` (repeatable) passes a model option: sampler sizes (``num_warmup``,
 ``num_draws``, ``num_chains``, ``thin``) or a model's mis-specification switch (e.g. ``thrust``:
@@ -41,20 +42,21 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
-import os
 import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import typer
 
 from cassini_bayes import __version__
-from cassini_bayes.errors import InputError
+from cassini_bayes._paths import text_file
+from cassini_bayes.cli._options import seed_option
+from cassini_bayes.errors import InputError, Interrupted
+from cassini_bayes.rundir import RunDir, check_out
 
 ORDER = 60
 
-__all__ = ["register", "write_run", "work_dir", "parse_options"]
+__all__ = ["register", "write_run", "work_dir", "parse_options", "check_sampler_options"]
 
 
 def work_dir(out: Path) -> Path:
@@ -69,19 +71,21 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     def sbc(
         model: str = typer.Argument(..., help="Model to calibrate: toy, inertia, thrust or rwa4 "
                                     "(whichever are registered)."),
-        replicates: int = typer.Option(..., "--replicates", "-n", help="Number of replicates N."),
+        replicates: int = typer.Option(..., "--replicates", "-n", min=1,
+                                       help="Number of replicates N."),
         out: Path = typer.Option(..., "--out", help="Run directory to write (atomically)."),
         scenario: Path | None = typer.Option(None, "--scenario",
                                              help="Scenario TOML for the simulator/model."),
-        seed: int = typer.Option(0, "--seed", help="Root seed; replicate i uses fold_in(key, i)."),
+        seed: int = seed_option(0, "Root seed; replicate i uses fold_in(key, i)."),
         executor: str = typer.Option("local", "--executor", help="local or dask."),
         scheduler: str | None = typer.Option(None, "--scheduler",
                                              help="Dask scheduler address (default: a local "
                                              "cluster)."),
-        workers: int | None = typer.Option(None, "--workers", help="Workers of the local Dask "
+        workers: int | None = typer.Option(None, "--workers", min=1,
+                                           help="Workers of the local Dask "
                                            "cluster (default min(2, CPU count)); with "
                                            "--executor dask and no --scheduler."),
-        batch: int = typer.Option(16, "--batch", help="Replicates per vectorised batch."),
+        batch: int = typer.Option(16, "--batch", min=1, help="Replicates per vectorised batch."),
         options: list[str] = typer.Option([], "--set", help="Model option KEY=VALUE (VALUE as "
                                           "TOML), repeatable: num_warmup, num_draws, num_chains, "
                                           "thin or a model's mis-specification switch."),
@@ -99,18 +103,10 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                              f"{', '.join(registered_models())}")
         if not 0 < alpha < 1:
             raise InputError(f"--alpha must be between 0 and 1, got {alpha}")
-        scenario_text = None
-        if scenario is not None:
-            try:
-                scenario_text = Path(scenario).read_text()
-            except OSError as e:
-                raise InputError(f"cannot read the scenario file ({e.strerror}); check the path",
-                                 path=str(scenario)) from None
+        scenario_text = None if scenario is None else text_file(scenario, "scenario")
         out = Path(out)
         work = work_dir(out)
-        if out.exists() and not force:
-            raise InputError(f"{out} already exists; pass --force to overwrite it or choose "
-                             "another --out")
+        check_out(out, force=force, inputs=[scenario] if scenario else [])
         if work.exists():
             if force:
                 shutil.rmtree(work)
@@ -122,7 +118,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                              "--executor dask and no --scheduler")
         spec = ModelSpec.make(model, scenario_text,
                               scenario_source=str(scenario) if scenario else "<scenario>",
-                              **parse_options(options))
+                              **check_sampler_options(parse_options(options)))
 
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
@@ -139,9 +135,15 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                       on_batch=on_batch)
             except KeyboardInterrupt:
                 n_done = len(list(work.glob("batch_*.npz")))
-                typer.echo(f"interrupted: {n_done} finished batch(es) are checkpointed in {work}; "
-                           "run the same command with --resume to continue", err=True)
-                raise typer.Exit(130) from None
+                if not n_done:
+                    shutil.rmtree(work, ignore_errors=True)
+                    raise
+                raise Interrupted(f"{n_done} finished batch(es) are checkpointed in {work}; run "
+                                  "the same command with --resume to continue") from None
+            except BaseException:
+                if not any(work.glob("batch_*.npz")):  # nothing worth resuming: leave no trace
+                    shutil.rmtree(work, ignore_errors=True)
+                raise
         summary = write_run(out, spec, result, alpha=alpha, executor=executor, force=force)
         shutil.rmtree(work, ignore_errors=True)
         _print_summary(summary, out)
@@ -163,6 +165,22 @@ def parse_options(items: list[str]) -> dict:
             value = raw.strip()
         out[key] = value
     return out
+
+
+_SAMPLER_MIN = {"num_warmup": 0, "num_draws": 1, "num_chains": 1, "thin": 1}
+
+
+def check_sampler_options(options: dict) -> dict:
+    """``options`` after checking the sampler sizes every model takes (``num_warmup >= 0``,
+    ``num_draws``, ``num_chains``, ``thin >= 1`` integers, ``thin <= num_draws``)."""
+    for key, low in _SAMPLER_MIN.items():
+        v = options.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < low):
+            raise InputError(f"--set {key}={v!r}: must be an integer >= {low}")
+    if options.get("thin", 1) > options.get("num_draws", options.get("thin", 1)):
+        raise InputError(f"--set thin={options['thin']} keeps no draw of num_draws="
+                         f"{options['num_draws']}; use thin <= num_draws")
+    return options
 
 
 def _print_summary(summary: dict, out: Path) -> None:
@@ -240,20 +258,15 @@ def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
 
 def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "local",
               force: bool = False) -> dict:
-    """Write the run directory ``out`` atomically (temporary sibling, then rename).
+    """Write the run directory ``out`` atomically (:class:`cassini_bayes.rundir.RunDir`).
 
     Returns the ``summary.json`` content.
     """
     import tomli_w
 
     sbc, summary = summarize(spec, result, alpha=alpha, executor=executor)
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; a run directory is not
-    try:
+    with RunDir(out, force=force) as rd:
+        tmp = rd.path
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         config = {"command": "sbc", "model": spec.name, "replicates": summary["replicates"],
                   "seed": summary["seed"], "batch": summary["batch_size"], "alpha": alpha,
@@ -268,16 +281,6 @@ def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "
                  draws=result.draws, rank=result.rank, n_divergent=result.n_divergent,
                  rhat=result.rhat, failed=result.failed, converged=result.converged)
         (tmp / "report.html").write_text(_report_html(sbc, summary))
-        if out.exists():
-            if not force:
-                raise InputError(f"{out} already exists; pass --force to overwrite it")
-            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-            os.replace(out, old / out.name)
-            shutil.rmtree(old)
-        os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return summary
 
 

@@ -4,15 +4,13 @@ Writes ``DIR/telemetry.csv`` (noisy telemetry, DESIGN.md §4), ``DIR/pulses.csv`
 fired) and ``DIR/truth.json`` (every true parameter, the noise levels, the quiet windows and the
 noise-free momentum check), atomically: everything is written into a temporary directory beside
 ``DIR`` and renamed at the end, so a half-written run never appears under the final name. An
-existing ``DIR`` is refused unless ``--force``.
+existing ``DIR`` is refused unless ``--force`` (and then only one this package wrote,
+:func:`cassini_bayes.rundir.check_out`).
 """
 
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import tempfile
 import time
 from pathlib import Path
 
@@ -22,9 +20,11 @@ import typer
 from rich.console import Console
 
 from cassini_bayes import __version__
-from cassini_bayes.errors import InputError
+from cassini_bayes._paths import text_file
+from cassini_bayes.cli._options import check_seed, seed_option
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.physics.momentum import INERTIA_NAMES
+from cassini_bayes.rundir import RunDir, check_out
 from cassini_bayes.simulate import SimResult, load_scenario, quiet_windows, simulate
 from cassini_bayes.telemetry import write_pulses, write_telemetry
 
@@ -90,32 +90,13 @@ def truth_document(result: SimResult, seed: int) -> dict:
 
 
 def write_run(result: SimResult, out: Path, seed: int, force: bool = False) -> None:
-    """Write a simulated run into ``out`` atomically (temporary sibling directory, then rename)."""
-    out = Path(out)
-    if out.exists() and not force:
-        raise InputError(f"{out} exists; choose another --out or pass --force to replace it")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
-    umask = os.umask(0)
-    os.umask(umask)
-    tmp.chmod(0o777 & ~umask)  # mkdtemp makes it private; the run directory is an ordinary one
-    try:
-        write_telemetry(tmp / "telemetry.csv", result.telemetry)
+    """Write a simulated run into ``out`` atomically (:class:`cassini_bayes.rundir.RunDir`)."""
+    with RunDir(out, force=force) as rd:
+        write_telemetry(rd.path / "telemetry.csv", result.telemetry)
         if result.pulses is not None:
-            write_pulses(tmp / "pulses.csv", result.pulses)
-        (tmp / "truth.json").write_text(json.dumps(truth_document(result, seed), indent=2) + "\n")
-        if out.exists():
-            old = out.with_name(f".{out.name}.old")
-            if old.exists():
-                shutil.rmtree(old)
-            out.rename(old)
-            tmp.rename(out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            tmp.rename(out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+            write_pulses(rd.path / "pulses.csv", result.pulses)
+        (rd.path / "truth.json").write_text(json.dumps(truth_document(result, seed), indent=2)
+                                            + "\n")
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
@@ -123,18 +104,17 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     def simulate_cmd(
         scenario: Path = typer.Argument(..., help="Scenario TOML (experiments/scenarios/…)."),
         out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
-        seed: int | None = typer.Option(None, "--seed", help="Seed of the sensor noise "
-                                        "(default: the scenario's)."),
-        force: bool = typer.Option(False, "--force", help="Replace an existing --out."),
+        seed: int | None = seed_option(None, "Seed of the sensor noise (default: the "
+                                       "scenario's)."),
+        force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                                   "cassini-bayes wrote."),
     ) -> None:
         """Simulate a scenario: telemetry.csv, pulses.csv (if thrusters fire), truth.json."""
         console = Console(stderr=True, highlight=False)
+        text_file(scenario, "scenario")  # a directory or a binary file: one line
+        check_out(out, force=force, inputs=[scenario])
         sc = load_scenario(scenario)
-        if Path(out).exists() and not force:
-            raise InputError(f"{out} exists; choose another --out or pass --force to replace it")
-        seed_ = sc.seed if seed is None else seed
-        if seed_ < 0:
-            raise InputError(f"--seed must be a non-negative integer, got {seed_}")
+        seed_ = check_seed(sc.seed, str(scenario)) if seed is None else seed
         t0 = time.perf_counter()
         with console.status(f"simulating {sc.name}: {sc.n_steps} steps of {sc.dt_s} s, "
                             f"{sc.n_samples} samples (compiling on first use)…"):
