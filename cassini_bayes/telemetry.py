@@ -13,6 +13,15 @@ Validation rules and their tolerances
 - Values: numbers only; a required cell that is empty, NaN or infinite is an error; a wheel column
   that is empty in some rows but not in others is an error.
 - Time: strictly increasing (a duplicate or a step back is an error naming both rows).
+- Physical bounds (docs/limits.md), checked whatever ``check_units`` says, so that nothing that
+  passes validation can overflow later (differences of ``t``, rate × time products): ``|t| ≤
+  TIME_ABS_MAX`` (1e10 s, 317 years: any epoch in seconds, SCLK or J2000, fits) and consecutive
+  samples at least ``MIN_SAMPLE_SPACING_S`` (1 µs) apart; wheel rates ``|ρ| ≤ WHEEL_RPM_MAX``
+  (10 000 rpm: five times Cassini's ~2000 rpm wheels, which the papers bias to 1800 rpm);
+  body rates ``|ω_i| ≤ OMEGA_ABS_MAX`` (5 rad/s, 290 °/s: no spacecraft under attitude control
+  turns that fast); quaternion components ``|q_i| ≤ 2`` (before the norm test); cumulative on-times
+  ``|on| ≤ TIME_ABS_MAX``; pulse ``|t_on| ≤ TIME_ABS_MAX`` and ``0 < width ≤ PULSE_WIDTH_MAX``
+  (3600 s; Cassini's RCS pulses are below a second, its longest RCS burns minutes).
 - Quaternion norm: ``|‖q‖ − 1| ≤ QUAT_NORM_TOL`` (1e-3, telemetry rounding) is accepted and the row
   renormalised; a larger deviation is an error. Rows within 1e-12 of unit norm are left bit-exact.
 - Quaternion sign: ``q`` and ``−q`` are the same attitude. Sign flips between consecutive rows are
@@ -30,7 +39,7 @@ Validation rules and their tolerances
   the body rate integrated up to the first row where the quaternions have turned by
   ``min(0.1 rad, largest turn)`` must not exceed that angle by more than ten times (°/s gives
   57×, mrad/s 1000×; rate noise adds only a random walk, far below ten times the angle).
-- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); width > 0; ``t_on`` strictly
+- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); ``0 < width ≤ PULSE_WIDTH_MAX``; ``t_on`` strictly
   increasing per thruster and no pulse starting before the previous pulse of the same thruster
   has ended. A header-only pulse log is valid (no pulses). Against a telemetry
   (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
@@ -63,6 +72,11 @@ __all__ = [
     "QUAT_NORM_TOL",
     "OMEGA_MAX",
     "RAD_S_SUSPECT_MAX",
+    "TIME_ABS_MAX",
+    "MIN_SAMPLE_SPACING_S",
+    "WHEEL_RPM_MAX",
+    "OMEGA_ABS_MAX",
+    "PULSE_WIDTH_MAX",
     "PulseSpanWarning",
     "read_telemetry",
     "read_telemetry_many",
@@ -156,6 +170,16 @@ OMEGA_MAX = 0.2
 """Largest plausible body rate, rad/s (11.5 °/s); above it the column is in the wrong unit."""
 RAD_S_SUSPECT_MAX = 12.0
 """A spinning wheel (median ``|value| ≥ 1``) never above this magnitude is read as rad/s."""
+TIME_ABS_MAX = 1e10
+"""Largest ``|t|``, ``|t_on|`` and ``|on_*|``, s (317 years; SCLK and J2000 seconds fit)."""
+MIN_SAMPLE_SPACING_S = 1e-6
+"""Smallest time between consecutive telemetry samples, s (1 MHz; telemetry is ~1 Hz)."""
+WHEEL_RPM_MAX = 1e4
+"""Largest wheel-rate magnitude, rpm (five times Cassini's ~2000 rpm wheels)."""
+OMEGA_ABS_MAX = 5.0
+"""Largest body-rate component magnitude, rad/s, checked even without the unit heuristics."""
+PULSE_WIDTH_MAX = 3600.0
+"""Longest accepted pulse width, s (Cassini's RCS pulses are below a second)."""
 _EXACT_NORM = 1e-12  # rows this close to unit norm are left bit-exact
 _RATE_RATIO_MAX = 10.0  # |∫ω dt| over the quaternion angle turned above this → wrong unit
 _MIN_SWEEP_RAD = 0.01  # the ratio test needs the attitude to move at least this much
@@ -311,11 +335,23 @@ def _fail_nonfinite(x: np.ndarray, col: str, path: str, t: np.ndarray | None,
         raise InputError(f"column '{col}', {_row_ref(i, t)} {what}; {fix}", path=path)
 
 
+def _fail_out_of_range(x: np.ndarray, col: str, limit: float, unit: str, path: str,
+                       t: np.ndarray | None, why: str) -> None:
+    """Error naming the first row where the finite ``|x|`` exceeds ``limit``."""
+    bad = np.abs(x) > limit
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise InputError(f"column '{col}', {_row_ref(i, t)}: {x[i]:.6g} {unit} is beyond the "
+                         f"physical limit |{col}| <= {limit:g} {unit} ({why}); fix the value, its "
+                         "unit or drop the row (docs/limits.md)", path=path)
+
+
 # --------------------------------------------------------------------------------------------
 # Validation of arrays (shared by the readers and by in-memory telemetry)
 
 
 def _check_time(t: np.ndarray, path: str, col: str = "t") -> None:
+    _fail_out_of_range(t, col, TIME_ABS_MAX, "s", path, None, "317 years")
     dt = np.diff(t)
     bad = ~(dt > 0)
     if np.any(bad):
@@ -324,6 +360,12 @@ def _check_time(t: np.ndarray, path: str, col: str = "t") -> None:
         raise InputError(f"column '{col}' is not strictly increasing: {_row_ref(i + 1, t)} "
                          f"{kind} data row {i + 1} (t = {t[i]:.10g} s); sort the rows and drop "
                          "duplicate samples", path=path)
+    close = dt < MIN_SAMPLE_SPACING_S
+    if np.any(close):
+        i = int(np.argmax(close))
+        raise InputError(f"column '{col}': {_row_ref(i + 1, t)} is only {dt[i]:.3g} s after data "
+                         f"row {i + 1}; samples must be at least {MIN_SAMPLE_SPACING_S:g} s apart "
+                         "— check the time unit (seconds) or drop the duplicate", path=path)
 
 
 def _quat_continuous(q: np.ndarray) -> np.ndarray:
@@ -350,6 +392,9 @@ def _turn_angle(q: np.ndarray, q0: np.ndarray) -> np.ndarray:
 
 def _check_quaternions(q: np.ndarray, t: np.ndarray, path: str) -> np.ndarray:
     """Renormalise near-unit rows, reject the rest, remove sign flips."""
+    for j, c in enumerate(_Q_COLS):  # before the norm, which would overflow
+        _fail_out_of_range(q[:, j], c, 2.0, "", path, t, "a unit quaternion's components are "
+                           "at most 1; check the column order and scaling")
     norm = np.linalg.norm(q, axis=1)
     dev = np.abs(norm - 1.0)
     if np.any(dev > QUAT_NORM_TOL):
@@ -454,6 +499,8 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
         _fail_nonfinite(q[:, j], c, path, t)
     for j, c in enumerate(_W_COLS):
         _fail_nonfinite(w[:, j], c, path, t)
+        _fail_out_of_range(w[:, j], c, OMEGA_ABS_MAX, "rad/s", path, t,
+                           "body rates are rad/s; no controlled spacecraft turns faster")
     for j, name in enumerate(tel.wheel_names):
         x = r[:, j]
         if np.any(np.isnan(x)) and not np.all(np.isnan(x)):
@@ -461,11 +508,14 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
                             fix="a wheel that is off must be empty in every row; fill the gap")
         if np.any(np.isinf(x)):
             _fail_nonfinite(x, name.lower(), path, t)
+        _fail_out_of_range(x / RPM_TO_RAD_S, name.lower(), WHEEL_RPM_MAX, "rpm", path, t,
+                           "5x Cassini's ~2000 rpm wheels")
         if check_units:
             _check_wheel_units(name.lower(), x / RPM_TO_RAD_S, path)
     if on is not None:
         for k, c in enumerate(_ON_COLS):
             _fail_nonfinite(on[:, k], c, path, t)
+            _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", path, t, "317 years")
         _check_on_times(on, t, _ON_COLS, path)
     q = _check_quaternions(q, t, path)
     if check_units:
@@ -519,6 +569,7 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
         on = np.stack([cols.get(c, np.zeros(n)) for c in _ON_COLS], axis=1)
         for k, c in enumerate(_ON_COLS):
             _fail_nonfinite(on[:, k], c, name, t)
+            _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", name, t, "317 years")
         on = on - on[0]
     tel = Telemetry(t, q, w, rpm * RPM_TO_RAD_S, WHEEL_NAMES, on, name)
     return validate_telemetry(tel, check_units=check_units)
@@ -638,6 +689,9 @@ def validate_pulses(log: PulseLog) -> PulseLog:
     thr = thr.astype(int)
     _fail_nonfinite(t_on, "t_on", path, None)
     _fail_nonfinite(width, "width", path, None)
+    _fail_out_of_range(t_on, "t_on", TIME_ABS_MAX, "s", path, None, "317 years")
+    _fail_out_of_range(width, "width", PULSE_WIDTH_MAX, "s", path, None,
+                       "an hour; Cassini's RCS pulses are below a second")
     if np.any(width <= 0):
         i = int(np.argmax(width <= 0))
         raise InputError(f"column 'width', data row {i + 1} (t_on = {t_on[i]:.10g} s): width "
