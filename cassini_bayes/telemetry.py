@@ -51,6 +51,7 @@ Validation rules and their tolerances
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import tempfile
 import warnings
@@ -77,6 +78,7 @@ __all__ = [
     "WHEEL_RPM_MAX",
     "OMEGA_ABS_MAX",
     "PULSE_WIDTH_MAX",
+    "MAX_ROWS",
     "PulseSpanWarning",
     "read_telemetry",
     "read_telemetry_many",
@@ -178,6 +180,11 @@ WHEEL_RPM_MAX = 1e4
 """Largest wheel-rate magnitude, rpm (five times Cassini's ~2000 rpm wheels)."""
 OMEGA_ABS_MAX = 5.0
 """Largest body-rate component magnitude, rad/s, checked even without the unit heuristics."""
+MAX_ROWS = 200_000
+"""Most data rows of one telemetry file, and of all the files of one fit together (measured
+peak memory: ~0.35 kB per row to read and check, ~4-5 kB per row to prepare an inertia fit, so
+~1 GB at the limit; docs/limits.md). 55 h at 1 Hz; longer records: decimate or split."""
+_CHUNK_ROWS = 8192  # CSV rows parsed to floats at a time (bounds the text held in memory)
 PULSE_WIDTH_MAX = 3600.0
 """Longest accepted pulse width, s (Cassini's RCS pulses are below a second)."""
 _EXACT_NORM = 1e-12  # rows this close to unit norm are left bit-exact
@@ -239,7 +246,7 @@ def _read_table(path: Path, what: str,
         except Exception as e:  # corrupt file: pyarrow's message, on one line
             raise InputError(f"cannot read Parquet ({e}); re-export the file", path=name) from None
         header = [str(c).strip() for c in df.columns]
-        cols = [df.iloc[:, j].to_numpy(dtype=object) for j in range(df.shape[1])]
+        cols = [df.iloc[:, j].to_numpy() for j in range(df.shape[1])]
         if df.shape[0] == 0 and not allow_empty:
             raise InputError(f"{what} file has a header but no data rows", path=name)
         return header, cols
@@ -264,6 +271,59 @@ def _read_table(path: Path, what: str,
                              "(leave a cell empty, keep the comma)", path=name)
     cols = [np.array([r[j] for r in data], dtype=object) for j in range(len(header))]
     return header, cols
+
+
+def _too_many_rows(n: int, path: str) -> InputError:
+    return InputError(f"has more than {MAX_ROWS} data rows ({n} read so far), the limit of one "
+                      "telemetry file; decimate it (e.g. keep every k-th row) or split it into "
+                      "one file per slew (docs/limits.md)", path=path)
+
+
+def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
+                      expected: str) -> tuple[dict[str, int], list[np.ndarray]]:
+    """Header map and one float64 column per header name, parsed in chunks of rows.
+
+    Equivalent to :func:`_read_table` then :func:`_to_float` on every column (same errors, same
+    row numbers), but holds at most :data:`_CHUNK_ROWS` rows as text, so memory is ~8 bytes per
+    cell; more than :data:`MAX_ROWS` data rows is an error raised while reading.
+    """
+    _check_readable(path, what)
+    name = str(path)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rows = (r for r in csv.reader(f) if any(c.strip() for c in r))
+            first = next(rows, None)
+            if first is None:
+                raise InputError(f"{what} file is empty; expected a header line and data rows",
+                                 path=name)
+            header = [c.strip() for c in first]
+            idx = _map_header(header, known, name, expected)
+            canon = {j: c for c, j in idx.items()}
+            parts: list[list[np.ndarray]] = [[] for _ in header]
+            n = 0
+            while True:
+                chunk = list(itertools.islice(rows, _CHUNK_ROWS))
+                if not chunk:
+                    break
+                for i, r in enumerate(chunk, start=n + 1):
+                    if len(r) != len(header):
+                        raise InputError(f"data row {i} has {len(r)} fields but the header has "
+                                         f"{len(header)}; every row needs one value per column "
+                                         "(leave a cell empty, keep the comma)", path=name)
+                for j in range(len(header)):
+                    cells = np.array([r[j] for r in chunk], dtype=object)
+                    parts[j].append(_to_float(cells, canon[j], name, offset=n))
+                n += len(chunk)
+                if n > MAX_ROWS:
+                    raise _too_many_rows(n, name)
+    except UnicodeDecodeError:
+        raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
+                         path=name) from None
+    except csv.Error as e:
+        raise InputError(f"malformed CSV ({e}); re-export the file", path=name) from None
+    if n == 0:
+        raise InputError(f"{what} file has a header but no data rows", path=name)
+    return idx, [np.concatenate(p) for p in parts]
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,
@@ -301,8 +361,11 @@ def _is_missing(c: object) -> bool:
         return False
 
 
-def _to_float(cells: np.ndarray, col: str, path: str) -> np.ndarray:
-    """Cells → float64; empty cells → NaN; non-numeric text is an error naming the row."""
+def _to_float(cells: np.ndarray, col: str, path: str, offset: int = 0) -> np.ndarray:
+    """Cells → float64; empty cells → NaN; non-numeric text is an error naming the row
+    (``offset`` rows before ``cells[0]``)."""
+    if cells.dtype.kind in "iuf":  # a numeric Parquet column
+        return cells.astype(float)
     try:  # fast path: every cell a number or blank
         return np.array([c.strip() or "nan" if isinstance(c, str) else c for c in cells],
                         dtype=float)
@@ -321,7 +384,7 @@ def _to_float(cells: np.ndarray, col: str, path: str) -> np.ndarray:
         try:
             out[i] = float(c)
         except (TypeError, ValueError):
-            raise InputError(f"column '{col}', data row {i + 1}: '{c}' is not a number; "
+            raise InputError(f"column '{col}', data row {offset + i + 1}: '{c}' is not a number; "
                              "fix or remove that row", path=path) from None
     return out
 
@@ -549,14 +612,21 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     """
     p = Path(path)
     name = str(path)
-    header, cells = _read_table(p, "telemetry")
-    idx = _map_header(header, _KNOWN, name,
-                      "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)")
+    expected = "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)"
+    if _is_parquet(p):
+        header, cells = _read_table(p, "telemetry")
+        idx = _map_header(header, _KNOWN, name, expected)
+        if len(cells[0]) > MAX_ROWS:
+            raise _too_many_rows(len(cells[0]), name)
+        canon = {j: c for c, j in idx.items()}
+        values = [_to_float(cells[j], canon[j], name) for j in range(len(header))]
+    else:
+        idx, values = _read_numeric_csv(p, "telemetry", _KNOWN, expected)
     for c in _REQUIRED:
         if c not in idx:
             raise InputError(f"missing column '{c}'; a telemetry file needs "
                              f"{' '.join(_REQUIRED)} (and rwa1..rwa4 in rpm)", path=name)
-    cols = {c: _to_float(cells[j], c, name) for c, j in idx.items()}
+    cols = {c: values[j] for c, j in idx.items()}
     t = cols["t"]
     _fail_nonfinite(t, "t", name, None, fix="every row needs a time")
     _check_time(t, name)
@@ -581,7 +651,15 @@ def read_telemetry_many(paths: Iterable[str | os.PathLike], *,
     paths = list(paths)
     if not paths:
         raise InputError("no telemetry files given; pass at least one CSV")
-    return [read_telemetry(p, check_units=check_units) for p in paths]
+    out, total = [], 0
+    for p in paths:
+        out.append(read_telemetry(p, check_units=check_units))
+        total += out[-1].n
+        if total > MAX_ROWS:
+            raise InputError(f"the files up to this one hold {total} rows together, more than "
+                             f"the limit of {MAX_ROWS} for one fit; decimate them or fit fewer "
+                             "files (docs/limits.md)", path=str(p))
+    return out
 
 
 def _atomic_write(path: Path, force: bool, write) -> None:
