@@ -217,15 +217,15 @@ INERTIA_MAX = 1e9
 INERTIA_MIN = 1e-4
 """Smallest principal moment, kg m² (a 1U CubeSat is ~2e-3)."""
 WHEEL_INERTIA_RANGE = (1e-6, 100.0)
-"""Wheel spin inertia, kg m² (Cassini's RWAs 0.16; the largest CMG rotors are ~10)."""
+"""Wheel spin inertia, kg m² (Cassini's RWAs 0.16; the ISS's CMG rotors ~7)."""
 LENGTH_MAX = 100.0
-"""Largest thruster lever arm or centre-of-mass offset, m (Cassini is 6.7 m tall)."""
+"""Largest thruster lever arm or centre-of-mass offset, m (Cassini's lever arms are 1.2-3.0 m)."""
 THRUST_MAX = 1e3
 """Largest steady thrust per thruster, N (Cassini's 0.75 N RCS, its main engine 445 N)."""
 TAU_MAX = 10.0
 """Largest pulse time constant or range end, s (Cassini's are tens of ms)."""
 MASS_MAX = 1e7
-"""Largest mass, kg (Cassini 5.6 t fuelled; the ISS 4.2e5 kg)."""
+"""Largest mass, kg (Cassini 5.7 t fuelled; the ISS 4.2e5 kg)."""
 
 
 def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:

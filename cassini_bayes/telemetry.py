@@ -22,6 +22,9 @@ Validation rules and their tolerances
   turns that fast); quaternion components ``|q_i| ≤ 2`` (before the norm test); cumulative on-times
   ``|on| ≤ TIME_ABS_MAX``; pulse ``|t_on| ≤ TIME_ABS_MAX`` and ``0 < width ≤ PULSE_WIDTH_MAX``
   (3600 s; Cassini's RCS pulses are below a second, its longest RCS burns minutes).
+- Size: at most ``MAX_ROWS`` (200 000) data rows per file and per fit (:func:`read_telemetry_many`);
+  CSV is parsed to floats in chunks of rows and the limit is checked while reading, so memory
+  stays ~0.35 MB per 1000 rows to read and a huge file fails fast (docs/limits.md).
 - Quaternion norm: ``|‖q‖ − 1| ≤ QUAT_NORM_TOL`` (1e-3, telemetry rounding) is accepted and the row
   renormalised; a larger deviation is an error. Rows within 1e-12 of unit norm are left bit-exact.
 - Quaternion sign: ``q`` and ``−q`` are the same attitude. Sign flips between consecutive rows are
@@ -39,9 +42,9 @@ Validation rules and their tolerances
   the body rate integrated up to the first row where the quaternions have turned by
   ``min(0.1 rad, largest turn)`` must not exceed that angle by more than ten times (°/s gives
   57×, mrad/s 1000×; rate noise adds only a random walk, far below ten times the angle).
-- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); ``0 < width ≤ PULSE_WIDTH_MAX``; ``t_on`` strictly
-  increasing per thruster and no pulse starting before the previous pulse of the same thruster
-  has ended. A header-only pulse log is valid (no pulses). Against a telemetry
+- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); ``0 < width ≤ PULSE_WIDTH_MAX``;
+  ``t_on`` strictly increasing per thruster and no pulse starting before the previous pulse of
+  the same thruster has ended. A header-only pulse log is valid (no pulses). Against a telemetry
   (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
   and is dropped with a :class:`PulseSpanWarning`; one still on at the last sample is kept with a
   warning (its on-time counts up to that sample); one already on at the first sample is an error

@@ -36,7 +36,8 @@ def _tel_lines(n: int = 12) -> list[str]:
     rows = [HEADER]
     for i in range(n):
         a = 1e-4 * i
-        rows.append(f"{100 + i * 0.5},0,0,{float(np.sin(a / 2))!r},{float(np.cos(a / 2))!r},0,0,2e-4,"
+        qz, qw = float(np.sin(a / 2)), float(np.cos(a / 2))
+        rows.append(f"{100 + i * 0.5},0,0,{qz!r},{qw!r},0,0,2e-4,"
                     f"{600 + i},{-700 - i},900,,{0.125 * (i // 4)},0")
     return rows
 
@@ -261,11 +262,11 @@ def test_cli_prints_one_line_and_exits_2(tmp_path, run_cli):
 # --------------------------------------------------------------------------------------------
 # fuzzing: success or InputError, nothing else
 
-_JUNK = ["1e308", "-1e308", "1e300", "-1e200", "1e20", "-3e15", "inf", "-inf", "nan", "NaN", "", "abc", "1e-320", "0", "-0",
-         "1e10", "--1", "0x10", "1_0", "true", " 5 ", "1e", "\x00"]
-_TOML_JUNK = ["1e308", "-1e308", "1e300", "-1e200", "1e20", "-3e15", "inf", "nan", "-1", "0", "1e-300", "\"x\"", "[1, 2]",
-              "[1e308, 0, 0]", "{ a = 1 }", "true", "[]", "9999999999999999999", "[[1]]",
-              "'0.5'", "-0.0"]
+_JUNK = ["1e308", "-1e308", "1e300", "-1e200", "1e20", "-3e15", "inf", "-inf", "nan", "NaN", "",
+         "abc", "1e-320", "0", "-0", "1e10", "--1", "0x10", "1_0", "true", " 5 ", "1e", "\x00"]
+_TOML_JUNK = ["1e308", "-1e308", "1e300", "-1e200", "1e20", "-3e15", "inf", "nan", "-1", "0",
+              "1e-300", "\"x\"", "[1, 2]", "[1e308, 0, 0]", "{ a = 1 }", "true", "[]",
+              "9999999999999999999", "[[1]]", "'0.5'", "-0.0"]
 
 
 def _mutate(text: bytes, data, junk: list[str], csv_like: bool) -> bytes:
@@ -364,3 +365,15 @@ def test_fuzz_scenario(tmp_path, data):
     text = _mutate(GOOD_SCENARIO.encode(), data, _TOML_JUNK, csv_like=False)
     p = _write(tmp_path, "fuzz.toml", text)
     _succeeds_or_input_error(lambda: load_scenario(p))
+
+
+def test_simulate_refuses_an_oversized_scenario_built_in_code():
+    from dataclasses import replace
+
+    import jax
+
+    from cassini_bayes.simulate import simulate
+
+    s = load_scenario("biasing_day049")
+    big = replace(s, duration_s=1e6)  # 8e6 steps: ~3 GB if it were allocated
+    _one_line_error(lambda: simulate(jax.random.key(0), big), "run.duration_s", "split the run")

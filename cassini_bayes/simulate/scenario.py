@@ -58,7 +58,7 @@ from cassini_bayes.telemetry import MAX_ROWS, OMEGA_ABS_MAX, WHEEL_RPM_MAX
 
 __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "FlexMode", "Window",
            "RwaControl", "RcsControl", "Scenario", "load_scenario", "scenario_from_dict",
-           "scenario_path"]
+           "scenario_path", "check_size", "MAX_STEPS", "MAX_SAMPLES"]
 
 RPM = 2.0 * np.pi / 60.0
 _UNIT_TOL = 1e-6
@@ -249,6 +249,15 @@ class Scenario:
         return self.truth.wheel_names
 
 
+def check_size(s: Scenario) -> None:
+    """Raise unless the run fits :data:`MAX_STEPS` steps and :data:`MAX_SAMPLES` samples (for
+    scenarios built or changed in code, past :func:`scenario_from_dict`'s checks)."""
+    if s.n_steps > MAX_STEPS or s.n_samples > MAX_SAMPLES + 1:
+        raise InputError(f"'run.duration_s' = {s.duration_s} s is {s.n_steps} steps and "
+                         f"{s.n_samples} samples, more than the limits {MAX_STEPS} steps and "
+                         f"{MAX_SAMPLES} samples; split the run (docs/limits.md)", path=s.source)
+
+
 def scenario_path(name: str) -> Path:
     """Path of a scenario: a file path, or the stem of a file under ``experiments/scenarios/``."""
     p = Path(name)
@@ -401,7 +410,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         raise run.err("control", f"must be \"rwa\" or \"rcs\", got {control!r}")
     if duration / dt > MAX_STEPS:
         raise run.err("duration_s", f"= {duration} s is {duration / dt:.3g} integration steps of "
-                                    f"dt_s = {dt} s, more than the limit {MAX_STEPS:.0e} (~1.2 GB); "
+                                    f"dt_s = {dt} s, more than the limit {MAX_STEPS:.0e} "
+                                    "(~1.2 GB); "
                                     "split the run into shorter scenarios (docs/limits.md)")
     if period > duration:
         raise run.err("sample_period_s", f"= {period} s is longer than the run "
