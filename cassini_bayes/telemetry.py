@@ -22,9 +22,10 @@ Validation rules and their tolerances
   turns that fast); quaternion components ``|q_i| ≤ 2`` (before the norm test); cumulative on-times
   ``|on| ≤ TIME_ABS_MAX``; pulse ``|t_on| ≤ TIME_ABS_MAX`` and ``0 < width ≤ PULSE_WIDTH_MAX``
   (3600 s; Cassini's RCS pulses are below a second, its longest RCS burns minutes).
-- Size: at most ``MAX_ROWS`` (200 000) data rows per file and per fit (:func:`read_telemetry_many`);
-  CSV is parsed to floats in chunks of rows and the limit is checked while reading, so memory
-  stays ~0.35 MB per 1000 rows to read and a huge file fails fast (docs/limits.md).
+- Size: at most ``MAX_ROWS`` (200 000) data rows per file (telemetry or pulse log) and per fit
+  (:func:`read_telemetry_many`). Telemetry CSV is parsed to floats in chunks of rows and the limit
+  is checked while reading, so reading takes ~0.35 MB per 1000 rows and a huge file fails fast
+  (docs/limits.md).
 - Quaternion norm: ``|‖q‖ − 1| ≤ QUAT_NORM_TOL`` (1e-3, telemetry rounding) is accepted and the row
   renormalised; a larger deviation is an error. Rows within 1e-12 of unit norm are left bit-exact.
 - Quaternion sign: ``q`` and ``−q`` are the same attitude. Sign flips between consecutive rows are
@@ -237,15 +238,24 @@ def _require_pyarrow(path: Path) -> None:
 
 def _read_table(path: Path, what: str,
                 allow_empty: bool = False) -> tuple[list[str], list[np.ndarray]]:
-    """Header names (stripped) and one array of raw cells per column; rows are data rows."""
+    """Header names (stripped) and one array of raw cells per column; rows are data rows.
+
+    More than :data:`MAX_ROWS` data rows is an error, found before the rest is read.
+    """
     _check_readable(path, what)
     name = str(path)
     if _is_parquet(path):
         _require_pyarrow(path)
         import pandas as pd
+        import pyarrow.parquet as pq
 
         try:
+            n = pq.read_metadata(path).num_rows
+            if n > MAX_ROWS:
+                raise _too_many_rows(n, name, what)
             df = pd.read_parquet(path)
+        except InputError:
+            raise
         except Exception as e:  # corrupt file: pyarrow's message, on one line
             raise InputError(f"cannot read Parquet ({e}); re-export the file", path=name) from None
         header = [str(c).strip() for c in df.columns]
@@ -255,7 +265,8 @@ def _read_table(path: Path, what: str,
         return header, cols
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
-            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
+            rows = list(itertools.islice((r for r in csv.reader(f) if any(c.strip() for c in r)),
+                                         MAX_ROWS + 2))
     except UnicodeDecodeError:
         raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
                          path=name) from None
@@ -265,6 +276,8 @@ def _read_table(path: Path, what: str,
         raise InputError(f"{what} file is empty; expected a header line and data rows", path=name)
     header = [c.strip() for c in rows[0]]
     data = rows[1:]
+    if len(data) > MAX_ROWS:
+        raise _too_many_rows(len(data), name, what)
     if not data and not allow_empty:
         raise InputError(f"{what} file has a header but no data rows", path=name)
     for i, r in enumerate(data, start=1):
@@ -276,9 +289,9 @@ def _read_table(path: Path, what: str,
     return header, cols
 
 
-def _too_many_rows(n: int, path: str) -> InputError:
+def _too_many_rows(n: int, path: str, what: str = "telemetry") -> InputError:
     return InputError(f"has more than {MAX_ROWS} data rows ({n} read so far), the limit of one "
-                      "telemetry file; decimate it (e.g. keep every k-th row) or split it into "
+                      f"{what} file; decimate it (e.g. keep every k-th row) or split it into "
                       "one file per slew (docs/limits.md)", path=path)
 
 
@@ -619,8 +632,6 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     if _is_parquet(p):
         header, cells = _read_table(p, "telemetry")
         idx = _map_header(header, _KNOWN, name, expected)
-        if len(cells[0]) > MAX_ROWS:
-            raise _too_many_rows(len(cells[0]), name)
         canon = {j: c for c, j in idx.items()}
         values = [_to_float(cells[j], canon[j], name) for j in range(len(header))]
     else:

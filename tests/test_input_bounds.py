@@ -132,6 +132,19 @@ def test_row_limit_per_file_and_per_fit(tmp_path, monkeypatch):
     b = _write(tmp_path, "b.csv", "\n".join(_tel_lines(6)))
     assert read_telemetry(a).n == 6
     _one_line_error(lambda: read_telemetry_many([a, b]), str(b), "12 rows", "limit of 10")
+    pulses = "\n".join(["t_on,thruster,width"] + [f"{i},Z1,0.125" for i in range(11)])
+    lp = _write(tmp_path, "pulses.csv", pulses)
+    _one_line_error(lambda: read_pulses(lp), str(lp), "more than 10 data rows", "pulse-log")
+
+
+def test_row_limit_parquet(tmp_path, monkeypatch):
+    pytest.importorskip("pyarrow")
+    tel = read_telemetry(_write(tmp_path, "a.csv", "\n".join(_tel_lines(12))))
+    pq = tmp_path / "a.parquet"
+    telemetry.write_telemetry(pq, tel)
+    assert read_telemetry(pq).n == 12
+    monkeypatch.setattr(telemetry, "MAX_ROWS", 10)
+    _one_line_error(lambda: read_telemetry(pq), str(pq), "more than 10 data rows")
 
 
 def test_chunked_reading_matches_and_names_the_global_row(tmp_path, monkeypatch):
