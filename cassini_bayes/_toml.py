@@ -6,6 +6,8 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from cassini_bayes.errors import InputError
 
 MAX_TOML_BYTES = 1_000_000
@@ -38,3 +40,13 @@ def read_toml(path: Path, what: str, where: str) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"not valid TOML: {e}", path=str(path)) from None
+
+
+def is_numbers(v: Any) -> bool:
+    """True for a flat list, tuple or 1-D array of real numbers (not booleans, not strings): what
+    a TOML array of numbers, or the same built in code, may be."""
+    if isinstance(v, np.ndarray):
+        return v.ndim == 1 and v.dtype.kind in "iuf"
+    return isinstance(v, (list, tuple)) and all(
+        isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+        for x in v)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import model_path
-from cassini_bayes._toml import read_toml
+from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
 
 __all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
@@ -282,8 +282,7 @@ def _number(table: dict, key: str, where: str, src: str, default=None,
 
 def _vector(value, key: str, src: str, bound: float = LENGTH_MAX) -> np.ndarray:
     """A list of 3 finite numbers, each of magnitude ≤ ``bound``."""
-    if not isinstance(value, list) or len(value) != 3 or any(
-            isinstance(x, bool) or not isinstance(x, (int, float)) for x in value):
+    if not is_numbers(value) or len(value) != 3:
         raise InputError(f"'{key}' must be a list of 3 numbers, got {value!r}", path=src)
     v = np.asarray(value, float)
     if not np.all(np.isfinite(v)) or np.any(np.abs(v) > bound):
@@ -296,8 +295,7 @@ def _pair(table: dict, key: str, where: str, src: str, default: tuple[float, flo
           hi: float) -> tuple[float, float]:
     """``[low, high]`` with ``0 < low < high ≤ hi``."""
     v = table.get(key, list(default))
-    ok = (isinstance(v, (list, tuple)) and len(v) == 2
-          and all(not isinstance(x, bool) and isinstance(x, (int, float)) for x in v))
+    ok = is_numbers(v) and len(v) == 2
     if not ok or not (0 < v[0] < v[1] <= hi):
         raise InputError(f"'{where}{key}' must be [low, high] with 0 < low < high <= {hi:g} (s), "
                          f"got {v!r}", path=src)

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import ROOT, SCENARIOS_DIR
-from cassini_bayes._toml import read_toml
+from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
@@ -310,8 +310,7 @@ class _Reader:
                 raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
             return np.asarray(default, float)
         v = self.t[key]
-        if not isinstance(v, list) or any(isinstance(x, bool) or not isinstance(x, (int, float))
-                                          for x in v):
+        if not is_numbers(v):
             raise self.err(key, f"must be a list of {n} numbers, got {v!r}")
         a = np.asarray(v, float)
         if a.shape != (n,) or not np.all(np.isfinite(a)):
