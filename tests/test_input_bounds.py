@@ -231,6 +231,7 @@ def test_spacecraft_file_not_utf8_or_a_directory(tmp_path):
     ("duration_s = 480.0", "duration_s = \"480\"", "run.duration_s"),
     ("dt_s = 0.125 ", "dt_s = 1e-300 ", "run.duration_s"),
     ("sample_period_s = 1.0", "sample_period_s = 1000.0", "run.sample_period_s"),
+    ("duration_s = 480.0", "duration_s = 210000.0", "run.sample_period_s"),  # 210 001 samples
     ("target_rpm = 1026.0", "target_rpm = 1e308", "wheel_ramp[0].target_rpm"),
     ("torque_nm = 0.06", "torque_nm = 1e9", "wheel_ramp[0].torque_nm"),
     ("thrust_n = 0.699", "thrust_n = 1e308", "truth.thrust_n"),

@@ -67,7 +67,7 @@ MAX_STEPS = 2_000_000
 ``simulate`` is ~0.5 GB plus ~350 bytes per step (8 steps per sample), so ~1.2 GB at the limit
 (docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
 MAX_SAMPLES = MAX_ROWS
-"""Most telemetry samples ``duration_s / sample_period_s`` of one scenario: the telemetry file
+"""Most telemetry samples ``duration_s / sample_period_s + 1`` of one scenario: the telemetry file
 row limit :data:`cassini_bayes.telemetry.MAX_ROWS`, so every simulated file can be read back."""
 NUMBER_ABS_MAX = 1e10
 """Largest magnitude of any number in a scenario file (keeps every product far from overflow)."""
@@ -252,7 +252,7 @@ class Scenario:
 def check_size(s: Scenario) -> None:
     """Raise unless the run fits :data:`MAX_STEPS` steps and :data:`MAX_SAMPLES` samples (for
     scenarios built or changed in code, past :func:`scenario_from_dict`'s checks)."""
-    if s.n_steps > MAX_STEPS or s.n_samples > MAX_SAMPLES + 1:
+    if s.n_steps > MAX_STEPS or s.n_samples > MAX_SAMPLES:
         raise InputError(f"'run.duration_s' = {s.duration_s} s is {s.n_steps} steps and "
                          f"{s.n_samples} samples, more than the limits {MAX_STEPS} steps and "
                          f"{MAX_SAMPLES} samples; split the run (docs/limits.md)", path=s.source)
@@ -415,9 +415,9 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     if period > duration:
         raise run.err("sample_period_s", f"= {period} s is longer than the run "
                                          f"(duration_s = {duration} s)")
-    if duration / period > MAX_SAMPLES:
-        raise run.err("sample_period_s", f"= {period} s gives {duration / period:.3g} samples over "
-                                         f"{duration} s, more than the limit {MAX_SAMPLES}; "
+    if duration / period + 1 > MAX_SAMPLES:
+        raise run.err("sample_period_s", f"= {period} s gives {duration / period + 1:.6g} samples "
+                                         f"over {duration} s, more than the limit {MAX_SAMPLES}; "
                                          "sample less often or shorten the run (docs/limits.md)")
     if abs(period / dt - round(period / dt)) > 1e-9 or round(period / dt) < 1:
         raise run.err("sample_period_s", f"= {period} must be a whole number of steps dt_s = {dt}")
