@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import model_path
-from cassini_bayes._toml import read_toml
+from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
 
 __all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
@@ -209,6 +209,25 @@ _THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
 _PULSE_KEYS = set(PulseConstants.__dataclass_fields__)
 
 
+# Physical ranges of the model-file numbers (docs/limits.md): wide margins around any spacecraft,
+# tight enough that nothing downstream can overflow (products of inertia, rate and time stay
+# far below 1e308).
+INERTIA_MAX = 1e9
+"""Largest moment or product of inertia, kg m² (the ISS is ~1e8; Cassini ~9e3)."""
+INERTIA_MIN = 1e-4
+"""Smallest principal moment, kg m² (a 1U CubeSat is ~2e-3)."""
+WHEEL_INERTIA_RANGE = (1e-6, 100.0)
+"""Wheel spin inertia, kg m² (Cassini's RWAs 0.16; the ISS's CMG rotors ~7)."""
+LENGTH_MAX = 100.0
+"""Largest thruster lever arm or centre-of-mass offset, m (Cassini's lever arms are 1.2-3.0 m)."""
+THRUST_MAX = 1e3
+"""Largest steady thrust per thruster, N (Cassini's 0.75 N RCS, its main engine 445 N)."""
+TAU_MAX = 10.0
+"""Largest pulse time constant or range end, s (Cassini's are tens of ms)."""
+MASS_MAX = 1e7
+"""Largest mass, kg (Cassini 5.7 t fuelled; the ISS 4.2e5 kg)."""
+
+
 def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
     for key in table:
         if key not in allowed:
@@ -216,7 +235,34 @@ def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
                              path=src)
 
 
-def _number(table: dict, key: str, where: str, src: str, default=None) -> float:
+def _table(d: dict, key: str, src: str, *, required: bool = False) -> dict:
+    """The sub-table ``[key]`` ({} when absent and optional); anything else is an error."""
+    if key not in d:
+        if required:
+            raise InputError(f"missing required section [{key}]", path=src)
+        return {}
+    v = d[key]
+    if not isinstance(v, dict):
+        raise InputError(f"'{key}' must be a table [{key}], got {v!r}; write it as a [{key}] "
+                         "section", path=src)
+    return v
+
+
+def _string(d: dict, key: str, where: str, src: str, default: str | None = None) -> str:
+    if key not in d:
+        if default is None:
+            raise InputError(f"missing required key '{where}{key}'", path=src)
+        return default
+    v = d[key]
+    if not isinstance(v, str):
+        raise InputError(f"'{where}{key}' must be a string (in quotes), got {v!r}", path=src)
+    return v
+
+
+def _number(table: dict, key: str, where: str, src: str, default=None,
+            lo: float | None = None, hi: float | None = None, unit: str = "",
+            open_lo: bool = True) -> float:
+    """A finite number, optionally in ``(lo, hi]`` (``[lo, hi]`` with ``open_lo=False``)."""
     if key not in table:
         if default is None:
             raise InputError(f"missing required key '{where}{key}'", path=src)
@@ -224,104 +270,129 @@ def _number(table: dict, key: str, where: str, src: str, default=None) -> float:
     v = table[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
         raise InputError(f"'{where}{key}' must be a finite number, got {v!r}", path=src)
-    return float(v)
-
-
-def _vector(value, key: str, src: str) -> np.ndarray:
-    try:
-        v = np.asarray(value, float)
-    except (TypeError, ValueError):
-        raise InputError(f"'{key}' must be a list of 3 numbers, got {value!r}", path=src) from None
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise InputError(f"'{key}' must be a list of 3 finite numbers, got {value!r}", path=src)
+    v = float(v)
+    below = lo is not None and (v <= lo if open_lo else v < lo)
+    if below or (hi is not None and v > hi):
+        rng = f"{'(' if open_lo else '['}{lo:g}, {hi:g}]" if hi is not None else f"> {lo:g}"
+        sign = " (it must be positive)" if lo == 0 and v <= 0 else ""
+        raise InputError(f"'{where}{key}' = {v:g} {unit} is outside the physical range {rng} "
+                         f"{unit}{sign}; check the value and its unit (docs/limits.md)", path=src)
     return v
 
 
+def _vector(value, key: str, src: str, bound: float = LENGTH_MAX) -> np.ndarray:
+    """A list of 3 finite numbers, each of magnitude ≤ ``bound``."""
+    if not is_numbers(value) or len(value) != 3:
+        raise InputError(f"'{key}' must be a list of 3 numbers, got {value!r}", path=src)
+    v = np.asarray(value, float)
+    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > bound):
+        raise InputError(f"'{key}' must be 3 finite numbers of magnitude <= {bound:g}, got "
+                         f"{value!r}", path=src)
+    return v
+
+
+def _pair(table: dict, key: str, where: str, src: str, default: tuple[float, float],
+          hi: float) -> tuple[float, float]:
+    """``[low, high]`` with ``0 < low < high ≤ hi``."""
+    v = table.get(key, list(default))
+    ok = is_numbers(v) and len(v) == 2
+    if not ok or not (0 < v[0] < v[1] <= hi):
+        raise InputError(f"'{where}{key}' must be [low, high] with 0 < low < high <= {hi:g} (s), "
+                         f"got {v!r}", path=src)
+    return float(v[0]), float(v[1])
+
+
 def check_physical_inertia(inertia: np.ndarray, what: str, src: str) -> None:
-    """Raise unless ``inertia`` is symmetric positive definite and obeys the triangle inequalities."""
+    """Raise unless ``inertia`` is a finite, symmetric positive definite tensor within
+    :data:`INERTIA_MAX` that obeys the triangle inequalities."""
+    if not np.all(np.isfinite(inertia)) or np.max(np.abs(inertia)) > INERTIA_MAX:
+        raise InputError(f"{what} has an entry outside +-{INERTIA_MAX:g} kg m^2 (or not finite); "
+                         "inertias are in kg m^2 (docs/limits.md)", path=src)
     eig = np.linalg.eigvalsh(inertia)
     if eig[0] <= 0:
         raise InputError(f"{what} is not positive definite (eigenvalues {np.round(eig, 3)} kg m^2);"
                          " check the signs and magnitudes of the entries", path=src)
+    if eig[0] < INERTIA_MIN:
+        raise InputError(f"{what} has a principal moment {eig[0]:.3g} kg m^2 below "
+                         f"{INERTIA_MIN:g} kg m^2; inertias are in kg m^2 (docs/limits.md)",
+                         path=src)
     if eig[0] + eig[1] < eig[2] * (1 - 1e-12):
         raise InputError(f"{what} violates the triangle inequality (principal moments "
                          f"{np.round(eig, 3)} kg m^2): no rigid body has it", path=src)
 
 
 def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacecraft:
-    """Build and validate a :class:`Spacecraft` from the TOML schema (as a dict)."""
+    """Build and validate a :class:`Spacecraft` from the TOML schema (as a dict).
+
+    Every key is checked for type, finiteness and physical range (the ranges are the module
+    constants above, documented in docs/limits.md); any failure is one :class:`InputError` line
+    naming ``src`` and the key.
+    """
     _check_keys(d, _TOP_KEYS, "", src)
-    if "inertia" not in d:
-        raise InputError("missing required section [inertia]", path=src)
-    ti = d["inertia"]
+    ti = _table(d, "inertia", src, required=True)
     _check_keys(ti, _INERTIA_KEYS, "inertia.", src)
-    xx, yy, zz, xy, xz, yz = (_number(ti, k, "inertia.", src) for k in
-                              ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"))
+    xx, yy, zz = (_number(ti, k, "inertia.", src, lo=0.0, hi=INERTIA_MAX, unit="kg m^2")
+                  for k in ("Ixx", "Iyy", "Izz"))
+    xy, xz, yz = (_number(ti, k, "inertia.", src, lo=-INERTIA_MAX, hi=INERTIA_MAX,
+                          unit="kg m^2", open_lo=False) for k in ("Ixy", "Ixz", "Iyz"))
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    if min(xx, yy, zz) <= 0:
-        raise InputError("inertia moments Ixx, Iyy, Izz must be positive (kg m^2)", path=src)
     check_physical_inertia(inertia, "[inertia]", src)
     moi = _number(ti, "moi_uncertainty", "inertia.", src, 0.10)
-    poi = _number(ti, "poi_uncertainty", "inertia.", src, 75.0)
+    poi = _number(ti, "poi_uncertainty", "inertia.", src, 75.0, lo=0.0, hi=INERTIA_MAX,
+                  unit="kg m^2")
     if not 0 < moi < 1:
         raise InputError(f"'inertia.moi_uncertainty' is a fraction in (0, 1), got {moi}", path=src)
-    if poi <= 0:
-        raise InputError(f"'inertia.poi_uncertainty' must be positive (kg m^2), got {poi}", path=src)
 
     wheels_raw = d.get("wheel", [])
+    if not isinstance(wheels_raw, list) or not all(isinstance(w, dict) for w in wheels_raw):
+        raise InputError("'wheel' must be an array of tables, one [[wheel]] section per wheel",
+                         path=src)
     if not wheels_raw:
         raise InputError("at least one [[wheel]] is required", path=src)
     wheels = []
     for i, w in enumerate(wheels_raw):
         where = f"wheel[{i}]."
         _check_keys(w, _WHEEL_KEYS, where, src)
-        if "name" not in w:
-            raise InputError(f"missing required key '{where}name'", path=src)
+        name = _string(w, "name", where, src)
         if "axis" not in w:
             raise InputError(f"missing required key '{where}axis'", path=src)
         axis = _vector(w["axis"], where + "axis", src)
         if abs(np.linalg.norm(axis) - 1) > _UNIT_TOL:
             raise InputError(f"'{where}axis' must be a unit vector (|axis| = "
                              f"{np.linalg.norm(axis):.6f}); normalise it", path=src)
-        j = _number(w, "inertia", where, src)
-        if j <= 0:
-            raise InputError(f"'{where}inertia' must be positive (kg m^2), got {j}", path=src)
-        wheels.append(Wheel(str(w["name"]).upper(), axis / np.linalg.norm(axis), j))
+        j = _number(w, "inertia", where, src, lo=WHEEL_INERTIA_RANGE[0],
+                    hi=WHEEL_INERTIA_RANGE[1], unit="kg m^2", open_lo=False)
+        wheels.append(Wheel(name.upper(), axis / np.linalg.norm(axis), j))
     names = [w.name for w in wheels]
     if len(set(names)) != len(names):
         raise InputError(f"wheel names must be unique, got {names}", path=src)
 
-    tt = d.get("thrusters")
-    if tt is None:
-        raise InputError("missing required section [thrusters]", path=src)
+    tt = _table(d, "thrusters", src, required=True)
     _check_keys(tt, _THRUSTER_KEYS, "thrusters.", src)
-    thr = Thrusters(*(_number(tt, k, "thrusters.", src) for k in ("Lx", "Ly", "Lzy", "Lzz")),
+    thr = Thrusters(*(_number(tt, k, "thrusters.", src, lo=0.0, hi=LENGTH_MAX, unit="m")
+                      for k in ("Lx", "Ly", "Lzy", "Lzz")),
                     com=_vector(tt.get("com", [0.0, 0.0, 0.0]), "thrusters.com", src))
 
-    tp = d.get("pulse", {})
+    tp = _table(d, "pulse", src)
     _check_keys(tp, _PULSE_KEYS, "pulse.", src)
     base = PulseConstants()
     kw = {}
     for k in ("tau_delay", "tau_rise", "tau_fall"):
-        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k))
-        if kw[k] <= 0:
-            raise InputError(f"'pulse.{k}' must be positive (s), got {kw[k]}", path=src)
+        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
         rk = k + "_range"
-        lo, hi = tp.get(rk, getattr(base, rk))
-        if not 0 < lo < hi:
-            raise InputError(f"'pulse.{rk}' must be [low, high] with 0 < low < high (s)", path=src)
-        kw[rk] = (float(lo), float(hi))
-    thrust_t = d.get("thrust", {})
+        kw[rk] = _pair(tp, rk, "pulse.", src, getattr(base, rk), TAU_MAX)
+    thrust_t = _table(d, "thrust", src)
     _check_keys(thrust_t, {"F"}, "thrust.", src)
-    thrust = _number(thrust_t, "F", "thrust.", src, 0.75)
-    mass_t = d.get("mass", {})
+    thrust = _number(thrust_t, "F", "thrust.", src, 0.75, lo=0.0, hi=THRUST_MAX, unit="N")
+    mass_t = _table(d, "mass", src)
     _check_keys(mass_t, {"kg"}, "mass.", src)
-    mass = _number(mass_t, "kg", "mass.", src, float("nan")) if mass_t else float("nan")
+    mass = (_number(mass_t, "kg", "mass.", src, lo=0.0, hi=MASS_MAX, unit="kg") if mass_t
+            else float("nan"))
     return Spacecraft(
-        name=str(d.get("name", Path(src).stem)), inertia=inertia, moi_uncertainty=moi,
+        name=_string(d, "name", "", src, Path(src).stem), inertia=inertia, moi_uncertainty=moi,
         poi_uncertainty=poi, wheels=tuple(wheels), thrusters=thr, pulse=PulseConstants(**kw),
-        thrust=thrust, mass=mass, description=str(d.get("description", "")),
-        source=str(d.get("source", "")), knowledge=_knowledge(d, src),
+        thrust=thrust, mass=mass, description=_string(d, "description", "", src, ""),
+        source=_string(d, "source", "", src, ""), knowledge=_knowledge(d, src),
     )
 
 
@@ -332,9 +403,7 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
     kw = {}
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
                           ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS)):
-        table = d.get(section, {})
-        if not isinstance(table, dict):
-            raise InputError(f"'{section}' must be a table [{section}]", path=src)
+        table = _table(d, section, src)
         _check_keys(table, set(keys), f"{section}.", src)
         for key, attr in keys.items():
             v = _number(table, key, f"{section}.", src, getattr(base, attr))
@@ -348,6 +417,12 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "
                          f"(<= 10), got {kw['wheel_axis_sd_deg']}", path=src)
+    if kw["gyro_bias_sd_rad_s"] > 1e-2:
+        raise InputError("'gyro.bias_sd_rad_s' is a small gyro bias in rad/s (<= 0.01), got "
+                         f"{kw['gyro_bias_sd_rad_s']}", path=src)
+    if kw["gyro_scale_factor_sd"] >= 0.1:
+        raise InputError("'gyro.scale_factor_sd' is a small fraction (< 0.1), got "
+                         f"{kw['gyro_scale_factor_sd']}", path=src)
     if kw["time_tag_sd_s"] > 1.0:
         raise InputError("'telemetry_knowledge.time_tag_sd_s' is a time-tag error in seconds "
                          f"(<= 1), got {kw['time_tag_sd_s']}", path=src)
@@ -356,6 +431,8 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
 
 def load_spacecraft(path: str | Path) -> Spacecraft:
     """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
+    if Path(path).is_dir():
+        raise InputError("is a directory, expected a spacecraft model .toml file", path=str(path))
     p = model_path(str(path))
     d = read_toml(p, "spacecraft model", "models/")
     return spacecraft_from_dict(d, str(p))

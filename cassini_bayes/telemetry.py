@@ -13,6 +13,19 @@ Validation rules and their tolerances
 - Values: numbers only; a required cell that is empty, NaN or infinite is an error; a wheel column
   that is empty in some rows but not in others is an error.
 - Time: strictly increasing (a duplicate or a step back is an error naming both rows).
+- Physical bounds (docs/limits.md), checked whatever ``check_units`` says, so that nothing that
+  passes validation can overflow later (differences of ``t``, rate × time products): ``|t| ≤
+  TIME_ABS_MAX`` (1e10 s, 317 years: any epoch in seconds, SCLK or J2000, fits) and consecutive
+  samples at least ``MIN_SAMPLE_SPACING_S`` (1 µs) apart; wheel rates ``|ρ| ≤ WHEEL_RPM_MAX``
+  (10 000 rpm: five times Cassini's ~2000 rpm wheels, which the papers bias to 1800 rpm);
+  body rates ``|ω_i| ≤ OMEGA_ABS_MAX`` (5 rad/s, 290 °/s: no spacecraft under attitude control
+  turns that fast); quaternion components ``|q_i| ≤ 2`` (before the norm test); cumulative on-times
+  ``|on| ≤ TIME_ABS_MAX``; pulse ``|t_on| ≤ TIME_ABS_MAX`` and ``0 < width ≤ PULSE_WIDTH_MAX``
+  (3600 s; Cassini's RCS pulses are below a second, its longest RCS burns minutes).
+- Size: at most ``MAX_ROWS`` (200 000) data rows per file (telemetry or pulse log) and per fit
+  (:func:`read_telemetry_many`). Telemetry CSV is parsed to floats in chunks of rows and the limit
+  is checked while reading, so reading takes ~0.35 MB per 1000 rows and a huge file fails fast
+  (docs/limits.md).
 - Quaternion norm: ``|‖q‖ − 1| ≤ QUAT_NORM_TOL`` (1e-3, telemetry rounding) is accepted and the row
   renormalised; a larger deviation is an error. Rows within 1e-12 of unit norm are left bit-exact.
 - Quaternion sign: ``q`` and ``−q`` are the same attitude. Sign flips between consecutive rows are
@@ -30,9 +43,9 @@ Validation rules and their tolerances
   the body rate integrated up to the first row where the quaternions have turned by
   ``min(0.1 rad, largest turn)`` must not exceed that angle by more than ten times (°/s gives
   57×, mrad/s 1000×; rate noise adds only a random walk, far below ten times the angle).
-- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); width > 0; ``t_on`` strictly
-  increasing per thruster and no pulse starting before the previous pulse of the same thruster
-  has ended. A header-only pulse log is valid (no pulses). Against a telemetry
+- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); ``0 < width ≤ PULSE_WIDTH_MAX``;
+  ``t_on`` strictly increasing per thruster and no pulse starting before the previous pulse of
+  the same thruster has ended. A header-only pulse log is valid (no pulses). Against a telemetry
   (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
   and is dropped with a :class:`PulseSpanWarning`; one still on at the last sample is kept with a
   warning (its on-time counts up to that sample); one already on at the first sample is an error
@@ -42,6 +55,7 @@ Validation rules and their tolerances
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import tempfile
 import warnings
@@ -63,6 +77,12 @@ __all__ = [
     "QUAT_NORM_TOL",
     "OMEGA_MAX",
     "RAD_S_SUSPECT_MAX",
+    "TIME_ABS_MAX",
+    "MIN_SAMPLE_SPACING_S",
+    "WHEEL_RPM_MAX",
+    "OMEGA_ABS_MAX",
+    "PULSE_WIDTH_MAX",
+    "MAX_ROWS",
     "PulseSpanWarning",
     "read_telemetry",
     "read_telemetry_many",
@@ -156,6 +176,21 @@ OMEGA_MAX = 0.2
 """Largest plausible body rate, rad/s (11.5 °/s); above it the column is in the wrong unit."""
 RAD_S_SUSPECT_MAX = 12.0
 """A spinning wheel (median ``|value| ≥ 1``) never above this magnitude is read as rad/s."""
+TIME_ABS_MAX = 1e10
+"""Largest ``|t|``, ``|t_on|`` and ``|on_*|``, s (317 years; SCLK and J2000 seconds fit)."""
+MIN_SAMPLE_SPACING_S = 1e-6
+"""Smallest time between consecutive telemetry samples, s (1 MHz; telemetry is ~1 Hz)."""
+WHEEL_RPM_MAX = 1e4
+"""Largest wheel-rate magnitude, rpm (five times Cassini's ~2000 rpm wheels)."""
+OMEGA_ABS_MAX = 5.0
+"""Largest body-rate component magnitude, rad/s, checked even without the unit heuristics."""
+MAX_ROWS = 200_000
+"""Most data rows of one telemetry file, and of all the files of one fit together (measured
+peak memory: ~0.35 kB per row to read and check, ~4-5 kB per row to prepare an inertia fit, so
+~1 GB at the limit; docs/limits.md). 55 h at 1 Hz; longer records: decimate or split."""
+_CHUNK_ROWS = 8192  # CSV rows parsed to floats at a time (bounds the text held in memory)
+PULSE_WIDTH_MAX = 3600.0
+"""Longest accepted pulse width, s (Cassini's RCS pulses are below a second)."""
 _EXACT_NORM = 1e-12  # rows this close to unit norm are left bit-exact
 _RATE_RATIO_MAX = 10.0  # |∫ω dt| over the quaternion angle turned above this → wrong unit
 _MIN_SWEEP_RAD = 0.01  # the ratio test needs the attitude to move at least this much
@@ -203,25 +238,35 @@ def _require_pyarrow(path: Path) -> None:
 
 def _read_table(path: Path, what: str,
                 allow_empty: bool = False) -> tuple[list[str], list[np.ndarray]]:
-    """Header names (stripped) and one array of raw cells per column; rows are data rows."""
+    """Header names (stripped) and one array of raw cells per column; rows are data rows.
+
+    More than :data:`MAX_ROWS` data rows is an error, found before the rest is read.
+    """
     _check_readable(path, what)
     name = str(path)
     if _is_parquet(path):
         _require_pyarrow(path)
         import pandas as pd
+        import pyarrow.parquet as pq
 
         try:
+            n = pq.read_metadata(path).num_rows
+            if n > MAX_ROWS:
+                raise _too_many_rows(n, name, what)
             df = pd.read_parquet(path)
+        except InputError:
+            raise
         except Exception as e:  # corrupt file: pyarrow's message, on one line
             raise InputError(f"cannot read Parquet ({e}); re-export the file", path=name) from None
         header = [str(c).strip() for c in df.columns]
-        cols = [df.iloc[:, j].to_numpy(dtype=object) for j in range(df.shape[1])]
+        cols = [df.iloc[:, j].to_numpy() for j in range(df.shape[1])]
         if df.shape[0] == 0 and not allow_empty:
             raise InputError(f"{what} file has a header but no data rows", path=name)
         return header, cols
     try:
         with open(path, newline="", encoding="utf-8-sig") as f:
-            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
+            rows = list(itertools.islice((r for r in csv.reader(f) if any(c.strip() for c in r)),
+                                         MAX_ROWS + 2))
     except UnicodeDecodeError:
         raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
                          path=name) from None
@@ -231,6 +276,8 @@ def _read_table(path: Path, what: str,
         raise InputError(f"{what} file is empty; expected a header line and data rows", path=name)
     header = [c.strip() for c in rows[0]]
     data = rows[1:]
+    if len(data) > MAX_ROWS:
+        raise _too_many_rows(len(data), name, what)
     if not data and not allow_empty:
         raise InputError(f"{what} file has a header but no data rows", path=name)
     for i, r in enumerate(data, start=1):
@@ -240,6 +287,59 @@ def _read_table(path: Path, what: str,
                              "(leave a cell empty, keep the comma)", path=name)
     cols = [np.array([r[j] for r in data], dtype=object) for j in range(len(header))]
     return header, cols
+
+
+def _too_many_rows(n: int, path: str, what: str = "telemetry") -> InputError:
+    return InputError(f"has more than {MAX_ROWS} data rows ({n} read so far), the limit of one "
+                      f"{what} file; decimate it (e.g. keep every k-th row) or split it into "
+                      "one file per slew (docs/limits.md)", path=path)
+
+
+def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
+                      expected: str) -> tuple[dict[str, int], list[np.ndarray]]:
+    """Header map and one float64 column per header name, parsed in chunks of rows.
+
+    Equivalent to :func:`_read_table` then :func:`_to_float` on every column (same errors, same
+    row numbers), but holds at most :data:`_CHUNK_ROWS` rows as text, so memory is ~8 bytes per
+    cell; more than :data:`MAX_ROWS` data rows is an error raised while reading.
+    """
+    _check_readable(path, what)
+    name = str(path)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rows = (r for r in csv.reader(f) if any(c.strip() for c in r))
+            first = next(rows, None)
+            if first is None:
+                raise InputError(f"{what} file is empty; expected a header line and data rows",
+                                 path=name)
+            header = [c.strip() for c in first]
+            idx = _map_header(header, known, name, expected)
+            canon = {j: c for c, j in idx.items()}
+            parts: list[list[np.ndarray]] = [[] for _ in header]
+            n = 0
+            while True:
+                chunk = list(itertools.islice(rows, _CHUNK_ROWS))
+                if not chunk:
+                    break
+                for i, r in enumerate(chunk, start=n + 1):
+                    if len(r) != len(header):
+                        raise InputError(f"data row {i} has {len(r)} fields but the header has "
+                                         f"{len(header)}; every row needs one value per column "
+                                         "(leave a cell empty, keep the comma)", path=name)
+                for j in range(len(header)):
+                    cells = np.array([r[j] for r in chunk], dtype=object)
+                    parts[j].append(_to_float(cells, canon[j], name, offset=n))
+                n += len(chunk)
+                if n > MAX_ROWS:
+                    raise _too_many_rows(n, name)
+    except UnicodeDecodeError:
+        raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
+                         path=name) from None
+    except csv.Error as e:
+        raise InputError(f"malformed CSV ({e}); re-export the file", path=name) from None
+    if n == 0:
+        raise InputError(f"{what} file has a header but no data rows", path=name)
+    return idx, [np.concatenate(p) for p in parts]
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,
@@ -277,8 +377,11 @@ def _is_missing(c: object) -> bool:
         return False
 
 
-def _to_float(cells: np.ndarray, col: str, path: str) -> np.ndarray:
-    """Cells → float64; empty cells → NaN; non-numeric text is an error naming the row."""
+def _to_float(cells: np.ndarray, col: str, path: str, offset: int = 0) -> np.ndarray:
+    """Cells → float64; empty cells → NaN; non-numeric text is an error naming the row
+    (``offset`` rows before ``cells[0]``)."""
+    if cells.dtype.kind in "iuf":  # a numeric Parquet column
+        return cells.astype(float)
     try:  # fast path: every cell a number or blank
         return np.array([c.strip() or "nan" if isinstance(c, str) else c for c in cells],
                         dtype=float)
@@ -297,7 +400,7 @@ def _to_float(cells: np.ndarray, col: str, path: str) -> np.ndarray:
         try:
             out[i] = float(c)
         except (TypeError, ValueError):
-            raise InputError(f"column '{col}', data row {i + 1}: '{c}' is not a number; "
+            raise InputError(f"column '{col}', data row {offset + i + 1}: '{c}' is not a number; "
                              "fix or remove that row", path=path) from None
     return out
 
@@ -311,11 +414,23 @@ def _fail_nonfinite(x: np.ndarray, col: str, path: str, t: np.ndarray | None,
         raise InputError(f"column '{col}', {_row_ref(i, t)} {what}; {fix}", path=path)
 
 
+def _fail_out_of_range(x: np.ndarray, col: str, limit: float, unit: str, path: str,
+                       t: np.ndarray | None, why: str) -> None:
+    """Error naming the first row where the finite ``|x|`` exceeds ``limit``."""
+    bad = np.abs(x) > limit
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        raise InputError(f"column '{col}', {_row_ref(i, t)}: {x[i]:.6g} {unit} is beyond the "
+                         f"physical limit |{col}| <= {limit:g} {unit} ({why}); fix the value, its "
+                         "unit or drop the row (docs/limits.md)", path=path)
+
+
 # --------------------------------------------------------------------------------------------
 # Validation of arrays (shared by the readers and by in-memory telemetry)
 
 
 def _check_time(t: np.ndarray, path: str, col: str = "t") -> None:
+    _fail_out_of_range(t, col, TIME_ABS_MAX, "s", path, None, "317 years")
     dt = np.diff(t)
     bad = ~(dt > 0)
     if np.any(bad):
@@ -324,6 +439,12 @@ def _check_time(t: np.ndarray, path: str, col: str = "t") -> None:
         raise InputError(f"column '{col}' is not strictly increasing: {_row_ref(i + 1, t)} "
                          f"{kind} data row {i + 1} (t = {t[i]:.10g} s); sort the rows and drop "
                          "duplicate samples", path=path)
+    close = dt < MIN_SAMPLE_SPACING_S
+    if np.any(close):
+        i = int(np.argmax(close))
+        raise InputError(f"column '{col}': {_row_ref(i + 1, t)} is only {dt[i]:.3g} s after data "
+                         f"row {i + 1}; samples must be at least {MIN_SAMPLE_SPACING_S:g} s apart "
+                         "— check the time unit (seconds) or drop the duplicate", path=path)
 
 
 def _quat_continuous(q: np.ndarray) -> np.ndarray:
@@ -350,6 +471,9 @@ def _turn_angle(q: np.ndarray, q0: np.ndarray) -> np.ndarray:
 
 def _check_quaternions(q: np.ndarray, t: np.ndarray, path: str) -> np.ndarray:
     """Renormalise near-unit rows, reject the rest, remove sign flips."""
+    for j, c in enumerate(_Q_COLS):  # before the norm, which would overflow
+        _fail_out_of_range(q[:, j], c, 2.0, "", path, t, "a unit quaternion's components are "
+                           "at most 1; check the column order and scaling")
     norm = np.linalg.norm(q, axis=1)
     dev = np.abs(norm - 1.0)
     if np.any(dev > QUAT_NORM_TOL):
@@ -454,6 +578,8 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
         _fail_nonfinite(q[:, j], c, path, t)
     for j, c in enumerate(_W_COLS):
         _fail_nonfinite(w[:, j], c, path, t)
+        _fail_out_of_range(w[:, j], c, OMEGA_ABS_MAX, "rad/s", path, t,
+                           "body rates are rad/s; no controlled spacecraft turns faster")
     for j, name in enumerate(tel.wheel_names):
         x = r[:, j]
         if np.any(np.isnan(x)) and not np.all(np.isnan(x)):
@@ -461,11 +587,14 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
                             fix="a wheel that is off must be empty in every row; fill the gap")
         if np.any(np.isinf(x)):
             _fail_nonfinite(x, name.lower(), path, t)
+        _fail_out_of_range(x / RPM_TO_RAD_S, name.lower(), WHEEL_RPM_MAX, "rpm", path, t,
+                           "5x Cassini's ~2000 rpm wheels")
         if check_units:
             _check_wheel_units(name.lower(), x / RPM_TO_RAD_S, path)
     if on is not None:
         for k, c in enumerate(_ON_COLS):
             _fail_nonfinite(on[:, k], c, path, t)
+            _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", path, t, "317 years")
         _check_on_times(on, t, _ON_COLS, path)
     q = _check_quaternions(q, t, path)
     if check_units:
@@ -499,14 +628,19 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     """
     p = Path(path)
     name = str(path)
-    header, cells = _read_table(p, "telemetry")
-    idx = _map_header(header, _KNOWN, name,
-                      "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)")
+    expected = "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)"
+    if _is_parquet(p):
+        header, cells = _read_table(p, "telemetry")
+        idx = _map_header(header, _KNOWN, name, expected)
+        canon = {j: c for c, j in idx.items()}
+        values = [_to_float(cells[j], canon[j], name) for j in range(len(header))]
+    else:
+        idx, values = _read_numeric_csv(p, "telemetry", _KNOWN, expected)
     for c in _REQUIRED:
         if c not in idx:
             raise InputError(f"missing column '{c}'; a telemetry file needs "
                              f"{' '.join(_REQUIRED)} (and rwa1..rwa4 in rpm)", path=name)
-    cols = {c: _to_float(cells[j], c, name) for c, j in idx.items()}
+    cols = {c: values[j] for c, j in idx.items()}
     t = cols["t"]
     _fail_nonfinite(t, "t", name, None, fix="every row needs a time")
     _check_time(t, name)
@@ -519,6 +653,7 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
         on = np.stack([cols.get(c, np.zeros(n)) for c in _ON_COLS], axis=1)
         for k, c in enumerate(_ON_COLS):
             _fail_nonfinite(on[:, k], c, name, t)
+            _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", name, t, "317 years")
         on = on - on[0]
     tel = Telemetry(t, q, w, rpm * RPM_TO_RAD_S, WHEEL_NAMES, on, name)
     return validate_telemetry(tel, check_units=check_units)
@@ -530,7 +665,15 @@ def read_telemetry_many(paths: Iterable[str | os.PathLike], *,
     paths = list(paths)
     if not paths:
         raise InputError("no telemetry files given; pass at least one CSV")
-    return [read_telemetry(p, check_units=check_units) for p in paths]
+    out, total = [], 0
+    for p in paths:
+        out.append(read_telemetry(p, check_units=check_units))
+        total += out[-1].n
+        if total > MAX_ROWS:
+            raise InputError(f"the files up to this one hold {total} rows together, more than "
+                             f"the limit of {MAX_ROWS} for one fit; decimate them or fit fewer "
+                             "files (docs/limits.md)", path=str(p))
+    return out
 
 
 def _atomic_write(path: Path, force: bool, write) -> None:
@@ -638,6 +781,9 @@ def validate_pulses(log: PulseLog) -> PulseLog:
     thr = thr.astype(int)
     _fail_nonfinite(t_on, "t_on", path, None)
     _fail_nonfinite(width, "width", path, None)
+    _fail_out_of_range(t_on, "t_on", TIME_ABS_MAX, "s", path, None, "317 years")
+    _fail_out_of_range(width, "width", PULSE_WIDTH_MAX, "s", path, None,
+                       "an hour; Cassini's RCS pulses are below a second")
     if np.any(width <= 0):
         i = int(np.argmax(width <= 0))
         raise InputError(f"column 'width', data row {i + 1} (t_on = {t_on[i]:.10g} s): width "

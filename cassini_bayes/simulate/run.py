@@ -44,7 +44,7 @@ from cassini_bayes.physics.impulse import moment_matrix
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.simulate import controllers as ctl
-from cassini_bayes.simulate.scenario import Scenario
+from cassini_bayes.simulate.scenario import Scenario, check_size
 from cassini_bayes.simulate.sensors import NoiseParams, measure, time_tags
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
@@ -414,6 +414,7 @@ def _prepared(s: Scenario):
     hit = _PREPARED.get(id(s))
     if hit is not None and hit[0] is s:
         return hit[1], hit[2]
+    check_size(s)  # before the (n_steps, P) plan is allocated
     plan, carr = jnp.asarray(_plan(s)), _controller_arrays(s)
     if len(_PREPARED) >= 8:
         _PREPARED.pop(next(iter(_PREPARED)))

@@ -31,6 +31,12 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [flex_mode] freq_hz, damping, coupling = [3] (kg^½ m): one flexible or slosh mode
                 (:class:`FlexMode`; off when the section is absent)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
+
+Bounds (docs/limits.md): a run has at most :data:`MAX_STEPS` integration steps and
+:data:`MAX_SAMPLES` telemetry samples; every number is at most :data:`NUMBER_ABS_MAX` in
+magnitude; wheel rates at most ``WHEEL_RPM_MAX``, body and slew rates at most ``OMEGA_ABS_MAX``
+(the telemetry bounds of :mod:`cassini_bayes.telemetry`), thrust and pulse time constants within
+the spacecraft-model ranges of :mod:`cassini_bayes.spacecraft`; ``seed`` in 0 .. 2^32 − 1.
 """
 
 from __future__ import annotations
@@ -42,19 +48,29 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import ROOT, SCENARIOS_DIR
-from cassini_bayes._toml import read_toml
+from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
-from cassini_bayes.spacecraft import (Spacecraft, check_physical_inertia, load_spacecraft,
-                                      tilted_axis)
+from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
+                                      load_spacecraft, tilted_axis)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
+from cassini_bayes.telemetry import MAX_ROWS, OMEGA_ABS_MAX, WHEEL_RPM_MAX
 
 __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "FlexMode", "Window",
            "RwaControl", "RcsControl", "Scenario", "load_scenario", "scenario_from_dict",
-           "scenario_path"]
+           "scenario_path", "check_size", "MAX_STEPS", "MAX_SAMPLES"]
 
 RPM = 2.0 * np.pi / 60.0
 _UNIT_TOL = 1e-6
+MAX_STEPS = 2_000_000
+"""Most integration steps ``duration_s / dt_s`` of one scenario. Measured peak memory of
+``simulate`` is ~0.5 GB plus ~350 bytes per step (8 steps per sample), so ~1.2 GB at the limit
+(docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
+MAX_SAMPLES = MAX_ROWS
+"""Most telemetry samples ``duration_s / sample_period_s + 1`` of one scenario: the telemetry file
+row limit :data:`cassini_bayes.telemetry.MAX_ROWS`, so every simulated file can be read back."""
+NUMBER_ABS_MAX = 1e10
+"""Largest magnitude of any number in a scenario file (keeps every product far from overflow)."""
 
 
 @dataclass(frozen=True)
@@ -233,6 +249,15 @@ class Scenario:
         return self.truth.wheel_names
 
 
+def check_size(s: Scenario) -> None:
+    """Raise unless the run fits :data:`MAX_STEPS` steps and :data:`MAX_SAMPLES` samples (for
+    scenarios built or changed in code, past :func:`scenario_from_dict`'s checks)."""
+    if s.n_steps > MAX_STEPS or s.n_samples > MAX_SAMPLES:
+        raise InputError(f"'run.duration_s' = {s.duration_s} s is {s.n_steps} steps and "
+                         f"{s.n_samples} samples, more than the limits {MAX_STEPS} steps and "
+                         f"{MAX_SAMPLES} samples; split the run (docs/limits.md)", path=s.source)
+
+
 def scenario_path(name: str) -> Path:
     """Path of a scenario: a file path, or the stem of a file under ``experiments/scenarios/``."""
     p = Path(name)
@@ -259,7 +284,8 @@ class _Reader:
     def has(self, key: str) -> bool:
         return key in self.t
 
-    def num(self, key: str, default=None, *, positive=False, nonneg=False) -> float:
+    def num(self, key: str, default=None, *, positive=False, nonneg=False,
+            hi: float | None = None) -> float:
         if key not in self.t:
             if default is None:
                 raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
@@ -267,24 +293,32 @@ class _Reader:
         v = self.t[key]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
             raise self.err(key, f"must be a finite number, got {v!r}")
+        if abs(v) > (NUMBER_ABS_MAX if hi is None else hi):
+            raise self.err(key, f"= {v:g} is beyond the physical limit "
+                                f"{NUMBER_ABS_MAX if hi is None else hi:g} in magnitude; check "
+                                "the value and its unit (docs/limits.md)")
         if positive and v <= 0:
             raise self.err(key, f"must be positive, got {v}")
         if nonneg and v < 0:
             raise self.err(key, f"must not be negative, got {v}")
         return float(v)
 
-    def vec(self, key: str, n: int = 3, default=None, *, unit=False, nonneg=False) -> np.ndarray:
+    def vec(self, key: str, n: int = 3, default=None, *, unit=False, nonneg=False,
+            hi: float | None = None) -> np.ndarray:
         if key not in self.t:
             if default is None:
                 raise InputError(f"missing required key '{self.where}{key}'", path=self.src)
             return np.asarray(default, float)
         v = self.t[key]
-        try:
-            a = np.asarray(v, float)
-        except (TypeError, ValueError):
-            raise self.err(key, f"must be a list of {n} numbers, got {v!r}") from None
+        if not is_numbers(v):
+            raise self.err(key, f"must be a list of {n} numbers, got {v!r}")
+        a = np.asarray(v, float)
         if a.shape != (n,) or not np.all(np.isfinite(a)):
             raise self.err(key, f"must be a list of {n} finite numbers, got {v!r}")
+        if np.any(np.abs(a) > (NUMBER_ABS_MAX if hi is None else hi)):
+            raise self.err(key, f"has an entry beyond the physical limit "
+                                f"{NUMBER_ABS_MAX if hi is None else hi:g} in magnitude, got "
+                                f"{v!r}; check the values and their unit (docs/limits.md)")
         if unit and abs(np.linalg.norm(a) - 1.0) > _UNIT_TOL:
             raise self.err(key, f"must be a unit vector (|v| = {np.linalg.norm(a):.6f}); "
                                 "normalise it")
@@ -373,6 +407,18 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     control = run.str_("control")
     if control not in ("rwa", "rcs"):
         raise run.err("control", f"must be \"rwa\" or \"rcs\", got {control!r}")
+    if duration / dt > MAX_STEPS:
+        raise run.err("duration_s", f"= {duration} s is {duration / dt:.3g} integration steps of "
+                                    f"dt_s = {dt} s, more than the limit {MAX_STEPS:.0e} "
+                                    "(~1.2 GB); "
+                                    "split the run into shorter scenarios (docs/limits.md)")
+    if period > duration:
+        raise run.err("sample_period_s", f"= {period} s is longer than the run "
+                                         f"(duration_s = {duration} s)")
+    if duration / period + 1 > MAX_SAMPLES:
+        raise run.err("sample_period_s", f"= {period} s gives {duration / period + 1:.6g} samples "
+                                         f"over {duration} s, more than the limit {MAX_SAMPLES}; "
+                                         "sample less often or shorten the run (docs/limits.md)")
     if abs(period / dt - round(period / dt)) > 1e-9 or round(period / dt) < 1:
         raise run.err("sample_period_s", f"= {period} must be a whole number of steps dt_s = {dt}")
     if abs(duration / period - round(duration / period)) > 1e-9:
@@ -396,16 +442,15 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     truth = truth.with_inertia(inertia)
     if tr.has("thrust_n"):
         v = tr.t["thrust_n"]
-        thrust = (np.full(8, tr.num("thrust_n", positive=True)) if not isinstance(v, list)
-                  else tr.vec("thrust_n", 8, nonneg=True))
+        thrust = (np.full(8, tr.num("thrust_n", positive=True, hi=THRUST_MAX))
+                  if not isinstance(v, list) else tr.vec("thrust_n", 8, nonneg=True, hi=THRUST_MAX))
         if np.any(thrust <= 0):
             raise tr.err("thrust_n", "must be positive (N)")
     else:
         thrust = np.full(8, truth.thrust)
     pulse = truth.pulse
-    pulse = replace(pulse, tau_delay=tr.num("tau_delay_s", pulse.tau_delay, positive=True),
-                    tau_rise=tr.num("tau_rise_s", pulse.tau_rise, positive=True),
-                    tau_fall=tr.num("tau_fall_s", pulse.tau_fall, positive=True))
+    pulse = replace(pulse, **{k: tr.num(f"{k}_s", getattr(pulse, k), positive=True, hi=TAU_MAX)
+                              for k in ("tau_delay", "tau_rise", "tau_fall")})
     truth = replace(truth, pulse=pulse, thrust=float(np.mean(thrust)))
     if tr.has("rwa4_axis"):
         axis = tr.vec("rwa4_axis", unit=True)
@@ -446,14 +491,14 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     for n in on_names:
         on[_wheel_index(truth, n, "initial.wheels_on", src)] = True
     q0 = ini.vec("q", 4, default=[0.0, 0.0, 0.0, 1.0], unit=True)
-    w0 = ini.vec("rates_rad_s", default=np.zeros(3))
+    w0 = ini.vec("rates_rad_s", default=np.zeros(3), hi=OMEGA_ABS_MAX)
     rpm = ini.sub("wheel_rpm", set(truth.wheel_names) | {n.lower() for n in truth.wheel_names})
     rho0 = np.zeros(k)
     for name in rpm.t:
         j = _wheel_index(truth, name, f"initial.wheel_rpm.{name}", src)
         if not on[j]:
             raise rpm.err(name, "gives a rate for a wheel that is not in 'initial.wheels_on'")
-        rho0[j] = rpm.num(name) * RPM
+        rho0[j] = rpm.num(name, hi=WHEEL_RPM_MAX) * RPM
 
     rc = top.sub("rwa_controller", {"bandwidth_rad_s", "damping", "believed_axis"})
     believed = prior.wheel_axes.copy()
@@ -497,7 +542,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         t0 = r.num("t_start_s")
         _check_time(r, "t_start_s", t0, duration)
         s = Slew(t0, tuple(r.vec("axis", unit=True)), np.deg2rad(r.num("angle_deg")),
-                 r.num("rate_mrad_s", positive=True) * 1e-3,
+                 r.num("rate_mrad_s", positive=True, hi=OMEGA_ABS_MAX * 1e3) * 1e-3,
                  r.num("accel_mrad_s2", positive=True) * 1e-3)
         if s.t_end_s > duration:
             raise r.err("t_start_s", f"slew ends at {s.t_end_s:.1f} s, after the run "
@@ -516,8 +561,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
             raise r.err("wheel", "is not in 'initial.wheels_on'")
         t0 = r.num("t_start_s")
         _check_time(r, "t_start_s", t0, duration)
-        ramps.append(WheelRamp(j, t0, r.num("target_rpm") * RPM, r.num("torque_nm",
-                                                                       positive=True)))
+        ramps.append(WheelRamp(j, t0, r.num("target_rpm", hi=WHEEL_RPM_MAX) * RPM,
+                               r.num("torque_nm", positive=True, hi=10.0)))
     if ramps and control != "rcs":
         raise InputError("[[wheel_ramp]] needs 'run.control = \"rcs\"' (under RWA control the "
                          "attitude controller drives the wheels)", path=src)
@@ -573,8 +618,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
             raise r.err("t1_s", f"= {t1} must be after t0_s = {t0}")
         windows.append(Window(r.str_("name"), t0, t1))
     seed = top.t.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise top.err("seed", f"must be a non-negative integer, got {seed!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
+        raise top.err("seed", f"must be an integer in 0 .. 2^32 - 1, got {seed!r}")
 
     return Scenario(
         name=top.str_("name", Path(src).stem), description=top.str_("description", ""),
@@ -593,6 +638,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
+    if Path(path).is_dir():
+        raise InputError("is a directory, expected a scenario .toml file", path=str(path))
     p = scenario_path(str(path))
     d = read_toml(p, "scenario", "experiments/scenarios/")
     return scenario_from_dict(d, str(p))
