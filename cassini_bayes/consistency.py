@@ -108,6 +108,8 @@ EXCITATION_MIN = 1e-3
 spacecraft about one axis only."""
 RWA_METHOD_MIN_KNOWN = 2
 """The RWA method (Brown Eq 3) needs this many running wheels besides the one solved for."""
+CONTROL_WHEEL_RPM = 10.0
+"""A wheel whose rate changes by more than this over the record takes part in the control."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -225,7 +227,8 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
 
     Raises :class:`InputError` when another reading of q1..q4 fits (alignment ≥
     :data:`ALIGN_GOOD`) with a misfit ``1 − alignment`` at least :data:`MISFIT_RATIO` times
-    smaller than the declared reading's (naming that reading); when no reading fits and the
+    smaller than the declared reading's (naming that reading, or every such reading when the
+    rotation, e.g. about a single axis from the identity, cannot tell them apart); when no reading fits and the
     declared one aligns by less than :data:`ALIGN_BAD` (rates and attitude inconsistent); or
     when the declared reading fits but the rotation is not about 1× the integrated rate (°/s or
     mrad/s body rates). Returns the agreement (``None``: not identifiable, no check).
@@ -237,8 +240,10 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
     c = ag.alignment
     stats = (f"alignment of the quaternions' rotation with ∫ω dt over {ag.segments} turning "
              f"stretches: {c[0]:.2f} as written")
-    best = int(np.argmax(c[1:])) + 1
-    if c[best] >= ALIGN_GOOD and 1.0 - c[0] >= MISFIT_RATIO * (1.0 - c[best]):
+    fits = [k for k in range(1, len(READINGS))
+            if c[k] >= ALIGN_GOOD and 1.0 - c[0] >= MISFIT_RATIO * (1.0 - c[k])]
+    if len(fits) == 1:
+        k = fits[0]
         cause = {
             1: "the quaternion looks scalar-first (q4 first); write q1 q2 q3 (vector part) "
                "first and the scalar q4 last",
@@ -246,13 +251,19 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
                "inertial → body: negate q1 q2 q3",
             3: "the quaternion looks scalar-first and conjugated (body → inertial); write "
                "the vector part first, negated, and the scalar q4 last",
-        }[best]
-        raise InputError(f"columns q1..q4: {cause} ({stats}, {c[best]:.2f} {READINGS[best]})",
+        }[k]
+        raise InputError(f"columns q1..q4: {cause} ({stats}, {c[k]:.2f} {READINGS[k]})",
                          path=src)
+    if fits:  # rotation about too few axes to tell these readings apart
+        alts = " or ".join(f"{READINGS[k]} ({c[k]:.2f})" for k in fits)
+        raise InputError(f"columns q1..q4: the quaternion does not follow the format's "
+                         f"convention but fits the body rates read as {alts} ({stats}); the "
+                         "format wants q1 q2 q3 (vector part) first, the scalar q4 last, "
+                         "inertial → body", path=src)
     if c[0] < ALIGN_BAD:
         raise InputError(f"columns q1..q4 and wx wy wz: body rates and attitude are inconsistent "
-                         f"({stats}, at most {c[1:].max():.2f} under any reordering or "
-                         "conjugation); check that wx wy wz are rad/s in body axes and q is "
+                         f"({stats}, at most {c[1:].max():.2f} read otherwise: scalar-first or "
+                         "conjugated); check that wx wy wz are rad/s in body axes and q is "
                          "inertial → body, scalar last", path=src)
     lo, hi = RATE_SCALE_RANGE
     if not lo <= ag.scale <= hi:
@@ -492,22 +503,29 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
     * ``rwa`` (Brown Eq 3): the slews are carried by the other wheels, whose momentum is known;
       with fewer than :data:`RWA_METHOD_MIN_KNOWN` of them running the data hold no RWA slew
       pairs (RCS-controlled drift).
-    * ``rcs`` (Brown Eq 1): under RCS control the body drift takes up the wheel's momentum and the
-      thrusters fire when the widened dead-band is reached; data where the other wheels run and
-      no thruster fires (``on_*`` columns all flat) are RWA-controlled.
+    * ``rcs`` (Brown Eq 1): under RCS control the body drift takes up the wheel's momentum and
+      the thrusters hold the attitude. When at least :data:`RWA_METHOD_MIN_KNOWN` other wheels
+      run and change by more than :data:`CONTROL_WHEEL_RPM` while no thruster fires (``on_*``
+      columns flat or absent), the wheels carry the attitude control: RWA-controlled data.
     """
     others = [n for n in tel.active_wheels() if n.upper() != wheel.upper()]
     if method == "rwa" and len(others) < RWA_METHOD_MIN_KNOWN:
         running = ", ".join(tel.active_wheels()) or "none"
         raise InputError(f"--method rwa needs RWA slew pairs, carried by at least "
-                         f"{RWA_METHOD_MIN_KNOWN} wheels besides {wheel} (Brown Eq 3); wheels "
-                         f"running: {running}: this looks like RCS-controlled data, use "
-                         "--method rcs", path=tel.source)
-    if (method == "rcs" and len(others) >= RWA_METHOD_MIN_KNOWN and tel.on_times is not None
-            and not np.any(np.diff(tel.on_times, axis=0) > 0)):
-        raise InputError(f"--method rcs needs RCS-controlled data (Brown Eq 1), but "
-                         f"{', '.join(others)} run besides {wheel} and no thruster fires: this "
-                         "looks like RWA-controlled slews, use --method rwa", path=tel.source)
+                         f"{RWA_METHOD_MIN_KNOWN} wheels besides {wheel} (Brown Eq 3), but the "
+                         f"wheels running are {running}: this looks like RCS-controlled data; "
+                         "use --method rcs", path=tel.source)
+    if method != "rcs" or len(others) < RWA_METHOD_MIN_KNOWN:
+        return
+    fired = tel.on_times is not None and bool(np.any(np.diff(tel.on_times, axis=0) > 0))
+    span = {n: float(np.ptp(tel.wheel_rate(n))) / RPM_TO_RAD_S for n in others}
+    varying = [n for n, v in span.items() if v > CONTROL_WHEEL_RPM]
+    if not fired and len(varying) >= RWA_METHOD_MIN_KNOWN:
+        spans = ", ".join(f"{n} {span[n]:.0f} rpm" for n in varying)
+        raise InputError(f"--method rcs needs RCS-controlled data (Brown Eq 1: the body drifts, "
+                         f"thrusters fire), but no thruster fires and the other wheels carry "
+                         f"the control (they change by {spans}): these are RWA-controlled "
+                         "slews; use --method rwa", path=tel.source)
 
 
 # ---------------------------------------------------------------------------------------------

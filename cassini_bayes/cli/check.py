@@ -1,7 +1,10 @@
-"""``cassini-bayes check FILE [--pulses P.csv]``: validate a telemetry file and say what it holds.
+"""``cassini-bayes check FILE [--pulses P.csv] [--spacecraft M.toml]``: validate a telemetry file
+and say what it holds.
 
-Exit 0 when the file (and pulse log) pass every rule of :mod:`cassini_bayes.telemetry`; otherwise
-one line ``error: …`` on stderr and exit 2 (raised as ``InputError``, printed by
+Exit 0 when the file (and pulse log) pass every rule of :mod:`cassini_bayes.telemetry` and the
+physics checks of :mod:`cassini_bayes.consistency` (attitude vs body rates; pulse log vs the
+``on_*`` columns; with ``--spacecraft``, wheel units by momentum conservation); otherwise one line
+``error: …`` on stderr and exit 2 (raised as ``InputError``, printed by
 :func:`cassini_bayes.cli.main`).
 """
 
@@ -16,6 +19,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from cassini_bayes.consistency import check_telemetry_data
+from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import (
     RPM_TO_RAD_S,
     THRUSTER_NAMES,
@@ -40,9 +45,12 @@ def _sampling(t: np.ndarray) -> str:
 
 
 def _summary(console: Console, file: Path, pulses: Path | None, min_quiet_s: float,
-             rate_max: float, wheel_tol_rpm: float, *, check_units: bool = True) -> None:
+             rate_max: float, wheel_tol_rpm: float, *, check_units: bool = True,
+             spacecraft: str | None = None) -> None:
     tel = read_telemetry(file, check_units=check_units)
     log = read_pulses(pulses) if pulses is not None else None
+    sc = load_spacecraft(spacecraft) if spacecraft is not None else None
+    check_telemetry_data(tel, sc, log)
     notes: list[str] = []
     source = "on_* columns"
     if log is not None and tel.on_times is not None:
@@ -132,6 +140,9 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                        help="Largest body rate of a quiet sample, rad/s."),
         wheel_tol: float = typer.Option(2.0, "--wheel-tol",
                                         help="Largest wheel-rate change in a quiet stretch, rpm."),
+        spacecraft: str | None = typer.Option(None, "--spacecraft", help="Spacecraft model "
+                                              "TOML: also check the wheel units against "
+                                              "momentum conservation."),
         no_unit_check: bool = typer.Option(False, "--no-unit-check",
                                            help="Skip the rad/s-vs-rpm and deg/s heuristics "
                                            "(wheels genuinely idling below 12 rpm)."),
@@ -139,4 +150,4 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         """Validate a telemetry file (and pulse log) and summarise what it holds."""
         console = Console(highlight=False, soft_wrap=True)
         _summary(console, file, pulses, min_quiet, rate_max, wheel_tol,
-                 check_units=not no_unit_check)
+                 check_units=not no_unit_check, spacecraft=spacecraft)
