@@ -207,19 +207,16 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     steps = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
                                                         * np.diff(t)[:, None], axis=0)])
     g = steps[b_idx] - steps[a_idx]
+    rots = [np.asarray(quat_to_rotvec(quat_multiply(qk[b_idx], quat_conjugate(qk[a_idx]))))
+            for qk in (_reading(q, k) for k in range(len(READINGS)))]
     gg = float(np.sum(g * g))
-    align = np.zeros(len(READINGS))
-    scale = np.nan
-    for k in range(len(READINGS)):
-        qk = _reading(q, k)
-        rot = np.asarray(quat_to_rotvec(quat_multiply(qk[b_idx], quat_conjugate(qk[a_idx]))))
-        rr = float(np.sum(rot * rot))
-        dot = float(np.sum(rot * g))
-        align[k] = dot / np.sqrt(rr * gg) if rr > 0 and gg > 0 else 0.0
-        if k == 0:
-            scale = dot / gg if gg > 0 else np.inf
-            turn = float(np.sum(np.linalg.norm(rot, axis=1)))
-    return AttitudeAgreement(align, float(scale), len(segs), turn)
+    rr = float(np.sum(rots[0] ** 2))  # the same for every reading (angles are invariant)
+    if not (gg > 0 and rr > 0):
+        return None
+    align = np.array([float(np.sum(r * g)) / np.sqrt(rr * gg) for r in rots])
+    scale = float(np.sum(rots[0] * g)) / gg
+    turn = float(np.sum(np.linalg.norm(rots[0], axis=1)))
+    return AttitudeAgreement(align, scale, len(segs), turn)
 
 
 def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
@@ -228,10 +225,10 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
     Raises :class:`InputError` when another reading of q1..q4 fits (alignment ≥
     :data:`ALIGN_GOOD`) with a misfit ``1 − alignment`` at least :data:`MISFIT_RATIO` times
     smaller than the declared reading's (naming that reading, or every such reading when the
-    rotation, e.g. about a single axis from the identity, cannot tell them apart); when no reading fits and the
-    declared one aligns by less than :data:`ALIGN_BAD` (rates and attitude inconsistent); or
-    when the declared reading fits but the rotation is not about 1× the integrated rate (°/s or
-    mrad/s body rates). Returns the agreement (``None``: not identifiable, no check).
+    rotation, e.g. about a single axis from the identity, cannot tell them apart); when no
+    reading fits and the declared one aligns by less than :data:`ALIGN_BAD` (rates and attitude
+    inconsistent); or when the declared reading fits but the rotation is not about 1× the
+    integrated rate (°/s or mrad/s body rates). Returns the agreement (``None``: not identifiable, no check).
     """
     ag = attitude_rate_agreement(tel)
     if ag is None:
@@ -533,17 +530,22 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
 
 
 def check_telemetry_data(tel: Telemetry, spacecraft: Spacecraft | None = None,
-                         pulses: PulseLog | None = None) -> None:
+                         pulses: PulseLog | None = None
+                         ) -> tuple[AttitudeAgreement | None, MomentumScale | None]:
     """Every physics check one telemetry file (and its pulse log) allows: attitude vs rates,
-    pulse log vs ``on_*`` columns, and with a spacecraft model the wheel units."""
-    check_attitude_rates(tel)
+    pulse log vs ``on_*`` columns, and with a spacecraft model the wheel units.
+
+    Returns the attitude agreement and the momentum fit (``None`` where not identifiable or,
+    for the momentum, without a spacecraft model), for a summary.
+    """
+    attitude = check_attitude_rates(tel)
     on = tel.on_times
     if pulses is not None:
         check_pulses_match_on_times(tel, pulses)
         if on is None:
             on = _derived_on_times(tel, pulses)
-    if spacecraft is not None:
-        check_wheel_units(tel, spacecraft, on)
+    momentum = check_wheel_units(tel, spacecraft, on) if spacecraft is not None else None
+    return attitude, momentum
 
 
 def check_inertia_data(tels: Sequence[Telemetry], spacecraft: Spacecraft) -> None:

@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from cassini_bayes.consistency import check_telemetry_data
+from cassini_bayes.consistency import MOMENTUM_ALIGN_MIN, check_telemetry_data
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import (
     RPM_TO_RAD_S,
@@ -44,13 +44,28 @@ def _sampling(t: np.ndarray) -> str:
     return text + ")"
 
 
+def _physics_line(attitude, momentum, sc) -> str:
+    """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
+    if attitude is None:
+        text = "q vs ω not checked (the attitude hardly turns)"
+    else:
+        text = (f"q vs ω consistent (alignment {attitude.alignment[0]:.3f} over "
+                f"{attitude.segments} turning stretches, rate scale {attitude.scale:.3f})")
+    if sc is None:
+        return text + "; wheel units not checked (give --spacecraft)"
+    if momentum is None or momentum.alignment < MOMENTUM_ALIGN_MIN:
+        return text + "; wheel units not checked (no clean momentum exchange)"
+    return (text + f"; wheel rpm confirmed by momentum conservation (scale {momentum.scale:.3f}, "
+            "rad/s would give 9.55)")
+
+
 def _summary(console: Console, file: Path, pulses: Path | None, min_quiet_s: float,
              rate_max: float, wheel_tol_rpm: float, *, check_units: bool = True,
              spacecraft: str | None = None) -> None:
     tel = read_telemetry(file, check_units=check_units)
     log = read_pulses(pulses) if pulses is not None else None
     sc = load_spacecraft(spacecraft) if spacecraft is not None else None
-    check_telemetry_data(tel, sc, log)
+    attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = []
     source = "on_* columns"
     if log is not None and tel.on_times is not None:
@@ -70,6 +85,7 @@ def _summary(console: Console, file: Path, pulses: Path | None, min_quiet_s: flo
     turn = _turn_angle(tel.q, tel.q[0])
     console.print(f"  body rate  max |ω| {rate.max() * 1e3:.4g} mrad/s; attitude turns up to "
                   f"{np.degrees(turn.max()):.4g}° from the first row")
+    console.print("  physics    " + _physics_line(attitude, momentum, sc))
 
     wheels = Table(title="Reaction wheels", title_justify="left")
     for col in ("wheel", "status", "min rpm", "max rpm", "first → last rpm"):
