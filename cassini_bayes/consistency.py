@@ -49,8 +49,7 @@ from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rot
 from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
-                                     Telemetry, check_pulses_in_span,
-                                     cumulative_on_times)
+                                     Telemetry, check_pulses_in_span, cumulative_on_times)
 
 __all__ = [
     "READINGS",
@@ -101,7 +100,6 @@ KAPPA_RANGE = (float(np.sqrt(RPM_TO_RAD_S)), float(1.0 / np.sqrt(RPM_TO_RAD_S)))
 (rad/s) or its inverse, 0.324 … 3.09; the ±10 % knowledge of the moments moves ``κ`` by 10 %."""
 FREE_WHEEL = "RWA4"
 """The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
-
 
 EXCITATION_MIN = 1e-3
 """Second-largest over largest eigenvalue of ``Σ ω ωᵀ dt``: below it the slews turn the
@@ -170,6 +168,7 @@ def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
     lmax = min(_SEG_MAX_SAMPLES, n - 1)
     reach = np.full(n, -1)
     for lag in range(lmax, 0, -1):  # smallest lag wins
+        # the rotation angle of telemetry._turn_angle, for every pair lag samples apart
         sign = np.where(np.sum(q[lag:] * q[:-lag], axis=1) < 0, -1.0, 1.0)[:, None]
         ang = 4.0 * np.arctan2(np.linalg.norm(q[lag:] - sign * q[:-lag], axis=1),
                                np.linalg.norm(q[lag:] + sign * q[:-lag], axis=1))
