@@ -1,7 +1,10 @@
-"""``cassini-bayes check FILE [--pulses P.csv]``: validate a telemetry file and say what it holds.
+"""``cassini-bayes check FILE [--pulses P.csv] [--spacecraft M.toml]``: validate a telemetry file
+and say what it holds.
 
-Exit 0 when the file (and pulse log) pass every rule of :mod:`cassini_bayes.telemetry`; otherwise
-one line ``error: …`` on stderr and exit 2 (raised as ``InputError``, printed by
+Exit 0 when the file (and pulse log) pass every rule of :mod:`cassini_bayes.telemetry` and the
+physics checks of :mod:`cassini_bayes.consistency` (attitude vs body rates; pulse log vs the
+``on_*`` columns; with ``--spacecraft``, wheel units by momentum conservation); otherwise one line
+``error: …`` on stderr and exit 2 (raised as ``InputError``, printed by
 :func:`cassini_bayes.cli.main`).
 """
 
@@ -16,6 +19,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from cassini_bayes.consistency import MOMENTUM_ALIGN_MIN, check_telemetry_data
+from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import (
     RPM_TO_RAD_S,
     THRUSTER_NAMES,
@@ -39,10 +44,28 @@ def _sampling(t: np.ndarray) -> str:
     return text + ")"
 
 
+def _physics_line(attitude, momentum, sc) -> str:
+    """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
+    if attitude is None:
+        text = "q vs ω not checked (the attitude hardly turns)"
+    else:
+        text = (f"q vs ω consistent (alignment {attitude.alignment[0]:.3f} over "
+                f"{attitude.segments} turning stretches, rate scale {attitude.scale:.3f})")
+    if sc is None:
+        return text + "; wheel units not checked (give --spacecraft)"
+    if momentum is None or momentum.alignment < MOMENTUM_ALIGN_MIN:
+        return text + "; wheel units not checked (no clean momentum exchange)"
+    return (text + f"; wheel rpm confirmed by momentum conservation (scale {momentum.scale:.3f}, "
+            "rad/s would give 9.55)")
+
+
 def _summary(console: Console, file: Path, pulses: Path | None, min_quiet_s: float,
-             rate_max: float, wheel_tol_rpm: float, *, check_units: bool = True) -> None:
+             rate_max: float, wheel_tol_rpm: float, *, check_units: bool = True,
+             spacecraft: str | None = None) -> None:
     tel = read_telemetry(file, check_units=check_units)
     log = read_pulses(pulses) if pulses is not None else None
+    sc = load_spacecraft(spacecraft) if spacecraft is not None else None
+    attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = []
     source = "on_* columns"
     if log is not None and tel.on_times is not None:
@@ -62,6 +85,7 @@ def _summary(console: Console, file: Path, pulses: Path | None, min_quiet_s: flo
     turn = _turn_angle(tel.q, tel.q[0])
     console.print(f"  body rate  max |ω| {rate.max() * 1e3:.4g} mrad/s; attitude turns up to "
                   f"{np.degrees(turn.max()):.4g}° from the first row")
+    console.print("  physics    " + _physics_line(attitude, momentum, sc))
 
     wheels = Table(title="Reaction wheels", title_justify="left")
     for col in ("wheel", "status", "min rpm", "max rpm", "first → last rpm"):
@@ -132,6 +156,9 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                        help="Largest body rate of a quiet sample, rad/s."),
         wheel_tol: float = typer.Option(2.0, "--wheel-tol",
                                         help="Largest wheel-rate change in a quiet stretch, rpm."),
+        spacecraft: str | None = typer.Option(None, "--spacecraft", help="Spacecraft model "
+                                              "TOML: also check the wheel units against "
+                                              "momentum conservation."),
         no_unit_check: bool = typer.Option(False, "--no-unit-check",
                                            help="Skip the rad/s-vs-rpm and deg/s heuristics "
                                            "(wheels genuinely idling below 12 rpm)."),
@@ -139,4 +166,4 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         """Validate a telemetry file (and pulse log) and summarise what it holds."""
         console = Console(highlight=False, soft_wrap=True)
         _summary(console, file, pulses, min_quiet, rate_max, wheel_tol,
-                 check_units=not no_unit_check)
+                 check_units=not no_unit_check, spacecraft=spacecraft)

@@ -177,6 +177,7 @@ def fit_inertia_cmd(
     """Posterior of the inertia tensor from RWA slews (shared I, per-file momentum)."""
     import jax
 
+    from cassini_bayes.consistency import check_inertia_data
     from cassini_bayes.inference.inertia import NOISE_NAMES, ROBUST_SITES, fit_inertia
     from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
@@ -190,6 +191,7 @@ def fit_inertia_cmd(
     check_out(out, force=force, inputs=[*telemetry, model_path(spacecraft)])  # before any work
     sc = load_spacecraft(spacecraft)
     tels = read_telemetry_many(telemetry)
+    check_inertia_data(tels, sc)  # units and conventions by the physics, before any sampling
     settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:

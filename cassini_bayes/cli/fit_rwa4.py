@@ -67,6 +67,7 @@ def fit_rwa4_cmd(
     import jax
 
     from cassini_bayes._paths import model_path
+    from cassini_bayes.consistency import check_rwa4_data
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, U4_NAMES, fit_rwa4
     from cassini_bayes.inference.summary import build_summary
@@ -90,6 +91,7 @@ def fit_rwa4_cmd(
     sc = load_spacecraft(spacecraft)
     inertia = inertia_from_run(inertia_posterior) if inertia_posterior is not None else None
     tel = read_telemetry(telemetry)
+    check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
     pairs = None
     if window_a:
         pairs = [(parse_window(a, tel.t, option="window-a"),

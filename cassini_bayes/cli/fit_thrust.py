@@ -125,6 +125,7 @@ def fit_thrust_cmd(
     import jax
 
     from cassini_bayes._paths import model_path
+    from cassini_bayes.consistency import check_thrust_data
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.inference.thrust import (MODES, TAU_NAMES, fit_thrust, inertia_from_run,
@@ -150,6 +151,7 @@ def fit_thrust_cmd(
     inertia = (inertia_from_run(inertia_posterior) if inertia_posterior is not None
                else "fixed" if fix_inertia else None)
     events = [(read_telemetry(t), read_pulses(p)) for t, p in zip(telemetry, pulses)]
+    check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
     settings = sampler_settings(chains, warmup, draws, target_accept)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:

@@ -1,0 +1,570 @@
+"""Unit and convention checks that use the physics in the data, not magnitude thresholds.
+
+A file can pass every rule of :mod:`cassini_bayes.telemetry` and still be read wrongly: wheel
+rates written in rad/s where the format wants rpm, a quaternion written scalar-first or
+conjugated, a pulse log that does not belong to the telemetry's own ``on_*`` columns, or data
+that cannot identify what a fit asks for. Each such mistake gives a wrong answer, not a crash, so
+each is refused here (:class:`~cassini_bayes.errors.InputError`, one line naming the file and the
+likely cause) from relations the data must obey whatever the unit of a column:
+
+1. **Attitude vs body rates** (:func:`attitude_rate_agreement`). Consecutive attitudes are tied to
+   the gyro rates by the kinematics ``q̇ = ½ Ω(ω) q`` (Brown Eq 2 convention,
+   :mod:`cassini_bayes.frames`): the rotation from ``q(t_a)`` to ``q(t_b)`` is the integrated body
+   rate. Over stretches where the attitude turns measurably the quaternion rotation vectors are
+   compared with ``∫ω dt`` under four readings of the columns (as declared; scalar first;
+   conjugated; both) by their alignment (the cosine between the stacked vectors, 1 for a perfect
+   fit, near 0 or negative for a wrong reading) and, for the declared reading, their ratio (the
+   body-rate unit: 57.3 for °/s).
+2. **Wheel units vs momentum conservation** (:func:`wheel_momentum_scale`). Between thruster
+   firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` is constant (Feldman & Lee
+   Eqs 2-3). With the model's predicted inertia (known to ±10 %) the balance is fitted with the
+   wheel momentum times a free scale ``κ``: ``κ ≈ 1`` for rpm as the file format wants,
+   ``κ ≈ 60/(2π) = 9.55`` when the wheel columns hold rad/s (the wheel momentum read ×0.105).
+3. **Pulse log vs ``on_*`` columns** (:func:`check_pulses_match_on_times`): the cumulative
+   on-time the pulse log implies (:func:`cassini_bayes.telemetry.cumulative_on_times`) must match
+   the telemetry's own counters.
+4. **Identifiability for the fit asked for** (:func:`check_inertia_excitation`,
+   :func:`check_rwa4_method`): an inertia fit needs rotation about more than one body axis; the
+   RWA method of the RWA4 calibration needs the wheels that carry the slews (Brown Eq 3).
+
+Thresholds and the margins measured on every scenario in ``experiments/scenarios/`` and on
+corrupted copies are in ``docs/input_checks.md``. A check whose statistic is not identifiable
+from the data (no rotation, no momentum exchange) says nothing.
+
+The entry points called by the CLI right after reading the inputs are
+:func:`check_telemetry_data` (``cassini-bayes check``), :func:`check_inertia_data`,
+:func:`check_thrust_data` and :func:`check_rwa4_data`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+
+from cassini_bayes.errors import InputError, UnidentifiableError
+from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rotvec
+from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
+from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
+                                     Telemetry, check_pulses_in_span, cumulative_on_times)
+
+__all__ = [
+    "READINGS",
+    "AttitudeAgreement",
+    "MomentumScale",
+    "attitude_rate_agreement",
+    "check_attitude_rates",
+    "wheel_momentum_scale",
+    "check_wheel_units",
+    "check_pulses_match_on_times",
+    "inertia_excitation",
+    "check_inertia_excitation",
+    "check_rwa4_method",
+    "check_telemetry_data",
+    "check_inertia_data",
+    "check_thrust_data",
+    "check_rwa4_data",
+]
+
+# ---------------------------------------------------------------------------------------------
+# Thresholds (margins measured in docs/input_checks.md)
+
+READINGS = ("as declared", "scalar-first", "conjugated", "scalar-first and conjugated")
+"""The four readings of the q1..q4 columns that the attitude check compares."""
+ALIGN_GOOD = 0.9
+"""A reading whose alignment with the body rates is at least this fits."""
+MISFIT_RATIO = 5.0
+"""Another reading fits clearly better when the declared one's misfit ``1 − alignment`` is at
+least this many times its misfit."""
+ALIGN_BAD = 0.5
+"""With no other reading fitting, the declared one is refused when its alignment is below this
+(body rates and attitude inconsistent)."""
+RATE_SCALE_RANGE = (0.5, 2.0)
+"""Accepted ratio of the attitude's rotation to the integrated body rate (1 for rad/s)."""
+MIN_SEGMENTS = 5
+"""Fewer turning stretches than this: the attitude check is not identifiable and is skipped."""
+_SEG_NOISE = 20.0      # a turning stretch turns by this many attitude-noise sd …
+_SEG_MIN_RAD = 1e-3    # … and at least this much
+_SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
+_SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
+
+MOMENTUM_ALIGN_MIN = 0.9
+"""The wheel-unit check judges ``κ`` only when the balance fits this well (alignment)."""
+RAD_S_FACTOR = 1.0 / RPM_TO_RAD_S
+"""``κ`` expected when the wheel columns hold rad/s: 60/(2π) = 9.55."""
+KAPPA_RANGE = (float(np.sqrt(RPM_TO_RAD_S)), float(1.0 / np.sqrt(RPM_TO_RAD_S)))
+"""Accepted wheel-momentum scale ``κ``: the geometric midpoints between 1 (rpm) and 60/(2π)
+(rad/s) or its inverse, 0.324 … 3.09; the ±10 % knowledge of the moments moves ``κ`` by 10 %."""
+FREE_WHEEL = "RWA4"
+"""The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
+
+EXCITATION_MIN = 1e-3
+"""Second-largest over largest eigenvalue of ``Σ ω ωᵀ dt``: below it the slews turn the
+spacecraft about one axis only."""
+RWA_METHOD_MIN_KNOWN = 2
+"""The RWA method (Brown Eq 3) needs this many running wheels besides the one solved for."""
+CONTROL_WHEEL_RPM = 10.0
+"""A wheel whose rate changes by more than this over the record takes part in the control."""
+
+
+# ---------------------------------------------------------------------------------------------
+# 1. Attitude vs body rates
+
+
+class AttitudeAgreement(NamedTuple):
+    """How well each reading of the quaternion columns agrees with the body rates.
+
+    Attributes
+    ----------
+    alignment : (4,) cosine between the stacked quaternion rotation vectors and ``∫ω dt``, one
+        per reading of :data:`READINGS`.
+    scale : ratio of the declared reading's rotation to ``∫ω dt`` (1 for rad/s, 0.0175 for °/s).
+    segments : number of turning stretches used.
+    turn_rad : total rotation over them, rad.
+    """
+
+    alignment: np.ndarray
+    scale: float
+    segments: int
+    turn_rad: float
+
+
+def _reading(q: np.ndarray, k: int) -> np.ndarray:
+    """The quaternion (scalar last, inertial → body) under reading ``k`` of :data:`READINGS`."""
+    if k in (1, 3):  # columns hold (q4, q1, q2, q3)
+        q = np.roll(q, -1, axis=1)
+    if k in (2, 3):  # body → inertial: the inverse rotation
+        q = np.asarray(quat_conjugate(q))
+    return q
+
+
+def _attitude_noise(q: np.ndarray) -> float:
+    """Attitude noise sd per axis (rad) from second differences of the per-step rotations.
+
+    ``θ_k = rotvec(q_{k+1} q_k⁻¹)`` carries ``n_{k+1} − n_k`` of the attitude noise; its
+    difference ``n_{k+2} − 2 n_{k+1} + n_k`` has variance ``6 σ²`` per axis, while smooth motion
+    cancels. The median absolute deviation keeps slew starts and stops from inflating it.
+    """
+    if q.shape[0] < 4:
+        return 0.0
+    step = np.asarray(quat_to_rotvec(quat_multiply(q[1:], quat_conjugate(q[:-1]))))
+    d = np.diff(step, axis=0)
+    return float(1.4826 * np.median(np.abs(d - np.median(d, axis=0))) / np.sqrt(6.0))
+
+
+def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
+    """Non-overlapping stretches ``(a, b)`` over which the attitude turns by a set angle.
+
+    The angle is ``clip(20 σ_att, 1e-3, 0.05)`` rad (``σ_att`` from :func:`_attitude_noise`),
+    reached within :data:`_SEG_MAX_SAMPLES` samples; quiet stretches give none. The rotation angle
+    between two quaternions is the same under every reading (``|q_a · q_b|`` is invariant under
+    reordering and conjugation), so the stretches are too.
+    """
+    n = q.shape[0]
+    target = float(np.clip(_SEG_NOISE * _attitude_noise(q), _SEG_MIN_RAD, _SEG_MAX_RAD))
+    lmax = min(_SEG_MAX_SAMPLES, n - 1)
+    reach = np.full(n, -1)
+    for lag in range(lmax, 0, -1):  # smallest lag wins
+        # the rotation angle of telemetry._turn_angle, for every pair lag samples apart
+        sign = np.where(np.sum(q[lag:] * q[:-lag], axis=1) < 0, -1.0, 1.0)[:, None]
+        ang = 4.0 * np.arctan2(np.linalg.norm(q[lag:] - sign * q[:-lag], axis=1),
+                               np.linalg.norm(q[lag:] + sign * q[:-lag], axis=1))
+        hit = np.flatnonzero(ang >= target)
+        reach[hit] = hit + lag
+    out, a = [], 0
+    while a < n - 1:
+        if reach[a] > a:
+            out.append((a, int(reach[a])))
+            a = int(reach[a])
+        else:
+            a += 1
+    return out
+
+
+def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
+    """Compare the quaternions' rotation with the integrated body rates, per reading.
+
+    Per stretch ``(a, b)`` of :func:`_turning_segments`: the rotation vector
+    ``rotvec(q_b q_a⁻¹)`` (:mod:`cassini_bayes.frames`: ``q(t + dt) = rotvec_to_quat(ω dt) q(t)``)
+    and the trapezoid integral ``∫ω dt`` (equal to it up to the small non-commuting part of a
+    ≤ 0.05 rad turn). ``None`` when fewer than :data:`MIN_SEGMENTS` stretches turn (not
+    identifiable).
+    """
+    q = np.asarray(tel.q, float)
+    if q.shape[0] < 4:
+        return None
+    segs = _turning_segments(q)
+    if len(segs) < MIN_SEGMENTS:
+        return None
+    a_idx = np.array([s[0] for s in segs])
+    b_idx = np.array([s[1] for s in segs])
+    t = np.asarray(tel.t, float)
+    w = np.asarray(tel.omega, float)
+    steps = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
+                                                        * np.diff(t)[:, None], axis=0)])
+    g = steps[b_idx] - steps[a_idx]
+    rots = [np.asarray(quat_to_rotvec(quat_multiply(qk[b_idx], quat_conjugate(qk[a_idx]))))
+            for qk in (_reading(q, k) for k in range(len(READINGS)))]
+    gg = float(np.sum(g * g))
+    rr = float(np.sum(rots[0] ** 2))  # the same for every reading (angles are invariant)
+    if not (gg > 0 and rr > 0):
+        return None
+    align = np.array([float(np.sum(r * g)) / np.sqrt(rr * gg) for r in rots])
+    scale = float(np.sum(rots[0] * g)) / gg
+    turn = float(np.sum(np.linalg.norm(rots[0], axis=1)))
+    return AttitudeAgreement(align, scale, len(segs), turn)
+
+
+def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
+    """Refuse a quaternion convention or body-rate unit that the kinematics contradict.
+
+    Raises :class:`InputError` when another reading of q1..q4 fits (alignment ≥
+    :data:`ALIGN_GOOD`) with a misfit ``1 − alignment`` at least :data:`MISFIT_RATIO` times
+    smaller than the declared reading's (naming that reading, or every such reading when the
+    rotation, e.g. about a single axis from the identity, cannot tell them apart); when no
+    reading fits and the declared one aligns by less than :data:`ALIGN_BAD` (rates and attitude
+    inconsistent); or when the declared reading fits but the rotation is not about 1× the
+    integrated rate (°/s or mrad/s body rates). Returns the agreement (``None``: not identifiable, no check).
+    """
+    ag = attitude_rate_agreement(tel)
+    if ag is None:
+        return None
+    src = tel.source
+    c = ag.alignment
+    stats = (f"alignment of the quaternions' rotation with ∫ω dt over {ag.segments} turning "
+             f"stretches: {c[0]:.2f} as written")
+    fits = [k for k in range(1, len(READINGS))
+            if c[k] >= ALIGN_GOOD and 1.0 - c[0] >= MISFIT_RATIO * (1.0 - c[k])]
+    if len(fits) == 1:
+        k = fits[0]
+        cause = {
+            1: "the quaternion looks scalar-first (q4 first); write q1 q2 q3 (vector part) "
+               "first and the scalar q4 last",
+            2: "the quaternion looks conjugated (body → inertial); the format wants "
+               "inertial → body: negate q1 q2 q3",
+            3: "the quaternion looks scalar-first and conjugated (body → inertial); write "
+               "the vector part first, negated, and the scalar q4 last",
+        }[k]
+        raise InputError(f"columns q1..q4: {cause} ({stats}, {c[k]:.2f} {READINGS[k]})",
+                         path=src)
+    if fits:  # rotation about too few axes to tell these readings apart
+        alts = " or ".join(f"{READINGS[k]} ({c[k]:.2f})" for k in fits)
+        raise InputError(f"columns q1..q4: the quaternion does not follow the format's "
+                         f"convention but fits the body rates read as {alts} ({stats}); the "
+                         "format wants q1 q2 q3 (vector part) first, the scalar q4 last, "
+                         "inertial → body", path=src)
+    if c[0] < ALIGN_BAD:
+        raise InputError(f"columns q1..q4 and wx wy wz: body rates and attitude are inconsistent "
+                         f"({stats}, at most {c[1:].max():.2f} read otherwise: scalar-first or "
+                         "conjugated); check that wx wy wz are rad/s in body axes and q is "
+                         "inertial → body, scalar last", path=src)
+    lo, hi = RATE_SCALE_RANGE
+    if not lo <= ag.scale <= hi:
+        ratio = 1.0 / ag.scale if ag.scale > 0 else np.inf
+        if 30.0 < ratio < 100.0:
+            guess = "they look like deg/s: divide by 57.2958"
+        elif 300.0 < ratio < 3000.0:
+            guess = "they look like mrad/s: divide by 1000"
+        else:
+            guess = "check their unit"
+        raise InputError(f"columns wx wy wz: the body rates integrate to {ratio:.3g}x the "
+                         f"rotation the quaternions show; {guess} (body rates must be rad/s)",
+                         path=src)
+    return ag
+
+
+# ---------------------------------------------------------------------------------------------
+# 2. Wheel units vs momentum conservation
+
+
+class MomentumScale(NamedTuple):
+    """Fit of the momentum balance with the wheel momentum scaled by ``κ`` (1 for a correct file).
+
+    Attributes
+    ----------
+    scale : ``κ``, the factor on the wheel momentum that balances the body momentum of the
+        model's predicted inertia: 1 (within the ±10 % knowledge of the inertia) for rpm,
+        60/(2π) = 9.55 when the wheel columns hold rad/s.
+    alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
+    stretches : number of stretches between thruster firings used.
+    """
+
+    scale: float
+    alignment: float
+    stretches: int
+
+
+def _quiet_labels(on_times: np.ndarray | None, n: int) -> np.ndarray:
+    """Label of the firing-free stretch of every sample; ``-1`` next to a firing.
+
+    An interval in which any cumulative on-time grows carries a thruster impulse (and its
+    rise/fall tail into the next interval): both intervals split the record.
+    """
+    if on_times is None:
+        return np.zeros(n, int)
+    fired = np.any(np.diff(on_times, axis=0) > 0, axis=1)
+    cut = fired | np.concatenate([[False], fired[:-1]])
+    labels = np.concatenate([[0], np.cumsum(cut)])
+    bad = np.zeros(n, bool)
+    bad[1:] |= cut
+    bad[:-1] |= cut
+    return np.where(bad, -1, labels)
+
+
+def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
+                         on_times: np.ndarray | None = None,
+                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
+    """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
+
+    Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
+
+        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
+
+    with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias from
+    the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
+    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
+    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
+    removes ``H_s``. ``None`` when no wheel runs, no stretch has three samples, or nothing
+    varies.
+    """
+    names = tel.active_wheels()
+    free = [n for n in names if free_wheel is not None and n.upper() == free_wheel.upper()]
+    known = [n for n in names if n not in free]
+    if not names:
+        return None
+    on = tel.on_times if on_times is None else on_times
+    labels = _quiet_labels(on, tel.n)
+    ids, counts = np.unique(labels[labels >= 0], return_counts=True)
+    good = ids[counts >= 3]
+    keep = np.isin(labels, good)
+    if not np.any(keep):
+        return None
+    a_t = np.swapaxes(np.asarray(dcm(np.asarray(tel.q, float))), -1, -2)[keep]  # body → inertial
+    x = np.einsum("nij,jk,nk->ni", a_t, np.asarray(spacecraft.inertia, float),
+                  np.asarray(tel.omega, float)[keep])
+    cols = []
+    if known:
+        rates = np.stack([np.asarray(tel.wheel_rate(n), float)[keep] for n in known], 1)
+        axes = np.stack([spacecraft.wheel(n).axis for n in known])
+        js = np.array([spacecraft.wheel(n).inertia for n in known])
+        cols.append(-np.einsum("nij,nj->ni", a_t, np.asarray(wheel_momentum_body(rates, axes,
+                                                                                 js))))
+    if free:
+        rho = np.asarray(tel.wheel_rate(free[0]), float)[keep]
+        cols += [-rho[:, None] * a_t[:, :, j] for j in range(3)]
+    lab = labels[keep]
+    for s in good:
+        m = lab == s
+        x[m] -= x[m].mean(0)
+        for c in cols:
+            c[m] -= c[m].mean(0)
+    design = np.stack([c.ravel() for c in cols], 1)
+    target = x.ravel()
+    xx = float(target @ target)
+    if xx <= 0 or np.linalg.matrix_rank(design) < design.shape[1]:
+        return None
+    theta = np.linalg.lstsq(design, target, rcond=None)[0]
+    fitted = design @ theta
+    align = float(target @ fitted / np.sqrt(xx * (fitted @ fitted))) if fitted.any() else 0.0
+    scale = (float(theta[0]) if known
+             else float(np.linalg.norm(theta) / spacecraft.wheel(free[0]).inertia))
+    return MomentumScale(scale, align, len(good))
+
+
+def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
+                      on_times: np.ndarray | None = None) -> MomentumScale | None:
+    """Refuse wheel rates whose unit breaks momentum conservation.
+
+    When the balance of :func:`wheel_momentum_scale` fits (alignment ≥
+    :data:`MOMENTUM_ALIGN_MIN`) yet needs a wheel-momentum scale ``κ`` outside
+    :data:`KAPPA_RANGE`, raise :class:`InputError`: ``κ`` near 60/(2π) means the wheel columns
+    hold rad/s. Otherwise (including a balance that does not fit: momentum exchange with unlogged
+    thruster firings, or none at all) say nothing. Returns the fit.
+    """
+    fit = wheel_momentum_scale(tel, spacecraft, on_times)
+    if fit is None or fit.alignment < MOMENTUM_ALIGN_MIN:
+        return fit
+    lo, hi = KAPPA_RANGE
+    if lo <= fit.scale <= hi:
+        return fit
+    cols = " ".join(n.lower() for n in tel.active_wheels())
+    what = (f"momentum is conserved only with the wheel momentum {fit.scale:.3g}x what the "
+            f"columns say in rpm with the model {spacecraft.name!r} (alignment "
+            f"{fit.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g})")
+    if abs(np.log(fit.scale / RAD_S_FACTOR)) < np.log(2.0):
+        raise InputError(f"columns {cols}: wheel rates look like rad/s, the file format wants "
+                         f"rpm; multiply by 60/(2*pi) ({what})", path=tel.source)
+    raise InputError(f"columns {cols}: {what}; check that the wheel rates are rpm, the body "
+                     "rates rad/s, and that the spacecraft model matches the spacecraft",
+                     path=tel.source)
+
+
+# ---------------------------------------------------------------------------------------------
+# 3. Pulse log vs on_* columns
+
+
+def _derived_on_times(tel: Telemetry, log: PulseLog) -> np.ndarray:
+    """Cumulative on-times the pulse log implies at the telemetry samples (warnings silenced:
+    the readers and the fits report the pulses outside the span)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PulseSpanWarning)
+        return cumulative_on_times(check_pulses_in_span(log, tel), tel.t)
+
+
+def check_pulses_match_on_times(tel: Telemetry, log: PulseLog) -> None:
+    """Refuse a pulse log that disagrees with the telemetry's own ``on_*`` columns.
+
+    Per thruster, the log's cumulative on-time at the samples
+    (:func:`cassini_bayes.telemetry.cumulative_on_times`) must match the column at every sample
+    to within the longest single pulse (the longest width in the log, or the largest step of
+    the column between two samples): a counter may book a pulse straddling a sample on either
+    side of it, or in steps of its own resolution. No-op without ``on_*`` columns.
+    """
+    if tel.on_times is None:
+        return
+    derived = _derived_on_times(tel, log)
+    col_all = np.asarray(tel.on_times, float)
+    t = np.asarray(tel.t, float)
+    for k, name in enumerate(THRUSTER_NAMES):
+        col, der = col_all[:, k] - col_all[0, k], derived[:, k]
+        widths = log.width[log.thruster == k]
+        slack = max(float(widths.max()) if widths.size else 0.0, float(np.diff(col).max())) + 1e-6
+        diff = np.abs(der - col)
+        if diff.max() <= slack:
+            continue
+        total_c, total_d = float(col[-1]), float(der[-1])
+        i = int(np.argmax(diff))
+        pct = (f"{100 * (total_d - total_c) / total_c:+.0f} %" if total_c > 0
+               else "the column never fires")
+        raise InputError(f"pulse log widths disagree with on_{name} of {tel.source} by {pct}: "
+                         f"the log gives {total_d:.6g} s of {name} on-time, the column "
+                         f"{total_c:.6g} s (largest difference {diff[i]:.3g} s at t = "
+                         f"{t[i]:.10g} s); check the width unit (s) and that the log belongs to "
+                         "this telemetry", path=log.source)
+
+
+# ---------------------------------------------------------------------------------------------
+# 4. Identifiability for the fit asked for
+
+
+def inertia_excitation(tels: Sequence[Telemetry]) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending, rad² s) and eigenvectors of ``Σ ω ωᵀ dt`` over all files.
+
+    The momentum balance sees the inertia only through ``I ω`` (Feldman & Lee Eq 10): rotation
+    about a single unit axis ``e`` determines ``I e`` (three of the six entries' combinations)
+    and nothing else.
+    """
+    m = np.zeros((3, 3))
+    for tel in tels:
+        w = np.asarray(tel.omega, float)
+        dt = np.gradient(np.asarray(tel.t, float)) if tel.n > 1 else np.ones(tel.n)
+        m += np.einsum("n,ni,nj->ij", dt, w, w)
+    return np.linalg.eigh(m)
+
+
+def check_inertia_excitation(tels: Sequence[Telemetry]) -> None:
+    """Raise :class:`UnidentifiableError` when the slews turn the spacecraft about one axis only.
+
+    The ratio of the second-largest to the largest eigenvalue of :func:`inertia_excitation`
+    below :data:`EXCITATION_MIN` means all rotation is about one axis ``e``; only ``I e`` is
+    learnable (the posterior of the rest is the prior, and the sampler does not converge on
+    that ridge). A weak second or third axis is the inertia fit's own "weakly identified"
+    warning.
+    """
+    vals, vecs = inertia_excitation(tels)
+    if not vals[-1] > 0 or vals[1] / vals[-1] >= EXCITATION_MIN:
+        return
+    e = vecs[:, -1] * np.sign(vecs[np.argmax(np.abs(vecs[:, -1])), -1])
+    src = ", ".join(t.source for t in tels)
+    axis = int(np.argmax(np.abs(e)))
+    if abs(e[axis]) > 0.99:
+        learn = {0: ("Ixx", "Ixy", "Ixz"), 1: ("Ixy", "Iyy", "Iyz"), 2: ("Ixz", "Iyz", "Izz")}[axis]
+        lost = [n for n in INERTIA_NAMES if n not in learn]
+        about = f"body {'XYZ'[axis]}"
+        what = (f"{', '.join(lost)} cannot be learned from them (only {', '.join(learn)})")
+    else:
+        about = f"the body axis [{e[0]:.2f}, {e[1]:.2f}, {e[2]:.2f}]"
+        what = "only the three combinations I·e of the six entries can be learned"
+    raise UnidentifiableError(f"{src}: the slews turn the spacecraft about {about} only "
+                              f"(second axis {vals[1] / vals[-1]:.1e} of the first in Σ ω ωᵀ dt); "
+                              f"{what}; add slews about other axes")
+
+
+def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
+    """Refuse data that the chosen RWA4 method cannot use.
+
+    * ``rwa`` (Brown Eq 3): the slews are carried by the other wheels, whose momentum is known;
+      with fewer than :data:`RWA_METHOD_MIN_KNOWN` of them running the data hold no RWA slew
+      pairs (RCS-controlled drift).
+    * ``rcs`` (Brown Eq 1): under RCS control the body drift takes up the wheel's momentum and
+      the thrusters hold the attitude. When at least :data:`RWA_METHOD_MIN_KNOWN` other wheels
+      run and change by more than :data:`CONTROL_WHEEL_RPM` while no thruster fires (``on_*``
+      columns flat or absent), the wheels carry the attitude control: RWA-controlled data.
+    """
+    others = [n for n in tel.active_wheels() if n.upper() != wheel.upper()]
+    if method == "rwa" and len(others) < RWA_METHOD_MIN_KNOWN:
+        running = ", ".join(tel.active_wheels()) or "none"
+        raise InputError(f"--method rwa needs RWA slew pairs, carried by at least "
+                         f"{RWA_METHOD_MIN_KNOWN} wheels besides {wheel} (Brown Eq 3), but the "
+                         f"wheels running are {running}: this looks like RCS-controlled data; "
+                         "use --method rcs", path=tel.source)
+    if method != "rcs" or len(others) < RWA_METHOD_MIN_KNOWN:
+        return
+    fired = tel.on_times is not None and bool(np.any(np.diff(tel.on_times, axis=0) > 0))
+    span = {n: float(np.ptp(tel.wheel_rate(n))) / RPM_TO_RAD_S for n in others}
+    varying = [n for n, v in span.items() if v > CONTROL_WHEEL_RPM]
+    if not fired and len(varying) >= RWA_METHOD_MIN_KNOWN:
+        spans = ", ".join(f"{n} {span[n]:.0f} rpm" for n in varying)
+        raise InputError(f"--method rcs needs RCS-controlled data (Brown Eq 1: the body drifts, "
+                         f"thrusters fire), but no thruster fires and the other wheels carry "
+                         f"the control (they change by {spans}): these are RWA-controlled "
+                         "slews; use --method rwa", path=tel.source)
+
+
+# ---------------------------------------------------------------------------------------------
+# Entry points (one per command)
+
+
+def check_telemetry_data(tel: Telemetry, spacecraft: Spacecraft | None = None,
+                         pulses: PulseLog | None = None
+                         ) -> tuple[AttitudeAgreement | None, MomentumScale | None]:
+    """Every physics check one telemetry file (and its pulse log) allows: attitude vs rates,
+    pulse log vs ``on_*`` columns, and with a spacecraft model the wheel units.
+
+    Returns the attitude agreement and the momentum fit (``None`` where not identifiable or,
+    for the momentum, without a spacecraft model), for a summary.
+    """
+    attitude = check_attitude_rates(tel)
+    on = tel.on_times
+    if pulses is not None:
+        check_pulses_match_on_times(tel, pulses)
+        if on is None:
+            on = _derived_on_times(tel, pulses)
+    momentum = check_wheel_units(tel, spacecraft, on) if spacecraft is not None else None
+    return attitude, momentum
+
+
+def check_inertia_data(tels: Sequence[Telemetry], spacecraft: Spacecraft) -> None:
+    """Checks before ``fit inertia``: each file's attitude, rates and wheel units; then that the
+    slews excite more than one axis."""
+    for tel in tels:
+        check_telemetry_data(tel, spacecraft)
+    check_inertia_excitation(tels)
+
+
+def check_thrust_data(events: Sequence[tuple[Telemetry, PulseLog]],
+                      spacecraft: Spacecraft) -> None:
+    """Checks before ``fit thrust``: per event, attitude and rates, pulse log vs ``on_*``
+    columns, and wheel units (stretches between the logged firings)."""
+    for tel, log in events:
+        check_telemetry_data(tel, spacecraft, log)
+
+
+def check_rwa4_data(tel: Telemetry, spacecraft: Spacecraft, method: str) -> None:
+    """Checks before ``fit rwa4``: attitude, rates and wheel units, and that ``method`` suits
+    how the data were controlled."""
+    check_telemetry_data(tel, spacecraft)
+    check_rwa4_method(tel, method)

@@ -1,0 +1,283 @@
+"""Physics checks of the inputs (cassini_bayes.consistency): each mistake is refused with its cause,
+clean data from every scenario family pass.
+
+Data: one simulated run per scenario family (slews, biasing event, FSDS biasing, RWA4 by RCS and
+by RWA, and a ``_real`` variant with every real-world error on), cut where long; corrupted copies
+of them. The statistics and their margins (measured on the full scenario files with
+``cassini-bayes simulate``, every file in experiments/scenarios/, see docs/input_checks.md):
+
+* attitude vs rates: the declared reading's alignment with ∫ω dt is ≥ 0.988 on clean data; the
+  misfit ratio ``(1 − c_declared)/(1 − c_best other)`` is ≤ 0.013 clean and ≥ 28 for a
+  scalar-first, conjugated or both-wrong file (threshold 5); body-rate scale 0.99–1.03 clean,
+  0.0174–0.0181 for deg/s (accepted 0.5–2);
+* wheel units: the wheel-momentum scale κ is 0.993–1.032 clean and 9.48–9.86 for rad/s columns
+  (accepted 0.324–3.09, the geometric midpoints), alignment ≥ 0.962 (needed ≥ 0.9);
+* pulse log vs on_*: largest per-sample difference ≤ 0.018 s clean against a slack of one
+  pulse (≥ 0.125 s); doubled widths differ by the whole total (seconds);
+* excitation: second/first eigenvalue of Σ ω ωᵀ dt ≥ 0.35 on the shipped slews (post-PRM: X and
+  Y equal, Z small: 1.0), 2.6e-6 for X-only slews (threshold 1e-3).
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import replace
+
+import jax
+import numpy as np
+import pytest
+
+from cassini_bayes import consistency as cons
+from cassini_bayes._paths import SCENARIOS_DIR
+from cassini_bayes.errors import InputError, UnidentifiableError
+from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
+from cassini_bayes.simulate.controllers import slew_duration
+from cassini_bayes.spacecraft import load_spacecraft
+from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, write_telemetry
+from kinematics import slew_segments, wheels_for_conserved_momentum
+
+FAMILIES = ["slews_post_prm", "slew_2000_03_15_real", "biasing_day028", "fsds_biasing",
+            "rwa4_rcs", "rwa4_rwa"]
+CUT_S = 1800.0  # long scenarios are cut here (slews that would not finish are dropped)
+
+
+def _scenario(name: str):
+    """The scenario, cut to CUT_S when longer (as tests/test_scenarios.py does)."""
+    d = tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
+    if d["run"]["duration_s"] <= CUT_S:
+        return scenario_from_dict(d, name)
+    d["run"]["duration_s"] = CUT_S
+    d["slew"] = [s for s in d.get("slew", []) if s["t_start_s"] + slew_duration(
+        np.deg2rad(s["angle_deg"]), s["rate_mrad_s"] * 1e-3, s["accel_mrad_s2"] * 1e-3)
+        <= CUT_S]
+    return scenario_from_dict(d, f"{name}[:{CUT_S:g} s]")
+
+
+def _prior(name: str):
+    d = tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
+    return load_spacecraft(d["prior"]["model"].split("/")[-1].removesuffix(".toml"))
+
+
+@pytest.fixture(scope="module")
+def runs():
+    out = {}
+    for i, name in enumerate(FAMILIES):
+        r = simulate(jax.random.key(100 + i), _scenario(name))
+        tel = replace(r.telemetry, source=f"{name}.csv")
+        log = None if r.pulses is None else replace(r.pulses, source=f"{name}_pulses.csv")
+        out[name] = (tel, log, _prior(name))
+    return out
+
+
+def _scalar_first(tel):
+    return replace(tel, q=np.roll(tel.q, 1, axis=1))
+
+
+def _conjugated(tel):
+    return replace(tel, q=tel.q * np.array([-1.0, -1.0, -1.0, 1.0]))
+
+
+def _wheels_in_rad_s(tel):
+    """The file's wheel columns hold rad/s; read as rpm they become ×2π/60 too small."""
+    return replace(tel, wheel_rates=tel.wheel_rates * RPM_TO_RAD_S)
+
+
+# --------------------------------------------------------------------------------------------
+# Clean data pass, with margin
+
+
+@pytest.mark.parametrize("name", FAMILIES)
+def test_clean_scenario_families_pass(runs, name):
+    tel, log, sc = runs[name]
+    cons.check_telemetry_data(tel, sc, log)
+    ag = cons.attitude_rate_agreement(tel)
+    if ag is not None:  # fsds_biasing barely turns: not identifiable, skipped
+        misfit = (1 - ag.alignment[0]) / (1 - ag.alignment[1:].max())
+        assert ag.alignment[0] > 0.97 and misfit < 0.05 and 0.9 < ag.scale < 1.1
+    on = tel.on_times
+    fit = cons.wheel_momentum_scale(tel, sc, on)
+    assert fit.alignment > 0.93 and 0.9 < fit.scale < 1.1
+
+
+def test_not_identifiable_says_nothing():
+    """No rotation, no wheel change: every check is skipped, nothing is raised."""
+    n = 300
+    rates = np.full((n, 4), np.nan)
+    rates[:, :3] = 400.0 * RPM_TO_RAD_S
+    tel = Telemetry(np.arange(float(n)), np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)),
+                    1e-7 * np.ones((n, 3)), rates)
+    assert cons.attitude_rate_agreement(tel) is None
+    cons.check_telemetry_data(tel, load_spacecraft("cassini_post_prm"))
+
+
+# --------------------------------------------------------------------------------------------
+# Quaternion convention and body-rate units
+
+
+@pytest.mark.parametrize("name", ["slews_post_prm", "biasing_day028", "rwa4_rcs", "rwa4_rwa"])
+@pytest.mark.parametrize("corrupt, cause", [
+    (_scalar_first, "looks scalar-first (q4 first)"),
+    (_conjugated, "looks conjugated (body → inertial)"),
+    (lambda t: _scalar_first(_conjugated(t)), "looks scalar-first and conjugated"),
+])
+def test_quaternion_convention_refused(runs, name, corrupt, cause):
+    tel = runs[name][0]
+    with pytest.raises(InputError, match=re.escape(cause)) as e:
+        cons.check_telemetry_data(corrupt(tel))
+    assert str(e.value).startswith(f"{name}.csv: columns q1..q4:")
+    assert "\n" not in str(e.value)
+
+
+def test_single_axis_turn_names_every_fitting_reading(runs):
+    """One slew about body Y from near the identity: three readings fit a conjugated file."""
+    tel = runs["slew_2000_03_15_real"][0]              # cut: its first slew only
+    with pytest.raises(InputError, match=r"does not follow the format's convention but fits "
+                                         r"the body rates read as scalar-first \(1.00\) or "
+                                         r"conjugated \(1.00\) or scalar-first and conjugated"):
+        cons.check_attitude_rates(_conjugated(tel))
+
+
+@pytest.mark.parametrize("name", ["slews_post_prm", "rwa4_rcs"])
+def test_body_rates_in_deg_s_refused(runs, name):
+    tel = runs[name][0]
+    with pytest.raises(InputError, match=r"look like deg/s: divide by 57\.2958"):
+        cons.check_attitude_rates(replace(tel, omega=np.degrees(tel.omega)))
+
+
+def test_rates_unrelated_to_attitude_refused(runs):
+    tel = runs["slews_post_prm"][0]
+    shuffled = np.random.default_rng(0).permutation(tel.omega)
+    with pytest.raises(InputError, match="body rates and attitude are inconsistent"):
+        cons.check_attitude_rates(replace(tel, omega=shuffled))
+
+
+# --------------------------------------------------------------------------------------------
+# Wheel units by momentum conservation
+
+
+@pytest.mark.parametrize("name", ["slews_post_prm", "slew_2000_03_15_real", "biasing_day028",
+                                  "fsds_biasing", "rwa4_rcs", "rwa4_rwa"])
+def test_wheel_rates_in_rad_s_refused(runs, name):
+    tel, log, sc = runs[name]
+    bad = _wheels_in_rad_s(tel)
+    fit = cons.wheel_momentum_scale(bad, sc)
+    assert 8.5 < fit.scale < 10.5                      # 60/(2π) = 9.55
+    with pytest.raises(InputError, match=r"wheel rates look like rad/s, the file format wants "
+                                         r"rpm; multiply by 60/\(2\*pi\)"):
+        cons.check_telemetry_data(bad, sc, log)
+
+
+def test_unlogged_firings_skip_the_wheel_check(runs):
+    """Without on-times the biasing event's thruster firings break the balance: no verdict."""
+    tel, _, sc = runs["biasing_day028"]
+    bare = replace(_wheels_in_rad_s(tel), on_times=None)
+    fit = cons.wheel_momentum_scale(bare, sc)
+    assert fit.alignment < cons.MOMENTUM_ALIGN_MIN
+    cons.check_wheel_units(bare, sc)
+
+
+# --------------------------------------------------------------------------------------------
+# Pulse log vs on_* columns
+
+
+@pytest.mark.parametrize("factor, pct", [(2.0, "+100 %"), (0.5, "-50 %")])
+def test_pulse_widths_disagreeing_with_on_columns_refused(runs, factor, pct):
+    tel, log, sc = runs["biasing_day028"]
+    bad = PulseLog(log.t_on, log.thruster, log.width * factor, log.source)
+    with pytest.raises(InputError, match=r"pulse log widths disagree with on_\w\d of "
+                                         r"biasing_day028.csv by " + re.escape(pct)):
+        cons.check_thrust_data([(tel, bad)], sc)
+
+
+def test_pulse_log_of_another_thruster_refused(runs):
+    tel, log, sc = runs["biasing_day028"]
+    swapped = PulseLog(log.t_on, (log.thruster + 1) % 8, log.width, log.source)
+    with pytest.raises(InputError, match="pulse log widths disagree with on_"):
+        cons.check_pulses_match_on_times(tel, swapped)
+
+
+# --------------------------------------------------------------------------------------------
+# Identifiability for the fit asked for
+
+
+def _one_axis_slews(axis):
+    sc = load_spacecraft("cassini_2000_03_15")
+    t, q, w = slew_segments([0.0, 0.0, 0.0, 1.0], [(axis, 0.6, 300.0), (axis, -0.5, 300.0)],
+                            2.0, 100.0)
+    rates, _ = wheels_for_conserved_momentum(t, q, w, sc.inertia, np.array([3.0, -2.0, 5.0]),
+                                             sc.wheel_axes[:3], sc.wheel_inertias[:3])
+    rng = np.random.default_rng(1)
+    wheel = np.full((t.size, 4), np.nan)
+    wheel[:, :3] = rates
+    tel = Telemetry(t, q, w + 1e-6 * rng.standard_normal(w.shape), wheel, source="x.csv")
+    return tel, sc
+
+
+def test_one_axis_slews_unidentifiable():
+    tel, sc = _one_axis_slews((1.0, 0.0, 0.0))
+    with pytest.raises(UnidentifiableError, match=r"about body X only .* Iyy, Izz, Iyz cannot be "
+                                                  r"learned .*add slews about other axes"):
+        cons.check_inertia_data([tel], sc)
+    tel, sc = _one_axis_slews((1.0, 1.0, 1.0))
+    with pytest.raises(UnidentifiableError, match=r"only the three combinations I·e"):
+        cons.check_inertia_data([tel], sc)
+
+
+def test_two_files_about_two_axes_are_enough():
+    tx, sc = _one_axis_slews((1.0, 0.0, 0.0))
+    ty, _ = _one_axis_slews((0.0, 1.0, 0.0))
+    cons.check_inertia_data([tx, ty], sc)
+
+
+def test_rwa4_method_must_match_the_control(runs):
+    tel_rcs, _, sc = runs["rwa4_rcs"]
+    tel_rwa = runs["rwa4_rwa"][0]
+    cons.check_rwa4_data(tel_rcs, sc, "rcs")
+    cons.check_rwa4_data(tel_rwa, sc, "rwa")
+    with pytest.raises(InputError, match="--method rwa needs RWA slew pairs.*use --method rcs"):
+        cons.check_rwa4_data(tel_rcs, sc, "rwa")
+    with pytest.raises(InputError, match="--method rcs needs RCS-controlled data.*use --method "
+                                         "rwa"):
+        cons.check_rwa4_data(tel_rwa, sc, "rcs")
+
+
+# --------------------------------------------------------------------------------------------
+# Through the CLI
+
+
+def test_cli_refuses_wheel_rates_in_rad_s(runs, run_cli, tmp_path):
+    """`check` and `fit inertia` exit 2 with one stderr line, no traceback, no run directory."""
+    tel, _, sc = runs["slews_post_prm"]
+    path = tmp_path / "slews_rad_s.csv"
+    write_telemetry(path, _wheels_in_rad_s(tel))        # 300-400 rpm written as 31-42 rad/s
+    model = "cassini_post_prm"
+    code, _, err = run_cli("check", path, "--spacecraft", model)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert "wheel rates look like rad/s" in err and str(path) in err
+    code, _, err = run_cli("fit", "inertia", "--telemetry", path, "--spacecraft", model,
+                           "--out", tmp_path / "run")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert "wheel rates look like rad/s" in err
+    assert not (tmp_path / "run").exists()
+    write_telemetry(tmp_path / "ok.csv", tel)
+    code, out, err = run_cli("check", tmp_path / "ok.csv", "--spacecraft", model)
+    assert code == 0, err
+
+
+# --------------------------------------------------------------------------------------------
+# Every shipped scenario (slow: one full simulation each)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(p.stem for p in SCENARIOS_DIR.glob("*.toml")))
+def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
+    r = simulate(jax.random.key(7), load_scenario(name))
+    tel, log, sc = r.telemetry, r.pulses, _prior(name)
+    cons.check_telemetry_data(tel, sc, log)
+    if cons.attitude_rate_agreement(tel) is not None:
+        for bad in (_scalar_first(tel), _conjugated(tel)):
+            with pytest.raises(InputError, match="columns q1..q4: the quaternion looks"):
+                cons.check_attitude_rates(bad)
+    with pytest.raises(InputError, match="wheel rates look like rad/s"):
+        cons.check_telemetry_data(_wheels_in_rad_s(tel), sc, log)
