@@ -361,7 +361,7 @@ def test_inertia_off_its_prediction_reaches_f_only_when_fixed():
     """A Table 2 event whose true moments are 3 % above the model file's prediction (0.3 of
     their ±10 % prior sd). The robust model's default samples the inertia from that prior and
     covers ``F``; held at the prediction (``inertia="fixed"``, the papers' practice) ``F`` is
-    biased by the ``I Δω`` the pulses put into the body rates. Measured (4 × 400, key 5):
+    biased by the ``I Δω`` the pulses put into the body rates. Measured (2 × 200, key 5):
     sampled F 0.7002 ± 0.0036 N (z = +0.3, inertia back within 0.2 % of the truth), fixed
     0.6804 ± 0.0016 N (z = −11.6). Margins: sampled |z| < 3 (a calibrated posterior fails 0.3 %),
     within 1 %; fixed |z| > 5."""
