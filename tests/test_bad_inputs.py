@@ -1,0 +1,322 @@
+"""The bad-input and fault catalogue: every mistake a new user was seen to make, through the real
+CLI (``cassini_bayes.cli.main``), with the same four checks each time:
+
+* the exit status (2 for bad input and usage, 0 for a case that is handled with a warning);
+* at most three lines on stderr;
+* no traceback;
+* no input file changed (sha256 before and after).
+
+Cases that need no fit run here from files made in memory (noise-free slews of
+tests/kinematics.py, no simulation), so the whole table costs seconds. Cases whose setting is
+heavier — a real Ctrl-C during sampling, a full disk under a finished fit, a damaged SBC
+checkpoint, a shipped scenario corrupted — are tested where their fixtures live; the table
+:data:`ELSEWHERE` names each of those tests, and :func:`test_every_case_elsewhere_exists` fails if
+one is renamed or removed, so the catalogue cannot silently lose a case. A hypothesis fuzz of
+``check`` on mutated good files closes the file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib
+import re
+from pathlib import Path
+
+import jax
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from cassini_bayes.spacecraft import load_spacecraft
+from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, cumulative_on_times, \
+    write_pulses, write_telemetry
+from kinematics import slew_segments, wheels_for_conserved_momentum
+from test_inference_inertia import make_slews
+
+SC = "cassini_2000_03_15"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ---- files, made once --------------------------------------------------------------------
+
+def _csv_edit(src: Path, dst: Path, edit) -> Path:
+    df = pd.read_csv(src)
+    edit(df)
+    df.to_csv(dst, index=False)
+    return dst
+
+
+def _one_axis(path: Path) -> Path:
+    sc = load_spacecraft(SC)
+    t, q, w = slew_segments([0.0, 0.0, 0.0, 1.0], [((1, 0, 0), 0.6, 300.0),
+                                                   ((1, 0, 0), -0.5, 300.0)], 2.0, 100.0)
+    rates, _ = wheels_for_conserved_momentum(t, q, w, sc.inertia, np.array([3.0, -2.0, 5.0]),
+                                             sc.wheel_axes[:3], sc.wheel_inertias[:3])
+    wheel = np.full((t.size, 4), np.nan)
+    wheel[:, :3] = rates
+    write_telemetry(path, Telemetry(t, q, w + 1e-6 * np.random.default_rng(1).standard_normal(
+        w.shape), wheel, source=str(path)))
+    return path
+
+
+def _biasing(d: Path) -> tuple[Path, Path, Path]:
+    """A quiet record with logged pulses and its ``on_*`` columns; a pulse log whose widths
+    are twice the columns' (the F = 0.355 N case); the honest pulse log."""
+    t = np.arange(0.0, 200.0, 0.5)
+    n = t.size
+    t_on = np.arange(20.0, 180.0, 10.0)                        # 16 pulses, Z1 and Y1 in turn
+    log = PulseLog(t_on, np.tile([0, 4], t_on.size // 2), np.full(t_on.size, 0.25))
+    rates = np.full((n, 4), np.nan)
+    rates[:, :3] = np.array([100.0, -200.0, 150.0]) * RPM_TO_RAD_S
+    tel = Telemetry(t, np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)), np.zeros((n, 3)), rates,
+                    on_times=cumulative_on_times(log, t))
+    write_telemetry(d / "bias.csv", tel)
+    write_pulses(d / "pulses_ok.csv", log)
+    write_pulses(d / "pulses_double.csv", PulseLog(log.t_on, log.thruster, 2 * log.width))
+    return d / "bias.csv", d / "pulses_ok.csv", d / "pulses_double.csv"
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory) -> dict[str, Path]:
+    d = tmp_path_factory.mktemp("catalogue")
+    good = d / "slews.csv"
+    write_telemetry(good, make_slews(jax.random.key(11), load_spacecraft(SC), dur=120.0))
+    wheels = ["rwa1", "rwa2", "rwa3"]
+    f = {"good": good}
+
+    def rad_s(df):
+        df[wheels] = df[wheels] * RPM_TO_RAD_S
+
+    def scalar_first(df):
+        df[["q1", "q2", "q3", "q4"]] = df[["q4", "q1", "q2", "q3"]].to_numpy()
+
+    def conjugated(df):
+        df[["q1", "q2", "q3"]] = -df[["q1", "q2", "q3"]]
+
+    def huge(df):
+        df.loc[10, "rwa2"] = 1e308
+
+    def rwa4_only(df):
+        df["rwa4"] = 300.0
+        df[wheels] = np.nan
+
+    for name, edit in [("rad_s", rad_s), ("scalar_first", scalar_first),
+                       ("conjugated", conjugated), ("huge_wheel", huge),
+                       ("rwa4_only", rwa4_only)]:
+        f[name] = _csv_edit(good, d / f"{name}.csv", edit)
+    f["one_axis"] = _one_axis(d / "one_axis.csv")
+    f["bias"], f["pulses_ok"], f["pulses_double"] = _biasing(d)
+    (d / "pulses_huge.csv").write_text("t_on,thruster,width\n50.0,Z1,1e308\n")
+    f["pulses_huge"] = d / "pulses_huge.csv"
+    model = (ROOT / "models" / f"{SC}.toml").read_text()
+    for name, new in [("tau_scalar", re.sub(r"tau_delay_range\s*=\s*\[[^\]]*\]",
+                                            "tau_delay_range = 0.003", model)),
+                      ("inertia_scalar", re.sub(r"\[inertia\][^\[]*", "inertia = 5\n\n", model,
+                                                count=1)),
+                      ("inertia_huge", re.sub(r"Ixx\s*=\s*[-0-9.e+]+", "Ixx = 1e308", model)),
+                      ("thrust_negative", re.sub(r"(?m)^F\s*=\s*[-0-9.e+]+",
+                                                 "F = -0.7", model))]:
+        assert new != model, name   # the edit took
+        (d / f"{name}.toml").write_text(new)
+        f[name] = d / f"{name}.toml"
+    (d / "latin1.toml").write_bytes(model.encode() + "# caf\xe9\n".encode("latin-1"))
+    f["latin1"] = d / "latin1.toml"
+    (d / "binary.toml").write_bytes(bytes(range(256)) * 8)
+    f["binary"] = d / "binary.toml"
+    (d / "a_folder.toml").mkdir()
+    f["a_folder"] = d / "a_folder.toml"
+    long = (ROOT / "experiments" / "scenarios" / "slews_post_probe.toml").read_text()
+    (d / "forever.toml").write_text(re.sub(r"duration_s\s*=\s*[0-9.e+]+",
+                                           "duration_s = 5.0e6", long, count=1))
+    f["forever"] = d / "forever.toml"
+    user = d / "users_folder"
+    user.mkdir()
+    (user / "notes.txt").write_text("the user's own file\n")
+    f["users_folder"] = user
+    return f
+
+
+def _sha(path: Path) -> dict[str, str]:
+    paths = sorted(p for p in Path(path).rglob("*") if p.is_file()) if Path(path).is_dir() \
+        else [Path(path)]
+    return {str(p): hashlib.sha256(p.read_bytes()).hexdigest() for p in paths}
+
+
+# ---- the catalogue -----------------------------------------------------------------------
+
+FIT = ["fit", "inertia", "--spacecraft", SC, "--chains", "1", "--warmup", "20", "--draws", "20"]
+
+# (id, argv with {name} for the files above and {out} for a fresh output path, exit status,
+#  words the one stderr line must hold)
+CASES = [
+    # usage errors: one line, exit 2, whatever typer version is installed
+    ("no-arguments", [], 2, []),        # the help, on stdout
+    ("unknown-command", ["bogus"], 2, ["bogus"]),
+    ("missing-option", ["fit", "inertia", "--telemetry", "{good}"], 2, ["--spacecraft"]),
+    ("chains-0", [*FIT, "--telemetry", "{good}", "--out", "{out}", "--chains", "0"], 2,
+     ["--chains"]),
+    ("seed-text", [*FIT, "--telemetry", "{good}", "--out", "{out}", "--seed", "abc"], 2,
+     ["--seed"]),
+    ("seed-beyond-64-bits", [*FIT, "--telemetry", "{good}", "--out", "{out}", "--seed",
+                             str(2**64)], 2, ["--seed"]),
+    # silent wrong answers, now refused by the physics of the data itself
+    ("wheels-in-rad-s-check", ["check", "{rad_s}", "--spacecraft", SC], 2, ["rad/s", "rpm"]),
+    ("wheels-in-rad-s-fit", [*FIT, "--telemetry", "{rad_s}", "--out", "{out}"], 2, ["rad/s"]),
+    ("quaternion-scalar-first", [*FIT, "--telemetry", "{scalar_first}", "--out", "{out}"], 2,
+     ["scalar"]),
+    ("quaternion-conjugated", [*FIT, "--telemetry", "{conjugated}", "--out", "{out}"], 2,
+     ["conjugated"]),
+    ("pulse-log-disagrees-with-on-columns", ["check", "{bias}", "--pulses", "{pulses_double}"],
+     2, ["on_"]),
+    ("spacecraft-path-in-a-missing-folder", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                             "--spacecraft", "typo/cassini_post_probe.toml"], 2,
+     ["typo"]),
+    ("rwa-method-without-rwa-control", ["fit", "rwa4", "--method", "rwa", "--telemetry",
+                                        "{rwa4_only}", "--spacecraft", "cassini_pre_soi",
+                                        "--out", "{out}"], 2, ["rwa"]),
+    ("slews-about-one-axis", [*FIT, "--telemetry", "{one_axis}", "--out", "{out}"], 2,
+     ["axis"]),
+    # data loss
+    ("force-on-a-users-folder", [*FIT, "--telemetry", "{good}", "--out", "{users_folder}",
+                                 "--force"], 2, ["--force"]),
+    # input that passed validation and then crashed
+    ("wheel-1e308", ["check", "{huge_wheel}"], 2, ["rwa2"]),
+    ("pulse-width-1e308", ["check", "{bias}", "--pulses", "{pulses_huge}"], 2, ["width"]),
+    ("spacecraft-tau-range-scalar", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                     "--spacecraft", "{tau_scalar}"], 2, ["tau_delay_range"]),
+    ("spacecraft-inertia-scalar", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                   "--spacecraft", "{inertia_scalar}"], 2, ["inertia"]),
+    ("spacecraft-extreme-magnitude", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                      "--spacecraft", "{inertia_huge}"], 2, ["Ixx"]),
+    ("spacecraft-negative-thrust", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                    "--spacecraft", "{thrust_negative}"], 2, ["thrust"]),
+    ("spacecraft-not-utf8", [*FIT, "--telemetry", "{good}", "--out", "{out}", "--spacecraft",
+                             "{latin1}"], 2, ["UTF-8"]),
+    ("spacecraft-a-directory", [*FIT, "--telemetry", "{good}", "--out", "{out}",
+                                "--spacecraft", "{a_folder}"], 2, ["director"]),
+    ("sbc-thin-0", ["sbc", "toy", "-n", "4", "--out", "{out}", "--set", "thin=0"], 2,
+     ["thin"]),
+    ("sbc-num-chains-0", ["sbc", "toy", "-n", "4", "--out", "{out}", "--set",
+                          "num_chains=0"], 2, ["num_chains"]),
+    ("sbc-bad-scheduler", ["sbc", "toy", "-n", "4", "--out", "{out}", "--executor", "dask",
+                           "--scheduler", "not an address"], 2, ["scheduler"]),
+    ("simulate-a-directory", ["simulate", "{a_folder}", "--out", "{out}"], 2, ["director"]),
+    ("simulate-a-binary-file", ["simulate", "{binary}", "--out", "{out}"], 2, ["UTF-8"]),
+    ("experiment-a-directory", ["experiment", "{a_folder}", "--out", "{out}"], 2,
+     ["director"]),
+    ("experiment-a-binary-file", ["experiment", "{binary}", "--out", "{out}"], 2, ["UTF-8"]),
+    ("out-under-a-file", [*FIT, "--telemetry", "{good}", "--out", "{good}/run"], 2, []),
+    # faults
+    ("scenario-of-millions-of-seconds", ["simulate", "{forever}", "--out", "{out}"], 2,
+     ["duration_s"]),
+]
+
+
+@pytest.mark.parametrize("case, argv, status, words", CASES, ids=[c[0] for c in CASES])
+def test_catalogue(files, run_cli, tmp_path, case, argv, status, words):
+    args = [a.format(out=tmp_path / "out", **files) for a in argv]
+    inputs = [Path(a) for a in args if Path(a).exists()]
+    before = {k: v for p in inputs for k, v in _sha(p).items()}
+    code, _, err = run_cli(*args)
+    lines = err.strip().splitlines()
+    assert code == status, err
+    assert len(lines) <= 3 and "Traceback" not in err, err
+    for w in words:
+        assert w.lower() in err.lower(), (w, err)
+    assert {k: v for p in inputs for k, v in _sha(p).items()} == before
+    assert not (tmp_path / "out").exists()
+
+
+def test_row_limit_refuses_a_huge_file_before_reading_it_all(tmp_path, run_cli, monkeypatch):
+    """A 10⁶-row telemetry took 5.7 GB to fit: files beyond ``MAX_ROWS`` are refused with one
+    line (docs/limits.md); the limit is lowered here so the file stays small."""
+    import cassini_bayes.telemetry as telemetry
+
+    monkeypatch.setattr(telemetry, "MAX_ROWS", 100)
+    good = tmp_path / "slews.csv"
+    write_telemetry(good, make_slews(jax.random.key(11), load_spacecraft(SC), dur=120.0))
+    code, _, err = run_cli(*FIT, "--telemetry", good, "--out", tmp_path / "out")
+    assert code == 2 and len(err.strip().splitlines()) <= 3 and "Traceback" not in err
+    assert "row" in err.lower()
+
+
+# ---- cases tested beside their fixtures ----------------------------------------------------
+
+ELSEWHERE = {
+    "Ctrl-C during sampling: exit 130, one line, nothing half-written":
+        "test_cli_errors.py::test_ctrl_c_during_a_fit_exits_130_and_leaves_nothing",
+    "Ctrl-C in sbc keeps its checkpoints and exits 130":
+        "test_cli_errors.py::test_ctrl_c_in_sbc_keeps_checkpoints_and_says_resume",
+    "Ctrl-C swallowed by a JAX callback is delivered again":
+        "test_cli_errors.py::test_ctrl_c_swallowed_by_python_is_delivered_again",
+    "full disk while writing posterior.nc keeps the old run":
+        "test_cli_errors.py::test_full_disk_while_writing_a_fit_keeps_the_old_run",
+    "--out holding the run's own inputs is refused even with --force":
+        "test_cli_errors.py::test_out_holding_the_inputs_is_refused_even_with_force",
+    "--force swaps atomically (sbc and fit write through one RunDir)":
+        "test_rundir.py::test_force_replaces_atomically",
+    "report --out into a missing folder":
+        "test_cli_errors.py::test_report_out_creates_its_folder_and_spares_the_run_files",
+    "truncated SBC checkpoint on --resume: recomputed with a warning":
+        "test_cli_errors.py::test_damaged_sbc_checkpoints_are_recomputed",
+    "unreadable SBC manifest on --resume":
+        "test_cli_errors.py::test_unreadable_sbc_manifest_is_one_line",
+    "--out in a folder that cannot be written":
+        "test_cli_errors.py::test_out_in_a_read_only_folder_is_refused",
+    "internal errors are one line with a debug hint":
+        "test_cli_errors.py::test_internal_error_is_one_line_with_a_hint",
+    "usage errors in a real process (typer 0.29 raises typer._click exceptions)":
+        "test_cli_errors.py::test_no_arguments_and_usage_errors_in_a_real_process",
+    "every shipped scenario passes the physics checks, its corruptions fail":
+        "test_consistency.py::test_every_shipped_scenario_passes_and_its_corruptions_fail",
+    "body rates in deg/s": "test_consistency.py::test_body_rates_in_deg_s_refused",
+    "hypothesis fuzz of the readers (telemetry, pulses, spacecraft, scenario)":
+        "test_input_bounds.py::test_fuzz_telemetry",
+}
+
+
+def test_every_case_elsewhere_exists():
+    for what, node in ELSEWHERE.items():
+        module, name = node.split("::")
+        mod = importlib.import_module(module.removesuffix(".py"))
+        assert callable(getattr(mod, name, None)), (what, node)
+
+
+# ---- fuzz: mutated good files through `check` ----------------------------------------------
+
+_CELLS = st.sampled_from(["", "nan", "inf", "-inf", "1e308", "-1e308", "abc", "0", "1e-320",
+                          "9" * 40, "1,2", "\"", "é"])
+
+
+@settings(max_examples=40, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_fuzz_check_on_mutated_telemetry(files, run_cli, tmp_path_factory, data):
+    """Random cells of a good file replaced by hostile text, or a column dropped, or the file
+    cut short: ``check --spacecraft`` either accepts it (0) or refuses it in ≤ 3 lines (2), never
+    a traceback, never a changed input (derandomized: the same 40 files on every run)."""
+    lines = files["good"].read_text().splitlines()
+    header, rows = lines[0].split(","), lines[1:]
+    how = data.draw(st.sampled_from(["cells", "drop", "truncate"]))
+    if how == "cells":
+        for _ in range(data.draw(st.integers(1, 4))):
+            i = data.draw(st.integers(0, len(rows) - 1))
+            j = data.draw(st.integers(0, len(header) - 1))
+            cells = rows[i].split(",")
+            cells[j] = data.draw(_CELLS)
+            rows[i] = ",".join(cells)
+    elif how == "drop":
+        j = data.draw(st.integers(0, len(header) - 1))
+        header = header[:j] + header[j + 1:]
+        rows = [",".join(r.split(",")[:j] + r.split(",")[j + 1:]) for r in rows]
+    else:
+        rows = rows[:data.draw(st.integers(0, 5))]
+    path = tmp_path_factory.mktemp("fuzz") / "mutated.csv"
+    path.write_text("\n".join([",".join(header), *rows]) + "\n")
+    before = _sha(path)
+    code, _, err = run_cli("check", path, "--spacecraft", SC)
+    assert code in (0, 2), err
+    assert len(err.strip().splitlines()) <= 3 and "Traceback" not in err, err
+    assert _sha(path) == before
