@@ -29,3 +29,9 @@ class UnidentifiableError(InputError):
 
 class NotConvergedError(CassiniError):
     """Sampler diagnostics failed and ``--strict`` was asked for."""
+
+
+class InadequateModelError(NotConvergedError):
+    """The fit's adequacy checks failed (the model does not fit its data) and ``--strict`` was
+    asked for. A kind of :class:`NotConvergedError` so that every ``--strict`` failure is handled
+    alike (exit 3, after the run directory is written)."""

@@ -1,14 +1,13 @@
 """Does the model fit? Self-checks of a posterior that need no truth (flight data has none).
 
 Each check returns one number, ``statistic``, compared with a ``threshold`` (``ok`` when
-``statistic ≤ threshold``); every statistic is on the scale of a standard normal deviate, so the
-thresholds read alike. The false-alarm rates on correctly specified data are measured by
+``statistic ≤ threshold``). The false-alarm rates on correctly specified data are measured by
 ``benchmarks/adequacy_false_alarms.py`` and stated in ``docs/adequacy.md``.
 
 * ``prior_data_conflict`` — for every element ``x`` of the named posterior sites that has a
-  proper prior (the ``prior`` group's draws), ``|E[x | data] − E[x]| / sd(x)`` with the prior's
-  mean and sd, on the log scale when every prior draw is positive (thrust, time constants,
-  moments). A nuisance parameter pulled several prior sd from its prior is how an unmodelled
+  proper prior, ``|E[x | data] − E[x]| / sd(x)`` in prior sd (nuisance parameters: their stated
+  zero-mean Normal priors; others: the ``prior`` group's draws, on the log scale when every draw
+  is positive — thrust, time constants, moments). A nuisance parameter pulled several prior sd from its prior is how an unmodelled
   error reaches the answer; the worst element is named (``parameter``).
 * ``held_out`` — leave one telemetry file out: the posterior of the shared parameters from the
   other files (and the prior) predicts the held-out file's information-weighted estimate, exactly
@@ -16,11 +15,13 @@ thresholds read alike. The false-alarm rates on correctly specified data are mea
   statistics, :func:`gaussian_held_out`); the statistic is the normal deviate of the smallest
   Bonferroni-adjusted χ² tail probability over the files. Not applicable to one file.
 * ``residual_autocorrelation`` — whiteness against time: per block (file, event) and axis the
-  lag-1 autocorrelation ``ρ̂₁`` of the posterior-mean residuals, ``|ρ̂₁| √n`` (≈ N(0, 1) for
-  white residuals); the maximum over blocks and axes.
-* ``residual_regression`` — whiteness against the regressors the model uses (body rate ω and
-  wheel momentum): per block and axis the F-test of the residual regressed on them, as the
-  normal deviate of its Bonferroni-adjusted tail probability.
+  lag-1 autocorrelation ``ρ̂₁`` of the posterior-mean residuals; the largest ``|ρ̂₁|``.
+* ``residual_regression`` — whiteness against the regressors of the model (body rate or its
+  change, wheel momentum): per block and axis the F-test of the (AR(1)-prewhitened) residual
+  regressed on them, as the normal deviate of the smallest Bonferroni-adjusted p-value.
+
+Statistics expressed as normal deviates (held-out, regression) fail beyond 4 (two-sided
+6e-5 after the Bonferroni correction); the prior–data conflict beyond 4 prior sd.
 """
 
 from __future__ import annotations
@@ -31,13 +32,14 @@ from typing import Mapping, NamedTuple, Sequence
 import numpy as np
 from scipy import stats
 
-__all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "normal_deviate",
-           "prior_data_conflict", "gaussian_held_out", "inertia_held_out",
+__all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
+           "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "gaussian_held_out", "inertia_held_out",
            "residual_autocorrelation", "residual_regression", "not_applicable",
            "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy"]
 
 PRIOR_CONFLICT_SD = 4.0   # prior sd between the posterior mean and the prior mean
-Z_THRESHOLD = 4.0         # normal deviate of the residual and held-out checks (two-sided 6e-5)
+Z_THRESHOLD = 4.0         # normal deviate of the regression and held-out checks (two-sided 6e-5)
+AUTOCORR_MAX = 0.5        # largest lag-1 autocorrelation of the residuals
 
 
 class Check(NamedTuple):
@@ -121,32 +123,50 @@ def _elements(da) -> dict[str, np.ndarray]:
     return out
 
 
-def prior_data_conflict(idata, sites: Sequence[str],
-                        threshold: float = PRIOR_CONFLICT_SD) -> Check:
-    """``max |E[x | data] − E[x]| / sd(x)`` over every element of ``sites`` that has prior draws.
+def nuisance_prior_sd(layout) -> dict[str, np.ndarray]:
+    """Posterior site → flat prior sd of the robust nuisance parameters (zero-mean Normal) of a
+    :class:`~cassini_bayes.inference.nuisance.NuisanceLayout`, in the site's element order."""
+    from cassini_bayes.inference.nuisance import EFFECTS
 
-    Works on any site shape (a scalar ``wheel_scale`` or one per wheel alike). Prior mean and sd
-    come from the ``prior`` group's draws; sites whose prior draws are all positive are compared
-    on the log scale (log-normal priors of thrust and time constants; moments of inertia).
+    return {site: np.asarray(layout.sd)[layout.slices[effect]]
+            for effect, site in EFFECTS.items() if effect in layout.slices}
+
+
+def prior_data_conflict(idata, sites: Sequence[str], threshold: float = PRIOR_CONFLICT_SD,
+                        prior_sd: Mapping[str, np.ndarray] | None = None) -> Check:
+    """``max |E[x | data] − E[x]| / sd(x)`` over every element of ``sites`` that has a prior.
+
+    Works on any site shape (a scalar ``wheel_scale`` or one per wheel alike). ``prior_sd``:
+    sites with a zero-mean Normal prior of these sds (flat, in the site's element order; e.g.
+    :func:`nuisance_prior_sd`); the other sites' prior mean and sd come from the ``prior``
+    group's draws, on the log scale when every draw is positive (the log-normal priors of thrust
+    and time constants; moments of inertia).
     """
     name = "prior_data_conflict"
-    if "prior" not in idata.groups():
-        return not_applicable(name, threshold, "no prior draws in the run")
+    prior_sd = dict(prior_sd or {})
+    has_prior = "prior" in idata.groups()
     worst, worst_z = None, -1.0
     for site in sites:
-        if site not in idata.posterior or site not in idata.prior:
+        if site not in idata.posterior:
             continue
-        post, prior = _elements(idata.posterior[site]), _elements(idata.prior[site])
-        for label, x in post.items():
-            p = prior.get(label)
-            if p is None or p.size < 2:
+        post = _elements(idata.posterior[site])
+        if site in prior_sd and np.size(prior_sd[site]) == len(post):
+            ref = {label: (0.0, float(sd))
+                   for label, sd in zip(post, np.ravel(prior_sd[site]))}
+        elif has_prior and site in idata.prior:
+            ref = {}
+            for label, p in _elements(idata.prior[site]).items():
+                if label in post and p.size > 1:
+                    logs = bool(np.all(p > 0) and np.all(post[label] > 0))
+                    p = np.log(p) if logs else p
+                    ref[label] = (float(np.mean(p)), float(np.std(p, ddof=1)), logs)
+        else:
+            continue
+        for label, r in ref.items():
+            x = np.log(post[label]) if len(r) == 3 and r[2] else post[label]
+            if not r[1] > 0:
                 continue
-            if np.all(p > 0) and np.all(x > 0):
-                p, x = np.log(p), np.log(x)
-            sd = float(np.std(p, ddof=1))
-            if not sd > 0:
-                continue
-            z = abs(float(np.mean(x)) - float(np.mean(p))) / sd
+            z = abs(float(np.mean(x)) - r[0]) / r[1]
             if z > worst_z:
                 worst, worst_z = label, z
     if worst is None:
@@ -250,77 +270,90 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
 # 3. Residual structure
 # --------------------------------------------------------------------------------------------
 
-def _blocks(block: np.ndarray) -> list[np.ndarray]:
-    return [np.flatnonzero(block == b) for b in np.unique(block)]
+def _blocks(block: np.ndarray, labels: Sequence[str] | None = None):
+    """``(label, indices)`` per distinct value of ``block``."""
+    return [(labels[int(b)] if labels is not None and 0 <= int(b) < len(labels) else f"block {b}",
+             np.flatnonzero(block == b)) for b in np.unique(block)]
 
 
 def residual_autocorrelation(residual: np.ndarray, block: np.ndarray,
-                             threshold: float = Z_THRESHOLD) -> Check:
-    """``max |ρ̂₁| √n`` over blocks and axes of ``residual`` (N, 3) in time order per block.
+                             threshold: float = AUTOCORR_MAX,
+                             labels: Sequence[str] | None = None) -> Check:
+    """``max |ρ̂₁|`` over blocks and axes of ``residual`` (N, 3), in time order per block.
 
-    ``ρ̂₁`` is the lag-1 autocorrelation of the block's centred residual on one axis; for white
-    residuals ``ρ̂₁ √n`` is ≈ N(0, 1).
+    ``ρ̂₁`` is the lag-1 autocorrelation of a block's centred residual on one axis: 0 for white
+    residuals (sd ``1/√n``), near 1 for a smooth misfit. An effect size rather than a test, so a
+    long block with a small known correlation (the thrust model's neglected random walk of the
+    gyroscopic term, ``ρ̂₁`` ≈ 0.15) does not fail it; blocks of fewer than ``(4/threshold)²``
+    samples (≈ 64) are skipped, where white noise alone can reach it.
     """
     worst, worst_z = None, -1.0
-    for b, idx in enumerate(_blocks(np.asarray(block))):
+    for label, idx in _blocks(np.asarray(block), labels):
         x = np.asarray(residual, float)[idx]
-        if x.shape[0] < 10:
+        if x.shape[0] < (4.0 / threshold)**2:
             continue
-        x = x - x.mean(0)
-        den = np.sum(x**2, 0)
-        rho = np.where(den > 0, np.sum(x[1:] * x[:-1], 0) / np.where(den > 0, den, 1.0), 0.0)
-        z = np.abs(rho) * math.sqrt(x.shape[0])
-        k = int(np.argmax(z))
-        if z[k] > worst_z:
-            worst, worst_z = f"block {b} axis {'xyz'[k]} (lag-1 autocorrelation {rho[k]:+.3f})", \
-                float(z[k])
+        rho = _lag1(x)
+        k = int(np.argmax(np.abs(rho)))
+        if abs(rho[k]) > worst_z:
+            worst, worst_z = f"{label} axis {'xyz'[k]} (ρ̂₁ {rho[k]:+.3f})", float(abs(rho[k]))
     if worst is None:
         return not_applicable("residual_autocorrelation", threshold, "too few residuals")
     return _check("residual_autocorrelation", worst_z, threshold, worst)
 
 
-def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.ndarray,
-                        threshold: float = Z_THRESHOLD,
-                        names: Sequence[str] | None = None) -> Check:
-    """F-test of each block's residual axis regressed on ``covariates`` (N, K) plus a constant.
+def _lag1(x: np.ndarray) -> np.ndarray:
+    """Lag-1 autocorrelation of each column of ``x`` (n, k), centred."""
+    x = x - x.mean(0)
+    den = np.sum(x**2, 0)
+    return np.where(den > 0, np.sum(x[1:] * x[:-1], 0) / np.where(den > 0, den, 1.0), 0.0)
 
-    Statistic: the normal deviate of the smallest Bonferroni-adjusted p-value over blocks and
-    axes. ``parameter`` names the block, axis and the covariate with the largest |t|.
+
+def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.ndarray,
+                        threshold: float = Z_THRESHOLD, names: Sequence[str] | None = None,
+                        labels: Sequence[str] | None = None) -> Check:
+    """F-test of each block's residual axis regressed on ``covariates`` (N, K) and a constant.
+
+    Both sides are first prewhitened with the residual's own lag-1 autocorrelation ``ρ̂``
+    (Cochrane–Orcutt: ``y_t − ρ̂ y_{t−1}``), so the test stays valid when the residuals carry a
+    mild AR(1) correlation and asks only whether the regressors explain them. Statistic: the
+    normal deviate of the smallest Bonferroni-adjusted p-value over blocks and axes; ``parameter``
+    names the block, axis and the regressor with the largest |t|.
     """
     residual = np.asarray(residual, float)
     covariates = np.asarray(covariates, float)
-    names = list(names) if names is not None else [f"x{k}" for k in range(covariates.shape[1])]
+    names = np.array(list(names) if names is not None
+                     else [f"x{k}" for k in range(covariates.shape[1])])
     tests = []
-    for b, idx in enumerate(_blocks(np.asarray(block))):
-        x = covariates[idx]
-        x = x - x.mean(0)
-        keep = np.std(x, 0) > 0
-        x = x[:, keep]
-        n, k = x.shape
-        if k == 0 or n <= k + 2:
+    for label, idx in _blocks(np.asarray(block), labels):
+        if idx.size < 3 * covariates.shape[1] + 10:
             continue
-        q, rr = np.linalg.qr(x)
-        good = np.abs(np.diag(rr)) > 1e-10 * np.abs(np.diag(rr)).max()
-        q = q[:, good]
-        k = q.shape[1]
         for a in range(residual.shape[1]):
-            y = residual[idx, a] - residual[idx, a].mean()
-            fit = q.T @ y
+            y0 = residual[idx, a]
+            rho = float(_lag1(y0[:, None])[0])
+            y = y0[1:] - rho * y0[:-1]
+            x = covariates[idx][1:] - rho * covariates[idx][:-1]
+            x, y = x - x.mean(0), y - y.mean()
+            keep = np.std(x, 0) > 0
+            if not keep.any():
+                continue
+            q, rr = np.linalg.qr(x[:, keep])
+            good = np.abs(np.diag(rr)) > 1e-10 * np.abs(np.diag(rr)).max()
+            k, n = int(good.sum()), y.size
+            fit = q[:, good].T @ y
             ss_reg, ss_res = float(fit @ fit), float(y @ y - fit @ fit)
             if ss_res <= 0:
                 continue
-            f_stat = (ss_reg / k) / (ss_res / (n - k - 1))
-            coef = np.linalg.lstsq(x, y, rcond=None)[0]
-            resid_var = ss_res / (n - k - 1)
-            se = np.sqrt(resid_var * np.diag(np.linalg.pinv(x.T @ x)))
-            tv = np.abs(coef) / np.where(se > 0, se, np.inf)
-            top = np.array(names)[keep][int(np.argmax(tv))]
-            tests.append((stats.f.sf(f_stat, k, n - k - 1), f"block {b} axis {'xyz'[a]} ~ {top}"))
+            dof = n - k - 1
+            f_stat = (ss_reg / k) / (ss_res / dof)
+            coef, *_ = np.linalg.lstsq(x[:, keep], y, rcond=None)
+            se = np.sqrt(ss_res / dof * np.diag(np.linalg.pinv(x[:, keep].T @ x[:, keep])))
+            top = names[keep][int(np.argmax(np.abs(coef) / np.where(se > 0, se, np.inf)))]
+            tests.append((float(stats.f.sf(f_stat, k, dof)), f"{label} axis {'xyz'[a]} ~ {top}"))
     if not tests:
         return not_applicable("residual_regression", threshold, "too few residuals")
     p, where = min(tests, key=lambda t: t[0])
-    z = normal_deviate(min(1.0, len(tests) * p))
-    return _check("residual_regression", z, threshold, where)
+    return _check("residual_regression", normal_deviate(min(1.0, len(tests) * p)), threshold,
+                  where)
 
 
 # --------------------------------------------------------------------------------------------
@@ -328,21 +361,21 @@ def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.
 # --------------------------------------------------------------------------------------------
 
 def _residual_checks(idata, covariates: np.ndarray | None, names: Sequence[str] | None,
-                     block_coord: str) -> list[Check]:
+                     block_coord: str, labels: Sequence[str]) -> list[Check]:
     if "residuals" not in idata.groups():
         note = "the run has no per-sample residuals"
-        return [not_applicable("residual_autocorrelation", Z_THRESHOLD, note),
+        return [not_applicable("residual_autocorrelation", AUTOCORR_MAX, note),
                 not_applicable("residual_regression", Z_THRESHOLD, note)]
     res = idata["residuals"]
     r = np.asarray(res["residual_std"] if "residual_std" in res else res["residual"])
     block = (np.asarray(res[block_coord]) if block_coord in res.coords
              else np.zeros(r.shape[0], int))
-    checks = [residual_autocorrelation(r, block)]
+    checks = [residual_autocorrelation(r, block, labels=labels)]
     if covariates is None:
         checks.append(not_applicable("residual_regression", Z_THRESHOLD,
                                      "no regressors stored with the residuals"))
     else:
-        checks.append(residual_regression(r, covariates, block, names=names))
+        checks.append(residual_regression(r, covariates, block, names=names, labels=labels))
     return checks
 
 
@@ -355,8 +388,10 @@ def inertia_adequacy(post, sites: Sequence[str]) -> Adequacy:
     pb = post.problem
     cov = np.c_[pb.omega, pb.h_wheels]
     names = ["wx", "wy", "wz", "hwx", "hwy", "hwz"]
-    return Adequacy((prior_data_conflict(post.idata, sites), inertia_held_out(pb, post.idata),
-                     *_residual_checks(post.idata, cov, names, "file")))
+    sd = nuisance_prior_sd(pb.layout) if pb.robust else {}
+    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd),
+                     inertia_held_out(pb, post.idata),
+                     *_residual_checks(post.idata, cov, names, "file", pb.sources)))
 
 
 def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
@@ -376,8 +411,11 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
                           "one event: nothing to hold out" if n_ev < 2 else
                           "not implemented for the thrust model (its nuisance parameters are "
                           "integrated out jointly over the events)")
-    return Adequacy((prior_data_conflict(post.idata, sites), held,
-                     *_residual_checks(post.idata, cov, names, "event")))
+    pb = post.problem
+    sd = nuisance_prior_sd(pb.layout) if pb.layout is not None else {}
+    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd), held,
+                     *_residual_checks(post.idata, cov, names, "event",
+                                       [f"{t} + {p}" for t, p in pb.sources])))
 
 
 def rwa4_adequacy(post, sites: Sequence[str]) -> Adequacy:
@@ -390,4 +428,4 @@ def rwa4_adequacy(post, sites: Sequence[str]) -> Adequacy:
                           "not implemented for the RWA4 model (its nuisance parameters are "
                           "integrated out jointly over the pairs)")
     return Adequacy((prior_data_conflict(post.idata, sites), held,
-                     *_residual_checks(post.idata, None, None, "pair")))
+                     *_residual_checks(post.idata, None, None, "pair", [])))
