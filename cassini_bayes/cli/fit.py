@@ -112,20 +112,25 @@ def write_fit_run(out: Path, *, force: bool, strict: bool, idata, summary: dict,
     console.print(f"{summary['kind']}: {status} (max R-hat {d['max_r_hat']:.4f}, min bulk ESS "
                   f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> {rd.final}")
     typer.echo(str(rd.final))
+    problems = []
     if not d["converged"]:
         msg = (f"{rd.final}: the sampler did not converge (max R-hat {d['max_r_hat']:.4f}, min "
                f"bulk ESS {d['min_ess_bulk']:.0f}, {d['divergences']} divergences); outputs "
                "written with converged = false — run longer (--warmup/--draws), raise "
                "--target-accept if it diverged, or check the data")
         if strict:
-            raise NotConvergedError(msg)
-        console.print(f"[yellow]warning:[/yellow] {msg}")
+            problems.append(msg)
+        else:
+            console.print(f"[yellow]warning:[/yellow] {msg}")
     if failed and strict:
-        raise InadequateModelError(
+        problems.append(
             f"{rd.final}: the model does not fit the data: adequacy check(s) "
             f"{', '.join(failed)} failed (summary.json \"adequacy\", docs/adequacy.md); outputs "
             "written — look for an unmodelled error (a wheel's tachometer, the inertia, a "
             "thruster) or a bad file")
+    if problems:
+        raise (NotConvergedError if not d["converged"] else InadequateModelError)(
+            "; ".join(problems))
     return rd.final
 
 
