@@ -29,8 +29,8 @@ TAUS = {"tau_delay": 0.005, "tau_rise": 0.020, "tau_fall": 0.065}
 RWA1 = np.array([0.0, 0.816497, 0.577350])
 
 # Expected section ids per kind (report/build.py)
-COMMON = ["adequacy", "diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals", "energy",
-          "configuration"]
+COMMON = ["adequacy", "diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals",
+          "energy", "configuration"]
 SECTIONS = {
     "inertia": COMMON + ["pair"],
     "thrust": COMMON + ["pair"],

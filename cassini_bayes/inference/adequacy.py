@@ -7,8 +7,9 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
 * ``prior_data_conflict`` — for every element ``x`` of the named posterior sites that has a
   proper prior, ``|E[x | data] − E[x]| / sd(x)`` in prior sd (nuisance parameters: their stated
   zero-mean Normal priors; others: the ``prior`` group's draws, on the log scale when every draw
-  is positive — thrust, time constants, moments). A nuisance parameter pulled several prior sd from its prior is how an unmodelled
-  error reaches the answer; the worst element is named (``parameter``).
+  is positive — thrust, time constants, moments). A nuisance parameter pulled several prior sd
+  from its prior is how an unmodelled error reaches the answer; the worst element is named
+  (``parameter``).
 * ``held_out`` — leave one telemetry file out: the posterior of the shared parameters from the
   other files (and the prior) predicts the held-out file's information-weighted estimate, exactly
   where the model is linear-Gaussian in its parameters (the inertia model's sufficient
@@ -18,11 +19,12 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   lag-1 autocorrelation ``ρ̂₁`` of the posterior-mean residuals; the largest ``|ρ̂₁|``.
 * ``residual_regression`` — whiteness against the regressors of the model (inertia fits: body
   rate and wheel momentum; not used for thrust fits, see :func:`thrust_adequacy`): per block and
-  axis the F-test of the (AR(1)-prewhitened) residual
-  regressed on them, as the normal deviate of the smallest Bonferroni-adjusted p-value.
+  axis the F-test of the (AR(1)-prewhitened) residual regressed on them, as the normal deviate
+  of the smallest Bonferroni-adjusted p-value.
 
-Statistics expressed as normal deviates (held-out, regression) fail beyond 4 (two-sided
-6e-5 after the Bonferroni correction); the prior–data conflict beyond 4 prior sd.
+Statistics expressed as normal deviates (held-out, regression) fail beyond 4 (two-sided 6e-5
+after the Bonferroni correction); the prior–data conflict beyond 4 prior sd; the
+autocorrelation beyond 0.5.
 """
 
 from __future__ import annotations
@@ -34,8 +36,8 @@ import numpy as np
 from scipy import stats
 
 __all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
-           "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "gaussian_held_out", "inertia_held_out",
-           "residual_autocorrelation", "residual_regression", "not_applicable",
+           "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "gaussian_held_out",
+           "inertia_held_out", "residual_autocorrelation", "residual_regression", "not_applicable",
            "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy"]
 
 PRIOR_CONFLICT_SD = 4.0   # prior sd between the posterior mean and the prior mean

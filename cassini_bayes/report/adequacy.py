@@ -1,4 +1,4 @@
-"""Report pieces: the fit's adequacy verdict (summary ``adequacy``), as a header badge and a section.
+"""Report pieces: the fit's adequacy verdict (summary ``adequacy``): a header badge, a section.
 
 Reads the block every ``fit`` writes into ``summary.json``
 (:mod:`cassini_bayes.inference.adequacy`): ``{"ok": b, "checks": {NAME: {"statistic",

@@ -1,10 +1,11 @@
 """Assemble a run directory's ``report.html`` (DESIGN.md §4) from its files.
 
 The page, top to bottom: header (kind, directory, seed, version, convergence and adequacy badges,
-warnings); model adequacy (the fit's self-checks); sampler diagnostics; parameter table (with baseline, truth, prior sd, contraction and the
-weak-identification flag); trace, rank, prior-vs-posterior and pair plots; model residuals against
-time; for RWA4 the spin-axis sky plot; the energy plot; the resolved configuration. A section whose
-data the run lacks says so instead of disappearing, so every report has the same outline.
+warnings); model adequacy (the fit's self-checks); sampler diagnostics; parameter table (with
+baseline, truth, prior sd, contraction and the weak-identification flag); trace, rank,
+prior-vs-posterior and pair plots; model residuals against time; for RWA4 the spin-axis sky plot;
+the energy plot; the resolved configuration. A section whose data the run lacks says so instead
+of disappearing, so every report has the same outline.
 """
 
 from __future__ import annotations
