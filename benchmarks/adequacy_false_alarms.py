@@ -99,7 +99,8 @@ def run_case(case: str, seed: int, settings) -> dict:
 
 
 def rates(results: list[dict]) -> dict:
-    """Per check (and ``any``): failure rate and its binomial sd over the seeds."""
+    """Per check (and ``any``): failure rate, its binomial sd and, with no failure, the 95 %
+    upper bound ``3/n`` (rule of three) over the seeds."""
     import numpy as np
 
     n = len(results)
@@ -108,7 +109,8 @@ def rates(results: list[dict]) -> dict:
     for name in names + ["any"]:
         fails = [not (r["ok"] if name == "any" else r["checks"][name]["ok"]) for r in results]
         p = float(np.mean(fails))
-        out[name] = {"rate": p, "sd": float(np.sqrt(max(p * (1 - p), 1.0 / n) / n)), "n": n,
+        out[name] = {"rate": p, "sd": float(np.sqrt(p * (1 - p) / n)), "n": n,
+                     "upper95": 3.0 / n if p == 0 else None,
                      "max_statistic": max((r["checks"][name]["statistic"] or 0.0)
                                           for r in results) if name != "any" else None}
     return out
@@ -141,8 +143,10 @@ def main(argv=None) -> None:
                 flush=True)
         per_seed[case] = results
         table[case] = rates(results)
-        print(f"{case}: " + "  ".join(f"{k} {v['rate']:.2f} ± {v['sd']:.2f}"
-                                      for k, v in table[case].items()), flush=True)
+        print(f"{case}: " + "  ".join(
+            f"{k} {v['rate']:.2f} ± {v['sd']:.2f}"
+            + (f" (≤ {v['upper95']:.2f} at 95 %)" if v["upper95"] is not None else "")
+            for k, v in table[case].items()), flush=True)
     if args.json is not None:
         args.json.write_text(json.dumps({"options": vars(args) | {"json": str(args.json)},
                                          "summary": table, "results": per_seed}, indent=1))
