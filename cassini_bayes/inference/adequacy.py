@@ -248,6 +248,9 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
     per_file = np.r_[np.full(3, H0_PRIOR_SD_NMS),
                      np.full(3, TORQUE_PRIOR_SD_NM)][:6 if problem.torque else 3]
     sd = np.r_[np.asarray(kw["pi_sd"]), np.tile(per_file, n_files), nu_sd]
+    if sd.size != fmat.shape[1]:
+        return not_applicable(name, threshold, "the inertia model's parameter layout is not the "
+                              "one this check knows (π, H_0/T_N per file, ν)")
     mean = np.r_[np.asarray(kw["pi_mean"]), np.zeros(sd.size - 6)]
     prior_prec = 1.0 / sd**2
     prior_lin = prior_prec * (mean - theta)            # canonical form in δ = θ − θ*
