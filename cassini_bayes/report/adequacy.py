@@ -61,7 +61,7 @@ def adequacy_section(summary) -> Section:
             "Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
             "far from its prior, a telemetry file the others do not predict, or residuals with "
             "structure in time or along the model's regressors mean the model leaves something "
-            "out, and the intervals above are not to be trusted as they stand. Each check fails "
+            "out, and this run's intervals are not to be trusted as they stand. Each check fails "
             "when its statistic exceeds the threshold; the false-alarm rates measured on "
             "correctly specified simulations are in docs/adequacy.md.", note=True),
     ]
