@@ -33,3 +33,9 @@ class NotConvergedError(CassiniError):
 
 class Interrupted(CassiniError):
     """The user interrupted a run (Ctrl-C); the message says what was kept and how to go on."""
+
+
+class InadequateModelError(NotConvergedError):
+    """The fit's adequacy checks failed (the model does not fit its data) and ``--strict`` was
+    asked for. A kind of :class:`NotConvergedError` so that every ``--strict`` failure is handled
+    alike (exit 3, after the run directory is written)."""

@@ -29,8 +29,8 @@ TAUS = {"tau_delay": 0.005, "tau_rise": 0.020, "tau_fall": 0.065}
 RWA1 = np.array([0.0, 0.816497, 0.577350])
 
 # Expected section ids per kind (report/build.py)
-COMMON = ["diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals", "energy",
-          "configuration"]
+COMMON = ["adequacy", "diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals",
+          "energy", "configuration"]
 SECTIONS = {
     "inertia": COMMON + ["pair"],
     "thrust": COMMON + ["pair"],
@@ -39,6 +39,20 @@ SECTIONS = {
 # trace, rank, prior-vs-posterior, residuals, energy + pair (inertia/thrust) or sky (rwa4)
 # (inertia: two residual figures, the momentum residual and the whitened one)
 N_FIGURES = {"inertia": 7, "thrust": 6, "rwa4": 6}
+
+
+# The fits' adequacy block (cassini_bayes.inference.adequacy): one failed check for inertia.
+_OK = {"statistic": 1.2, "threshold": 4.0, "ok": True, "parameter": "gyro_scale[x]"}
+_NA = {"statistic": None, "threshold": 4.0, "ok": True, "note": "one event: nothing to hold out"}
+ADEQUACY = {
+    "inertia": {"ok": False, "checks": {
+        "prior_data_conflict": {"statistic": 6.1, "threshold": 4.0, "ok": False,
+                                "parameter": "wheel_scale"},
+        "held_out": _OK, "residual_autocorrelation": {"statistic": 0.03, "threshold": 0.5,
+                                                      "ok": True}}},
+    "thrust": {"ok": True, "checks": {"prior_data_conflict": _OK, "held_out": _NA}},
+    "rwa4": {"ok": True, "checks": {"prior_data_conflict": _OK}},
+}
 
 
 def _stats(x):
@@ -158,6 +172,7 @@ def make_run(root: Path, kind: str, *, draws: int = 200, prior: bool = True,
         "version": "0.1.0",
         "truth": truth,
         "warnings": ["synthetic <test> run"],
+        "adequacy": ADEQUACY[kind],
     } | extra
     (run / "summary.json").write_text(json.dumps(summary, indent=1))
     (run / "config.toml").write_text(
@@ -306,6 +321,17 @@ def test_report_without_prior_residuals_or_energy(tmp_path):
     assert '<span class="badge fail">NOT CONVERGED</span>' in html
 
 
+def test_report_shows_the_adequacy_verdict(reports):
+    _, html = reports["inertia"]
+    assert '<span class="badge fail">ADEQUACY FAILED: prior_data_conflict</span>' in html
+    section = html.split('<section id="adequacy">', 1)[1].split("</section>", 1)[0]
+    assert "FAILED" in section and "wheel_scale" in section and "6.100" in section
+    assert section.count("<tr>") == 4                     # heading + three checks
+    _, html = reports["thrust"]
+    assert '<span class="badge ok">ADEQUATE</span>' in html
+    assert "not applicable" in html and "one event: nothing to hold out" in html
+
+
 def test_report_out_option_and_missing_summary(tmp_path):
     run = make_run(tmp_path, "rwa4", draws=100, residuals=False)
     (run / "summary.json").unlink()
@@ -314,6 +340,7 @@ def test_report_out_option_and_missing_summary(tmp_path):
     assert out == tmp_path / "elsewhere.html" and not (run / "report.html").exists()
     assert "summary.json not found" in html and "rwa4 run" in html  # kind from the variables
     assert "Not available: model residuals" in html
+    assert "ADEQUACY NOT CHECKED" in html and "Not available: this run has no adequacy" in html
     # the direction comes from the draws when summary.json does not give it
     assert "posterior mean direction" in html and "50 % cone radius" in html
 

@@ -10,7 +10,8 @@ package, or beside ``inertia`` here):
 * :func:`write_fit_run` — writes the run directory atomically (``posterior.nc``,
   ``summary.json``, ``config.toml``, ``report.html``), prints the result and the warnings, and
   under ``--strict`` raises :class:`~cassini_bayes.errors.NotConvergedError` (exit 3) *after*
-  writing everything;
+  writing everything, or :class:`~cassini_bayes.errors.InadequateModelError` (also exit 3) when
+  the summary's ``adequacy`` checks failed;
 * :func:`collect_warnings` — turns Python warnings raised during a fit into lines for the summary.
 
 The seed becomes a ``jax.random`` key exactly once, here, with ``jax.random.key(seed)``.
@@ -46,7 +47,8 @@ TARGET_ACCEPT = typer.Option(0.9, "--target-accept", min=0.5, max=0.999,
                                   "when a fit reports divergent transitions; smaller steps, "
                                   "longer trees.")
 STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sampler did not "
-                                              "converge (outputs are still written).")
+                                              "converge or an adequacy check failed (outputs "
+                                              "are still written).")
 FORCE = typer.Option(False, "--force", help="Replace --out if it is a run directory "
                                              "cassini-bayes wrote (never a user's folder).")
 OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
@@ -86,9 +88,10 @@ def write_fit_run(out: Path, *, force: bool, strict: bool, idata, summary: dict,
     """Write the run directory, report what happened, and enforce ``--strict``.
 
     Returns the final directory. Raises ``NotConvergedError`` under ``strict`` when
-    ``summary["diagnostics"]["converged"]`` is false — after the directory is complete.
+    ``summary["diagnostics"]["converged"]`` is false, ``InadequateModelError`` when
+    ``summary["adequacy"]["ok"]`` is false — after the directory is complete.
     """
-    from cassini_bayes.errors import NotConvergedError
+    from cassini_bayes.errors import InadequateModelError, NotConvergedError
     from cassini_bayes.rundir import (RunDir, write_config, write_posterior, write_report,
                                       write_summary)
 
@@ -103,17 +106,33 @@ def write_fit_run(out: Path, *, force: bool, strict: bool, idata, summary: dict,
         console.print(f"[yellow]warning:[/yellow] {line}")
     d = summary["diagnostics"]
     status = "[green]converged[/green]" if d["converged"] else "[red]NOT converged[/red]"
+    adequacy = summary.get("adequacy")
+    failed = ([] if adequacy is None else
+              [n for n, c in adequacy["checks"].items() if not c["ok"]])
+    fit = ("" if adequacy is None else "; [green]adequacy ok[/green]" if not failed
+           else f"; [red]ADEQUACY FAILED: {', '.join(failed)}[/red]")
     console.print(f"{summary['kind']}: {status} (max R-hat {d['max_r_hat']:.4f}, min bulk ESS "
-                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences) -> {rd.final}")
+                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> {rd.final}")
     typer.echo(str(rd.final))
+    problems = []
     if not d["converged"]:
         msg = (f"{rd.final}: the sampler did not converge (max R-hat {d['max_r_hat']:.4f}, min "
                f"bulk ESS {d['min_ess_bulk']:.0f}, {d['divergences']} divergences); outputs "
                "written with converged = false — run longer (--warmup/--draws), raise "
                "--target-accept if it diverged, or check the data")
         if strict:
-            raise NotConvergedError(msg)
-        console.print(f"[yellow]warning:[/yellow] {msg}")
+            problems.append(msg)
+        else:
+            console.print(f"[yellow]warning:[/yellow] {msg}")
+    if failed and strict:
+        problems.append(
+            f"{rd.final}: the model does not fit the data: adequacy check(s) "
+            f"{', '.join(failed)} failed (summary.json \"adequacy\", docs/adequacy.md); outputs "
+            "written — look for an unmodelled error (a wheel's tachometer, the inertia, a "
+            "thruster) or a bad file")
+    if problems:
+        raise (NotConvergedError if not d["converged"] else InadequateModelError)(
+            "; ".join(problems))
     return rd.final
 
 
@@ -178,6 +197,7 @@ def fit_inertia_cmd(
     import jax
 
     from cassini_bayes.consistency import check_inertia_data
+    from cassini_bayes.inference.adequacy import inertia_adequacy
     from cassini_bayes.inference.inertia import NOISE_NAMES, ROBUST_SITES, fit_inertia
     from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
@@ -197,11 +217,13 @@ def fit_inertia_cmd(
     with collect_warnings() as warns:
         post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings)
     baseline, base_warns = _inertia_baseline(tels, sc)
+    priored = (["T_N"] if torque else []) + ([] if idealised else list(ROBUST_SITES))
     summary = build_summary(
         "inertia", post.idata, parameters=INERTIA_NAMES, diagnostics=post.diagnostics,
         baseline=baseline, seed=seed, warnings=warns + base_warns,
         nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES]
-        + ([] if idealised else list(ROBUST_SITES)))
+        + ([] if idealised else list(ROBUST_SITES)),
+        adequacy=inertia_adequacy(post, list(INERTIA_NAMES) + priored))
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "idealised" if idealised else "robust"
     summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)

@@ -101,13 +101,16 @@ def fit_rwa4_cmd(
     with collect_warnings() as warns:
         post = fit_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior, inertia=inertia,
                         settings=settings, robust=not idealised)
+    from cassini_bayes.inference.adequacy import rwa4_adequacy
+
     pr = post.problem
     baseline = {n: float(v) for n, v in zip(U4_NAMES, pr.baseline)}
     summary = build_summary(
         "rwa4", post.idata, parameters=U4_NAMES, diagnostics=post.diagnostics,
         baseline=baseline, seed=seed, warnings=warns,
         nuisance=list(INERTIA_NAMES),
-        extra={"direction": post.direction})
+        extra={"direction": post.direction},
+        adequacy=rwa4_adequacy(post, list(U4_NAMES) + list(INERTIA_NAMES)))
     summary["method"] = method
     summary["prior"] = prior
     summary["windows"] = [{"a": list(a), "b": list(b)} for a, b in pr.pairs]

@@ -166,9 +166,13 @@ def fit_thrust_cmd(
     if not idealised:
         from cassini_bayes.inference.nuisance import EFFECTS
         nuisance += list(EFFECTS.values())
+    from cassini_bayes.inference.adequacy import thrust_adequacy
+
+    priored = names + [n for n in nuisance if not n.startswith("sigma_")]
     summary = build_summary("thrust", post.idata, parameters=names,
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,
-                            nuisance=nuisance, warnings=warns + base_warns)
+                            nuisance=nuisance, warnings=warns + base_warns,
+                            adequacy=thrust_adequacy(post, priored))
     summary["mode"] = mode
     summary["model"] = "idealised" if idealised else "robust"
     if not idealised:

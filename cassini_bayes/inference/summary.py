@@ -9,7 +9,9 @@ Added here (free to add, DESIGN.md §4): per parameter ``prior_sd`` and ``contra
 (``1 − posterior variance / prior variance``, from the ``prior`` group: near 1 the data decide,
 near 0 the prior does), ``weakly_identified`` (parameters with contraction < 0.5),
 ``diagnostics.min_ess_tail``, ``nuisance`` (the same statistics for nuisance parameters such as
-``H0``, ``T_N`` and the noise scales, flattened as ``H0[0,x]``), ``warnings``.
+``H0``, ``T_N`` and the noise scales, flattened as ``H0[0,x]``), ``warnings``, and ``adequacy``
+(``{"ok": b, "checks": {NAME: {"statistic", "threshold", "ok", ...}}}``, the model's
+self-checks of :mod:`cassini_bayes.inference.adequacy`; a warning line per failed check).
 """
 
 from __future__ import annotations
@@ -46,6 +48,14 @@ def _flat(idata, group: str, name: str) -> dict[str, np.ndarray]:
     return out
 
 
+def _json_ready(x):
+    if isinstance(x, dict):
+        return {k: _json_ready(v) for k, v in x.items()}
+    if isinstance(x, float):
+        return _num(x)
+    return x
+
+
 def parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, dict]:
     """Per-element posterior statistics (ArviZ R-hat and ESS) of the variables ``names``."""
     out = {}
@@ -72,7 +82,7 @@ def parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, 
 def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[str],
                   diagnostics, baseline: Mapping[str, float] | None, seed: int,
                   nuisance: Sequence[str] = (), warnings: Sequence[str] = (),
-                  extra: Mapping | None = None) -> dict:
+                  extra: Mapping | None = None, adequacy=None) -> dict:
     """The ``summary.json`` dict (DESIGN.md §4), JSON-ready (NaN/inf become ``null``).
 
     Parameters
@@ -86,6 +96,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
     nuisance : other variables to summarise under ``nuisance``.
     warnings : human-readable warnings (weak identification, baseline failure, ...).
     extra : more top-level keys (e.g. ``direction`` for rwa4).
+    adequacy : :class:`cassini_bayes.inference.adequacy.Adequacy` of the fit, or ``None``.
     """
     params = parameter_stats(idata, parameters)
     weak = [k for k, v in params.items()
@@ -100,8 +111,10 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
         "version": __version__,
         "weakly_identified": weak,
         "nuisance": parameter_stats(idata, nuisance),
-        "warnings": list(warnings),
+        "warnings": list(warnings) + (adequacy.warnings() if adequacy is not None else []),
     }
+    if adequacy is not None:
+        out["adequacy"] = _json_ready(adequacy.to_dict())
     if extra:
         out.update(extra)
     return out

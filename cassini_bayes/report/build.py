@@ -1,10 +1,11 @@
 """Assemble a run directory's ``report.html`` (DESIGN.md §4) from its files.
 
-The page, top to bottom: header (kind, directory, seed, version, convergence badge, warnings);
-sampler diagnostics; parameter table (with baseline, truth, prior sd, contraction and the
-weak-identification flag); trace, rank, prior-vs-posterior and pair plots; model residuals against
-time; for RWA4 the spin-axis sky plot; the energy plot; the resolved configuration. A section whose
-data the run lacks says so instead of disappearing, so every report has the same outline.
+The page, top to bottom: header (kind, directory, seed, version, convergence and adequacy badges,
+warnings); model adequacy (the fit's self-checks); sampler diagnostics; parameter table (with
+baseline, truth, prior sd, contraction and the weak-identification flag); trace, rank,
+prior-vs-posterior and pair plots; model residuals against time; for RWA4 the spin-axis sky plot;
+the energy plot; the resolved configuration. A section whose data the run lacks says so instead
+of disappearing, so every report has the same outline.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes.report import figures
+from cassini_bayes.report.adequacy import adequacy_badge, adequacy_section
 from cassini_bayes.report.html import (
     Raw,
     Section,
@@ -125,6 +127,7 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
             return not_available(f"{title} could not be drawn ({type(e).__name__}: {e})")
 
     sections = [
+        adequacy_section(run.summary),
         _diagnostics_section(diag),
         _parameters_section(run, rows),
         _trace_section(run, names, fig),
@@ -179,7 +182,7 @@ def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow], problems:
     out = [
         f'<p>{badge("CONVERGED" if conv else "NOT CONVERGED", conv)} '
         f'<span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
-        f"{ESS_MIN:g}, no divergences)</span></p>",
+        f"{ESS_MIN:g}, no divergences)</span> {adequacy_badge(run.summary)}</p>",
         meta_list(meta),
     ]
     warns = _warnings(run, diag, rows) + problems
