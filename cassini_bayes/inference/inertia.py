@@ -436,10 +436,10 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     # column with a fixed noise covariance would let the fit shrink the noise term along the
     # unidentified scale and drag c many prior sd low.) The sensitivity keeps the full columns.
     w_index = p_base + np.arange(layout.size)[layout.slices["wheel_inertia"]]
-    weights = layout.scale_weights
+    scale_w = layout.scale_weights
     fit_map = np.eye(p_full)
     fit_map[np.ix_(w_index, w_index)] = np.eye(w_index.size) - np.outer(np.ones(w_index.size),
-                                                                         weights)
+                                                                         scale_w)
 
     def fitted(x):
         """The fitted columns ``x @ fit_map`` of (n, 3, p_full) columns ``x``."""
@@ -561,7 +561,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     c_sd = 0.0  # Laplace sd of the common wheel scale c = ωᵀ w (robust; π = (1 + c) π̃)
     if robust:
         w_act = np.searchsorted(active, w_index)
-        c_sd = float(np.sqrt(weights @ cov[np.ix_(w_act, w_act)] @ weights))
+        c_sd = float(np.sqrt(scale_w @ cov[np.ix_(w_act, w_act)] @ scale_w))
     pi_c = theta[:6] if is_physical(theta[:6]) else prior.mean
     lp_c = cholesky_params_from_pi(pi_c)
     jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
@@ -586,7 +586,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     )
     if robust:
         model_kwargs["nu_sd"] = jnp.asarray(layout.sd)
-        model_kwargs["nu_weights"] = jnp.asarray(weights)
+        model_kwargs["nu_weights"] = jnp.asarray(scale_w)
     onehot = np.concatenate([np.full(fd["t"].size, f) for f, fd in enumerate(files)])
     onehot = (onehot[None, :] == np.arange(n_files)[:, None]).astype(float)
     residual_data = dict(
