@@ -6,10 +6,11 @@ Data: the noise-free slews of tests/kinematics.py (via ``make_slews`` of
 test_inference_inertia.py) with the effects injected into the telemetry before the noise is
 judged: the gyro reads ``(1 + s) ω + b``; each wheel's true spin inertia is ``(1 + c_k)`` times
 the model file's (``WHEEL_ERR``, about one prior sd each with mixed signs; the telemetry's wheel
-rates are made with the true ones); the slews' momentum drifts under a constant inertial torque. Most checks use the Laplace approximation that
-``prepare_inertia`` computes (the exact Gaussian posterior of the linear model with the noise
-covariance fixed; the sampler is centred on it), and two NUTS fits check the sampled posterior:
-convergence (R-hat ≤ 1.01, no divergences), coverage and the prior-dominated wheel scale. All
+rates are made with the true ones); the slews' momentum drifts under a constant inertial torque.
+Most checks use the Laplace approximation that ``prepare_inertia`` computes (the exact Gaussian
+posterior of the linear model with the noise covariance fixed; the sampler is centred on it), and
+two NUTS fits check the sampled posterior: convergence (R-hat ≤ 1.01, no divergences), coverage
+and the prior-dominated common wheel scale. All
 keys fixed; tolerances stated per test.
 """
 
