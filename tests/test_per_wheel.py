@@ -154,3 +154,29 @@ def test_per_wheel_scales_recover_the_differences(fits, sc):
     true = ERRORS[:3] - ERRORS[:3].mean()
     assert np.all(np.abs(diff.mean(0) - true) < 3 * diff.std(0)), (diff.mean(0), true)
     assert list(p["wheel_scale"]["wheel"].values) == ["RWA1", "RWA2", "RWA3"]
+
+
+def test_cli_wheel_errors_option(tmp_path, run_cli, sc):
+    """``--wheel-errors common|per-wheel`` reaches the fit and is recorded in config.toml's
+    options and summary.json; anything else is a one-line error before any work."""
+    import json
+    import tomllib
+
+    from cassini_bayes.telemetry import write_telemetry
+
+    csv = tmp_path / "slew.csv"
+    write_telemetry(csv, make_slews(jax.random.key(11), sc))
+    base = ["fit", "inertia", "--telemetry", csv, "--spacecraft", "cassini_2000_03_15"]
+    code, _, err = run_cli(*base, "--out", tmp_path / "bad", "--wheel-errors", "each")
+    assert code == 2 and "--wheel-errors" in err and len(err.strip().splitlines()) == 1
+    out = tmp_path / "run"
+    code, _, err = run_cli(*base, "--out", out, "--wheel-errors", "common", "--chains", "2",
+                           "--warmup", "100", "--draws", "100")
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["model"] == "robust" and summary["wheel_errors"] == "common"
+    assert tomllib.loads((out / "config.toml").read_text())["options"]["wheel_errors"] == "common"
+    import arviz as az
+
+    post = az.from_netcdf(out / "posterior.nc").posterior
+    assert post["wheel_scale"].dims == ("chain", "draw")   # one common scale

@@ -10,8 +10,7 @@ rates are made with the true ones); the slews' momentum drifts under a constant 
 Most checks use the Laplace approximation that ``prepare_inertia`` computes (the exact Gaussian
 posterior of the linear model with the noise covariance fixed; the sampler is centred on it), and
 two NUTS fits check the sampled posterior: convergence (R-hat ≤ 1.01, no divergences), coverage
-and the prior-dominated common wheel scale. All
-keys fixed; tolerances stated per test.
+and the prior-dominated common wheel scale. All keys fixed; tolerances stated per test.
 """
 
 from __future__ import annotations
