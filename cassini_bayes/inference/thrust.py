@@ -894,7 +894,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     inertia : sample the inertia jointly from this Gaussian (e.g. :func:`inertia_from_run`).
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
-    robust : add the nuisance parameters (gyro bias and scale, wheel inertia scale and tilts,
+    robust : add the nuisance parameters (gyro bias and scale, wheel inertia scales and tilts,
         external torque; module docstring). The default, as on the CLI; ``False`` is the
         papers' idealised model (clean simulations, comparisons with the papers).
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` (default, one scale
