@@ -30,7 +30,7 @@ scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a spin-inert
 per active wheel (``wheel_errors="per_wheel"``, the default; ``"common"``: one scale ``c`` for
 all, the earlier model) and two small tilts of each active wheel's spin axis. All enter the
 residual linearly to first order (:mod:`cassini_bayes.inference.nuisance`), so the
-sufficient-statistics likelihood below keeps its O(P²) cost (P grows by 3F + 3 + 3K). The common
+sufficient-statistics likelihood below keeps its O(P²) cost (P grows by 6F + 3 + 3K). The common
 scale ``c = mean_k c_k`` does not enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and
 every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
 balance by ``1 + c`` shows what the data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and
