@@ -60,11 +60,16 @@ def tilted_axis(axis, tilt_rad) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Wheel:
-    """A reaction wheel: ``axis`` unit vector in body axes, ``inertia`` kg m² about it."""
+    """A reaction wheel: ``axis`` unit vector in body axes, ``inertia`` kg m² about it.
+
+    ``inertia_sd_frac``: this wheel's spin-inertia knowledge (one sd, a fraction), overriding
+    ``[wheel_knowledge] inertia_sd_frac`` for it; ``None`` when the file does not give one.
+    """
 
     name: str
     axis: np.ndarray
     inertia: float
+    inertia_sd_frac: float | None = None
 
 
 @dataclass(frozen=True)
@@ -99,10 +104,11 @@ class Knowledge:
     ``[wheel_knowledge]`` (``inertia_sd_frac``, ``axis_sd_deg``) and ``[telemetry_knowledge]``
     (``time_tag_sd_s``). The defaults are conservative engineering values, not numbers from the
     papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro scale-factor error of 5e-4
-    (500 ppm) per axis, a common wheel spin-inertia error of 0.5 %, a wheel spin-axis misalignment
-    of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4 0.53 deg from its
-    nominal axis; the fixed wheels are known better) and a white time-tag error of 10 ms per
-    telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
+    (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each wheel independently; a
+    ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that wheel), a wheel spin-axis
+    misalignment of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4
+    0.53 deg from its nominal axis; the fixed wheels are known better) and a white time-tag error
+    of 10 ms per telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
     """
 
     gyro_bias_sd_rad_s: float = 5e-7
@@ -181,7 +187,9 @@ class Spacecraft:
                         "moi_uncertainty": self.moi_uncertainty,
                         "poi_uncertainty": self.poi_uncertainty},
             "wheel": [{"name": w.name, "axis": [float(x) for x in w.axis],
-                       "inertia": float(w.inertia)} for w in self.wheels],
+                       "inertia": float(w.inertia),
+                       **({} if w.inertia_sd_frac is None
+                          else {"inertia_sd_frac": w.inertia_sd_frac})} for w in self.wheels],
             "thrusters": {"Lx": self.thrusters.Lx, "Ly": self.thrusters.Ly,
                           "Lzy": self.thrusters.Lzy, "Lzz": self.thrusters.Lzz,
                           "com": [float(x) for x in self.thrusters.com]},
@@ -204,7 +212,7 @@ _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "axis_sd_deg": "wheel_axis_sd_deg"}
 _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
-_WHEEL_KEYS = {"name", "axis", "inertia"}
+_WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac"}
 _THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
 _PULSE_KEYS = set(PulseConstants.__dataclass_fields__)
 
@@ -362,7 +370,13 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
                              f"{np.linalg.norm(axis):.6f}); normalise it", path=src)
         j = _number(w, "inertia", where, src, lo=WHEEL_INERTIA_RANGE[0],
                     hi=WHEEL_INERTIA_RANGE[1], unit="kg m^2", open_lo=False)
-        wheels.append(Wheel(name.upper(), axis / np.linalg.norm(axis), j))
+        sd = None
+        if "inertia_sd_frac" in w:
+            sd = _number(w, "inertia_sd_frac", where, src)
+            if not 0 <= sd < 0.5:
+                raise InputError(f"'{where}inertia_sd_frac' is a fraction in [0, 0.5) (0.005 = "
+                                 f"0.5 %), got {sd}", path=src)
+        wheels.append(Wheel(name.upper(), axis / np.linalg.norm(axis), j, sd))
     names = [w.name for w in wheels]
     if len(set(names)) != len(names):
         raise InputError(f"wheel names must be unique, got {names}", path=src)

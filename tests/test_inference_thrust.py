@@ -297,23 +297,29 @@ def test_default_settings_converge(fsds):
 # Robust model (nuisance parameters)
 # --------------------------------------------------------------------------------------------
 
-def test_robust_columns_torque_and_wheel_scale():
-    """The external-torque columns are (t − t0)·1 and the wheel-scale column is −H_w: the
-    linear terms of the predicted Eq 17 left side (module docstring)."""
+@pytest.mark.parametrize("wheel_errors", ["per_wheel", "common"])
+def test_robust_columns_torque_and_wheel_scale(wheel_errors):
+    """The external-torque columns are (t − t0)·1 and the wheel-scale columns are −J_k ρ_k g_k per
+    wheel (common: one column −H_w): the linear terms of the predicted Eq 17 left side (module
+    docstring)."""
     from cassini_bayes.inference.nuisance import nuisance_layout
     from cassini_bayes.inference.thrust import _nuisance_columns
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")
-    layout = nuisance_layout(sc, 2, ("RWA1", "RWA2"))
+    layout = nuisance_layout(sc, 2, ("RWA1", "RWA2"), wheel_errors=wheel_errors)
     t = np.linspace(10.0, 20.0, 11)
-    h = np.outer(np.linspace(0.0, 5.0, 11), [1.0, 2.0, 3.0])
-    per_wheel = {"RWA1": np.linspace(0.0, 5.0, 11), "RWA2": np.zeros(11)}
+    per_wheel = {"RWA1": np.linspace(0.0, 5.0, 11), "RWA2": np.linspace(1.0, -2.0, 11)}
+    h = sum(per_wheel[n][:, None] * sc.wheel(n).axis for n in per_wheel)
     cols = _nuisance_columns(layout, 1, t, np.zeros((11, 3)), np.asarray(sc.inertia), h,
                              per_wheel)
     tq = layout.slices["body_torque"].start + 3
     np.testing.assert_allclose(cols[:, :, tq:tq + 3], (t - 10.0)[:, None, None] * np.eye(3))
-    np.testing.assert_allclose(cols[:, :, layout.slices["wheel_inertia"].start], -h)
+    wheel = cols[:, :, layout.slices["wheel_inertia"]]
+    if wheel_errors == "per_wheel":
+        for k, n in enumerate(("RWA1", "RWA2")):
+            np.testing.assert_allclose(wheel[:, :, k], -per_wheel[n][:, None] * sc.wheel(n).axis)
+    np.testing.assert_allclose(wheel.sum(-1), -h, atol=1e-12)
     # the other event's bias and torque columns are zero
     assert not cols[:, :, 0:3].any()
     assert not cols[:, :, tq - 3:tq].any()
@@ -339,7 +345,10 @@ def test_robust_model_covers_what_the_idealised_misses():
     r = simulate_event(sc)
     found = {}
     for robust in (False, True):
-        post = fit_thrust(jax.random.key(5), [r], sc.prior, robust=robust, settings=_settings())
+        # the truth is one common wheel scale: the common-scale robust model (a 1 % common error
+        # is 2 sd of its 0.5 % prior, 3.5 sd of the 0.29 % common part of the per-wheel prior)
+        post = fit_thrust(jax.random.key(5), [r], sc.prior, robust=robust, settings=_settings(),
+                          wheel_errors="common")
         f = post.idata.posterior["F"].values.ravel()
         found[robust] = np.quantile(f, [0.05, 0.95])
         assert post.diagnostics.divergences == 0

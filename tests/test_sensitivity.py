@@ -53,12 +53,31 @@ def test_effects_and_modelled_flags(base, sc):
     assert robust.modelled.all()
 
 
-def test_wheel_inertia_shift_is_the_scale(base, sc):
+def test_common_wheel_inertia_shift_is_the_scale(sc):
     """Wheel inertias (1 + c) J ignored ⇒ the fit returns π/(1 + c): shift = π × sd_c."""
+    base = prep(make_slews(KEY, sc), sc, torque=False, wheel_errors="common")
     k = base.sensitivity.effects.index("wheel_inertia")
     np.testing.assert_allclose(base.sensitivity.shift[k],
                                np.abs(base.laplace_mean) * sc.knowledge.wheel_inertia_sd_frac,
                                rtol=0.02)
+
+
+def test_per_wheel_inertia_shift_matches_refits(base, sc):
+    """One wheel's spin inertia off by one prior sd at a time (the others exact), refitted with
+    the model file's: the root-sum-square of the moves is the reported per-wheel shift (it
+    reaches the products too: the wheels sit on a cone)."""
+    sd = sc.knowledge.wheel_inertia_sd_frac
+    moves = []
+    for j in range(3):   # make_slews drives RWA1-3
+        wheels = tuple(replace(w, inertia=w.inertia * (1 + sd)) if i == j else w
+                       for i, w in enumerate(sc.wheels))
+        moved = make_slews(KEY, replace(sc, wheels=wheels))
+        moves.append(prep(moved, sc, torque=False).laplace_mean - base.laplace_mean)
+    rss = np.sqrt(np.sum(np.square(moves), 0))
+    k = base.sensitivity.effects.index("wheel_inertia")
+    want = base.sensitivity.shift[k]
+    assert np.all(np.abs(rss - want) <= 0.1 * want + 0.2 * base.laplace_sd), (rss, want)
+    assert np.all(want[3:] > 3 * base.laplace_sd[3:]), want   # products: many sd
 
 
 def test_gyro_bias_shift_matches_refits(base, sc):

@@ -146,3 +146,59 @@ def test_bad_values_are_one_line_errors(section, value, needle):
     with pytest.raises(InputError) as e:
         scenario_from_dict(d, "bad.toml")
     assert needle in str(e.value) and "\n" not in str(e.value)
+
+
+# ---- per-wheel spin-inertia errors -------------------------------------------------------
+
+def _wheel_truth(**keys):
+    d = _drift_dict(duration=20.0)
+    d["truth"].update(keys)
+    return scenario_from_dict(d)
+
+
+def test_per_wheel_inertia_errors_fixed_and_drawn():
+    """True J_k = scale × (1 + e_k) × the model file's; absent keys change nothing; the drawn
+    errors are independent per wheel, fixed by the scenario's seed, and add to the fixed ones."""
+    base = _wheel_truth()
+    assert base.wheel_inertia_errors == () and base.wheel_inertia_scale == 1.0
+    np.testing.assert_array_equal(base.truth.wheel_inertias, base.prior.wheel_inertias)
+    e = [0.008, -0.006, 0.010, -0.007]
+    s = _wheel_truth(wheel_inertia_errors=e, wheel_inertia_scale=1.002)
+    np.testing.assert_allclose(s.truth.wheel_inertias,
+                               1.002 * (1 + np.array(e)) * s.prior.wheel_inertias, rtol=1e-15)
+    assert s.wheel_inertia_errors == tuple(e)
+    d1 = _wheel_truth(wheel_inertia_error_sd=0.005).wheel_inertia_errors
+    assert d1 == _wheel_truth(wheel_inertia_error_sd=0.005).wheel_inertia_errors   # seeded
+    assert len(set(d1)) == 4 and all(0 < abs(x) < 0.03 for x in d1)   # 6 sd: never by chance
+    both = _wheel_truth(wheel_inertia_error_sd=0.005, wheel_inertia_errors=e)
+    np.testing.assert_allclose(both.wheel_inertia_errors, np.array(d1) + e, rtol=1e-14)
+    other = scenario_from_dict({**_drift_dict(duration=20.0), "seed": 2,
+                                "truth": {"model": "models/cassini_post_probe.toml",
+                                          "wheel_inertia_error_sd": 0.005}})
+    assert other.wheel_inertia_errors != d1
+
+
+def test_per_wheel_inertia_errors_in_truth_json_and_in_the_run():
+    """truth.json records each wheel's true spin inertia and its error; the run uses them (the
+    inertial momentum of the true model is conserved between pulses)."""
+    from cassini_bayes.cli.simulate import truth_document
+
+    e = [0.008, -0.006, 0.010, -0.007]
+    s = _wheel_truth(wheel_inertia_errors=e)
+    doc = truth_document(simulate(jax.random.key(0), s), 0)
+    np.testing.assert_allclose([w["inertia_error_frac"] for w in doc["wheels"]], e, rtol=1e-12)
+    np.testing.assert_allclose([w["inertia_kgm2"] for w in doc["wheels"]],
+                               (1 + np.array(e)) * s.prior.wheel_inertias, rtol=1e-12)
+    assert doc["wheel_inertia_errors"] == e and doc["wheel_inertia_scale"] == 1.0
+    np.testing.assert_allclose(np.asarray(truth_params(s).wheel_inertias)[:3],
+                               s.truth.wheel_inertias[:3], rtol=1e-15)
+
+
+@pytest.mark.parametrize("keys, needle", [
+    ({"wheel_inertia_errors": [0.01, 0.0, 0.0]}, "wheel_inertia_errors"),
+    ({"wheel_inertia_errors": [0.2, 0.0, 0.0, 0.0]}, "small fraction"),
+    ({"wheel_inertia_error_sd": -0.01}, "wheel_inertia_error_sd"),
+])
+def test_bad_wheel_inertia_errors_are_one_line_errors(keys, needle):
+    with pytest.raises(InputError, match=needle):
+        _wheel_truth(**keys)

@@ -52,6 +52,19 @@ STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sample
 FORCE = typer.Option(False, "--force", help="Replace --out if it is a run directory "
                                              "cassini-bayes wrote (never a user's folder).")
 OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
+WHEEL_ERRORS = typer.Option("per-wheel", "--wheel-errors",
+                            help="Robust model's wheel spin-inertia errors: per-wheel (one scale "
+                                 "per wheel, the default) or common (one scale for all wheels).")
+
+
+def wheel_errors_name(value: str) -> str:
+    """The library's ``wheel_errors`` (``per_wheel``/``common``) of a ``--wheel-errors`` value."""
+    from cassini_bayes.errors import InputError
+
+    name = value.replace("-", "_")
+    if name not in ("per_wheel", "common"):
+        raise InputError(f"--wheel-errors {value!r}: choose per-wheel or common")
+    return name
 
 
 def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float = 0.9):
@@ -190,6 +203,7 @@ def fit_inertia_cmd(
                                         "wheel inertia or axis errors (default: the robust model "
                                         "with those as nuisance parameters, priors from the "
                                         "spacecraft model's [gyro] and [wheel_knowledge])."),
+    wheel_errors: str = WHEEL_ERRORS,
     more: list[Path] = typer.Argument(None, hidden=True, help="More telemetry files, as in "
                                       "--telemetry A.csv B.csv."),
 ) -> None:
@@ -213,9 +227,11 @@ def fit_inertia_cmd(
     tels = read_telemetry_many(telemetry)
     check_inertia_data(tels, sc)  # units and conventions by the physics, before any sampling
     settings = sampler_settings(chains, warmup, draws, target_accept)
+    wheel_errors = wheel_errors_name(wheel_errors)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
-        post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings)
+        post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings,
+                           wheel_errors=wheel_errors)
     baseline, base_warns = _inertia_baseline(tels, sc)
     priored = (["T_N"] if torque else []) + ([] if idealised else list(ROBUST_SITES))
     summary = build_summary(
@@ -226,11 +242,13 @@ def fit_inertia_cmd(
         adequacy=inertia_adequacy(post, list(INERTIA_NAMES) + priored))
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "idealised" if idealised else "robust"
+    summary["wheel_errors"] = None if idealised else wheel_errors
     summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
     config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": [file_record(p) for p in telemetry],
                                 "spacecraft": file_record(model_path(spacecraft))},
-                        options={"torque": torque, "idealised": idealised})
+                        options={"torque": torque, "idealised": idealised,
+                                 "wheel_errors": wheel_errors})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 

@@ -12,8 +12,8 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, TARGET_ACCEPT,
-                                   WARMUP, collect_warnings, fit_config, sampler_settings,
-                                   write_fit_run)
+                                   WARMUP, WHEEL_ERRORS, collect_warnings, fit_config,
+                                   sampler_settings, wheel_errors_name, write_fit_run)
 
 ORDER = 22
 
@@ -55,6 +55,7 @@ def fit_rwa4_cmd(
                                         "wheel spin-inertia or known-wheel axis errors, no "
                                         "external torque (default: the robust model with those "
                                         "integrated out)."),
+    wheel_errors: str = WHEEL_ERRORS,
     seed: int = SEED,
     chains: int = CHAINS,
     warmup: int = WARMUP,
@@ -97,10 +98,11 @@ def fit_rwa4_cmd(
         pairs = [(parse_window(a, tel.t, option="window-a"),
                   parse_window(b, tel.t, option="window-b")) for a, b in zip(window_a, window_b)]
     settings = sampler_settings(chains, warmup, draws, target_accept)
+    wheel_errors = wheel_errors_name(wheel_errors)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior, inertia=inertia,
-                        settings=settings, robust=not idealised)
+                        settings=settings, robust=not idealised, wheel_errors=wheel_errors)
     from cassini_bayes.inference.adequacy import rwa4_adequacy
 
     pr = post.problem
@@ -115,6 +117,7 @@ def fit_rwa4_cmd(
     summary["prior"] = prior
     summary["windows"] = [{"a": list(a), "b": list(b)} for a, b in pr.pairs]
     summary["model"] = "idealised" if idealised else "robust"
+    summary["wheel_errors"] = None if idealised else wheel_errors
     summary["sensitivity"] = rwa4_sensitivity(post)
     config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": file_record(telemetry),
@@ -123,6 +126,7 @@ def fit_rwa4_cmd(
                                    if inertia_posterior is not None else {})},
                         options={"method": method, "prior": prior,
                                  "model": "idealised" if idealised else "robust",
+                                 "wheel_errors": wheel_errors,
                                  "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
                                  "window_b": [f"{b[0]:.10g}:{b[1]:.10g}" for _, b in pr.pairs],
                                  "windows_detected": pairs is None})

@@ -11,8 +11,8 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, TARGET_ACCEPT,
-                                   WARMUP, collect_warnings, fit_config, sampler_settings,
-                                   write_fit_run)
+                                   WARMUP, WHEEL_ERRORS, collect_warnings, fit_config,
+                                   sampler_settings, wheel_errors_name, write_fit_run)
 
 ORDER = 21
 
@@ -120,6 +120,7 @@ def fit_thrust_cmd(
                                         "(default: the robust model with those as nuisance "
                                         "parameters, priors from the spacecraft model's [gyro] "
                                         "and [wheel_knowledge])."),
+    wheel_errors: str = WHEEL_ERRORS,
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""
     import jax
@@ -153,10 +154,11 @@ def fit_thrust_cmd(
     events = [(read_telemetry(t), read_pulses(p)) for t, p in zip(telemetry, pulses)]
     check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
     settings = sampler_settings(chains, warmup, draws, target_accept)
+    wheel_errors = wheel_errors_name(wheel_errors)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = fit_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
-                          robust=not idealised)
+                          robust=not idealised, wheel_errors=wheel_errors)
     baseline, base_warns = thrust_baseline(events, sc, mode)
     names = list(thrust_names(mode)) + list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
@@ -175,6 +177,7 @@ def fit_thrust_cmd(
                             adequacy=thrust_adequacy(post, priored))
     summary["mode"] = mode
     summary["model"] = "idealised" if idealised else "robust"
+    summary["wheel_errors"] = None if idealised else wheel_errors
     if not idealised:
         summary["sensitivity"] = thrust_sensitivity(post)
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
@@ -186,7 +189,8 @@ def fit_thrust_cmd(
                         options={"mode": mode, "model": "idealised" if idealised else "robust",
                                  "inertia": ("posterior" if inertia_posterior is not None
                                              else "sampled" if "Ixx" in post.idata.posterior
-                                             else "fixed")})
+                                             else "fixed"),
+                                 "wheel_errors": wheel_errors})
     write_fit_run(out, force=force, strict=strict, idata=post.idata, summary=summary,
                   config=config)
 

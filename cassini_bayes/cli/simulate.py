@@ -52,9 +52,13 @@ def truth_document(result: SimResult, seed: int) -> dict:
         "prior_model": s.prior_model_path,
         "inertia_kgm2": inertia,
         "wheels": [{"name": n, "on": bool(on), "axis": [float(x) for x in ax],
-                    "inertia_kgm2": float(j)}
-                   for n, on, ax, j in zip(s.wheel_names, s.wheels_on, s.truth.wheel_axes,
-                                           s.truth.wheel_inertias)],
+                    "inertia_kgm2": float(j),
+                    "inertia_error_frac": s.wheel_inertia_scale * (1.0 + e) - 1.0}
+                   for n, on, ax, j, e in zip(
+                       s.wheel_names, s.wheels_on, s.truth.wheel_axes, s.truth.wheel_inertias,
+                       s.wheel_inertia_errors or np.zeros(len(s.wheels_on)))],
+        "wheel_inertia_scale": s.wheel_inertia_scale,
+        "wheel_inertia_errors": list(s.wheel_inertia_errors),
         "rwa4_axis": ([float(x) for x in s.truth.wheel("RWA4").axis]
                       if "RWA4" in s.wheel_names else None),
         "believed_axes": [list(a) for a in s.rwa.believed_axes],

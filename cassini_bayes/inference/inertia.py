@@ -26,14 +26,20 @@ Robust model (``robust=True``; the CLI's default)
 Flight telemetry carries errors the papers' model leaves out. The robust model adds, as nuisance
 parameters with priors from the spacecraft model's ``[gyro]``/``[wheel_knowledge]`` sections
 (:class:`~cassini_bayes.spacecraft.Knowledge`): a gyro bias per axis and file and a gyro
-scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a common wheel spin-inertia
-scale ``c`` and two small tilts of each active wheel's spin axis. All enter the residual
-linearly to first order (:mod:`cassini_bayes.inference.nuisance`), so the sufficient-statistics
-likelihood below keeps its O(P²) cost (P grows by 3F + 4 + 2K). The scale ``c`` does not enter the
-likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and the wheel inertias together leaves every
-momentum balance unchanged (Psiaki 2005), so the data see ``π̃ = π/(1 + c)`` and the model sets
-``π = (1 + c) π̃`` with ``c`` at its prior — its posterior equals its prior and the moments'
-posterior sd carries it (≈ 0.5 % with the default knowledge). The constant external torque ``T_N``
+scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a spin-inertia scale ``c_k``
+per active wheel (``wheel_errors="per_wheel"``, the default; ``"common"``: one scale ``c`` for
+all, the earlier model) and two small tilts of each active wheel's spin axis. All enter the
+residual linearly to first order (:mod:`cassini_bayes.inference.nuisance`), so the
+sufficient-statistics likelihood below keeps its O(P²) cost (P grows by 6F + 3 + 3K). The common
+scale ``c = mean_k c_k`` does not enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and
+every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
+balance by ``1 + c`` shows what the data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and
+the wheel scales relative to the common one, ``δ_k = (c_k − c)/(1 + c)``, which enter linearly
+(column ``J_k ρ_k g_k``) and are exact: ``(1 + c_k)/(1 + c) = 1 + δ_k``. The model sets
+``π = (1 + c) π̃`` and ``c_k = c + (1 + c) δ_k``; ``c`` keeps its prior and the moments'
+posterior sd carries it (prior sd of the mean of K independent scales: ``σ_J/√K``, 0.29 % for
+three wheels at 0.5 %; 0.5 % in the common model), while the ``δ_k`` are learned from slews
+about several axes. The constant external torque ``T_N``
 is in both models (``torque=True``), prior sd 15 µN m per axis (Feldman & Lee App. A bound;
 Brown quotes solar/gas torques of the same few-µN m order).
 
@@ -332,7 +338,7 @@ def _body_cov_terms(inertia: np.ndarray, wheel_cov: np.ndarray, h_body: np.ndarr
 
 
 def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
-                    torque: bool = True, robust: bool = False,
+                    torque: bool = True, robust: bool = False, wheel_errors: str = "per_wheel",
                     max_iter: int = 20) -> InertiaProblem:
     """Prepare the inertia problem: arrays, noise covariance, sufficient statistics, checks.
 
@@ -353,7 +359,9 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
        effect (:func:`cassini_bayes.inference.sensitivity.linear_sensitivity`).
 
     ``robust`` adds the nuisance parameters ``ν`` (gyro bias per file, gyro scale factor, wheel
-    spin-inertia scale, wheel spin-axis tilts) with priors from ``spacecraft.knowledge``.
+    spin-inertia scales, wheel spin-axis tilts) with priors from ``spacecraft.knowledge``;
+    ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel spin-inertia model
+    (:func:`~cassini_bayes.inference.nuisance.nuisance_layout`).
 
     Raises
     ------
@@ -377,7 +385,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         for name in tel.active_wheels():
             if spacecraft.wheel(name).name not in wheels_any:
                 wheels_any.append(spacecraft.wheel(name).name)
-    layout = nuisance_layout(spacecraft, n_files, wheels_any)
+    layout = nuisance_layout(spacecraft, n_files, wheels_any, wheel_errors=wheel_errors)
     p_base = 6 + 6 * n_files
     p_full = p_base + layout.size
     active = list(range(6))
@@ -420,14 +428,22 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
                                                        fd["wheel_h"], fd["a"], fd["t"])
 
     set_robust_columns(prior.mean)
-    # The wheel spin-inertia scale c is not in the likelihood: the data see only the momentum
-    # balance normalised by (1 + c), i.e. π/(1 + c), H_0/(1 + c), T_N/(1 + c) (nuisance.py), so
-    # the fitted columns drop it; the model maps π = (1 + c) π̃. (Keeping ``c H_w`` as a linear
+    # The common wheel spin-inertia scale c = ωᵀ w (w the wheel-scale block of θ) is not in the
+    # likelihood: the data see only the momentum balance normalised by (1 + c), i.e. π/(1 + c),
+    # H_0/(1 + c), T_N/(1 + c) and the relative scales δ = P w, P = 1 − 1 ωᵀ (module docstring),
+    # so the fitted columns are cols @ fit_map with the wheel block projected by P (common model:
+    # P = 0, the column dropped); the model maps π = (1 + c) π̃. (Keeping ``c H_w`` as a linear
     # column with a fixed noise covariance would let the fit shrink the noise term along the
-    # unidentified scale and drag c many prior sd low.) The sensitivity keeps the column.
-    c_index = p_base + layout.slices["wheel_inertia"].start
-    fit_mask = np.ones(p_full)
-    fit_mask[c_index] = 0.0
+    # unidentified scale and drag c many prior sd low.) The sensitivity keeps the full columns.
+    w_index = p_base + np.arange(layout.size)[layout.slices["wheel_inertia"]]
+    scale_w = layout.scale_weights
+    fit_map = np.eye(p_full)
+    fit_map[np.ix_(w_index, w_index)] = np.eye(w_index.size) - np.outer(np.ones(w_index.size),
+                                                                         scale_w)
+
+    def fitted(x):
+        """The fitted columns ``x @ fit_map`` of (n, 3, p_full) columns ``x``."""
+        return np.einsum("nip,pq->niq", x, fit_map, optimize=True)
 
     # Excitation: the body rates must rise above their own noise (errors in variables: a regressor
     # made of noise carries no information even though least squares would use it).
@@ -471,7 +487,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         rhs = np.zeros(p_tot)
         for f, fd in enumerate(files):
             w_inv, _, _ = weights(f, theta_full, log_s[f])
-            c = (fd["cols"] * fit_mask)[:, :, active]
+            c = fitted(fd["cols"])[:, :, active]
             wc = np.einsum("nij,njq->niq", w_inv, c)
             info += np.einsum("nip,niq->pq", c, wc, optimize=True)
             rhs += np.einsum("niq,ni->q", wc, fd["y"], optimize=True)
@@ -483,7 +499,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         max_step = 0.0
         for f, fd in enumerate(files):
             w_inv, terms, _ = weights(f, theta_full, log_s[f])
-            e = np.einsum("nip,p->ni", fd["cols"] * fit_mask, theta_full) - fd["y"]
+            e = np.einsum("nip,p->ni", fd["cols"], fit_map @ theta_full) - fd["y"]
             we = np.einsum("nij,nj->ni", w_inv, e)
             s2 = np.exp(2 * log_s[f])
             d = [2 * s2[j] * terms[j] for j in range(3)]
@@ -514,13 +530,13 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         wc_full = np.einsum("nij,njq->niq", w_inv, fd["cols"])
         f_full = np.einsum("nip,niq->pq", fd["cols"], wc_full, optimize=True)
         info_full += f_full
-        f_fit = f_full * np.outer(fit_mask, fit_mask)
+        f_fit = fit_map.T @ f_full @ fit_map
         fmat[f] = f_fit[np.ix_(active, active)]
-        e = np.einsum("nip,p->ni", fd["cols"] * fit_mask, theta_full) - fd["y"]
-        gvec[f] = np.einsum("niq,ni->q", (wc_full * fit_mask)[:, :, active], e, optimize=True)
+        e = np.einsum("nip,p->ni", fd["cols"], fit_map @ theta_full) - fd["y"]
+        gvec[f] = np.einsum("niq,ni->q", fitted(wc_full)[:, :, active], e, optimize=True)
         q_star[f] = np.einsum("ni,nij,nj->", e, w_inv, e)
         n_obs[f] = 3 * e.shape[0]
-    info = (info_full * np.outer(fit_mask, fit_mask))[np.ix_(active, active)]
+    info = (fit_map.T @ info_full @ fit_map)[np.ix_(active, active)]
     nuis_prec = prior_prec[6:]
 
     # Data information of π with the nuisance (H_0, T_N, ν) profiled out under their priors.
@@ -542,6 +558,10 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     # Laplace approximation (prior included) → affine whitening of the sampler's coordinates.
     cov = np.linalg.inv(info + np.diag(prior_prec))
     cov = 0.5 * (cov + cov.T)
+    c_sd = 0.0  # Laplace sd of the common wheel scale c = ωᵀ w (robust; π = (1 + c) π̃)
+    if robust:
+        w_act = np.searchsorted(active, w_index)
+        c_sd = float(np.sqrt(scale_w @ cov[np.ix_(w_act, w_act)] @ scale_w))
     pi_c = theta[:6] if is_physical(theta[:6]) else prior.mean
     lp_c = cholesky_params_from_pi(pi_c)
     jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
@@ -566,6 +586,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     )
     if robust:
         model_kwargs["nu_sd"] = jnp.asarray(layout.sd)
+        model_kwargs["nu_weights"] = jnp.asarray(scale_w)
     onehot = np.concatenate([np.full(fd["t"].size, f) for f, fd in enumerate(files)])
     onehot = (onehot[None, :] == np.arange(n_files)[:, None]).astype(float)
     residual_data = dict(
@@ -586,7 +607,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         h_wheels=np.concatenate([fd["h_w"] for fd in files]),
         q=np.concatenate([fd["q"] for fd in files]), sources=tuple(t.source for t in telemetries),
         noise_hat=np.exp(log_s_hat), noise_eb=np.exp(log_s), laplace_mean=theta[:6],
-        laplace_sd=np.sqrt(np.diag(cov)[:6] + (robust * theta[:6] * full_sd[c_index])**2),
+        laplace_sd=np.sqrt(np.diag(cov)[:6] + (theta[:6] * c_sd)**2),
         information_ratio=ratio, weak_directions=weak,
         residual_data=residual_data, robust=robust, layout=layout, sensitivity=sens,
         robust_cols=(np.concatenate([fd["cols"][:, :, p_base:] for fd in files])
@@ -642,7 +663,7 @@ def _log_jacobian(lp):
 
 
 def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise,
-           torque: bool, nu_sd=None):
+           torque: bool, per_wheel: bool = True, nu_sd=None, nu_weights=None):
     n_files = log_noise.shape[0]
     p_tot = centre.shape[0]
     z = numpyro.sample("z", dist.ImproperUniform(constraints.real_vector, (), (p_tot,)))
@@ -653,9 +674,12 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
     lp, h0_t, tq_t = _unpack(theta, n_files, torque)
     pi_t = pi_from_cholesky_params(lp)
     nu = theta[6 + (6 if torque else 3) * n_files:]
-    # Robust model: the likelihood sees π̃ = π/(1 + c), H̃_0, T̃_N (c the wheel spin-inertia
-    # scale, nuisance.py); the physical values are (1 + c) times those. Idealised: c = 0.
-    c = nu[3 * n_files + 3] if nu_sd is not None else 0.0
+    # Robust model: the likelihood sees π̃ = π/(1 + c), H̃_0, T̃_N and the wheel scales relative
+    # to the common c = ωᵀ w, δ = w − c (module docstring; nuisance.py); the physical values are
+    # (1 + c) times those and c_k = c + (1 + c) δ_k. Idealised: c = 0.
+    n_scale = 0 if nu_weights is None else nu_weights.shape[0]
+    w_sc = nu[3 * n_files + 3:3 * n_files + 3 + n_scale]
+    c = nu_weights @ w_sc if nu_sd is not None else 0.0
     pi, h0, tq = (1.0 + c) * pi_t, (1.0 + c) * h0_t, (1.0 + c) * tq_t
 
     # Prior, in physical coordinates (module docstring); the affine part of z → θ has a constant
@@ -668,16 +692,20 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
     if nu_sd is not None:
         log_prior += (6 + (6 if torque else 3) * n_files) * jnp.log1p(c)
         # Robust nuisance ν ~ N(0, sd from the spacecraft model's knowledge); see nuisance.py.
-        # The body torque, like T_N, is (1 + c) times what the likelihood sees.
-        n_tilt = nu_sd.shape[0] - 6 * n_files - 4
-        body = 3 * n_files + 4 + n_tilt
-        nu_phys = jnp.concatenate([nu[:body], (1.0 + c) * nu[body:]])
-        log_prior += jnp.sum(-0.5 * (nu_phys / nu_sd)**2) + 3 * n_files * jnp.log1p(c)
+        # The body torque, like T_N, is (1 + c) times what the likelihood sees; the wheel scales
+        # c_k = c + (1 + c)(w_k − c) = (1 + c) w_k − c², |∂c_k/∂w| = (1 + c)^(S−1).
+        t0 = 3 * n_files + 3 + n_scale
+        n_tilt = nu_sd.shape[0] - 3 * n_files - t0
+        body = t0 + n_tilt
+        scales = (1.0 + c) * w_sc - c**2
+        nu_phys = jnp.concatenate([nu[:3 * n_files + 3], scales, nu[t0:body],
+                                   (1.0 + c) * nu[body:]])
+        log_prior += (jnp.sum(-0.5 * (nu_phys / nu_sd)**2)
+                      + (3 * n_files + n_scale - 1) * jnp.log1p(c))
         numpyro.deterministic("gyro_bias", nu[:3 * n_files].reshape(n_files, 3))
         numpyro.deterministic("gyro_scale", nu[3 * n_files:3 * n_files + 3])
-        numpyro.deterministic("wheel_scale", nu[3 * n_files + 3])
-        numpyro.deterministic("wheel_tilt",
-                              nu[3 * n_files + 4:3 * n_files + 4 + n_tilt].reshape(n_tilt // 2, 2))
+        numpyro.deterministic("wheel_scale", scales if per_wheel else scales[0])
+        numpyro.deterministic("wheel_tilt", nu[t0:body].reshape(n_tilt // 2, 2))
         numpyro.deterministic("T_body", nu_phys[body:].reshape(n_files, 3))
     numpyro.factor("prior", log_prior)
 
@@ -704,24 +732,26 @@ def _pack(h0, tq, torque: bool):
 
 
 @lru_cache(maxsize=None)
-def inertia_model(torque: bool, robust: bool = False):
-    """The NumPyro model function (one object per flag pair, so compiled code is reused).
+def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_wheel"):
+    """The NumPyro model function (one object per flag set, so compiled code is reused).
 
     Call it with ``**InertiaProblem.model_kwargs`` (per-file sufficient statistics, so its shapes
     depend on the number of files, wheels and the flags only, not on the number of samples).
     Posterior sites: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis) N m
     when ``torque``, ``noise_scale`` (file), ``sigma_omega``, ``sigma_rho`` (rad/s) and
     ``sigma_theta`` (rad) per file, and the sampler's ``z``, ``noise_z``; when ``robust`` also
-    ``gyro_bias`` (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale`` (fraction) and
+    ``gyro_bias`` (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale`` (wheel) fractions
+    (one per wheel; a scalar with ``wheel_errors="common"``, which must match the problem's),
     ``wheel_tilt`` (wheel, tilt) rad and ``T_body`` (file, axis) N m, a body-fixed external
     torque (:mod:`cassini_bayes.inference.nuisance`).
     """
     def model(**kwargs):
         if not robust:
             kwargs.pop("nu_sd", None)
-        return _model(torque=torque, **kwargs)
+            kwargs.pop("nu_weights", None)
+        return _model(torque=torque, per_wheel=wheel_errors == "per_wheel", **kwargs)
 
-    model.__name__ = f"inertia_model_torque_{torque}_robust_{robust}"
+    model.__name__ = f"inertia_model_torque_{torque}_robust_{robust}_{wheel_errors}"
     model.__doc__ = _model.__doc__
     return model
 
@@ -738,8 +768,9 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
     ``noise_scale`` and the noise levels (n, F) when ``log_noise`` (F, 3), the log of the
     empirical-Bayes levels ``σ*``, is given; with a robust ``layout``
     (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`) also ``gyro_bias`` (n, F, 3),
-    ``gyro_scale`` (n, 3), ``wheel_scale`` (n,), ``wheel_tilt`` (n, K, 2). The same function gives
-    the simulator and SBC their truth, so the model's prior and the truth's prior agree exactly.
+    ``gyro_scale`` (n, 3), ``wheel_scale`` (n, K) per wheel or (n,) common, ``wheel_tilt``
+    (n, K, 2). The same function gives the simulator and SBC their truth, so the model's prior
+    and the truth's prior agree exactly.
     """
     key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
     kept = []
@@ -773,7 +804,8 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
         sl = layout.slices
         out["gyro_bias"] = nu[:, sl["gyro_bias"]].reshape(n, layout.n_files, 3)
         out["gyro_scale"] = nu[:, sl["gyro_scale"]]
-        out["wheel_scale"] = nu[:, sl["wheel_inertia"].start]
+        out["wheel_scale"] = (nu[:, sl["wheel_inertia"]] if layout.wheel_errors == "per_wheel"
+                              else nu[:, sl["wheel_inertia"].start])
         out["wheel_tilt"] = nu[:, sl["wheel_axes"]].reshape(n, len(layout.wheels), 2)
         out["T_body"] = nu[:, sl["body_torque"]].reshape(n, layout.n_files, 3)
     return out
@@ -833,8 +865,8 @@ ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_tilt", "T_body"
 
 
 def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
-                torque: bool = True, robust: bool = True, settings=None,
-                prior_draws: int = 500) -> InertiaPosterior:
+                torque: bool = True, robust: bool = True, wheel_errors: str = "per_wheel",
+                settings=None, prior_draws: int = 500) -> InertiaPosterior:
     """Posterior of the inertia tensor from one or more RWA-slew telemetry files.
 
     Parameters
@@ -845,10 +877,12 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
         wheel axes and spin inertias.
     torque : include the constant inertial external torque ``T_N`` per file.
     robust : include the sensor and actuator nuisance parameters (gyro bias per file, gyro scale
-        factor, wheel spin-inertia scale, wheel spin-axis tilts; priors from
+        factor, wheel spin-inertia scales, wheel spin-axis tilts; priors from
         ``spacecraft.knowledge``; :mod:`cassini_bayes.inference.nuisance`). The default, as on
         the CLI: flight data always carry these errors. ``False`` is the papers' idealised model
         (for clean simulations and comparisons with the papers).
+    wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` (default, one scale
+        per active wheel) or ``"common"`` (one scale for all wheels, the earlier model).
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
 
@@ -860,8 +894,8 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
         * ``posterior``: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis)
           N m, ``sigma_omega``/``sigma_rho`` (file) rad/s, ``sigma_theta`` (file) rad, and the
           sampler's non-dimensional ``z``, ``noise_z``; when ``robust`` also ``gyro_bias``
-          (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale``, ``wheel_tilt`` (wheel,
-          tilt) rad;
+          (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale`` (wheel; a scalar for the
+          common model), ``wheel_tilt`` (wheel, tilt) rad;
         * ``sample_stats`` (NUTS), ``prior`` (same names, drawn from the stated prior);
         * ``observed_data``: ``omega`` (t, axis) rad/s, ``q`` (t, quat), ``h_wheels`` (t, axis)
           N m s (wheel momentum in body axes), ``file`` (t);
@@ -884,7 +918,8 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
-    problem = prepare_inertia(telemetries, spacecraft, torque=torque, robust=robust)
+    problem = prepare_inertia(telemetries, spacecraft, torque=torque, robust=robust,
+                              wheel_errors=wheel_errors)
     _warn_weak(problem)
     n_files = len(telemetries)
     kw = problem.model_kwargs
@@ -895,6 +930,7 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
             "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
             "gyro_bias": ["file", "axis"], "gyro_scale": ["axis"], "wheel_tilt": ["wheel", "tilt"],
             "T_body": ["file", "axis"],
+            **({"wheel_scale": ["wheel"]} if wheel_errors == "per_wheel" else {}),
             **{name: ["file"] for name in NOISE_NAMES}}
     log_nh = np.asarray(kw["log_noise"])
 
@@ -902,8 +938,9 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
         return sample_prior(key_prior, problem.prior, n, n_files=n_files, torque=torque,
                             log_noise=log_nh, layout=problem.layout if robust else None)
 
-    idata = run_nuts(key, inertia_model(torque, robust), model_kwargs=kw, settings=settings,
-                     coords=coords, dims=dims, prior=prior, prior_draws=prior_draws)
+    idata = run_nuts(key, inertia_model(torque, robust, wheel_errors), model_kwargs=kw,
+                     settings=settings, coords=coords, dims=dims, prior=prior,
+                     prior_draws=prior_draws)
 
     post = idata.posterior
     pi_mean = np.array([float(post[n].mean()) for n in INERTIA_NAMES])
@@ -915,10 +952,11 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     if robust:
         nu_mean = np.concatenate([post[name].mean(("chain", "draw")).values.reshape(-1)
                                   for name in ROBUST_SITES])
-    if robust:  # the residual is that of π̃ = π/(1 + c) (nuisance.py); c has no column there
-        sl = problem.layout.slices["wheel_inertia"].start
-        scale = 1.0 + nu_mean[sl]
-        nu_mean[sl] = 0.0
+    if robust:  # the residual is that of π̃ = π/(1 + c) and δ_k = (c_k − c)/(1 + c) (nuisance.py)
+        sl = problem.layout.slices["wheel_inertia"]
+        c = float(problem.layout.scale_weights @ nu_mean[sl])
+        scale = 1.0 + c
+        nu_mean[sl] = (nu_mean[sl] - c) / scale
         nu_mean[problem.layout.slices["body_torque"]] /= scale
         pi_mean, h0_mean, tq_mean = pi_mean / scale, h0_mean / scale, tq_mean / scale
     r, std = momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean, nu_mean)

@@ -30,9 +30,10 @@ Robust model (issue 7; the default)
 -----------------------------------
 Brown's balance also moves with effects his least squares leaves out, each small and entering
 ``d_g`` linearly (:mod:`cassini_bayes.inference.nuisance`, the inertia and thrust models' layout
-and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a common wheel
-spin-inertia scale (``J_k → (1 + c) J_k`` on every wheel, the solved one included), tilts of the
-*known* wheels' axes (the solved wheel's axis is the unknown) and a body-fixed external torque
+and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a spin-inertia
+scale per wheel (``J_k → (1 + c_k) J_k``, the solved wheel's own included; with
+``wheel_errors="common"`` one ``c`` for every wheel, the earlier model), tilts of the *known*
+wheels' axes (the solved wheel's axis is the unknown) and a body-fixed external torque
 (``∫ A(q_s)ᵀ ds T_B`` between the windows; Brown: ≈ 3e-6 N m, < 0.1° for the RCS method). With
 zero-mean Normal priors they are integrated out exactly: ``d ~ N(0, C + D Σ_ν Dᵀ)`` over all
 pairs together (one effect is shared by every pair). The RWA method feels them most: 0.2° tilts
@@ -293,8 +294,8 @@ def _noise_cov(u, pi, log_sigma, *, n_w, t_aa, j4, known_cov):
 
 def _nuisance_cols(u, *, r_u, j4, nu_cols, nu_wheel):
     """(G, 3, R) columns of the robust nuisance vector ``ν`` in ``d_g``: the fixed inertial
-    columns of :func:`_nuisance_means` plus the solved wheel's part of the common wheel
-    spin-inertia scale, ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
+    columns of :func:`_nuisance_means` plus the solved wheel's part of its spin-inertia scale
+    (its own per-wheel scale, or the common one), ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
     d_r = (r_u[1::2] - r_u[0::2]) @ u                                  # (G, 3)
     return nu_cols + j4 * d_r[:, :, None] * nu_wheel[None, None, :]
 
@@ -401,11 +402,12 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     """The robust model's nuisance columns of ``d_g`` (:func:`_loglik`), as JAX arrays.
 
     The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
-    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the common wheel
-    spin-inertia scale on the known wheels; the known wheels' axis tilts; a body-fixed torque
-    through ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the
-    momentum, B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the wheel-scale
-    column, whose solved-wheel part :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
+    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
+    wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
+    ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the momentum,
+    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale column
+    (per wheel: its own, the layout's last scale; common: the one scale), whose solved-wheel part
+    :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
     """
     a_all = np.asarray(dcm(jnp.asarray(q)))
     rho = np.nan_to_num(rates)
@@ -416,7 +418,7 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
     diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
     one_hot = np.zeros(layout.size)
-    one_hot[layout.slices["wheel_inertia"]] = 1.0
+    one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
     return dict(nu_cols=jnp.asarray(np.stack(diff)), nu_sd=jnp.asarray(layout.sd),
                 nu_wheel=jnp.asarray(one_hot))
 
@@ -452,7 +454,7 @@ def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
 def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                  pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
                  inertia: InertiaGaussian | None = None, wheel: str = WHEEL,
-                 robust: bool = True) -> Rwa4Problem:
+                 robust: bool = True, wheel_errors: str = "per_wheel") -> Rwa4Problem:
     """Prepare the spin-axis problem of ``wheel`` from one telemetry file and its window pairs.
 
     Parameters
@@ -467,6 +469,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     wheel : the wheel whose axis is solved for (default RWA4; Brown's flight test: RWA1).
     robust : integrate out the nuisance effects of the module docstring ("Robust model"), with
         the priors of the spacecraft model's ``Knowledge``; ``False``: Brown's idealised model.
+    wheel_errors : the robust model's wheel spin-inertia errors: ``"per_wheel"`` (default; the
+        solved wheel has its own scale too) or ``"common"`` (one scale for every wheel).
 
     Raises
     ------
@@ -523,7 +527,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
 
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
-    layout = nuisance_layout(spacecraft, 1, [names[k] for k in known])
+    layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
+                             wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel])
     nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
     data.update(nuisance if robust else _no_nuisance(len(pairs)))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
@@ -795,7 +800,8 @@ class Rwa4Posterior(NamedTuple):
 def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
              pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
              inertia: InertiaGaussian | None = None, settings=None,
-             prior_draws: int = 500, wheel: str = WHEEL, robust: bool = True) -> Rwa4Posterior:
+             prior_draws: int = 500, wheel: str = WHEEL, robust: bool = True,
+             wheel_errors: str = "per_wheel") -> Rwa4Posterior:
     """Posterior of a wheel's spin axis (unit vector, body axes; default RWA4) with the inertia
     sampled jointly.
 
@@ -812,9 +818,11 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     wheel : the wheel solved for (``u4_*`` is its axis), e.g. ``"RWA1"`` for Brown's flight
         test with RWA2 and RWA3 known.
-    robust : the robust model (default: gyro bias and scale factor, wheel spin-inertia scale,
+    robust : the robust model (default: gyro bias and scale factor, wheel spin-inertia scales,
         the known wheels' axis tilts and a body-fixed torque integrated out; module docstring)
         or, ``False``, Brown's idealised model.
+    wheel_errors : ``"per_wheel"`` (default: one spin-inertia scale per wheel, the solved one
+        included) or ``"common"`` (one scale for every wheel).
 
     Returns
     -------
@@ -830,7 +838,8 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
 
     settings = settings or SamplerSettings()
     problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
-                           inertia=inertia, wheel=wheel, robust=robust)
+                           inertia=inertia, wheel=wheel, robust=robust,
+                           wheel_errors=wheel_errors)
     kw = problem.model_kwargs
     coords = {"w_dim": np.arange(_DIM)}
     dims = {"w": ["w_dim"]}

@@ -2,7 +2,7 @@
 
 Lee recommends checking what a representative external torque does to the inertia estimate. Here
 that check is done for every effect the robust model knows (external torque, gyro bias and scale
-factor, wheel spin-inertia scale, wheel spin-axis tilts), linearised at the posterior mode:
+factor, wheel spin-inertia scales, wheel spin-axis tilts), linearised at the posterior mode:
 
 For an effect ``G`` with parameters ``ν_G`` (prior sd ``d_G``) and the model *without* it
 (parameters ``R`` = the fitted set minus ``G``), the Gaussian posterior mode of ``θ_R`` moves, when

@@ -74,8 +74,10 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   ``∫ b × H_w dt = −[C_t]_× b``, ``C_t = ∫_{t_0}^{t} H_w ds`` (the constant ``I b`` is absorbed by
   the offset);
 * gyro scale factors ``s``: ``+ I diag(ω_meas) s``;
-* common wheel spin-inertia error ``c``: the true wheel momentum is ``(1 + c) H_w``, so the left
-  side computed with the model's wheels is ``Q F j − c H_w(t)``;
+* wheel spin-inertia errors ``c_k``, one per active wheel (``wheel_errors="per_wheel"``, the
+  default): the true wheel momentum is ``H_w + Σ_k c_k J_k ρ_k g_k``, so the left side computed
+  with the model's wheels is ``Q F j − Σ_k c_k J_k ρ_k(t) g_k``; ``"common"``: one ``c`` for all,
+  ``− c H_w(t)``;
 * wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj J_k ρ_k u_kj``;
 * telemetry time-tag errors (white, sd ``σ_t`` = ``Knowledge.time_tag_sd_s``, 10 ms by default):
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
@@ -99,9 +101,10 @@ sd per unit of whitened ``τr``, which no affine whitening removes — 84 diverg
 to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the worst of those
 (seed 14: 5 divergences, tree depth 4-5) has none, at tree depth 2-3.
 
-``c`` is confounded with the thrust scale (``F`` balances the wheel momentum the event builds): the
-thrust posterior widens by about the prior sd of ``c`` (0.5 % by default) instead of claiming the
-0.01 % that the idealised model claims on clean data.
+The common part of the wheel scales is confounded with the thrust scale (``F`` balances the
+wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the
+common model, ``0.5 %/√K`` per wheel with K wheels built up) instead of claiming the 0.01 % that
+the idealised model claims on clean data.
 
 Identification
 --------------
@@ -129,7 +132,7 @@ from numpyro.distributions import constraints
 from cassini_bayes.errors import InputError
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.laplace import laplace
-from cassini_bayes.inference.nuisance import EFFECTS, nuisance_layout
+from cassini_bayes.inference.nuisance import EFFECTS, nuisance_layout, wheel_scale_columns
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
@@ -339,7 +342,7 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
     b0 = sl["gyro_bias"].start + 3 * e
     cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
     cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
-    cols[:, :, sl["wheel_inertia"].start] = -h                            # −c H_w
+    cols[:, :, sl["wheel_inertia"]] = -wheel_scale_columns(layout, h, per_wheel)  # −c_k J_k ρ_k
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
         if name in per_wheel:
@@ -382,11 +385,12 @@ def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
-                   robust: bool = False) -> ThrustProblem:
+                   robust: bool = False, wheel_errors: str = "per_wheel") -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
 
     ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
-    external torque).
+    external torque); ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel
+    spin-inertia model.
 
     Raises
     ------
@@ -440,7 +444,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     i_fixed = np.asarray(spacecraft.inertia, float)
     i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
-    layout = nuisance_layout(spacecraft, n_ev, wheels if robust else ())
+    layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
+                             wheel_errors=wheel_errors)
     n_nu = layout.size if robust else 0
     nu_cols = np.zeros((n_ev, n_max, 3, n_nu))
     for e, (tel, log) in enumerate(zip(tels, logs)):
@@ -792,19 +797,20 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
             numpyro.deterministic(name, pi[i])
 
 
-def _split_nuisance(nu, n_ev: int) -> dict:
-    """The robust nuisance vectors ``ν`` (..., R) as named sites (layout of
+def _split_nuisance(nu, layout) -> dict:
+    """The robust nuisance vectors ``ν`` (..., R) as named sites (``layout`` of
     :func:`~cassini_bayes.inference.nuisance.nuisance_layout`): ``gyro_bias`` (..., E, 3) rad/s,
-    ``gyro_scale`` (..., 3), ``wheel_scale`` (...), ``wheel_tilt`` (..., K, 2) rad, ``T_body``
-    (..., E, 3) N m."""
-    lead = nu.shape[:-1]
-    b = 3 * n_ev
-    end = nu.shape[-1] - 3 * n_ev
-    return {EFFECTS["gyro_bias"]: nu[..., :b].reshape(lead + (n_ev, 3)),
-            EFFECTS["gyro_scale"]: nu[..., b:b + 3],
-            EFFECTS["wheel_inertia"]: nu[..., b + 3],
-            EFFECTS["wheel_axes"]: nu[..., b + 4:end].reshape(lead + (-1, 2)),
-            EFFECTS["body_torque"]: nu[..., end:].reshape(lead + (n_ev, 3))}
+    ``gyro_scale`` (..., 3), ``wheel_scale`` (..., K) per wheel or (...) common, ``wheel_tilt``
+    (..., K, 2) rad, ``T_body`` (..., E, 3) N m."""
+    lead, sl = nu.shape[:-1], layout.slices
+    scale = nu[..., sl["wheel_inertia"]]
+    return {EFFECTS["gyro_bias"]: nu[..., sl["gyro_bias"]].reshape(lead + (layout.n_files, 3)),
+            EFFECTS["gyro_scale"]: nu[..., sl["gyro_scale"]],
+            EFFECTS["wheel_inertia"]: scale if layout.wheel_errors == "per_wheel"
+            else scale[..., 0],
+            EFFECTS["wheel_axes"]: nu[..., sl["wheel_axes"]].reshape(lead + (-1, 2)),
+            EFFECTS["body_torque"]: nu[..., sl["body_torque"]].reshape(
+                lead + (layout.n_files, 3))}
 
 
 @lru_cache(maxsize=None)
@@ -905,8 +911,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
     nu = np.asarray(_nuisance_sampler(len(problem.names), sample_inertia)(
         jnp.asarray(w.reshape(-1, dim)), eps, kw))
-    n_ev = kw["log_noise_hat"].shape[0]
-    for site, v in _split_nuisance(nu.reshape(n_chain, n_draw, n_nu), n_ev).items():
+    for site, v in _split_nuisance(nu.reshape(n_chain, n_draw, n_nu), problem.layout).items():
         site_dims = tuple(dims.get(site, ()))
         idata.posterior[site] = xr.DataArray(
             v, dims=("chain", "draw") + site_dims,
@@ -916,7 +921,8 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                mode: str = "mean", inertia: InertiaGaussian | str | None = None, settings=None,
-               prior_draws: int = 500, robust: bool = True) -> ThrustPosterior:
+               prior_draws: int = 500, robust: bool = True,
+               wheel_errors: str = "per_wheel") -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
     Parameters
@@ -935,9 +941,11 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         inertia error moved ``F`` 3 % (12 sd) on a Table 2 event, through the wheel scale.
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
-    robust : add the nuisance parameters (gyro bias and scale, wheel inertia scale and tilts,
+    robust : add the nuisance parameters (gyro bias and scale, wheel inertia scales and tilts,
         external torque; module docstring). The default, as on the CLI; ``False`` is the
         papers' idealised model (clean simulations, comparisons with the papers).
+    wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` (default, one scale
+        per active wheel, site ``wheel_scale`` (wheel)) or ``"common"`` (one scalar scale).
 
     Returns
     -------
@@ -954,7 +962,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
 
     settings = settings or SamplerSettings()
     inertia = resolve_inertia(inertia, spacecraft, robust)
-    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust)
+    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust,
+                             wheel_errors=wheel_errors)
     unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
@@ -969,7 +978,9 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                        "tilt": ["u1", "u2"]})
         dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
                      EFFECTS["wheel_axes"]: ["wheel", "tilt"],
-                     EFFECTS["body_torque"]: ["event", "axis"]})
+                     EFFECTS["body_torque"]: ["event", "axis"],
+                     **({EFFECTS["wheel_inertia"]: ["wheel"]}
+                        if wheel_errors == "per_wheel" else {})})
     idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs=kw, settings=settings,
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),

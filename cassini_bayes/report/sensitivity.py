@@ -14,7 +14,7 @@ from cassini_bayes.report.tables import fmt
 __all__ = ["sensitivity_section"]
 
 _LABELS = {"external_torque": "external torque T_N", "gyro_bias": "gyro bias",
-           "gyro_scale": "gyro scale factor", "wheel_inertia": "wheel spin-inertia scale",
+           "gyro_scale": "gyro scale factor", "wheel_inertia": "wheel spin-inertia scales",
            "wheel_axes": "wheel spin-axis tilts", "body_torque": "body-fixed torque T_body"}
 
 

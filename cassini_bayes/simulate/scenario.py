@@ -13,6 +13,10 @@ noise and the seed. Unknown keys, missing required values and impossible values 
                 tau_fall_s, rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
                 external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3],
                 wheel_inertia_scale = 1.0 (true spin inertias = scale × the model file's),
+                wheel_inertia_errors = [e_1, …, e_K] (each wheel's own fractional error, in the
+                model file's wheel order), wheel_inertia_error_sd = σ (each wheel's error drawn
+                ~ N(0, σ²) independently from the scenario's seed, added to the fixed ones):
+                true J_k = scale × (1 + e_k) × the model file's,
                 wheel_axis_tilt_deg = {RWA1 = [a1, a2], …} (true axes tilted along
                 ``spacecraft.wheel_tilt_basis``; the prior model keeps the nominal ones)
     [prior]     model = "…" (required)
@@ -71,6 +75,7 @@ MAX_SAMPLES = MAX_ROWS
 row limit :data:`cassini_bayes.telemetry.MAX_ROWS`, so every simulated file can be read back."""
 NUMBER_ABS_MAX = 1e10
 """Largest magnitude of any number in a scenario file (keeps every product far from overflow)."""
+_WHEEL_ERROR_STREAM = 1   # the random stream of the wheel spin-inertia error draws
 
 
 @dataclass(frozen=True)
@@ -218,6 +223,8 @@ class Scenario:
     external_torque_inertial_nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
     external_torque_body_nm: tuple[float, float, float] = (0.0, 0.0, 0.0)
     external_torque_inertial_rate_nm_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    wheel_inertia_scale: float = 1.0
+    wheel_inertia_errors: tuple[float, ...] = ()
     slews: tuple[Slew, ...] = ()
     wheel_ramps: tuple[WheelRamp, ...] = ()
     deadbands: tuple[DeadbandChange, ...] = ()
@@ -373,6 +380,21 @@ def _check_time(r: _Reader, key: str, t: float, duration: float) -> None:
         raise r.err(key, f"= {t} s lies outside the run [0, {duration}] s")
 
 
+def _wheel_inertia_errors(tr: _Reader, k: int, seed: int) -> np.ndarray | None:
+    """Each wheel's fractional spin-inertia error (k,): ``[truth] wheel_inertia_errors`` plus
+    independent ``N(0, wheel_inertia_error_sd²)`` draws from the scenario's seed (its own stream,
+    so the sensor noise is untouched); ``None`` when neither key is given."""
+    if not (tr.has("wheel_inertia_errors") or tr.has("wheel_inertia_error_sd")):
+        return None
+    err = tr.vec("wheel_inertia_errors", k, default=np.zeros(k))
+    sd = tr.num("wheel_inertia_error_sd", 0.0, nonneg=True)
+    err = err + sd * np.random.default_rng([seed, _WHEEL_ERROR_STREAM]).standard_normal(k)
+    if np.any(np.abs(err) >= 0.1):
+        raise tr.err("wheel_inertia_errors", f"= {np.round(err, 4).tolist()}: each wheel's error "
+                     "is a small fraction (|e| < 0.1; with wheel_inertia_error_sd, the drawn one)")
+    return err
+
+
 def _flex_mode(top: _Reader, inertia: np.ndarray, dt: float, src: str) -> FlexMode | None:
     """The optional ``[flex_mode]`` section, checked against the truth inertia and the step."""
     if not top.has("flex_mode"):
@@ -400,6 +422,9 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     top = _Reader(d, "", src, {"name", "description", "seed", "run", "truth", "prior", "initial",
                                "rwa_controller", "rcs_controller", "slew", "wheel_ramp",
                                "deadband", "pulse", "noise", "window", "flex_mode"})
+    seed = top.t.get("seed", 0)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
+        raise top.err("seed", f"must be an integer in 0 .. 2^32 - 1, got {seed!r}")
     run = top.sub("run", {"duration_s", "dt_s", "sample_period_s", "control"}, required=True)
     duration = run.num("duration_s", positive=True)
     dt = run.num("dt_s", positive=True)
@@ -430,7 +455,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     tr = top.sub("truth", {"model", "inertia", "thrust_n", "tau_delay_s", "tau_rise_s",
                            "tau_fall_s", "rwa4_axis", "external_torque_inertial_nm",
                            "external_torque_body_nm", "external_torque_inertial_rate_nm_s",
-                           "wheel_inertia_scale", "wheel_axis_tilt_deg"},
+                           "wheel_inertia_scale", "wheel_axis_tilt_deg", "wheel_inertia_errors",
+                           "wheel_inertia_error_sd"},
                     required=True)
     truth, truth_path = _model(tr.str_("model"), "truth.model", src)
     ti = tr.sub("inertia", {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"})
@@ -460,16 +486,17 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     j_scale = tr.num("wheel_inertia_scale", 1.0, positive=True)
     if abs(j_scale - 1.0) >= 0.5:
         raise tr.err("wheel_inertia_scale", f"= {j_scale} must be close to 1 (a fractional error)")
+    j_err = _wheel_inertia_errors(tr, len(truth.wheels), seed)
     tilts = tr.sub("wheel_axis_tilt_deg", set(truth.wheel_names))
     wheels = []
-    for w in truth.wheels:
+    for w, e in zip(truth.wheels, j_err if j_err is not None else np.zeros(len(truth.wheels))):
         axis = w.axis
         if w.name in tilts.t:
             a = tilts.vec(w.name, 2)
             if np.any(np.abs(a) > 10.0):
                 raise tilts.err(w.name, "tilts are small angles in degrees (|a| <= 10)")
             axis = tilted_axis(axis, np.deg2rad(a))
-        wheels.append(replace(w, axis=axis, inertia=w.inertia * j_scale))
+        wheels.append(replace(w, axis=axis, inertia=w.inertia * j_scale * (1.0 + e)))
     truth = replace(truth, wheels=tuple(wheels))
     ext_n = tr.vec("external_torque_inertial_nm", default=np.zeros(3))
     ext_b = tr.vec("external_torque_body_nm", default=np.zeros(3))
@@ -617,9 +644,6 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         if t1 <= t0:
             raise r.err("t1_s", f"= {t1} must be after t0_s = {t0}")
         windows.append(Window(r.str_("name"), t0, t1))
-    seed = top.t.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
-        raise top.err("seed", f"must be an integer in 0 .. 2^32 - 1, got {seed!r}")
 
     return Scenario(
         name=top.str_("name", Path(src).stem), description=top.str_("description", ""),
@@ -629,6 +653,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         wheel0_rad_s=tuple(rho0), rwa=rwa, rcs=rcs,
         external_torque_inertial_nm=tuple(ext_n), external_torque_body_nm=tuple(ext_b),
         external_torque_inertial_rate_nm_s=tuple(ext_rate),
+        wheel_inertia_scale=j_scale,
+        wheel_inertia_errors=() if j_err is None else tuple(float(x) for x in j_err),
         slews=tuple(slews), wheel_ramps=tuple(ramps),
         deadbands=tuple(sorted(deadbands, key=lambda c: c.t_s)),
         pulses=tuple(pulses), noise=noise, flex=flex, windows=tuple(windows),
