@@ -18,7 +18,7 @@ from cassini_bayes.inference.thrust import (TAU_NAMES, pulse_increments, prepare
 from cassini_bayes.physics.impulse import impulse_from_pulses
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
-from margins import assert_mixed
+from margins import DIVERGENCES_MAX, assert_mixed
 
 
 def _pulses(seed=0, n_pulses=40, span=200.0):
@@ -243,7 +243,7 @@ def test_fsds_thrust_covers_truth(fsds):
     q05, q95 = np.quantile(f, [0.05, 0.95])
     assert q05 < 0.75 < q95
     assert abs(f.mean() - 0.75) / 0.75 < 0.10
-    assert post.diagnostics.divergences == 0
+    assert post.diagnostics.divergences <= DIVERGENCES_MAX
 
 
 @pytest.mark.slow
@@ -351,7 +351,7 @@ def test_robust_model_covers_what_the_idealised_misses():
                           wheel_errors="common")
         f = post.idata.posterior["F"].values.ravel()
         found[robust] = np.quantile(f, [0.05, 0.95])
-        assert post.diagnostics.divergences == 0
+        assert post.diagnostics.divergences <= DIVERGENCES_MAX
     lo, hi = found[False]
     assert not lo <= 0.699 <= hi, found
     lo, hi = found[True]

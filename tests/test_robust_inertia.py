@@ -29,6 +29,7 @@ from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector, wheel_
 from cassini_bayes.spacecraft import Knowledge, load_spacecraft
 from cassini_bayes.telemetry import Telemetry
 from test_inference_inertia import TRUTH, make_slews
+from margins import assert_mixed
 
 PI_TRUE = np.asarray(inertia_vector(TRUTH))
 SCALE = np.array([6e-4, -5e-4, 4e-4])      # gyro scale-factor error per axis (~1 prior sd)
@@ -156,7 +157,7 @@ def test_weak_z_torque_robust_covers_and_finds_the_torque(sc, weak_z):
     post = fit_inertia(jax.random.key(3), [weak_z], sc, robust=True, settings=FIT,
                        prior_draws=200)
     d = post.diagnostics
-    assert d.max_r_hat <= 1.01 and d.divergences == 0, d
+    assert_mixed(d, ess_bulk_min=100)
     p = post.idata.posterior
     for i, n in enumerate(INERTIA_NAMES):
         lo, hi = np.quantile(p[n].values, [0.025, 0.975])
@@ -185,7 +186,7 @@ def robust_fit(sc, dirty):
 
 def test_robust_fit_converges_and_covers(robust_fit):
     d = robust_fit.diagnostics
-    assert d.max_r_hat <= 1.01 and d.divergences == 0, d
+    assert_mixed(d, ess_bulk_min=100)
     p = robust_fit.idata.posterior
     inside = [np.quantile(p[n].values, 0.05) <= PI_TRUE[i] <= np.quantile(p[n].values, 0.95)
               for i, n in enumerate(INERTIA_NAMES)]
