@@ -383,5 +383,11 @@ def test_ctrl_c_swallowed_by_python_is_delivered_again(run, run_cli, monkeypatch
         return run / "report.html"
 
     monkeypatch.setattr(cassini_bayes.report, "build_report", slow)
-    code, _, err = run_cli("report", run)
+    # a user's Ctrl-C reaches Python's handler; a test runner started in the background (CI) may
+    # have SIGINT ignored, and then the repeated SIGINT would be ignored too
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        code, _, err = run_cli("report", run)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     _one_error(code, err, 130, "interrupted")
