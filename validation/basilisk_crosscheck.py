@@ -402,6 +402,23 @@ def basilisk_pulse_impulse(width):
     return on - tr * f_end + tf * f_end
 
 
+def fl_equivalent_tau_fall(by_width) -> float:
+    """τf that makes Feldman & Lee's §V impulse (τd, τr as in TAU) match Basilisk's delivered impulse.
+
+    Least squares over the commanded widths (weighted by their counts), by bisection: the §V
+    impulse increases with τf. This is the value a perfect fit of the paper's pulse model should
+    find for τf when τd and τr sit at their priors.
+    """
+    def misfit(tf):
+        return sum(v["count"] * (float(pulse_impulse(float(w), TAU["tau_delay"], TAU["tau_rise"], tf))
+                                 - v["basilisk_s"]) for w, v in by_width.items())
+    lo, hi = 0.0, 0.3
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if misfit(mid) < 0 else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
 def thruster_configs(model):
     th = model.thrusters
     pos = np.asarray(thruster_positions(th.Lx, th.Ly, th.Lzy, th.Lzz))
@@ -504,6 +521,7 @@ def run_bias(model, out: Path, seed: int):
         by_width[f"{wdt:.3f}"] = {"basilisk_s": got, "ramp_formula_s": basilisk_pulse_impulse(wdt),
                                   "feldman_lee_s": fl, "count": int((imp[:, 0] == wdt).sum())}
     truth = {"case": "bias", "inertia": inertia_dict(i_true), "F": F_TRUE, **TAU,
+             "tau_fall_fl_equivalent": fl_equivalent_tau_fall(by_width),
              "tau_note": "Basilisk ramp-table constants (delay + first-order rise/decay), "
                          "not Feldman & Lee's profile",
              "wheel_inertia": {w[0]: w[2] for w in wheels},
@@ -625,6 +643,8 @@ def main(argv=None):
         elif case == "bias":
             rows = param_rows(s, {"F": truth["F"], **TAU}, thrust_budget)
             print_rows("fit thrust (Basilisk biasing, Basilisk ramps)", rows, s)
+            print(f"   tau_fall that makes F&L §V reproduce Basilisk's impulses (τd, τr at truth): "
+                  f"{truth['tau_fall_fl_equivalent']:.4f} s")
             print("   impulse per newton by commanded width (s): Basilisk / ramp formula / F&L §V")
             for wdt, v in truth["impulse_per_newton_by_width"].items():
                 print(f"   {wdt} s x{v['count']:>3}: {v['basilisk_s']:.4f} / "
