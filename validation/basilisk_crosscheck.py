@@ -386,7 +386,10 @@ def ramp_tables():
     This is Basilisk's piecewise-linear ramp model filled with the manufacturer's time constants,
     NOT Feldman & Lee's §V profile (which rises as 1 − e^{−t/τr} from t = 0, jumps at τd, and holds
     for τd after the off command before decaying): the two give different impulses for the same
-    commanded width, which is exactly what this cross-check probes.
+    commanded width, which is exactly what this cross-check probes. Basilisk starts a firing at the
+    ramp time whose factor equals the current one (``thrFactorToTime``): from rest that is the LAST
+    zero-thrust point of the table, so the leading delay segment is skipped and the delivered
+    profile rises from the command (see :func:`basilisk_pulse_impulse`).
     """
     td, tr, tf = TAU["tau_delay"], TAU["tau_rise"], TAU["tau_fall"]
     on = [(td, 0.0)] + [(td + s, 1.0 - np.exp(-s / tr)) for s in np.linspace(tr / 10, 8 * tr, 80)]
@@ -395,11 +398,14 @@ def ramp_tables():
 
 
 def basilisk_pulse_impulse(width):
-    """Impulse per newton (s) of one isolated pulse under :func:`ramp_tables` (continuous form)."""
-    td, tr, tf = TAU["tau_delay"], TAU["tau_rise"], TAU["tau_fall"]
-    on = max(width - td, 0.0)
-    f_end = 1.0 - np.exp(-on / tr)
-    return on - tr * f_end + tf * f_end
+    """Impulse per newton (s) Basilisk delivers for one isolated pulse of :func:`ramp_tables`.
+
+    First-order rise from the command (the table's delay is skipped, see :func:`ramp_tables`),
+    first-order decay from the off command: ``Δ − τr (1 − e^{−Δ/τr}) + τf (1 − e^{−Δ/τr})``.
+    """
+    tr, tf = TAU["tau_rise"], TAU["tau_fall"]
+    f_end = 1.0 - np.exp(-width / tr)
+    return width - tr * f_end + tf * f_end
 
 
 def fl_equivalent_tau_fall(by_width) -> float:
@@ -518,12 +524,13 @@ def run_bias(model, out: Path, seed: int):
     for wdt in sorted(set(imp[:, 0])):
         got = imp[imp[:, 0] == wdt, 1].mean()
         fl = float(pulse_impulse(wdt, TAU["tau_delay"], TAU["tau_rise"], TAU["tau_fall"]))
-        by_width[f"{wdt:.3f}"] = {"basilisk_s": got, "ramp_formula_s": basilisk_pulse_impulse(wdt),
+        by_width[f"{wdt:.3f}"] = {"basilisk_s": got, "ramp_no_delay_s": basilisk_pulse_impulse(wdt),
                                   "feldman_lee_s": fl, "count": int((imp[:, 0] == wdt).sum())}
     truth = {"case": "bias", "inertia": inertia_dict(i_true), "F": F_TRUE, **TAU,
              "tau_fall_fl_equivalent": fl_equivalent_tau_fall(by_width),
              "tau_note": "Basilisk ramp-table constants (delay + first-order rise/decay), "
-                         "not Feldman & Lee's profile",
+                         "not Feldman & Lee's profile; Basilisk skips the table's delay, so the "
+                         "delivered profile has tau_delay 0",
              "wheel_inertia": {w[0]: w[2] for w in wheels},
              "external_torque_inertial_nm": TORQUE_N.tolist(), "n_pulses": len(pulses),
              "impulse_per_newton_by_width": by_width,
@@ -667,10 +674,11 @@ def main(argv=None):
             print_rows("fit thrust (Basilisk biasing, Basilisk ramps)", rows, s)
             print(f"   tau_fall that makes F&L §V reproduce Basilisk's impulses (τd, τr at truth): "
                   f"{truth['tau_fall_fl_equivalent']:.4f} s")
-            print("   impulse per newton by commanded width (s): Basilisk / ramp formula / F&L §V")
+            print("   impulse per newton by commanded width (s): Basilisk delivered / first-order "
+                  "ramp without delay / F&L §V")
             for wdt, v in truth["impulse_per_newton_by_width"].items():
                 print(f"   {wdt} s x{v['count']:>3}: {v['basilisk_s']:.4f} / "
-                      f"{v['ramp_formula_s']:.4f} / {v['feldman_lee_s']:.4f}")
+                      f"{v['ramp_no_delay_s']:.4f} / {v['feldman_lee_s']:.4f}")
         else:
             rows = []
             for sub, label in (("fit", "inertia prior = model file's knowledge requirement"),
