@@ -425,6 +425,27 @@ def fl_equivalent_tau_fall(by_width) -> float:
     return 0.5 * (lo + hi)
 
 
+def single_pulse_check(model, widths=(0.125, 0.5), steps=(0.005, 0.001)):
+    """Impulse per newton Basilisk delivers for one isolated pulse of one thruster (s), by step.
+
+    Returns rows (step, width, delivered, :func:`basilisk_pulse_impulse`, Feldman & Lee §V): the
+    delivered profile, independent of the dynamics step, is what the bias case's truth means.
+    """
+    rows = []
+    for dt in steps:
+        for width in widths:
+            plant = Plant(true_inertia(model), [], dt, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0],
+                          thrusters=thruster_configs(model)[:1])
+            plant.step(0.1, [], np.zeros(3))
+            plant.step(0.2, [], np.zeros(3), fire=[width])
+            plant.step(2.0, [], np.zeros(3))
+            delivered = float(np.sum(plant.thr_logs[0].thrustForce) * dt / F_TRUE)
+            rows.append((dt, width, delivered, basilisk_pulse_impulse(width),
+                         float(pulse_impulse(width, TAU["tau_delay"], TAU["tau_rise"],
+                                             TAU["tau_fall"]))))
+    return rows
+
+
 def thruster_configs(model):
     th = model.thrusters
     pos = np.asarray(thruster_positions(th.Lx, th.Ly, th.Lzy, th.Lzz))
@@ -624,8 +645,15 @@ def main(argv=None):
     ap.add_argument("--draws", type=int, default=300)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-fit", action="store_true", help="simulate and check only")
+    ap.add_argument("--pulse-check", action="store_true",
+                    help="only measure single-pulse impulses of Basilisk's thruster and exit")
     a = ap.parse_args(argv)
     model = load_spacecraft(MODEL)
+    if a.pulse_check:
+        print("step s  width s  Basilisk delivered  no-delay ramp  F&L §V (impulse per newton, s)")
+        for row in single_pulse_check(model):
+            print("  ".join(f"{v:.5f}" for v in row))
+        return
     print(f"cassini_bayes {cassini_bayes.__version__} from {Path(cassini_bayes.__file__).parent}")
     a.out.mkdir(parents=True, exist_ok=True)
     log, results = [], {}
