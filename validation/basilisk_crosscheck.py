@@ -1,4 +1,4 @@
-"""Cross-check of cassini_bayes's calibrations against Basilisk (AVS Lab), a simulator that is not ours.
+"""Cross-check of cassini_bayes's calibrations against Basilisk (AVS Lab), a simulator not ours.
 
 Basilisk integrates the rigid body (``spacecraft``), the reaction wheels
 (``reactionWheelStateEffector``, balanced wheels with their own spin inertia and axis), the
@@ -98,8 +98,8 @@ class Plant:
     ``inertia`` is the TRUE total inertia about the centre of mass with the wheels locked (the
     ``I`` of Feldman & Lee Eq 2). Basilisk's balanced wheels add ``Js g gᵀ + Jt (1 − g gᵀ)`` to
     the hub (wheels at the centre of mass, so no parallel-axis term); the hub gets the rest so the
-    total is exactly ``inertia``. :func:`plant_momentum_check` verifies this from Basilisk's own total
-    angular momentum.
+    total is exactly ``inertia``. :func:`plant_momentum_check` verifies this from Basilisk's own
+    total angular momentum.
     """
 
     def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None):
@@ -114,8 +114,8 @@ class Plant:
         factory = simIncludeRW.rwFactory()
         for name, axis, js, rpm0 in wheels:
             g = np.asarray(axis) / np.linalg.norm(axis)
-            factory.create("custom", list(g), Js=float(js), Omega=float(rpm0), rWB_B=[0.0, 0.0, 0.0],
-                           useMaxTorque=False, label=name[:5])
+            factory.create("custom", list(g), Js=float(js), Omega=float(rpm0),
+                           rWB_B=[0.0, 0.0, 0.0], useMaxTorque=False, label=name[:5])
             jt = 0.5 * js            # simIncludeRW's transverse inertia for a custom wheel
             i_hub -= js * np.outer(g, g) + jt * (np.eye(3) - np.outer(g, g))
         self.sc.hub.mHub = 2500.0
@@ -206,7 +206,7 @@ class Recorder:
     def sample(self, t, sigma, omega, rho):
         q = quat_from_mrp(sigma)
         dth = NOISE["star_tracker_rad"] * self.rng.standard_normal(3)
-        # small rotation applied on the body side: A_meas = R(dth) A (as cassini_bayes.simulate.sensors)
+        # small rotation on the body side, A_meas = R(dth) A (as cassini_bayes.simulate.sensors)
         c = rbk.PRV2C(dth) if np.linalg.norm(dth) > 0 else np.eye(3)
         b = rbk.C2EP(c @ rbk.MRP2C(sigma))
         qm = np.array([b[1], b[2], b[3], b[0]])
@@ -273,7 +273,7 @@ def slew_reference(t, slews):
 
 
 def run_slews(model, out: Path, seed: int):
-    """RWA slews about X, Y, Z (+30 deg) and back (−30 deg) under a PD controller with feed-forward."""
+    """RWA slews about X, Y, Z (+30 deg) and back (−30 deg), PD control with feed-forward."""
     i_true = true_inertia(model)
     names = ["RWA1", "RWA2", "RWA3"]
     rpm0 = [400.0, -300.0, 500.0]
@@ -323,7 +323,7 @@ def run_slews(model, out: Path, seed: int):
 
 
 def plant_momentum_check(plant, rec, inertia, wheels):
-    """Largest |H_Basilisk − H_Eq2| (N m s) between Basilisk's total angular momentum and Feldman & Lee Eq 2.
+    """Largest |H_Basilisk − H_Eq2| (N m s), Basilisk's total angular momentum vs F&L Eq 2.
 
     ``H_N = A(q)ᵀ [I ω + Σ J_k ρ_k g_k]`` from the noiseless samples and the TRUE values; it
     checks the quaternion convention, the wheel-rate sign and the inertia bookkeeping at once.
@@ -409,14 +409,15 @@ def basilisk_pulse_impulse(width):
 
 
 def fl_equivalent_tau_fall(by_width) -> float:
-    """τf that makes Feldman & Lee's §V impulse (τd, τr as in TAU) match Basilisk's delivered impulse.
+    """τf for which Feldman & Lee's §V impulse (τd, τr as in TAU) matches Basilisk's delivered one.
 
-    Least squares over the commanded widths (weighted by their counts), by bisection: the §V
-    impulse increases with τf. This is the value a perfect fit of the paper's pulse model should
+    The τf whose count-weighted mean impulse residual over the commanded widths is zero, found by
+    bisection (the §V impulse increases with τf). This is the value a perfect fit of the paper's pulse model should
     find for τf when τd and τr sit at their priors.
     """
     def misfit(tf):
-        return sum(v["count"] * (float(pulse_impulse(float(w), TAU["tau_delay"], TAU["tau_rise"], tf))
+        return sum(v["count"] * (float(pulse_impulse(float(w), TAU["tau_delay"], TAU["tau_rise"],
+                                                     tf))
                                  - v["basilisk_s"]) for w, v in by_width.items())
     lo, hi = 0.0, 0.3
     for _ in range(60):
@@ -498,7 +499,8 @@ def run_bias(model, out: Path, seed: int):
     pairs = thruster_pairs(qm)
     duration, dt_ctrl, dt_dyn, dt_tel = 420.0, 0.125, 0.005, 1.0
     sigma0 = rbk.EP2MRP([0.9273618495495703, 0.1, -0.2, 0.3])
-    plant = Plant(i_true, wheels, dt_dyn, sigma0, [0.0, 0.0, 0.0], thrusters=thruster_configs(model))
+    plant = Plant(i_true, wheels, dt_dyn, sigma0, [0.0, 0.0, 0.0],
+                  thrusters=thruster_configs(model))
     c0 = rbk.MRP2C(sigma0)
     deadband, rate_gain, width_gain, wmax, min_off = 2e-3, 10.0, 0.5e3, 0.75, 3.25
     rec = Recorder([n.lower() for n in names], seed)
@@ -620,7 +622,7 @@ def print_rows(title, rows, summary):
 
 
 def rwa4_row(summary, truth, label):
-    """Angle between the posterior mean axis and the true one, vs the 90 % cone and Brown's 3 deg."""
+    """Angle from the posterior mean axis to the true one, vs the 90 % cone and Brown's 3 deg."""
     mean = np.asarray(summary["direction"]["mean"], float)
     u4 = np.asarray(truth["rwa4_axis"])
     ang = float(np.degrees(np.arccos(np.clip(mean @ u4 / np.linalg.norm(mean), -1, 1))))
@@ -710,7 +712,8 @@ def main(argv=None):
         else:
             rows = []
             for sub, label in (("fit", "inertia prior = model file's knowledge requirement"),
-                               ("fit_slews_inertia", "inertia prior = the Basilisk slews' posterior")):
+                               ("fit_slews_inertia",
+                                "inertia prior = the Basilisk slews' posterior")):
                 if not (d / sub / "summary.json").exists():
                     continue
                 s = json.loads((d / sub / "summary.json").read_text())
@@ -719,7 +722,8 @@ def main(argv=None):
                          "adequacy": s.get("adequacy"), "truth": truth}
     (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
     (a.out / "commands.log").write_text("\n\n".join(log))
-    print(f"\nresults: {a.out / 'results.json'}; commands and their output: {a.out / 'commands.log'}")
+    print(f"\nresults: {a.out / 'results.json'}; commands and their output: "
+          f"{a.out / 'commands.log'}")
 
 
 if __name__ == "__main__":
