@@ -667,7 +667,8 @@ def main(argv=None):
         truth = {"slews": run_slews, "rcs": run_rcs, "bias": run_bias}[case](model, d, a.seed)
         print(f"[{case}] Basilisk simulation {time.time() - t0:.0f} s; convention check "
               f"{truth['convention_check']:.1e}; momentum check "
-              f"{truth.get('momentum_check_nms', float('nan')):.1e} N m s")
+              + (f"{truth['momentum_check_nms']:.1e} N m s" if "momentum_check_nms" in truth
+                 else "n/a (thrusters fire)"))
         extra = ["--pulses", d / "pulses.csv"] if case == "bias" else []
         rc, text = cli("check", d / "telemetry.csv", *extra, "--spacecraft", MODEL, log=log)
         print(f"[{case}] check exit {rc}")
