@@ -13,8 +13,8 @@ import pytest
 from scipy import stats
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.inference.thrust import (TAU_NAMES, pulse_increments, prepare_thrust,
-                                            tau_prior, thrust_names)
+from cassini_bayes.inference.thrust import (TAU_NAMES, draw_tau_prior, pulse_increments,
+                                            prepare_thrust, tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_from_pulses
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
@@ -159,14 +159,70 @@ def test_nuisance_marginal_matches_dense_gaussian():
     np.testing.assert_allclose(sd * np.asarray(mean), nu_mean, rtol=1e-4, atol=1e-8)
 
 
-def test_tau_prior_holds_manufacturer_ranges():
-    """The test ranges (Feldman & Lee §V: delay 3-7, rise 15-25, fall 40-90 ms) are ±2σ."""
+def test_tau_prior_centred_on_manufacturer_ranges_and_holds_first_order_valves():
+    """Delay ~ HalfNormal(7 ms): median ≈ the nominal 5 ms, largest density at τd = 0, 85 % of it
+    below 10 ms. Rise and fall log-normal, centred on the test ranges (Feldman & Lee §V: rise
+    15-25, fall 40-90 ms) and at least as wide as them (±2σ), with log sd 0.45, so the prior
+    density of ``log τ`` at a first-order valve (τd = 0, τr = τf = 45 ms) is 0.17 of its peak for
+    the rise and 0.81 for the fall (it was e^{−22} for the rise)."""
     sc = load_spacecraft("models/fsds.toml")
     tp = tau_prior(sc)
-    ranges = [sc.pulse.tau_delay_range, sc.pulse.tau_rise_range, sc.pulse.tau_fall_range]
+    ranges = [sc.pulse.tau_rise_range, sc.pulse.tau_fall_range]
+    assert tp.delay_scale == sc.pulse.tau_delay_range[1]
+    delay = stats.halfnorm(scale=tp.delay_scale)
+    assert delay.median() == pytest.approx(0.00472, abs=1e-5)
+    assert delay.cdf(0.010) == pytest.approx(0.847, abs=1e-3)
+    assert delay.pdf(0.0) == delay.pdf(np.linspace(0, 0.03, 100)).max()
     for mu, sd, (lo, hi) in zip(tp.log_mean, tp.log_sd, ranges):
+        assert mu == pytest.approx(0.5 * np.log(lo * hi))
+        assert sd >= np.log(hi / lo) / 4 and sd == pytest.approx(0.45)
         d = stats.lognorm(s=sd, scale=np.exp(mu))
-        assert d.cdf(hi) - d.cdf(lo) == pytest.approx(0.9545, abs=1e-3)
+        assert d.cdf(hi) - d.cdf(lo) > 0.4
+    log_rise, log_fall = (stats.norm(mu, sd) for mu, sd in zip(tp.log_mean, tp.log_sd))
+    assert log_rise.pdf(np.log(0.045)) / log_rise.pdf(tp.log_mean[0]) == pytest.approx(0.17,
+                                                                                       abs=0.01)
+    assert log_fall.pdf(np.log(0.045)) / log_fall.pdf(tp.log_mean[1]) == pytest.approx(0.81,
+                                                                                       abs=0.01)
+    rise, fall = (stats.lognorm(s=sd, scale=np.exp(mu)) for mu, sd in zip(tp.log_mean, tp.log_sd))
+    lo99, hi99 = tp.central(0.99).T
+    assert lo99[0] < 5e-5 and np.all(lo99[1:] < 0.038) and np.all(hi99[1:] > 0.054)
+    np.testing.assert_allclose(tp.median(), [delay.median(), rise.median(), fall.median()])
+    np.testing.assert_allclose(tp.variance(), [delay.var(), rise.var(), fall.var()], rtol=1e-12)
+    draws = np.asarray(draw_tau_prior(jax.random.key(0), tp, (20000,)))
+    np.testing.assert_allclose(np.median(draws, 0), tp.median(), rtol=0.03)
+
+
+def test_sampler_prior_density_is_the_stated_prior():
+    """The log prior of the sampler coordinates ``(z_d, a_z, c_z)`` (:func:`_tau_from_z`, with its
+    Jacobians) is the stated prior's density of ``(τd, τr, τf)`` times ``|∂τ/∂z|`` / 2 (``τd =
+    σ_d |z_d|`` is two-to-one) — checked at the papers' profile, at a first-order valve, near
+    τd = 0 (1 µs) and at τd = 12 ms; the map inverts (Lambert W) to 1e-12."""
+    from cassini_bayes.inference.thrust import (C_SCALE_S, _tau_from_z, long_pulse_excess,
+                                                rise_deficit)
+
+    sc = load_spacecraft("models/fsds.toml")
+    tp = tau_prior(sc)
+    kw = dict(tau_delay_scale=jnp.asarray(tp.delay_scale), tau_mu=jnp.asarray(tp.log_mean),
+              tau_sd=jnp.asarray(tp.log_sd),
+              a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
+              c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))))
+
+    def coords(tau):
+        return jnp.array([-tau[0] / tp.delay_scale,
+                          (float(rise_deficit(*tau[:2])) - float(kw["a_mu"])) / C_SCALE_S,
+                          (float(long_pulse_excess(*tau)) - float(kw["c_mu"])) / C_SCALE_S])
+
+    for tau in [(0.005, 0.020, 0.065), (1e-6, 0.045, 0.045), (0.0004, 0.030, 0.050),
+                (0.012, 0.015, 0.040)]:
+        z = coords(tau)
+        got_tau, log_p = _tau_from_z(z, kw)
+        np.testing.assert_allclose(np.asarray(got_tau), tau, rtol=1e-12, atol=1e-15)
+        jac = np.linalg.det(np.asarray(jax.jacfwd(lambda v: _tau_from_z(v, kw)[0])(z)))
+        want = (stats.halfnorm(scale=tp.delay_scale).logpdf(tau[0])
+                + sum(stats.lognorm(s=sd, scale=np.exp(mu)).logpdf(x)
+                      for mu, sd, x in zip(tp.log_mean, tp.log_sd, tau[1:]))
+                + np.log(abs(jac)) - np.log(2.0))
+        assert float(log_p) == pytest.approx(want, abs=1e-9)
 
 
 def test_names_and_modes():

@@ -68,9 +68,15 @@ Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
 ~1e-4 of their prior widths, and leave ``τd``, ``τr`` near their prior: the posterior of
 ``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls (step
 sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
-``f_z`` (prior-whitened ``log F``), ``z_d``, ``z_r`` (prior-whitened ``log τd``, ``log τr``),
-``c_z`` (``c = c_mu + 0.01 s · c_z``, ``τf = c + τr e^{−τd/τr}``, the prior of ``τf`` carried over
-by its Jacobian), ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
+``f_z`` (prior-whitened ``log F``), ``z_d`` (``τd = σ_d |z_d|``, ``z_d ~ N(0, 1)``: the half-normal
+prior exactly, Gaussian in the coordinate, ``τd = 0`` an interior point), ``a_z`` (the rise
+deficit ``a = τd + τr e^{−τd/τr}`` = ``a_mu + 0.01 s · a_z``, :func:`rise_deficit`: a pulse still
+on has delivered ``F (t − a)``, so the samples inside pulses pin it) and ``c_z``
+(``c = c_mu + 0.01 s · c_z``; ``τr``, ``τf`` follow in closed form, the prior carried over by
+the Jacobian, :func:`_tau_from_z`). With the delay free over 0-10 ms the earlier coordinates
+``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6 divergences, R-hat up to
+1.048 and bulk ESS ~60 on the idealised fit of ``biasing_day028_first_order`` (2 × 300 + 300);
+``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
 Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
 density is exact in ``θ``; the maps only condition the geometry.
@@ -118,6 +124,22 @@ The common part of the wheel scales is confounded with the thrust scale (``F`` b
 wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the
 common model, ``0.5 %/√K`` per wheel with K wheels built up) instead of claiming the 0.01 % that
 the idealised model claims on clean data.
+
+Pulse family (what the data can and cannot say about the shape)
+---------------------------------------------------------------
+The profile of :mod:`~cassini_bayes.physics.pulse` with ``τd = 0`` and ``τr = τf = τ`` is a
+first-order valve, whose pulse impulse is exactly ``F Δ`` for every width: from impulses alone
+only ``F`` and ``c`` (here 0) are learned, not ``τ``. ``F`` rests on what is shape-free: two
+pulses much longer than every time constant (500 and 750 ms) differ in impulse by
+``F (Δ1 − Δ2)`` whatever the shape, which the sampled ``c`` expresses (every long pulse delivers
+``F (Δ + c)``, ``c`` free). What remains shape-dependent is the ``e^{−Δ/τr}`` part of short
+pulses (``e^{−125/45} = 6 %`` of a 125-ms pulse's rise for a 45-ms valve) and the samples taken
+during a pulse, which are what resolves ``τr`` on 1-s telemetry. The earlier prior (every range
+±2σ of a log-normal) put ``c = 0`` at ~7σ (``τf`` ≈ 15 ms), so an event whose widths could not
+separate ``F`` from ``c`` had to move ``F`` instead (measured on an independent simulator: −2.1 %
+and −1.1 % at sd 0.17 %). :func:`tau_identification` names in ``summary["warnings"]`` (through
+:class:`TauIdentificationWarning`) each time constant the data leave at its prior (contraction
+< 0.1) or pull outside the prior's central 99 % (the data disagree with the ``[pulse]`` ranges).
 
 Identification
 --------------
@@ -174,6 +196,7 @@ __all__ = [
     "pulse_increments",
     "inv3_spd",
     "long_pulse_excess",
+    "rise_deficit",
     "rate_noise_levels",
     "thrust_model",
     "sample_thrust_prior",
@@ -342,9 +365,11 @@ def tau_identification(posterior, prior: TauPrior) -> list[str]:
 def draw_tau_prior(key, prior: TauPrior, shape: tuple[int, ...] = ()):
     """Draws ``shape + (3,)`` (s) of ``(τd, τr, τf)`` from :class:`TauPrior` (JAX, traceable)."""
     z = jax.random.normal(key, shape + (3,))
+    lead = (1,) * len(shape)
+    mu = jnp.reshape(jnp.asarray(prior.log_mean), lead + (2,))
+    sd = jnp.reshape(jnp.asarray(prior.log_sd), lead + (2,))
     t_d = prior.delay_scale * jnp.abs(z[..., :1])
-    return jnp.concatenate([t_d, jnp.exp(jnp.asarray(prior.log_mean)
-                                         + jnp.asarray(prior.log_sd) * z[..., 1:])], -1)
+    return jnp.concatenate([t_d, jnp.exp(mu + sd * z[..., 1:])], -1)
 
 
 def thrust_names(mode: str) -> tuple[str, ...]:
@@ -575,6 +600,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         wheel_cov=jnp.asarray(wcov), log_noise_hat=jnp.asarray(np.log(noise)),
         tau_delay_scale=jnp.asarray(tp.delay_scale),
         tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
+        a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
         c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))),
         f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
         inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
@@ -778,33 +804,59 @@ def long_pulse_excess(tau_delay, tau_rise, tau_fall):
     return tau_fall - tau_rise * jnp.exp(-tau_delay / tau_rise)
 
 
+def rise_deficit(tau_delay, tau_rise):
+    """``a = τd + τr e^{−τd/τr}`` (s): a pulse has delivered ``F (t − a)`` by a time ``t ≫ τr``
+    after its command while it is still on (Feldman & Lee §V profile, rising phase,
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`). Samples taken during pulses pin
+    ``a`` as the long pulses' impulses pin :func:`long_pulse_excess`."""
+    return tau_delay + tau_rise * jnp.exp(-tau_delay / tau_rise)
+
+
+def _lambert_w0(x):
+    """Principal branch of Lambert's W for ``x ≥ 0`` (``w e^w = x``): Halley's iteration from
+    ``log(1 + x)``, converged to rounding in 5 steps for ``x ≤ 10``; differentiable."""
+    w = jnp.log1p(x)
+    for _ in range(5):
+        ew = jnp.exp(w)
+        f = w * ew - x
+        w = w - f / (ew * (w + 1.0) - (w + 2.0) * f / (2.0 * w + 2.0))
+    return w
+
+
 def _tau_from_z(tau_z, kw):
-    """Time constants (3,) s from the sampler's ``(z_d, z_r, c_z)`` and the log prior density
-    of the time constants in those coordinates (exact: the Jacobians included).
+    """Time constants (3,) s from the sampler's ``(z_d, a_z, c_z)`` and the log prior density
+    of the sampler coordinates (exact: the Jacobians included).
 
-    * ``z_d = log(τd / σ_d)``: the half-normal prior of ``τd`` (scale ``σ_d``) in the log
-      coordinate has density ``2 φ(e^{z_d}) e^{z_d}`` — smooth, with an exponential left tail
-      (``τd → 0``, where the likelihood stops depending on ``τd``) and a Gaussian-fast right one.
-    * ``z_r``: ``log τr`` whitened by its prior.
+    * ``z_d ~ Normal(0, 1)``, ``τd = σ_d |z_d|``: exactly the half-normal prior of ``τd``
+      (scale ``σ_d``), Gaussian in the sampler's coordinate. The map is two-to-one; every
+      physical quantity depends on ``|z_d|`` only, so the mirror images are the same posterior.
+    * ``a_z``: the rise deficit ``a = a_mu + C_SCALE a_z`` (:func:`rise_deficit`), pinned by
+      the samples taken during pulses; ``b = a − τd = τr e^{−τd/τr}``, so
+      ``τr = b e^{W(τd/b)}`` (Lambert's W).
     * ``c_z``: the long-pulse excess ``c = c_mu + C_SCALE c_z`` (:func:`long_pulse_excess`),
-      ``τf = c + τr e^{−τd/τr}``. Sampling ``c`` instead of ``τf`` makes the narrow ridge of the
-      likelihood (``c`` known to microseconds from hundreds of pulses) a coordinate axis instead
-      of a curve in ``log τ``. The prior density of ``z_f = (log τf − μ_f)/s_f`` is carried over
-      with ``|∂z_f/∂c| = 1/(s_f τf)``. Invalid values (``τf ≤ 0``) give ``τf = NaN``.
+      pinned by the long pulses' impulses; ``τf = c + b``.
 
-    At ``τd = 0`` the ridge is ``τf = τr + c``: a first-order valve (``τr = τf``) is ``c = 0``.
+    Sampling ``(a, c)`` instead of ``(τr, τf)`` turns the two narrow, curved ridges of the
+    likelihood into coordinate axes; what is left free is the split of ``a`` between the delay
+    and the rise, which only samples within a few ``τr`` of a command resolve. The prior of
+    ``(τr, τf)`` is carried over with ``|∂(τr, τf)/∂(a, c)| = ∂τr/∂b = e^u/(1 + u)``,
+    ``u = τd/τr``. Invalid values (``b ≤ 0`` or ``τf ≤ 0``) give NaN.
+
+    A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``c = 0``.
     """
-    t_d = kw["tau_delay_scale"] * jnp.exp(tau_z[0])
-    t_r = jnp.exp(kw["tau_mu"][0] + kw["tau_sd"][0] * tau_z[1])
-    c = kw["c_mu"] + C_SCALE_S * tau_z[2]
-    t_f = c + t_r * jnp.exp(-t_d / t_r)
-    ok = t_f > 0.0
-    t_f = jnp.where(ok, t_f, jnp.nan)
-    z_f = (jnp.log(t_f) - kw["tau_mu"][1]) / kw["tau_sd"][1]
+    t_d = kw["tau_delay_scale"] * jnp.abs(tau_z[0])
+    b = kw["a_mu"] + C_SCALE_S * tau_z[1] - t_d
+    b = jnp.where(b > 0.0, b, jnp.nan)
+    u = _lambert_w0(t_d / b)
+    t_r = b * jnp.exp(u)
+    t_f = kw["c_mu"] + C_SCALE_S * tau_z[2] + b
+    t_f = jnp.where(t_f > 0.0, t_f, jnp.nan)
+    log_tau = jnp.log(jnp.stack([t_r, t_f]))
+    z_rf = (log_tau - kw["tau_mu"]) / kw["tau_sd"]
     std = dist.Normal(0.0, 1.0)
-    log_prior = (jnp.log(2.0) + std.log_prob(t_d / kw["tau_delay_scale"]) + tau_z[0]
-                 + std.log_prob(tau_z[1]) + std.log_prob(z_f)
-                 - jnp.log(kw["tau_sd"][1] * t_f) + jnp.log(C_SCALE_S))
+    log_prior = (std.log_prob(tau_z[0]) + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"])
+                                                   - log_tau)
+                 + u - jnp.log1p(u) + 2.0 * jnp.log(C_SCALE_S))
     return jnp.stack([t_d, t_r, t_f]), log_prior
 
 
@@ -1052,6 +1104,15 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         ``sample_stats``, ``prior``, ``observed_data`` (``v``: the left side of Eq 17 at the
         fixed/prior-mean inertia, N m s), ``constant_data`` (prior centres and scales) and
         ``residuals`` (posterior-mean offset-free residuals, N m s).
+
+    Warns
+    -----
+    TauIdentificationWarning
+        One line per time constant the data do not identify or that conflicts with its prior
+        (:func:`tau_identification`); the CLI puts them in ``summary["warnings"]``.
+    PulseAtStartWarning
+        A pulse acts on the first sample of an event (only its impulse after that sample is
+        modelled: the event's free offset absorbs the rest).
     """
     import xarray as xr
 
