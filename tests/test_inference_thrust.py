@@ -225,6 +225,42 @@ def test_sampler_prior_density_is_the_stated_prior():
         assert float(log_p) == pytest.approx(want, abs=1e-9)
 
 
+def test_pulse_on_at_the_first_sample_is_modelled_after_it_with_a_warning(monkeypatch):
+    """A pulse commanded 0.2 s before the first sample (and one whose command ended 10 ms before
+    it, its thrust still decaying) is kept with one PulseAtStartWarning each; the model's
+    impulse from the first sample on is exactly what the profile delivers after it (the free
+    offset takes what came before)."""
+    from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
+    from cassini_bayes.telemetry import PulseAtStartWarning
+
+    import cassini_bayes.inference.thrust as thrust
+
+    # the sampler's Laplace whitening is not under test: skip its compilation
+    monkeypatch.setattr(thrust, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
+    sc = load_spacecraft("models/fsds.toml")
+    tel = _quiet_telemetry()
+    t_on, width = np.array([-0.2, -0.135, 5.0]), np.array([0.5, 0.125, 0.25])
+    log = PulseLog(t_on, np.array([0, 5, 2]), width, "p.csv")
+    with pytest.warns(PulseAtStartWarning) as rec:
+        prob = prepare_thrust([(tel, log)], sc, robust=False)
+    lines = [str(w.message) for w in rec if issubclass(w.category, PulseAtStartWarning)]
+    assert len(lines) == 2
+    assert "Z1 at t_on = -0.2 s" in lines[0] and "Y2 at t_on = -0.135 s" in lines[1]
+    assert prob.n_pulses[0] == 3
+    kw = prob.model_kwargs
+    tau = (0.005, 0.020, 0.065)
+    j = np.asarray(pulse_increments(kw["t"][0], kw["t_on"][0], kw["thruster"][0], kw["width"][0],
+                                    kw["slot"][0], kw["slot_offsets"], *tau))
+    t = np.asarray(tel.t)
+    for k, (on, w) in enumerate(zip(t_on[:2], width[:2])):
+        col = [0, 5][k]
+        want = np.asarray(pulse_impulse_until(t - on, w, *tau))
+        np.testing.assert_allclose(j[:, col] - j[0, col], want - want[0], atol=1e-12)
+    full = float(pulse_impulse(0.5, *tau))       # Feldman & Lee §V closed form
+    assert j[-1, 0] - j[0, 0] == pytest.approx(full - float(pulse_impulse_until(0.2, 0.5, *tau)),
+                                               abs=1e-12)
+
+
 def test_names_and_modes():
     assert thrust_names("mean") == ("F",)
     assert thrust_names("branch") == ("F_Z", "F_Y")
@@ -300,6 +336,30 @@ def test_fsds_thrust_covers_truth(fsds):
     assert q05 < 0.75 < q95
     assert abs(f.mean() - 0.75) / 0.75 < 0.10
     assert post.diagnostics.divergences <= DIVERGENCES_MAX
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1])
+def test_first_order_valve_thrust_covers_truth(seed):
+    """A valve outside the papers' profile family as the manufacturer's ranges state it: no
+    delay, rise = fall = 45 ms (``biasing_day028_first_order``, F = 0.699 N), robust model,
+    inertia from the model's prior. F's 90 % interval covers the truth and the sampler mixes.
+    Measured (2 × 300 + 300): seeds 0, 1 gave F −0.13 %, −0.21 % (sd 0.33 %, 0.31 %: 0.4 and
+    0.7 sd), τr 44.4, 42.3 ms. |error| < 1.645 sd is what coverage asks; at 0.7 sd measured the
+    margin holds across CPUs."""
+    from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.inference.thrust import fit_thrust
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    sc = load_scenario("experiments/scenarios/biasing_day028_first_order.toml")
+    r = simulate(jax.random.key(seed), sc)
+    post = fit_thrust(jax.random.key(1), [(r.telemetry, r.pulses)], sc.prior,
+                      settings=SamplerSettings(chains=2, warmup=300, draws=300,
+                                               chain_method="sequential"))
+    f = post.idata.posterior["F"].values.ravel()
+    q05, q95 = np.quantile(f, [0.05, 0.95])
+    assert q05 < 0.699 < q95
+    assert_mixed(post.diagnostics, ess_bulk_min=150)
 
 
 @pytest.mark.slow

@@ -35,9 +35,9 @@ Priors, stated in the physical parameters
   predicted thrust: the flight history (0.97 N at launch, 0.75 N at SOI, 0.69 N at the Probe
   relay) moves by ~30 %.
 * Pulse time constants, from the spacecraft model's ``[pulse]`` section (:func:`tau_prior`). The
-  papers' profile (delay, exponential rise, hold, exponential fall, :mod:`~cassini_bayes.physics.pulse`)
-  contains real valves that the manufacturer's ranges (delay 3-7 ms, rise 15-25 ms, fall
-  40-90 ms) exclude: a first-order valve (no delay, one time constant ``τ`` for rise and fall, 38-54
+  papers' profile (delay, exponential rise, hold, exponential fall;
+  :mod:`~cassini_bayes.physics.pulse`) contains real valves that the manufacturer's ranges (delay
+  3-7 ms, rise 15-25 ms, fall 40-90 ms) exclude: a first-order valve (no delay, one time constant ``τ`` for rise and fall, 38-54
   ms measured on an independent simulator) is ``τd = 0``, ``τr = τf = τ``. The prior covers it:
 
   - ``τd ~ HalfNormal(σ_d)``, ``σ_d`` = the upper end of ``tau_delay_range`` (7 ms): largest
