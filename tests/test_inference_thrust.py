@@ -192,6 +192,24 @@ def test_tau_prior_centred_on_manufacturer_ranges_and_holds_first_order_valves()
     np.testing.assert_allclose(np.median(draws, 0), tp.median(), rtol=0.03)
 
 
+def test_tau_identification_names_unidentified_and_conflicting_time_constants():
+    """Posterior ≈ prior (contraction < 0.1) → "not identified"; a posterior mean outside the
+    prior's central 99 % → "disagree"; an identified, agreeing one → nothing."""
+    from cassini_bayes.inference.thrust import tau_identification
+
+    tp = tau_prior(load_spacecraft("models/fsds.toml"))
+    prior = np.asarray(draw_tau_prior(jax.random.key(3), tp, (4000,)))
+    rng = np.random.default_rng(0)
+    post = {"tau_delay": prior[:, 0], "tau_rise": rng.normal(0.045, 0.001, 4000),
+            "tau_fall": rng.normal(0.200, 0.002, 4000)}
+    lines = tau_identification(post, tp)
+    assert len(lines) == 2
+    assert lines[0].startswith("tau_delay: not identified by the data (posterior/prior "
+                               "contraction")
+    assert lines[1].startswith("tau_fall: posterior mean 200 ms lies outside the prior's central "
+                               "99 % (18.8 to 191 ms)")
+
+
 def test_sampler_prior_density_is_the_stated_prior():
     """The log prior of the sampler coordinates ``(z_d, a_z, c_z)`` (:func:`_tau_from_z`, with its
     Jacobians) is the stated prior's density of ``(τd, τr, τf)`` times ``|∂τ/∂z|`` / 2 (``τd =
