@@ -135,9 +135,10 @@ pulses much longer than every time constant (500 and 750 ms) differ in impulse b
 ``F (Δ + c)``, ``c`` free). What remains shape-dependent is the ``e^{−Δ/τr}`` part of short
 pulses (``e^{−125/45} = 6 %`` of a 125-ms pulse's rise for a 45-ms valve) and the samples taken
 during a pulse, which are what resolves ``τr`` on 1-s telemetry. The earlier prior (every range
-±2σ of a log-normal) put ``c = 0`` at ~7σ (``τf`` ≈ 15 ms), so an event whose widths could not
-separate ``F`` from ``c`` had to move ``F`` instead (measured on an independent simulator: −2.1 %
-and −1.1 % at sd 0.17 %). :func:`tau_identification` names in ``summary["warnings"]`` (through
+±2σ of a log-normal) put ``c = 0`` at ~7σ (``τf`` ≈ 15 ms), so on an event whose widths cannot
+separate ``F`` from ``c`` it moves ``F`` instead (reported on an independent simulator's
+first-order valve: −2.1 % and −1.1 % at sd 0.17 %; on this package's 1-s simulations the samples
+inside pulses overrode it, docs/robust/README.md "Thrust pulse family"). :func:`tau_identification` names in ``summary["warnings"]`` (through
 :class:`TauIdentificationWarning`) each time constant the data leave at its prior (contraction
 < 0.1) or pull outside the prior's central 99 % (the data disagree with the ``[pulse]`` ranges).
 
