@@ -3,7 +3,8 @@
 A model file (DESIGN.md §4) holds the *predicted* mass properties and the hardware geometry a
 calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
 Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants, their manufacturer
-ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall priors), ``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
+ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall priors),
+``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
 sensors and wheels, the priors of the robust models' nuisance parameters; :class:`Knowledge`).
 Unknown keys are errors, so a typo never goes unnoticed.
 
