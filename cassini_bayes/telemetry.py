@@ -879,9 +879,10 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     at_start = (log.t_on < t0) & (end + tail_s > t0)
     for i in np.flatnonzero(at_start):
         warnings.warn(f"{log.source}: pulse of {THRUSTER_NAMES[log.thruster[i]]} at t_on = "
-                      f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is on at the first "
-                      f"telemetry sample t = {t0:.10g} s of {tel.source}; only what it does "
-                      "after that sample is used", PulseAtStartWarning, stacklevel=2)
+                      f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is "
+                      f"{'on' if end[i] > t0 else 'still decaying'} at the first telemetry "
+                      f"sample t = {t0:.10g} s of {tel.source}; only what it does after that "
+                      "sample is used", PulseAtStartWarning, stacklevel=2)
     at_end = (log.t_on < t1) & (end > t1)
     if np.any(at_end):
         warnings.warn(f"{log.source}: {int(at_end.sum())} pulse(s) still on at the last sample "
