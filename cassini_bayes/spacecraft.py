@@ -2,8 +2,9 @@
 
 A model file (DESIGN.md §4) holds the *predicted* mass properties and the hardware geometry a
 calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
-Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants and their manufacturer
-ranges), ``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
+Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants, their manufacturer
+ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall priors),
+``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
 sensors and wheels, the priors of the robust models' nuisance parameters; :class:`Knowledge`).
 Unknown keys are errors, so a typo never goes unnoticed.
 
@@ -93,6 +94,9 @@ class PulseConstants:
     tau_delay_range: tuple[float, float] = (0.003, 0.007)
     tau_rise_range: tuple[float, float] = (0.015, 0.025)
     tau_fall_range: tuple[float, float] = (0.040, 0.090)
+    # Smallest log sd of the rise and fall priors (cassini_bayes.inference.thrust.tau_prior):
+    # 0.45 keeps a first-order valve (rise = fall, 38-54 ms) inside the rise prior's ±2σ.
+    tau_log_sd_min: float = 0.45
 
 
 @dataclass(frozen=True)
@@ -232,6 +236,8 @@ THRUST_MAX = 1e3
 """Largest steady thrust per thruster, N (Cassini's 0.75 N RCS, its main engine 445 N)."""
 TAU_MAX = 10.0
 """Largest pulse time constant or range end, s (Cassini's are tens of ms)."""
+TAU_LOG_SD_MAX = 2.0
+"""Largest ``pulse.tau_log_sd_min`` (a factor e^±4 at ±2σ; wider says nothing)."""
 MASS_MAX = 1e7
 """Largest mass, kg (Cassini 5.7 t fuelled; the ISS 4.2e5 kg)."""
 
@@ -395,6 +401,8 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
         kw[k] = _number(tp, k, "pulse.", src, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
         rk = k + "_range"
         kw[rk] = _pair(tp, rk, "pulse.", src, getattr(base, rk), TAU_MAX)
+    kw["tau_log_sd_min"] = _number(tp, "tau_log_sd_min", "pulse.", src, base.tau_log_sd_min,
+                                   lo=0.0, hi=TAU_LOG_SD_MAX)
     thrust_t = _table(d, "thrust", src)
     _check_keys(thrust_t, {"F"}, "thrust.", src)
     thrust = _number(thrust_t, "F", "thrust.", src, 0.75, lo=0.0, hi=THRUST_MAX, unit="N")

@@ -48,8 +48,9 @@ Validation rules and their tolerances
   the same thruster has ended. A header-only pulse log is valid (no pulses). Against a telemetry
   (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
   and is dropped with a :class:`PulseSpanWarning`; one still on at the last sample is kept with a
-  warning (its on-time counts up to that sample); one already on at the first sample is an error
-  (the record would start in the middle of a thrust).
+  warning (its on-time counts up to that sample); one already on at the first sample is kept with
+  a :class:`PulseAtStartWarning` (its on-time counts from that sample, and the thrust fit models
+  exactly what it delivers after it).
 """
 
 from __future__ import annotations
@@ -92,6 +93,7 @@ __all__ = [
     "validate_telemetry",
     "validate_pulses",
     "check_pulses_in_span",
+    "PulseAtStartWarning",
     "cumulative_on_times",
     "with_on_times",
 ]
@@ -205,7 +207,11 @@ _PULSE_COLS = ("t_on", "thruster", "width")
 
 
 class PulseSpanWarning(UserWarning):
-    """Pulses outside the telemetry span were dropped, or one is still on at the last sample."""
+    """Pulses outside the telemetry span were dropped, or one is on at the first or last sample."""
+
+
+class PulseAtStartWarning(PulseSpanWarning):
+    """A pulse is on at the first sample: only what it does after that sample is used."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -851,32 +857,38 @@ def write_pulses(path: str | os.PathLike, log: PulseLog, *, force: bool = False)
     _write_frame(Path(path), cols, force)
 
 
-def check_pulses_in_span(log: PulseLog, tel: Telemetry) -> PulseLog:
+def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) -> PulseLog:
     """Keep the pulses that can affect the telemetry span ``[t[0], t[-1]]``.
 
-    - A pulse entirely before the first or from the last sample on cannot change the telemetry:
-      it is dropped with a :class:`PulseSpanWarning`.
+    A pulse acts on the data from its command ``t_on`` to ``t_on + width + tail_s``: ``tail_s`` =
+    0 for the commanded on-time (:func:`cumulative_on_times`), the decay of the thrust after the
+    command (a few fall time constants) for the thrust fit.
+
+    - A pulse that acts entirely before the first sample or from the last sample on cannot change
+      the telemetry: it is dropped with a :class:`PulseSpanWarning`.
     - A pulse still on at the last sample is kept with a :class:`PulseSpanWarning`: the data
       see its on-time up to the last sample, which is what :func:`cumulative_on_times` counts.
-    - A pulse already on at the first sample is an :class:`InputError`: the record starts in the
-      middle of a thrust, so neither the on-time "since the first row" nor the first sample's
-      rates describe a quiescent start; extend the telemetry or drop the pulse.
+    - A pulse already acting at the first sample is kept with a :class:`PulseAtStartWarning`
+      (one line per pulse, naming it): the data see what it does after the first sample — its
+      on-time from that sample (:func:`cumulative_on_times` re-bases to row 0), and in the thrust
+      fit, whose cumulative model has a free offset per event, exactly the impulse it delivers
+      after ``t[0]`` (what it delivered before is part of the offset).
     """
     t0, t1 = float(tel.t[0]), float(tel.t[-1])
     end = log.t_on + log.width
-    at_start = (log.t_on < t0) & (end > t0)
-    if np.any(at_start):
-        i = int(np.argmax(at_start))
-        raise InputError(f"pulse of {THRUSTER_NAMES[log.thruster[i]]} at t_on = "
-                         f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is on across the "
-                         f"first telemetry sample (t = {t0:.10g} s) of {tel.source}; start the "
-                         "telemetry earlier or drop that pulse", path=log.source)
+    at_start = (log.t_on < t0) & (end + tail_s > t0)
+    for i in np.flatnonzero(at_start):
+        warnings.warn(f"{log.source}: pulse of {THRUSTER_NAMES[log.thruster[i]]} at t_on = "
+                      f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is "
+                      f"{'on' if end[i] > t0 else 'still decaying'} at the first telemetry "
+                      f"sample t = {t0:.10g} s of {tel.source}; only what it does after that "
+                      "sample is used", PulseAtStartWarning, stacklevel=2)
     at_end = (log.t_on < t1) & (end > t1)
     if np.any(at_end):
         warnings.warn(f"{log.source}: {int(at_end.sum())} pulse(s) still on at the last sample "
                       f"t = {t1:.10g} s of {tel.source}; their on-time is counted up to it",
                       PulseSpanWarning, stacklevel=2)
-    outside = (end <= t0) | (log.t_on >= t1)
+    outside = (end + tail_s <= t0) | (log.t_on >= t1)
     if np.any(outside):
         warnings.warn(f"{log.source}: {int(outside.sum())} of {len(outside)} pulses lie outside "
                       f"the telemetry span {t0:.10g}..{t1:.10g} s of {tel.source} and are ignored",

@@ -21,6 +21,7 @@ quiet period never starts in the middle of a wheel ramp or a pulse's thrust tail
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -28,7 +29,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from cassini_bayes.errors import InputError
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 
-__all__ = ["quiet_mask", "quiet_periods", "slew_windows", "split_slews", "parse_window"]
+__all__ = ["quiet_mask", "quiet_periods", "slew_windows", "split_slews", "parse_window",
+           "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
 
@@ -160,7 +162,9 @@ def parse_window(text: str, t: np.ndarray | None = None, *, option: str = "windo
 
     ``T0`` or ``T1`` may be left out (``":600"``, ``"1200:"``) when ``t`` is given: the data's
     first or last time is used. With ``t`` the window must lie within ``[t[0], t[-1]]`` and hold
-    at least two samples.
+    at least two samples; an end at most half a median sample period past the data (a rounded
+    time, a jittered first or last sample) is clamped onto it with a :class:`WindowClampWarning`
+    (:func:`clamp_window`).
 
     Raises
     ------
@@ -182,11 +186,34 @@ def parse_window(text: str, t: np.ndarray | None = None, *, option: str = "windo
         raise InputError(f"--{option} '{text}': start {t0:g} s is not before end {t1:g} s; "
                          "write T0:T1 with T0 < T1")
     if t is not None:
-        if t0 < lo or t1 > hi:
-            raise InputError(f"--{option} '{text}' lies outside the data ({lo:.10g} to "
-                             f"{hi:.10g} s); choose a window inside the telemetry")
+        t0, t1 = clamp_window((t0, t1), t, f"--{option} '{text}'")
         inside = int(np.count_nonzero((t >= t0) & (t <= t1)))
         if inside < 2:
             raise InputError(f"--{option} '{text}' holds {inside} sample(s); widen it to at least "
                              "two samples")
     return (t0, t1)
+
+
+class WindowClampWarning(UserWarning):
+    """A window end a fraction of a sample past the data was moved onto the data's end."""
+
+
+def clamp_window(window: Window, t: np.ndarray, what: str) -> Window:
+    """``window`` with an end at most half a median sample period outside ``[t[0], t[-1]]``
+    moved onto the data, with one :class:`WindowClampWarning` naming ``what`` and both windows.
+
+    Raises :class:`InputError` (naming ``what``) when an end lies further out.
+    """
+    t = np.asarray(t, dtype=float)
+    lo, hi = float(t[0]), float(t[-1])
+    slack = 0.5 * float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    t0, t1 = float(window[0]), float(window[1])
+    if t0 < lo - slack or t1 > hi + slack:
+        raise InputError(f"{what} lies outside the data ({lo:.10g} to {hi:.10g} s); choose a "
+                         "window inside the telemetry")
+    new = (max(t0, lo), min(t1, hi))
+    if new != (t0, t1):
+        warnings.warn(f"{what}: window {t0:.10g}:{t1:.10g} s reaches past the data ({lo:.10g} to "
+                      f"{hi:.10g} s) by less than half a sample period; clamped to "
+                      f"{new[0]:.10g}:{new[1]:.10g} s", WindowClampWarning, stacklevel=3)
+    return new

@@ -12,6 +12,7 @@ from cassini_bayes.errors import InputError
 from cassini_bayes.inference.rwa4 import prepare_rwa4
 from cassini_bayes.inference.thrust import inv3_spd
 from cassini_bayes.inference.sphere import angles_deg, direction_summary, mean_direction
+from cassini_bayes.windows import WindowClampWarning
 from margins import assert_mixed
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -63,6 +64,9 @@ def test_bad_inputs_are_input_errors():
         prepare_rwa4(steady, sc, method="rcs", pairs=pairs)
     with pytest.raises(InputError, match="outside the data"):
         prepare_rwa4(steady, sc, method="rcs", pairs=[((0.0, 100.0), (300.0, 900.0))])
+    with pytest.warns(WindowClampWarning, match="clamped to"), \
+            pytest.raises(InputError, match="spin change"):   # clamped, then judged on the data
+        prepare_rwa4(steady, sc, method="rcs", pairs=[((0.0, 100.0), (300.0, 399.002))])
     with pytest.raises(InputError, match="overlap"):
         prepare_rwa4(steady, sc, method="rwa", pairs=[((0.0, 100.0), (50.0, 150.0))])
     with pytest.raises(InputError, match="--method"):

@@ -12,7 +12,8 @@ from cassini_bayes.physics.pulse import (impulse_ratio, mix_ratio, pulse_impulse
                                          pulse_impulse_until, thrust_profile)
 
 CASES = [(0.125, 0.005, 0.020, 0.065), (0.250, 0.005, 0.020, 0.065), (0.125, 0.005, 0.020, 0.040),
-         (0.750, 0.003, 0.015, 0.090), (0.010, 0.005, 0.025, 0.040)]
+         (0.750, 0.003, 0.015, 0.090), (0.010, 0.005, 0.025, 0.040),
+         (0.125, 0.0, 0.045, 0.045)]   # a first-order valve: no delay, rise = fall
 
 
 _profile = jax.jit(thrust_profile)
@@ -66,3 +67,18 @@ def test_gradients_in_time_constants_are_finite_and_match_differences():
     g = float(jax.grad(f)(0.065))
     h = 1e-6
     assert np.isclose(g, (float(f(0.065 + h)) - float(f(0.065 - h))) / (2 * h), rtol=1e-6)
+
+
+@pytest.mark.parametrize("tau", [0.038, 0.045, 0.054])
+def test_first_order_valve_impulse_is_thrust_times_width(tau):
+    """τd = 0, τr = τf = τ: ``(Δ+τ) + τ(e^{−Δ/τ} − 1) − τ e^{−Δ/τ} = Δ`` exactly, for every width
+    (the rise's deficit equals the tail's excess), so impulses alone carry no time constant;
+    the long-pulse excess ``c = τf − τr e^{−τd/τr}`` is 0."""
+    from cassini_bayes.inference.thrust import long_pulse_excess
+
+    widths = np.array([0.001, 0.125, 0.25, 0.5, 0.75, 2.0])
+    np.testing.assert_allclose(np.asarray(pulse_impulse(widths, 0.0, tau, tau, 0.7)),
+                               0.7 * widths, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(np.asarray(pulse_impulse_until(10.0, widths, 0.0, tau, tau)),
+                               widths, rtol=1e-12, atol=1e-15)
+    assert float(long_pulse_excess(0.0, tau, tau)) == 0.0

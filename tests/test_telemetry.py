@@ -17,6 +17,7 @@ from cassini_bayes.telemetry import (
     RPM_TO_RAD_S,
     THRUSTER_NAMES,
     PulseLog,
+    PulseAtStartWarning,
     PulseSpanWarning,
     Telemetry,
     check_pulses_in_span,
@@ -221,7 +222,10 @@ def test_cumulative_on_times_matches_the_clip_sum():
     np.testing.assert_allclose(with_on_times(tel, log).on_times, got)
 
 
-def test_pulses_outside_span_warn_and_straddling_is_an_error():
+def test_pulses_outside_span_warn_and_straddling_is_kept_with_a_warning():
+    """A pulse on at the first sample is kept (one warning naming it); its on-time counts from
+    that sample. With a thrust tail (``tail_s``) a pulse whose command ended just before the
+    first sample still acts on the data and is kept too."""
     t = np.linspace(10.0, 20.0, 11)
     tel = Telemetry(t, np.tile([0, 0, 0, 1.0], (11, 1)), np.zeros((11, 3)), np.zeros((11, 4)),
                     source="tel.csv")
@@ -230,9 +234,17 @@ def test_pulses_outside_span_warn_and_straddling_is_an_error():
     with pytest.warns(PulseSpanWarning, match="2 of 3 pulses lie outside"):
         kept = check_pulses_in_span(log, tel)
     np.testing.assert_array_equal(kept.t_on, [12.0])
-    bad = PulseLog(np.array([9.95]), np.array([6]), np.array([0.1]), source="p.csv")
-    with pytest.raises(InputError, match=r"p\.csv: pulse of Y3 at t_on = 9\.95.*first telemetry"):
-        check_pulses_in_span(bad, tel)
+    on = PulseLog(np.array([9.95]), np.array([6]), np.array([0.1]), source="p.csv")
+    with pytest.warns(PulseAtStartWarning,
+                      match=r"p\.csv: pulse of Y3 at t_on = 9\.95 s .*first telemetry sample "
+                            r"t = 10 s of tel\.csv; only what it does after"):
+        assert check_pulses_in_span(on, tel).t_on.size == 1
+    np.testing.assert_allclose(cumulative_on_times(on, t)[-1, 6], 0.05)
+    ended = PulseLog(np.array([9.8]), np.array([6]), np.array([0.1]), source="p.csv")
+    with pytest.warns(PulseSpanWarning, match="1 of 1 pulses lie outside"):
+        assert check_pulses_in_span(ended, tel).t_on.size == 0
+    with pytest.warns(PulseAtStartWarning, match="t_on = 9.8 s .* still decaying at the first"):
+        assert check_pulses_in_span(ended, tel, tail_s=1.5).t_on.size == 1
     tail = PulseLog(np.array([19.95]), np.array([6]), np.array([0.1]), source="p.csv")
     with pytest.warns(PulseSpanWarning, match="still on at the last sample"):
         assert check_pulses_in_span(tail, tel).t_on.size == 1

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, with_on_times
 from cassini_bayes.windows import (
+    WindowClampWarning,
+    clamp_window,
     parse_window,
     quiet_mask,
     quiet_periods,
@@ -115,3 +119,20 @@ def test_parse_window():
         assert f"--window-a '{text}'" in str(info.value)
     with pytest.raises(InputError, match="give both ends"):
         parse_window(":600")
+
+
+def test_window_a_few_ms_past_the_data_is_clamped_with_a_warning():
+    """An end up to half a median sample period past the data (here 2 ms past, 1-s samples) is
+    moved onto the data with one WindowClampWarning; 0.6 s past (more than half a period) stays
+    an error."""
+    t = np.arange(0.0, 1000.0, 1.0) + 0.001          # jittered: first sample at 1 ms
+    with pytest.warns(WindowClampWarning, match=r"--window-b '900:999\.003'.*clamped to "
+                                                r"900:999\.001 s"):
+        assert parse_window("900:999.003", t, option="window-b") == (900.0, 999.001)
+    with pytest.warns(WindowClampWarning, match="clamped to 0.001:600 s"):
+        assert parse_window("0:600", t) == (0.001, 600.0)
+    with pytest.raises(InputError, match="outside the data"):
+        parse_window("900:999.61", t)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert clamp_window((1.0, 999.001), t, "w") == (1.0, 999.001)

@@ -644,7 +644,8 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     Truth per replicate, from the prior the fit states (:mod:`cassini_bayes.inference.thrust`):
     ``log F ~ Normal(log F_pred, THRUST_PRIOR_LOG_SD)`` with ``F_pred`` the ``[prior]``
     spacecraft's thrust (one ``F`` for all eight thrusters, mode ``mean``), and
-    ``log τ ~ Normal`` from :func:`~cassini_bayes.inference.thrust.tau_prior` for ``τd, τr, τf``.
+    ``τd, τr, τf`` from :func:`~cassini_bayes.inference.thrust.tau_prior` (half-normal delay,
+    log-normal rise and fall; :func:`~cassini_bayes.inference.thrust.draw_tau_prior`).
     They go into ``TruthParams.thrust_n`` (8,) and ``tau_s`` (3,); the truth's inertia is the
     ``[prior]`` model's (the fit holds it fixed), the rest is the scenario's. Data: the scenario
     (default :data:`THRUST_SCENARIO`, RCS-controlled wheel biasing, so the pulse train depends on
@@ -661,7 +662,8 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     """
     import numpy as np
 
-    from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, fit_thrust, tau_prior
+    from cassini_bayes.inference.thrust import (THRUST_PRIOR_LOG_SD, draw_tau_prior, fit_thrust,
+                                                tau_prior)
     from cassini_bayes.physics.momentum import inertia_vector
     from cassini_bayes.simulate.run import pulse_log, simulate_batch, truth_params
     from cassini_bayes.simulate.scenario import scenario_from_dict
@@ -678,7 +680,6 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     spacecraft = scenario.prior
     tp = tau_prior(spacecraft)
     log_f_mu = float(np.log(spacecraft.thrust))
-    tau_mu, tau_sd = jnp.asarray(tp.log_mean), jnp.asarray(tp.log_sd)
     base = truth_params(scenario)._replace(
         inertia=jnp.asarray(inertia_vector(spacecraft.inertia)))
     settings = _sampler_settings(opts)
@@ -687,7 +688,7 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     def prior_sample(key):
         k_f, k_t = jax.random.split(key)
         f = jnp.exp(log_f_mu + THRUST_PRIOR_LOG_SD * jax.random.normal(k_f))
-        tau = jnp.exp(tau_mu + tau_sd * jax.random.normal(k_t, (3,)))
+        tau = draw_tau_prior(k_t, tp)
         return dict(zip(names, (f, tau[0], tau[1], tau[2])))
 
     def simulate_batch_fn(prior_keys, sim_keys):

@@ -128,6 +128,7 @@ from cassini_bayes.inference.thrust import InertiaGaussian, rate_noise_levels
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
+from cassini_bayes.windows import clamp_window
 
 __all__ = [
     "U4_NAMES",
@@ -332,8 +333,10 @@ def _tangent_basis(u: np.ndarray) -> np.ndarray:
     return np.stack([e1, np.cross(u, e1)])
 
 
-def _check_windows(tel: Telemetry, pairs, method: str) -> None:
-    """One-line InputErrors for window pairs the calibration cannot use."""
+def _check_windows(tel: Telemetry, pairs, method: str) -> list:
+    """The window pairs, ends up to half a sample past the data clamped onto it
+    (:func:`~cassini_bayes.windows.clamp_window`, with a warning); one-line InputErrors for
+    pairs the calibration cannot use."""
     if not pairs:
         raise InputError("no window pair; give --window-a T0:T1 --window-b T0:T1",
                          path=tel.source)
@@ -341,12 +344,10 @@ def _check_windows(tel: Telemetry, pairs, method: str) -> None:
         raise InputError(f"the RCS method takes one Time A / Time B pair, got {len(pairs)}",
                          path=tel.source)
     t = np.asarray(tel.t, float)
+    pairs = [tuple(clamp_window(w, t, f"{tel.source}: window {w[0]:.10g}:{w[1]:.10g} s")
+                   for w in p) for p in pairs]
     windows = [w for p in pairs for w in p]
     for w in windows:
-        if w[0] < t[0] or w[1] > t[-1]:
-            raise InputError(f"window {w[0]:.10g}:{w[1]:.10g} s lies outside the data "
-                             f"({t[0]:.10g} to {t[-1]:.10g} s); choose windows inside it",
-                             path=tel.source)
         if np.count_nonzero((t >= w[0]) & (t <= w[1])) < 2:
             raise InputError(f"window {w[0]:.10g}:{w[1]:.10g} s holds fewer than two samples; "
                              "widen it", path=tel.source)
@@ -363,6 +364,7 @@ def _check_windows(tel: Telemetry, pairs, method: str) -> None:
                 raise InputError(f"thrusters fire inside window {w[0]:.10g}:{w[1]:.10g} s; "
                                  "momentum is not conserved there: choose a quiet window",
                                  path=tel.source)
+    return pairs
 
 
 def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
@@ -486,7 +488,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     wheel = _wheel_name(tel, wheel)
     pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
         [tuple(p) for p in pairs]
-    _check_windows(tel, pairs, method)
+    pairs = _check_windows(tel, pairs, method)
 
     t = np.asarray(tel.t, float)
     names = tel.wheel_names

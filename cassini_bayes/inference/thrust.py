@@ -34,9 +34,22 @@ Priors, stated in the physical parameters
 * ``log F ~ Normal(log F_pred, 0.3)`` per thrust parameter, ``F_pred`` the spacecraft model's
   predicted thrust: the flight history (0.97 N at launch, 0.75 N at SOI, 0.69 N at the Probe
   relay) moves by ~30 %.
-* ``log τ ~ Normal(log √(lo·hi), ln(hi/lo)/4)`` for each time constant with the manufacturer's test
-  range ``[lo, hi]`` of the spacecraft model's ``[pulse]`` section (rise 15-25 ms, fall 40-90 ms,
-  delay 3-7 ms): the test range is the central ±2σ, 95.4 % of the prior mass.
+* Pulse time constants, from the spacecraft model's ``[pulse]`` section (:func:`tau_prior`). The
+  papers' profile (delay, exponential rise, hold, exponential fall;
+  :mod:`~cassini_bayes.physics.pulse`) contains real valves that the manufacturer's ranges (delay
+  3-7 ms, rise 15-25 ms, fall 40-90 ms) exclude: a first-order valve (no delay, one time constant ``τ`` for rise and fall, 38-54
+  ms measured on an independent simulator) is ``τd = 0``, ``τr = τf = τ``. The prior covers it:
+
+  - ``τd ~ HalfNormal(σ_d)``, ``σ_d`` = the upper end of ``tau_delay_range`` (7 ms): largest
+    density at ``τd = 0`` (a valve that opens at once), median 4.7 ms ≈ the nominal 5 ms, 85 %
+    below 10 ms, the 3-7 ms range 35 %. A log-normal (the earlier prior, or one on ``τd + ε``) has
+    no density, or an arbitrary ``ε``, at 0.
+  - ``log τr``, ``log τf ~ Normal(log √(lo·hi), max(ln(hi/lo)/4, tau_log_sd_min))``, centred on
+    the manufacturer's range ``[lo, hi]``; ``tau_log_sd_min`` = 0.45 by default widens the
+    ranges' ±2σ (sd 0.13 and 0.20) so that the rise prior's ±2σ is 7.9-48 ms and the fall's
+    24-148 ms: ``τr = τf = 45 ms`` has prior density 0.17 × the mode's along ``τr`` (it was
+    ``e^{−22}``, 6.6σ out). On 1-s telemetry the data hardly resolve the shape, so this prior is
+    what the shape terms of short pulses average over (section "Pulse family" below).
 * Noise, per event: ``(σ_ω, σ_ρ) = s_e (σ̂_ω, σ̂_ρ)`` with ``log s_e ~ Normal(0, 1)``, ``σ̂`` the
   data's own white-noise levels (:func:`rate_noise_levels`). One scale, not two: the gyro term of
   ``B_e`` outweighs the wheel term ~100× on the shipped scenarios, so a free ``σ_ρ`` is
@@ -55,9 +68,15 @@ Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
 ~1e-4 of their prior widths, and leave ``τd``, ``τr`` near their prior: the posterior of
 ``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls (step
 sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
-``f_z`` (prior-whitened ``log F``), ``z_d``, ``z_r`` (prior-whitened ``log τd``, ``log τr``),
-``c_z`` (``c = c_mu + 0.01 s · c_z``, ``τf = c + τr e^{−τd/τr}``, the prior of ``τf`` carried over
-by its Jacobian), ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
+``f_z`` (prior-whitened ``log F``), ``z_d`` (``τd = σ_d |z_d|``, ``z_d ~ N(0, 1)``: the half-normal
+prior exactly, Gaussian in the coordinate, ``τd = 0`` an interior point), ``a_z`` (the rise
+deficit ``a = τd + τr e^{−τd/τr}`` = ``a_mu + 0.01 s · a_z``, :func:`rise_deficit`: a pulse still
+on has delivered ``F (t − a)``, so the samples inside pulses pin it) and ``c_z``
+(``c = c_mu + 0.01 s · c_z``; ``τr``, ``τf`` follow in closed form, the prior carried over by
+the Jacobian, :func:`_tau_from_z`). With the delay free over 0-10 ms the earlier coordinates
+``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6 divergences, R-hat up to
+1.048 and bulk ESS ~60 on the idealised fit of ``biasing_day028_first_order`` (2 × 300 + 300);
+``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
 Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
 density is exact in ``θ``; the maps only condition the geometry.
@@ -106,6 +125,23 @@ wheel momentum the event builds): the thrust posterior widens by about its prior
 common model, ``0.5 %/√K`` per wheel with K wheels built up) instead of claiming the 0.01 % that
 the idealised model claims on clean data.
 
+Pulse family (what the data can and cannot say about the shape)
+---------------------------------------------------------------
+The profile of :mod:`~cassini_bayes.physics.pulse` with ``τd = 0`` and ``τr = τf = τ`` is a
+first-order valve, whose pulse impulse is exactly ``F Δ`` for every width: from impulses alone
+only ``F`` and ``c`` (here 0) are learned, not ``τ``. ``F`` rests on what is shape-free: two
+pulses much longer than every time constant (500 and 750 ms) differ in impulse by
+``F (Δ1 − Δ2)`` whatever the shape, which the sampled ``c`` expresses (every long pulse delivers
+``F (Δ + c)``, ``c`` free). What remains shape-dependent is the ``e^{−Δ/τr}`` part of short
+pulses (``e^{−125/45} = 6 %`` of a 125-ms pulse's rise for a 45-ms valve) and the samples taken
+during a pulse, which are what resolves ``τr`` on 1-s telemetry. The earlier prior (every range
+±2σ of a log-normal) put ``c = 0`` at ~7σ (``τf`` ≈ 15 ms), so on an event whose widths cannot
+separate ``F`` from ``c`` it moves ``F`` instead (reported on an independent simulator's
+first-order valve: −2.1 % and −1.1 % at sd 0.17 %; on this package's 1-s simulations the samples
+inside pulses overrode it, docs/robust/README.md "Thrust pulse family"). :func:`tau_identification` names in ``summary["warnings"]`` (through
+:class:`TauIdentificationWarning`) each time constant the data leave at its prior (contraction
+< 0.1) or pull outside the prior's central 99 % (the data disagree with the ``[pulse]`` ranges).
+
 Identification
 --------------
 Combinations of thrusts the data cannot separate keep their prior: a thruster that never fires,
@@ -137,7 +173,8 @@ from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_ma
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import PulseLog, Telemetry, check_pulses_in_span
+from cassini_bayes.telemetry import (PulseAtStartWarning, PulseLog, Telemetry,
+                                     check_pulses_in_span)
 
 __all__ = [
     "TAU_NAMES",
@@ -149,12 +186,18 @@ __all__ = [
     "resolve_inertia",
     "TauPrior",
     "tau_prior",
+    "draw_tau_prior",
+    "tau_identification",
+    "TauIdentificationWarning",
+    "CONTRACTION_UNIDENTIFIED",
+    "PRIOR_CONFLICT_MASS",
     "thrust_names",
     "ThrustProblem",
     "prepare_thrust",
     "pulse_increments",
     "inv3_spd",
     "long_pulse_excess",
+    "rise_deficit",
     "rate_noise_levels",
     "thrust_model",
     "sample_thrust_prior",
@@ -168,6 +211,7 @@ THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Fel
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 _NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
 C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler coordinate
+_HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
 _NOISE_FLOORS = np.array([1e-9, 1e-7])
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
 _TAIL_S = 1.5
@@ -242,21 +286,91 @@ def resolve_inertia(inertia: InertiaGaussian | str | None, spacecraft: Spacecraf
 
 
 class TauPrior(NamedTuple):
-    """Log-normal prior of ``(τd, τr, τf)``: ``log_mean`` (3,) log s, ``log_sd`` (3,)."""
+    """Prior of ``(τd, τr, τf)`` (module docstring): ``τd ~ HalfNormal(delay_scale)`` (s);
+    ``log τr``, ``log τf`` ~ ``Normal(log_mean, log_sd)``, ``log_mean`` (2,) log s and
+    ``log_sd`` (2,) for rise and fall."""
 
+    delay_scale: float
     log_mean: np.ndarray
     log_sd: np.ndarray
 
+    def median(self) -> np.ndarray:
+        """(3,) s: the prior medians of ``τd, τr, τf`` (half-normal median 0.6745 σ)."""
+        return np.r_[_HALF_NORMAL_MEDIAN * self.delay_scale, np.exp(self.log_mean)]
+
+    def central(self, mass: float) -> np.ndarray:
+        """(3, 2) s: the central interval of each time constant holding ``mass`` of the prior."""
+        from scipy.stats import norm
+
+        z = np.array([-1.0, 1.0]) * norm.ppf(0.5 + 0.5 * mass)
+        delay = self.delay_scale * norm.ppf([0.75 - 0.25 * mass, 0.75 + 0.25 * mass])
+        lognormal = np.exp(self.log_mean[:, None] + z[None, :] * self.log_sd[:, None])
+        return np.vstack([delay, lognormal])
+
+    def variance(self) -> np.ndarray:
+        """(3,) s²: the prior variances of ``τd, τr, τf`` (half-normal, log-normal)."""
+        s2 = np.asarray(self.log_sd) ** 2
+        return np.r_[self.delay_scale**2 * (1.0 - 2.0 / np.pi),
+                     np.expm1(s2) * np.exp(2.0 * np.asarray(self.log_mean) + s2)]
+
 
 def tau_prior(spacecraft: Spacecraft) -> TauPrior:
-    """Prior of the time constants from the model's manufacturer test ranges (module docstring)."""
+    """Prior of the time constants from the model's ``[pulse]`` section (module docstring)."""
     p = spacecraft.pulse
     ranges = np.array([p.tau_delay_range, p.tau_rise_range, p.tau_fall_range], float)
     lo, hi = ranges[:, 0], ranges[:, 1]
     if np.any(lo <= 0) or np.any(hi <= lo):
         raise InputError(f"spacecraft model {spacecraft.name!r}: [pulse] tau_*_range must be "
                          "positive [low, high] with low < high (s)", path=spacecraft.source or None)
-    return TauPrior(0.5 * (np.log(lo) + np.log(hi)), (np.log(hi) - np.log(lo)) / 4.0)
+    log_sd = np.maximum((np.log(hi[1:]) - np.log(lo[1:])) / 4.0, p.tau_log_sd_min)
+    return TauPrior(float(hi[0]), 0.5 * (np.log(lo[1:]) + np.log(hi[1:])), log_sd)
+
+
+CONTRACTION_UNIDENTIFIED = 0.1
+"""Posterior/prior contraction ``1 − Var_post/Var_prior`` below which a time constant counts as
+not identified by the data (its posterior is essentially its prior)."""
+PRIOR_CONFLICT_MASS = 0.99
+"""A posterior mean outside the prior's central interval of this mass is a prior-data conflict."""
+
+
+class TauIdentificationWarning(UserWarning):
+    """A pulse time constant is not identified by the data, or its posterior conflicts with its
+    prior (:func:`tau_identification`)."""
+
+
+def tau_identification(posterior, prior: TauPrior) -> list[str]:
+    """One line per time constant the data cannot identify (posterior/prior contraction below
+    :data:`CONTRACTION_UNIDENTIFIED`) or whose posterior mean lies outside the prior's central
+    :data:`PRIOR_CONFLICT_MASS` (the data disagree with the spacecraft model's ``[pulse]``
+    ranges). ``posterior``: a mapping of ``tau_delay, tau_rise, tau_fall`` to draws (s)."""
+    var_prior = prior.variance()
+    central = prior.central(PRIOR_CONFLICT_MASS)
+    out = []
+    for i, name in enumerate(TAU_NAMES):
+        x = np.asarray(posterior[name], float).ravel()
+        contraction = 1.0 - float(np.var(x, ddof=1)) / var_prior[i]
+        if contraction < CONTRACTION_UNIDENTIFIED:
+            out.append(f"{name}: not identified by the data (posterior/prior contraction "
+                       f"{contraction:.2f} < {CONTRACTION_UNIDENTIFIED:g}); its posterior is "
+                       "essentially the [pulse] prior, and the thrust's interval includes that "
+                       "prior's spread")
+        mean, (lo, hi) = float(np.mean(x)), central[i]
+        if not lo <= mean <= hi:
+            out.append(f"{name}: posterior mean {1e3 * mean:.3g} ms lies outside the prior's "
+                       f"central {100 * PRIOR_CONFLICT_MASS:g} % ({1e3 * lo:.3g} to "
+                       f"{1e3 * hi:.3g} ms): the data disagree with the spacecraft model's "
+                       "[pulse] ranges; check the valve response and the prior")
+    return out
+
+
+def draw_tau_prior(key, prior: TauPrior, shape: tuple[int, ...] = ()):
+    """Draws ``shape + (3,)`` (s) of ``(τd, τr, τf)`` from :class:`TauPrior` (JAX, traceable)."""
+    z = jax.random.normal(key, shape + (3,))
+    lead = (1,) * len(shape)
+    mu = jnp.reshape(jnp.asarray(prior.log_mean), lead + (2,))
+    sd = jnp.reshape(jnp.asarray(prior.log_sd), lead + (2,))
+    t_d = prior.delay_scale * jnp.abs(z[..., :1])
+    return jnp.concatenate([t_d, jnp.exp(mu + sd * z[..., 1:])], -1)
 
 
 def thrust_names(mode: str) -> tuple[str, ...]:
@@ -408,9 +522,12 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
                              "P.csv, columns t_on, thruster, width)", path=tel.source)
         if tel.n < 10:
             raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            log = check_pulses_in_span(log, tel)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            log = check_pulses_in_span(log, tel, tail_s=_TAIL_S)
+        for w in caught:   # the other span notes are for `check`; this one changes the model
+            if issubclass(w.category, PulseAtStartWarning):
+                warnings.warn(str(w.message), PulseAtStartWarning, stacklevel=2)
         if log.t_on.size == 0:
             raise InputError(f"no pulse of {log.source} falls inside the telemetry span "
                              f"{tel.t[0]:.10g}..{tel.t[-1]:.10g} s; thrust calibration needs an "
@@ -482,8 +599,10 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         width=jnp.asarray(wid), slot=jnp.asarray(slot),
         slot_offsets=jnp.arange(k_slots), q_matrix=jnp.asarray(q_mat),
         wheel_cov=jnp.asarray(wcov), log_noise_hat=jnp.asarray(np.log(noise)),
+        tau_delay_scale=jnp.asarray(tp.delay_scale),
         tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
-        c_mu=jnp.asarray(float(long_pulse_excess(*np.exp(tp.log_mean)))),
+        a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
+        c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))),
         f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
         inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
         nu_cols=jnp.asarray(nu_cols), nu_sd=jnp.asarray(layout.sd if robust else np.zeros(0)),
@@ -492,7 +611,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     kw["time_tag_cols"] = jax.vmap(
         time_tag_columns, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None))(
         kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-        tuple(jnp.asarray(x) for x in np.exp(tp.log_mean)),
+        tuple(jnp.asarray(x) for x in tp.median()),
         jnp.full(8, float(spacecraft.thrust)), kw["q_matrix"], jnp.asarray(sd_t))
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
@@ -686,27 +805,60 @@ def long_pulse_excess(tau_delay, tau_rise, tau_fall):
     return tau_fall - tau_rise * jnp.exp(-tau_delay / tau_rise)
 
 
-def _tau_from_z(tau_z, kw):
-    """Time constants (3,) s from the sampler's ``(z_d, z_r, c_z)`` and the log-Jacobian of
-    ``z_f ↦ c`` that makes the prior exact.
+def rise_deficit(tau_delay, tau_rise):
+    """``a = τd + τr e^{−τd/τr}`` (s): a pulse has delivered ``F (t − a)`` by a time ``t ≫ τr``
+    after its command while it is still on (Feldman & Lee §V profile, rising phase,
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`). Samples taken during pulses pin
+    ``a`` as the long pulses' impulses pin :func:`long_pulse_excess`."""
+    return tau_delay + tau_rise * jnp.exp(-tau_delay / tau_rise)
 
-    ``τd``, ``τr`` keep their prior-whitened log coordinates; the third coordinate is the
-    long-pulse excess ``c = c_mu + C_SCALE c_z`` (:func:`long_pulse_excess`), and
-    ``τf = c + τr e^{−τd/τr}``. Sampling ``c`` instead of ``τf`` makes the narrow ridge of the
-    likelihood (``c`` known to microseconds from hundreds of pulses, DESIGN.md §7) a coordinate
-    axis instead of a curve in ``log τ``. The prior density of ``z_f = (log τf − μ_f)/s_f`` is
-    carried over with ``|∂z_f/∂c| = 1/(s_f τf)``. Invalid values (``τf ≤ 0``) give ``τf = NaN``.
+
+def _lambert_w0(x):
+    """Principal branch of Lambert's W for ``x ≥ 0`` (``w e^w = x``): Halley's iteration from
+    ``log(1 + x)``, converged to rounding in 5 steps for ``x ≤ 10``; differentiable."""
+    w = jnp.log1p(x)
+    for _ in range(5):
+        ew = jnp.exp(w)
+        f = w * ew - x
+        w = w - f / (ew * (w + 1.0) - (w + 2.0) * f / (2.0 * w + 2.0))
+    return w
+
+
+def _tau_from_z(tau_z, kw):
+    """Time constants (3,) s from the sampler's ``(z_d, a_z, c_z)`` and the log prior density
+    of the sampler coordinates (exact: the Jacobians included).
+
+    * ``z_d ~ Normal(0, 1)``, ``τd = σ_d |z_d|``: exactly the half-normal prior of ``τd``
+      (scale ``σ_d``), Gaussian in the sampler's coordinate. The map is two-to-one; every
+      physical quantity depends on ``|z_d|`` only, so the mirror images are the same posterior.
+    * ``a_z``: the rise deficit ``a = a_mu + C_SCALE a_z`` (:func:`rise_deficit`), pinned by
+      the samples taken during pulses; ``b = a − τd = τr e^{−τd/τr}``, so
+      ``τr = b e^{W(τd/b)}`` (Lambert's W).
+    * ``c_z``: the long-pulse excess ``c = c_mu + C_SCALE c_z`` (:func:`long_pulse_excess`),
+      pinned by the long pulses' impulses; ``τf = c + b``.
+
+    Sampling ``(a, c)`` instead of ``(τr, τf)`` turns the two narrow, curved ridges of the
+    likelihood into coordinate axes; what is left free is the split of ``a`` between the delay
+    and the rise, which only samples within a few ``τr`` of a command resolve. The prior of
+    ``(τr, τf)`` is carried over with ``|∂(τr, τf)/∂(a, c)| = ∂τr/∂b = e^u/(1 + u)``,
+    ``u = τd/τr``. Invalid values (``b ≤ 0`` or ``τf ≤ 0``) give NaN.
+
+    A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``c = 0``.
     """
-    log_d = kw["tau_mu"][0] + kw["tau_sd"][0] * tau_z[0]
-    log_r = kw["tau_mu"][1] + kw["tau_sd"][1] * tau_z[1]
-    t_d, t_r = jnp.exp(log_d), jnp.exp(log_r)
-    c = kw["c_mu"] + C_SCALE_S * tau_z[2]
-    t_f = c + t_r * jnp.exp(-t_d / t_r)
-    ok = t_f > 0.0
-    t_f = jnp.where(ok, t_f, jnp.nan)
-    z_f = (jnp.log(t_f) - kw["tau_mu"][2]) / kw["tau_sd"][2]
-    log_jac = -jnp.log(kw["tau_sd"][2] * t_f) + jnp.log(C_SCALE_S)
-    return jnp.stack([t_d, t_r, t_f]), jnp.stack([tau_z[0], tau_z[1], z_f]), log_jac
+    t_d = kw["tau_delay_scale"] * jnp.abs(tau_z[0])
+    b = kw["a_mu"] + C_SCALE_S * tau_z[1] - t_d
+    b = jnp.where(b > 0.0, b, jnp.nan)
+    u = _lambert_w0(t_d / b)
+    t_r = b * jnp.exp(u)
+    t_f = kw["c_mu"] + C_SCALE_S * tau_z[2] + b
+    t_f = jnp.where(t_f > 0.0, t_f, jnp.nan)
+    log_tau = jnp.log(jnp.stack([t_r, t_f]))
+    z_rf = (log_tau - kw["tau_mu"]) / kw["tau_sd"]
+    std = dist.Normal(0.0, 1.0)
+    log_prior = (std.log_prob(tau_z[0]) + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"])
+                                                   - log_tau)
+                 + u - jnp.log1p(u) + 2.0 * jnp.log(C_SCALE_S))
+    return jnp.stack([t_d, t_r, t_f]), log_prior
 
 
 def _physical(theta, kw, n_f: int, sample_inertia: bool):
@@ -715,7 +867,7 @@ def _physical(theta, kw, n_f: int, sample_inertia: bool):
     n_ev = kw["log_noise_hat"].shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
     thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
-    tau, _, _ = _tau_from_z(tau_z, kw)
+    tau, _ = _tau_from_z(tau_z, kw)
     log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
     pi = kw["inertia_mean"]
     if sample_inertia:
@@ -737,9 +889,8 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     the offsets and the robust model's nuisance ``ν`` are integrated out exactly."""
     n_ev = kw["log_noise_hat"].shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
-    _, tau_std, log_jac = _tau_from_z(tau_z, kw)
-    log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z))
-                 + jnp.sum(dist.Normal(0.0, 1.0).log_prob(tau_std)) + log_jac
+    _, log_prior_tau = _tau_from_z(tau_z, kw)
+    log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
@@ -837,10 +988,9 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     kw = problem.model_kwargs
     n_ev = kw["log_noise_hat"].shape[0]
     f_z = jax.random.normal(k_f, (n, len(problem.names)))
-    tau_z = jax.random.normal(k_t, (n, 3))
     noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
     thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
-    tau = np.exp(problem.tau.log_mean + problem.tau.log_sd * np.asarray(tau_z))
+    tau = np.asarray(draw_tau_prior(k_t, problem.tau, (n,)))
     out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
     out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
     sig = np.exp(np.asarray(kw["log_noise_hat"])[None] + _NOISE_STEP * np.asarray(noise_z))
@@ -955,6 +1105,15 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         ``sample_stats``, ``prior``, ``observed_data`` (``v``: the left side of Eq 17 at the
         fixed/prior-mean inertia, N m s), ``constant_data`` (prior centres and scales) and
         ``residuals`` (posterior-mean offset-free residuals, N m s).
+
+    Warns
+    -----
+    TauIdentificationWarning
+        One line per time constant the data do not identify or that conflicts with its prior
+        (:func:`tau_identification`); the CLI puts them in ``summary["warnings"]``.
+    PulseAtStartWarning
+        A pulse acts on the first sample of an event (only its impulse after that sample is
+        modelled: the event's free offset absorbs the rest).
     """
     import xarray as xr
 
@@ -1019,14 +1178,15 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     observed = xr.Dataset({"v": (("t", "axis"), v_all, {"units": "N m s"})}, coords=t_coord,
                           attrs={"sources": [f"{a} + {b}" for a, b in problem.sources]})
     constant = xr.Dataset(
-        {"tau_prior_log_mean": ("tau", problem.tau.log_mean),
-         "tau_prior_log_sd": ("tau", problem.tau.log_sd),
+        {"tau_delay_prior_scale": ((), problem.tau.delay_scale, {"units": "s"}),
+         "tau_prior_log_mean": ("tau_lognormal", problem.tau.log_mean),
+         "tau_prior_log_sd": ("tau_lognormal", problem.tau.log_sd),
          "thrust_prior_median": ((), problem.thrust_pred, {"units": "N"}),
          "thrust_prior_log_sd": ((), THRUST_PRIOR_LOG_SD),
          "fired": ("thruster", problem.fired.astype(int)),
          "n_pulses": ("event", problem.n_pulses),
          "noise_hat": (("event", "noise"), problem.noise_hat)},
-        coords={"tau": list(TAU_NAMES), "thruster": list(THRUSTER_NAMES),
+        coords={"tau_lognormal": list(TAU_NAMES[1:]), "thruster": list(THRUSTER_NAMES),
                 "event": np.arange(n_ev), "noise": ["omega", "rho"]})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -1035,6 +1195,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                 del idata[name]
         idata.add_groups({"observed_data": observed, "constant_data": constant,
                           "residuals": residuals})
+    for line in tau_identification(post, problem.tau):
+        warnings.warn(line, TauIdentificationWarning, stacklevel=2)
     names = list(problem.names) + list(TAU_NAMES) + ["sigma_omega", "sigma_rho"]
     if sample_inertia:
         names += list(INERTIA_NAMES)

@@ -13,6 +13,10 @@ after the command ends the thrust is held for another ``τd`` and then decays wi
 whose integral is exactly the closed form printed in Feldman & Lee §V (valid for ``Δ ≥ τd``):
 ``F [(Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}]``.
 
+The family includes a first-order valve, ``τd = 0`` and ``τr = τf = τ`` (thrust ``F(1 − e^{−t/τ})``
+while commanded, then an exponential decay with the same ``τ``): its impulse is exactly ``F Δ``,
+``(Δ + τ) + τ (e^{−Δ/τ} − 1) − τ e^{−Δ/τ} = Δ``, for every width.
+
 All times in seconds, thrust in newtons. Functions broadcast over arrays and are differentiable.
 """
 

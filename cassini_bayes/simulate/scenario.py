@@ -10,7 +10,8 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [run]       duration_s, dt_s, sample_period_s, control = "rwa" | "rcs"
     [truth]     model = "models/…toml" (required); optional overrides:
                 inertia = {Ixx = …, …}, thrust_n = 0.75 | [8 values], tau_delay_s, tau_rise_s,
-                tau_fall_s, rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
+                tau_fall_s (``tau_delay_s = 0`` and ``tau_rise_s = tau_fall_s`` is a first-order
+                valve), rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
                 external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3],
                 wheel_inertia_scale = 1.0 (true spin inertias = scale × the model file's),
                 wheel_inertia_errors = [e_1, …, e_K] (each wheel's own fractional error, in the
@@ -475,7 +476,9 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     else:
         thrust = np.full(8, truth.thrust)
     pulse = truth.pulse
-    pulse = replace(pulse, **{k: tr.num(f"{k}_s", getattr(pulse, k), positive=True, hi=TAU_MAX)
+    # a valve may open at once (first-order valve: tau_delay_s = 0, tau_rise_s = tau_fall_s)
+    pulse = replace(pulse, **{k: tr.num(f"{k}_s", getattr(pulse, k), positive=k != "tau_delay",
+                                        nonneg=True, hi=TAU_MAX)
                               for k in ("tau_delay", "tau_rise", "tau_fall")})
     truth = replace(truth, pulse=pulse, thrust=float(np.mean(thrust)))
     if tr.has("rwa4_axis"):
