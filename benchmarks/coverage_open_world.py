@@ -17,7 +17,12 @@ the table of an existing file without fitting.
 
     python benchmarks/coverage_open_world.py --families post_probe pre_soi post_prm \\
         --seeds 20 [--first-seed 0] [--models per_wheel common idealised] [--chains 4]
-        [--warmup 500] [--draws 500] [--widen 1.5] --out open_world.jsonl [--report]
+        [--warmup 500] [--draws 500] [--widen 1.5] [--off drift flex …] --out open_world.jsonl
+        [--report]
+
+``--off`` switches effects off (``EFFECTS_OFF``) with every other draw unchanged: a campaign
+with ``--off drift`` on the same seeds shows what the drifting torque alone costs. Keep one
+``--out`` file per setting: resuming does not compare options (each line records its own).
 
 Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``day028``,
 ``day028_first_order`` (first-order valve scenario, when its file exists); RWA4 ``rwa4_rcs``,
@@ -36,6 +41,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from coverage_robust_inertia import MOMENT_BUDGET, PRODUCT_BUDGET  # noqa: E402
 from coverage_robust_rwa4 import BUDGET_DEG  # noqa: E402
+
+from cassini_bayes.simulate.open_world import EFFECTS_OFF  # noqa: E402
 
 FAMILIES = {   # family: (kind, scenario)
     "post_probe": ("inertia", "slews_post_probe"),
@@ -125,7 +132,7 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
     from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
     from cassini_bayes.inference.runner import SamplerSettings
     from cassini_bayes.simulate import scenario_from_dict, simulate
-    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world
+    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
 
     kind, name = FAMILIES[family]
     fam = list(FAMILIES).index(family)
@@ -133,6 +140,7 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
                          draw_inertia=kind != "inertia",
                          solved_wheel="RWA4" if kind == "rwa4" else None,
                          torque_sd_nm=BODY_TORQUE_PRIOR_SD_NM)
+    ow = without(ow, opts["off"])
     scenario = scenario_from_dict(ow.scenario, src=name)
     k_sim, k_fit = jax.random.split(jax.random.key(50_000 * (fam + 1) + seed))
     sim = simulate(k_sim, scenario)
@@ -201,6 +209,8 @@ def main(argv=None) -> None:
     ap.add_argument("--warmup", type=int, default=500)
     ap.add_argument("--draws", type=int, default=500)
     ap.add_argument("--widen", type=float, default=1.5)
+    ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
+                    help="switch these open-world effects off (the other draws stay the same)")
     ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
     ap.add_argument("--report", action="store_true", help="only print the table of --out")
     args = ap.parse_args(argv)
@@ -208,7 +218,8 @@ def main(argv=None) -> None:
     if not args.report:
         from cassini_bayes.simulate.scenario import scenario_path
 
-        opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen")}
+        opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
+                                              "off")}
         done = {(r["family"], r["seed"]) for r in rows}
         t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):

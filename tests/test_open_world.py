@@ -152,3 +152,19 @@ def test_campaign_script_end_to_end(tmp_path, capsys):
     mod.main(args)
     assert len(out.read_text().splitlines()) == 1
     assert "post_prm" in capsys.readouterr().out
+
+
+def test_without_switches_off_only_the_named_effects():
+    from cassini_bayes.simulate.open_world import without
+
+    ow = draw_open_world("slews_post_prm", 4)
+    off = without(ow, ["drift", "flex", "slips"])
+    assert "flex_mode" not in off.scenario and "flex_mode" in ow.scenario
+    assert off.scenario["truth"]["external_torque_inertial_rate_nm_s"] == [0.0, 0.0, 0.0]
+    assert not np.any(off.slip)
+    np.testing.assert_array_equal(off.time_tag_error_s, ow.time_tag_error_s)
+    assert off.scenario["truth"]["wheel_inertia_errors"] == ow.scenario["truth"][
+        "wheel_inertia_errors"]
+    assert off.record["off"] == ["drift", "flex", "slips"]
+    with pytest.raises(InputError, match="unknown effect"):
+        without(ow, ["sloshing"])

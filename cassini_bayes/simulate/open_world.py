@@ -37,8 +37,8 @@ from cassini_bayes.simulate.scenario import scenario_from_dict, scenario_path
 from cassini_bayes.spacecraft import check_physical_inertia
 from cassini_bayes.telemetry import Telemetry
 
-__all__ = ["LAWS", "WIDEN", "OpenWorld", "draw_law", "draw_open_world", "apply_time_tags",
-           "base_scenario"]
+__all__ = ["LAWS", "WIDEN", "EFFECTS_OFF", "OpenWorld", "draw_law", "draw_open_world",
+           "without", "apply_time_tags", "base_scenario"]
 
 LAWS = ("uniform", "student_t3", "laplace")
 """The non-Normal families, each parametrised by its sd: uniform on ``±√3 sd``, Student-t(3)
@@ -208,6 +208,40 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     rec["slips"] = {"prob": slip_prob, "index": np.flatnonzero(slip).tolist(),
                     "shift": slip[slip != 0].tolist()}
     return OpenWorld(d, rec, tt, slip)
+
+
+EFFECTS_OFF = ("flex", "drift", "time_tags", "slips", "wheels", "tilts", "gyro", "torques")
+"""Effects :func:`without` can switch off (to find which one an interval misses by)."""
+
+
+def without(ow: OpenWorld, effects) -> OpenWorld:
+    """``ow`` with ``effects`` (names from :data:`EFFECTS_OFF`) switched off, every other draw
+    unchanged; the record lists them under ``"off"``."""
+    bad = sorted(set(effects) - set(EFFECTS_OFF))
+    if bad:
+        raise InputError(f"unknown effect(s) {', '.join(bad)}; use {', '.join(EFFECTS_OFF)}")
+    d = copy.deepcopy(ow.scenario)
+    truth, noise = d["truth"], d["noise"]
+    tt, slip = ow.time_tag_error_s, ow.slip
+    for e in effects:
+        if e == "flex":
+            d.pop("flex_mode", None)
+        elif e == "drift":
+            truth["external_torque_inertial_rate_nm_s"] = [0.0, 0.0, 0.0]
+        elif e == "time_tags":
+            tt = np.zeros_like(tt)
+        elif e == "slips":
+            slip = np.zeros_like(slip)
+        elif e == "wheels":
+            truth["wheel_inertia_errors"] = [0.0] * len(truth["wheel_inertia_errors"])
+        elif e == "tilts":
+            truth["wheel_axis_tilt_deg"] = {}
+        elif e == "gyro":
+            noise["gyro_bias_rad_s"] = noise["gyro_scale_factor"] = [0.0, 0.0, 0.0]
+        else:
+            truth["external_torque_body_nm"] = [0.0, 0.0, 0.0]
+            truth["external_torque_inertial_nm"] = [0.0, 0.0, 0.0]
+    return OpenWorld(d, ow.record | {"off": sorted(set(effects))}, tt, slip)
 
 
 def apply_time_tags(tel: Telemetry, ow: OpenWorld) -> Telemetry:
