@@ -167,7 +167,8 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     prior, kn = nominal.prior, nominal.prior.knowledge
     truth = d.setdefault("truth", {})
     noise = d.setdefault("noise", {})
-    for k in ("wheel_inertia_scale", "wheel_inertia_error_sd", "external_torque_inertial_rate_nm_s"):
+    for k in ("wheel_inertia_scale", "wheel_inertia_error_sd",
+              "external_torque_inertial_rate_nm_s"):
         truth.pop(k, None)
     rec: dict[str, Any] = {"widen": widen, "scenario": nominal.name}
     noise["gyro_bias_rad_s"] = _effect(rng, "gyro_bias_rad_s", widen * kn.gyro_bias_sd_rad_s, 3,
@@ -255,7 +256,8 @@ def apply_time_tags(tel: Telemetry, ow: OpenWorld) -> Telemetry:
     src = np.arange(n) + ow.slip
     t = tel.t + ow.time_tag_error_s
     if np.any(np.diff(t) <= 0.0):
-        raise InputError("time-tag errors reorder the samples: use a smaller widen", path=tel.source)
+        raise InputError("time-tag errors reorder the samples: use a smaller widen",
+                         path=tel.source)
     return replace(tel, t=t, q=tel.q[src], omega=tel.omega[src],
                    wheel_rates=tel.wheel_rates[src],
                    on_times=None if tel.on_times is None else tel.on_times[src])
