@@ -1,0 +1,248 @@
+"""Open-world coverage campaign: errors drawn independently of the fits' error model.
+
+For each family and seed: draw an open-world truth (:func:`cassini_bayes.simulate.open_world.
+draw_open_world`: non-Normal errors 1.5× wider than the robust priors, per wheel and per axis, a
+random flexible mode, a drifting inertial torque, uniform time-tag errors and stale samples; for
+thrust and RWA4 the true inertia uniform on the model file's knowledge box), simulate, apply the
+time tags, and fit three models with the nominal spacecraft model: ``per_wheel`` (the default
+robust model), ``common`` (robust, one wheel spin-inertia scale) and ``idealised`` (the papers').
+Records per fit whether the 90 % intervals cover each truth entry, the error against the papers'
+budgets (moments ≤ 1 % and products ≤ 75 kg m², Feldman & Lee §VI; F ≤ 10 %, Feldman & Lee §V;
+RWA4 axis ≤ 3° by RCS, ≤ 1° by RWA, Brown §III.B-C), the largest R-hat, the divergences, the
+adequacy verdict (docs/adequacy.md) and the wall time. Not a test.
+
+Every finished (family, seed) is appended as one JSON line to ``--out``; a rerun with the same
+``--out`` skips what is there, so a campaign can be stopped and continued. ``--report`` prints
+the table of an existing file without fitting.
+
+    python benchmarks/coverage_open_world.py --families post_probe pre_soi post_prm \\
+        --seeds 20 [--first-seed 0] [--models per_wheel common idealised] [--chains 4]
+        [--warmup 500] [--draws 500] [--widen 1.5] [--off drift flex …] --out open_world.jsonl
+        [--report]
+
+``--off`` switches effects off (``EFFECTS_OFF``) with every other draw unchanged: a campaign
+with ``--off drift`` on the same seeds shows what the drifting torque alone costs. Keep one
+``--out`` file per setting: resuming does not compare options (each line records its own).
+
+Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``day028``,
+``day028_first_order`` (first-order valve scenario, when its file exists); RWA4 ``rwa4_rcs``,
+``rwa4_rwa``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from coverage_robust_inertia import MOMENT_BUDGET, PRODUCT_BUDGET  # noqa: E402
+from coverage_robust_rwa4 import BUDGET_DEG  # noqa: E402
+
+from cassini_bayes.simulate.open_world import EFFECTS_OFF  # noqa: E402
+
+FAMILIES = {   # family: (kind, scenario)
+    "post_probe": ("inertia", "slews_post_probe"),
+    "pre_soi": ("inertia", "slews_pre_soi"),
+    "post_prm": ("inertia", "slews_post_prm"),
+    "day028": ("thrust", "biasing_day028"),
+    "day028_first_order": ("thrust", "biasing_day028_first_order"),
+    "rwa4_rcs": ("rwa4", "rwa4_rcs"),
+    "rwa4_rwa": ("rwa4", "rwa4_rwa"),
+}
+MODELS = ("per_wheel", "common", "idealised")
+THRUST_BUDGET = 0.10      # Feldman & Lee §V: F known to ±10 %
+
+
+def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | None):
+    """Fit one model; returns (posterior, adequacy). The adequacy checks get the sites the CLI
+    gives them (``cli/fit.py``, ``cli/fit_thrust.py``, ``cli/fit_rwa4.py``)."""
+    from cassini_bayes.inference import adequacy as adq
+    from cassini_bayes.inference.nuisance import EFFECTS
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
+    robust = model != "idealised"
+    wheel_errors = "common" if model == "common" else "per_wheel"
+    nuisance = list(EFFECTS.values()) if robust else []
+    if kind == "inertia":
+        from cassini_bayes.inference.inertia import ROBUST_SITES, fit_inertia
+
+        post = fit_inertia(key, [tel], prior, robust=robust, wheel_errors=wheel_errors,
+                           settings=settings, prior_draws=200)
+        sites = list(INERTIA_NAMES) + ["T_N"] + (list(ROBUST_SITES) if robust else [])
+        return post, adq.inertia_adequacy(post, sites)
+    if kind == "thrust":
+        from cassini_bayes.inference.thrust import TAU_NAMES, fit_thrust
+
+        post = fit_thrust(key, [(tel, sim.pulses)], prior, robust=robust,
+                          wheel_errors=wheel_errors, settings=settings, prior_draws=200)
+        sampled = list(INERTIA_NAMES) if "Ixx" in post.idata.posterior else []
+        return post, adq.thrust_adequacy(post, ["F", *TAU_NAMES, *sampled, *nuisance])
+    from cassini_bayes.inference.rwa4 import U4_NAMES, fit_rwa4
+
+    post = fit_rwa4(key, tel, prior, method=method, robust=robust, wheel_errors=wheel_errors,
+                    settings=settings, prior_draws=200)
+    return post, adq.rwa4_adequacy(post, list(U4_NAMES) + list(INERTIA_NAMES))
+
+
+def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
+    """Coverage of the 90 % intervals and the error against the budgets."""
+    import numpy as np
+
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
+
+    p = post.idata.posterior
+    if kind == "rwa4":
+        from cassini_bayes.inference.sphere import angles_deg
+
+        u = np.asarray(sim.params.wheel_axes)[list(scenario.wheel_names).index("RWA4")]
+        err = float(angles_deg(np.array(post.direction["mean"])[None], u)[0])
+        cone = float(post.direction["cone_deg"]["90"])
+        return {"entries": ["axis"], "hit": [err <= cone], "error": [err], "cone90_deg": cone,
+                "budget": err <= BUDGET_DEG[method]}
+    if kind == "inertia":
+        names = list(INERTIA_NAMES)
+        truth = np.asarray(inertia_vector(scenario.truth.inertia), float)
+    else:
+        from cassini_bayes.inference.thrust import TAU_NAMES
+
+        names = ["F", *TAU_NAMES]
+        truth = np.array([float(np.mean(np.asarray(sim.params.thrust_n)))]
+                         + list(np.asarray(sim.params.tau_s, float)))
+    d = np.stack([p[n].values.ravel() for n in names], 1)
+    q05, q95 = np.quantile(d, [0.05, 0.95], axis=0)
+    err = d.mean(0) - truth
+    if kind == "inertia":
+        budget = bool(np.all(np.abs(err[:3]) <= MOMENT_BUDGET * truth[:3])
+                      and np.all(np.abs(err[3:]) <= PRODUCT_BUDGET))
+    else:
+        budget = bool(abs(err[0]) <= THRUST_BUDGET * truth[0])
+    return {"entries": names, "hit": ((q05 <= truth) & (truth <= q95)).tolist(),
+            "error": err.tolist(), "z": (err / d.std(0)).tolist(), "truth": truth.tolist(),
+            "budget": budget}
+
+
+def run_seed(family: str, seed: int, opts: dict) -> dict:
+    """Draw, simulate and fit one (family, seed); a JSON-ready record."""
+    import jax
+    import numpy as np
+
+    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
+    from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
+
+    kind, name = FAMILIES[family]
+    fam = list(FAMILIES).index(family)
+    ow = draw_open_world(name, np.random.default_rng([seed, fam]), widen=opts["widen"],
+                         draw_inertia=kind != "inertia",
+                         solved_wheel="RWA4" if kind == "rwa4" else None,
+                         torque_sd_nm=BODY_TORQUE_PRIOR_SD_NM)
+    ow = without(ow, opts["off"])
+    scenario = scenario_from_dict(ow.scenario, src=name)
+    k_sim, k_fit = jax.random.split(jax.random.key(50_000 * (fam + 1) + seed))
+    sim = simulate(k_sim, scenario)
+    tel = apply_time_tags(sim.telemetry, ow)
+    method = name.split("_")[1] if kind == "rwa4" else None
+    settings = SamplerSettings(chains=opts["chains"], warmup=opts["warmup"], draws=opts["draws"])
+    out = {"family": family, "seed": seed, "drawn": ow.record, "fits": {}}
+    for model in opts["models"]:
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            post, ad = _fit(kind, k_fit, sim, tel, scenario.prior, model, settings, method)
+        rec = _score(kind, post, sim, scenario, method)
+        worst = {c.name: (c.statistic, c.parameter) for c in ad.checks if not c.ok}
+        rec |= {"r_hat": float(post.diagnostics.max_r_hat),
+                "divergences": int(post.diagnostics.divergences),
+                "adequacy_ok": bool(ad.ok), "adequacy_failed": worst,
+                "seconds": time.perf_counter() - t0}
+        out["fits"][model] = rec
+    return out
+
+
+def _done(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
+    rows = []
+    for line in path.read_text().splitlines():
+        try:
+            rows.append(json.loads(line))
+        except json.JSONDecodeError:      # a line cut by an interrupted write
+            continue
+    return rows
+
+
+def report(rows: list[dict]) -> None:
+    """Per family and model: 90 % coverage of all entries with its binomial sd, per-entry
+    coverage, budget pass rate, adequacy pass rate, largest R-hat, divergences, median fit time."""
+    import numpy as np
+
+    for family in dict.fromkeys(r["family"] for r in rows):
+        fr = [r for r in rows if r["family"] == family]
+        models = dict.fromkeys(m for r in fr for m in r["fits"])
+        for m in models:
+            fits = [r["fits"][m] for r in fr if m in r["fits"]]
+            h = np.array([f["hit"] for f in fits], float)
+            cov, n = float(h.mean()), h.size
+            print(f"{family:11s} {m:9s} {len(fits):3d} seeds  90 % coverage {cov:.3f} ± "
+                  f"{np.sqrt(cov * (1 - cov) / n) if 0 < cov < 1 else np.sqrt(0.09 / n):.3f} "
+                  f"({int(h.sum())}/{n})  per entry "
+                  + " ".join(f"{e} {c:.2f}" for e, c in zip(fits[0]["entries"], h.mean(0)))
+                  + f"  budget {np.mean([f['budget'] for f in fits]):.2f}  adequacy ok "
+                  f"{np.mean([f['adequacy_ok'] for f in fits]):.2f}  max R-hat "
+                  f"{max(f['r_hat'] for f in fits):.3f}  div "
+                  f"{sum(f['divergences'] for f in fits)}  median "
+                  f"{np.median([f['seconds'] for f in fits]):.0f} s", flush=True)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--families", nargs="+", default=["post_probe", "pre_soi", "post_prm"],
+                    choices=list(FAMILIES))
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS))
+    ap.add_argument("--chains", type=int, default=4)
+    ap.add_argument("--warmup", type=int, default=500)
+    ap.add_argument("--draws", type=int, default=500)
+    ap.add_argument("--widen", type=float, default=1.5)
+    ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
+                    help="switch these open-world effects off (the other draws stay the same)")
+    ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
+    ap.add_argument("--report", action="store_true", help="only print the table of --out")
+    args = ap.parse_args(argv)
+    rows = _done(args.out)
+    if not args.report:
+        from cassini_bayes.simulate.scenario import scenario_path
+
+        opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
+                                              "off")}
+        done = {(r["family"], r["seed"]) for r in rows}
+        t0 = time.perf_counter()
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
+            for family in args.families:
+                if (family, seed) in done:
+                    continue
+                if not scenario_path(FAMILIES[family][1]).exists():
+                    sys.exit(f"{family}: no scenario {FAMILIES[family][1]}.toml under "
+                             "experiments/scenarios/")
+                r = run_seed(family, seed, opts)
+                r["options"] = opts
+                with args.out.open("a") as fh:
+                    fh.write(json.dumps(r) + "\n")
+                rows.append(r)
+                print(f"{family} seed {seed}: " + "; ".join(
+                    f"{m} {''.join('1' if x else '0' for x in f['hit'])} "
+                    f"budget {int(f['budget'])} adequacy {'ok' if f['adequacy_ok'] else 'FAIL'} "
+                    f"R-hat {f['r_hat']:.3f} div {f['divergences']}"
+                    for m, f in r["fits"].items())
+                    + f"  ({time.perf_counter() - t0:.0f} s)", flush=True)
+    report(rows)
+
+
+if __name__ == "__main__":
+    main()
