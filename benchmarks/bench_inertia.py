@@ -1,4 +1,6 @@
-"""Benchmark: inertia posterior, 4 chains × 1000 draws on 3600 telemetry samples (DESIGN.md §8).
+"""Benchmark: inertia posterior, 4 chains × 1000 draws on 3600 telemetry samples.
+
+Target: docs/design.md §8.
 
 Prints, for one process: wall time of the first fit (with XLA compilation), of a second fit on new
 data of the same shapes (no compilation), of the sampler alone, min bulk ESS over the six inertia
@@ -29,7 +31,7 @@ def main(argv=None) -> None:
     ap.add_argument("--draws", type=int, default=1000)
     ap.add_argument("--chain-method", default=None)
     ap.add_argument("--robust", action="store_true",
-                    help="the robust model (gyro/wheel nuisance parameters, issue 7)")
+                    help="the robust model (gyro/wheel nuisance parameters, docs/design.md §7.5)")
     args = ap.parse_args(argv)
 
     import jax

@@ -1,4 +1,4 @@
-"""Benchmark: inertia posterior, NumPyro (``fit_inertia``) against a plain PyMC model (issue 4).
+"""Benchmark: inertia posterior, NumPyro (``fit_inertia``) against a plain PyMC model.
 
 One process, one data set: the ``slew_2000_03_15`` scenario simulated once (0.25 Hz for 4 h, 3600
 samples), its ``[prior]`` spacecraft model as the prior. Both samplers target the same posterior:
@@ -26,7 +26,7 @@ second does not. ESS and R-hat come from ArviZ for both. Not a test: nothing is 
         [--pymc-param physical|standardised] [--pymc-warmup N] [--pymc-draws N]
 
 PyMC's default NUTS hits its tree-depth limit on this posterior (tiny, strongly correlated
-posterior scales: DESIGN.md §7 scaling pitfall), about 0.15 s per iteration on 2 shared cores,
+posterior scales: docs/design.md §7.4), about 0.15 s per iteration on 2 shared cores,
 so 4 × 2000 iterations take tens of minutes: ``--pymc-warmup/--pymc-draws`` shorten
 its runs so the comparison finishes; ESS/s stays comparable (ESS per second of sampling).
 """

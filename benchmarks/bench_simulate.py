@@ -5,8 +5,7 @@ Usage: ``python benchmarks/bench_simulate.py [--scenario NAME] [--batch 1000] [-
 Prints compile time and steps/s (after compilation, best of ``--repeat``) for one run of the
 scenario (telemetry as raw arrays, no file I/O) and for a vmapped batch of replicates with
 different keys (one compiled call). A batch step counts once per replicate. Reference: Basilisk
-integrates a comparable rigid-body-plus-wheels run at about 40 000 steps/s on this machine
-(issue 3).
+integrates a comparable rigid-body-plus-wheels run at about 40 000 steps/s on this machine.
 """
 
 from __future__ import annotations

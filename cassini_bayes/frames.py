@@ -1,6 +1,6 @@
 """Attitude conventions: quaternions, direction-cosine matrices and sphere helpers (pure JAX).
 
-The convention is the one of Brown (2012) Eq 2 and DESIGN.md §3:
+The convention is the one of Brown (2012) Eq 2 and docs/design.md §3:
 
 * a quaternion ``q = (q1, q2, q3, q4)`` has its vector part first and its scalar ``q4`` last;
 * it rotates inertial (J2000) components into body components: ``v_B = A(q) v_N``;

@@ -1,6 +1,6 @@
 """Spacecraft model objects, loaded and validated from the TOML files under ``models/``.
 
-A model file (DESIGN.md §4) holds the *predicted* mass properties and the hardware geometry a
+A model file (docs/design.md §4.3) holds the *predicted* mass properties and the hardware geometry a
 calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
 Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants, their manufacturer
 ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall priors),

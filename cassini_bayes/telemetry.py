@@ -1,4 +1,4 @@
-"""Telemetry and pulse-log containers, readers, writers and input validation (DESIGN.md §4).
+"""Telemetry and pulse-log containers, readers, writers, validation (docs/design.md §4.1-4.2).
 
 SI inside: wheel rates are rad/s in :class:`Telemetry` (rpm only in files). Every problem with a
 file is an :class:`~cassini_bayes.errors.InputError` with one line naming the file, the column
@@ -617,7 +617,7 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
 
     Parameters
     ----------
-    path : the file; columns as DESIGN.md §4 (``t`` s, ``q1..q4``, ``wx wy wz`` rad/s,
+    path : the file; columns as docs/design.md §4.1 (``t`` s, ``q1..q4``, ``wx wy wz`` rad/s,
         ``rwa1..rwa4`` rpm, optional ``on_Z1..on_Y4`` s).
     check_units : run the rad/s-vs-rpm and rad/s-vs-°/s heuristics (see the module docstring).
 
@@ -902,7 +902,7 @@ def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:
     """Cumulative commanded on-time of each thruster at times ``t``, since ``t[0]``.
 
     A pulse of width ``w`` commanded at ``t_on`` contributes ``clip(t − t_on, 0, w)``; the sum is
-    re-based so row 0 is zero (DESIGN.md §4 ``on_*`` columns).
+    re-based so row 0 is zero (docs/design.md §4.1 ``on_*`` columns).
 
     Parameters
     ----------

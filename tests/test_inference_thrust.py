@@ -461,10 +461,11 @@ def test_robust_columns_torque_and_wheel_scale(wheel_errors):
 
 @pytest.mark.slow
 def test_robust_model_covers_what_the_idealised_misses():
-    """Issue 7 on a Table 2 event whose true wheels are 1 % heavier than the model file says and
-    whose spacecraft feels 20 µN m: the idealised posterior of F excludes the truth (it is ~1 %
-    off with a ~0.15 % sd), the robust one covers it. Fixed keys; a calibrated robust posterior
-    misses with probability 10 % (a 2-sd wheel-scale error makes the idealised miss certain).
+    """Robust against idealised on a Table 2 event whose true wheels are 1 % heavier than the model
+    file says and whose spacecraft feels 20 µN m: the idealised posterior of F excludes the truth
+    (it is ~1 % off with a ~0.15 % sd), the robust one covers it. Fixed keys; a calibrated robust
+    posterior misses with probability 10 % (a 2-sd wheel-scale error makes the idealised miss
+    certain).
     The robust model keeps its default 10 ms time-tag term although this scenario's tags are
     exact (measured: 0 divergences, R-hat 1.006, F in [0.6967, 0.7018] N)."""
     import tomllib

@@ -1,4 +1,4 @@
-"""Tier (a): every computable number of PAPER_FACTS.md, reproduced to the printed precision.
+"""Tier (a): every computable paper number (analysis.paper_facts), to the printed precision.
 
 Where the paper's printed value differs from what its own formula gives, the test pins the
 computed value and states the printed one (and why they differ) next to it.

@@ -1,8 +1,8 @@
 """Diagnostic reports: self-contained HTML per run directory, for every kind of run.
 
-The run directories are synthetic but shaped like the fit's (DESIGN.md §4): ArviZ InferenceData
-with posterior (4 chains), prior, sample_stats (diverging, energy), observed_data and a
-``residuals`` group, plus summary.json and config.toml. The numbers are drawn from known normals,
+The run directories are synthetic but shaped like the fit's (docs/design.md §4.4): ArviZ
+InferenceData with posterior (4 chains), prior, sample_stats (diverging, energy), observed_data and
+a ``residuals`` group, plus summary.json and config.toml. The numbers are drawn from known normals,
 so the report's flags (weak identification, truth in the 90 % interval) have known answers.
 """
 

@@ -1,6 +1,6 @@
-"""Robust inertia model (issue 7): gyro bias and scale factor, wheel spin-inertia scales and axis
-tilts, external torque — the idealised model is confidently wrong when these are present, the
-robust one covers the truth, and what the data cannot separate stays at its prior.
+"""Robust inertia model (docs/design.md §7.5): gyro bias and scale factor, wheel spin-inertia
+scales and axis tilts, external torque — the idealised model is confidently wrong when these are
+present, the robust one covers the truth, and what the data cannot separate stays at its prior.
 
 Data: the noise-free slews of tests/kinematics.py (via ``make_slews`` of
 test_inference_inertia.py) with the effects injected into the telemetry before the noise is

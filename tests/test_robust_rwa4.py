@@ -1,4 +1,7 @@
-"""Robust RWA4 model (issue 7): nuisance effects integrated out of Brown's momentum balance."""
+"""Robust RWA4 model: nuisance effects integrated out of Brown's momentum balance.
+
+The model: docs/design.md §7.5 and :mod:`cassini_bayes.inference.rwa4`.
+"""
 
 from __future__ import annotations
 

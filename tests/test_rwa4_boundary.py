@@ -1,4 +1,4 @@
-"""The RWA4 model near the physical-inertia boundary (cassini_bayes.inference.rwa4, issue 6).
+"""The RWA4 model near the physical-inertia boundary (cassini_bayes.inference.rwa4).
 
 The stated inertia prior is ``Normal(μ, Σ)`` times the smooth physical factor
 ``1 − exp(−(m/s)³)`` (module docstring "Priors"). SBC is valid only if the truths are drawn from

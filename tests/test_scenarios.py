@@ -232,7 +232,7 @@ def test_overrides_per_thruster_and_believed_vector():
         scenario_from_dict(d)
 
 
-# ---- `_real` variants (issue 7): the same events with realistic error sources -----------------
+# ---- `_real` variants: the same events with realistic error sources (docs/robust/README.md) ---
 
 REAL = ["slew_2000_03_15_real", "slews_pre_soi_real", "slews_post_prm_real",
         "slews_post_probe_real", "biasing_day028_real", "rwa4_rcs_real", "rwa4_rwa_real"]

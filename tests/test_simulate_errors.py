@@ -1,4 +1,4 @@
-"""Simulator error effects of issue 7 not covered elsewhere: telemetry time-tag jitter and the
+"""Simulator real-world error effects not covered elsewhere: telemetry time-tag jitter and the
 flexible/slosh mode (hybrid coordinates, :class:`cassini_bayes.simulate.scenario.FlexMode`)."""
 
 from __future__ import annotations

@@ -1,4 +1,6 @@
-"""Telemetry and pulse-log files: round trips, unit conversion, and every bad input (DESIGN §4-5).
+"""Telemetry and pulse-log files: round trips, unit conversion, every bad input.
+
+File formats: docs/design.md §4.1-4.2.
 
 Each bad input is checked twice: the library raises ``InputError`` with one line that names the
 file and the column/row, and ``cassini-bayes check`` turns it into ``error: …`` with exit code 2.

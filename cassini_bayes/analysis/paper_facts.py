@@ -1,7 +1,7 @@
 """The papers' numbers, as data: what ``cassini-bayes reproduce`` puts beside ours.
 
-Every row of :data:`PAPER_FACTS` is one number printed in a paper (``../shared/PAPER_FACTS.md``
-lists them with their sources): an ``id`` that experiments use to attach their own value to it, a
+Every row of :data:`PAPER_FACTS` is one number printed in a paper (docs/design.md lists the
+papers): an ``id`` that experiments use to attach their own value to it, a
 description, the printed value, its printed precision (decimal places) and the source section.
 
 Two kinds of rows:

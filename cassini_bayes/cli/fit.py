@@ -1,4 +1,4 @@
-"""``cassini-bayes fit inertia ...`` (DESIGN.md §5), and the pieces every ``fit`` command shares.
+"""``cassini-bayes fit inertia ...`` (docs/design.md §5), and the pieces every ``fit`` shares.
 
 Shared by ``fit thrust`` and ``fit rwa4`` (add them as their own ``register`` in a module of this
 package, or beside ``inertia`` here):
@@ -255,7 +255,7 @@ def fit_inertia_cmd(
 
 def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: dict,
                options: dict) -> dict:
-    """The resolved inputs of a fit, written as ``config.toml`` (DESIGN.md §4): enough to re-run."""
+    """The resolved inputs of a fit, ``config.toml`` (docs/design.md §4.4): enough to re-run."""
     return {
         "command": command,
         "version": __version__,

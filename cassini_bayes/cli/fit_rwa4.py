@@ -1,4 +1,4 @@
-"""``cassini-bayes fit rwa4 ...`` (DESIGN.md §5): the RWA4 spin axis on the sphere.
+"""``cassini-bayes fit rwa4 ...`` (docs/design.md §5): the RWA4 spin axis on the sphere.
 
 ``--window-a T0:T1 --window-b T0:T1`` may be repeated (paired in order: one A/B pair per slew
 pair for the RWA method); without them the windows come from the quiet periods

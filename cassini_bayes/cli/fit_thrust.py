@@ -1,4 +1,4 @@
-"""``cassini-bayes fit thrust ...`` (DESIGN.md §5): thrust and pulse time constants.
+"""``cassini-bayes fit thrust ...`` (docs/design.md §5): thrust and pulse time constants.
 
 ``--telemetry F.csv --pulses P.csv`` may be repeated (paired in order): the biasing events are
 pooled, sharing the time constants and the thrust (:mod:`cassini_bayes.inference.thrust`).

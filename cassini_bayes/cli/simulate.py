@@ -1,9 +1,9 @@
 """``cassini-bayes simulate SCENARIO.toml --out DIR [--seed N] [--force]``.
 
-Writes ``DIR/telemetry.csv`` (noisy telemetry, DESIGN.md §4), ``DIR/pulses.csv`` (when thrusters
-fired) and ``DIR/truth.json`` (every true parameter, the noise levels, the quiet windows and the
-noise-free momentum check), atomically: everything is written into a temporary directory beside
-``DIR`` and renamed at the end, so a half-written run never appears under the final name. An
+Writes ``DIR/telemetry.csv`` (noisy telemetry, docs/design.md §4.1), ``DIR/pulses.csv`` (when
+thrusters fired) and ``DIR/truth.json`` (every true parameter, the noise levels, the quiet windows
+and the noise-free momentum check), atomically: everything is written into a temporary directory
+beside ``DIR`` and renamed at the end, so a half-written run never appears under the final name. An
 existing ``DIR`` is refused unless ``--force`` (and then only one this package wrote,
 :func:`cassini_bayes.rundir.check_out`).
 """

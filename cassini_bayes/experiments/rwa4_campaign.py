@@ -267,7 +267,7 @@ def _plot(runs, label, budget_deg):
 
 
 # model: the scenarios are clean simulations (no sensor, wheel or torque errors), so Brown's
-# idealised model is the right one; "robust" integrates those effects out (issue 7)
+# idealised model is the right one; "robust" integrates those effects out (docs/design.md §7.5)
 _COMMON = {"posterior_runs": 1, "chains": 2, "warmup": 150, "draws": 150, "prior": "cone",
            "reports": 1, "model": "idealised"}
 _QUICK = {"n_runs": 2, "posterior_runs": 0, "warmup": 50, "draws": 50}

@@ -9,7 +9,7 @@
 * :mod:`~cassini_bayes.inference.nuisance`, :mod:`~cassini_bayes.inference.sensitivity` — the
   robust models' sensor and actuator errors and what neglecting them would cost;
 * :mod:`~cassini_bayes.inference.laplace` — the Laplace step that whitens the samplers' coordinates;
-* :mod:`~cassini_bayes.inference.summary` — the ``summary.json`` of a run (DESIGN.md §4).
+* :mod:`~cassini_bayes.inference.summary` — the ``summary.json`` of a run (docs/design.md §4.5).
 """
 
 from cassini_bayes.inference.inertia import (InertiaPosterior, InertiaPrior, fit_inertia,

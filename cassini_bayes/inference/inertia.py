@@ -16,8 +16,8 @@ rotation). Linearising the three measurement errors gives its covariance exactly
 
 (``σ_ω`` rad/s white gyro noise per axis, ``σ_ρ`` rad/s white wheel-rate noise per wheel, ``σ_θ``
 rad isotropic attitude error per axis: a body-frame error ``δθ`` turns ``A(q)ᵀ h`` into
-``A(q)ᵀ (h + δθ × h)``). In inertial axes this is the ``Aᵀ(I Σ_ω I + …)A + [H_N×]σ_θ²[H_N×]ᵀ`` of
-the design note. Because the rate noise enters through ``I`` itself (errors in variables), the
+``A(q)ᵀ (h + δθ × h)``). In inertial axes this is the ``Aᵀ(I Σ_ω I + …)A + [H_N×]σ_θ²[H_N×]ᵀ``.
+Because the rate noise enters through ``I`` itself (errors in variables), the
 likelihood stays calibrated when ω, ρ and q are all noisy, not only the paper's ``Γ``. The wheel
 spin inertias ``J_k`` are known (Psiaki 2005: otherwise the scale of ``I`` is unidentified).
 
@@ -84,7 +84,7 @@ cover the truth).
 Sampler coordinates
 -------------------
 The sampler does not see the physical parameters. It samples an unconstrained, non-dimensional
-vector ``z`` (order one under the posterior, DESIGN.md §7 scaling pitfall) mapped affinely to
+vector ``z`` (order one under the posterior, docs/design.md §7.4) mapped affinely to
 ``(log-Cholesky of Σ, H_0, T_N)`` around the Laplace approximation of the posterior (GLS mode and
 covariance, pushed through the Jacobian of the Cholesky map), and ``noise_z`` = ``log s_f`` in
 units of its posterior sd. The prior density is added in the physical space with

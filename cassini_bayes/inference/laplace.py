@@ -4,7 +4,7 @@ The thrust and RWA4 models hand NUTS a vector ``w`` with ``θ = centre + tril w`
 ``centre`` is the posterior mode and ``tril`` the Cholesky factor of the inverse negative Hessian
 there. The density is exact in ``θ`` whatever the centring (the affine map has a constant
 Jacobian); a good Laplace step only makes the geometry close to a standard normal, which is what
-NUTS's step-size and mass-matrix adaptation handle best (DESIGN.md §7 scaling pitfall).
+NUTS's step-size and mass-matrix adaptation handle best (docs/design.md §7.4).
 
 The parameters of these models span many orders of magnitude of posterior scale (thrust to
 1e-4 of its prior width, noise scales left at their prior), which stalls a quasi-Newton method

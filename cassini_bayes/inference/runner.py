@@ -107,7 +107,7 @@ class Diagnostics(NamedTuple):
     worst: str
 
     def to_dict(self) -> dict:
-        """The ``diagnostics`` entry of ``summary.json`` (DESIGN.md §4) plus extras."""
+        """The ``diagnostics`` entry of ``summary.json`` (docs/design.md §4.5) plus extras."""
         return {"divergences": int(self.divergences), "max_r_hat": float(self.max_r_hat),
                 "min_ess_bulk": float(self.min_ess_bulk), "min_ess_tail": float(self.min_ess_tail),
                 "converged": bool(self.converged)}
@@ -235,7 +235,7 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
     model : NumPyro model taking its data as keyword arguments (arrays only: they are traced, so
         new data of the same shapes reuse the compiled sampler). Its latent sites must be
         unconstrained (real support): the models here sample whitened, non-dimensional
-        coordinates and map them to physical parameters themselves (DESIGN.md §7).
+        coordinates and map them to physical parameters themselves (docs/design.md §7.4).
     model_kwargs : the data.
     settings : :class:`SamplerSettings`.
     coords, dims : ArviZ coordinates and dimensions of the posterior variables.

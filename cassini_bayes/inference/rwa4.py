@@ -26,8 +26,8 @@ Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives 
 averaged over each window; the levels are fixed at the data's own white-noise estimates σ̂ (three
 numbers per pair cannot estimate them).
 
-Robust model (issue 7; the default)
------------------------------------
+Robust model (the default)
+--------------------------
 Brown's balance also moves with effects his least squares leaves out, each small and entering
 ``d_g`` linearly (:mod:`cassini_bayes.inference.nuisance`, the inertia and thrust models' layout
 and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a spin-inertia

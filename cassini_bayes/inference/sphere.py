@@ -4,7 +4,7 @@
   mean direction of a von Mises–Fisher sample);
 * :func:`cone_radii` — angular radii around a direction holding given fractions of the draws;
 * :func:`direction_summary` — the ``direction`` entry of an RWA4 run's ``summary.json``
-  (DESIGN.md §4): ``{"mean": [x, y, z], "cone_deg": {"50": a, "90": b, "95": c}}``.
+  (docs/design.md §4.5): ``{"mean": [x, y, z], "cone_deg": {"50": a, "90": b, "95": c}}``.
 """
 
 from __future__ import annotations

@@ -1,11 +1,11 @@
-"""The ``summary.json`` of a run (DESIGN.md §4 contract), built from InferenceData.
+"""The ``summary.json`` of a run (docs/design.md §4.5 contract), built from InferenceData.
 
 Contract keys: ``kind``, ``parameters`` (per parameter ``mean sd q05 q50 q95 r_hat ess_bulk
 ess_tail``), ``baseline`` (the paper's least-squares estimate on the same data, or ``null`` with a
 warning when it could not be computed), ``diagnostics`` (``divergences max_r_hat min_ess_bulk
 converged``), ``seed``, ``version``.
 
-Added here (free to add, DESIGN.md §4): per parameter ``prior_sd`` and ``contraction``
+Added here (free to add, docs/design.md §4.5): per parameter ``prior_sd`` and ``contraction``
 (``1 − posterior variance / prior variance``, from the ``prior`` group: near 1 the data decide,
 near 0 the prior does), ``weakly_identified`` (parameters with contraction < 0.5),
 ``diagnostics.min_ess_tail``, ``nuisance`` (the same statistics for nuisance parameters such as
@@ -83,7 +83,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
                   diagnostics, baseline: Mapping[str, float] | None, seed: int,
                   nuisance: Sequence[str] = (), warnings: Sequence[str] = (),
                   extra: Mapping | None = None, adequacy=None) -> dict:
-    """The ``summary.json`` dict (DESIGN.md §4), JSON-ready (NaN/inf become ``null``).
+    """The ``summary.json`` dict (docs/design.md §4.5), JSON-ready (NaN/inf become ``null``).
 
     Parameters
     ----------

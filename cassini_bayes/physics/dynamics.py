@@ -1,6 +1,6 @@
 """Rigid spacecraft with reaction wheels: equations of motion, fixed-step integrator (pure JAX).
 
-Equations (body axes, DESIGN.md §6; Feldman & Lee (2006) §III and Lee Eq 10):
+Equations (body axes, docs/design.md §6; Feldman & Lee (2006) §III and Lee Eq 10):
 
     I ω̇ + ω × (I ω + H_w) + Ḣ_w = T_thr + T_ext,      H_w = Σ_k J_k ρ_k g_k,
     J_k (ρ̇_k + g_k · ω̇) = u_k                           (wheel k, motor torque u_k, N m),

@@ -18,7 +18,7 @@ Everything here is pure JAX (jit/vmap/grad friendly): the NumPyro thrust model c
 
 Thruster geometry:
 
-Thrusters are ordered ``Z1 Z2 Z3 Z4 Y1 Y2 Y3 Y4`` (A-branch, DESIGN.md §3). Their locations are
+Thrusters are ordered ``Z1 Z2 Z3 Z4 Y1 Y2 Y3 Y4`` (A-branch, docs/design.md §3). Their locations are
 those listed with Eq 16: ``Z1..Z4`` at ``[±Lx, ±Ly, Lzz]`` and ``Y1..Y4`` at ``[±Lx, ±Ly, Lzy]``.
 The Z-facing thrusters push along −Z, ``Y1, Y2`` along −Y and ``Y3, Y4`` along +Y: these are the
 directions for which ``r × F`` reproduces every entry of the moment matrix of Eq 16 (so that, as

@@ -8,7 +8,7 @@ is conserved (up to the small external torque of their Appendix A). ``A(q)`` is
 :func:`cassini_bayes.frames.dcm` (their ``P``), ``ω`` the body rate (rad/s), ``ρ_k`` the spin rate
 (rad/s) of wheel ``k`` about its unit axis ``g_k`` (body axes) and ``J_k`` its spin inertia (kg m²).
 
-Parameter vector convention (DESIGN.md §3): ``π = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (kg m²) with
+Parameter vector convention (docs/design.md §3): ``π = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (kg m²) with
 ``I[0,1] = Ixy`` the matrix entry. The paper's Eq 10 orders the unknowns ``(Ixx, Ixy, Ixz, Iyy,
 Iyz, Izz)``; the regressor here is the same matrix with its columns permuted to our order.
 """

@@ -3,7 +3,7 @@
 Feldman & Lee (2006) §V describe a commanded pulse of width ``Δ`` (s): no thrust for the valve
 delay ``τd``; then an exponential rise with time constant ``τr`` towards the steady thrust ``F``;
 after the command ends the thrust is held for another ``τd`` and then decays with time constant
-``τf``. The profile used here (DESIGN.md §6) is
+``τf``. The profile used here (docs/design.md §6) is
 
 * ``0``                              for ``t < τd``,
 * ``F (1 − e^{−t/τr})``              for ``τd ≤ t < Δ``,
@@ -43,7 +43,7 @@ TAU_FALL_S = 0.065
 
 
 def thrust_profile(t_s, width_s, tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
-    """Thrust (N) at time ``t_s`` after the command of a pulse of width ``width_s`` (DESIGN §6)."""
+    """Thrust (N) at ``t_s`` after a pulse command of width ``width_s`` (Feldman & Lee §V)."""
     t = jnp.asarray(t_s)
     w, td, tr, tf = (jnp.asarray(x) for x in (width_s, tau_delay_s, tau_rise_s, tau_fall_s))
     held = 1.0 - jnp.exp(-w / tr)

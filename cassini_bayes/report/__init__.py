@@ -1,7 +1,7 @@
 """Posterior diagnostic reports: one self-contained HTML page per run directory.
 
 ``build_report(run_dir)`` reads ``posterior.nc``, ``summary.json`` and ``config.toml`` of a run
-directory (DESIGN.md §4) and writes ``report.html`` beside them, atomically. The page opens
+directory (docs/design.md §4.4) and writes ``report.html`` beside them, atomically. The page opens
 offline: figures are embedded as base64 PNG, the style sheet is inline, there is no script.
 
 The page-building helpers (``html_page``, ``section``, ``table``, ``figure``, ...) are public so

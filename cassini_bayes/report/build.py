@@ -1,4 +1,4 @@
-"""Assemble a run directory's ``report.html`` (DESIGN.md §4) from its files.
+"""Assemble a run directory's ``report.html`` (docs/design.md §4.4) from its files.
 
 The page, top to bottom: header (kind, directory, seed, version, convergence and adequacy badges,
 warnings); model adequacy (the fit's self-checks); sampler diagnostics; parameter table (with
@@ -137,7 +137,7 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
     if run.kind in ("inertia", "thrust"):
         sections.append(_pair_section(run, fig))
     sections.append(_residuals_section(run, fig))
-    from cassini_bayes.report.sensitivity import sensitivity_section  # issue 7: additive hook
+    from cassini_bayes.report.sensitivity import sensitivity_section
     sections += [s for s in [sensitivity_section(run.summary)] if s is not None]
     if run.kind == "rwa4":
         sections.append(_axis_section(run, fig))

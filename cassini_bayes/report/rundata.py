@@ -1,4 +1,4 @@
-"""Reading a run directory (DESIGN.md §4) for the report: ``posterior.nc``, ``summary.json``,
+"""Reading a run directory (docs/design.md §4.4) for the report: ``posterior.nc``, ``summary.json``,
 ``config.toml``.
 
 Only ``posterior.nc`` is required. A missing ``summary.json`` costs the baseline/truth columns (the

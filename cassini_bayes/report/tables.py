@@ -45,7 +45,7 @@ __all__ = [
 ]
 
 RHAT_MAX = 1.01  # Vehtari et al. (2021) recommendation
-ESS_MIN = 400.0  # issue 4 acceptance: min bulk ESS >= 400
+ESS_MIN = 400.0  # min bulk ESS >= 400: 100 per chain for 4 chains, Vehtari et al. (2021)
 BFMI_MIN = 0.3  # Betancourt (2016): E-BFMI below 0.3 indicates poor exploration
 WEAK_CONTRACTION = 0.5
 PRIOR_DOMINATED_CONTRACTION = 0.1
@@ -136,7 +136,7 @@ def _ge(x: float, lim: float) -> bool:
 
 
 def unit_of(label: str) -> str:
-    """SI unit of a parameter from its DESIGN.md §3 name (``""`` when unknown)."""
+    """SI unit of a parameter from its docs/design.md §3 name (``""`` when unknown)."""
     base = label.split("[")[0]
     if base in INERTIA_NAMES:
         return "kg m²"
@@ -153,7 +153,7 @@ def parameter_names(run: RunData) -> list[str]:
     """Calibration parameters of the run, in table order (posterior variable names).
 
     The keys of ``summary.json``'s ``parameters`` when given (stripped of ``[...]`` components),
-    else the DESIGN.md §3 names present in the posterior for the run's kind.
+    else the docs/design.md §3 names present in the posterior for the run's kind.
     """
     post = set(run.idata.posterior.data_vars)
     names: list[str] = []

@@ -19,7 +19,7 @@ model's inertia and the *believed* wheel axes. Sensor noise is added to the samp
 so the noisy telemetry and the truth come from one trajectory; with time-tag jitter the noisy
 telemetry carries the jittered times (``SimArrays.t_meas``), the truth the true ones.
 
-Flexible or slosh mode (issue 7, :class:`~cassini_bayes.simulate.scenario.FlexMode`): in hybrid
+Flexible or slosh mode (:class:`~cassini_bayes.simulate.scenario.FlexMode`): in hybrid
 coordinates the mode is a momentum store exactly like a wheel — spin inertia ``|δ|²`` about
 ``δ/|δ|``, relative rate ``η̇/|δ|`` and absolute momentum ``p = |δ| (η̇ + δ·ω)`` — whose
 "motor torque" is its spring and damper, ``ṗ = −|δ| (Ω² η + 2ζΩ η̇)``. It rides in the

@@ -129,7 +129,7 @@ class Noise:
     star_tracker_rad : attitude noise per axis, a small rotation, rad.
     tach_quantum_rpm : wheel-rate quantization step, rpm (0 = none).
     tach_noise_rpm : white noise on wheel rates before quantization, rpm.
-    gyro_bias_rad_s : constant gyro bias per body axis, rad/s (issue 7; 0 = none).
+    gyro_bias_rad_s : constant gyro bias per body axis, rad/s (0 = none).
     gyro_scale_factor : gyro scale-factor error per body axis, fraction (0 = none).
     time_tag_jitter_s : sd of the white error of each sample's recorded time, s (0 = none).
     """
@@ -145,7 +145,7 @@ class Noise:
 
 @dataclass(frozen=True)
 class FlexMode:
-    """One flexible-appendage or propellant-slosh mode in hybrid coordinates (issue 7).
+    """One flexible-appendage or propellant-slosh mode in hybrid coordinates.
 
     Modal coordinate ``η`` (unit modal mass, kg^½ m), body rate ``ω``, wheels ``H_w``::
 
@@ -485,7 +485,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         axis = tr.vec("rwa4_axis", unit=True)
         _wheel_index(truth, "RWA4", "truth.rwa4_axis", src)
         truth = truth.with_wheel_axis("RWA4", axis / np.linalg.norm(axis))
-    # Issue 7: true wheels differing from the model file (the prior model keeps its own).
+    # Real-world errors: true wheels differing from the model file (the prior model keeps its own).
     j_scale = tr.num("wheel_inertia_scale", 1.0, positive=True)
     if abs(j_scale - 1.0) >= 0.5:
         raise tr.err("wheel_inertia_scale", f"= {j_scale} must be close to 1 (a fractional error)")

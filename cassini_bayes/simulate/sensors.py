@@ -1,11 +1,11 @@
 """Sensor models: what telemetry reports of the true state (pure JAX, keyed).
 
 * gyro (IRU): white noise on each body-rate sample, rad/s, and optionally a constant bias ``b``
-  (rad/s) and scale-factor error ``s`` per axis: ``ω_meas = (1 + s) ω + b + noise`` (issue 7);
+  (rad/s) and scale-factor error ``s`` per axis: ``ω_meas = (1 + s) ω + b + noise``;
 * attitude (star tracker / attitude estimate): a small random rotation per sample,
   ``q_meas = small_rotation_quat(δθ) ⊗ q``, ``δθ ~ N(0, σ²)`` per axis, rad;
 * wheel tachometers: white noise (rpm) and quantization to ``tach_quantum_rpm``;
-* time tags (issue 7): each sample's recorded time is its true time plus white noise of sd
+* time tags: each sample's recorded time is its true time plus white noise of sd
   ``time_tag_jitter_s`` (s), ``t_rec = t + σ_t ε``; the values are those at the true time;
 * thruster on-time counters: the commanded on-time accumulated up to each sample. The counters
   tick at 10 Hz (0.1 s resolution); scenarios sample on multiples of 0.1 s and pulses start on the
