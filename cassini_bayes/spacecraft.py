@@ -105,12 +105,14 @@ class Knowledge:
 
     The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
     From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``),
-    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``axis_sd_deg``) and ``[telemetry_knowledge]``
-    (``time_tag_sd_s``). The defaults are conservative engineering values, not numbers from the
-    papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro scale-factor error of 5e-4
-    (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each wheel independently; a
-    ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that wheel), a wheel spin-axis
-    misalignment of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4
+    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``common_inertia_sd_frac``, ``axis_sd_deg``)
+    and ``[telemetry_knowledge]`` (``time_tag_sd_s``). The defaults are conservative engineering
+    values, not numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
+    scale-factor error of 5e-4 (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each
+    wheel independently; a ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that
+    wheel) plus 0.5 % shared by every wheel (one calibration method, test stand and temperature;
+    the data cannot tell it from the overall scale of the inertia, so the moments' uncertainty
+    rests on it; 0 removes it), a wheel spin-axis misalignment of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4
     0.53 deg from its nominal axis; the fixed wheels are known better) and a white time-tag error
     of 10 ms per telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
     """
@@ -120,6 +122,7 @@ class Knowledge:
     wheel_inertia_sd_frac: float = 0.005
     wheel_axis_sd_deg: float = 0.2
     time_tag_sd_s: float = 0.01
+    wheel_common_inertia_sd_frac: float = 0.005
 
 
 @dataclass(frozen=True)
@@ -204,6 +207,8 @@ class Spacecraft:
             "gyro": {"bias_sd_rad_s": self.knowledge.gyro_bias_sd_rad_s,
                      "scale_factor_sd": self.knowledge.gyro_scale_factor_sd},
             "wheel_knowledge": {"inertia_sd_frac": self.knowledge.wheel_inertia_sd_frac,
+                                "common_inertia_sd_frac":
+                                    self.knowledge.wheel_common_inertia_sd_frac,
                                 "axis_sd_deg": self.knowledge.wheel_axis_sd_deg},
             "telemetry_knowledge": {"time_tag_sd_s": self.knowledge.time_tag_sd_s},
         }
@@ -213,6 +218,7 @@ _TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "
              "mass", "gyro", "wheel_knowledge", "telemetry_knowledge"}
 _GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
 _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
+                         "common_inertia_sd_frac": "wheel_common_inertia_sd_frac",
                          "axis_sd_deg": "wheel_axis_sd_deg"}
 _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
@@ -433,9 +439,10 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
                 raise InputError(f"'{section}.{key}' is a standard deviation and must be >= 0, "
                                  f"got {v}", path=src)
             kw[attr] = v
-    if kw["wheel_inertia_sd_frac"] >= 0.5:
-        raise InputError("'wheel_knowledge.inertia_sd_frac' is a fraction (0.005 = 0.5 %), got "
-                         f"{kw['wheel_inertia_sd_frac']}", path=src)
+    for key in ("inertia_sd_frac", "common_inertia_sd_frac"):
+        if kw[_WHEEL_KNOWLEDGE_KEYS[key]] >= 0.5:
+            raise InputError(f"'wheel_knowledge.{key}' is a fraction (0.005 = 0.5 %), got "
+                             f"{kw[_WHEEL_KNOWLEDGE_KEYS[key]]}", path=src)
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "
                          f"(<= 10), got {kw['wheel_axis_sd_deg']}", path=src)

@@ -48,7 +48,8 @@ def with_wheel_errors(sc, errors):
 
 def test_per_wheel_columns_sum_to_the_common_column(sc):
     """Column k = J_k ρ_k g_k (wheel k's momentum, body axes); their sum over wheels is the
-    common model's one column H_w; every other column is the same in both layouts."""
+    common model's one column H_w, and the shared scale c_s's column; every other column is the
+    same in both layouts."""
     rng = np.random.default_rng(0)
     n, wheels = 50, ("RWA1", "RWA2", "RWA3")
     wheel_h = {w: rng.normal(size=n) for w in wheels}
@@ -57,16 +58,19 @@ def test_per_wheel_columns_sum_to_the_common_column(sc):
             np.tile(np.eye(3), (n, 1, 1)), np.arange(n, dtype=float))
     per = nuisance_layout(sc, 2, wheels)
     common = nuisance_layout(sc, 2, wheels, wheel_errors="common")
-    assert per.n_scales == 3 and common.n_scales == 1 and per.size == common.size + 2
+    assert per.n_scales == 3 and common.n_scales == 1 and per.size == common.size + 3
+    assert per.has_common and not common.has_common
     c_per = robust_columns(per, 1, *args)
     c_com = robust_columns(common, 1, *args)
     s_per, s_com = per.slices["wheel_inertia"], common.slices["wheel_inertia"]
     np.testing.assert_allclose(c_per[:, :, s_per].sum(-1), c_com[:, :, s_com.start], rtol=1e-12)
     np.testing.assert_allclose(c_com[:, :, s_com.start], h_w, rtol=0)
+    np.testing.assert_allclose(c_per[:, :, per.slices["wheel_inertia_common"].start], h_w,
+                               rtol=1e-12)
     for k, w in enumerate(wheels):
         np.testing.assert_allclose(c_per[:, :, s_per.start + k],
                                    wheel_h[w][:, None] * sc.wheel(w).axis, rtol=0)
-    rest = [e for e in per.slices if e != "wheel_inertia"]
+    rest = [e for e in per.slices if e not in ("wheel_inertia", "wheel_inertia_common")]
     for e in rest:
         np.testing.assert_array_equal(c_per[:, :, per.slices[e]], c_com[:, :, common.slices[e]])
     # a wheel not running in the file has a zero column

@@ -47,7 +47,7 @@ def base(sc):
 def test_effects_and_modelled_flags(base, sc):
     s = base.sensitivity
     assert s.effects == ("external_torque", "gyro_bias", "gyro_scale", "wheel_inertia",
-                         "wheel_axes", "body_torque")
+                         "wheel_inertia_common", "wheel_axes", "body_torque")
     assert not s.modelled.any()  # torque=False, idealised
     robust = prep(make_slews(KEY, sc), sc, robust=True).sensitivity
     assert robust.modelled.all()

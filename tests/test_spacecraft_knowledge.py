@@ -25,9 +25,10 @@ def test_defaults_when_absent():
 def test_sections_are_read(tmp_path):
     text = GOOD + ("\n[gyro]\nbias_sd_rad_s = 1e-6\nscale_factor_sd = 2e-4\n"
                    "\n[wheel_knowledge]\ninertia_sd_frac = 0.01\naxis_sd_deg = 0.5\n"
+                   "common_inertia_sd_frac = 0.002\n"
                    "\n[telemetry_knowledge]\ntime_tag_sd_s = 0.02\n")
     k = load_spacecraft(_write(tmp_path, text)).knowledge
-    assert k == Knowledge(1e-6, 2e-4, 0.01, 0.5, 0.02)
+    assert k == Knowledge(1e-6, 2e-4, 0.01, 0.5, 0.02, wheel_common_inertia_sd_frac=0.002)
 
 
 def test_partial_section_keeps_other_defaults(tmp_path):

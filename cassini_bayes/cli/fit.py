@@ -212,7 +212,7 @@ def fit_inertia_cmd(
 
     from cassini_bayes.consistency import check_inertia_data
     from cassini_bayes.inference.adequacy import inertia_adequacy
-    from cassini_bayes.inference.inertia import NOISE_NAMES, ROBUST_SITES, fit_inertia
+    from cassini_bayes.inference.inertia import NOISE_NAMES, fit_inertia, robust_sites
     from cassini_bayes.inference.sensitivity import sensitivity_block
     from cassini_bayes.inference.summary import build_summary
     from cassini_bayes.physics.momentum import INERTIA_NAMES
@@ -233,12 +233,13 @@ def fit_inertia_cmd(
         post = fit_inertia(key, tels, sc, torque=torque, robust=not idealised, settings=settings,
                            wheel_errors=wheel_errors)
     baseline, base_warns = _inertia_baseline(tels, sc)
-    priored = (["T_N"] if torque else []) + ([] if idealised else list(ROBUST_SITES))
+    robust = [] if idealised else robust_sites(post.problem.layout)
+    priored = (["T_N"] if torque else []) + robust
     summary = build_summary(
         "inertia", post.idata, parameters=INERTIA_NAMES, diagnostics=post.diagnostics,
         baseline=baseline, seed=seed, warnings=warns + base_warns,
         nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES]
-        + ([] if idealised else list(ROBUST_SITES)),
+        + robust,
         adequacy=inertia_adequacy(post, list(INERTIA_NAMES) + priored))
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "idealised" if idealised else "robust"

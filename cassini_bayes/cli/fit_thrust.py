@@ -71,7 +71,7 @@ def thrust_sensitivity(post) -> dict:
     :func:`cassini_bayes.inference.sensitivity.posterior_sensitivity`)."""
     import numpy as np
 
-    from cassini_bayes.inference.nuisance import EFFECTS
+    from cassini_bayes.inference.nuisance import EFFECTS, site_prior_sd
     from cassini_bayes.inference.sensitivity import posterior_sensitivity
     from cassini_bayes.inference.thrust import TAU_NAMES
 
@@ -84,8 +84,9 @@ def thrust_sensitivity(post) -> dict:
 
     names = list(post.problem.names) + list(TAU_NAMES)
     targets = {n: flat(n)[:, 0] for n in names}
-    groups = {e: (flat(EFFECTS[e]), layout.sd[layout.slices[e]])
-              for e in EFFECTS}
+    prior_sd = site_prior_sd(layout)
+    groups = {e: (flat(EFFECTS[e]), prior_sd[EFFECTS[e]])
+              for e in layout.slices if EFFECTS[e] in post_ds}
     units = {n: ("N" if n.startswith("F") else "s") for n in names}
     return posterior_sensitivity(targets, groups, units)
 
@@ -167,7 +168,7 @@ def fit_thrust_cmd(
         nuisance += list(INERTIA_NAMES)
     if not idealised:
         from cassini_bayes.inference.nuisance import EFFECTS
-        nuisance += list(EFFECTS.values())
+        nuisance += [EFFECTS[e] for e in post.problem.layout.slices]
     from cassini_bayes.inference.adequacy import thrust_adequacy
 
     priored = names + [n for n in nuisance if not n.startswith("sigma_")]

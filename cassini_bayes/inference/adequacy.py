@@ -128,11 +128,11 @@ def _elements(da) -> dict[str, np.ndarray]:
 
 def nuisance_prior_sd(layout) -> dict[str, np.ndarray]:
     """Posterior site → flat prior sd of the robust nuisance parameters (zero-mean Normal) of a
-    :class:`~cassini_bayes.inference.nuisance.NuisanceLayout`, in the site's element order."""
-    from cassini_bayes.inference.nuisance import EFFECTS
+    :class:`~cassini_bayes.inference.nuisance.NuisanceLayout`, in the site's element order (a
+    wheel's total scale has its marginal sd: :func:`~cassini_bayes.inference.nuisance.site_prior_sd`)."""
+    from cassini_bayes.inference.nuisance import site_prior_sd
 
-    return {site: np.asarray(layout.sd)[layout.slices[effect]]
-            for effect, site in EFFECTS.items() if effect in layout.slices}
+    return site_prior_sd(layout)
 
 
 def prior_data_conflict(idata, sites: Sequence[str], threshold: float = PRIOR_CONFLICT_SD,

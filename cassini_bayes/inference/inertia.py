@@ -109,6 +109,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
 from cassini_bayes.errors import InputError, UnidentifiableError
+from cassini_bayes.inference.nuisance import EFFECTS, split_nuisance
 from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
 from cassini_bayes.physics.momentum import (INERTIA_NAMES, inertia_matrix, inertia_vector,
                                             regressor, wheel_momentum_body)
@@ -128,6 +129,8 @@ __all__ = [
     "is_physical",
     "noise_levels",
     "prepare_inertia",
+    "problem_model",
+    "robust_sites",
     "inertia_model",
     "sample_prior",
     "momentum_residuals",
@@ -359,7 +362,8 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
        effect (:func:`cassini_bayes.inference.sensitivity.linear_sensitivity`).
 
     ``robust`` adds the nuisance parameters ``ν`` (gyro bias per file, gyro scale factor, wheel
-    spin-inertia scales, wheel spin-axis tilts) with priors from ``spacecraft.knowledge``;
+    spin-inertia scales per wheel and shared, wheel spin-axis tilts, body-fixed torque and, with
+    ``torque``, the inertial torque's rate) with priors from ``spacecraft.knowledge``;
     ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel spin-inertia model
     (:func:`~cassini_bayes.inference.nuisance.nuisance_layout`).
 
@@ -385,7 +389,8 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         for name in tel.active_wheels():
             if spacecraft.wheel(name).name not in wheels_any:
                 wheels_any.append(spacecraft.wheel(name).name)
-    layout = nuisance_layout(spacecraft, n_files, wheels_any, wheel_errors=wheel_errors)
+    layout = nuisance_layout(spacecraft, n_files, wheels_any, wheel_errors=wheel_errors,
+                             torque_rate=torque)
     p_base = 6 + 6 * n_files
     p_full = p_base + layout.size
     active = list(range(6))
@@ -435,11 +440,13 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     # P = 0, the column dropped); the model maps π = (1 + c) π̃. (Keeping ``c H_w`` as a linear
     # column with a fixed noise covariance would let the fit shrink the noise term along the
     # unidentified scale and drag c many prior sd low.) The sensitivity keeps the full columns.
-    w_index = p_base + np.arange(layout.size)[layout.slices["wheel_inertia"]]
+    w_index = p_base + np.arange(layout.size)[layout.wheel_block]
     scale_w = layout.scale_weights
+    n_d = layout.n_scales                  # the per-wheel d_k; the shared c_s is seen as zero
     fit_map = np.eye(p_full)
-    fit_map[np.ix_(w_index, w_index)] = np.eye(w_index.size) - np.outer(np.ones(w_index.size),
-                                                                         scale_w)
+    fit_map[np.ix_(w_index, w_index)] = 0.0
+    d_index = w_index[:n_d]
+    fit_map[np.ix_(d_index, d_index)] = np.eye(n_d) - np.full((n_d, n_d), 1.0 / n_d)
 
     def fitted(x):
         """The fitted columns ``x @ fit_map`` of (n, 3, p_full) columns ``x``."""
@@ -663,7 +670,8 @@ def _log_jacobian(lp):
 
 
 def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise,
-           torque: bool, per_wheel: bool = True, nu_sd=None, nu_weights=None):
+           torque: bool, per_wheel: bool = True, common: bool = False, n_torque_sets: int = 1,
+           nu_sd=None, nu_weights=None):
     n_files = log_noise.shape[0]
     p_tot = centre.shape[0]
     z = numpyro.sample("z", dist.ImproperUniform(constraints.real_vector, (), (p_tot,)))
@@ -675,10 +683,14 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
     pi_t = pi_from_cholesky_params(lp)
     nu = theta[6 + (6 if torque else 3) * n_files:]
     # Robust model: the likelihood sees π̃ = π/(1 + c), H̃_0, T̃_N and the wheel scales relative
-    # to the common c = ωᵀ w, δ = w − c (module docstring; nuisance.py); the physical values are
-    # (1 + c) times those and c_k = c + (1 + c) δ_k. Idealised: c = 0.
-    n_scale = 0 if nu_weights is None else nu_weights.shape[0]
-    w_sc = nu[3 * n_files + 3:3 * n_files + 3 + n_scale]
+    # to the common c = ωᵀ w (module docstring; nuisance.py). The wheel block w holds the S
+    # per-wheel d̃_k and, with ``common``, the shared c̃_s; c = mean_k d̃_k + c̃_s. Physically
+    # d_k = m + (1 + c)(d̃_k − m), m = mean_k d̃_k, c_s = c̃_s, so c_k = d_k + c_s = c + (1 + c)
+    # (d̃_k − m): the seen differences are (c_k − c)/(1 + c). Idealised: c = 0.
+    n_block = 0 if nu_weights is None else nu_weights.shape[0]
+    n_d = n_block - int(common)
+    b0 = 3 * n_files + 3
+    w_sc = nu[b0:b0 + n_block]
     c = nu_weights @ w_sc if nu_sd is not None else 0.0
     pi, h0, tq = (1.0 + c) * pi_t, (1.0 + c) * h0_t, (1.0 + c) * tq_t
 
@@ -692,21 +704,27 @@ def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_s
     if nu_sd is not None:
         log_prior += (6 + (6 if torque else 3) * n_files) * jnp.log1p(c)
         # Robust nuisance ν ~ N(0, sd from the spacecraft model's knowledge); see nuisance.py.
-        # The body torque, like T_N, is (1 + c) times what the likelihood sees; the wheel scales
-        # c_k = c + (1 + c)(w_k − c) = (1 + c) w_k − c², |∂c_k/∂w| = (1 + c)^(S−1).
-        t0 = 3 * n_files + 3 + n_scale
-        n_tilt = nu_sd.shape[0] - 3 * n_files - t0
-        body = t0 + n_tilt
-        scales = (1.0 + c) * w_sc - c**2
-        nu_phys = jnp.concatenate([nu[:3 * n_files + 3], scales, nu[t0:body],
+        # The torques (body-fixed, and the inertial rate), like T_N, are (1 + c) times what the
+        # likelihood sees; d̃ → d at fixed c and c̃_s has |∂d/∂d̃| = (1 + c)^(S−1).
+        n_rest = 3 * n_files * n_torque_sets
+        body = nu_sd.shape[0] - n_rest
+        m = jnp.mean(w_sc[:n_d])
+        d_phys = m + (1.0 + c) * (w_sc[:n_d] - m)
+        nu_phys = jnp.concatenate([nu[:b0], d_phys, w_sc[n_d:], nu[b0 + n_block:body],
                                    (1.0 + c) * nu[body:]])
         log_prior += (jnp.sum(-0.5 * (nu_phys / nu_sd)**2)
-                      + (3 * n_files + n_scale - 1) * jnp.log1p(c))
+                      + (n_rest + n_d - 1) * jnp.log1p(c))
+        scales = d_phys + (w_sc[n_d] if common else 0.0)
         numpyro.deterministic("gyro_bias", nu[:3 * n_files].reshape(n_files, 3))
         numpyro.deterministic("gyro_scale", nu[3 * n_files:3 * n_files + 3])
         numpyro.deterministic("wheel_scale", scales if per_wheel else scales[0])
-        numpyro.deterministic("wheel_tilt", nu[t0:body].reshape(n_tilt // 2, 2))
-        numpyro.deterministic("T_body", nu_phys[body:].reshape(n_files, 3))
+        if common:
+            numpyro.deterministic("wheel_scale_common", w_sc[n_d])
+        numpyro.deterministic("wheel_tilt", nu[b0 + n_block:body].reshape(-1, 2))
+        torques = nu_phys[body:].reshape(n_torque_sets, n_files, 3)
+        numpyro.deterministic("T_body", torques[0])
+        if n_torque_sets > 1:
+            numpyro.deterministic("T_N_rate", torques[1])
     numpyro.factor("prior", log_prior)
 
     for i, name in enumerate(INERTIA_NAMES):
@@ -732,8 +750,10 @@ def _pack(h0, tq, torque: bool):
 
 
 @lru_cache(maxsize=None)
-def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_wheel"):
-    """The NumPyro model function (one object per flag set, so compiled code is reused).
+def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_wheel",
+                  common: bool = False, torque_rate: bool = False):
+    """The NumPyro model function (one object per flag set, so compiled code is reused); the
+    flags must match the problem's (:func:`problem_model` reads them from it).
 
     Call it with ``**InertiaProblem.model_kwargs`` (per-file sufficient statistics, so its shapes
     depend on the number of files, wheels and the flags only, not on the number of samples).
@@ -743,17 +763,29 @@ def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_w
     ``gyro_bias`` (file, axis) rad/s, ``gyro_scale`` (axis), ``wheel_scale`` (wheel) fractions
     (one per wheel; a scalar with ``wheel_errors="common"``, which must match the problem's),
     ``wheel_tilt`` (wheel, tilt) rad and ``T_body`` (file, axis) N m, a body-fixed external
-    torque (:mod:`cassini_bayes.inference.nuisance`).
+    torque, with ``common`` the shared wheel scale ``wheel_scale_common`` and with
+    ``torque_rate`` the inertial torque rate ``T_N_rate`` (file, axis) N m/s
+    (:mod:`cassini_bayes.inference.nuisance`).
     """
     def model(**kwargs):
         if not robust:
             kwargs.pop("nu_sd", None)
             kwargs.pop("nu_weights", None)
-        return _model(torque=torque, per_wheel=wheel_errors == "per_wheel", **kwargs)
+        return _model(torque=torque, per_wheel=wheel_errors == "per_wheel",
+                      common=robust and common, n_torque_sets=1 + int(robust and torque_rate),
+                      **kwargs)
 
-    model.__name__ = f"inertia_model_torque_{torque}_robust_{robust}_{wheel_errors}"
+    model.__name__ = (f"inertia_model_torque_{torque}_robust_{robust}_{wheel_errors}"
+                      f"_common_{common}_rate_{torque_rate}")
     model.__doc__ = _model.__doc__
     return model
+
+
+def problem_model(problem: "InertiaProblem"):
+    """:func:`inertia_model` with the flags of a prepared ``problem``."""
+    layout = problem.layout
+    return inertia_model(problem.torque, problem.robust, layout.wheel_errors,
+                         common=layout.has_common, torque_rate="torque_rate" in layout.slices)
 
 
 # --------------------------------------------------------------------------------------------
@@ -769,7 +801,8 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
     empirical-Bayes levels ``σ*``, is given; with a robust ``layout``
     (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`) also ``gyro_bias`` (n, F, 3),
     ``gyro_scale`` (n, 3), ``wheel_scale`` (n, K) per wheel or (n,) common, ``wheel_tilt``
-    (n, K, 2). The same function gives the simulator and SBC their truth, so the model's prior
+    (n, K, 2), ``T_body`` (n, F, 3) and, where the layout has them, ``wheel_scale_common`` (n,)
+    and ``T_N_rate`` (n, F, 3) (:func:`~cassini_bayes.inference.nuisance.split_nuisance`). The same function gives the simulator and SBC their truth, so the model's prior
     and the truth's prior agree exactly.
     """
     key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
@@ -801,13 +834,8 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
     if layout is not None:
         nu = layout.sd * np.asarray(jax.random.normal(jax.random.fold_in(key_s, 1),
                                                       (n, layout.size)))
-        sl = layout.slices
-        out["gyro_bias"] = nu[:, sl["gyro_bias"]].reshape(n, layout.n_files, 3)
-        out["gyro_scale"] = nu[:, sl["gyro_scale"]]
-        out["wheel_scale"] = (nu[:, sl["wheel_inertia"]] if layout.wheel_errors == "per_wheel"
-                              else nu[:, sl["wheel_inertia"].start])
-        out["wheel_tilt"] = nu[:, sl["wheel_axes"]].reshape(n, len(layout.wheels), 2)
-        out["T_body"] = nu[:, sl["body_torque"]].reshape(n, layout.n_files, 3)
+        out.update(split_nuisance(nu, layout))
+        out.pop("T_inertial", None)
     return out
 
 
@@ -860,8 +888,33 @@ class InertiaPosterior(NamedTuple):
 
 
 AXES = ("x", "y", "z")
-# Posterior sites of the robust nuisance vector ν, in its order (nuisance.py).
-ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_tilt", "T_body")
+# Posterior sites of the robust nuisance vector ν (nuisance.py); a problem's own are
+# :func:`robust_sites`.
+ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_scale_common", "wheel_tilt",
+                "T_body", "T_N_rate")
+
+
+def robust_sites(layout) -> list[str]:
+    """The posterior sites of ``layout``'s robust nuisance parameters, in its order."""
+    return [EFFECTS[e] for e in layout.slices]
+
+
+def _seen_nuisance(layout, post) -> tuple[np.ndarray, float]:
+    """The nuisance vector the likelihood sees (R,), from the posterior means of the physical
+    sites: the wheel scales relative to the common ``c``, ``δ_k = (c_k − c)/(1 + c)`` (the shared
+    ``c_s`` is seen as zero), the torques divided by ``1 + c``; and ``1 + c``."""
+    nu = np.zeros(layout.size)
+    mean = {name: post[name].mean(("chain", "draw")).values.reshape(-1)
+            for name in robust_sites(layout)}
+    for effect, sl in layout.slices.items():
+        if effect != "wheel_inertia_common":
+            nu[sl] = mean[EFFECTS[effect]]
+    sl = layout.slices["wheel_inertia"]
+    c = float(np.mean(nu[sl]))
+    nu[sl] = (nu[sl] - c) / (1.0 + c)
+    for effect in layout.torque_effects:
+        nu[layout.slices[effect]] /= 1.0 + c
+    return nu, 1.0 + c
 
 
 def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
@@ -929,7 +982,7 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     dims = {"H0": ["file", "axis"], "T_N": ["file", "axis"], "z": ["z_dim"],
             "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
             "gyro_bias": ["file", "axis"], "gyro_scale": ["axis"], "wheel_tilt": ["wheel", "tilt"],
-            "T_body": ["file", "axis"],
+            "T_body": ["file", "axis"], "T_N_rate": ["file", "axis"],
             **({"wheel_scale": ["wheel"]} if wheel_errors == "per_wheel" else {}),
             **{name: ["file"] for name in NOISE_NAMES}}
     log_nh = np.asarray(kw["log_noise"])
@@ -938,7 +991,7 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
         return sample_prior(key_prior, problem.prior, n, n_files=n_files, torque=torque,
                             log_noise=log_nh, layout=problem.layout if robust else None)
 
-    idata = run_nuts(key, inertia_model(torque, robust, wheel_errors), model_kwargs=kw,
+    idata = run_nuts(key, problem_model(problem), model_kwargs=kw,
                      settings=settings, coords=coords, dims=dims, prior=prior,
                      prior_draws=prior_draws)
 
@@ -949,15 +1002,8 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     sig_mean = np.stack([np.exp(np.log(post[n]).mean(("chain", "draw")).values)
                          for n in NOISE_NAMES], -1)
     nu_mean = None
-    if robust:
-        nu_mean = np.concatenate([post[name].mean(("chain", "draw")).values.reshape(-1)
-                                  for name in ROBUST_SITES])
     if robust:  # the residual is that of π̃ = π/(1 + c) and δ_k = (c_k − c)/(1 + c) (nuisance.py)
-        sl = problem.layout.slices["wheel_inertia"]
-        c = float(problem.layout.scale_weights @ nu_mean[sl])
-        scale = 1.0 + c
-        nu_mean[sl] = (nu_mean[sl] - c) / scale
-        nu_mean[problem.layout.slices["body_torque"]] /= scale
+        nu_mean, scale = _seen_nuisance(problem.layout, post)
         pi_mean, h0_mean, tq_mean = pi_mean / scale, h0_mean / scale, tq_mean / scale
     r, std = momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean, nu_mean)
 
@@ -993,5 +1039,5 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
         idata.add_groups({"observed_data": observed, "constant_data": constant,
                           "residuals": residuals})
     names = (list(INERTIA_NAMES) + ["H0"] + (["T_N"] if torque else []) + ["noise_scale"]
-             + (list(ROBUST_SITES) if robust else []))
+             + (robust_sites(problem.layout) if robust else []))
     return InertiaPosterior(idata, diagnostics(idata, names), problem)

@@ -23,17 +23,32 @@ Every effect is small, so it enters the momentum model to first order, and linea
   (Feldman & Lee App. A: 15 µN m per axis); over a short slew the two are nearly the same
   torque, and the priors share it out.
 
+* **a shared wheel spin-inertia error** ``c_s`` (per wheel, the default, when the model file's
+  ``[wheel_knowledge] common_inertia_sd_frac`` is above zero): every wheel's scale is
+  ``c_k = c_s + d_k``, the shared part from one calibration method, one test stand, one
+  temperature, the individual ``d_k`` from each wheel's own calibration. Its column is the sum of
+  the per-wheel columns (``H_w``);
+* **inertial torque** ``T_I`` (N m, per file; the RWA4 model, whose balance has no ``T_N``): the
+  inertial momentum gains ``T_I (t − t_0)``, so the body residual gains ``−A(q_t) (t − t_0) T_I``;
+* **inertial torque rate** ``Ṫ`` (N m/s, per file; the inertia model, beside its constant
+  ``T_N``): ``−A(q_t) ½ (t − t_0)² Ṫ``. Solar and RTG torques change as the slews turn the sun
+  line in body axes; the prior lets the App. A bound (15 µN m) change by its whole size within
+  an hour (:data:`TORQUE_RATE_PRIOR_SD_NM_S`). Without it a torque that drifts within the run
+  leaks into the products of inertia (``docs/robust/open_world.md``).
+
 What the data cannot separate stays prior-dominated by construction: scaling ``I``, ``H_0`` and
 ``T_N`` by ``(1 + c)`` together with every wheel inertia leaves every momentum balance unchanged
 (Psiaki 2005, WMAP), and so does scaling ``I`` by ``1/(1 − σ)`` against a common gyro scale factor
 ``σ``; in the linearised model these are exact null directions of the likelihood, so the common
-wheel scale ``c = mean_k c_k`` (:data:`NuisanceLayout.scale_weights`) and the common part of ``s``
-keep their priors and the overall scale of ``I`` widens by their prior sd instead of drifting.
-The differences ``c_k − c`` are learned from slews about several axes. With independent per-wheel
-priors of sd ``σ_J`` the common part has prior sd ``σ_J/√K`` (K wheels): 0.29 % for three wheels
-at 0.5 %, against 0.5 % in the common-scale model. The priors (zero-mean Normal, one sd each)
-come from the spacecraft model's :class:`~cassini_bayes.spacecraft.Knowledge` and, per wheel,
-its ``[[wheel]] inertia_sd_frac`` (:func:`wheel_inertia_sd`).
+wheel scale ``c = c_s + mean_k d_k`` (:data:`NuisanceLayout.scale_weights`) and the common part
+of ``s`` keep their priors and the overall scale of ``I`` widens by their prior sd instead of
+drifting. The differences ``c_k − c`` are learned from slews about several axes. With
+independent per-wheel priors of sd ``σ_J`` alone the common part would have prior sd
+``σ_J/√K`` (K wheels): 0.29 % for three wheels at 0.5 %, a claim that the wheels' errors
+average out which no data can check; the shared term makes it ``√(σ_s² + σ_J²/K)`` (0.58 % at
+the defaults). The priors (zero-mean Normal, one sd each) come from the spacecraft model's
+:class:`~cassini_bayes.spacecraft.Knowledge` and, per wheel, its ``[[wheel]] inertia_sd_frac``
+(:func:`wheel_inertia_sd`).
 """
 
 from __future__ import annotations
@@ -46,13 +61,19 @@ from cassini_bayes.errors import InputError
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt_basis",
-           "wheel_inertia_sd", "wheel_scale_columns", "robust_columns"]
+           "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
+           "site_prior_sd"]
 
 # Effect name → the posterior site holding its parameters.
 EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
-           "wheel_inertia": "wheel_scale", "wheel_axes": "wheel_tilt",
-           "body_torque": "T_body"}
+           "wheel_inertia": "wheel_scale", "wheel_inertia_common": "wheel_scale_common",
+           "wheel_axes": "wheel_tilt", "body_torque": "T_body",
+           "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
 BODY_TORQUE_PRIOR_SD_NM = 15e-6  # N m per axis, as the inertial T_N (Feldman & Lee App. A)
+TORQUE_RATE_PRIOR_SD_NM_S = BODY_TORQUE_PRIOR_SD_NM / 3600.0
+"""Prior sd of the inertial torque rate, N m/s per axis: the App. A bound may change by its
+whole size within an hour."""
+_TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
 # Models of the wheel spin-inertia error: one scale per wheel (default) or one common scale.
 WHEEL_ERRORS = ("per_wheel", "common")
 
@@ -60,14 +81,15 @@ WHEEL_ERRORS = ("per_wheel", "common")
 class NuisanceLayout(NamedTuple):
     """Order and prior of the robust nuisance vector ``ν`` (appended to the model's θ).
 
-    ``ν = (b_0 (3), …, b_{F−1} (3), s (3), c_0 … c_{S−1} (S), a_0 (2), …, a_{K−1} (2),
-    T_B,0 (3), …)``; ``S`` = the number of scaled wheels (per wheel) or 1 (common).
+    ``ν = (b_0 (3), …, b_{F−1} (3), s (3), c_0 … c_{S−1} (S), [c_s (1)], a_0 (2), …, a_{K−1} (2),
+    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …])``; ``S`` = the number of scaled wheels (per
+    wheel) or 1 (common); the bracketed effects only where the layout has them.
 
     Attributes
     ----------
     n_files : F; ``wheels`` the K wheel names (active in any file) that get tilts.
-    sd : (R,) prior standard deviations (rad/s, 1, 1, rad, N m), R = 6F + 3 + S + 2K.
-    slices : effect name (:data:`EFFECTS`) → slice of ``ν``.
+    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s).
+    slices : effect name (:data:`EFFECTS`) → slice of ``ν``, for the effects the layout has.
     tilt_u : (K, 2, 3) the unit vectors ``u_k1, u_k2`` perpendicular to each spin axis.
     wheel_errors : ``"per_wheel"`` or ``"common"`` (:data:`WHEEL_ERRORS`).
     scale_wheels : the S wheels with their own scale (per wheel; ``()`` for common).
@@ -89,15 +111,42 @@ class NuisanceLayout(NamedTuple):
 
     @property
     def n_scales(self) -> int:
-        """S, the number of wheel spin-inertia scale parameters."""
+        """S, the number of wheel spin-inertia scale parameters (without the shared one)."""
         sl = self.slices["wheel_inertia"]
         return sl.stop - sl.start
 
     @property
+    def has_common(self) -> bool:
+        """Whether the per-wheel scales share a common term ``c_s`` (:func:`nuisance_layout`)."""
+        return "wheel_inertia_common" in self.slices
+
+    @property
+    def wheel_block(self) -> slice:
+        """The contiguous slice of every wheel-scale parameter: ``c_0 … c_{S−1}`` and ``c_s``."""
+        sl = self.slices["wheel_inertia"]
+        return slice(sl.start, sl.stop + int(self.has_common))
+
+    @property
     def scale_weights(self) -> np.ndarray:
-        """(S,) weights ``ω`` of the common scale ``c = Σ_k ω_k c_k`` (equal, summing to 1): the
-        direction the data cannot see (module docstring); ``c_k − c`` they can."""
-        return np.full(self.n_scales, 1.0 / max(self.n_scales, 1))
+        """Weights ``ω`` over :attr:`wheel_block` of the common scale ``c = Σ ω_k w_k`` (the
+        mean of the per-wheel parameters plus the shared one): the direction the data cannot see
+        (module docstring); ``c_k − c`` they can."""
+        return np.r_[np.full(self.n_scales, 1.0 / max(self.n_scales, 1)),
+                     np.ones(int(self.has_common))]
+
+    @property
+    def torque_effects(self) -> tuple[str, ...]:
+        """The torque effects the layout has, in order (they follow the tilts)."""
+        return tuple(e for e in _TORQUE_EFFECTS if e in self.slices)
+
+    def wheel_scales(self, nu: np.ndarray) -> np.ndarray:
+        """Each wheel's total spin-inertia scale ``c_k = d_k [+ c_s]`` from ``ν`` (..., R):
+        (..., S) per wheel, (...) common."""
+        nu = np.asarray(nu)
+        scale = nu[..., self.slices["wheel_inertia"]]
+        if self.has_common:
+            scale = scale + nu[..., self.slices["wheel_inertia_common"]]
+        return scale if self.wheel_errors == "per_wheel" else scale[..., 0]
 
 
 def tilt_basis(axis) -> np.ndarray:
@@ -114,12 +163,15 @@ def wheel_inertia_sd(spacecraft: Spacecraft, name: str) -> float:
 
 
 def nuisance_layout(spacecraft: Spacecraft, n_files: int, wheels, *,
-                    wheel_errors: str = "per_wheel", scaled=None) -> NuisanceLayout:
+                    wheel_errors: str = "per_wheel", scaled=None,
+                    inertial_torque: bool = False, torque_rate: bool = False) -> NuisanceLayout:
     """The layout and prior of ``ν`` for ``n_files`` files and the named active ``wheels``.
 
     ``wheel_errors`` (:data:`WHEEL_ERRORS`): one spin-inertia scale per wheel of ``scaled``
     (default ``wheels``; the RWA4 model adds the solved wheel, which gets no tilt), prior sd
-    :func:`wheel_inertia_sd` each, or one common scale with the ``[wheel_knowledge]`` sd.
+    :func:`wheel_inertia_sd` each, plus the shared ``c_s`` when ``[wheel_knowledge]
+    common_inertia_sd_frac`` > 0; or one common scale with the ``[wheel_knowledge]`` sd.
+    ``inertial_torque`` and ``torque_rate`` add those per-file effects (module docstring).
     """
     if wheel_errors not in WHEEL_ERRORS:
         raise InputError(f"wheel errors {wheel_errors!r}: choose one of "
@@ -127,28 +179,66 @@ def nuisance_layout(spacecraft: Spacecraft, n_files: int, wheels, *,
     k = spacecraft.knowledge
     wheels = tuple(wheels)
     nk = len(wheels)
+    common_sd = np.zeros(0)
     if wheel_errors == "per_wheel":
         scaled = wheels if scaled is None else tuple(scaled)
         scale_sd = np.array([wheel_inertia_sd(spacecraft, w) for w in scaled], float)
         scale_axes = (np.stack([spacecraft.wheel(w).axis for w in scaled]) if scaled
                       else np.zeros((0, 3)))
+        if k.wheel_common_inertia_sd_frac > 0 and scaled:
+            common_sd = np.array([k.wheel_common_inertia_sd_frac])
     else:
         scaled, scale_sd, scale_axes = (), np.array([k.wheel_inertia_sd_frac]), np.zeros((0, 3))
-    ns = scale_sd.size
-    sd = np.concatenate([np.full(3 * n_files, k.gyro_bias_sd_rad_s),
-                         np.full(3, k.gyro_scale_factor_sd),
-                         scale_sd,
-                         np.full(2 * nk, np.deg2rad(k.wheel_axis_sd_deg)),
-                         np.full(3 * n_files, BODY_TORQUE_PRIOR_SD_NM)])
-    b = 3 * n_files
-    e = b + 3 + ns + 2 * nk
-    slices = {"gyro_bias": slice(0, b), "gyro_scale": slice(b, b + 3),
-              "wheel_inertia": slice(b + 3, b + 3 + ns), "wheel_axes": slice(b + 3 + ns, e),
-              "body_torque": slice(e, e + 3 * n_files)}
+    blocks = [("gyro_bias", np.full(3 * n_files, k.gyro_bias_sd_rad_s)),
+              ("gyro_scale", np.full(3, k.gyro_scale_factor_sd)),
+              ("wheel_inertia", scale_sd),
+              ("wheel_inertia_common", common_sd),
+              ("wheel_axes", np.full(2 * nk, np.deg2rad(k.wheel_axis_sd_deg))),
+              ("body_torque", np.full(3 * n_files, BODY_TORQUE_PRIOR_SD_NM)),
+              ("inertial_torque", np.full(3 * n_files if inertial_torque else 0,
+                                          BODY_TORQUE_PRIOR_SD_NM)),
+              ("torque_rate", np.full(3 * n_files if torque_rate else 0,
+                                      TORQUE_RATE_PRIOR_SD_NM_S))]
+    slices, start = {}, 0
+    for name, block in blocks:
+        if block.size or name in ("wheel_inertia", "wheel_axes"):
+            slices[name] = slice(start, start + block.size)
+        start += block.size
+    sd = np.concatenate([block for _, block in blocks])
     tilt_u = (np.stack([tilt_basis(spacecraft.wheel(w).axis) for w in wheels]) if nk
               else np.zeros((0, 2, 3)))
     return NuisanceLayout(n_files, wheels, sd, slices, tilt_u, wheel_errors, tuple(scaled),
                           scale_axes)
+
+
+def split_nuisance(nu, layout: NuisanceLayout) -> dict:
+    """The robust nuisance vectors ``ν`` (..., R) as named posterior sites: ``gyro_bias``
+    (..., F, 3) rad/s, ``gyro_scale`` (..., 3), ``wheel_scale`` (..., S) each wheel's total
+    scale ``c_k`` per wheel or (...) common, ``wheel_scale_common`` (...) the shared ``c_s``,
+    ``wheel_tilt`` (..., K, 2) rad, ``T_body``/``T_inertial`` (..., F, 3) N m, ``T_N_rate``
+    (..., F, 3) N m/s."""
+    nu = np.asarray(nu)
+    lead, sl = nu.shape[:-1], layout.slices
+    out = {EFFECTS["gyro_bias"]: nu[..., sl["gyro_bias"]].reshape(lead + (layout.n_files, 3)),
+           EFFECTS["gyro_scale"]: nu[..., sl["gyro_scale"]],
+           EFFECTS["wheel_inertia"]: layout.wheel_scales(nu),
+           EFFECTS["wheel_axes"]: nu[..., sl["wheel_axes"]].reshape(lead + (-1, 2))}
+    if layout.has_common:
+        out[EFFECTS["wheel_inertia_common"]] = nu[..., sl["wheel_inertia_common"]][..., 0]
+    for effect in layout.torque_effects:
+        out[EFFECTS[effect]] = nu[..., sl[effect]].reshape(lead + (layout.n_files, 3))
+    return out
+
+
+def site_prior_sd(layout: NuisanceLayout) -> dict[str, np.ndarray]:
+    """Posterior site of :func:`split_nuisance` → flat prior sd (zero-mean Normal) of its
+    elements; a wheel's total scale ``c_k = d_k + c_s`` has the marginal ``√(σ_k² + σ_s²)``."""
+    sd = np.asarray(layout.sd)
+    out = {EFFECTS[e]: sd[s] for e, s in layout.slices.items()}
+    if layout.has_common:
+        site = EFFECTS["wheel_inertia"]
+        out[site] = np.sqrt(out[site]**2 + sd[layout.slices["wheel_inertia_common"]]**2)
+    return out
 
 
 def wheel_scale_columns(layout: NuisanceLayout, h_wheels: np.ndarray,
@@ -183,7 +273,10 @@ def robust_columns(layout: NuisanceLayout, f: int, inertia: np.ndarray, omega: n
     sl = layout.slices
     cols[:, :, 3 * f:3 * f + 3] = -inertia                                  # I* b
     cols[:, :, sl["gyro_scale"]] = -inertia[None] * omega[:, None, :]       # I* diag(ω) s
-    cols[:, :, sl["wheel_inertia"]] = wheel_scale_columns(layout, h_wheels, wheel_h)  # c_k J_k ρ_k
+    scale_cols = wheel_scale_columns(layout, h_wheels, wheel_h)
+    cols[:, :, sl["wheel_inertia"]] = scale_cols                           # c_k J_k ρ_k
+    if layout.has_common:
+        cols[:, :, sl["wheel_inertia_common"]] = scale_cols.sum(-1, keepdims=True)  # c_s H_w
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
         if name in wheel_h:
@@ -194,4 +287,9 @@ def robust_columns(layout: NuisanceLayout, f: int, inertia: np.ndarray, omega: n
     c_t = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(steps, 0)])   # ∫ A(q_s)ᵀ ds
     t0 = sl["body_torque"].start + 3 * f
     cols[:, :, t0:t0 + 3] = -np.einsum("nij,njk->nik", a, c_t)         # −A(q_t) C_t T_B
+    dt = (t - t[0])[:, None, None]
+    for effect, power in (("inertial_torque", 1), ("torque_rate", 2)):
+        if effect in sl:
+            j = sl[effect].start + 3 * f                   # −A(q_t) (t − t_0)^p / p! T
+            cols[:, :, j:j + 3] = -a * dt**power / power
     return cols

@@ -33,8 +33,10 @@ Brown's balance also moves with effects his least squares leaves out, each small
 and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a spin-inertia
 scale per wheel (``J_k → (1 + c_k) J_k``, the solved wheel's own included; with
 ``wheel_errors="common"`` one ``c`` for every wheel, the earlier model), tilts of the *known*
-wheels' axes (the solved wheel's axis is the unknown) and a body-fixed external torque
-(``∫ A(q_s)ᵀ ds T_B`` between the windows; Brown: ≈ 3e-6 N m, < 0.1° for the RCS method). With
+wheels' axes (the solved wheel's axis is the unknown), a body-fixed external torque
+(``∫ A(q_s)ᵀ ds T_B`` between the windows; Brown: ≈ 3e-6 N m, < 0.1° for the RCS method) and an
+inertial one (``T_I Δt``: solar and RTG torques, Feldman & Lee App. A; over the RWA method's
+long windows a few tens of µN m move the axis by more than the idealised cone). With
 zero-mean Normal priors they are integrated out exactly: ``d ~ N(0, C + D Σ_ν Dᵀ)`` over all
 pairs together (one effect is shared by every pair). The RWA method feels them most: 0.2° tilts
 of RWA2 and RWA3, whose momenta match RWA4's, move Brown's axis by tenths of a degree, 20–50× the
@@ -407,8 +409,9 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
     wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
     ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the momentum,
-    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale column
-    (per wheel: its own, the layout's last scale; common: the one scale), whose solved-wheel part
+    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale columns
+    (per wheel: its own, the layout's last scale, and the shared one; common: the one scale),
+    whose solved-wheel part
     :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
     """
     a_all = np.asarray(dcm(jnp.asarray(q)))
@@ -421,6 +424,8 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
     one_hot = np.zeros(layout.size)
     one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
+    if layout.has_common:                   # the shared scale reaches the solved wheel too
+        one_hot[layout.slices["wheel_inertia_common"]] = 1.0
     return dict(nu_cols=jnp.asarray(np.stack(diff)), nu_sd=jnp.asarray(layout.sd),
                 nu_wheel=jnp.asarray(one_hot))
 
@@ -530,7 +535,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
     layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
-                             wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel])
+                             wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
+                             inertial_torque=True)
     nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
     data.update(nuisance if robust else _no_nuisance(len(pairs)))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),

@@ -168,7 +168,8 @@ from numpyro.distributions import constraints
 from cassini_bayes.errors import InputError
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.laplace import laplace
-from cassini_bayes.inference.nuisance import EFFECTS, nuisance_layout, wheel_scale_columns
+from cassini_bayes.inference.nuisance import (EFFECTS, nuisance_layout, split_nuisance,
+                                              wheel_scale_columns)
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_lhs, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
@@ -456,7 +457,10 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
     b0 = sl["gyro_bias"].start + 3 * e
     cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
     cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
-    cols[:, :, sl["wheel_inertia"]] = -wheel_scale_columns(layout, h, per_wheel)  # −c_k J_k ρ_k
+    scale_cols = wheel_scale_columns(layout, h, per_wheel)
+    cols[:, :, sl["wheel_inertia"]] = -scale_cols                        # −c_k J_k ρ_k
+    if layout.has_common:
+        cols[:, :, sl["wheel_inertia_common"]] = -scale_cols.sum(-1, keepdims=True)  # −c_s H_w
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
         if name in per_wheel:
@@ -948,22 +952,6 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
             numpyro.deterministic(name, pi[i])
 
 
-def _split_nuisance(nu, layout) -> dict:
-    """The robust nuisance vectors ``ν`` (..., R) as named sites (``layout`` of
-    :func:`~cassini_bayes.inference.nuisance.nuisance_layout`): ``gyro_bias`` (..., E, 3) rad/s,
-    ``gyro_scale`` (..., 3), ``wheel_scale`` (..., K) per wheel or (...) common, ``wheel_tilt``
-    (..., K, 2) rad, ``T_body`` (..., E, 3) N m."""
-    lead, sl = nu.shape[:-1], layout.slices
-    scale = nu[..., sl["wheel_inertia"]]
-    return {EFFECTS["gyro_bias"]: nu[..., sl["gyro_bias"]].reshape(lead + (layout.n_files, 3)),
-            EFFECTS["gyro_scale"]: nu[..., sl["gyro_scale"]],
-            EFFECTS["wheel_inertia"]: scale if layout.wheel_errors == "per_wheel"
-            else scale[..., 0],
-            EFFECTS["wheel_axes"]: nu[..., sl["wheel_axes"]].reshape(lead + (-1, 2)),
-            EFFECTS["body_torque"]: nu[..., sl["body_torque"]].reshape(
-                lead + (layout.n_files, 3))}
-
-
 @lru_cache(maxsize=None)
 def thrust_model(mode: str, sample_inertia: bool = False):
     """The NumPyro model (one function object per mode, so compiled samplers are reused).
@@ -1048,10 +1036,11 @@ class ThrustPosterior(NamedTuple):
 
 
 def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool,
-                        coords: dict, dims: dict) -> None:
-    """Add the robust model's nuisance sites (:func:`_split_nuisance`) to the posterior: one
-    draw of ``ν`` from its exact conditional per draw of the sampler (:func:`_nuisance_sampler`),
-    so the sites are draws of the joint posterior."""
+                        coords: dict, dims: dict) -> np.ndarray:
+    """Add the robust model's nuisance sites (:func:`~cassini_bayes.inference.nuisance.
+    split_nuisance`) to the posterior: one draw of ``ν`` from its exact conditional per draw of
+    the sampler (:func:`_nuisance_sampler`), so the sites are draws of the joint posterior.
+    Returns the posterior mean of ``ν`` (R,)."""
     import xarray as xr
 
     kw = problem.model_kwargs
@@ -1061,12 +1050,13 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
     nu = np.asarray(_nuisance_sampler(len(problem.names), sample_inertia)(
         jnp.asarray(w.reshape(-1, dim)), eps, kw))
-    for site, v in _split_nuisance(nu.reshape(n_chain, n_draw, n_nu), problem.layout).items():
+    for site, v in split_nuisance(nu.reshape(n_chain, n_draw, n_nu), problem.layout).items():
         site_dims = tuple(dims.get(site, ()))
         idata.posterior[site] = xr.DataArray(
             v, dims=("chain", "draw") + site_dims,
             coords={"chain": idata.posterior.chain, "draw": idata.posterior.draw,
                     **{d: coords[d] for d in site_dims}})
+    return nu.mean(0)
 
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -1144,9 +1134,10 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
+    nu_mean = None
     if robust:
-        _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem, sample_inertia, coords,
-                            dims)
+        nu_mean = _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem,
+                                      sample_inertia, coords, dims)   # ν's posterior mean
 
     post = idata.posterior
     f_mean = np.array([float(post[n].mean()) for n in problem.names])
@@ -1155,10 +1146,6 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                     for n in ("sigma_omega", "sigma_rho")], -1)
     pi_mean = (np.array([float(post[n].mean()) for n in INERTIA_NAMES]) if sample_inertia
                else None)
-    nu_mean = None
-    if robust:
-        nu_mean = np.concatenate([np.asarray(post[EFFECTS[e]].mean(("chain", "draw"))).ravel()
-                                  for e in EFFECTS])   # the layout's order
     d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean, nu_mean)
     m = np.asarray(kw["mask"]) > 0
     t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
