@@ -3,7 +3,8 @@
 For each scenario family (``experiments/scenarios/*_real.toml``: the Pre-SOI, Post-PRM and
 Post-Probe slews of Feldman & Lee Table 1 and the March 2000 slew) and each seed: draw the
 sensor and wheel errors from the prior model's knowledge (``Spacecraft.knowledge``: gyro bias and
-scale factor per axis, a common wheel spin-inertia error, two tilt angles per wheel axis) — or,
+scale factor per axis, a shared and a per-wheel spin-inertia error, two tilt angles per wheel
+axis) — or,
 with ``--errors fixed``, keep the values the scenario file states — keep the scenario's realistic
 external torques (Feldman & Lee App. A), flexible mode and time-tag jitter, simulate the slews
 (the compiled simulator, truth and noise traced), and fit both the idealised model (the papers')
@@ -46,6 +47,7 @@ def _errors(key, scenario, drawn: bool):
     import jax.numpy as jnp
     import numpy as np
 
+    from cassini_bayes.inference.nuisance import prior_wheel_errors
     from cassini_bayes.simulate import noise_params, truth_params
     from cassini_bayes.spacecraft import tilted_axis
 
@@ -57,7 +59,7 @@ def _errors(key, scenario, drawn: bool):
     n_w = len(prior.wheels)
     bias = kn.gyro_bias_sd_rad_s * jax.random.normal(k_b, (3,))
     scale = kn.gyro_scale_factor_sd * jax.random.normal(k_s, (3,))
-    c = kn.wheel_inertia_sd_frac * float(jax.random.normal(k_c, ()))
+    c = prior_wheel_errors(prior, k_c)            # c_s + d_k per wheel
     tilt = np.deg2rad(kn.wheel_axis_sd_deg) * np.asarray(jax.random.normal(k_a, (n_w, 2)))
     axes = np.array(tp.wheel_axes)
     for j, w in enumerate(prior.wheels):

@@ -3,7 +3,7 @@
 For each scenario family (``rwa4_rcs_real``: Brown §III.B, RCS method; ``rwa4_rwa_real``: Brown
 §III.C, RWA method) and each seed: draw the truth's sensor and actuator errors at the scale of the
 robust model's prior (the prior model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias
-and scale factor per axis, a common wheel spin-inertia error, two tilt angles of each *known*
+and scale factor per axis, a shared and a per-wheel spin-inertia error, two tilt angles of each *known*
 wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the file's
 flexible mode, time-tag jitter and true RWA4 axis (and its inertia, unless ``--draw-inertia``
 draws it from the fit's inertia prior), simulate, and fit both models (Brown's
@@ -40,7 +40,7 @@ def _scenario_with_errors(base: dict, key, prior, draw_inertia: bool):
     import numpy as np
 
     from cassini_bayes.inference.inertia import INERTIA_NAMES, inertia_prior
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
+    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM, prior_wheel_errors
 
     d = copy.deepcopy(base)
     k_b, k_s, k_c, k_a, k_t, k_i = jax.random.split(key, 6)
@@ -51,8 +51,8 @@ def _scenario_with_errors(base: dict, key, prior, draw_inertia: bool):
                                 * np.asarray(jax.random.normal(k_b, (3,)))).tolist()
     noise["gyro_scale_factor"] = (knowledge.gyro_scale_factor_sd
                                   * np.asarray(jax.random.normal(k_s, (3,)))).tolist()
-    truth["wheel_inertia_scale"] = 1.0 + knowledge.wheel_inertia_sd_frac * float(
-        jax.random.normal(k_c, ()))
+    truth["wheel_inertia_scale"] = 1.0       # each wheel c_s + d_k, from the robust prior
+    truth["wheel_inertia_errors"] = prior_wheel_errors(prior, k_c).tolist()
     tilts = knowledge.wheel_axis_sd_deg * np.asarray(jax.random.normal(k_a, (max(len(known), 1),
                                                                              2)))
     truth["wheel_axis_tilt_deg"] = {w: tilts[i].tolist() for i, w in enumerate(known)}

@@ -2,7 +2,7 @@
 
 For each seed: draw the truth's sensor and actuator errors at the scale of the robust model's
 prior (the spacecraft model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias and scale
-factor per axis, a common wheel spin-inertia error, a tilt of each wheel's axis per component,
+factor per axis, a shared and a per-wheel spin-inertia error, a tilt of each wheel's axis per component,
 and a body-fixed external torque of 15 µN m per axis, Feldman & Lee App. A), simulate the
 biasing event of a scenario (default ``biasing_day028``: Table 2, truth 0.699 N, 5/20/65 ms) with
 the simulator's closed-loop RCS control, and fit both thrust models with the nominal spacecraft
@@ -22,16 +22,17 @@ import tomllib
 import warnings
 
 
-def _scenario_with_errors(base: dict, key, knowledge):
+def _scenario_with_errors(base: dict, key, prior):
     """The scenario dict with the truth's errors drawn at the knowledge priors' scale."""
     import copy
 
     import jax
     import numpy as np
 
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
+    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM, prior_wheel_errors
 
     d = copy.deepcopy(base)
+    knowledge = prior.knowledge
     k_b, k_s, k_c, k_a, k_t = jax.random.split(key, 5)
     wheels = d["initial"]["wheels_on"]
     truth, noise = d["truth"], d["noise"]
@@ -39,8 +40,8 @@ def _scenario_with_errors(base: dict, key, knowledge):
                                 * np.asarray(jax.random.normal(k_b, (3,)))).tolist()
     noise["gyro_scale_factor"] = (knowledge.gyro_scale_factor_sd
                                   * np.asarray(jax.random.normal(k_s, (3,)))).tolist()
-    truth["wheel_inertia_scale"] = 1.0 + knowledge.wheel_inertia_sd_frac * float(
-        jax.random.normal(k_c, ()))
+    truth["wheel_inertia_scale"] = 1.0       # each wheel c_s + d_k, from the robust prior
+    truth["wheel_inertia_errors"] = prior_wheel_errors(prior, k_c).tolist()
     tilts = knowledge.wheel_axis_sd_deg * np.asarray(jax.random.normal(k_a, (len(wheels), 2)))
     truth["wheel_axis_tilt_deg"] = {w: tilts[i].tolist() for i, w in enumerate(wheels)}
     truth["external_torque_body_nm"] = (BODY_TORQUE_PRIOR_SD_NM * np.asarray(
@@ -81,7 +82,7 @@ def main(argv=None) -> None:
         key = jax.random.key(2000 + seed)
         k_err, k_sim, k_fit = jax.random.split(key, 3)
         nominal = scenario_from_dict(base, src=str(path))
-        scenario = scenario_from_dict(_scenario_with_errors(base, k_err, nominal.prior.knowledge),
+        scenario = scenario_from_dict(_scenario_with_errors(base, k_err, nominal.prior),
                                       src=str(path))
         sim = simulate(k_sim, scenario)
         truth = np.array([float(np.mean(np.asarray(sim.params.thrust_n)))]

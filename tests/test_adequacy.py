@@ -237,3 +237,36 @@ def test_strict_exits_3_on_an_adequacy_failure_after_writing_everything(tmp_path
     assert any(w.startswith("adequacy check prior_data_conflict failed")
                for w in summary["warnings"])
     assert (out / "posterior.nc").exists() and (out / "report.html").exists()
+
+
+@pytest.mark.slow
+def test_rwa4_balance_fit_flags_an_inertial_torque_beyond_its_prior():
+    """RWA method (`rwa4_rwa`): on clean data the window balances sit well inside the
+    likelihood's covariance (χ² ≈ 0.005 on 10 dof); an inertial torque of ~200 µN m, 13 times
+    its 15 µN m prior sd, moves the axis 0.17° (3× the 90 % cone) and the balances to χ² ≈ 130
+    (normal deviate ≈ 10, threshold 4). Measured once: 60 µN m gives z ≈ 2.1 (not flagged)."""
+    import copy
+    import tomllib
+    import warnings
+
+    from cassini_bayes.inference.adequacy import balance_fit
+    from cassini_bayes.inference.rwa4 import fit_rwa4
+    from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    base = tomllib.loads(scenario_path("rwa4_rwa").read_text())
+    stats = {}
+    for label, torque in (("clean", None), ("torque", [150e-6, -100e-6, 120e-6])):
+        d = copy.deepcopy(base)
+        if torque:
+            d["truth"]["external_torque_inertial_nm"] = torque
+        sc = scenario_from_dict(d, src="rwa4_rwa")
+        sim = simulate(jax.random.key(3), sc)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            post = fit_rwa4(jax.random.key(1), sim.telemetry, sc.prior, method="rwa",
+                            settings=SamplerSettings(chains=2, warmup=300, draws=300),
+                            prior_draws=50)
+        stats[label] = balance_fit(post)
+    assert stats["clean"].ok and stats["clean"].statistic < 1.0, stats["clean"]
+    assert not stats["torque"].ok and stats["torque"].statistic > 6.0, stats["torque"]

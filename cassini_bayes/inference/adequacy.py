@@ -21,8 +21,11 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   rate and wheel momentum; not used for thrust fits, see :func:`thrust_adequacy`): per block and
   axis the F-test of the (AR(1)-prewhitened) residual regressed on them, as the normal deviate
   of the smallest Bonferroni-adjusted p-value.
+* ``balance_fit`` (RWA4 fits) — the window-mean momentum balances at the posterior mean against
+  the likelihood's own covariance (noise plus the integrated-out nuisance effects): ``χ²`` on
+  ``3G − 2`` degrees of freedom (G window pairs), as the normal deviate of its upper tail.
 
-Statistics expressed as normal deviates (held-out, regression) fail beyond 4 (two-sided 6e-5
+Statistics expressed as normal deviates (held-out, regression, balance) fail beyond 4 (two-sided 6e-5
 after the Bonferroni correction); the prior–data conflict beyond 4 prior sd; the
 autocorrelation beyond 0.5.
 """
@@ -38,7 +41,7 @@ from scipy import stats
 __all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
            "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "gaussian_held_out",
            "inertia_held_out", "residual_autocorrelation", "residual_regression", "not_applicable",
-           "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy"]
+           "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy", "balance_fit"]
 
 PRIOR_CONFLICT_SD = 4.0   # prior sd between the posterior mean and the prior mean
 Z_THRESHOLD = 4.0         # normal deviate of the regression and held-out checks (two-sided 6e-5)
@@ -426,14 +429,30 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
                                        "wheel momentum (docs/adequacy.md)")))
 
 
+def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
+    """Does the RWA4 model fit its own window balances? ``χ²`` of the balances at the posterior
+    mean (:func:`~cassini_bayes.inference.rwa4.balance_misfit`) as the normal deviate of its
+    upper χ² tail probability."""
+    from cassini_bayes.inference.rwa4 import U4_NAMES, balance_misfit
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
+    p = post.idata.posterior
+    u = np.array([float(p[n].mean()) for n in U4_NAMES])
+    pi = np.array([float(p[n].mean()) for n in INERTIA_NAMES])
+    chi2, dof = balance_misfit(post.problem, u, pi)
+    z = normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0))   # one-sided tail
+    return _check("balance_fit", z, threshold, note=f"chi2 {chi2:.3g} on {dof} dof")
+
+
 def rwa4_adequacy(post, sites: Sequence[str]) -> Adequacy:
-    """The checks of :func:`~cassini_bayes.inference.rwa4.fit_rwa4`'s result ``post``: prior-data
-    conflict only (the likelihood uses window means, so there are no per-sample residuals; the
-    pairs share integrated-out nuisance parameters)."""
+    """The checks of :func:`~cassini_bayes.inference.rwa4.fit_rwa4`'s result ``post``:
+    prior-data conflict and the fit of the window balances (:func:`balance_fit`; the likelihood
+    uses window means, so there are no per-sample residuals; the pairs share integrated-out
+    nuisance parameters)."""
     n_pairs = len(post.problem.pairs)
     held = not_applicable("held_out", Z_THRESHOLD,
                           "one window pair: nothing to hold out" if n_pairs < 2 else
                           "not implemented for the RWA4 model (its nuisance parameters are "
                           "integrated out jointly over the pairs)")
-    return Adequacy((prior_data_conflict(post.idata, sites), held,
+    return Adequacy((prior_data_conflict(post.idata, sites), held, balance_fit(post),
                      *_residual_checks(post.idata, None, None, "pair", [])))

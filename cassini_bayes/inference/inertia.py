@@ -26,20 +26,23 @@ Robust model (``robust=True``; the CLI's default)
 Flight telemetry carries errors the papers' model leaves out. The robust model adds, as nuisance
 parameters with priors from the spacecraft model's ``[gyro]``/``[wheel_knowledge]`` sections
 (:class:`~cassini_bayes.spacecraft.Knowledge`): a gyro bias per axis and file and a gyro
-scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a spin-inertia scale ``c_k``
-per active wheel (``wheel_errors="per_wheel"``, the default; ``"common"``: one scale ``c`` for
-all, the earlier model) and two small tilts of each active wheel's spin axis. All enter the
-residual linearly to first order (:mod:`cassini_bayes.inference.nuisance`), so the
-sufficient-statistics likelihood below keeps its O(P²) cost (P grows by 6F + 3 + 3K). The common
-scale ``c = mean_k c_k`` does not enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and
+scale-factor error per axis (``ω_meas = (1 + s) ω + b + noise``), a spin-inertia scale
+``c_k = c_s + d_k`` per active wheel, a part ``c_s`` shared by every wheel plus each wheel's own
+``d_k`` (``wheel_errors="per_wheel"``, the default; ``"common"``: one scale ``c`` for all, the
+earlier model), two small tilts of each active wheel's spin axis, a body-fixed torque and, with
+``T_N``, the inertial torque's rate ``Ṫ_N`` (``−A(q_t) ½ (t − t_0)² Ṫ_N``: solar and RTG
+torques change as the slews turn the sun line). All enter the residual linearly to first order
+(:mod:`cassini_bayes.inference.nuisance`), so the sufficient-statistics likelihood below keeps
+its O(P²) cost (P grows by 9F + 4 + 3K). The common
+scale ``c = c_s + mean_k d_k`` does not enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and
 every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
 balance by ``1 + c`` shows what the data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and
 the wheel scales relative to the common one, ``δ_k = (c_k − c)/(1 + c)``, which enter linearly
 (column ``J_k ρ_k g_k``) and are exact: ``(1 + c_k)/(1 + c) = 1 + δ_k``. The model sets
 ``π = (1 + c) π̃`` and ``c_k = c + (1 + c) δ_k``; ``c`` keeps its prior and the moments'
-posterior sd carries it (prior sd of the mean of K independent scales: ``σ_J/√K``, 0.29 % for
-three wheels at 0.5 %; 0.5 % in the common model), while the ``δ_k`` are learned from slews
-about several axes. The constant external torque ``T_N``
+posterior sd carries it (prior sd ``√(σ_s² + σ_J²/K)``: 0.58 % for three wheels at the default
+0.5 % shared and 0.5 % each; 0.5 % in the common model), while the ``δ_k`` are learned from
+slews about several axes. The constant external torque ``T_N``
 is in both models (``torque=True``), prior sd 15 µN m per axis (Feldman & Lee App. A bound;
 Brown quotes solar/gas torques of the same few-µN m order).
 
@@ -802,8 +805,9 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
     (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`) also ``gyro_bias`` (n, F, 3),
     ``gyro_scale`` (n, 3), ``wheel_scale`` (n, K) per wheel or (n,) common, ``wheel_tilt``
     (n, K, 2), ``T_body`` (n, F, 3) and, where the layout has them, ``wheel_scale_common`` (n,)
-    and ``T_N_rate`` (n, F, 3) (:func:`~cassini_bayes.inference.nuisance.split_nuisance`). The same function gives the simulator and SBC their truth, so the model's prior
-    and the truth's prior agree exactly.
+    and ``T_N_rate`` (n, F, 3) (:func:`~cassini_bayes.inference.nuisance.split_nuisance`).
+    The same function gives the simulator and SBC their truth, so the model's prior and the
+    truth's prior agree exactly.
     """
     key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
     kept = []

@@ -62,7 +62,7 @@ from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt_basis",
            "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
-           "site_prior_sd"]
+           "site_prior_sd", "prior_wheel_errors"]
 
 # Effect name → the posterior site holding its parameters.
 EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
@@ -160,6 +160,17 @@ def wheel_inertia_sd(spacecraft: Spacecraft, name: str) -> float:
     w = spacecraft.wheel(name)
     return (spacecraft.knowledge.wheel_inertia_sd_frac if w.inertia_sd_frac is None
             else w.inertia_sd_frac)
+
+
+def prior_wheel_errors(spacecraft: Spacecraft, key) -> np.ndarray:
+    """One draw of every wheel's spin-inertia error ``c_k = c_s + d_k`` (model-file wheel order)
+    from the per-wheel robust model's prior: the closed-world campaigns' truth."""
+    import jax
+
+    k_s, k_d = jax.random.split(key)
+    sd = np.array([wheel_inertia_sd(spacecraft, w.name) for w in spacecraft.wheels])
+    shared = spacecraft.knowledge.wheel_common_inertia_sd_frac * float(jax.random.normal(k_s))
+    return shared + sd * np.asarray(jax.random.normal(k_d, (sd.size,)))
 
 
 def nuisance_layout(spacecraft: Spacecraft, n_files: int, wheels, *,

@@ -141,6 +141,7 @@ __all__ = [
     "MIN_SPIN_CHANGE_RPM",
     "WHEEL",
     "detect_windows",
+    "balance_misfit",
     "Rwa4Problem",
     "prepare_rwa4",
     "rwa4_model",
@@ -793,6 +794,28 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
         if k.size:
             out[effect] = float(np.degrees(np.sqrt(np.sum(k * k))))
     return out
+
+
+def balance_misfit(problem: Rwa4Problem, u, pi) -> tuple[float, int]:
+    """``χ² = dᵀ S⁻¹ d`` of the window-mean balances ``d`` (:func:`_balance`) at the axis ``u``
+    (3,) and inertia ``pi`` (6,) kg m², with ``S`` the likelihood's covariance (white noise plus
+    the integrated-out nuisance effects, :func:`_loglik`), and its degrees of freedom ``3G − 2``
+    (the axis's two are fitted; an inertia the balance also informs makes χ² smaller still). A
+    model that fits gives ``χ²`` about its dof; an unmodelled effect larger than its prior
+    allows shows as a large one."""
+    kw = problem.model_kwargs
+    u = jnp.asarray(np.asarray(u, float) / np.linalg.norm(u))
+    pi = jnp.asarray(pi, float)
+    d = np.asarray(_balance(u, pi, m_pi=kw["m_pi"], r_u=kw["r_u"], k_h=kw["k_h"],
+                            j4=kw["j4"])).ravel()
+    cov = np.asarray(jax.scipy.linalg.block_diag(*_noise_cov(
+        u, pi, kw["log_noise_hat"], n_w=kw["n_w"], t_aa=kw["t_aa"], j4=kw["j4"],
+        known_cov=kw["known_cov"])))
+    cols = np.asarray(_nuisance_cols(u, r_u=kw["r_u"], j4=kw["j4"], nu_cols=kw["nu_cols"],
+                                     nu_wheel=kw["nu_wheel"])).reshape(d.size, -1)
+    cols = cols * np.asarray(kw["nu_sd"])[None, :]
+    chi2 = float(d @ np.linalg.solve(cov + cols @ cols.T, d))
+    return chi2, max(d.size - 2, 1)
 
 
 class Rwa4Posterior(NamedTuple):

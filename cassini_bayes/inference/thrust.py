@@ -122,8 +122,8 @@ to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the wor
 
 The common part of the wheel scales is confounded with the thrust scale (``F`` balances the
 wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the
-common model, ``0.5 %/√K`` per wheel with K wheels built up) instead of claiming the 0.01 % that
-the idealised model claims on clean data.
+common model; ``√(σ_s² + σ_J²/K)`` per wheel with K wheels built up, 0.58 % at the defaults)
+instead of claiming the 0.01 % that the idealised model claims on clean data.
 
 Pulse family (what the data can and cannot say about the shape)
 ---------------------------------------------------------------
@@ -1188,5 +1188,5 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     if sample_inertia:
         names += list(INERTIA_NAMES)
     if robust:
-        names += list(EFFECTS.values())
+        names += [EFFECTS[e] for e in problem.layout.slices]
     return ThrustPosterior(idata, diagnostics(idata, names), problem)
