@@ -537,7 +537,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
     layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
                              wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
-                             inertial_torque=True)
+                             inertial_torque=True, torque_rate=True)
     nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
     data.update(nuisance if robust else _no_nuisance(len(pairs)))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
