@@ -22,6 +22,7 @@ from cassini_bayes.inference.adequacy import (
     gaussian_held_out,
     normal_deviate,
     not_applicable,
+    nuisance_prior_sd,
     prior_data_conflict,
     residual_autocorrelation,
     residual_regression,
@@ -56,6 +57,28 @@ def test_prior_data_conflict_names_the_worst_element_of_any_shape():
     c1 = prior_data_conflict(az.from_dict(posterior=post1), ["wheel_scale"],
                              prior_sd={"wheel_scale": np.array([0.005])})
     assert c1.parameter == "wheel_scale" and abs(c1.statistic - 2.0) < 0.01 and c1.ok
+
+
+def test_common_wheel_scale_is_a_derived_element_with_the_marginal_prior_sd():
+    """The wheels' mean error c = c_s + mean d_k, prior sd √(σ_s² + σ²/K) = 0.577 % for three
+    wheels at the defaults: each wheel at +2.5 % (one inertia-scale error shared out) is 3.5 prior
+    sd per wheel (σ 0.707 %), inside the threshold 4, but 4.3 sd for c, which the check names."""
+    from cassini_bayes.inference.adequacy import common_wheel_scale
+    from cassini_bayes.inference.nuisance import nuisance_layout
+
+    sc = load_spacecraft("cassini_post_probe")
+    layout = nuisance_layout(sc, 1, ("RWA1", "RWA2", "RWA3"))
+    rng = np.random.default_rng(2)
+    post = {"wheel_scale": rng.normal(0.025, 1e-4, (2, 500, 3))}
+    idata = az.from_dict(posterior=post, dims={"wheel_scale": ["wheel"]})
+    derived = common_wheel_scale(idata, layout)
+    assert abs(derived["wheel_scale_mean"][1] - np.sqrt(0.005**2 + 0.005**2 / 3)) < 1e-12
+    plain = prior_data_conflict(idata, ["wheel_scale"], prior_sd=nuisance_prior_sd(layout))
+    both = prior_data_conflict(idata, ["wheel_scale"], prior_sd=nuisance_prior_sd(layout),
+                               derived=derived)
+    assert plain.ok and abs(plain.statistic - 0.025 / np.hypot(0.005, 0.005)) < 0.01
+    assert both.parameter == "wheel_scale_mean" and not both.ok
+    assert abs(both.statistic - 0.025 / np.sqrt(0.005**2 + 0.005**2 / 3)) < 0.01
 
 
 def test_prior_data_conflict_uses_the_log_scale_for_positive_priors():

@@ -9,7 +9,8 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   zero-mean Normal priors; others: the ``prior`` group's draws, on the log scale when every draw
   is positive — thrust, time constants, moments). A nuisance parameter pulled several prior sd
   from its prior is how an unmodelled error reaches the answer; the worst element is named
-  (``parameter``).
+  (``parameter``). Per-wheel robust fits add the wheels' mean spin-inertia error
+  ``wheel_scale_mean`` (:func:`common_wheel_scale`), the direction a wrong inertia pulls.
 * ``held_out`` — leave one telemetry file out: the posterior of the shared parameters from the
   other files (and the prior) predicts the held-out file's information-weighted estimate, exactly
   where the model is linear-Gaussian in its parameters (the inertia model's sufficient
@@ -39,7 +40,8 @@ import numpy as np
 from scipy import stats
 
 __all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
-           "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "gaussian_held_out",
+           "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "common_wheel_scale",
+           "gaussian_held_out",
            "inertia_held_out", "residual_autocorrelation", "residual_regression", "not_applicable",
            "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy", "balance_fit"]
 
@@ -138,20 +140,43 @@ def nuisance_prior_sd(layout) -> dict[str, np.ndarray]:
     return site_prior_sd(layout)
 
 
+def common_wheel_scale(idata, layout) -> dict[str, tuple[np.ndarray, float]]:
+    """The wheels' mean spin-inertia error ``c = c_s + mean_k d_k`` as a derived element for
+    :func:`prior_data_conflict`: ``{"wheel_scale_mean": (draws, prior sd)}``, prior sd
+    ``√(σ_s² + Σ_k σ_k²/K²)``. It is the direction that trades with the inertia's (and the
+    thrust's) overall scale, so a wrong fixed inertia pulls it first; per element its parts sit
+    nearer their own priors. Empty for the common model (its one scale is already an element)."""
+    if layout is None or layout.wheel_errors != "per_wheel" or "wheel_scale" not in idata.posterior:
+        return {}
+    sd = np.asarray(layout.sd)
+    d_sd = sd[layout.slices["wheel_inertia"]]
+    var = float(np.sum(d_sd**2)) / d_sd.size**2
+    if layout.has_common:
+        var += float(sd[layout.slices["wheel_inertia_common"]][0]**2)
+    draws = np.asarray(idata.posterior["wheel_scale"].mean("wheel").values).ravel()
+    return {"wheel_scale_mean": (draws, math.sqrt(var))}
+
+
 def prior_data_conflict(idata, sites: Sequence[str], threshold: float = PRIOR_CONFLICT_SD,
-                        prior_sd: Mapping[str, np.ndarray] | None = None) -> Check:
+                        prior_sd: Mapping[str, np.ndarray] | None = None,
+                        derived: Mapping[str, tuple[np.ndarray, float]] | None = None) -> Check:
     """``max |E[x | data] − E[x]| / sd(x)`` over every element of ``sites`` that has a prior.
 
     Works on any site shape (a scalar ``wheel_scale`` or one per wheel alike). ``prior_sd``:
     sites with a zero-mean Normal prior of these sds (flat, in the site's element order; e.g.
     :func:`nuisance_prior_sd`); the other sites' prior mean and sd come from the ``prior``
     group's draws, on the log scale when every draw is positive (the log-normal priors of thrust
-    and time constants; moments of inertia).
+    and time constants; moments of inertia). ``derived``: more elements, ``label → (posterior
+    draws, zero-mean prior sd)`` (e.g. :func:`common_wheel_scale`).
     """
     name = "prior_data_conflict"
     prior_sd = dict(prior_sd or {})
     has_prior = "prior" in idata.groups()
     worst, worst_z = None, -1.0
+    for label, (draws, sd) in (derived or {}).items():
+        z = abs(float(np.mean(draws))) / sd if sd > 0 else -1.0
+        if z > worst_z:
+            worst, worst_z = label, z
     for site in sites:
         if site not in idata.posterior:
             continue
@@ -399,7 +424,8 @@ def inertia_adequacy(post, sites: Sequence[str]) -> Adequacy:
     cov = np.c_[pb.omega, pb.h_wheels]
     names = ["wx", "wy", "wz", "hwx", "hwy", "hwz"]
     sd = nuisance_prior_sd(pb.layout) if pb.robust else {}
-    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd),
+    derived = common_wheel_scale(post.idata, pb.layout) if pb.robust else {}
+    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd, derived=derived),
                      inertia_held_out(pb, post.idata),
                      *_residual_checks(post.idata, cov, names, "file", pb.sources)))
 
@@ -421,7 +447,8 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
                           "not implemented for the thrust model (its nuisance parameters are "
                           "integrated out jointly over the events)")
     sd = nuisance_prior_sd(pb.layout) if pb.layout is not None else {}
-    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd), held,
+    derived = common_wheel_scale(post.idata, pb.layout)
+    return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd, derived=derived), held,
                      *_residual_checks(post.idata, None, None, "event",
                                        [f"{t} + {p}" for t, p in pb.sources],
                                        no_regression="not used for thrust fits: the model's "
