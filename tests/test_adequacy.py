@@ -79,6 +79,17 @@ def test_common_wheel_scale_is_a_derived_element_with_the_marginal_prior_sd():
     assert plain.ok and abs(plain.statistic - 0.025 / np.hypot(0.005, 0.005)) < 0.01
     assert both.parameter == "wheel_scale_mean" and not both.ok
     assert abs(both.statistic - 0.025 / np.sqrt(0.005**2 + 0.005**2 / 3)) < 0.01
+    # one wheel 2 % above the others (a tachometer): c_k − c = 1.33 % against a prior sd of
+    # σ √(2/3) = 0.41 % is 3.3 sd; its total c_k (1.33 % + c) stays within 2 sd
+    post2 = {"wheel_scale": np.stack([rng.normal(m, 1e-4, (2, 500)) for m in (0.02, 0, 0)], -1)}
+    idata2 = az.from_dict(posterior=post2, dims={"wheel_scale": ["wheel"]},
+                          coords={"wheel": ["RWA1", "RWA2", "RWA3"]})
+    rel = common_wheel_scale(idata2, layout)["wheel_scale_rel[RWA1]"]
+    assert abs(rel[1] - 0.005 * np.sqrt(2 / 3)) < 1e-12
+    c2 = prior_data_conflict(idata2, ["wheel_scale"], prior_sd=nuisance_prior_sd(layout),
+                             derived=common_wheel_scale(idata2, layout))
+    assert c2.parameter == "wheel_scale_rel[RWA1]"
+    assert abs(c2.statistic - (0.02 - 0.02 / 3) / (0.005 * np.sqrt(2 / 3))) < 0.01
 
 
 def test_prior_data_conflict_uses_the_log_scale_for_positive_priors():

@@ -9,8 +9,9 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   zero-mean Normal priors; others: the ``prior`` group's draws, on the log scale when every draw
   is positive — thrust, time constants, moments). A nuisance parameter pulled several prior sd
   from its prior is how an unmodelled error reaches the answer; the worst element is named
-  (``parameter``). Per-wheel robust fits add the wheels' mean spin-inertia error
-  ``wheel_scale_mean`` (:func:`common_wheel_scale`), the direction a wrong inertia pulls.
+  (``parameter``). Per-wheel robust fits add the wheels' mean spin-inertia error and each
+  wheel's error relative to it (:func:`common_wheel_scale`): the directions a wrong inertia and
+  a wrong tachometer pull.
 * ``held_out`` — leave one telemetry file out: the posterior of the shared parameters from the
   other files (and the prior) predicts the held-out file's information-weighted estimate, exactly
   where the model is linear-Gaussian in its parameters (the inertia model's sufficient
@@ -141,20 +142,36 @@ def nuisance_prior_sd(layout) -> dict[str, np.ndarray]:
 
 
 def common_wheel_scale(idata, layout) -> dict[str, tuple[np.ndarray, float]]:
-    """The wheels' mean spin-inertia error ``c = c_s + mean_k d_k`` as a derived element for
-    :func:`prior_data_conflict`: ``{"wheel_scale_mean": (draws, prior sd)}``, prior sd
-    ``√(σ_s² + Σ_k σ_k²/K²)``. It is the direction that trades with the inertia's (and the
-    thrust's) overall scale, so a wrong fixed inertia pulls it first; per element its parts sit
-    nearer their own priors. Empty for the common model (its one scale is already an element)."""
+    """The wheel spin-inertia errors in the directions the data and the priors split them, as
+    derived elements for :func:`prior_data_conflict` (``label → (draws, zero-mean prior sd)``):
+
+    * ``wheel_scale_mean``, the wheels' mean error ``c = c_s + mean_k d_k``, prior sd
+      ``√(σ_s² + Σ_k σ_k²/K²)``: the direction that trades with the inertia's (and the thrust's)
+      overall scale, so a wrong fixed inertia pulls it first;
+    * ``wheel_scale_rel[k]``, each wheel's error relative to that mean, ``c_k − c``, prior sd
+      ``√(σ_k² (1 − 2/K) + Σ_j σ_j²/K²)``: what slews about several axes measure, so one wheel's
+      tachometer (or spin inertia) off by several times its knowledge shows here, while its
+      total ``c_k`` shares the error with the unidentified mean and stays nearer its prior.
+
+    Empty for the common model (its one scale is already an element)."""
     if layout is None or layout.wheel_errors != "per_wheel" or "wheel_scale" not in idata.posterior:
         return {}
     sd = np.asarray(layout.sd)
-    d_sd = sd[layout.slices["wheel_inertia"]]
-    var = float(np.sum(d_sd**2)) / d_sd.size**2
-    if layout.has_common:
-        var += float(sd[layout.slices["wheel_inertia_common"]][0]**2)
-    draws = np.asarray(idata.posterior["wheel_scale"].mean("wheel").values).ravel()
-    return {"wheel_scale_mean": (draws, math.sqrt(var))}
+    d_var = sd[layout.slices["wheel_inertia"]]**2
+    k = d_var.size
+    mean_var = float(np.sum(d_var)) / k**2
+    draws = np.asarray(idata.posterior["wheel_scale"].transpose(..., "wheel").values)
+    draws = draws.reshape(-1, k)
+    c = draws.mean(-1)
+    c_var = mean_var + (float(sd[layout.slices["wheel_inertia_common"]][0]**2)
+                        if layout.has_common else 0.0)
+    out = {"wheel_scale_mean": (c, math.sqrt(c_var))}
+    if k > 1:
+        names = idata.posterior["wheel"].values
+        for j in range(k):
+            out[f"wheel_scale_rel[{names[j]}]"] = (draws[:, j] - c,
+                                                   math.sqrt(d_var[j] * (1 - 2 / k) + mean_var))
+    return out
 
 
 def prior_data_conflict(idata, sites: Sequence[str], threshold: float = PRIOR_CONFLICT_SD,
