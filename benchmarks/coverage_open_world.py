@@ -17,8 +17,8 @@ the table of an existing file without fitting.
 
     python benchmarks/coverage_open_world.py --families post_probe pre_soi post_prm \\
         --seeds 20 [--first-seed 0] [--models per_wheel common idealised] [--chains 4]
-        [--warmup 500] [--draws 500] [--widen 1.5] [--off drift flex …] --out open_world.jsonl
-        [--report]
+        [--warmup 500] [--draws 500] [--widen 1.5] [--off drift flex …] [--torque-sd-nm X]
+        --out open_world.jsonl [--report]
 
 ``--off`` switches effects off (``EFFECTS_OFF``) with every other draw unchanged: a campaign
 with ``--off drift`` on the same seeds shows what the drifting torque alone costs. Keep one
@@ -170,6 +170,12 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         inertia = InertiaGaussian(mean, np.diag(sd**2))
         out_inertia = {"mean": mean.tolist(), "sd": sd.tolist()}
     settings = SamplerSettings(chains=opts["chains"], warmup=opts["warmup"], draws=opts["draws"])
+    prior = scenario.prior
+    if opts.get("torque_sd_nm"):     # the fit's stated torque knowledge (the truth's is fixed)
+        from dataclasses import replace
+
+        prior = replace(prior, knowledge=replace(prior.knowledge,
+                                                 torque_sd_nm=opts["torque_sd_nm"]))
     out = {"family": family, "seed": seed, "drawn": ow.record, "fits": {}}
     if inertia is not None:
         out["inertia_given"] = out_inertia
@@ -177,8 +183,7 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            post, ad = _fit(kind, k_fit, sim, tel, scenario.prior, model, settings, method,
-                            inertia)
+            post, ad = _fit(kind, k_fit, sim, tel, prior, model, settings, method, inertia)
         rec = _score(kind, post, sim, scenario, method)
         worst = {c.name: (c.statistic, c.parameter) for c in ad.checks if not c.ok}
         rec |= {"r_hat": float(post.diagnostics.max_r_hat),
@@ -235,6 +240,9 @@ def main(argv=None) -> None:
     ap.add_argument("--warmup", type=int, default=500)
     ap.add_argument("--draws", type=int, default=500)
     ap.add_argument("--widen", type=float, default=1.5)
+    ap.add_argument("--torque-sd-nm", type=float, default=None,
+                    help="the fits' stated external-torque prior sd, N m (default: the model "
+                    "file's [torque_knowledge] sd_nm); the truth's torques do not change")
     ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
                     help="switch these open-world effects off (the other draws stay the same)")
     ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
@@ -245,7 +253,7 @@ def main(argv=None) -> None:
         from cassini_bayes.simulate.scenario import scenario_path
 
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
-                                              "off")}
+                                              "off", "torque_sd_nm")}
         done = {(r["family"], r["seed"]) for r in rows}
         t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):

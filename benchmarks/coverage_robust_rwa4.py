@@ -40,7 +40,7 @@ def _scenario_with_errors(base: dict, key, prior, draw_inertia: bool):
     import numpy as np
 
     from cassini_bayes.inference.inertia import INERTIA_NAMES, inertia_prior
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM, prior_wheel_errors
+    from cassini_bayes.inference.nuisance import prior_wheel_errors
 
     d = copy.deepcopy(base)
     k_b, k_s, k_c, k_a, k_t, k_i = jax.random.split(key, 6)
@@ -56,7 +56,7 @@ def _scenario_with_errors(base: dict, key, prior, draw_inertia: bool):
     tilts = knowledge.wheel_axis_sd_deg * np.asarray(jax.random.normal(k_a, (max(len(known), 1),
                                                                              2)))
     truth["wheel_axis_tilt_deg"] = {w: tilts[i].tolist() for i, w in enumerate(known)}
-    truth["external_torque_body_nm"] = (BODY_TORQUE_PRIOR_SD_NM * np.asarray(
+    truth["external_torque_body_nm"] = (knowledge.torque_sd_nm * np.asarray(
         jax.random.normal(k_t, (3,)))).tolist()
     if draw_inertia:
         from cassini_bayes.inference.rwa4 import sample_inertia_prior

@@ -29,7 +29,7 @@ def _scenario_with_errors(base: dict, key, prior):
     import jax
     import numpy as np
 
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM, prior_wheel_errors
+    from cassini_bayes.inference.nuisance import prior_wheel_errors
 
     d = copy.deepcopy(base)
     knowledge = prior.knowledge
@@ -44,7 +44,7 @@ def _scenario_with_errors(base: dict, key, prior):
     truth["wheel_inertia_errors"] = prior_wheel_errors(prior, k_c).tolist()
     tilts = knowledge.wheel_axis_sd_deg * np.asarray(jax.random.normal(k_a, (len(wheels), 2)))
     truth["wheel_axis_tilt_deg"] = {w: tilts[i].tolist() for i, w in enumerate(wheels)}
-    truth["external_torque_body_nm"] = (BODY_TORQUE_PRIOR_SD_NM * np.asarray(
+    truth["external_torque_body_nm"] = (knowledge.torque_sd_nm * np.asarray(
         jax.random.normal(k_t, (3,)))).tolist()
     return d
 

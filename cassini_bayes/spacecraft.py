@@ -106,7 +106,8 @@ class Knowledge:
     The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
     From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``),
     ``[wheel_knowledge]`` (``inertia_sd_frac``, ``common_inertia_sd_frac``, ``axis_sd_deg``)
-    and ``[telemetry_knowledge]`` (``time_tag_sd_s``). The defaults are conservative engineering
+    ``[telemetry_knowledge]`` (``time_tag_sd_s``) and ``[torque_knowledge]`` (``sd_nm``,
+    ``rate_sd_nm_per_h``). The defaults are conservative engineering
     values, not numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
     scale-factor error of 5e-4 (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each
     wheel independently; a ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that
@@ -115,6 +116,11 @@ class Knowledge:
     rests on it; 0 removes it), a wheel spin-axis misalignment of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4
     0.53 deg from its nominal axis; the fixed wheels are known better) and a white time-tag error
     of 10 ms per telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
+    External torques (the robust models' body-fixed and inertial torques): 15 µN m per axis, the
+    Feldman & Lee App. A bound for March 2000 taken as one sd, and a rate of change of 15 µN m
+    per hour (solar and RTG torques change as the slews turn the sun line). Where the torques the
+    calibration windows cannot measure may be larger (another epoch, outgassing, a leak), say so
+    here: the RWA4 axis's cone rests on this prior (``docs/robust/open_world.md``).
     """
 
     gyro_bias_sd_rad_s: float = 5e-7
@@ -123,6 +129,8 @@ class Knowledge:
     wheel_axis_sd_deg: float = 0.2
     time_tag_sd_s: float = 0.01
     wheel_common_inertia_sd_frac: float = 0.005
+    torque_sd_nm: float = 15e-6
+    torque_rate_sd_nm_per_h: float = 15e-6
 
 
 @dataclass(frozen=True)
@@ -211,16 +219,19 @@ class Spacecraft:
                                     self.knowledge.wheel_common_inertia_sd_frac,
                                 "axis_sd_deg": self.knowledge.wheel_axis_sd_deg},
             "telemetry_knowledge": {"time_tag_sd_s": self.knowledge.time_tag_sd_s},
+            "torque_knowledge": {"sd_nm": self.knowledge.torque_sd_nm,
+                                 "rate_sd_nm_per_h": self.knowledge.torque_rate_sd_nm_per_h},
         }
 
 
 _TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "pulse", "thrust",
-             "mass", "gyro", "wheel_knowledge", "telemetry_knowledge"}
+             "mass", "gyro", "wheel_knowledge", "telemetry_knowledge", "torque_knowledge"}
 _GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
 _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "common_inertia_sd_frac": "wheel_common_inertia_sd_frac",
                          "axis_sd_deg": "wheel_axis_sd_deg"}
 _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
+_TORQUE_KNOWLEDGE_KEYS = {"sd_nm": "torque_sd_nm", "rate_sd_nm_per_h": "torque_rate_sd_nm_per_h"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac"}
 _THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
@@ -430,7 +441,8 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
     base = Knowledge()
     kw = {}
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
-                          ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS)):
+                          ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS),
+                          ("torque_knowledge", _TORQUE_KNOWLEDGE_KEYS)):
         table = _table(d, section, src)
         _check_keys(table, set(keys), f"{section}.", src)
         for key, attr in keys.items():
@@ -443,6 +455,11 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
         if kw[_WHEEL_KNOWLEDGE_KEYS[key]] >= 0.5:
             raise InputError(f"'wheel_knowledge.{key}' is a fraction (0.005 = 0.5 %), got "
                              f"{kw[_WHEEL_KNOWLEDGE_KEYS[key]]}", path=src)
+    for key in ("sd_nm", "rate_sd_nm_per_h"):
+        if kw[_TORQUE_KNOWLEDGE_KEYS[key]] > 1e-2:
+            raise InputError(f"'torque_knowledge.{key}' is a small external torque in N m "
+                             f"(<= 0.01; Cassini's is ~1.5e-5), got "
+                             f"{kw[_TORQUE_KNOWLEDGE_KEYS[key]]}", path=src)
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "
                          f"(<= 10), got {kw['wheel_axis_sd_deg']}", path=src)

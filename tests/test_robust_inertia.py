@@ -119,13 +119,10 @@ def test_clean_data_same_answer_wider_intervals(sc, clean):
 
 
 def test_effects_at_zero_prior_recover_idealised(sc, clean, monkeypatch):
-    """Knowledge sd 0 (and a body-torque prior sd 0) pins every nuisance parameter: the robust
-    fit is the idealised one."""
-    import cassini_bayes.inference.nuisance as nuisance
-
-    monkeypatch.setattr(nuisance, "BODY_TORQUE_PRIOR_SD_NM", 0.0)
-    monkeypatch.setattr(nuisance, "TORQUE_RATE_PRIOR_SD_NM_S", 0.0)
-    sc0 = replace(sc, knowledge=Knowledge(0.0, 0.0, 0.0, 0.0, wheel_common_inertia_sd_frac=0.0))
+    """Knowledge sd 0 (torques included) pins every nuisance parameter: the robust fit is the
+    idealised one."""
+    sc0 = replace(sc, knowledge=Knowledge(0.0, 0.0, 0.0, 0.0, wheel_common_inertia_sd_frac=0.0,
+                                          torque_sd_nm=0.0, torque_rate_sd_nm_per_h=0.0))
     m_i, s_i, _ = laplace(clean, sc)
     m_r, s_r, _ = laplace(clean, sc0, robust=True)
     np.testing.assert_allclose(m_r, m_i, rtol=0, atol=1e-3 * s_i.min())

@@ -33,7 +33,7 @@ Every effect is small, so it enters the momentum model to first order, and linea
 * **inertial torque rate** ``Ṫ`` (N m/s, per file; the inertia model, beside its constant
   ``T_N``): ``−A(q_t) ½ (t − t_0)² Ṫ``. Solar and RTG torques change as the slews turn the sun
   line in body axes; the prior lets the App. A bound (15 µN m) change by its whole size within
-  an hour (:data:`TORQUE_RATE_PRIOR_SD_NM_S`). Without it a torque that drifts within the run
+  an hour (``[torque_knowledge] rate_sd_nm_per_h``). Without it a torque that drifts within the run
   leaks into the products of inertia (``docs/robust/open_world.md``).
 
 What the data cannot separate stays prior-dominated by construction: scaling ``I``, ``H_0`` and
@@ -70,9 +70,7 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
            "wheel_axes": "wheel_tilt", "body_torque": "T_body",
            "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
 BODY_TORQUE_PRIOR_SD_NM = 15e-6  # N m per axis, as the inertial T_N (Feldman & Lee App. A)
-TORQUE_RATE_PRIOR_SD_NM_S = BODY_TORQUE_PRIOR_SD_NM / 3600.0
-"""Prior sd of the inertial torque rate, N m/s per axis: the App. A bound may change by its
-whole size within an hour."""
+"""The default external-torque prior sd (``Knowledge.torque_sd_nm``)."""
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
 # Models of the wheel spin-inertia error: one scale per wheel (default) or one common scale.
 WHEEL_ERRORS = ("per_wheel", "common")
@@ -205,11 +203,11 @@ def nuisance_layout(spacecraft: Spacecraft, n_files: int, wheels, *,
               ("wheel_inertia", scale_sd),
               ("wheel_inertia_common", common_sd),
               ("wheel_axes", np.full(2 * nk, np.deg2rad(k.wheel_axis_sd_deg))),
-              ("body_torque", np.full(3 * n_files, BODY_TORQUE_PRIOR_SD_NM)),
+              ("body_torque", np.full(3 * n_files, k.torque_sd_nm)),
               ("inertial_torque", np.full(3 * n_files if inertial_torque else 0,
-                                          BODY_TORQUE_PRIOR_SD_NM)),
+                                          k.torque_sd_nm)),
               ("torque_rate", np.full(3 * n_files if torque_rate else 0,
-                                      TORQUE_RATE_PRIOR_SD_NM_S))]
+                                      k.torque_rate_sd_nm_per_h / 3600.0))]
     slices, start = {}, 0
     for name, block in blocks:
         if block.size or name in ("wheel_inertia", "wheel_axes"):

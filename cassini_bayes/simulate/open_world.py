@@ -9,8 +9,10 @@ not the model. :func:`draw_open_world` draws them instead
   scaled to an sd ``widen`` (default 1.5) times the prior's, independently per wheel and per axis
   (:data:`LAWS`);
 * together with effects no fit models: a flexible mode of random frequency, damping and
-  coupling; a slowly drifting inertial torque; time-tag errors that are uniform, not Normal, plus
-  occasional stale samples (a packet that repeats its neighbour's data: a ±1 sample slip);
+  coupling; time-tag errors that are uniform, not Normal, plus occasional stale samples (a packet
+  that repeats its neighbour's data: a ±1 sample slip); and a slowly drifting inertial torque,
+  drawn uniform (the inertia and RWA4 fits now model a torque rate with a Normal prior; the
+  thrust fit does not);
 * and, with ``draw_inertia`` (thrust and RWA4 fits, which take the inertia from the model file's
   knowledge), a true inertia uniform on the model file's ``±moi_uncertainty`` moments and
   ``±poi_uncertainty`` products about its prediction.
