@@ -169,7 +169,8 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         mean = truth_pi + sd * np.random.default_rng([seed, fam, 1]).standard_normal(6)
         inertia = InertiaGaussian(mean, np.diag(sd**2))
         out_inertia = {"mean": mean.tolist(), "sd": sd.tolist()}
-    settings = SamplerSettings(chains=opts["chains"], warmup=opts["warmup"], draws=opts["draws"])
+    settings = SamplerSettings(chains=opts["chains"], warmup=opts["warmup"], draws=opts["draws"],
+                               target_accept=opts.get("target_accept") or 0.9)
     prior = scenario.prior
     if opts.get("torque_sd_nm"):     # the fit's stated torque knowledge (the truth's is fixed)
         from dataclasses import replace
@@ -240,6 +241,8 @@ def main(argv=None) -> None:
     ap.add_argument("--warmup", type=int, default=500)
     ap.add_argument("--draws", type=int, default=500)
     ap.add_argument("--widen", type=float, default=1.5)
+    ap.add_argument("--target-accept", type=float, default=None,
+                    help="NUTS target acceptance (default: SamplerSettings' 0.9)")
     ap.add_argument("--torque-sd-nm", type=float, default=None,
                     help="the fits' stated external-torque prior sd, N m (default: the model "
                     "file's [torque_knowledge] sd_nm); the truth's torques do not change")
@@ -253,7 +256,7 @@ def main(argv=None) -> None:
         from cassini_bayes.simulate.scenario import scenario_path
 
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
-                                              "off", "torque_sd_nm")}
+                                              "off", "torque_sd_nm", "target_accept")}
         done = {(r["family"], r["seed"]) for r in rows}
         t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):

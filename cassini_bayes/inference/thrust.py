@@ -1056,7 +1056,38 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
             v, dims=("chain", "draw") + site_dims,
             coords={"chain": idata.posterior.chain, "draw": idata.posterior.draw,
                     **{d: coords[d] for d in site_dims}})
-    return nu.mean(0)
+    return nu
+
+
+RESIDUAL_DRAWS = 100
+"""Posterior draws averaged into the stored residual (:func:`_posterior_mean_residuals`)."""
+
+
+def _posterior_mean_residuals(problem: ThrustProblem, post, sample_inertia: bool,
+                              nu_draws=None) -> np.ndarray:
+    """The posterior mean of the impulse residuals, ``E[r(θ) | data]`` (E, n_max, 3) N m s,
+    over :data:`RESIDUAL_DRAWS` evenly spaced draws, each with its own thrust, time constants,
+    noise levels, inertia and nuisance. Not ``r(E[θ])``: with the inertia sampled, the draws lie
+    on a curved ridge (``I``, ``F`` and the wheels' scale trade against each other), whose mean
+    is off the ridge, and the residual at the mean carries a smooth misfit that no draw has
+    (measured on correctly specified ``biasing_day028``: lag-1 autocorrelation 0.67–0.80 at the
+    mean)."""
+    def flat(name):
+        v = np.asarray(post[name].values, float)
+        return v.reshape(v.shape[0] * v.shape[1], -1)
+
+    n_s = flat(problem.names[0]).shape[0]
+    pick = np.unique(np.linspace(0, n_s - 1, min(RESIDUAL_DRAWS, n_s)).astype(int))
+    f = np.concatenate([flat(n) for n in problem.names], 1)
+    tau = np.concatenate([flat(n) for n in TAU_NAMES], 1)
+    sig = np.stack([flat("sigma_omega"), flat("sigma_rho")], -1)          # (S, E, 2)
+    pi = np.concatenate([flat(n) for n in INERTIA_NAMES], 1) if sample_inertia else None
+    total = 0.0
+    for i in pick:
+        total = total + impulse_residuals(problem, f[i], tau[i], sig[i],
+                                          None if pi is None else pi[i],
+                                          None if nu_draws is None else nu_draws[i])
+    return total / pick.size
 
 
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -1134,19 +1165,12 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
-    nu_mean = None
+    nu_draws = None
     if robust:
-        nu_mean = _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem,
-                                      sample_inertia, coords, dims)   # ν's posterior mean
-
+        nu_draws = _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem,
+                                       sample_inertia, coords, dims)
     post = idata.posterior
-    f_mean = np.array([float(post[n].mean()) for n in problem.names])
-    tau_mean = np.array([float(post[n].mean()) for n in TAU_NAMES])
-    sig = np.stack([np.exp(np.log(post[n]).mean(("chain", "draw")).values)
-                    for n in ("sigma_omega", "sigma_rho")], -1)
-    pi_mean = (np.array([float(post[n].mean()) for n in INERTIA_NAMES]) if sample_inertia
-               else None)
-    d = impulse_residuals(problem, f_mean, tau_mean, sig, pi_mean, nu_mean)
+    d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
     m = np.asarray(kw["mask"]) > 0
     t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
     ev_all = np.concatenate([np.full(int(m[e].sum()), e) for e in range(n_ev)])
