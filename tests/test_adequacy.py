@@ -231,8 +231,16 @@ def _tach_pair(sc, scale: float) -> list[Telemetry]:
     return tels
 
 
+TACH_SCALE = 1.06   # RWA1's tachometer 6 % high in the slow tests below
+
+
 @pytest.mark.slow
-def test_three_percent_tachometer_error_is_flagged_and_clean_data_pass():
+def test_tachometer_error_is_flagged_and_clean_data_pass():
+    """A tachometer reading high is, for the momentum, that wheel's spin inertia off by the same
+    fraction, so the per-wheel model absorbs it as that wheel's scale; the wheel's error relative
+    to the wheels' mean (`wheel_scale_rel[RWA1]`, prior sd 0.41 %) shows it. Measured on these
+    slews: 3 % gives 4.8 (threshold 4, at the edge: the benchmark flags 3 % on 8 of 10 seeds,
+    docs/adequacy.md), so the test uses 6 %, expected ≈ 9.8, asserted beyond 2 × the threshold."""
     from cassini_bayes.inference.adequacy import inertia_adequacy
     from cassini_bayes.inference.inertia import ROBUST_SITES, fit_inertia
     from cassini_bayes.physics.momentum import INERTIA_NAMES
@@ -240,16 +248,15 @@ def test_three_percent_tachometer_error_is_flagged_and_clean_data_pass():
     sc = load_spacecraft("cassini_2000_03_15")
     settings = SamplerSettings(chains=2, warmup=300, draws=300, chain_method="vectorized")
     verdicts = {}
-    for scale in (1.0, 1.03):
+    for scale in (1.0, TACH_SCALE):
         post = fit_inertia(jax.random.key(0), _tach_pair(sc, scale), sc, settings=settings)
         verdicts[scale] = inertia_adequacy(post, [*INERTIA_NAMES, "T_N", *ROBUST_SITES])
     # clean pair, measured: prior-data conflict 0.78 (threshold 4), held-out 0.0 (4), lag-1
     # autocorrelation 0.055 (0.5), residual regression 0.67 (4): every check ≥ 5× inside
     assert verdicts[1.0].ok, verdicts[1.0].to_dict()
-    assert not verdicts[1.03].ok
-    # the misfit is gross (measured: a gyro scale factor pulled 21 prior sd, residual regression
-    # deviate 11.5): margin of 2× the thresholds
-    bad = {c.name: c for c in verdicts[1.03].checks}
+    assert not verdicts[TACH_SCALE].ok
+    bad = {c.name: c for c in verdicts[TACH_SCALE].checks}
+    assert bad["prior_data_conflict"].parameter == "wheel_scale_rel[RWA1]"
     assert bad["prior_data_conflict"].statistic > 2 * bad["prior_data_conflict"].threshold
 
 
@@ -257,7 +264,7 @@ def test_three_percent_tachometer_error_is_flagged_and_clean_data_pass():
 def test_strict_exits_3_on_an_adequacy_failure_after_writing_everything(tmp_path, run_cli):
     sc = load_spacecraft("cassini_2000_03_15")
     files = []
-    for t in _tach_pair(sc, 1.03):
+    for t in _tach_pair(sc, TACH_SCALE):
         files.append(tmp_path / f"{t.source}.csv")
         write_telemetry(files[-1], t)
     out = tmp_path / "run"
