@@ -104,5 +104,6 @@ def test_fit_rwa4_end_to_end(run_cli, tmp_path):
     assert angles_deg(np.array(d["mean"])[None], sc.truth.wheel("RWA4").axis)[0] < 3.0
     assert s["model"] == "robust"
     sens = s["sensitivity"]
-    assert set(sens) == {"gyro_bias", "gyro_scale", "wheel_inertia", "body_torque"}
+    assert set(sens) == {"gyro_bias", "gyro_scale", "wheel_inertia", "wheel_inertia_common",
+                         "body_torque", "inertial_torque", "torque_rate"}
     assert all(e["modelled"] and e["parameters"]["axis"]["units"] == "deg" for e in sens.values())
