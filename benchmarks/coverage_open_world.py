@@ -133,8 +133,8 @@ def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
     else:
         budget = bool(abs(err[0]) <= THRUST_BUDGET * truth[0])
     return {"entries": names, "hit": ((q05 <= truth) & (truth <= q95)).tolist(),
-            "interval": np.stack([q05, q95], 1).tolist(), "error": err.tolist(), "z": (err / d.std(0)).tolist(), "truth": truth.tolist(),
-            "budget": budget}
+            "interval": np.stack([q05, q95], 1).tolist(), "error": err.tolist(),
+            "z": (err / d.std(0)).tolist(), "truth": truth.tolist(), "budget": budget}
 
 
 def run_seed(family: str, seed: int, opts: dict) -> dict:

@@ -3,8 +3,8 @@
 For each scenario family (``rwa4_rcs_real``: Brown §III.B, RCS method; ``rwa4_rwa_real``: Brown
 §III.C, RWA method) and each seed: draw the truth's sensor and actuator errors at the scale of the
 robust model's prior (the prior model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias
-and scale factor per axis, a shared and a per-wheel spin-inertia error, two tilt angles of each *known*
-wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the file's
+and scale factor per axis, a shared and a per-wheel spin-inertia error, two tilt angles of each
+*known* wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the file's
 flexible mode, time-tag jitter and true RWA4 axis (and its inertia, unless ``--draw-inertia``
 draws it from the fit's inertia prior), simulate, and fit both models (Brown's
 idealised one and the robust one) with the nominal spacecraft model. Prints, per family and

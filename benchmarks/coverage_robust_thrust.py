@@ -2,8 +2,8 @@
 
 For each seed: draw the truth's sensor and actuator errors at the scale of the robust model's
 prior (the spacecraft model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias and scale
-factor per axis, a shared and a per-wheel spin-inertia error, a tilt of each wheel's axis per component,
-and a body-fixed external torque of 15 µN m per axis, Feldman & Lee App. A), simulate the
+factor per axis, a shared and a per-wheel spin-inertia error, a tilt of each wheel's axis per
+component, and a body-fixed external torque of 15 µN m per axis, Feldman & Lee App. A), simulate the
 biasing event of a scenario (default ``biasing_day028``: Table 2, truth 0.699 N, 5/20/65 ms) with
 the simulator's closed-loop RCS control, and fit both thrust models with the nominal spacecraft
 model. Prints, per model, the 90 % coverage of ``F`` and of the three time constants with the

@@ -105,16 +105,16 @@ class Knowledge:
 
     The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
     From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``),
-    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``common_inertia_sd_frac``, ``axis_sd_deg``)
+    ``[wheel_knowledge]`` (``inertia_sd_frac``, ``common_inertia_sd_frac``, ``axis_sd_deg``),
     ``[telemetry_knowledge]`` (``time_tag_sd_s``) and ``[torque_knowledge]`` (``sd_nm``,
-    ``rate_sd_nm_per_h``). The defaults are conservative engineering
-    values, not numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
+    ``rate_sd_nm_per_h``). The defaults are conservative engineering values, not numbers from
+    the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
     scale-factor error of 5e-4 (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each
     wheel independently; a ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that
     wheel) plus 0.5 % shared by every wheel (one calibration method, test stand and temperature;
     the data cannot tell it from the overall scale of the inertia, so the moments' uncertainty
-    rests on it; 0 removes it), a wheel spin-axis misalignment of 0.2 deg per tilt component (Brown §III.A finds the re-articulated RWA4
-    0.53 deg from its nominal axis; the fixed wheels are known better) and a white time-tag error
+    rests on it; 0 removes it), a wheel spin-axis misalignment of 0.2 deg per tilt component
+    (Brown §III.A finds the re-articulated RWA4 0.53 deg from its nominal axis; the fixed wheels are known better) and a white time-tag error
     of 10 ms per telemetry sample (the papers give no figure; 1 % of Cassini's 1 s sample period).
     External torques (the robust models' body-fixed and inertial torques): 15 µN m per axis, the
     Feldman & Lee App. A bound for March 2000 taken as one sd, and a rate of change of 15 µN m

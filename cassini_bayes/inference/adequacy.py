@@ -27,8 +27,8 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   the likelihood's own covariance (noise plus the integrated-out nuisance effects): ``χ²`` on
   ``3G − 2`` degrees of freedom (G window pairs), as the normal deviate of its upper tail.
 
-Statistics expressed as normal deviates (held-out, regression, balance) fail beyond 4 (two-sided 6e-5
-after the Bonferroni correction); the prior–data conflict beyond 4 prior sd; the
+Statistics expressed as normal deviates (held-out, regression, balance) fail beyond 4
+(two-sided 6e-5 after the Bonferroni correction); the prior–data conflict beyond 4 prior sd; the
 autocorrelation beyond 0.5.
 """
 
@@ -39,6 +39,8 @@ from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 from scipy import stats
+
+from cassini_bayes.inference.nuisance import site_prior_sd as nuisance_prior_sd
 
 __all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
            "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "common_wheel_scale",
@@ -130,15 +132,6 @@ def _elements(da) -> dict[str, np.ndarray]:
         idx = idx if isinstance(idx, tuple) else (idx,)
         out[f"{da.name}[{','.join(str(i) for i in idx)}]"] = vals[:, j]
     return out
-
-
-def nuisance_prior_sd(layout) -> dict[str, np.ndarray]:
-    """Posterior site → flat prior sd of the robust nuisance parameters (zero-mean Normal) of a
-    :class:`~cassini_bayes.inference.nuisance.NuisanceLayout`, in the site's element order (a
-    wheel's total scale has its marginal sd: :func:`~cassini_bayes.inference.nuisance.site_prior_sd`)."""
-    from cassini_bayes.inference.nuisance import site_prior_sd
-
-    return site_prior_sd(layout)
 
 
 def common_wheel_scale(idata, layout) -> dict[str, tuple[np.ndarray, float]]:

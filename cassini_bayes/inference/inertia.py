@@ -33,9 +33,8 @@ earlier model), two small tilts of each active wheel's spin axis, a body-fixed t
 ``T_N``, the inertial torque's rate ``Ṫ_N`` (``−A(q_t) ½ (t − t_0)² Ṫ_N``: solar and RTG
 torques change as the slews turn the sun line). All enter the residual linearly to first order
 (:mod:`cassini_bayes.inference.nuisance`), so the sufficient-statistics likelihood below keeps
-its O(P²) cost (P grows by 9F + 4 + 3K). The common
-scale ``c = c_s + mean_k d_k`` does not enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and
-every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
+its O(P²) cost (P grows by 9F + 4 + 3K). The common scale ``c = c_s + mean_k d_k`` does not
+enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
 balance by ``1 + c`` shows what the data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and
 the wheel scales relative to the common one, ``δ_k = (c_k − c)/(1 + c)``, which enter linearly
 (column ``J_k ρ_k g_k``) and are exact: ``(1 + c_k)/(1 + c) = 1 + δ_k``. The model sets
@@ -839,7 +838,6 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
         nu = layout.sd * np.asarray(jax.random.normal(jax.random.fold_in(key_s, 1),
                                                       (n, layout.size)))
         out.update(split_nuisance(nu, layout))
-        out.pop("T_inertial", None)
     return out
 
 
@@ -894,8 +892,7 @@ class InertiaPosterior(NamedTuple):
 AXES = ("x", "y", "z")
 # Posterior sites of the robust nuisance vector ν (nuisance.py); a problem's own are
 # :func:`robust_sites`.
-ROBUST_SITES = ("gyro_bias", "gyro_scale", "wheel_scale", "wheel_scale_common", "wheel_tilt",
-                "T_body", "T_N_rate")
+ROBUST_SITES = tuple(site for effect, site in EFFECTS.items() if effect != "inertial_torque")
 
 
 def robust_sites(layout) -> list[str]:

@@ -252,14 +252,17 @@ def site_prior_sd(layout: NuisanceLayout) -> dict[str, np.ndarray]:
 
 def wheel_scale_columns(layout: NuisanceLayout, h_wheels: np.ndarray,
                         wheel_h: dict) -> np.ndarray:
-    """(n, 3, S) body-axis columns of the wheel spin-inertia scales: per wheel ``J_k ρ_k g_k``
-    (zero for a wheel not in ``wheel_h``), common ``H_w`` = ``h_wheels`` (n, 3) N m s."""
+    """(n, 3, W) body-axis columns of every wheel-scale parameter (:attr:`NuisanceLayout.
+    wheel_block`): per wheel ``J_k ρ_k g_k`` (zero for a wheel not in ``wheel_h``) and, with a
+    shared part, their sum for ``c_s``; common: ``H_w`` = ``h_wheels`` (n, 3) N m s."""
     if layout.wheel_errors == "common":
         return np.asarray(h_wheels, float)[:, :, None]
-    cols = np.zeros(np.shape(h_wheels) + (layout.n_scales,))
+    cols = np.zeros(np.shape(h_wheels) + (layout.n_scales + int(layout.has_common),))
     for k, name in enumerate(layout.scale_wheels):
         if name in wheel_h:
             cols[:, :, k] = wheel_h[name][:, None] * layout.scale_axes[k]
+    if layout.has_common:
+        cols[:, :, -1] = cols[:, :, :-1].sum(-1)                      # c_s: every wheel's
     return cols
 
 
@@ -282,10 +285,7 @@ def robust_columns(layout: NuisanceLayout, f: int, inertia: np.ndarray, omega: n
     sl = layout.slices
     cols[:, :, 3 * f:3 * f + 3] = -inertia                                  # I* b
     cols[:, :, sl["gyro_scale"]] = -inertia[None] * omega[:, None, :]       # I* diag(ω) s
-    scale_cols = wheel_scale_columns(layout, h_wheels, wheel_h)
-    cols[:, :, sl["wheel_inertia"]] = scale_cols                           # c_k J_k ρ_k
-    if layout.has_common:
-        cols[:, :, sl["wheel_inertia_common"]] = scale_cols.sum(-1, keepdims=True)  # c_s H_w
+    cols[:, :, layout.wheel_block] = wheel_scale_columns(layout, h_wheels, wheel_h)  # J_k ρ_k g_k
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
         if name in wheel_h:

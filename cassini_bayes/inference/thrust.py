@@ -37,8 +37,9 @@ Priors, stated in the physical parameters
 * Pulse time constants, from the spacecraft model's ``[pulse]`` section (:func:`tau_prior`). The
   papers' profile (delay, exponential rise, hold, exponential fall;
   :mod:`~cassini_bayes.physics.pulse`) contains real valves that the manufacturer's ranges (delay
-  3-7 ms, rise 15-25 ms, fall 40-90 ms) exclude: a first-order valve (no delay, one time constant ``τ`` for rise and fall, 38-54
-  ms measured on an independent simulator) is ``τd = 0``, ``τr = τf = τ``. The prior covers it:
+  3-7 ms, rise 15-25 ms, fall 40-90 ms) exclude: a first-order valve (no delay, one time
+  constant ``τ`` for rise and fall, 38-54 ms measured on an independent simulator) is
+  ``τd = 0``, ``τr = τf = τ``. The prior covers it:
 
   - ``τd ~ HalfNormal(σ_d)``, ``σ_d`` = the upper end of ``tau_delay_range`` (7 ms): largest
     density at ``τd = 0`` (a valve that opens at once), median 4.7 ms ≈ the nominal 5 ms, 85 %
@@ -114,8 +115,8 @@ rather than sampled (as in the robust RWA4 model): per event the offset is remov
 and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 16 for one
 event with three wheels). The sampler keeps the idealised model's coordinates (5 for one event
 and one ``F``); :func:`fit_thrust` then draws ``ν`` from its exact Gaussian conditional at each
-draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead (21 coordinates on one event), the time-tag term left a
-banana: the conditional mean of the torque about Z moved with ``τr²`` by about one conditional
+draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead
+(21 coordinates on one event), the time-tag term left a banana: the conditional mean of the torque about Z moved with ``τr²`` by about one conditional
 sd per unit of whitened ``τr``, which no affine whitening removes — 84 divergences and R-hat up
 to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the worst of those
 (seed 14: 5 divergences, tree depth 4-5) has none, at tree depth 2-3.
@@ -138,7 +139,8 @@ during a pulse, which are what resolves ``τr`` on 1-s telemetry. The earlier pr
 ±2σ of a log-normal) put ``c = 0`` at ~7σ (``τf`` ≈ 15 ms), so on an event whose widths cannot
 separate ``F`` from ``c`` it moves ``F`` instead (reported on an independent simulator's
 first-order valve: −2.1 % and −1.1 % at sd 0.17 %; on this package's 1-s simulations the samples
-inside pulses overrode it, docs/robust/README.md "Thrust pulse family"). :func:`tau_identification` names in ``summary["warnings"]`` (through
+inside pulses overrode it, docs/robust/README.md "Thrust pulse family").
+:func:`tau_identification` names in ``summary["warnings"]`` (through
 :class:`TauIdentificationWarning`) each time constant the data leave at its prior (contraction
 < 0.1) or pull outside the prior's central 99 % (the data disagree with the ``[pulse]`` ranges).
 
@@ -457,10 +459,7 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
     b0 = sl["gyro_bias"].start + 3 * e
     cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
     cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
-    scale_cols = wheel_scale_columns(layout, h, per_wheel)
-    cols[:, :, sl["wheel_inertia"]] = -scale_cols                        # −c_k J_k ρ_k
-    if layout.has_common:
-        cols[:, :, sl["wheel_inertia_common"]] = -scale_cols.sum(-1, keepdims=True)  # −c_s H_w
+    cols[:, :, layout.wheel_block] = -wheel_scale_columns(layout, h, per_wheel)  # −J_k ρ_k g_k
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
         if name in per_wheel:
@@ -1040,7 +1039,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     """Add the robust model's nuisance sites (:func:`~cassini_bayes.inference.nuisance.
     split_nuisance`) to the posterior: one draw of ``ν`` from its exact conditional per draw of
     the sampler (:func:`_nuisance_sampler`), so the sites are draws of the joint posterior.
-    Returns the posterior mean of ``ν`` (R,)."""
+    Returns the draws of ``ν`` (chain × draw, R), in the posterior's flattened order."""
     import xarray as xr
 
     kw = problem.model_kwargs
