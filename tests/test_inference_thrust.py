@@ -211,12 +211,13 @@ def test_tau_identification_names_unidentified_and_conflicting_time_constants():
 
 
 def test_sampler_prior_density_is_the_stated_prior():
-    """The log prior of the sampler coordinates ``(z_d, a_z, c_z)`` (:func:`_tau_from_z`, with its
-    Jacobians) is the stated prior's density of ``(τd, τr, τf)`` times ``|∂τ/∂z|`` / 2 (``τd =
-    σ_d |z_d|`` is two-to-one) — checked at the papers' profile, at a first-order valve, near
-    τd = 0 (1 µs) and at τd = 12 ms; the map inverts (Lambert W) to 1e-12."""
-    from cassini_bayes.inference.thrust import (C_SCALE_S, _tau_from_z, long_pulse_excess,
-                                                rise_deficit)
+    """The log prior of the sampler coordinates ``(s, a_z, c_z)`` (:func:`_tau_from_z`, with its
+    Jacobians) is the stated prior's density of ``(τd, τr, τf)`` times ``|∂τ/∂z|`` — checked at
+    the papers' profile, at a first-order valve, near τd = 0 (1 µs), at τd = 12 ms and at a
+    delay ten times the rise (``τr → 0``, the far tail of ``s``); the map inverts (Lambert W) to
+    1e-12."""
+    from cassini_bayes.inference.thrust import (A_LOG_SCALE, C_SCALE_S, _tau_from_z,
+                                                long_pulse_excess, rise_deficit)
 
     sc = load_spacecraft("models/fsds.toml")
     tp = tau_prior(sc)
@@ -226,12 +227,13 @@ def test_sampler_prior_density_is_the_stated_prior():
               c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))))
 
     def coords(tau):
-        return jnp.array([-tau[0] / tp.delay_scale,
-                          (float(rise_deficit(*tau[:2])) - float(kw["a_mu"])) / C_SCALE_S,
+        a = float(rise_deficit(*tau[:2]))
+        return jnp.array([np.log(tau[0] / (a - tau[0])),
+                          np.log(a / float(kw["a_mu"])) / A_LOG_SCALE,
                           (float(long_pulse_excess(*tau)) - float(kw["c_mu"])) / C_SCALE_S])
 
     for tau in [(0.005, 0.020, 0.065), (1e-6, 0.045, 0.045), (0.0004, 0.030, 0.050),
-                (0.012, 0.015, 0.040)]:
+                (0.012, 0.015, 0.040), (0.020, 0.002, 0.060)]:
         z = coords(tau)
         got_tau, log_p = _tau_from_z(z, kw)
         np.testing.assert_allclose(np.asarray(got_tau), tau, rtol=1e-12, atol=1e-15)
@@ -239,7 +241,7 @@ def test_sampler_prior_density_is_the_stated_prior():
         want = (stats.halfnorm(scale=tp.delay_scale).logpdf(tau[0])
                 + sum(stats.lognorm(s=sd, scale=np.exp(mu)).logpdf(x)
                       for mu, sd, x in zip(tp.log_mean, tp.log_sd, tau[1:]))
-                + np.log(abs(jac)) - np.log(2.0))
+                + np.log(abs(jac)))
         assert float(log_p) == pytest.approx(want, abs=1e-9)
 
 

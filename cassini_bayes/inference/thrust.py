@@ -69,14 +69,16 @@ Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
 ~1e-4 of their prior widths, and leave ``τd``, ``τr`` near their prior: the posterior of
 ``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls (step
 sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
-``f_z`` (prior-whitened ``log F``), ``z_d`` (``τd = σ_d |z_d|``, ``z_d ~ N(0, 1)``: the half-normal
-prior exactly, Gaussian in the coordinate, ``τd = 0`` an interior point), ``a_z`` (the rise
-deficit ``a = τd + τr e^{−τd/τr}`` = ``a_mu + 0.01 s · a_z``, :func:`rise_deficit`: a pulse still
-on has delivered ``F (t − a)``, so the samples inside pulses pin it) and ``c_z``
-(``c = c_mu + 0.01 s · c_z``; ``τr``, ``τf`` follow in closed form, the prior carried over by
-the Jacobian, :func:`_tau_from_z`). With the delay free over 0-10 ms the earlier coordinates
-``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6 divergences, R-hat up to
-1.048 and bulk ESS ~60 on the idealised fit of ``biasing_day028_first_order`` (2 × 300 + 300);
+``f_z`` (prior-whitened ``log F``), ``a_z`` (the rise deficit ``a = τd + τr e^{−τd/τr}`` =
+``a_mu e^{0.4 a_z}``, :func:`rise_deficit`: a pulse still on has delivered ``F (t − a)``, so the
+samples inside pulses pin it), ``s`` (its split, ``τd = a σ(s)``, ``a − τd = a σ(−s)``, σ the
+logistic function) and ``c_z`` (``c = c_mu + 0.01 s · c_z``); ``τr``, ``τf`` follow in closed form,
+the prior carried over by the Jacobian (:func:`_tau_from_z`). With the delay free over 0-10 ms
+the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6
+divergences, R-hat up to 1.048 and bulk ESS ~60 on the idealised fit of
+``biasing_day028_first_order`` (2 × 300 + 300). Sampling ``a`` additively beside the delay
+(``a − τd`` free to reach 0) put a wall at ``τr = 0`` into the sampler's space, behind a
+density spike: the open-world papers'-profile campaign diverged on 8 of 20 seeds (up to 263).
 ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
 Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
@@ -214,6 +216,7 @@ THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Fel
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 _NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
 C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler coordinate
+A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
 _HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
 _NOISE_FLOORS = np.array([1e-9, 1e-7])
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
@@ -787,7 +790,7 @@ _EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, 0)
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
-    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(z_d, z_r, c_z)``,
+    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(s, a_z, c_z)``,
     ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
     tau_z = theta[n_f:n_f + 3]
@@ -818,9 +821,11 @@ def rise_deficit(tau_delay, tau_rise):
 
 def _lambert_w0(x):
     """Principal branch of Lambert's W for ``x ≥ 0`` (``w e^w = x``): Halley's iteration from
-    ``log(1 + x)``, converged to rounding in 5 steps for ``x ≤ 10``; differentiable."""
-    w = jnp.log1p(x)
-    for _ in range(5):
+    ``l − log(1 + l) l/(1 + l)``, ``l = log(1 + x)`` (``≈ log x − log log x`` for large ``x``),
+    converged to rounding in 4 steps for ``1e-14 ≤ x ≤ 1e12``; differentiable."""
+    l = jnp.log1p(x)
+    w = l - jnp.log1p(l) * l / (1.0 + l)
+    for _ in range(4):
         ew = jnp.exp(w)
         f = w * ew - x
         w = w - f / (ew * (w + 1.0) - (w + 2.0) * f / (2.0 * w + 2.0))
@@ -828,39 +833,43 @@ def _lambert_w0(x):
 
 
 def _tau_from_z(tau_z, kw):
-    """Time constants (3,) s from the sampler's ``(z_d, a_z, c_z)`` and the log prior density
+    """Time constants (3,) s from the sampler's ``(s, a_z, c_z)`` and the log prior density
     of the sampler coordinates (exact: the Jacobians included).
 
-    * ``z_d ~ Normal(0, 1)``, ``τd = σ_d |z_d|``: exactly the half-normal prior of ``τd``
-      (scale ``σ_d``), Gaussian in the sampler's coordinate. The map is two-to-one; every
-      physical quantity depends on ``|z_d|`` only, so the mirror images are the same posterior.
-    * ``a_z``: the rise deficit ``a = a_mu + C_SCALE a_z`` (:func:`rise_deficit`), pinned by
-      the samples taken during pulses; ``b = a − τd = τr e^{−τd/τr}``, so
-      ``τr = b e^{W(τd/b)}`` (Lambert's W).
-    * ``c_z``: the long-pulse excess ``c = c_mu + C_SCALE c_z`` (:func:`long_pulse_excess`),
-      pinned by the long pulses' impulses; ``τf = c + b``.
+    * ``a_z``: the rise deficit ``a = a_mu e^{A a_z}`` (:func:`rise_deficit`, ``A`` =
+      :data:`A_LOG_SCALE`), pinned by the samples taken during pulses.
+    * ``s``: how ``a`` splits between the delay and the rise, ``τd = a σ(s)`` and
+      ``b = a − τd = τr e^{−τd/τr} = a σ(−s)``; ``τd/b = e^s``, so ``τr = b e^{W(e^s)}``
+      (Lambert's W). ``τd → 0`` (a first-order valve) and ``τr → 0`` are the two tails
+      ``s → ∓∞``, with no wall between them; the split is what only samples within a few
+      ``τr`` of a command resolve.
+    * ``c_z``: the long-pulse excess ``c = c_mu + C c_z`` (:func:`long_pulse_excess`, ``C`` =
+      :data:`C_SCALE_S`), pinned by the long pulses' impulses; ``τf = c + b``.
 
     Sampling ``(a, c)`` instead of ``(τr, τf)`` turns the two narrow, curved ridges of the
-    likelihood into coordinate axes; what is left free is the split of ``a`` between the delay
-    and the rise, which only samples within a few ``τr`` of a command resolve. The prior of
-    ``(τr, τf)`` is carried over with ``|∂(τr, τf)/∂(a, c)| = ∂τr/∂b = e^u/(1 + u)``,
-    ``u = τd/τr``. Invalid values (``b ≤ 0`` or ``τf ≤ 0``) give NaN.
+    likelihood into coordinate axes. The prior of ``(τd, τr, τf)`` is carried over with
+    ``|∂(τd, b)/∂(s, log a)| = a² σ(s) σ(−s)``, ``∂τr/∂b = e^u/(1 + u)`` (``u = τd/τr``) and the
+    coordinates' scales. ``τf ≤ 0`` gives NaN.
 
-    A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``c = 0``.
+    A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``s → −∞``, ``c = 0``.
     """
-    t_d = kw["tau_delay_scale"] * jnp.abs(tau_z[0])
-    b = kw["a_mu"] + C_SCALE_S * tau_z[1] - t_d
-    b = jnp.where(b > 0.0, b, jnp.nan)
-    u = _lambert_w0(t_d / b)
+    s = tau_z[0]
+    a = kw["a_mu"] * jnp.exp(A_LOG_SCALE * tau_z[1])
+    t_d = a * jax.nn.sigmoid(s)
+    b = a * jax.nn.sigmoid(-s)
+    u = _lambert_w0(jnp.exp(s))
     t_r = b * jnp.exp(u)
     t_f = kw["c_mu"] + C_SCALE_S * tau_z[2] + b
     t_f = jnp.where(t_f > 0.0, t_f, jnp.nan)
     log_tau = jnp.log(jnp.stack([t_r, t_f]))
     z_rf = (log_tau - kw["tau_mu"]) / kw["tau_sd"]
     std = dist.Normal(0.0, 1.0)
-    log_prior = (std.log_prob(tau_z[0]) + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"])
-                                                   - log_tau)
-                 + u - jnp.log1p(u) + 2.0 * jnp.log(C_SCALE_S))
+    sd_d = kw["tau_delay_scale"]
+    log_prior_delay = jnp.log(2.0 / sd_d) + std.log_prob(t_d / sd_d)      # half-normal
+    log_jac = (2.0 * jnp.log(a) + jax.nn.log_sigmoid(s) + jax.nn.log_sigmoid(-s)
+               + jnp.log(A_LOG_SCALE) + u - jnp.log1p(u) + jnp.log(C_SCALE_S))
+    log_prior = (log_prior_delay + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"]) - log_tau)
+                 + log_jac)
     return jnp.stack([t_d, t_r, t_f]), log_prior
 
 
