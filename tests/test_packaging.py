@@ -46,7 +46,8 @@ def wheel(tmp_path_factory) -> Path:
     proc = subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",
                            "--no-build-isolation", "--no-index", "-q", "-w", str(tmp / "dist")],
                           capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.returncode == 0, ("building the wheel needs the [dev] extra's setuptools>=68 and "
+                                  "wheel (pip install -e '.[dev]'):\n" + proc.stdout + proc.stderr)
     (whl,) = (tmp / "dist").glob("cassini_bayes-*.whl")
     return whl
 
