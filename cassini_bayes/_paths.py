@@ -1,16 +1,48 @@
-"""Where the shipped data lives (``models/``, ``experiments/`` beside the package), and how a
-user's input path is resolved and checked."""
+"""Where the shipped data lives, and how a user's input path is resolved and checked.
+
+The spacecraft models, the experiment files and the simulator's scenarios are package data under
+``cassini_bayes/data/`` (``models/``, ``experiments/``, ``experiments/scenarios/``), found through
+:mod:`importlib.resources`, so an installed wheel carries them; a clone's root-level ``models`` and
+``experiments`` are links to the same folders.
+"""
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
+import tempfile
+from importlib.resources import files
+from importlib.resources.abc import Traversable
 from pathlib import Path
 
 from cassini_bayes.errors import InputError
 
-ROOT = Path(__file__).resolve().parents[1]
-MODELS_DIR = ROOT / "models"
-EXPERIMENTS_DIR = ROOT / "experiments"
+
+def _on_disk(data: Traversable) -> Path:
+    """``data`` as a real directory: itself when the package sits on a file system (a wheel
+    installed by pip, an editable install), else (a zip import) a copy of the tree, extracted
+    once into a temporary directory that is removed at exit."""
+    if isinstance(data, Path):
+        return data
+    dest = Path(tempfile.mkdtemp(prefix="cassini_bayes-data-"))
+    atexit.register(shutil.rmtree, dest, ignore_errors=True)
+
+    def copy(src: Traversable, dst: Path) -> None:
+        for item in src.iterdir():
+            if item.is_dir():
+                (dst / item.name).mkdir()
+                copy(item, dst / item.name)
+            else:
+                (dst / item.name).write_bytes(item.read_bytes())
+
+    copy(data, dest)
+    return dest
+
+
+DATA_DIR = _on_disk(files("cassini_bayes") / "data")
+MODELS_DIR = DATA_DIR / "models"
+EXPERIMENTS_DIR = DATA_DIR / "experiments"
 SCENARIOS_DIR = EXPERIMENTS_DIR / "scenarios"
 
 

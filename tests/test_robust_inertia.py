@@ -263,13 +263,13 @@ def test_real_scenario_carries_its_effects():
     ("truth", "wheel_axis_tilt_deg = { RWA9 = [0.1, 0.0] }", "RWA9"),
 ])
 def test_bad_effect_values_are_one_line_errors(tmp_path, section, text, needle):
-    from cassini_bayes._paths import SCENARIOS_DIR
+    from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR
     from cassini_bayes.errors import InputError
     from cassini_bayes.simulate import load_scenario
 
     src = (SCENARIOS_DIR / "slew_2000_03_15.toml").read_text()
     src = src.replace(f"[{section}]\n", f"[{section}]\n{text}\n", 1)
     p = tmp_path / "s.toml"
-    p.write_text(src.replace('model = "models/', f'model = "{SCENARIOS_DIR.parents[1]}/models/'))
+    p.write_text(src.replace('model = "models/', f'model = "{DATA_DIR}/models/'))
     with pytest.raises(InputError, match=needle):
         load_scenario(p)

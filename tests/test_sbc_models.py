@@ -118,12 +118,11 @@ def test_thrust_truth_and_pulse_switch_reach_the_simulator():
 
 
 def _scenario(name):
-    import tomllib
-
+    """The default scenario ``sbc_models.<name>`` (a shipped file) of an adapter."""
     from cassini_bayes.analysis import sbc_models
-    from cassini_bayes.simulate.scenario import scenario_from_dict
+    from cassini_bayes.simulate.scenario import load_scenario
 
-    return scenario_from_dict(tomllib.loads(getattr(sbc_models, name)))
+    return load_scenario(getattr(sbc_models, name))
 
 
 def test_rwa4_truth_reaches_the_simulator_and_windows_are_quiet():

@@ -32,7 +32,8 @@ adapter, with the same compiled functions, from what the client sends it. Regist
     @register("inertia")
     def _inertia(spec: ModelSpec) -> SbcModel: ...
 
-Registered here:
+Registered here (the simulator models' default scenarios are shipped files under
+``experiments/scenarios/sbc/``, which a worker reads from its own installed package):
 
 ``toy``
     A linear-Gaussian regression with unknown noise that tests the machinery (fully vectorised),
@@ -65,11 +66,13 @@ import functools
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
 
+from cassini_bayes._paths import SCENARIOS_DIR
 from cassini_bayes.errors import InputError
 
 __all__ = [
@@ -355,61 +358,8 @@ def _toy(spec: ModelSpec) -> SbcModel:
 
 # --------------------------------------------------------------------------- inertia model
 
-INERTIA_SCENARIO = """\
-# Default SBC scenario of the inertia model: one hour of RWA slews about Y, X and Z (40°, 30°,
-# 30° at 2.5 mrad/s), telemetry at 0.25 Hz, the March-2000 spacecraft as prior, flight noise.
-name = "sbc_inertia_slews"
-description = "SBC: three RWA slews (Y, X, Z), one hour at 0.25 Hz"
-seed = 0
-
-[run]
-duration_s = 3600.0
-dt_s = 0.25
-sample_period_s = 4.0
-control = "rwa"
-
-[truth]
-model = "models/cassini_2000_03_15.toml"
-
-[prior]
-model = "models/cassini_2000_03_15.toml"
-
-[initial]
-wheels_on = ["RWA1", "RWA2", "RWA3"]
-q = [0.0, 0.0, 0.0, 1.0]
-wheel_rpm = { RWA1 = 300.0, RWA2 = -400.0, RWA3 = 350.0 }
-
-[rwa_controller]
-bandwidth_rad_s = 0.1
-damping = 0.7
-
-[[slew]]
-t_start_s = 300.0
-axis = [0.0, 1.0, 0.0]
-angle_deg = 40.0
-rate_mrad_s = 2.5
-accel_mrad_s2 = 0.025
-
-[[slew]]
-t_start_s = 1400.0
-axis = [1.0, 0.0, 0.0]
-angle_deg = 30.0
-rate_mrad_s = 2.5
-accel_mrad_s2 = 0.025
-
-[[slew]]
-t_start_s = 2500.0
-axis = [0.0, 0.0, 1.0]
-angle_deg = 30.0
-rate_mrad_s = 2.5
-accel_mrad_s2 = 0.025
-
-[noise]
-gyro_rad_s = 1.0e-6
-star_tracker_rad = 5.0e-5
-tach_noise_rpm = 0.05
-tach_quantum_rpm = 0.1
-"""
+# default scenario: one hour of RWA slews about Y, X and Z (the file's header says more)
+INERTIA_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_inertia_slews.toml"
 
 _INERTIA_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "torque",
                  "wheel_inertia_factor"}
@@ -437,11 +387,9 @@ def _inertia(spec: ModelSpec) -> SbcModel:
     from cassini_bayes.inference.inertia import sample_prior as inertia_sample_prior
     from cassini_bayes.inference.runner import SamplerSettings
     from cassini_bayes.simulate.run import TruthParams, simulate_batch, truth_params
-    from cassini_bayes.simulate.scenario import scenario_from_dict
     from cassini_bayes.telemetry import Telemetry
 
-    scenario = scenario_from_dict(spec.scenario() if spec.scenario_text
-                                  else tomllib.loads(INERTIA_SCENARIO), src=spec.scenario_source)
+    scenario = _scenario(spec, INERTIA_SCENARIO)
     opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "torque": True,
             "wheel_inertia_factor": 1.0, **dict(spec.options)}
     unknown = set(opts) - _INERTIA_KEYS
@@ -506,6 +454,16 @@ def _inertia(spec: ModelSpec) -> SbcModel:
 
 
 # ---------------------------------------------------------------------------- shared helpers
+
+
+def _scenario(spec: ModelSpec, default: Path):
+    """The :class:`~cassini_bayes.simulate.scenario.Scenario` of ``spec``: its ``--scenario``
+    text, else the model's shipped default scenario file ``default``."""
+    from cassini_bayes.simulate.scenario import load_scenario, scenario_from_dict
+
+    if spec.scenario_text:
+        return scenario_from_dict(spec.scenario(), src=spec.scenario_source)
+    return load_scenario(default)
 
 
 def _sampler_settings(opts: Mapping[str, Any]):
@@ -573,63 +531,8 @@ def _quiet(fn: Callable) -> Callable:
 
 # ---------------------------------------------------------------------------- thrust model
 
-THRUST_SCENARIO = """\
-# Default SBC scenario of the thrust model: a shortened 2004 day 028 RWA biasing event (Feldman &
-# Lee 2006 Table 2): RWA1-3 biased from rest under RCS control (dead-bands 2 mrad), wheel torque
-# 0.2 N m so that 80 s hold ~60 pulses of 125-750 ms. Truth spacecraft = prior spacecraft (the
-# Post-PROBE model: the fit holds its inertia fixed); thrust and time constants are replaced per
-# replicate by draws from the fit's prior.
-name = "sbc_thrust_biasing"
-description = "SBC: 80 s of RWA biasing under RCS control (day 028 shortened)"
-seed = 0
-
-[run]
-duration_s = 80.0
-dt_s = 0.125
-sample_period_s = 1.0
-control = "rcs"
-
-[truth]
-model = "models/cassini_post_probe.toml"
-
-[prior]
-model = "models/cassini_post_probe.toml"
-
-[initial]
-wheels_on = ["RWA1", "RWA2", "RWA3"]
-wheel_rpm = { RWA1 = 0.0, RWA2 = 0.0, RWA3 = 0.0 }
-
-[rcs_controller]
-deadband_mrad = [2.0, 2.0, 2.0]
-rate_gain_s = 10.0
-width_gain_s_per_mrad = 0.5
-max_pulse_s = 0.75
-min_off_s = 3.25
-
-[[wheel_ramp]]
-wheel = "RWA1"
-t_start_s = 10.0
-target_rpm = -794.0
-torque_nm = 0.2
-
-[[wheel_ramp]]
-wheel = "RWA2"
-t_start_s = 10.0
-target_rpm = -870.0
-torque_nm = 0.2
-
-[[wheel_ramp]]
-wheel = "RWA3"
-t_start_s = 10.0
-target_rpm = -296.0
-torque_nm = 0.2
-
-[noise]
-gyro_rad_s = 1.0e-6
-star_tracker_rad = 5.0e-5
-tach_noise_rpm = 0.05
-tach_quantum_rpm = 0.1
-"""
+# default scenario: the day 028 RWA biasing event cut to 80 s (the file's header says more)
+THRUST_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_thrust_biasing.toml"
 
 THRUST_SBC_NAMES = ("F", "tau_delay", "tau_rise", "tau_fall")
 _IDEAL_PULSE_TAU_S = 1e-6   # "no pulse dynamics": every time constant 1 µs, impulse = F·width
@@ -666,10 +569,8 @@ def _thrust(spec: ModelSpec) -> SbcModel:
                                                 tau_prior)
     from cassini_bayes.physics.momentum import inertia_vector
     from cassini_bayes.simulate.run import pulse_log, simulate_batch, truth_params
-    from cassini_bayes.simulate.scenario import scenario_from_dict
 
-    scenario = scenario_from_dict(spec.scenario() if spec.scenario_text
-                                  else tomllib.loads(THRUST_SCENARIO), src=spec.scenario_source)
+    scenario = _scenario(spec, THRUST_SCENARIO)
     if not scenario.uses_thrusters:
         raise InputError("the thrust SBC scenario fires no thrusters; give a biasing event "
                          "(control = \"rcs\" or [[pulse]] entries)", path=spec.scenario_source)
@@ -724,62 +625,8 @@ def _thrust(spec: ModelSpec) -> SbcModel:
 
 # ------------------------------------------------------------------------------ RWA4 model
 
-RWA4_SCENARIO = """\
-# Default SBC scenario of the RWA4 model: Brown (2012) §III.B RCS-controlled calibration,
-# shortened. RWA4 alone, dead-bands widened (400 mrad, so the thrusters stay off for the whole
-# run whatever the drawn axis and inertia), "Time A" 10-150 s, RWA4 0 -> +200 rpm at 0.05 N m
-# from 160 s (~70 s), drift, "Time B" 300-440 s. Truth spacecraft = prior spacecraft (Pre-SOI);
-# the RWA4 axis and the inertia are replaced per replicate by draws from the fit's prior.
-name = "sbc_rwa4_rcs"
-description = "SBC: RCS-method RWA4 calibration, 450 s (rwa4_rcs shortened)"
-seed = 0
-
-[run]
-duration_s = 450.0
-dt_s = 0.125
-sample_period_s = 1.0
-control = "rcs"
-
-[truth]
-model = "models/cassini_pre_soi.toml"
-
-[prior]
-model = "models/cassini_pre_soi.toml"
-
-[initial]
-wheels_on = ["RWA4"]
-wheel_rpm = { RWA4 = 0.0 }
-rates_rad_s = [-1.0e-5, 6.0e-5, -2.0e-5]
-
-[rcs_controller]
-deadband_mrad = [400.0, 400.0, 400.0]
-rate_gain_s = 10.0
-width_gain_s_per_mrad = 0.125
-max_pulse_s = 0.75
-min_off_s = 0.5
-
-[[wheel_ramp]]
-wheel = "RWA4"
-t_start_s = 160.0
-target_rpm = 200.0
-torque_nm = 0.05
-
-[[window]]
-name = "A"
-t0_s = 10.0
-t1_s = 150.0
-
-[[window]]
-name = "B"
-t0_s = 300.0
-t1_s = 440.0
-
-[noise]
-gyro_rad_s = 1.0e-6
-star_tracker_rad = 5.0e-5
-tach_noise_rpm = 0.05
-tach_quantum_rpm = 0.1
-"""
+# default scenario: Brown's RCS-method calibration cut to 450 s (the file's header says more)
+RWA4_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_rwa4_rcs.toml"
 
 _RWA4_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "prior", "rank_inertia",
               "rwa4_inertia_factor"}
@@ -836,10 +683,8 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     from cassini_bayes.inference.inertia import INERTIA_NAMES, inertia_prior
     from cassini_bayes.inference.rwa4 import PRIORS, U4_NAMES, fit_rwa4
     from cassini_bayes.simulate.run import simulate_batch, truth_params
-    from cassini_bayes.simulate.scenario import scenario_from_dict
 
-    scenario = scenario_from_dict(spec.scenario() if spec.scenario_text
-                                  else tomllib.loads(RWA4_SCENARIO), src=spec.scenario_source)
+    scenario = _scenario(spec, RWA4_SCENARIO)
     opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3,
             "prior": "uniform", "rank_inertia": True, "rwa4_inertia_factor": 1.0,
             **dict(spec.options)}

@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from cassini_bayes._paths import ROOT, SCENARIOS_DIR
+from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
@@ -359,9 +359,12 @@ class _Reader:
 
 
 def _model(name: str, key: str, src: str) -> tuple[Spacecraft, str]:
+    """The spacecraft of ``[truth]``/``[prior]`` ``model``: a path (relative to the working
+    directory, else to the shipped data, so ``models/NAME.toml`` works from anywhere) or the name
+    of a shipped model."""
     p = Path(name)
-    if not p.is_absolute() and not p.exists() and (ROOT / p).exists():
-        p = ROOT / p
+    if not p.is_absolute() and not p.exists() and (DATA_DIR / p).exists():
+        p = DATA_DIR / p
     try:
         return load_spacecraft(p), str(p)
     except InputError as e:
