@@ -8,7 +8,9 @@ Table 1 is rebuilt: prediction, truth, least squares, posterior mean ± sd and 9
 errors of Eqs 12-13, the knowledge requirements (±10 %, ±75 kg m²) and the ±1 % accuracy budget.
 
 The helpers :func:`fit_seed`, :func:`sampler` and :func:`write_fit_run` are shared by the other
-fit-based experiments (thrust, RWA4 campaigns).
+fit-based experiments (thrust, RWA4 campaigns); a fit's run directory is written with the
+library's run writer and summary builders (:mod:`cassini_bayes.api`), so it has the files and
+``summary.json`` keys of ``cassini-bayes fit``.
 """
 
 from __future__ import annotations
