@@ -67,7 +67,7 @@ THRUST_BUDGET = 0.10      # Feldman & Lee §V: F known to ±10 %
 def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | None,
          inertia=None):
     """Fit one model; returns (posterior, adequacy). The adequacy checks get the sites the CLI
-    gives them (``cli/fit.py``, ``cli/fit_thrust.py``, ``cli/fit_rwa4.py``)."""
+    gives them (``cassini_bayes/api/_inertia.py``, ``_thrust.py``, ``_rwa4.py``)."""
     from cassini_bayes.inference import adequacy as adq
     from cassini_bayes.inference.nuisance import EFFECTS
     from cassini_bayes.physics.momentum import INERTIA_NAMES

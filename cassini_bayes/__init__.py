@@ -4,9 +4,25 @@ Estimates the inertia tensor from reaction-wheel slews, the thrusters' force and
 constants from wheel-biasing events, and the spin axis of the re-articulated wheel RWA4, as the
 JPL papers did by least squares (kept here as baselines), but with calibrated posteriors.
 
+The public API (docs/api.md)::
+
+    import cassini_bayes as cb
+    fit = cb.fit_inertia(cb.read_telemetry("slew.csv"), cb.load_spacecraft("cassini_post_probe"),
+                         seed=0, chains=2, warmup=300, draws=300)
+    fit.summary()["parameters"]["Izz"]      # the summary.json of `cassini-bayes fit inertia`
+    fit.save("runs/inertia")                # its run directory
+
+The names below are imported on first use, so ``import cassini_bayes`` stays cheap and leaves
+JAX's devices alone (:func:`request_host_devices` asks for one CPU device per chain; call it
+before any JAX computation to run the chains in parallel, as the command line does).
+
 The package computes in 64-bit: the conservation checks and least-squares recoveries it promises
 (1e-9, 1e-8 relative) are beyond float32, so importing it turns on ``jax_enable_x64``.
 """
+
+import sys
+import types
+import importlib
 
 import jax
 
@@ -14,4 +30,50 @@ jax.config.update("jax_enable_x64", True)
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+__all__ = [
+    "__version__",
+    "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
+    "fit_inertia", "fit_thrust", "fit_rwa4",
+    "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
+    "InputError", "request_host_devices",
+]
+
+def _api():
+    """:mod:`cassini_bayes.api`, imported on first use. By name: the package's modules import
+    ``__version__`` from here, and the layering contracts (``lint-imports``) must not read that
+    as a dependency of every layer on the API, which this module never imports on its own."""
+    return importlib.import_module("cassini_bayes.api")
+
+
+def __getattr__(name: str):
+    """Import a public name from :mod:`cassini_bayes.api` on first use."""
+    if name == "InputError":
+        from cassini_bayes.errors import InputError
+
+        return InputError
+    if name in __all__:
+        return getattr(_api(), name)
+    raise AttributeError(f"module 'cassini_bayes' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+class _Package(types.ModuleType):
+    """The module type of this package, for one name: ``cassini_bayes.simulate`` is the public
+    :func:`~cassini_bayes.api.simulate` function, although the simulator's subpackage has the
+    same name (import from it as usual: ``from cassini_bayes.simulate import load_scenario``;
+    ``import cassini_bayes.simulate.run as m`` does not work)."""
+
+    @property
+    def simulate(self):
+        return _api().simulate
+
+    @simulate.setter
+    def simulate(self, module) -> None:
+        """The import system binds the subpackage here when it is first imported; it stays
+        reachable in ``sys.modules``, the name keeps the function."""
+
+
+sys.modules[__name__].__class__ = _Package

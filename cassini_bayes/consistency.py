@@ -44,7 +44,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from cassini_bayes.errors import InputError, UnidentifiableError
+from cassini_bayes.errors import InputError, UnidentifiableError, arg
 from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rotvec
 from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
@@ -507,10 +507,10 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
     others = [n for n in tel.active_wheels() if n.upper() != wheel.upper()]
     if method == "rwa" and len(others) < RWA_METHOD_MIN_KNOWN:
         running = ", ".join(tel.active_wheels()) or "none"
-        raise InputError(f"--method rwa needs RWA slew pairs, carried by at least "
+        raise InputError(f"{arg('method', 'rwa')} needs RWA slew pairs, carried by at least "
                          f"{RWA_METHOD_MIN_KNOWN} wheels besides {wheel} (Brown Eq 3), but the "
                          f"wheels running are {running}: this looks like RCS-controlled data; "
-                         "use --method rcs", path=tel.source)
+                         f"use {arg('method', 'rcs')}", path=tel.source)
     if method != "rcs" or len(others) < RWA_METHOD_MIN_KNOWN:
         return
     fired = tel.on_times is not None and bool(np.any(np.diff(tel.on_times, axis=0) > 0))
@@ -518,10 +518,11 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
     varying = [n for n, v in span.items() if v > CONTROL_WHEEL_RPM]
     if not fired and len(varying) >= RWA_METHOD_MIN_KNOWN:
         spans = ", ".join(f"{n} {span[n]:.0f} rpm" for n in varying)
-        raise InputError(f"--method rcs needs RCS-controlled data (Brown Eq 1: the body drifts, "
-                         f"thrusters fire), but no thruster fires and the other wheels carry "
-                         f"the control (they change by {spans}): these are RWA-controlled "
-                         "slews; use --method rwa", path=tel.source)
+        raise InputError(f"{arg('method', 'rcs')} needs RCS-controlled data (Brown Eq 1: the "
+                         "body drifts, thrusters fire), but no thruster fires and the other "
+                         f"wheels carry the control (they change by {spans}): these are "
+                         "RWA-controlled "
+                         f"slews; use {arg('method', 'rwa')}", path=tel.source)
 
 
 # ---------------------------------------------------------------------------------------------

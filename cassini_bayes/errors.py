@@ -3,9 +3,47 @@
 Every problem with a user's input (a file, a column, a row, a setting) is raised as
 :class:`InputError` with a one-line message that names where the problem is and what to do. The
 CLI prints that line and exits non-zero; it never shows a traceback for these.
+
+A message names the argument to change as its caller spelled it (:func:`spelled`, :func:`arg`):
+``method='rcs'`` or ``force=True`` when the library is called from Python, ``--method rcs`` or
+``--force`` under the ``cassini-bayes`` command, which runs inside :func:`command_line`.
 """
 
 from __future__ import annotations
+
+import contextlib
+import contextvars
+from typing import Iterator
+
+_COMMAND_LINE = contextvars.ContextVar("cassini_bayes_command_line", default=False)
+_NO_VALUE = object()
+
+
+@contextlib.contextmanager
+def command_line() -> Iterator[None]:
+    """Inside this block error messages name command-line options instead of arguments."""
+    token = _COMMAND_LINE.set(True)
+    try:
+        yield
+    finally:
+        _COMMAND_LINE.reset(token)
+
+
+def spelled(option: str, argument: str) -> str:
+    """``option`` (e.g. ``"--out"``) under the command line, else ``argument`` (``"out"``)."""
+    return option if _COMMAND_LINE.get() else argument
+
+
+def arg(name: str, value: object = _NO_VALUE, *, cli_quote: bool = False) -> str:
+    """An argument as the caller spelled it: ``--window-a`` / ``--method rcs`` (``--method
+    'rcs'`` with ``cli_quote``) on the command line, ``window_a`` / ``method='rcs'`` from Python
+    (``name`` is the Python argument name)."""
+    if _COMMAND_LINE.get():
+        flag = "--" + name.replace("_", "-")
+        if value is _NO_VALUE:
+            return flag
+        return f"{flag} {value!r}" if cli_quote else f"{flag} {value}"
+    return name if value is _NO_VALUE else f"{name}={value!r}"
 
 
 class CassiniError(Exception):

@@ -46,7 +46,16 @@ import warnings
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, spelled
+
+
+def _out() -> str:
+    return spelled("--out", "out directory")
+
+
+def _force() -> str:
+    return spelled("--force", "force=True")
+
 
 __all__ = ["RunDir", "check_out", "check_writable", "is_package_output", "file_record",
            "write_posterior", "write_summary", "write_config", "write_report",
@@ -96,12 +105,12 @@ def check_writable(path: Path, out: str) -> None:
     while not anc.exists() and anc != anc.parent:
         anc = anc.parent
     if not anc.is_dir():
-        raise InputError(f"cannot create it: {anc} is not a directory; choose another --out",
-                         path=out)
+        raise InputError(f"cannot create it: {anc} is not a directory; choose another "
+                         f"{_out()}", path=out)
     try:
         os.rmdir(tempfile.mkdtemp(prefix=".cassini-bayes-probe-", dir=anc))
     except OSError as e:
-        raise InputError(f"cannot write in {anc} ({e.strerror}); choose another --out",
+        raise InputError(f"cannot write in {anc} ({e.strerror}); choose another {_out()}",
                          path=out) from None
 
 
@@ -117,19 +126,22 @@ def check_out(out: str | os.PathLike, *, force: bool = False,
     for i in inputs:
         ip = Path(i).expanduser().resolve()
         if ip == final or final in ip.parents:
-            raise InputError(f"holds this run's input {i}; --out must be a new directory "
-                             "(--force never replaces the inputs)", path=shown)
+            raise InputError(f"holds this run's input {i}; {_out()} must be a new directory "
+                             f"({_force()} never replaces the inputs)", path=shown)
     if final.exists():
         if not final.is_dir():
-            raise InputError("exists and is not a directory; choose another --out", path=shown)
+            raise InputError(f"exists and is not a directory; choose another {_out()}",
+                             path=shown)
         if any(final.iterdir()):
             if not force:
-                raise InputError("already exists and is not empty; choose another --out or "
-                                 "pass --force to replace it", path=shown)
+                raise InputError(f"already exists and is not empty; choose another {_out()} "
+                                 f"or pass {_force()} to replace it",
+                                 path=shown)
             if not is_package_output(final):
                 raise InputError("is not a cassini-bayes output directory (no config.toml, "
-                                 "truth.json or results.json written by cassini-bayes); --force "
-                                 "replaces only those: choose another --out", path=shown)
+                                 f"truth.json or results.json written by cassini-bayes); "
+                                 f"{_force()} replaces only those: choose another "
+                                 f"{_out()}", path=shown)
     check_writable(final.parent, shown)
     return final
 

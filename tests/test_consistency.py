@@ -30,7 +30,7 @@ import pytest
 
 from cassini_bayes import consistency as cons
 from cassini_bayes._paths import SCENARIOS_DIR
-from cassini_bayes.errors import InputError, UnidentifiableError
+from cassini_bayes.errors import InputError, UnidentifiableError, command_line
 from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
 from cassini_bayes.simulate.controllers import slew_duration
 from cassini_bayes.spacecraft import load_spacecraft
@@ -235,11 +235,14 @@ def test_rwa4_method_must_match_the_control(runs):
     tel_rwa = runs["rwa4_rwa"][0]
     cons.check_rwa4_data(tel_rcs, sc, "rcs")
     cons.check_rwa4_data(tel_rwa, sc, "rwa")
-    with pytest.raises(InputError, match="--method rwa needs RWA slew pairs.*use --method rcs"):
+    with pytest.raises(InputError, match="method='rwa' needs RWA slew pairs.*use method='rcs'"):
         cons.check_rwa4_data(tel_rcs, sc, "rwa")
-    with pytest.raises(InputError, match="--method rcs needs RCS-controlled data.*use --method "
-                                         "rwa"):
+    with pytest.raises(InputError, match="method='rcs' needs RCS-controlled data.*use "
+                                         "method='rwa'"):
         cons.check_rwa4_data(tel_rwa, sc, "rcs")
+    with command_line(), pytest.raises(InputError, match="--method rwa needs RWA slew pairs.*use "
+                                                         "--method rcs"):
+        cons.check_rwa4_data(tel_rcs, sc, "rwa")
 
 
 # --------------------------------------------------------------------------------------------

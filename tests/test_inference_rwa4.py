@@ -69,7 +69,7 @@ def test_bad_inputs_are_input_errors():
         prepare_rwa4(steady, sc, method="rcs", pairs=[((0.0, 100.0), (300.0, 399.002))])
     with pytest.raises(InputError, match="overlap"):
         prepare_rwa4(steady, sc, method="rwa", pairs=[((0.0, 100.0), (50.0, 150.0))])
-    with pytest.raises(InputError, match="--method"):
+    with pytest.raises(InputError, match="method="):
         prepare_rwa4(steady, sc, method="four")
     no_rwa4 = Telemetry(steady.t, steady.q, steady.omega, np.full((400, 4), np.nan),
                         source="tel.csv")

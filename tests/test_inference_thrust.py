@@ -286,7 +286,7 @@ def test_names_and_modes():
     assert thrust_names("branch") == ("F_Z", "F_Y")
     assert thrust_names("thruster")[0] == "F_Z1" and thrust_names("thruster")[-1] == "F_Y4"
     assert TAU_NAMES == ("tau_delay", "tau_rise", "tau_fall")
-    with pytest.raises(InputError, match="--mode"):
+    with pytest.raises(InputError, match="mode="):
         thrust_names("per-day")
 
 

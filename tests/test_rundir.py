@@ -54,7 +54,7 @@ def test_refuses_non_empty_without_force(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     (out / "old.txt").write_text("old")
-    with pytest.raises(InputError, match="--force"):
+    with pytest.raises(InputError, match="force=True"):
         RunDir(out)
     # an empty directory is fine
     empty = tmp_path / "empty"

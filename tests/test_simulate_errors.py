@@ -181,7 +181,7 @@ def test_per_wheel_inertia_errors_fixed_and_drawn():
 def test_per_wheel_inertia_errors_in_truth_json_and_in_the_run():
     """truth.json records each wheel's true spin inertia and its error; the run uses them (the
     inertial momentum of the true model is conserved between pulses)."""
-    from cassini_bayes.cli.simulate import truth_document
+    from cassini_bayes.api import truth_document
 
     e = [0.008, -0.006, 0.010, -0.007]
     s = _wheel_truth(wheel_inertia_errors=e)

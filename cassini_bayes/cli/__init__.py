@@ -5,7 +5,9 @@ modules are discovered here, so adding a command never edits this file. ``groups
 ``cassini-bayes fit`` group. ``ORDER`` (an int, default 100) sorts the commands in ``--help``.
 
 One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
-usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``):
+usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``).
+Commands run inside :func:`cassini_bayes.errors.command_line`, so the library's messages name
+options (``--method rcs``) rather than Python arguments (``method='rcs'``):
 
 - 0 success; 2 a usage error (unknown command or option, a missing or out-of-range value; no
   arguments at all prints the help) or bad input (:class:`cassini_bayes.errors.InputError`);
@@ -35,7 +37,12 @@ import warnings
 import typer
 
 from cassini_bayes import __version__
-from cassini_bayes.errors import InputError, Interrupted, NotConvergedError
+from cassini_bayes._devices import request_host_devices
+from cassini_bayes.errors import InputError, Interrupted, NotConvergedError, command_line
+
+# one JAX CPU device per core and at least 4, so that the chains run in parallel: at start-up,
+# before anything starts the backend (the library never does this on import)
+request_host_devices()
 
 app = typer.Typer(
     name="cassini-bayes",
@@ -168,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         main(["--help"])
         return 2
     try:
-        with warnings.catch_warnings(), _ctrl_c_never_lost():
+        with warnings.catch_warnings(), _ctrl_c_never_lost(), command_line():
             warnings.showwarning = _show_warning
             rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
     except InputError as e:

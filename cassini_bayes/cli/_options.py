@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import typer
 
-# jax.random.key takes a signed 64-bit seed; the CLI takes its non-negative half
-SEED_MAX = 2**63 - 1
+from cassini_bayes.api._inputs import SEED_MAX
 
 
 def seed_option(default: int | None, help: str) -> typer.models.OptionInfo:

@@ -8,12 +8,13 @@ Table 1 is rebuilt: prediction, truth, least squares, posterior mean ± sd and 9
 errors of Eqs 12-13, the knowledge requirements (±10 %, ±75 kg m²) and the ±1 % accuracy budget.
 
 The helpers :func:`fit_seed`, :func:`sampler` and :func:`write_fit_run` are shared by the other
-fit-based experiments (thrust, RWA4 campaigns).
+fit-based experiments (thrust, RWA4 campaigns); a fit's run directory is written with the
+library's run writer and summary builders (:mod:`cassini_bayes.api`), so it has the files and
+``summary.json`` keys of ``cassini-bayes fit``.
 """
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -79,15 +80,18 @@ def check_sampler_settings(settings: Mapping[str, Any], ctx) -> None:
             raise ctx.error(f"'settings.{k}' must be at least {lo}")
 
 
-def write_fit_run(path: Path, *, kind: str, posterior, parameters: Sequence[str],
-                  baseline: Mapping[str, float] | None, seed: int, config: Mapping[str, Any],
-                  nuisance: Sequence[str] = (), extra: Mapping | None = None,
-                  telemetry=None, pulses=None) -> dict:
-    """Write one fit's run directory (``posterior.nc``, ``summary.json``, ``config.toml``,
-    ``report.html``, and the simulated ``telemetry.csv``/``pulses.csv`` it was fitted to) at
-    ``path`` inside an experiment's (already temporary) directory; returns the summary dict."""
-    from cassini_bayes.inference.summary import build_summary
-    from cassini_bayes.rundir import write_config, write_posterior, write_report, write_summary
+def write_fit_run(path: Path, *, posterior, summary: Mapping[str, Any],
+                  config: Mapping[str, Any], telemetry=None, pulses=None) -> dict:
+    """Write one fit's run directory at ``path`` inside an experiment's (already temporary)
+    directory with the library's run writer (:func:`cassini_bayes.api.write_run_files`: the
+    files and ``summary.json`` keys of ``cassini-bayes fit``), plus the simulated
+    ``telemetry.csv``/``pulses.csv`` it was fitted to; returns the summary.
+
+    ``summary`` comes from the model's summary builder (:func:`cassini_bayes.api.
+    inertia_summary`, ``thrust_summary``, ``rwa4_summary``); ``config`` is completed with the
+    package version, the seed and the input files.
+    """
+    from cassini_bayes.api import write_run_files
     from cassini_bayes.telemetry import write_pulses, write_telemetry
 
     path.mkdir(parents=True, exist_ok=True)
@@ -98,16 +102,10 @@ def write_fit_run(path: Path, *, kind: str, posterior, parameters: Sequence[str]
     if pulses is not None:
         write_pulses(path / "pulses.csv", pulses, force=True)
         inputs["pulses"] = _relative_record(path, "pulses.csv")
-    summary = build_summary(kind, posterior.idata, parameters=list(parameters),
-                            diagnostics=posterior.diagnostics, baseline=baseline, seed=seed,
-                            nuisance=list(nuisance), extra=extra)
-    write_posterior(path, posterior.idata)
-    write_summary(path, summary)
-    write_config(path, {"version": __version__, "seed": seed, "inputs": inputs, **config})
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        write_report(path, summary=summary)
-    return summary
+    write_run_files(path, idata=posterior.idata, summary=summary,
+                    config={"version": __version__, "seed": summary["seed"], "inputs": inputs,
+                            **config})
+    return dict(summary)
 
 
 def _relative_record(run_dir: Path, name: str) -> dict[str, str]:
@@ -182,7 +180,8 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
     """
     from cassini_bayes.estimators.baseline import fit_inertia_baseline
     from cassini_bayes.estimators.inertia import table1_errors
-    from cassini_bayes.inference.inertia import NOISE_NAMES, fit_inertia
+    from cassini_bayes.api import collect_warnings, inertia_summary
+    from cassini_bayes.inference.inertia import fit_inertia
     from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
     from cassini_bayes.simulate import load_scenario, simulate
 
@@ -209,8 +208,7 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
                                              method=settings["ls_method"]).pi, float)
         ctx.progress((n_done + 0.3) / len(epochs), f"{_EPOCH_LABEL[epoch]}: posterior")
         seed, fkey = fit_seed(k_fit)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
+        with collect_warnings() as fit_warnings:
             # the Table 1 scenarios carry no sensor or wheel errors: the papers' idealised model
             post = fit_inertia(fkey, [tel], scenario.prior, torque=settings["torque"], robust=False,
                                settings=sampler(settings))
@@ -219,10 +217,10 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
         q05, q95 = np.quantile(draws, [0.05, 0.95], axis=0)
         sub = Path("fits") / epoch
         write_fit_run(
-            ctx.workdir / sub, kind="inertia", posterior=post, parameters=INERTIA_NAMES,
-            baseline=dict(zip(INERTIA_NAMES, map(float, ls))), seed=seed, telemetry=tel,
-            nuisance=["H0"] + (["T_N"] if settings["torque"] else []) + ["noise_scale",
-                                                                          *NOISE_NAMES],
+            ctx.workdir / sub, posterior=post, telemetry=tel,
+            summary=inertia_summary(post, seed=seed, torque=settings["torque"], robust=False,
+                                    wheel_errors="per_wheel", warnings=fit_warnings,
+                                    baseline=dict(zip(INERTIA_NAMES, map(float, ls)))),
             config={"command": f"experiment inertia_table1 ({epoch})",
                     "scenario": scenario.name, "options": {"torque": settings["torque"]},
                     "sampler": sampler(settings)._asdict(),

@@ -92,6 +92,7 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
     batch, each run its own key), take the least-squares axis of every run and the posterior of
     the first ``settings["posterior_runs"]``."""
     from cassini_bayes.estimators.baseline import fit_rwa4_baseline
+    from cassini_bayes.api import collect_warnings, rwa4_summary
     from cassini_bayes.inference.rwa4 import U4_NAMES, detect_windows, fit_rwa4
     from cassini_bayes.simulate import simulate_batch, truth_params
 
@@ -125,8 +126,7 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
             ctx.progress(p0 + (p1 - p0) * (0.2 + 0.8 * i / n_post),
                          f"{label} run {i + 1}: posterior")
             seed, fkey = fit_seed(jax.random.fold_in(k_fit, i))
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
+            with collect_warnings() as fit_warnings:
                 post = fit_rwa4(fkey, tel, scenario.prior, method=method, pairs=pairs,
                                 prior=settings["prior"], settings=sampler(settings),
                                 robust=settings["model"] == "robust")
@@ -138,10 +138,11 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
                        converged=bool(post.diagnostics.converged), seed=seed)
             if i < settings["reports"]:
                 sub = Path("fits") / f"run{i:02d}"
-                write_fit_run(ctx.workdir / sub, kind="rwa4", posterior=post,
-                              parameters=list(U4_NAMES), seed=seed, telemetry=tel,
-                              baseline=dict(zip(U4_NAMES, ls.tolist())),
-                              extra={"direction": post.direction},
+                summary = rwa4_summary(post, seed=seed, method=method, prior=settings["prior"],
+                                       robust=settings["model"] == "robust",
+                                       wheel_errors="per_wheel", warnings=fit_warnings,
+                                       baseline=dict(zip(U4_NAMES, ls.tolist())))
+                write_fit_run(ctx.workdir / sub, posterior=post, summary=summary, telemetry=tel,
                               config={"command": f"experiment {label} (run {i})",
                                       "scenario": scenario.name,
                                       "options": {"method": method, "prior": settings["prior"],

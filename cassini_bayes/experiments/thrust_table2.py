@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import warnings
 from pathlib import Path
-from typing import Any
 
 import jax
 import numpy as np
@@ -85,6 +84,7 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     ``thruster``), ``per_event_fits`` (also fit each event alone), ``chains/warmup/draws`` (NUTS),
     ``tau_fall_alt_s`` (the paper's alternative fall time constant, s).
     """
+    from cassini_bayes.api import collect_warnings, thrust_summary
     from cassini_bayes.estimators.baseline import fit_thrust_baseline
     from cassini_bayes.inference.thrust import TAU_NAMES, fit_thrust
     from cassini_bayes.simulate import load_scenario, simulate
@@ -94,7 +94,7 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         raise ctx.error("'settings.events' must name at least one biasing scenario")
     names = list(dict.fromkeys(settings["events"]))
     k_sims, k_pool, k_each = jax.random.split(key, 3)
-    events, sims, ls_rows, results = [], [], [], {"events": {}}
+    events, sims, results = [], [], {"events": {}}
     for i, name in enumerate(names):
         ctx.progress(0.3 * i / len(names), f"{name}: simulating")
         scenario = load_scenario(name)
@@ -128,8 +128,7 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     # pooled posterior: one thrust (per mode) and shared time constants
     ctx.progress(0.35, "pooled posterior")
     seed, fkey = fit_seed(k_pool)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    with collect_warnings() as fit_warnings:
         post = fit_thrust(fkey, events, sc, mode=settings["mode"], robust=False,  # clean events
                           settings=sampler(settings))
     fnames = list(post.problem.names)
@@ -144,11 +143,11 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     t05, t95 = np.quantile(td, [0.05, 0.95], axis=0)
     n_cov = int(q05 <= f_true <= q95) + int(np.sum((t05 <= tau_true) & (tau_true <= t95)))
     sub = Path("fits") / "pooled"
-    write_fit_run(ctx.workdir / sub, kind="thrust", posterior=post,
-                  parameters=fnames + list(TAU_NAMES), seed=seed,
-                  baseline={"F": float(np.mean([results["events"][n]["ls_tf_nominal_n"]
-                                                for n in names]))},
-                  nuisance=["sigma_omega", "sigma_rho"],
+    baseline = {"F": float(np.mean([results["events"][n]["ls_tf_nominal_n"] for n in names]))}
+    write_fit_run(ctx.workdir / sub, posterior=post,
+                  summary=thrust_summary(post, seed=seed, mode=settings["mode"], robust=False,
+                                         wheel_errors="per_wheel", baseline=baseline,
+                                         warnings=fit_warnings),
                   telemetry=events[0][0] if len(events) == 1 else None,
                   config={"command": "experiment thrust_table2 (pooled)", "events": names,
                           "options": {"mode": settings["mode"]},

@@ -118,7 +118,7 @@ import numpyro
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, arg, spelled
 from cassini_bayes.estimators.rwa4 import fit_axis_rcs, fit_axis_rwa
 from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
 from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_prior,
@@ -159,6 +159,10 @@ CONE_ANGLE_DEG = float(np.degrees(np.arccos(1.0 / np.sqrt(3.0))))   # 54.7356°,
 CONE_SD_DEG = 1.0
 MIN_SPIN_CHANGE_RPM = 10.0   # smaller spin changes between A and B cannot calibrate the axis
 MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
+def _WINDOWS_HINT() -> str:  # noqa: N802 - a message constant, spelled for the caller
+    return spelled("--window-a T0:T1 --window-b T0:T1", "windows=[((A0, A1), (B0, B1))] (s)")
+
+
 WHEEL = "RWA4"               # the wheel solved for by default
 _NOISE_FLOORS = np.array([1e-9, 1e-7, 1e-9])
 _DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
@@ -210,7 +214,7 @@ def detect_windows(tel: Telemetry, method: str,
     if len(quiet) < 2:
         raise InputError(f"found {len(quiet)} quiet period(s) (≥ 60 s, |ω| ≤ 1 mrad/s, wheels "
                          "steady, no thruster firing); the RWA4 calibration needs a Time A and a "
-                         "Time B: give them with --window-a T0:T1 --window-b T0:T1",
+                         "Time B: give them with " + _WINDOWS_HINT(),
                          path=tel.source)
     if method == "rcs":
         rpm = np.array([_median_rpm(tel, w, wheel) for w in quiet])
@@ -341,7 +345,7 @@ def _check_windows(tel: Telemetry, pairs, method: str) -> list:
     (:func:`~cassini_bayes.windows.clamp_window`, with a warning); one-line InputErrors for
     pairs the calibration cannot use."""
     if not pairs:
-        raise InputError("no window pair; give --window-a T0:T1 --window-b T0:T1",
+        raise InputError("no window pair; give " + _WINDOWS_HINT(),
                          path=tel.source)
     if method == "rcs" and len(pairs) != 1:
         raise InputError(f"the RCS method takes one Time A / Time B pair, got {len(pairs)}",
@@ -488,9 +492,11 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         determine the axis.
     """
     if method not in METHODS:
-        raise InputError(f"--method {method!r}: choose one of {', '.join(METHODS)}")
+        raise InputError(f"{arg('method', method, cli_quote=True)}: choose one of "
+                         f"{', '.join(METHODS)}")
     if prior not in PRIORS:
-        raise InputError(f"--prior {prior!r}: choose one of {', '.join(PRIORS)}")
+        raise InputError(f"{arg('prior', prior, cli_quote=True)}: choose one of "
+                         f"{', '.join(PRIORS)}")
     wheel = _wheel_name(tel, wheel)
     pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
         [tuple(p) for p in pairs]

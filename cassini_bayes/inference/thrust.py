@@ -169,7 +169,7 @@ import numpyro
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, arg, spelled
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.nuisance import (EFFECTS, nuisance_layout, split_nuisance,
@@ -247,20 +247,27 @@ def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
 
     path = Path(run_dir) / "posterior.nc"
     if not path.is_file():
-        raise InputError(f"--inertia-posterior {run_dir}: no posterior.nc there; give the run "
-                         "directory of an earlier 'cassini-bayes fit inertia'")
+        raise InputError(f"{arg('inertia_posterior', run_dir)}: no posterior.nc there; give the "
+                         "run directory of an earlier 'cassini-bayes fit inertia'")
     try:
         idata = az.from_netcdf(path)
-        post = idata.posterior
-        draws = np.stack([np.asarray(post[n].values, float).ravel() for n in INERTIA_NAMES], -1)
-    except KeyError as e:
-        raise InputError(f"{path}: no inertia draws ({e.args[0]} missing); give the run "
-                         "directory of an inertia fit") from None
     except Exception as e:  # unreadable netCDF
         raise InputError(f"{path}: cannot read it ({type(e).__name__}); give the run directory "
                          "of an inertia fit") from None
+    return inertia_from_idata(idata, str(path))
+
+
+def inertia_from_idata(idata, source: str) -> InertiaGaussian:
+    """Posterior mean and covariance of ``Ixx … Iyz`` from an inertia fit's InferenceData
+    (``source`` names it in errors)."""
+    try:
+        post = idata.posterior
+        draws = np.stack([np.asarray(post[n].values, float).ravel() for n in INERTIA_NAMES], -1)
+    except (KeyError, AttributeError) as e:
+        raise InputError(f"{source}: no inertia draws ({e.args[0]} missing); give the run "
+                         "directory of an inertia fit") from None
     if draws.shape[0] < 10 or not np.all(np.isfinite(draws)):
-        raise InputError(f"{path}: too few or non-finite inertia draws; re-run the inertia fit")
+        raise InputError(f"{source}: too few or non-finite inertia draws; re-run the inertia fit")
     cov = np.cov(draws, rowvar=False)
     return InertiaGaussian(draws.mean(0), 0.5 * (cov + cov.T))
 
@@ -387,7 +394,7 @@ def thrust_names(mode: str) -> tuple[str, ...]:
         return ("F_Z", "F_Y")
     if mode == "thruster":
         return tuple(f"F_{s}" for s in THRUSTER_NAMES)
-    raise InputError(f"--mode {mode!r}: choose one of {', '.join(MODES)}")
+    raise InputError(f"{arg('mode', mode, cli_quote=True)}: choose one of {', '.join(MODES)}")
 
 
 def _thrust_index(mode: str) -> np.ndarray:
@@ -520,12 +527,14 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     """
     names = thrust_names(mode)
     if not events:
-        raise InputError("no biasing event given; pass --telemetry F.csv --pulses P.csv")
+        raise InputError("no biasing event given; pass "
+                         + spelled("--telemetry F.csv --pulses P.csv", "telemetry and pulses"))
     logs, tels = [], []
     for tel, log in events:
         if log is None:
-            raise InputError("thrust calibration needs the pulse log of every event (--pulses "
-                             "P.csv, columns t_on, thruster, width)", path=tel.source)
+            raise InputError("thrust calibration needs the pulse log of every event ("
+                             + spelled("--pulses P.csv", "pulses")
+                             + ", columns t_on, thruster, width)", path=tel.source)
         if tel.n < 10:
             raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
         with warnings.catch_warnings(record=True) as caught:

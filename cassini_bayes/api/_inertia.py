@@ -1,0 +1,128 @@
+"""The inertia tensor from RWA slews: :func:`fit_inertia` and its summary."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
+                                       spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
+
+__all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
+
+
+def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
+    """The paper's all-axes least squares (Feldman & Lee Eq 11) on the same data, or ``None``,
+    with warning lines.
+
+    One file: :func:`cassini_bayes.estimators.inertia.fit_all_axes`. Several files: their Eq 11
+    systems (each anchored on its own first sample) stacked into one least-squares problem.
+    """
+    import numpy as np
+
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, stacked_system, wheel_momentum_body
+
+    try:
+        from cassini_bayes.estimators.inertia import fit_all_axes
+
+        parts, msgs = [], []
+        for tel in telemetries:
+            names = tel.active_wheels()
+            rates = np.stack([np.nan_to_num(tel.wheel_rate(n)) for n in names], 1)
+            axes = np.stack([spacecraft.wheel(n).axis for n in names])
+            js = np.array([spacecraft.wheel(n).inertia for n in names])
+            h = np.asarray(wheel_momentum_body(rates, axes, js))
+            parts.append((tel.q, tel.omega, h))
+        if len(parts) == 1:
+            fit = fit_all_axes(*parts[0])
+            pi, msgs = fit.pi, list(fit.warnings)
+        else:
+            systems = [stacked_system(*p) for p in parts]
+            s = np.concatenate([np.asarray(a) for a, _ in systems])
+            g = np.concatenate([np.asarray(b) for _, b in systems])
+            pi = np.linalg.lstsq(s, g, rcond=None)[0]
+        return {n: float(v) for n, v in zip(INERTIA_NAMES, pi)}, [f"baseline: {m}" for m in msgs]
+    except Exception as e:  # the baseline must never sink the Bayesian fit
+        return None, [f"baseline (Feldman & Lee Eq 11 least squares) unavailable: "
+                      f"{' '.join(str(e).split())}"]
+
+
+def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
+                    baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
+    """``summary.json`` of an inertia posterior (``InertiaPosterior``): parameters, baseline,
+    diagnostics, adequacy, nuisance, ``model``, ``wheel_errors`` and ``sensitivity``."""
+    from cassini_bayes.inference.adequacy import inertia_adequacy
+    from cassini_bayes.inference.inertia import NOISE_NAMES, robust_sites
+    from cassini_bayes.inference.sensitivity import sensitivity_block
+    from cassini_bayes.inference.summary import build_summary
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
+    nuisance = robust_sites(post.problem.layout) if robust else []
+    priored = (["T_N"] if torque else []) + nuisance
+    summary = build_summary(
+        "inertia", post.idata, parameters=INERTIA_NAMES, diagnostics=post.diagnostics,
+        baseline=baseline, seed=seed, warnings=list(warnings),
+        nuisance=["H0"] + (["T_N"] if torque else []) + ["noise_scale", *NOISE_NAMES]
+        + nuisance,
+        adequacy=inertia_adequacy(post, list(INERTIA_NAMES) + priored))
+    post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
+    summary["model"] = "robust" if robust else "idealised"
+    summary["wheel_errors"] = wheel_errors if robust else None
+    summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
+    return summary
+
+
+def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
+                draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
+                wheel_errors: str = "per_wheel", torque: bool = True,
+                progress: bool = False) -> FitResult:
+    """Posterior of the inertia tensor from RWA slews (one inertia, each file its own momentum);
+    what ``cassini-bayes fit inertia`` computes.
+
+    Parameters
+    ----------
+    telemetry : slew telemetry: a :class:`~cassini_bayes.telemetry.Telemetry` or a CSV path, or
+        a list of them (files share the inertia).
+    spacecraft : the prior and the wheels: a :class:`~cassini_bayes.spacecraft.Spacecraft`, a
+        model TOML path or a shipped model's name (``"cassini_post_probe"``).
+    seed : seed of the run's ``jax.random`` key (0 .. 2**63 - 1).
+    chains, warmup, draws : NUTS chains, warmup iterations and kept draws per chain.
+    target_accept : NUTS target acceptance probability (raise it when the fit diverges).
+    robust : include gyro bias/scale and wheel inertia/axis errors as nuisance parameters
+        (priors from the model's ``[gyro]`` and ``[wheel_knowledge]``); ``False`` is the papers'
+        idealised model (``--idealised``).
+    wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
+    torque : include a constant inertial external torque per file.
+    progress : show a progress bar.
+
+    Returns
+    -------
+    FitResult
+        ``kind = "inertia"``; ``summary()["parameters"]`` has ``Ixx … Iyz`` in kg m².
+    """
+    import jax
+
+    from cassini_bayes.consistency import check_inertia_data
+    from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
+
+    seed = check_seed(seed)
+    wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
+    settings = sampler_settings(chains, warmup, draws, target_accept, progress)
+    sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    tels, records, paths = telemetry_inputs(telemetry)
+    check_inertia_data(tels, sc)  # units and conventions by the physics, before any sampling
+    key = jax.random.key(seed)  # the one place the seed becomes a key
+    with collect_warnings() as warns:
+        post = sample_inertia(key, tels, sc, torque=torque, robust=robust, settings=settings,
+                              wheel_errors=wheel_errors)
+    baseline, base_warns = inertia_baseline(tels, sc)
+    summary = inertia_summary(post, seed=seed, torque=torque, robust=robust,
+                              wheel_errors=wheel_errors, baseline=baseline,
+                              warnings=warns + base_warns)
+    config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": records, "spacecraft": sc_record},
+                        options={"torque": torque, "idealised": not robust,
+                                 "wheel_errors": wheel_errors})
+    return FitResult("inertia", post, baseline, summary["sensitivity"], config, summary,
+                     tuple(Path(p) for p in [*paths, *sc_paths]))

@@ -1,0 +1,146 @@
+"""The fit functions' arguments: objects or paths, checked once, errors naming the argument."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+from cassini_bayes.errors import InputError, arg
+from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.telemetry import PulseLog, Telemetry
+
+__all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
+           "choice", "sampler_settings", "check_seed"]
+
+WHEEL_ERRORS = ("per_wheel", "common")
+# jax.random.key takes a signed 64-bit seed; the package takes its non-negative half
+SEED_MAX = 2**63 - 1
+
+PathLike = str | os.PathLike
+
+
+def _is_path(x) -> bool:
+    return isinstance(x, (str, os.PathLike))
+
+
+def _record(source: str) -> tuple[dict[str, str], list[Path]]:
+    """config.toml's record of a loaded input and its file: path and sha256 when ``source`` is a
+    file, else where it came from (and no file)."""
+    from cassini_bayes.rundir import file_record
+
+    if source and Path(source).is_file():
+        return file_record(source), [Path(source)]
+    return {"source": str(source)}, []
+
+
+def spacecraft_input(spacecraft: Spacecraft | PathLike) -> tuple[Spacecraft, dict, list[Path]]:
+    """``(model, config record, input paths)`` of a spacecraft argument: a
+    :class:`~cassini_bayes.spacecraft.Spacecraft`, a TOML path or a shipped model's name."""
+    from cassini_bayes._paths import model_path
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    if isinstance(spacecraft, Spacecraft):  # no file: config.toml's [spacecraft] holds it all
+        return spacecraft, {"model": spacecraft.name}, []
+    if not _is_path(spacecraft):
+        raise InputError(f"{arg('spacecraft')}: give a Spacecraft, a model .toml path or "
+                         "a shipped model's name (e.g. 'cassini_post_probe')")
+    path = model_path(spacecraft)
+    sc = load_spacecraft(spacecraft)
+    return sc, file_record(path), [path]
+
+
+def _items(x, name: str) -> list:
+    if x is None:
+        return []
+    if _is_path(x) or isinstance(x, (Telemetry, PulseLog)):
+        return [x]
+    try:
+        return list(x)
+    except TypeError:
+        raise InputError(f"{arg(name)}: give a path, a loaded object or a list of them") from None
+
+
+def telemetry_inputs(telemetry, name: str = "telemetry"
+                     ) -> tuple[list[Telemetry], list[dict], list[Path]]:
+    """``(telemetries, config records, input paths)`` of a telemetry argument: a
+    :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them."""
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.telemetry import read_telemetry, read_telemetry_many
+
+    items = _items(telemetry, name)
+    if not items:
+        raise InputError(f"{arg(name)}: give at least one telemetry file or Telemetry")
+    if all(_is_path(x) for x in items):  # all files: read together (errors name the file)
+        paths = [Path(x) for x in items]
+        return read_telemetry_many(paths), [file_record(p) for p in paths], paths
+    tels, records, paths = [], [], []
+    for x in items:
+        if _is_path(x):
+            tels.append(read_telemetry(x))
+            records.append(file_record(x))
+            paths.append(Path(x))
+        elif isinstance(x, Telemetry):
+            record, files = _record(x.source)
+            tels.append(x)
+            records.append(record)
+            paths += files
+        else:
+            raise InputError(f"{arg(name)}: {type(x).__name__} is not a telemetry file or "
+                             "Telemetry")
+    return tels, records, paths
+
+
+def pulse_inputs(pulses, name: str = "pulses") -> tuple[list[PulseLog], list[dict], list[Path]]:
+    """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
+    :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them."""
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.telemetry import read_pulses
+
+    logs, records, paths = [], [], []
+    for x in _items(pulses, name):
+        if _is_path(x):
+            logs.append(read_pulses(x))
+            records.append(file_record(x))
+            paths.append(Path(x))
+        elif isinstance(x, PulseLog):
+            record, files = _record(x.source)
+            logs.append(x)
+            records.append(record)
+            paths += files
+        else:
+            raise InputError(f"{arg(name)}: {type(x).__name__} is not a pulse-log file or "
+                             "PulseLog")
+    return logs, records, paths
+
+
+def choice(name: str, value: str, choices: Sequence[str]) -> str:
+    """``value`` when it is one of ``choices``, else an InputError naming the argument."""
+    if value not in choices:
+        raise InputError(f"{arg(name, value, cli_quote=True)}: choose "
+                         + " or ".join(repr(c) for c in choices))
+    return value
+
+
+def check_seed(seed: int) -> int:
+    """``seed`` when an integer in ``0 .. 2**63 - 1``, else an InputError."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
+        raise InputError(f"{arg('seed', seed)}: use an integer in 0 .. {SEED_MAX}")
+    return seed
+
+
+def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
+                     progress: bool = False):
+    """:class:`~cassini_bayes.inference.runner.SamplerSettings` from the fit functions'
+    arguments, checked against the ranges the command line accepts."""
+    from cassini_bayes.inference.runner import SamplerSettings
+
+    for name, value, lo in (("chains", chains, 1), ("warmup", warmup, 10), ("draws", draws, 10)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
+            raise InputError(f"{arg(name, value)}: use an integer of at least {lo}")
+    if not 0.5 <= float(target_accept) <= 0.999:
+        raise InputError(f"{arg('target_accept', target_accept)}: use a probability in "
+                         "0.5 .. 0.999")
+    return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
+                           target_accept=float(target_accept), progress=bool(progress))

@@ -1,0 +1,142 @@
+"""The RWA4 spin axis on the sphere: :func:`fit_rwa4` and its summary."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
+                                       spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
+from cassini_bayes.api._thrust import _inertia_knowledge
+from cassini_bayes.errors import InputError, arg
+
+__all__ = ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"]
+
+
+def rwa4_sensitivity(post) -> dict:
+    """``sensitivity`` block of an RWA4 fit: the RMS axis shift (deg) each nuisance effect of
+    prior size causes in a model that leaves it out
+    (:func:`cassini_bayes.inference.rwa4.axis_sensitivity`), and that shift over the posterior's
+    RMS angle about its mean direction."""
+    import numpy as np
+
+    from cassini_bayes.inference.rwa4 import U4_NAMES, axis_sensitivity
+    from cassini_bayes.inference.sphere import angles_deg
+
+    draws = np.stack([post.idata.posterior[n].values.ravel() for n in U4_NAMES], -1)
+    rms = float(np.sqrt(np.mean(angles_deg(draws, np.asarray(post.direction["mean"])) ** 2)))
+    return {effect: {"modelled": post.problem.robust,
+                     "parameters": {"axis": {"shift": shift,
+                                             "shift_in_sd": shift / rms if rms > 0 else None,
+                                             "units": "deg"}}}
+            for effect, shift in axis_sensitivity(post.problem).items()}
+
+
+def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, wheel_errors: str,
+                 baseline: dict | None = None, warnings: Sequence[str] = ()) -> dict:
+    """``summary.json`` of an RWA4 posterior (``Rwa4Posterior``): parameters ``u4_*``, the
+    baseline (default Brown's least squares of the prepared problem), diagnostics, adequacy,
+    ``direction``, ``method``, ``prior``, ``windows``, ``model``, ``wheel_errors`` and
+    ``sensitivity``."""
+    from cassini_bayes.inference.adequacy import rwa4_adequacy
+    from cassini_bayes.inference.rwa4 import U4_NAMES
+    from cassini_bayes.inference.summary import build_summary
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
+    pr = post.problem
+    if baseline is None:
+        baseline = {n: float(v) for n, v in zip(U4_NAMES, pr.baseline)}
+    summary = build_summary(
+        "rwa4", post.idata, parameters=U4_NAMES, diagnostics=post.diagnostics,
+        baseline=baseline, seed=seed, warnings=list(warnings),
+        nuisance=list(INERTIA_NAMES),
+        extra={"direction": post.direction},
+        adequacy=rwa4_adequacy(post, list(U4_NAMES) + list(INERTIA_NAMES)))
+    summary["method"] = method
+    summary["prior"] = prior
+    summary["windows"] = [{"a": list(a), "b": list(b)} for a, b in pr.pairs]
+    summary["model"] = "robust" if robust else "idealised"
+    summary["wheel_errors"] = wheel_errors if robust else None
+    summary["sensitivity"] = rwa4_sensitivity(post)
+    return summary
+
+
+def _window_pairs(windows) -> list | None:
+    """``[((a0, a1), (b0, b1)), …]`` floats (s) from the ``windows`` argument, or ``None``."""
+    if windows is None:
+        return None
+    try:
+        pairs = [((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))) for a, b in windows]
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"{arg('windows')}: give [((A0, A1), (B0, B1)), …], the Time A and "
+                         "Time B windows in seconds, one pair per slew pair") from None
+    return pairs
+
+
+def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
+             inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
+             draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
+             wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+    """Posterior of the RWA4 spin axis, the inertia uncertainty sampled jointly; what
+    ``cassini-bayes fit rwa4`` computes.
+
+    Parameters
+    ----------
+    telemetry : the calibration telemetry: a :class:`~cassini_bayes.telemetry.Telemetry` or a
+        CSV path.
+    spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, a model TOML path or a shipped
+        model's name.
+    method : ``"rcs"`` (Brown Eq 1, RCS-controlled drift) or ``"rwa"`` (Brown Eq 3, RWA slews).
+    windows : ``[((A0, A1), (B0, B1)), …]``: Time A and Time B windows in seconds, one pair (RCS)
+        or one per slew pair (RWA); detected from the quiet periods when ``None``.
+    prior : ``"uniform"`` on the sphere or ``"cone"`` (articulation cone, 54.7356° from +Z).
+    inertia_posterior : an inertia fit (its :class:`FitResult` or run directory): its posterior
+        becomes the inertia prior (default: the model's knowledge requirements).
+    seed, chains, warmup, draws, target_accept, progress : as :func:`fit_inertia`.
+    robust : gyro, wheel and torque errors integrated out; ``False`` is Brown's idealised model.
+    wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
+
+    Returns
+    -------
+    FitResult
+        ``kind = "rwa4"``; parameters ``u4_x, u4_y, u4_z`` (unit vector, body axes); the
+        summary's ``direction`` holds the mean direction and its 50/90/95 % cones (deg).
+    """
+    import jax
+
+    from cassini_bayes.consistency import check_rwa4_data
+    from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
+
+    seed = check_seed(seed)
+    method = choice("method", method, METHODS)
+    prior = choice("prior", prior, PRIORS)
+    wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
+    settings = sampler_settings(chains, warmup, draws, target_accept, progress)
+    pairs = _window_pairs(windows)
+    sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, False)
+    tels, records, paths = telemetry_inputs(telemetry)
+    if len(tels) != 1:
+        raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
+                         f"{len(tels)}")
+    tel = tels[0]
+    check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
+    key = jax.random.key(seed)  # the one place the seed becomes a key
+    with collect_warnings() as warns:
+        post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
+                           inertia=inertia, settings=settings, robust=robust,
+                           wheel_errors=wheel_errors)
+    summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
+                           wheel_errors=wheel_errors, warnings=warns)
+    pr = post.problem
+    config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": records[0], "spacecraft": sc_record,
+                                **inertia_input},
+                        options={"method": method, "prior": prior,
+                                 "model": "robust" if robust else "idealised",
+                                 "wheel_errors": wheel_errors,
+                                 "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
+                                 "window_b": [f"{b[0]:.10g}:{b[1]:.10g}" for _, b in pr.pairs],
+                                 "windows_detected": pairs is None})
+    return FitResult("rwa4", post, summary["baseline"], summary["sensitivity"], config, summary,
+                     (*paths, *sc_paths, *inertia_paths))

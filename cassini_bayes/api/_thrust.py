@@ -1,0 +1,219 @@
+"""Thrust and pulse time constants from biasing events: :func:`fit_thrust` and its summary."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Sequence
+
+from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_inputs,
+                                       sampler_settings, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
+from cassini_bayes.errors import InputError, arg
+
+__all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
+
+
+def thrust_baseline(events, spacecraft, mode: str) -> tuple[dict | None, list[str]]:
+    """Feldman & Lee's least squares (Eqs 19-23) with the pulse-dynamics correction at the
+    spacecraft model's nominal time constants, all events stacked; ``None`` when unavailable."""
+    import numpy as np
+
+    from cassini_bayes.estimators import thrust as est
+    from cassini_bayes.physics.impulse import moment_matrix
+
+    th = spacecraft.thrusters
+    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    p = spacecraft.pulse
+    vs, js = [], []
+    try:
+        for tel, log in events:
+            rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
+            h = np.zeros((tel.n, 3))
+            for k, name in enumerate(tel.wheel_names):
+                if name in tel.active_wheels():
+                    w = spacecraft.wheel(name)
+                    h += w.inertia * rates[:, k, None] * w.axis[None, :]
+            v, j = est.regression_inputs(tel.t, tel.omega, h, spacecraft.inertia,
+                                         pulses=(log.t_on, log.thruster, log.width),
+                                         tau=(p.tau_delay, p.tau_rise, p.tau_fall))
+            vs.append(v)
+            js.append(j)
+        v, j = np.concatenate(vs), np.concatenate(js)
+    except Exception as e:  # the baseline must never sink the Bayesian fit
+        return None, [f"baseline unavailable: {' '.join(str(e).split())}"]
+    out, msgs = {}, []
+    fits = {"mean": [("F", est.fit_mean, None)],
+            "branch": [("F_Z", est.fit_z_thrusters, "mean"), ("F_Y", est.fit_y_mean, None)],
+            "thruster": [("F_Z", est.fit_z_thrusters, "each"),
+                         ("F_Y", est.fit_y_thrusters, "each")]}[mode]
+    for name, fn, how in fits:
+        try:
+            f = fn(v, j, q)
+        except Exception as e:
+            msgs.append(f"baseline {name}: {' '.join(str(e).split())}")
+            continue
+        if how == "each":
+            out.update({n: float(x) for n, x in zip(f.names, f.estimate)})
+        elif how == "mean":
+            out[name] = float(np.mean(f.estimate))
+        else:
+            out[name] = float(f.estimate[0])
+    return (out or None), msgs
+
+
+def thrust_sensitivity(post) -> dict:
+    """``sensitivity`` block of a robust thrust fit: how far each nuisance effect of prior size
+    would move the thrust and time constants if it were left out (posterior regression,
+    :func:`cassini_bayes.inference.sensitivity.posterior_sensitivity`)."""
+    import numpy as np
+
+    from cassini_bayes.inference.nuisance import EFFECTS, site_prior_sd
+    from cassini_bayes.inference.sensitivity import posterior_sensitivity
+    from cassini_bayes.inference.thrust import TAU_NAMES
+
+    post_ds = post.idata.posterior
+    layout = post.problem.layout
+
+    def flat(name):
+        v = np.asarray(post_ds[name].values, float)
+        return v.reshape(v.shape[0] * v.shape[1], -1)
+
+    names = list(post.problem.names) + list(TAU_NAMES)
+    targets = {n: flat(n)[:, 0] for n in names}
+    prior_sd = site_prior_sd(layout)
+    groups = {e: (flat(EFFECTS[e]), prior_sd[EFFECTS[e]])
+              for e in layout.slices if EFFECTS[e] in post_ds}
+    units = {n: ("N" if n.startswith("F") else "s") for n in names}
+    return posterior_sensitivity(targets, groups, units)
+
+
+def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: str,
+                   baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
+    """``summary.json`` of a thrust posterior (``ThrustPosterior``): parameters (thrust and
+    ``tau_*``), baseline, diagnostics, adequacy, nuisance, ``mode``, ``model``,
+    ``wheel_errors`` and (robust fits) ``sensitivity``."""
+    from cassini_bayes.inference.adequacy import thrust_adequacy
+    from cassini_bayes.inference.nuisance import EFFECTS
+    from cassini_bayes.inference.summary import build_summary
+    from cassini_bayes.inference.thrust import TAU_NAMES, thrust_names
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
+    names = list(thrust_names(mode)) + list(TAU_NAMES)
+    nuisance = ["sigma_omega", "sigma_rho"]
+    if "Ixx" in post.idata.posterior:   # the inertia was sampled
+        nuisance += list(INERTIA_NAMES)
+    if robust:
+        nuisance += [EFFECTS[e] for e in post.problem.layout.slices]
+    priored = names + [n for n in nuisance if not n.startswith("sigma_")]
+    summary = build_summary("thrust", post.idata, parameters=names,
+                            diagnostics=post.diagnostics, baseline=baseline, seed=seed,
+                            nuisance=nuisance, warnings=list(warnings),
+                            adequacy=thrust_adequacy(post, priored))
+    summary["mode"] = mode
+    summary["model"] = "robust" if robust else "idealised"
+    summary["wheel_errors"] = wheel_errors if robust else None
+    if robust:
+        summary["sensitivity"] = thrust_sensitivity(post)
+    return summary
+
+
+def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
+    """``(the inference's inertia argument, config.toml inputs entry, input paths)``."""
+    from cassini_bayes.inference.thrust import inertia_from_idata, inertia_from_run
+
+    if inertia_posterior is None:
+        return ("fixed" if fix_inertia else None), {}, []
+    if fix_inertia:
+        raise InputError(f"{arg('fix_inertia')} and {arg('inertia_posterior')} exclude each "
+                         "other; give one")
+    if isinstance(inertia_posterior, FitResult):
+        if inertia_posterior.kind != "inertia":
+            raise InputError(f"{arg('inertia_posterior')}: a {inertia_posterior.kind} fit; give "
+                             "the result (or run directory) of an inertia fit")
+        cfg = inertia_posterior.config
+        entry = {"command": cfg["command"], "seed": cfg["seed"], "inputs": cfg["inputs"]}
+        return (inertia_from_idata(inertia_posterior.idata, "inertia_posterior"),
+                {"inertia_posterior": entry}, [])
+    if not isinstance(inertia_posterior, (str, os.PathLike)):
+        raise InputError(f"{arg('inertia_posterior')}: give an inertia fit's FitResult or run "
+                         "directory")
+    path = Path(inertia_posterior)
+    return (inertia_from_run(path), {"inertia_posterior": str(path.resolve())}, [path])
+
+
+def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
+               inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,
+               chains: int = 4, warmup: int = 1000, draws: int = 1000,
+               target_accept: float = 0.9, robust: bool = True,
+               wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+    """Posterior of the thrust and the pulse time constants from biasing events; what
+    ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
+    and thrust).
+
+    Parameters
+    ----------
+    telemetry : each event's telemetry: a :class:`~cassini_bayes.telemetry.Telemetry` or a CSV
+        path, or a list of them.
+    pulses : each event's pulse log (``t_on`` s, ``thruster``, ``width`` s): a
+        :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list in the order of
+        ``telemetry``.
+    spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, a model TOML path or a shipped
+        model's name.
+    mode : ``"mean"`` (``F``), ``"branch"`` (``F_Z``, ``F_Y``) or ``"thruster"``
+        (``F_Z1 … F_Y4``), thrust in N.
+    inertia_posterior : an inertia fit (its :class:`FitResult` or run directory): its posterior
+        becomes the inertia prior (default: the spacecraft model's inertia and its stated
+        uncertainty).
+    fix_inertia : hold the inertia at the model's prediction (the papers' practice; the default
+        when ``robust=False``).
+    seed, chains, warmup, draws, target_accept, progress : as :func:`fit_inertia`.
+    robust : gyro, wheel and external-torque errors as nuisance parameters; ``False`` is the
+        papers' idealised model.
+    wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
+
+    Returns
+    -------
+    FitResult
+        ``kind = "thrust"``; parameters the thrust (N) and ``tau_delay``, ``tau_rise``,
+        ``tau_fall`` (s).
+    """
+    import jax
+
+    from cassini_bayes.consistency import check_thrust_data
+    from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
+
+    seed = check_seed(seed)
+    mode = choice("mode", mode, MODES)
+    wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
+    settings = sampler_settings(chains, warmup, draws, target_accept, progress)
+    sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, fix_inertia)
+    tels, tel_records, tel_paths = telemetry_inputs(telemetry)
+    logs, log_records, log_paths = pulse_inputs(pulses)
+    if not logs:
+        raise InputError(f"fit_thrust needs the pulse log of each event: {arg('pulses')} "
+                         "(columns t_on, thruster, width)")
+    if len(logs) != len(tels):
+        raise InputError(f"{len(tels)} telemetry but {len(logs)} pulse log(s); give one pulse "
+                         "log per telemetry, in the same order")
+    events = list(zip(tels, logs))
+    check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
+    key = jax.random.key(seed)  # the one place the seed becomes a key
+    with collect_warnings() as warns:
+        post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
+                             robust=robust, wheel_errors=wheel_errors)
+    baseline, base_warns = thrust_baseline(events, sc, mode)
+    summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
+                             wheel_errors=wheel_errors, baseline=baseline,
+                             warnings=warns + base_warns)
+    config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
+                        inputs={"telemetry": tel_records, "pulses": log_records,
+                                "spacecraft": sc_record, **inertia_input},
+                        options={"mode": mode, "model": "robust" if robust else "idealised",
+                                 "inertia": ("posterior" if inertia_posterior is not None
+                                             else "sampled" if "Ixx" in post.idata.posterior
+                                             else "fixed"),
+                                 "wheel_errors": wheel_errors})
+    return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,
+                     (*tel_paths, *log_paths, *sc_paths, *inertia_paths))

@@ -1,0 +1,155 @@
+"""The public Python API (:mod:`cassini_bayes`, docs/api.md): one small fit per model gives the
+numbers the CLI writes (and wrote before the fit logic left the CLI, ``tests/data/fit_pins.json``),
+``save`` writes the CLI's run directory, and importing the package is cheap and leaves JAX alone.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tomllib
+
+import pytest
+
+import cassini_bayes as cb
+from cassini_bayes.errors import InputError, command_line
+from fit_pins import PINS, RECIPES, SMALL, assert_same, cli_args, numbers, write_inputs
+
+RUN_FILES = ["config.toml", "posterior.nc", "report.html", "summary.json"]
+PINNED = json.loads(PINS.read_text())
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    """The pinned fits' input files, per model."""
+    return {m: write_inputs(m, tmp_path_factory.mktemp(m)) for m in RECIPES}
+
+
+def _api_fit(model: str, files: dict, *, as_objects: bool):
+    _, _, spacecraft, _, seed = RECIPES[model]
+    tel = cb.read_telemetry(files["telemetry"]) if as_objects else files["telemetry"]
+    sc = cb.load_spacecraft(spacecraft) if as_objects else spacecraft
+    if model == "inertia":
+        return cb.fit_inertia(tel, sc, seed=seed, **SMALL)
+    if model == "thrust":
+        pulses = cb.read_pulses(files["pulses"]) if as_objects else files["pulses"]
+        return cb.fit_thrust(tel, pulses, sc, seed=seed, **SMALL)
+    return cb.fit_rwa4(tel, sc, method="rcs", prior="cone", seed=seed, **SMALL)
+
+
+# the pins are what the CLI wrote for these fits; the CLI itself is run again for the inertia fit
+# here and for the others in the slow tier (each thrust/RWA4 fit costs about a minute)
+CLI_AGAIN = [pytest.param("inertia"),
+             *(pytest.param(m, marks=pytest.mark.slow) for m in RECIPES if m != "inertia")]
+
+
+@pytest.mark.parametrize("model", CLI_AGAIN)
+def test_fit_matches_the_cli_and_the_pinned_numbers(model, inputs, tmp_path, run_cli):
+    """Objects in, the same summary.json numbers as ``cassini-bayes fit`` with the same seed and
+    options, as before the refactor (1e-9 relative); ``save`` writes the same four files."""
+    code, _, err = run_cli(*cli_args(model, inputs[model], tmp_path / "cli"))
+    assert code == 0, err
+    cli_summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert_same(PINNED[model], numbers(cli_summary), f"{model} (CLI vs pin)")
+
+    fit = _api_fit(model, inputs[model], as_objects=True)
+    assert isinstance(fit, cb.FitResult) and fit.kind == model
+    summary = fit.summary()
+    assert_same(numbers(cli_summary), numbers(summary), f"{model} (API vs CLI)")
+    assert summary["warnings"] == cli_summary["warnings"]
+    assert fit.baseline == summary["baseline"]
+    assert fit.sensitivity == summary.get("sensitivity")
+    assert fit.converged == summary["diagnostics"]["converged"]
+    assert set(fit.idata.groups()) >= {"posterior", "sample_stats", "prior"}
+
+    out = fit.save(tmp_path / "api")
+    assert sorted(p.name for p in out.iterdir()) == RUN_FILES
+    assert json.loads((out / "summary.json").read_text()) == cli_summary
+    cfg = tomllib.loads((out / "config.toml").read_text())
+    cli_cfg = tomllib.loads((tmp_path / "cli" / "config.toml").read_text())
+    assert cfg["inputs"].pop("spacecraft") == {"model": fit.config["spacecraft"]["name"]}
+    cli_cfg["inputs"].pop("spacecraft")
+    assert cfg == cli_cfg   # telemetry/pulses read from files record those files
+
+
+@pytest.mark.parametrize("model", [m for m in RECIPES if m != "inertia"])
+def test_fit_gives_the_pinned_numbers(model, inputs, tmp_path):
+    """Paths in: the summary.json numbers the CLI wrote before the refactor (1e-9 relative);
+    ``save`` writes the four files of a run directory."""
+    fit = _api_fit(model, inputs[model], as_objects=False)
+    assert_same(PINNED[model], numbers(fit.summary()), f"{model} (API vs pin)")
+    assert sorted(p.name for p in fit.save(tmp_path / "run").iterdir()) == RUN_FILES
+
+
+def test_paths_in_and_save_refuses_to_overwrite(inputs, tmp_path):
+    """Paths in (a shipped model by name) give the same fit as objects in; ``save`` refuses a
+    non-empty directory without ``force=True``, naming the argument, and replaces its own."""
+    fit = _api_fit("inertia", inputs["inertia"], as_objects=False)
+    assert_same(numbers(PINNED["inertia"]), numbers(fit.summary()))
+    out = fit.save(tmp_path / "run")
+    with pytest.raises(InputError, match="force=True"):
+        fit.save(out)
+    assert fit.save(out, force=True) == out
+    with pytest.raises(InputError, match="input"):
+        fit.save(inputs["inertia"]["telemetry"].parent, force=True)
+
+
+def test_experiment_and_fit_runs_have_the_same_summary_keys(inputs, tmp_path):
+    """One run writer: an experiment's per-fit run directory carries the summary.json keys (and
+    files) of ``cassini-bayes fit``."""
+    from cassini_bayes._paths import EXPERIMENTS_DIR
+    from cassini_bayes.experiments import load_experiment, run_experiment
+
+    out = tmp_path / "exp"
+    run_experiment(load_experiment(EXPERIMENTS_DIR / "inertia_table1.toml"), out, quick=True)
+    sub = out / "fits" / "post_probe"
+    assert sorted(p.name for p in sub.iterdir()) == sorted(RUN_FILES + ["telemetry.csv"])
+    exp_summary = json.loads((sub / "summary.json").read_text())
+    assert set(exp_summary) == set(PINNED["inertia"]) | {"warnings"}
+    assert exp_summary["model"] == "idealised" and exp_summary["wheel_errors"] is None
+
+
+def test_library_errors_name_arguments_the_cli_options(inputs):
+    with pytest.raises(InputError, match=r"wheel_errors='x': choose 'per_wheel' or 'common'"):
+        cb.fit_inertia(inputs["inertia"]["telemetry"], "cassini_2000_03_15", wheel_errors="x")
+    with pytest.raises(InputError, match=r"mode='each'"):
+        cb.fit_thrust(inputs["thrust"]["telemetry"], inputs["thrust"]["pulses"], "fsds",
+                      mode="each")
+    with pytest.raises(InputError, match=r"method='rwa' needs RWA slew pairs"):
+        cb.fit_rwa4(inputs["rwa4"]["telemetry"], "cassini_pre_soi", method="rwa")
+    with pytest.raises(InputError, match=r"chains=0"):
+        cb.fit_inertia(inputs["inertia"]["telemetry"], "cassini_2000_03_15", chains=0)
+    with command_line(), pytest.raises(InputError, match=r"--method rwa needs RWA slew pairs"):
+        cb.fit_rwa4(inputs["rwa4"]["telemetry"], "cassini_pre_soi", method="rwa")
+
+
+def test_simulate_wraps_the_command(tmp_path, run_cli):
+    """``cb.simulate`` writes what ``cassini-bayes simulate`` writes, byte for byte."""
+    from cassini_bayes._paths import SCENARIOS_DIR
+
+    code, _, err = run_cli("simulate", SCENARIOS_DIR / "fsds_biasing.toml", "--out",
+                           tmp_path / "cli", "--seed", "3")
+    assert code == 0, err
+    sim = cb.simulate("fsds_biasing", seed=3)
+    assert sim.pulses is not None and sim.truth()["seed"] == 3
+    out = sim.save(tmp_path / "api")
+    for name in ("telemetry.csv", "pulses.csv", "truth.json"):
+        assert (out / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+
+
+def test_import_is_cheap_and_leaves_jax_devices_alone():
+    """``import cassini_bayes`` (and touching the public names) imports no NumPyro/ArviZ and does
+    not ask JAX for host devices; the names are the documented ones."""
+    code = ("import os; os.environ.pop('XLA_FLAGS', None)\n"
+            "import sys, cassini_bayes as cb\n"
+            "assert 'numpyro' not in sys.modules and 'arviz' not in sys.modules\n"
+            "cb.fit_inertia, cb.fit_thrust, cb.fit_rwa4, cb.simulate, cb.FitResult\n"
+            "import jax; print(jax.local_device_count(), sorted(cb.__all__))")
+    env = {k: v for k, v in __import__("os").environ.items() if k != "XLA_FLAGS"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, check=True).stdout.split(maxsplit=1)
+    assert out[0] == "1"
+    assert set(cb.__all__) >= {"read_telemetry", "read_pulses", "load_spacecraft", "simulate",
+                               "fit_inertia", "fit_thrust", "fit_rwa4", "FitResult"}
+    assert callable(cb.simulate)
