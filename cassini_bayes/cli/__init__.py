@@ -34,7 +34,7 @@ import warnings
 
 import typer
 
-from cassini_bayes import __version__
+from cassini_bayes import __version__, _jax_cache
 from cassini_bayes.errors import InputError, Interrupted, NotConvergedError
 
 app = typer.Typer(
@@ -58,10 +58,22 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                  help="Print the version and exit."),
+    jax_cache: str = typer.Option(None, "--jax-cache", metavar="DIR|off",
+                                  help="Folder of JAX's compilation cache, or off (default: "
+                                       f"${_jax_cache.ENV}, else ~/.cache/cassini-bayes/jax)."),
+    verbose: bool = typer.Option(False, "--verbose", "-v",
+                                 help="At the end, print on stderr what the run did with the "
+                                      "compilation cache (hits, misses)."),
 ) -> None:
     """Bayesian in-flight calibration of Cassini: inertia tensor, thrusters, RWA4 spin axis."""
+    if jax_cache is not None:
+        os.environ[_jax_cache.ENV] = jax_cache  # worker processes (sbc --executor dask) follow
+        _jax_cache.enable(jax_cache)
+    if verbose:
+        ctx.call_on_close(lambda: print(_jax_cache.stats().line(), file=sys.stderr))
 
 
 def _register_all() -> None:

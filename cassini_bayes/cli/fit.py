@@ -27,7 +27,7 @@ from typing import Iterator
 
 import typer
 
-from cassini_bayes import __version__
+from cassini_bayes import __version__, _jax_cache
 from cassini_bayes._devices import request_host_devices
 from cassini_bayes.cli._options import seed_option
 
@@ -266,6 +266,7 @@ def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: dict,
         "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
                                           "progress": False},
         "spacecraft": spacecraft.to_dict(),
+        "jax_cache": _jax_cache.stats().to_dict(),  # did this fit load compiled programs?
     }
 
 
