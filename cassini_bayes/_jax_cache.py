@@ -117,7 +117,8 @@ def enable(setting: str | os.PathLike | None = None) -> Path | None:
     folder, or ``None`` when off.
 
     Call it before the first compilation; calling it again moves the cache (later compilations
-    use the new folder). A folder that cannot be created gives one warning and no cache.
+    use the new folder). JAX creates the folder when it first writes to it; one that cannot be
+    created or written gives one warning and no cache.
     """
     from jax.experimental.compilation_cache import compilation_cache as cc
 
@@ -127,12 +128,13 @@ def enable(setting: str | os.PathLike | None = None) -> Path | None:
         _listen()
     try:
         path = resolve(setting)
-        if path is not None:
-            path.mkdir(parents=True, exist_ok=True)
-    except (OSError, RuntimeError) as e:  # RuntimeError: no home folder to put ~/.cache in
-        warnings.warn(f"JAX compilation cache: cannot use {setting or 'the default folder'} "
-                      f"({getattr(e, 'strerror', None) or e}); running without it (set {ENV} "
-                      "to a writable folder, or to off)", stacklevel=2)
+        problem = None if path is None else _unusable(path)
+    except RuntimeError as e:  # no home folder to put ~/.cache in
+        path, problem = None, str(e)
+    if problem:
+        warnings.warn(f"JAX compilation cache: cannot use {path or 'the default folder'} "
+                      f"({problem}); running without it (set {ENV} to a writable folder, or "
+                      "to off)", stacklevel=2)
         path = None
     with _lock:
         if path is not None:
@@ -144,6 +146,19 @@ def enable(setting: str | os.PathLike | None = None) -> Path | None:
             cc.reset_cache()  # JAX decides once per process whether (and where) to cache
         _state["dir"] = path
     return path
+
+
+def _unusable(path: Path) -> str | None:
+    """Why JAX could not create or write ``path`` (it creates it at the first compilation), or
+    ``None``; nothing is created here."""
+    existing = path
+    while not existing.exists() and existing.parent != existing:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"{existing} is not a folder"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"{existing} is not writable"
+    return None
 
 
 def stats() -> CacheStats:
