@@ -4,6 +4,10 @@ Each sub-command lives in its own module of this package and exposes ``register(
 modules are discovered here, so adding a command never edits this file. ``groups["fit"]`` is the
 ``cassini-bayes fit`` group. ``ORDER`` (an int, default 100) sorts the commands in ``--help``.
 
+Global options, given before the command (docs/cli.md): ``--jax-cache DIR|off`` moves or switches
+off the compilation cache (:mod:`cassini_bayes._jax_cache`); ``--verbose`` prints its hits and
+misses at the end.
+
 One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
 usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``):
 
