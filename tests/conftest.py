@@ -6,6 +6,11 @@ import os
 
 os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
 os.environ.setdefault("MPLBACKEND", "Agg")
+# Persistent compilation cache: test workers (pytest -n), the CLI subprocesses they start and
+# reruns share compiled programs, which dominate the suite's run time on a 2-core machine. Set
+# before cassini_bayes is imported (it enables the cache), and never the user's own cache folder.
+os.environ["CASSINI_BAYES_JAX_CACHE"] = os.path.abspath(
+    os.path.join(os.path.dirname(__file__), os.pardir, ".pytest_cache", "jax"))
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
@@ -13,11 +18,6 @@ import pytest  # noqa: E402
 import cassini_bayes  # noqa: E402,F401  (turns on x64)
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
-# Persistent compilation cache: test workers (pytest -n) and reruns share compiled programs, which
-# dominate the suite's run time on a 2-core machine.
-_CACHE = os.path.join(os.path.dirname(__file__), os.pardir, ".pytest_cache", "jax")
-jax.config.update("jax_compilation_cache_dir", os.path.abspath(_CACHE))
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 
 
 @pytest.fixture

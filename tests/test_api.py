@@ -70,6 +70,8 @@ def test_fit_matches_the_cli_and_the_pinned_numbers(model, inputs, tmp_path, run
     cli_cfg = tomllib.loads((tmp_path / "cli" / "config.toml").read_text())
     assert cfg["inputs"].pop("spacecraft") == {"model": fit.config["spacecraft"]["name"]}
     cli_cfg["inputs"].pop("spacecraft")
+    for c in (cfg, cli_cfg):    # the compilation cache's hits and misses are the process's own
+        assert set(c.pop("jax_cache")) == {"dir", "hits", "misses", "rejected"}
     assert cfg == cli_cfg   # telemetry/pulses read from files record those files
 
 

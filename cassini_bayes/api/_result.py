@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping
 
-from cassini_bayes import __version__
+from cassini_bayes import __version__, _jax_cache
 
 __all__ = ["FitResult", "fit_config", "collect_warnings", "write_run", "write_run_files"]
 
@@ -50,6 +50,7 @@ def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping
         "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
                                           "progress": False},
         "spacecraft": spacecraft.to_dict(),
+        "jax_cache": _jax_cache.stats().to_dict(),  # did this fit load compiled programs?
     }
 
 

@@ -4,6 +4,10 @@ Each sub-command lives in its own module of this package and exposes ``register(
 modules are discovered here, so adding a command never edits this file. ``groups["fit"]`` is the
 ``cassini-bayes fit`` group. ``ORDER`` (an int, default 100) sorts the commands in ``--help``.
 
+Global options, given before the command (docs/cli.md): ``--jax-cache DIR|off`` moves or switches
+off the compilation cache (:mod:`cassini_bayes._jax_cache`); ``--verbose`` prints its hits and
+misses at the end.
+
 One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
 usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``).
 Commands run inside :func:`cassini_bayes.errors.command_line`, so the library's messages name
@@ -36,7 +40,7 @@ import warnings
 
 import typer
 
-from cassini_bayes import __version__
+from cassini_bayes import __version__, _jax_cache
 from cassini_bayes._devices import request_host_devices
 from cassini_bayes.errors import InputError, Interrupted, NotConvergedError, command_line
 
@@ -65,10 +69,22 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                  help="Print the version and exit."),
+    jax_cache: str = typer.Option(None, "--jax-cache", metavar="DIR|off",
+                                  help="Folder of JAX's compilation cache, or off (default: "
+                                       f"${_jax_cache.ENV}, else ~/.cache/cassini-bayes/jax)."),
+    verbose: bool = typer.Option(False, "--verbose", "-v",
+                                 help="At the end, print on stderr what the run did with the "
+                                      "compilation cache (hits, misses)."),
 ) -> None:
     """Bayesian in-flight calibration of Cassini: inertia tensor, thrusters, RWA4 spin axis."""
+    if jax_cache is not None:
+        os.environ[_jax_cache.ENV] = jax_cache  # worker processes (sbc --executor dask) follow
+        _jax_cache.enable(jax_cache)
+    if verbose:
+        ctx.call_on_close(lambda: print(_jax_cache.stats().line(), file=sys.stderr))
 
 
 def _register_all() -> None:
