@@ -34,8 +34,9 @@ def main(args):
     inertia = inertia_fit.summary()["parameters"]
     true_inertia = slews.truth()["inertia_kgm2"]
     print("inertia posterior, kg m² (mean ± sd, truth)")
-    print("  " + "  ".join(f"{n} {inertia[n]['mean']:.0f} ± {inertia[n]['sd']:.0f} "
-                           f"({true_inertia[n]:.0f})" for n in true_inertia))
+    cells = [f"{n} {inertia[n]['mean']:6.0f} ± {inertia[n]['sd']:3.0f} ({true_inertia[n]:.0f})"
+             for n in true_inertia]
+    print("  " + "   ".join(cells[:3]) + "\n  " + "   ".join(cells[3:]))
 
     # 2. The biasing event: telemetry plus the log of every commanded pulse (t_on, thruster,
     #    width). The inertia posterior replaces the model's inertia prior.
@@ -53,12 +54,12 @@ def main(args):
     baseline = fit.baseline or {}
     print(f"thrust and pulse time constants ({event.pulses.t_on.size} pulses, "
           f"event {args.event!r})")
-    print(f"{'':10} {'truth':>8} {'least sq':>8} {'post mean':>9} {'post sd':>8} "
+    print(f"{'':10} {'truth':>8} {'least sq':>9} {'post mean':>9} {'post sd':>8} "
           f"{'90 % interval':>19}")
     for name, unit, scale, true in rows:
         p = params[name]
         # the least squares estimates F only (at the model's nominal time constants)
-        lsq = f"{scale * baseline[name]:8.3f}" if name in baseline else f"{'-':>8}"
+        lsq = f"{scale * baseline[name]:9.3f}" if name in baseline else f"{'-':>9}"
         print(f"{name:10} {scale * true:8.3f} {lsq} {scale * p['mean']:9.3f} "
               f"{scale * p['sd']:8.3f} [{scale * p['q05']:8.3f}, {scale * p['q95']:8.3f}] {unit}")
     print(f"converged: inertia {inertia_fit.converged}, thrust {fit.converged}")
