@@ -35,7 +35,7 @@ def main(args):
 
     # The spacecraft model the calibration starts from: the scenario's [prior] model (its
     # inertia prediction and stated uncertainty are the prior; its wheels map tach to momentum).
-    spacecraft = sim.result.scenario.prior
+    spacecraft = sim.prior
 
     fit = cb.fit_inertia(sim.telemetry, spacecraft, seed=args.seed, chains=args.chains,
                          warmup=args.warmup, draws=args.draws)

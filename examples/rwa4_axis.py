@@ -44,7 +44,7 @@ def main(args):
 
     # The Time A / Time B windows are detected from the telemetry's quiet periods (pass
     # windows=[((A0, A1), (B0, B1)), ...] in seconds to set them).
-    fit = cb.fit_rwa4(sim.telemetry, sim.result.scenario.prior, method=args.method,
+    fit = cb.fit_rwa4(sim.telemetry, sim.prior, method=args.method,
                       prior=args.prior, seed=args.seed, chains=args.chains,
                       warmup=args.warmup, draws=args.draws)
 

@@ -30,7 +30,7 @@ def main(args):
 
     # 1. The inertia from RWA slews; the scenario's [prior] model is where the calibration starts.
     slews = cb.simulate(args.slews, seed=args.seed)
-    inertia_fit = cb.fit_inertia(slews.telemetry, slews.result.scenario.prior, **sampler)
+    inertia_fit = cb.fit_inertia(slews.telemetry, slews.prior, **sampler)
     inertia = inertia_fit.summary()["parameters"]
     true_inertia = slews.truth()["inertia_kgm2"]
     print("inertia posterior, kg m² (mean ± sd, truth)")
@@ -41,7 +41,7 @@ def main(args):
     # 2. The biasing event: telemetry plus the log of every commanded pulse (t_on, thruster,
     #    width). The inertia posterior replaces the model's inertia prior.
     event = cb.simulate(args.event, seed=args.seed)
-    fit = cb.fit_thrust(event.telemetry, event.pulses, event.result.scenario.prior,
+    fit = cb.fit_thrust(event.telemetry, event.pulses, event.prior,
                         inertia_posterior=inertia_fit, **sampler)
 
     truth = event.truth()
