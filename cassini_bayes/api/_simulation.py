@@ -13,6 +13,7 @@ from cassini_bayes import __version__
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 from cassini_bayes.simulate import Scenario, SimResult, quiet_windows
+from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["Simulation", "simulate", "truth_document"]
@@ -103,6 +104,12 @@ class Simulation:
     def pulses(self) -> PulseLog | None:
         """Every commanded thruster pulse, or ``None`` when none fired."""
         return self.result.pulses
+
+    @property
+    def prior(self) -> Spacecraft:
+        """The scenario's ``[prior]`` spacecraft model, where a calibration of this run starts
+        (its predicted inertia and stated uncertainties, its believed wheels and thrusters)."""
+        return self.result.scenario.prior
 
     def truth(self) -> dict:
         """Everything true about the run (``truth.json``; SI units)."""
