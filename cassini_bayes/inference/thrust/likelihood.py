@@ -5,7 +5,7 @@ and the residuals at given parameters (:mod:`cassini_bayes.inference.thrust`, "E
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -19,7 +19,30 @@ from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["pulse_increments", "time_tag_columns", "impulse_residuals"]
+__all__ = ["EventData", "pulse_increments", "time_tag_columns", "impulse_residuals"]
+
+
+class EventData(NamedTuple):
+    """One biasing event's arrays, padded to the events' common lengths (``n`` samples, ``m``
+    pulses): a pytree the likelihood is vmapped over. In ``ThrustProblem.model_kwargs`` each
+    field has a leading event axis (E) under the same name; :meth:`of` gathers them."""
+
+    t: jax.Array               # (n,) s; padding repeats the last sample
+    omega: jax.Array           # (n, 3) rad/s body rates
+    h_wheels: jax.Array        # (n, 3) N m s wheel momentum, body axes
+    mask: jax.Array            # (n,) 1 for a sample, 0 for padding
+    t_on: jax.Array            # (m,) s pulse commands
+    thruster: jax.Array        # (m,) int index into THRUSTER_NAMES
+    width: jax.Array           # (m,) s commanded widths (0: padding, no impulse)
+    slot: jax.Array            # (m,) index of each pulse's first sample (n: padding, dropped)
+    wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
+    nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
+    time_tag_cols: jax.Array   # (n, 3) N m s time-tag columns (:func:`time_tag_columns`)
+
+    @classmethod
+    def of(cls, kw: dict) -> EventData:
+        """The events' arrays (leading axis E) from ``model_kwargs``."""
+        return cls(*(kw[name] for name in cls._fields))
 
 
 def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, tau_rise, tau_fall):
@@ -58,14 +81,13 @@ def _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width,
     return v - (j * f8[None, :]) @ q_matrix.T                        # Feldman & Lee Eq 17
 
 
-def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, thruster,
-                  width, slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
+def _event_loglik(inertia, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix):
     """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``.
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
-    docstring) and the time-tag term ``m_i`` = ``time_tag_cols`` (:func:`time_tag_columns`). The
-    offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
+    docstring) and the time-tag term ``m_i`` = ``ev.time_tag_cols`` (:func:`time_tag_columns`).
+    The offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
     :func:`nuisance_marginal` over all events.
 
     The measurements are the gyro rates, not ``V``: ``V`` is the rates mapped through ``I``, so
@@ -77,11 +99,11 @@ def _event_loglik(inertia, f8, tau, log_sigma, t, omega, h_wheels, mask, t_on, t
     together: on a 480-sample event whose true inertia was 3 % above the model's, the sampled
     inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
     """
-    r = _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
-                        slot_offsets, q_matrix)
-    st = offset_marginal(r, _noise_cov(inertia, log_sigma, wheel_cov), time_tag_cols, mask,
-                         nu_cols)
-    log_jacobian = (jnp.sum(mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
+    r = _event_residual(inertia, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
+                        ev.width, ev.slot, slot_offsets, q_matrix)
+    st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov), ev.time_tag_cols,
+                         ev.mask, ev.nu_cols)
+    log_jacobian = (jnp.sum(ev.mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
     return st._replace(loglik=st.loglik + log_jacobian)
 
 
@@ -107,17 +129,14 @@ def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_ma
 
 
 @jax.jit
-def _residuals_jit(i_m, f8, tau, log_sigma, nu, t, omega, h_wheels, mask, t_on, thruster, width,
-                   slot, slot_offsets, q_matrix, wheel_cov, nu_cols, time_tag_cols):
-    def one(log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot, wheel_cov, nu_cols,
-            time_tag_cols):
-        r = _event_residual(i_m, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
-                            slot_offsets, q_matrix) - nu_cols @ nu
-        return offset_marginal(r, _noise_cov(i_m, log_sigma, wheel_cov), time_tag_cols, mask,
-                               nu_cols[..., :0]).resid
+def _residuals_jit(i_m, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_matrix):
+    def one(log_sigma, ev):
+        r = _event_residual(i_m, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
+                            ev.width, ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
+        return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov), ev.time_tag_cols,
+                               ev.mask, ev.nu_cols[..., :0]).resid
 
-    return jax.vmap(one)(log_sigma, t, omega, h_wheels, mask, t_on, thruster, width, slot,
-                         wheel_cov, nu_cols, time_tag_cols)
+    return jax.vmap(one)(log_sigma, ev)
 
 
 def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
@@ -132,7 +151,5 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     nu = np.zeros(kw["nu_sd"].shape[0]) if nu is None else np.asarray(nu, float)
     d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
                        tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
-                       jnp.asarray(nu), kw["t"], kw["omega"], kw["h_wheels"], kw["mask"],
-                       kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-                       kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
+                       jnp.asarray(nu), EventData.of(kw), kw["slot_offsets"], kw["q_matrix"])
     return np.asarray(d) * np.asarray(kw["mask"])[..., None]

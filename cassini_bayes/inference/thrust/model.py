@@ -15,23 +15,19 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.inference.gaussian import OffsetMarginal, nuisance_marginal
 from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpack
-from cassini_bayes.inference.thrust.likelihood import _event_loglik
+from cassini_bayes.inference.thrust.likelihood import EventData, _event_loglik
 from cassini_bayes.inference.thrust.prior import _NOISE_STEP, NOISE_PRIOR_LOG_SD, thrust_names
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
 
 __all__ = ["thrust_model"]
 
-_EVENT_AXES = (None, None, None, 0, 0, 0, 0, 0, 0, 0, 0, 0, None, None, 0, 0, 0)
-
-
 def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
     _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
-    return jax.vmap(_event_loglik, in_axes=_EVENT_AXES)(
-        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw["t"], kw["omega"],
-        kw["h_wheels"], kw["mask"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"],
-        kw["slot_offsets"], kw["q_matrix"], kw["wheel_cov"], kw["nu_cols"], kw["time_tag_cols"])
+    return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
+        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, EventData.of(kw),
+        kw["slot_offsets"], kw["q_matrix"])
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
