@@ -38,7 +38,8 @@ def _margin_chi2_p(draws: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> floa
     probability)."""
     ref = mean + np.asarray(jax.random.normal(jax.random.key(99), (400_000, 6))) @ \
         np.linalg.cholesky(cov).T
-    scale = jnp.asarray(float(rwa4_prior._physical_margin(jnp.asarray(mean))) / rwa4_prior._MARGIN_FRACTION)
+    scale = jnp.asarray(float(rwa4_prior._physical_margin(jnp.asarray(mean)))
+                        / rwa4_prior._MARGIN_FRACTION)
     weight = np.exp(np.asarray(rwa4_prior._log_factors(jnp.asarray(ref), scale)))
     m_ref = _margins(ref)
     order = np.argsort(m_ref)
@@ -98,7 +99,8 @@ def _chart_kwargs() -> dict:
     return {k: jnp.asarray(v) for k, v in dict(
         u0=u0, basis=rwa4_data._tangent_basis(u0), pi_mean=mean, pi_chol=chol,
         lp_centre=lp_c, lp_tril=np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)),
-        margin_scale=float(rwa4_prior._physical_margin(jnp.asarray(mean))) / rwa4_prior._MARGIN_FRACTION,
+        margin_scale=(float(rwa4_prior._physical_margin(jnp.asarray(mean)))
+                      / rwa4_prior._MARGIN_FRACTION),
         q_inv=q_inv, z_offset=-0.95 * u0).items()}
 
 

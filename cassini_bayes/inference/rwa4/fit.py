@@ -76,31 +76,6 @@ class Rwa4Posterior(NamedTuple):
     direction: dict
 
 
-def _data_groups(problem: Rwa4Problem) -> dict:
-    """The ``observed_data`` (window means) and ``constant_data`` groups of :func:`fit_rwa4`."""
-    import xarray as xr
-
-    kw = problem.model_kwargs
-    observed = xr.Dataset(
-        {"h_known_mean": (("window", "axis"), np.asarray(kw["k_h"]), {"units": "N m s",
-                          "description": "window mean of A(q)ᵀ h_known (inertial)"}),
-         "rho4_attitude_mean": (("window", "axis", "axis2"), np.asarray(kw["r_u"]),
-                                {"units": "rad/s", "description": "window mean of ρ4 A(q)ᵀ"}),
-         "n_samples": ("window", np.asarray(kw["n_w"]))},
-        coords={"window": np.arange(np.asarray(kw["n_w"]).shape[0]), "axis": ["x", "y", "z"],
-                "axis2": ["x", "y", "z"]}, attrs={"source": problem.source})
-    win = np.array([[a[0], a[1], b[0], b[1]] for a, b in problem.pairs], float)
-    constant = xr.Dataset(
-        {"baseline": ("axis", problem.baseline),
-         "windows": (("pair", "edge"), win, {"units": "s"}),
-         "spin_change_rpm": ("pair", problem.spin_change_rpm),
-         "prior_inertia_mean": ("param", np.asarray(problem.inertia.mean)),
-         "prior_inertia_sd": ("param", np.sqrt(np.diag(np.asarray(problem.inertia.cov))))},
-        coords={"axis": ["x", "y", "z"], "pair": np.arange(win.shape[0]),
-                "edge": ["a0", "a1", "b0", "b1"], "param": list(INERTIA_NAMES)})
-    return {"observed_data": observed, "constant_data": constant}
-
-
 def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
              pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
              inertia: InertiaGaussian | None = None, settings=None,
@@ -154,3 +129,28 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
     replace_groups(idata, _data_groups(problem))
     names = list(U4_NAMES) + list(INERTIA_NAMES)
     return Rwa4Posterior(idata, diagnostics(idata, names), problem, direction)
+
+
+def _data_groups(problem: Rwa4Problem) -> dict:
+    """The ``observed_data`` (window means) and ``constant_data`` groups of :func:`fit_rwa4`."""
+    import xarray as xr
+
+    kw = problem.model_kwargs
+    observed = xr.Dataset(
+        {"h_known_mean": (("window", "axis"), np.asarray(kw["k_h"]), {"units": "N m s",
+                          "description": "window mean of A(q)ᵀ h_known (inertial)"}),
+         "rho4_attitude_mean": (("window", "axis", "axis2"), np.asarray(kw["r_u"]),
+                                {"units": "rad/s", "description": "window mean of ρ4 A(q)ᵀ"}),
+         "n_samples": ("window", np.asarray(kw["n_w"]))},
+        coords={"window": np.arange(np.asarray(kw["n_w"]).shape[0]), "axis": ["x", "y", "z"],
+                "axis2": ["x", "y", "z"]}, attrs={"source": problem.source})
+    win = np.array([[a[0], a[1], b[0], b[1]] for a, b in problem.pairs], float)
+    constant = xr.Dataset(
+        {"baseline": ("axis", problem.baseline),
+         "windows": (("pair", "edge"), win, {"units": "s"}),
+         "spin_change_rpm": ("pair", problem.spin_change_rpm),
+         "prior_inertia_mean": ("param", np.asarray(problem.inertia.mean)),
+         "prior_inertia_sd": ("param", np.sqrt(np.diag(np.asarray(problem.inertia.cov))))},
+        coords={"axis": ["x", "y", "z"], "pair": np.arange(win.shape[0]),
+                "edge": ["a0", "a1", "b0", "b1"], "param": list(INERTIA_NAMES)})
+    return {"observed_data": observed, "constant_data": constant}
