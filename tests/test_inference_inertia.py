@@ -16,9 +16,10 @@ import pytest
 
 from cassini_bayes.errors import UnidentifiableError
 from cassini_bayes.frames import quat_multiply, rotvec_to_quat
-from cassini_bayes.inference.inertia import (_log_jacobian, cholesky_params_from_pi, fit_inertia,
-                                             inertia_prior, is_physical, pi_from_cholesky_params,
+from cassini_bayes.inference.inertia import (cholesky_params_from_pi, fit_inertia, inertia_prior,
+                                             is_physical, pi_from_cholesky_params,
                                              prepare_inertia, sample_prior)
+from cassini_bayes.inference.inertia.prior import _log_jacobian
 from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
 from cassini_bayes.spacecraft import load_spacecraft

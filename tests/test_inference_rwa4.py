@@ -10,7 +10,7 @@ from scipy import stats
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.rwa4 import prepare_rwa4
-from cassini_bayes.inference.thrust import inv3_spd
+from cassini_bayes.inference.gaussian import inv3_spd
 from cassini_bayes.inference.sphere import angles_deg, direction_summary, mean_direction
 from cassini_bayes.windows import WindowClampWarning
 from margins import assert_mixed
@@ -117,7 +117,7 @@ def test_whitened_axes_are_gaussian():
     −1200 at ±1). At ±3 only the RCS chart is checked: the prior-dominated log-Cholesky inertia
     coordinates of the RWA chart are skewed by the near physical boundary (−3.3 and −11.2 at
     ∓3 on one axis, seed 21), which NUTS's fits still handle (0 divergences measured)."""
-    from cassini_bayes.inference.rwa4 import _LOG_DENSITY
+    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
 
     for name, method in (("rwa4_rcs", "rcs"), ("rwa4_rwa", "rwa")):
         sc, r = _sim(name, 21)

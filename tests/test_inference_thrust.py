@@ -50,7 +50,7 @@ def test_offset_marginal_matches_dense_gaussian():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.thrust import offset_marginal
+    from cassini_bayes.inference.gaussian import offset_marginal
 
     rng = np.random.default_rng(3)
     n = 6
@@ -87,7 +87,8 @@ def test_event_likelihood_is_the_density_of_the_rates():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.thrust import _event_loglik, _event_residual, _noise_cov
+    from cassini_bayes.inference.thrust.likelihood import (EventData, _event_loglik,
+                                                           _event_residual, _noise_cov)
     from cassini_bayes.physics.impulse import moment_matrix
 
     rng = np.random.default_rng(5)
@@ -102,10 +103,10 @@ def test_event_likelihood_is_the_density_of_the_rates():
     wheel_cov = 0.02 * np.eye(3)
     no_pulse = (jnp.zeros(1), jnp.zeros(1, int), jnp.zeros(1), jnp.full(1, n))
     q = moment_matrix(1.2, 1.6, 2.9, 3.0, jnp.zeros(3))
+    ev = EventData(jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h), jnp.ones(n), *no_pulse,
+                   jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m))
     st = _event_loglik(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
-                       jnp.asarray(log_sigma), jnp.asarray(t), jnp.asarray(omega),
-                       jnp.asarray(h), jnp.ones(n), *no_pulse, jnp.arange(2), q,
-                       jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m))
+                       jnp.asarray(log_sigma), ev, jnp.arange(2), q)
     r = np.asarray(_event_residual(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
                                    jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h),
                                    *no_pulse, jnp.arange(2), q))
@@ -129,7 +130,7 @@ def test_nuisance_marginal_matches_dense_gaussian():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.thrust import nuisance_marginal, offset_marginal
+    from cassini_bayes.inference.gaussian import nuisance_marginal, offset_marginal
 
     rng = np.random.default_rng(4)
     n, n_nu, big = 5, 4, 1e6
@@ -216,8 +217,9 @@ def test_sampler_prior_density_is_the_stated_prior():
     the papers' profile, at a first-order valve, near τd = 0 (1 µs), at τd = 12 ms and at a
     delay ten times the rise (``τr → 0``, the far tail of ``s``); the map inverts (Lambert W) to
     1e-12."""
-    from cassini_bayes.inference.thrust import (A_LOG_SCALE, C_SCALE_S, _tau_from_z,
-                                                long_pulse_excess, rise_deficit)
+    from cassini_bayes.inference.thrust import (A_LOG_SCALE, C_SCALE_S, long_pulse_excess,
+                                                rise_deficit)
+    from cassini_bayes.inference.thrust.coords import _tau_from_z
 
     sc = load_spacecraft("models/fsds.toml")
     tp = tau_prior(sc)
@@ -253,10 +255,10 @@ def test_pulse_on_at_the_first_sample_is_modelled_after_it_with_a_warning(monkey
     from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
     from cassini_bayes.telemetry import PulseAtStartWarning
 
-    import cassini_bayes.inference.thrust as thrust
+    import cassini_bayes.inference.thrust.data as thrust_data
 
     # the sampler's Laplace whitening is not under test: skip its compilation
-    monkeypatch.setattr(thrust, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
+    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
     sc = load_spacecraft("models/fsds.toml")
     tel = _quiet_telemetry()
     t_on, width = np.array([-0.2, -0.135, 5.0]), np.array([0.5, 0.125, 0.25])
@@ -439,7 +441,7 @@ def test_robust_columns_torque_and_wheel_scale(wheel_errors):
     wheel (common: one column −H_w): the linear terms of the predicted Eq 17 left side (module
     docstring)."""
     from cassini_bayes.inference.nuisance import nuisance_layout
-    from cassini_bayes.inference.thrust import _nuisance_columns
+    from cassini_bayes.inference.thrust.data import _nuisance_columns
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")

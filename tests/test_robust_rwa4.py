@@ -12,8 +12,8 @@ import pytest
 
 from cassini_bayes.frames import dcm, rotvec_to_quat
 from cassini_bayes.inference.nuisance import nuisance_layout
-from cassini_bayes.inference.rwa4 import (_balance, _nuisance_cols, _nuisance_means,
-                                          _window_means)
+from cassini_bayes.inference.rwa4.data import _nuisance_means, _window_means
+from cassini_bayes.inference.rwa4.likelihood import _balance, _nuisance_cols
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S

@@ -15,6 +15,9 @@ import pytest
 from scipy import stats
 
 from cassini_bayes.inference import rwa4
+from cassini_bayes.inference.rwa4 import data as rwa4_data
+from cassini_bayes.inference.rwa4 import model as rwa4_charts
+from cassini_bayes.inference.rwa4 import prior as rwa4_prior
 from cassini_bayes.inference.inertia import (cholesky_params_from_pi, inertia_prior,
                                              is_physical, pi_from_cholesky_params)
 from cassini_bayes.spacecraft import load_spacecraft
@@ -26,7 +29,7 @@ def _cassini_prior(sd_factor: float = 1.0):
 
 
 def _margins(pi: np.ndarray) -> np.ndarray:
-    return np.asarray(jax.vmap(rwa4._physical_margin)(jnp.asarray(pi)))
+    return np.asarray(jax.vmap(rwa4_prior._physical_margin)(jnp.asarray(pi)))
 
 
 def _margin_chi2_p(draws: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> float:
@@ -35,8 +38,9 @@ def _margin_chi2_p(draws: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> floa
     probability)."""
     ref = mean + np.asarray(jax.random.normal(jax.random.key(99), (400_000, 6))) @ \
         np.linalg.cholesky(cov).T
-    scale = jnp.asarray(float(rwa4._physical_margin(jnp.asarray(mean))) / rwa4._MARGIN_FRACTION)
-    weight = np.exp(np.asarray(rwa4._log_factors(jnp.asarray(ref), scale)))
+    scale = jnp.asarray(float(rwa4_prior._physical_margin(jnp.asarray(mean)))
+                        / rwa4_prior._MARGIN_FRACTION)
+    weight = np.exp(np.asarray(rwa4_prior._log_factors(jnp.asarray(ref), scale)))
     m_ref = _margins(ref)
     order = np.argsort(m_ref)
     cdf = np.cumsum(weight[order]) / weight.sum()
@@ -93,9 +97,10 @@ def _chart_kwargs() -> dict:
     rng = np.random.default_rng(3)
     q_inv = np.linalg.qr(rng.standard_normal((6, 6)))[0] * np.array([20, 15, 30, 1, 1, 1.0])
     return {k: jnp.asarray(v) for k, v in dict(
-        u0=u0, basis=rwa4._tangent_basis(u0), pi_mean=mean, pi_chol=chol,
+        u0=u0, basis=rwa4_data._tangent_basis(u0), pi_mean=mean, pi_chol=chol,
         lp_centre=lp_c, lp_tril=np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)),
-        margin_scale=float(rwa4._physical_margin(jnp.asarray(mean))) / rwa4._MARGIN_FRACTION,
+        margin_scale=(float(rwa4_prior._physical_margin(jnp.asarray(mean)))
+                      / rwa4_prior._MARGIN_FRACTION),
         q_inv=q_inv, z_offset=-0.95 * u0).items()}
 
 
@@ -107,7 +112,7 @@ def test_both_charts_state_the_same_prior(chart):
     ``_log_physical_factor(π)`` is the same constant at every ``θ`` (deterministic, 1e-6).
     Points within 2.5 s of the boundary are included (50 of 300 have m < 2 s)."""
     kw = _chart_kwargs()
-    physical = rwa4._PHYSICAL[chart]
+    physical = rwa4_charts._PHYSICAL[chart]
     rng = np.random.default_rng(4)
     theta = rng.standard_normal((300, 8)) * np.array([0.3, 0.3, 0.05, 0.05, 0.05, 2, 2, 2])
     if chart == "rcs":
@@ -119,8 +124,8 @@ def test_both_charts_state_the_same_prior(chart):
         gnomonic = -1.5 * jnp.log(1.0 + jnp.sum(t[:2] ** 2))
         xi_err = jnp.max(jnp.abs(kw["pi_chol"] @ xi - (pi - kw["pi_mean"])))
         return (log_jac - jnp.linalg.slogdet(d_pi)[1] - gnomonic
-                - rwa4._log_physical_factor(pi, kw["margin_scale"]),
-                rwa4._physical_margin(pi), xi_err)
+                - rwa4_prior._log_physical_factor(pi, kw["margin_scale"]),
+                rwa4_prior._physical_margin(pi), xi_err)
 
     res, margin, xi_err = map(np.asarray, jax.jit(jax.vmap(residual))(jnp.asarray(theta)))
     ok = margin > 0

@@ -58,17 +58,13 @@ from typing import NamedTuple
 import numpy as np
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.names import EFFECTS
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt_basis",
            "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
            "site_prior_sd", "prior_wheel_errors"]
 
-# Effect name → the posterior site holding its parameters.
-EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
-           "wheel_inertia": "wheel_scale", "wheel_inertia_common": "wheel_scale_common",
-           "wheel_axes": "wheel_tilt", "body_torque": "T_body",
-           "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
 BODY_TORQUE_PRIOR_SD_NM = 15e-6  # N m per axis, as the inertial T_N (Feldman & Lee App. A)
 """The default external-torque prior sd (``Knowledge.torque_sd_nm``)."""
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from cassini_bayes.names import THRUSTER_NAMES
 from cassini_bayes.physics.pulse import pulse_impulse_until
 
 __all__ = [
@@ -52,7 +53,6 @@ __all__ = [
     "system_xyz",
 ]
 
-THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
 
 _SIGNS_XY = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
 _DIRECTIONS = np.array(

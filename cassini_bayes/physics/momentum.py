@@ -19,6 +19,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from cassini_bayes.frames import dcm
+from cassini_bayes.names import INERTIA_NAMES
 
 __all__ = [
     "INERTIA_NAMES",
@@ -32,7 +33,6 @@ __all__ = [
     "free_momentum_system",
 ]
 
-INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
 def inertia_matrix(pi: Array) -> Array:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
 from cassini_bayes.report import figures
 from cassini_bayes.report.adequacy import adequacy_badge, adequacy_section
 from cassini_bayes.report.html import (
@@ -36,16 +37,7 @@ from cassini_bayes.report.html import (
     table,
     write_atomic,
 )
-from cassini_bayes.report.rundata import (
-    F_NAMES,
-    INERTIA_NAMES,
-    TAU_NAMES,
-    U4_NAMES,
-    RunData,
-    finite_or_none,
-    flatten_draws,
-    load_run,
-)
+from cassini_bayes.report.rundata import RunData, finite_or_none, flatten_draws, load_run
 from cassini_bayes.report.tables import (
     BFMI_MIN,
     ESS_MIN,

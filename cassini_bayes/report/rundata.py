@@ -20,15 +20,11 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
 
 __all__ = ["RunData", "load_run", "flatten_draws", "KINDS"]
 
 KINDS = ("inertia", "thrust", "rwa4")
-INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
-TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
-THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
-F_NAMES = ("F",) + tuple(f"F_{t}" for t in THRUSTER_NAMES)
-U4_NAMES = ("u4_x", "u4_y", "u4_z")
 
 
 @dataclass(frozen=True)

@@ -18,15 +18,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from cassini_bayes.report.rundata import (
-    F_NAMES,
-    INERTIA_NAMES,
-    TAU_NAMES,
-    U4_NAMES,
-    RunData,
-    finite_or_none,
-    flatten_draws,
-)
+from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
+from cassini_bayes.report.rundata import RunData, finite_or_none, flatten_draws
 
 __all__ = [
     "RHAT_MAX",

@@ -1,0 +1,80 @@
+"""Gaussian algebra shared by the likelihoods: closed-form 3×3 inverses and the exact
+marginalisation of a flat per-event offset and of linear nuisance parameters with Gaussian priors
+(the thrust model's offsets and robust effects; Feldman & Lee 2006 Eq 17 with the robust terms).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+__all__ = ["inv3_spd", "OffsetMarginal", "offset_marginal", "nuisance_marginal"]
+
+
+def inv3_spd(b):
+    """Inverse and log-determinant of batches (..., 3, 3) of symmetric positive-definite
+    matrices, in closed form (LAPACK calls on 3×3 matrices cost far more than the arithmetic)."""
+    c00 = b[..., 1, 1] * b[..., 2, 2] - b[..., 1, 2] * b[..., 1, 2]
+    c11 = b[..., 0, 0] * b[..., 2, 2] - b[..., 0, 2] * b[..., 0, 2]
+    c22 = b[..., 0, 0] * b[..., 1, 1] - b[..., 0, 1] * b[..., 0, 1]
+    c01 = b[..., 0, 2] * b[..., 1, 2] - b[..., 0, 1] * b[..., 2, 2]
+    c02 = b[..., 0, 1] * b[..., 1, 2] - b[..., 0, 2] * b[..., 1, 1]
+    c12 = b[..., 0, 1] * b[..., 0, 2] - b[..., 0, 0] * b[..., 1, 2]
+    det = b[..., 0, 0] * c00 + b[..., 0, 1] * c01 + b[..., 0, 2] * c02
+    adj = jnp.stack([jnp.stack([c00, c01, c02], -1), jnp.stack([c01, c11, c12], -1),
+                     jnp.stack([c02, c12, c22], -1)], -2)
+    return adj / det[..., None, None], jnp.log(det)
+
+
+class OffsetMarginal(NamedTuple):
+    """What :func:`offset_marginal` returns for one event."""
+
+    loglik: object      # log ∫ Π_i N(r_i − β; 0, Σ_i) dβ at ν = 0
+    info: object        # (R, R) Σ D̄_iᵀ P_i D̄_i: the event's information on ν, offset removed
+    score: object       # (R,) Σ D̄_iᵀ P_i d_i: the linear term, ∂ loglik/∂ν at ν = 0
+    resid: object       # (n, 3) r − β̂, N m s
+
+
+def offset_marginal(r, b, m, mask, cols):
+    """The flat offset ``β`` (3,) of one event integrated out, exactly, with per-sample
+    covariances ``Σ_i = B + m_i m_iᵀ``; rows with ``mask`` 0 are left out.
+
+    The per-sample precisions ``P_i`` come from Sherman–Morrison,
+    ``(B + m mᵀ)⁻¹ = B⁻¹ − B⁻¹m mᵀB⁻¹/(1 + mᵀB⁻¹m)``; ``β̂ = (Σ P_i)⁻¹ Σ P_i r_i`` and the
+    integral adds ``(3/2) log 2π − ½ log|Σ_i P_i|``. ``cols`` (n, 3, R) are the columns of the
+    nuisance ``ν`` in the residual ``r_i − cols_i ν``: the log-likelihood is exactly quadratic in
+    ``ν``, ``loglik − ½ νᵀ info ν + scoreᵀ ν`` (:class:`OffsetMarginal`), with the columns'
+    offset part removed (``D̄_i = D_i − (Σ P)⁻¹ Σ P_j D_j``), so the events' terms add up.
+    """
+    # Products of the n 3×3 blocks are written as broadcasts and sums, not batched einsums,
+    # which XLA on the CPU runs as n tiny GEMMs (measured, gradient of this function for 481
+    # samples, R = 16, 4 chains vectorised: 4.4 ms with einsums, 3.3 ms as written).
+    b_inv, logdet = inv3_spd(b)
+    u = m @ b_inv
+    g = 1.0 + jnp.sum(u * m, -1)
+    prec = (b_inv[None] - u[:, :, None] * u[:, None, :] / g[:, None, None]) * mask[:, None, None]
+    p_inv, p_logdet = inv3_spd(jnp.sum(prec, 0))
+    d = r - (p_inv @ jnp.sum(prec * r[:, None, :], (0, 2)))[None, :]
+    quad = jnp.sum(d[:, :, None] * prec * d[:, None, :], (1, 2))
+    ll_i = -0.5 * (quad + logdet + jnp.log(g) + 3.0 * jnp.log(2.0 * jnp.pi))
+    ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet
+    flat = (3 * cols.shape[0], cols.shape[-1])
+    pd = jnp.sum(prec[..., None] * cols[:, None, :, :], 2)           # P_i D_i (n, 3, R)
+    s_bd = jnp.sum(pd, 0)                                             # Σ P_i D_i (3, R)
+    info = cols.reshape(flat).T @ pd.reshape(flat) - s_bd.T @ p_inv @ s_bd
+    score = pd.reshape(flat).T @ d.reshape(-1)
+    return OffsetMarginal(ll, info, score, d)
+
+
+def nuisance_marginal(info, score, nu_sd):
+    """``log ∫ exp(scoreᵀν − ½ νᵀ info ν) N(ν; 0, diag(nu_sd²)) dν`` and the Gaussian
+    conditional of the whitened ``z = ν / nu_sd``: its mean ``A⁻¹ s̃`` and the lower Cholesky
+    factor ``L`` of ``A = diag(sd) info diag(sd) + I`` (the conditional covariance is
+    ``A⁻¹ = L⁻ᵀ L⁻¹``). The integral is ``½ s̃ᵀ A⁻¹ s̃ − log|L|``, ``s̃ = sd ⊙ score``."""
+    a = nu_sd[:, None] * info * nu_sd[None, :] + jnp.eye(nu_sd.shape[0])
+    chol = jnp.linalg.cholesky(0.5 * (a + a.T))
+    y = jax.scipy.linalg.solve_triangular(chol, nu_sd * score, lower=True)
+    mean = jax.scipy.linalg.solve_triangular(chol.T, y, lower=False)
+    return 0.5 * y @ y - jnp.sum(jnp.log(jnp.diag(chol))), mean, chol

@@ -1,0 +1,137 @@
+"""RWA4 spin-axis posterior on the sphere (Brown 2012 §III.B, §III.C, made Bayesian).
+
+Model
+-----
+Both of Brown's methods rest on the conservation of the total inertial angular momentum between
+quiet windows (no thruster firing). Per sample ``i`` of window group ``g`` (an "A"/"B" window
+pair)
+
+    A(q_i)ᵀ c_i = H_g,    c_i = I ω_i + Σ_known J_k ρ_k,i g_k + J_4 ρ_4,i u4      (Brown Eqs 1, 3)
+
+(``A(q)`` inertial→body, Brown Eq 2; ``I`` kg m²; ``ρ`` rad/s; ``J`` kg m²). Brown averages each
+window and solves the difference for ``u4``; so does the likelihood here (:func:`_loglik`): the
+change of the window-mean inertial momentum is zero up to the noise of the means. A per-sample
+likelihood (each sample's momentum equal to the pair's, ``H_g`` integrated out) was tried first:
+on ``rwa4_rcs`` it preferred an inertia 55 % off the truth by 1460 log-units — the drift samples
+carry inertia information that the simulator's dynamics do not match to the gyro-noise level — so
+the window means, Brown's own information, are used.
+
+* RCS method (Eq 1): one pair, "Time A" before and "Time B" after the RWA4 spin-up while the
+  spacecraft drifts; RWA4 is the only wheel and ``I ω`` carries the balance, so the inertia matters.
+* RWA method (Eq 3): one pair per slew pair (quiescent windows at two attitudes), RWA2 and RWA3
+  known; ``I ω`` is small but kept.
+
+Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives the body covariance
+``B = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` (``g_4 = u4``) per sample, rotated to inertial axes and
+averaged over each window; the levels are fixed at the data's own white-noise estimates σ̂ (three
+numbers per pair cannot estimate them).
+
+Robust model (the default)
+--------------------------
+Brown's balance also moves with effects his least squares leaves out, each small and entering
+``d_g`` linearly (:mod:`cassini_bayes.inference.nuisance`, the inertia and thrust models' layout
+and priors): gyro bias and scale factor (through ``I*``, the prior-mean tensor), a spin-inertia
+scale per wheel (``J_k → (1 + c_k) J_k``, the solved wheel's own included; with
+``wheel_errors="common"`` one ``c`` for every wheel, the earlier model), tilts of the *known*
+wheels' axes (the solved wheel's axis is the unknown), a body-fixed external torque
+(``∫ A(q_s)ᵀ ds T_B`` between the windows; Brown: ≈ 3e-6 N m, < 0.1° for the RCS method) and an
+inertial one (``T_I Δt``: solar and RTG torques, Feldman & Lee App. A; over the RWA method's
+long windows a few tens of µN m move the axis by more than the idealised cone). With
+zero-mean Normal priors they are integrated out exactly: ``d ~ N(0, C + D Σ_ν Dᵀ)`` over all
+pairs together (one effect is shared by every pair). The RWA method feels them most: 0.2° tilts
+of RWA2 and RWA3, whose momenta match RWA4's, move Brown's axis by tenths of a degree, 20–50× the
+idealised posterior's width on ``rwa4_rwa_real``; :func:`axis_sensitivity` reports each effect's
+shift. ``robust=False`` is Brown's idealised model.
+
+Priors
+------
+* ``u4``: uniform on the sphere, or concentrated on the articulation cone (angle from +Z within
+  ``Normal(54.7356°, 1°)``, any articulation angle): a factor
+  ``−½ ((θ_z(u4) − 54.7356°)/1°)²``. 1° is the mechanical cant tolerance we assume; the 1/8 s
+  articulation-command resolution (≈ 1.5°, Brown §I) moves the azimuth, not the cant.
+* Inertia: the spacecraft model's predicted tensor with its knowledge requirements as 1σ (the
+  prior of :mod:`cassini_bayes.inference.inertia`), or a Gaussian (an inertia run's posterior);
+  sampled jointly, so the mass-property error is part of the posterior (Brown's Monte Carlo
+  analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). The stated
+  prior, the same in both charts and in :func:`sample_inertia_prior` (SBC truths included), is
+  this Gaussian times the physical factor ``1 − exp(−(m/s)³)`` (:func:`_log_physical_factor`):
+  ``m`` the smallest eigenvalue of the second moment ``½ tr(I) 1 − I`` (positive exactly for
+  positive-definite tensors obeying the triangle inequalities), ``s`` half its value at the
+  prior mean. The factor is 0 for unphysical tensors, 1 − 3e-4 at the mean, 0.63 half-way to
+  the boundary: a stated softening of the truncation near the boundary, which NUTS needs (see
+  "Sampler coordinates").
+
+Sampler coordinates
+-------------------
+The axis is written in the gnomonic chart about the least-squares axis ``u0`` (tangent basis
+``E``): ``u = (u0 + Eᵀ v)/√(1 + |v|²)``, ``v ∈ R²``; a uniform density on the sphere is
+``(1 + |v|²)^(−3/2)`` in ``v``. The chart covers the hemisphere about ``u0``, which holds the
+posterior whenever the data determine the axis at all (:func:`prepare_rwa4` refuses data whose
+Laplace direction sd exceeds ``MAX_SD_DIRECTION_DEG``). The inertia is ``π = μ + L ξ`` with
+``ξ ~ N(0, 1)`` (``L`` the prior's Cholesky factor) times the physical factor. The boundary is
+near: on Cassini it is 3.16σ from the prior mean along the worst direction of ``ξ``, so a hard
+cut (−∞) makes NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
+
+* RWA method: ``θ = (v, ζ)``; the data fix ``u`` and barely touch ``π``, which is sampled in
+  the prior-whitened log-Cholesky coordinates ``ζ`` of the second-moment matrix (physical by
+  construction, the boundary at infinity; the prior density through the map's Jacobian, times
+  the physical factor, which is ``≈ (m/s)³`` there: linear in ``log m``, so smooth in ``ζ``).
+* RCS method: the pair's balance is ``J₄ R (z + u)`` with ``z = R⁻¹(M π + Δk)/J₄`` (``R`` the
+  change of ``⟨ρ₄ Aᵀ⟩``, ``M π`` that of ``⟨Aᵀ I ω⟩``): the data fix ``z = −u``, i.e. ``|z| = 1``
+  (a curved ellipsoid in ``π``) and the direction of ``z`` (another sphere). In Cartesian ``π``
+  and ``u`` this is a narrow curved ridge that NUTS cannot follow (checked: whitened axes of the
+  earlier ``x = R u`` construction dropped by −1200 log-units at ±1 instead of −0.5). So the
+  three combinations ``z`` of ``ξ`` are sampled in polar form, ``z = −e^ρ g(v_z)`` with the same
+  chart ``g``, plus the three prior-only complements ``w``: ``θ = (v, ρ, v_z, w)``, Jacobian
+  ``e^{3ρ} (1 + |v_z|²)^(−3/2)``; the constraint becomes ``ρ ≈ 0``, ``v_z ≈ v``, linear. Here
+  ``π`` is linear in ``θ`` and the boundary is at a finite distance, where the physical factor
+  turns trajectories back. It matters: the ridge ``v_z ≈ v`` moves ``u`` and ``ξ`` together (a
+  3σ move of the axis along it is several prior σ of ``ξ``), so the axis posterior is limited by
+  the inertia prior and the boundary, and NUTS reaches the factor's barrier in many fits. The
+  first factor, ``1 − exp(−m/s)`` with ``s`` = ¼ of the mean's margin, is ``≈ m/s`` near the
+  boundary: a log barrier whose curvature at a turning point of energy ``K`` grows as ``e^{2K}``
+  (1004 divergences in a 208-replicate SBC; 37 on ten of its divergent replicates refitted).
+  The cubic factor with ``s`` = ½ grows as ``e^{2K/3}``: 1 on the same ten (2 × 300 draws
+  each; :func:`_log_physical_factor`), and 7 single divergences in the 208-replicate SBC
+  (``docs/sbc/rwa4``). A map sending the boundary to infinity along rays from the prior mean
+  (tried) bends the narrow ridge wherever it compresses (a whitened axis fell to −848 at −3):
+  229 on the ten.
+
+Finally the sampler sees ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace
+approximation (:func:`cassini_bayes.inference.laplace.laplace`). The density is exact in ``θ``;
+the affine map only conditions the geometry. Check (``rwa4_rcs``, seed 21): along every whitened
+axis the log density at ±1, ±3 is within 0.5 of the Gaussian −0.5, −4.5. On SBC replicates the
+physical factor's barrier shows at ±3 (up to 6.7 below −4.5 on six replicates, within 0.11 at
+±1): a soft, finite wall, no cliff.
+"""
+
+from cassini_bayes.inference.rwa4.data import (MAX_SD_DIRECTION_DEG, METHODS, Rwa4Problem,
+                                               prepare_rwa4)
+from cassini_bayes.inference.rwa4.fit import Rwa4Posterior, axis_sensitivity, fit_rwa4
+from cassini_bayes.inference.rwa4.likelihood import balance_misfit
+from cassini_bayes.inference.rwa4.model import rwa4_model
+from cassini_bayes.inference.rwa4.prior import (CONE_ANGLE_DEG, CONE_SD_DEG, PRIORS,
+                                                sample_inertia_prior, sample_rwa4_prior)
+from cassini_bayes.inference.rwa4.windows import MIN_SPIN_CHANGE_RPM, WHEEL, detect_windows
+from cassini_bayes.names import U4_NAMES
+
+__all__ = [
+    "U4_NAMES",
+    "METHODS",
+    "PRIORS",
+    "CONE_ANGLE_DEG",
+    "CONE_SD_DEG",
+    "MIN_SPIN_CHANGE_RPM",
+    "MAX_SD_DIRECTION_DEG",
+    "WHEEL",
+    "detect_windows",
+    "balance_misfit",
+    "Rwa4Problem",
+    "prepare_rwa4",
+    "rwa4_model",
+    "sample_rwa4_prior",
+    "sample_inertia_prior",
+    "Rwa4Posterior",
+    "fit_rwa4",
+    "axis_sensitivity",
+]

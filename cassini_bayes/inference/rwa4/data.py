@@ -1,0 +1,316 @@
+"""Data preparation of the RWA4 model: window means of the momentum balance, noise levels,
+the robust effects' columns, the chart and its Laplace whitening (:func:`prepare_rwa4`).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from cassini_bayes.errors import InputError, arg
+from cassini_bayes.estimators.rwa4 import fit_axis_rcs, fit_axis_rwa
+from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
+from cassini_bayes.inference.inertia import (InertiaGaussian, cholesky_params_from_pi,
+                                             inertia_prior, is_physical, pi_from_cholesky_params)
+from cassini_bayes.inference.laplace import laplace
+from cassini_bayes.inference.noise import (ATTITUDE_FLOOR, RATE_FLOORS, floored, rate_noise_levels,
+                                           white_noise_sd)
+from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
+from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
+from cassini_bayes.inference.rwa4.prior import (CONE_ANGLE_DEG, CONE_SD_DEG, PRIORS,
+                                                _margin_scale)
+from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
+                                                  _check_windows, _wheel_name, detect_windows)
+from cassini_bayes.physics.momentum import inertia_matrix, regressor
+from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
+
+__all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Problem", "prepare_rwa4"]
+
+METHODS = ("rcs", "rwa")
+MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
+_DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
+
+
+class Rwa4Problem(NamedTuple):
+    """Everything the RWA4 model needs, prepared once (SI units).
+
+    Attributes
+    ----------
+    model_kwargs : arrays for :func:`rwa4_model`.
+    method : ``"rcs"`` or ``"rwa"``; prior : ``"uniform"`` or ``"cone"``.
+    pairs : the ``(Time A, Time B)`` windows (s) used, one pair per group.
+    inertia : the Gaussian inertia prior (mean (6,), cov (6, 6), kg m²).
+    inertia_source : ``"spacecraft"`` or ``"posterior"``.
+    baseline : the least-squares axis (Brown Eq 1 or Eq 3 at the prior-mean inertia), (3,).
+    sd_direction_deg : the Laplace approximation's largest angular sd of the axis, deg.
+    spin_change_rpm : change of the wheel's mean rate from A to B, per pair.
+    noise_hat : (3,) σ̂ (rad/s, rad/s, rad).
+    source : the telemetry file.
+    wheel : the wheel solved for.
+    chart : ``"rcs"`` (balance coordinates) or ``"rwa"`` (direct), module docstring.
+    layout : the nuisance layout of the robust model's effects (built for either model).
+    nuisance : their columns (:func:`_nuisance_means`; in ``model_kwargs`` only when ``robust``).
+    robust : whether the likelihood integrates the effects out.
+    """
+
+    model_kwargs: dict
+    method: str
+    prior: str
+    pairs: tuple[tuple[Window, Window], ...]
+    inertia: InertiaGaussian
+    inertia_source: str
+    baseline: np.ndarray
+    sd_direction_deg: float
+    spin_change_rpm: np.ndarray
+    noise_hat: np.ndarray
+    source: str
+    wheel: str
+    chart: str
+    layout: NuisanceLayout
+    nuisance: dict
+    robust: bool
+
+
+def _attitude_noise(q: np.ndarray) -> float:
+    """White-noise level (rad) of the attitude ``q`` (n, 4) (:func:`~cassini_bayes.inference.
+    noise.white_noise_sd` of its body-frame increments)."""
+    if q.shape[0] < 4:
+        return 0.0
+    qc = np.asarray(quat_continuous(q))
+    inc = np.asarray(quat_to_rotvec(quat_multiply(qc[1:], quat_conjugate(qc[:-1]))))
+    return white_noise_sd(inc, differenced=True)
+
+
+def _tangent_basis(u: np.ndarray) -> np.ndarray:
+    """(2, 3) orthonormal basis of the plane perpendicular to the unit vector ``u``."""
+    e = np.eye(3)[int(np.argmin(np.abs(u)))]
+    e1 = np.cross(u, e)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([e1, np.cross(u, e1)])
+
+
+def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
+    """σ̂ (3,): gyro (rad/s), wheel rate (rad/s), attitude (rad), medians over the windows
+    (quiet: the robust white-noise estimate is cleanest there)."""
+    t = np.asarray(tel.t, float)
+    levels = np.array([rate_noise_levels(tel.slice(*w))[:2] for w in windows], float)
+    s_q = np.median([_attitude_noise(q[(t >= w[0]) & (t <= w[1])]) for w in windows])
+    return floored([*np.median(levels, axis=0), s_q], (*RATE_FLOORS, ATTITUDE_FLOOR))
+
+
+def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
+    """The window averages of :func:`_loglik` (its docstring), as JAX arrays."""
+    a_all = np.asarray(dcm(jnp.asarray(q)))
+    h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
+                   else np.zeros((q.shape[0], 3)))
+    reg = np.asarray(regressor(jnp.asarray(omega)))
+    rho = np.nan_to_num(rates[:, k_u])
+    m_pi, r_u, k_h, n_w, t_aa = [], [], [], [], []
+    for ma, mb in masks:
+        for m in (ma, mb):
+            at = np.swapaxes(a_all[m], -1, -2)                          # body → inertial
+            m_pi.append(np.einsum("nij,njk->ik", at, reg[m]) / m.sum())
+            r_u.append(np.einsum("n,nij->ij", rho[m], at) / m.sum())
+            k_h.append(np.einsum("nij,nj->i", at, h_known_all[m]) / m.sum())
+            n_w.append(float(m.sum()))
+            t_aa.append(np.einsum("nja,nkb->jakb", a_all[m], a_all[m]) / m.sum())
+    known_cov = sum((js[k]**2 * np.outer(axes[k], axes[k]) for k in known), np.zeros((3, 3)))
+    return dict(m_pi=jnp.asarray(np.stack(m_pi)), r_u=jnp.asarray(np.stack(r_u)),
+                k_h=jnp.asarray(np.stack(k_h)), n_w=jnp.asarray(np.array(n_w)),
+                t_aa=jnp.asarray(np.stack(t_aa)), j4=jnp.asarray(js[k_u]),
+                known_cov=jnp.asarray(known_cov))
+
+
+def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
+                    t, inertia) -> dict:
+    """The robust model's nuisance columns of ``d_g`` (:func:`_loglik`), as JAX arrays.
+
+    The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
+    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
+    wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
+    ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the momentum,
+    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale columns
+    (per wheel: its own, the layout's last scale, and the shared one; common: the one scale),
+    whose solved-wheel part
+    :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
+    """
+    a_all = np.asarray(dcm(jnp.asarray(q)))
+    rho = np.nan_to_num(rates)
+    wheel_h = {names[k]: js[k] * rho[:, k] for k in known}
+    h_known = sum((wheel_h[names[k]][:, None] * axes[k] for k in known),
+                  np.zeros((q.shape[0], 3)))
+    cols = robust_columns(layout, 0, inertia, omega, h_known, wheel_h, a_all, t)
+    inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
+    diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
+    one_hot = np.zeros(layout.size)
+    one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
+    if layout.has_common:                   # the shared scale reaches the solved wheel too
+        one_hot[layout.slices["wheel_inertia_common"]] = 1.0
+    return dict(nu_cols=jnp.asarray(np.stack(diff)), nu_sd=jnp.asarray(layout.sd),
+                nu_wheel=jnp.asarray(one_hot))
+
+
+def _no_nuisance(n_pairs: int) -> dict:
+    """The idealised model: no nuisance columns (R = 0)."""
+    return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
+
+
+def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
+    """The RCS method's linearising change of inertia coordinates (module docstring).
+
+    With ``π = μ + L ξ`` the pair's balance is ``J₄ R (z + u4)`` with ``R = ΔR_u`` and
+    ``z = a + K ξ``, ``a = R⁻¹(M μ + Δk)/J₄``, ``K = R⁻¹ M L/J₄`` (``M = Δm_π``). Returns ``a``
+    (3,) and ``Q⁻¹`` (6, 6) with ``ξ = Q⁻¹ [z − a; w]``, the rows of ``Q`` being ``K`` and an
+    orthonormal basis ``w`` of the prior-whitened inertia directions the balance does not see;
+    ``None`` when ``R`` or ``K`` is singular (no spin change or no drift).
+    """
+    j4 = float(data["j4"])
+    r = np.asarray(data["r_u"][1] - data["r_u"][0])
+    m = np.asarray(data["m_pi"][1] - data["m_pi"][0])
+    dk = np.asarray(data["k_h"][1] - data["k_h"][0])
+    if np.linalg.cond(r) > 1e8:
+        return None
+    a = np.linalg.solve(r, m @ pi_mean + dk) / j4
+    k = np.linalg.solve(r, m @ pi_chol) / j4
+    _, s, vt = np.linalg.svd(k)
+    if not s[-1] > 1e-8 * s[0]:
+        return None
+    return a, np.linalg.inv(np.concatenate([k, vt[3:]], 0))
+
+
+def _inertia_prior(inertia: InertiaGaussian | None, spacecraft: Spacecraft):
+    """The Gaussian inertia prior (default the spacecraft model's knowledge), its source
+    (``"spacecraft"`` or ``"posterior"``), mean (6,) kg m² and Cholesky factor (6, 6)."""
+    if inertia is None:
+        ip = inertia_prior(spacecraft)
+        inertia, i_src = InertiaGaussian(ip.mean, np.diag(ip.sd**2)), "spacecraft"
+    else:
+        i_src = "posterior"
+    i_mean = np.asarray(inertia.mean, float)
+    if not is_physical(i_mean):
+        raise InputError("the inertia prior mean is not a physical inertia tensor")
+    i_chol = np.linalg.cholesky(np.asarray(inertia.cov, float))
+    return inertia, i_src, i_mean, i_chol
+
+
+def _chart(kw: dict, method: str, data: dict, inertia: InertiaGaussian, i_mean: np.ndarray,
+           i_chol: np.ndarray) -> tuple[str, np.ndarray]:
+    """Add the chart's arrays to ``kw``; the chart (``"rcs"`` when the RCS balance map exists,
+    else ``"rwa"``) and the sampler's starting point (module docstring)."""
+    theta0 = np.zeros(_DIM)
+    chart = "rwa"
+    lp_c = cholesky_params_from_pi(i_mean)
+    jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
+    cov_lp = np.linalg.solve(jac, np.linalg.solve(jac, np.asarray(inertia.cov)).T)
+    kw["lp_centre"] = jnp.asarray(lp_c)
+    kw["lp_tril"] = jnp.asarray(np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)))
+    if method == "rcs":
+        bal = _balance_map(data, i_mean, i_chol)
+        if bal is not None:
+            chart = "rcs"
+            kw["z_offset"], kw["q_inv"] = jnp.asarray(bal[0]), jnp.asarray(bal[1])
+            theta0[2] = np.log(np.linalg.norm(bal[0]))
+    return chart, theta0
+
+
+def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
+                 pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
+                 inertia: InertiaGaussian | None = None, wheel: str = WHEEL,
+                 robust: bool = True, wheel_errors: str = "per_wheel") -> Rwa4Problem:
+    """Prepare the spin-axis problem of ``wheel`` from one telemetry file and its window pairs.
+
+    Parameters
+    ----------
+    tel : telemetry with the wheel running (and, for the RWA method, the known wheels).
+    spacecraft : wheel axes/inertias (the solved wheel's axis in the model is ignored) and the
+        inertia prior.
+    method : ``"rcs"`` (Brown Eq 1) or ``"rwa"`` (Brown Eq 3).
+    pairs : ``[(A, B), …]`` windows in s; detected (:func:`detect_windows`) when ``None``.
+    prior : ``"uniform"`` or ``"cone"``.
+    inertia : Gaussian inertia prior; default the spacecraft model's knowledge requirements.
+    wheel : the wheel whose axis is solved for (default RWA4; Brown's flight test: RWA1).
+    robust : integrate out the nuisance effects of the module docstring ("Robust model"), with
+        the priors of the spacecraft model's ``Knowledge``; ``False``: Brown's idealised model.
+    wheel_errors : the robust model's wheel spin-inertia errors: ``"per_wheel"`` (default; the
+        solved wheel has its own scale too) or ``"common"`` (one scale for every wheel).
+
+    Raises
+    ------
+    InputError
+        Unknown method/prior/wheel, no rates of the wheel, windows outside the data or
+        overlapping, thrusters firing inside a window, no spin change (RCS), data that cannot
+        determine the axis.
+    """
+    if method not in METHODS:
+        raise InputError(f"{arg('method', method, cli_quote=True)}: choose one of "
+                         f"{', '.join(METHODS)}")
+    if prior not in PRIORS:
+        raise InputError(f"{arg('prior', prior, cli_quote=True)}: choose one of "
+                         f"{', '.join(PRIORS)}")
+    wheel = _wheel_name(tel, wheel)
+    pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
+        [tuple(p) for p in pairs]
+    pairs = _check_windows(tel, pairs, method)
+
+    t = np.asarray(tel.t, float)
+    names = tel.wheel_names
+    k_u = names.index(wheel)
+    rates = np.asarray(tel.wheel_rates, float)
+    axes = np.stack([spacecraft.wheel(n).axis for n in names])
+    js = np.array([spacecraft.wheel(n).inertia for n in names])
+    active = np.any(np.isfinite(rates), axis=0)
+    known = [k for k in range(len(names)) if k != k_u and active[k]]
+    masks = [((t >= a[0]) & (t <= a[1]), (t >= b[0]) & (t <= b[1])) for a, b in pairs]
+    rho = np.nan_to_num(rates[:, k_u])
+    spin = np.array([(rho[mb].mean() - rho[ma].mean()) / RPM_TO_RAD_S for ma, mb in masks])
+    if method == "rcs" and abs(spin[0]) < MIN_SPIN_CHANGE_RPM:
+        raise InputError(f"{wheel} changes by {spin[0]:.3g} rpm between Time A and Time B "
+                         f"(< {MIN_SPIN_CHANGE_RPM:g} rpm): no spin change to calibrate from",
+                         path=tel.source)
+
+    inertia, i_src, i_mean, i_chol = _inertia_prior(inertia, spacecraft)
+
+    # Least-squares baseline (Brown Eq 1 / Eq 3), also the chart's centre.
+    q = np.asarray(quat_continuous(np.asarray(tel.q, float)))
+    omega = np.asarray(tel.omega, float)
+    i_pred = np.asarray(inertia_matrix(i_mean))
+    if method == "rcs":
+        fit = fit_axis_rcs(q, omega, rates, axes, js, i_pred, masks[0][0], masks[0][1],
+                           unknown=k_u)
+    else:
+        fit = fit_axis_rwa(q, omega, rates, axes, js, masks, unknown=k_u, inertia=i_pred)
+    u_ls = np.asarray(fit.axis, float)
+
+    noise = _noise_levels(tel, q, [w for p in pairs for w in p])
+    data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
+    layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
+                             wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
+                             inertial_torque=True, torque_rate=True)
+    nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
+    data.update(nuisance if robust else _no_nuisance(len(pairs)))
+    kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
+              pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
+              log_noise_hat=jnp.asarray(np.log(noise)),
+              margin_scale=_margin_scale(i_mean),
+              cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
+              cone_angle=jnp.asarray(np.radians(CONE_ANGLE_DEG)),
+              cone_sd=jnp.asarray(np.radians(CONE_SD_DEG)))
+    chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
+    centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
+    cov_v = (tril @ tril.T)[:2, :2]
+    sd_dir = float(np.degrees(np.sqrt(np.linalg.eigvalsh(cov_v)[-1])))
+    if not sd_dir < MAX_SD_DIRECTION_DEG:
+        raise InputError(f"the data determine the {wheel} axis only to ±{sd_dir:.3g}° "
+                         f"(Laplace sd > {MAX_SD_DIRECTION_DEG:g}°): no excitation between the "
+                         "windows; choose windows across a spin change (RCS) or a slew (RWA)",
+                         path=tel.source)
+    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
+    return Rwa4Problem(
+        model_kwargs=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
+        inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
+        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
+        nuisance=nuisance, robust=robust)

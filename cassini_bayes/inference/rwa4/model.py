@@ -1,0 +1,109 @@
+"""The RWA4 model's charts (gnomonic axis, the RWA and RCS inertia coordinates), the log
+density and the NumPyro model per chart (:mod:`cassini_bayes.inference.rwa4`, "Sampler
+coordinates").
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import jax
+import jax.numpy as jnp
+import numpyro
+import numpyro.distributions as dist
+from numpyro.distributions import constraints
+
+from cassini_bayes.inference.inertia import pi_from_cholesky_params
+from cassini_bayes.inference.rwa4.likelihood import _loglik
+from cassini_bayes.inference.rwa4.prior import _log_physical_factor
+from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
+
+__all__ = ["rwa4_model"]
+
+
+def _gnomonic(v, kw):
+    """Unit vector of the gnomonic chart ``v`` (2,) about ``u0`` and ``log dΩ/dv``."""
+    s = 1.0 + jnp.sum(v**2)
+    u = (kw["u0"] + v @ kw["basis"]) / jnp.sqrt(s)
+    return u, -1.5 * jnp.log(s)
+
+
+def _physical_rwa(theta, kw):
+    """``u`` (3,), ``π`` (6,) kg m², ``ξ = L⁻¹(π − μ)`` and the log Jacobian of
+    ``θ = (v (2), ζ (6))`` plus the log physical factor (:func:`_log_physical_factor`):
+    log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by construction,
+    :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
+    u, log_jac = _gnomonic(theta[:2], kw)
+    lp = kw["lp_centre"] + kw["lp_tril"] @ theta[2:8]
+    pi = pi_from_cholesky_params(lp)
+    xi = jax.scipy.linalg.solve_triangular(kw["pi_chol"], pi - kw["pi_mean"], lower=True)
+    # log|det ∂π/∂lp| up to a constant: exp of the diagonal gives Σ lp_ii, L → L Lᵀ gives
+    # 2³ L00³ L11² L22, Σ → I = tr(Σ) 1 − Σ is linear
+    return u, pi, xi, (log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
+                       + _log_physical_factor(pi, kw["margin_scale"]))
+
+
+def _physical_rcs(theta, kw):
+    """As :func:`_physical_rwa` for ``θ = (v (2), log|z| (1), v_z (2), w (3))``: ``z = −|z|
+    g(v_z)`` with the chart ``g`` of ``u``, ``ξ = Q⁻¹ [z − a; w]`` (:func:`_balance_map`)."""
+    u, log_jac = _gnomonic(theta[:2], kw)
+    z_dir, log_jac_z = _gnomonic(theta[3:5], kw)
+    z = -jnp.exp(theta[2]) * z_dir
+    xi = kw["q_inv"] @ jnp.concatenate([z - kw["z_offset"], theta[5:8]])
+    pi = kw["pi_mean"] + kw["pi_chol"] @ xi
+    # d³z = |z|³ d log|z| dΩ; π linear in ξ: the physical truncation is an explicit factor
+    return u, pi, xi, (log_jac + log_jac_z + 3.0 * theta[2]
+                       + _log_physical_factor(pi, kw["margin_scale"]))
+
+
+def _log_density_with(physical, theta, kw):
+    u, pi, xi, log_jac = physical(theta, kw)
+    # Gaussian inertia prior (physical truncation in the chart's Jacobian term); uniform u on
+    # the sphere (chart Jacobian), times the articulation-cone factor when chosen
+    log_prior = -0.5 * jnp.sum(xi**2) + log_jac
+    angle = jnp.arccos(jnp.clip(u[2], -1.0, 1.0))
+    log_prior += -0.5 * kw["cone_weight"] * ((angle - kw["cone_angle"]) / kw["cone_sd"]) ** 2
+    data = {k: kw[k] for k in _DATA_KEYS}
+    return log_prior + _loglik(u, pi, kw["log_noise_hat"], **data)
+
+
+def _log_density_rcs(theta, kw):
+    """Log prior + log likelihood, RCS chart (module docstring)."""
+    return _log_density_with(_physical_rcs, theta, kw)
+
+
+def _log_density_rwa(theta, kw):
+    """Log prior + log likelihood, direct chart (module docstring)."""
+    return _log_density_with(_physical_rwa, theta, kw)
+
+
+_DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov", "nu_cols", "nu_sd",
+              "nu_wheel")
+_LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
+_PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
+
+
+@lru_cache(maxsize=None)
+def rwa4_model(chart: str = "rwa"):
+    """The NumPyro model of a chart (``Rwa4Problem.chart``); one function object per chart, so
+    compiled samplers are reused.
+
+    Call it with ``**Rwa4Problem.model_kwargs``. Posterior sites: ``u4_x``, ``u4_y``, ``u4_z``
+    (the solved wheel's axis), ``Ixx … Iyz`` (kg m²) and the sampler's whitened ``w``
+    (``θ = centre + tril w``).
+    """
+    log_density, physical = _LOG_DENSITY[chart], _PHYSICAL[chart]
+
+    def model(*, centre, tril, **kw):
+        w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (),
+                                                     centre.shape))
+        theta = centre + tril @ w
+        numpyro.factor("log_density", log_density(theta, kw))
+        u, pi, _, _ = physical(theta, kw)
+        for i, name in enumerate(U4_NAMES):
+            numpyro.deterministic(name, u[i])
+        for i, name in enumerate(INERTIA_NAMES):
+            numpyro.deterministic(name, pi[i])
+
+    model.__name__ = f"rwa4_model_{chart}"
+    return model

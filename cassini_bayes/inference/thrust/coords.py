@@ -1,0 +1,115 @@
+"""The thrust sampler's coordinates: the map from the sampler's vector to the physical
+parameters, with the prior carried over by the Jacobians (:mod:`cassini_bayes.inference.thrust`,
+"Sampler coordinates").
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpyro.distributions as dist
+
+from cassini_bayes.inference.thrust.prior import _NOISE_STEP, THRUST_PRIOR_LOG_SD
+
+__all__ = ["C_SCALE_S", "A_LOG_SCALE", "long_pulse_excess", "rise_deficit"]
+
+C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler coordinate
+A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
+
+
+def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
+    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(s, a_z, c_z)``,
+    ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
+    f_z = theta[:n_f]
+    tau_z = theta[n_f:n_f + 3]
+    noise_z = theta[n_f + 3:n_f + 3 + n_ev]
+    k = n_f + 3 + n_ev
+    inertia_z = theta[k:k + 6] if sample_inertia else None
+    return f_z, tau_z, noise_z, inertia_z
+
+
+def long_pulse_excess(tau_delay, tau_rise, tau_fall):
+    """``c = τf − τr e^{−τd/τr}`` (s): a pulse of width ``Δ ≫ τr`` delivers ``F (Δ + c)``.
+
+    The limit ``e^{−Δ/τr} → 0`` of Feldman & Lee §V's closed form
+    ``(Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}``; for the 125 ms minimum
+    pulse ``e^{−Δ/τr} ≈ 0.002``. Pulse logs of widths ≥ 125 ms determine ``F`` and ``c`` and
+    little else: the time constants lie on the curved surface ``c(τ) = const``.
+    """
+    return tau_fall - tau_rise * jnp.exp(-tau_delay / tau_rise)
+
+
+def rise_deficit(tau_delay, tau_rise):
+    """``a = τd + τr e^{−τd/τr}`` (s): a pulse has delivered ``F (t − a)`` by a time ``t ≫ τr``
+    after its command while it is still on (Feldman & Lee §V profile, rising phase,
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`). Samples taken during pulses pin
+    ``a`` as the long pulses' impulses pin :func:`long_pulse_excess`."""
+    return tau_delay + tau_rise * jnp.exp(-tau_delay / tau_rise)
+
+
+def _lambert_w0(x):
+    """Principal branch of Lambert's W for ``x ≥ 0`` (``w e^w = x``): Halley's iteration from
+    ``l − log(1 + l) l/(1 + l)``, ``l = log(1 + x)`` (``≈ log x − log log x`` for large ``x``),
+    converged to rounding in 4 steps for ``1e-14 ≤ x ≤ 1e12``; differentiable."""
+    l = jnp.log1p(x)
+    w = l - jnp.log1p(l) * l / (1.0 + l)
+    for _ in range(4):
+        ew = jnp.exp(w)
+        f = w * ew - x
+        w = w - f / (ew * (w + 1.0) - (w + 2.0) * f / (2.0 * w + 2.0))
+    return w
+
+
+def _tau_from_z(tau_z, kw):
+    """Time constants (3,) s from the sampler's ``(s, a_z, c_z)`` and the log prior density
+    of the sampler coordinates (exact: the Jacobians included).
+
+    * ``a_z``: the rise deficit ``a = a_mu e^{A a_z}`` (:func:`rise_deficit`, ``A`` =
+      :data:`A_LOG_SCALE`), pinned by the samples taken during pulses.
+    * ``s``: how ``a`` splits between the delay and the rise, ``τd = a σ(s)`` and
+      ``b = a − τd = τr e^{−τd/τr} = a σ(−s)``; ``τd/b = e^s``, so ``τr = b e^{W(e^s)}``
+      (Lambert's W). ``τd → 0`` (a first-order valve) and ``τr → 0`` are the two tails
+      ``s → ∓∞``, with no wall between them; the split is what only samples within a few
+      ``τr`` of a command resolve.
+    * ``c_z``: the long-pulse excess ``c = c_mu + C c_z`` (:func:`long_pulse_excess`, ``C`` =
+      :data:`C_SCALE_S`), pinned by the long pulses' impulses; ``τf = c + b``.
+
+    Sampling ``(a, c)`` instead of ``(τr, τf)`` turns the two narrow, curved ridges of the
+    likelihood into coordinate axes. The prior of ``(τd, τr, τf)`` is carried over with
+    ``|∂(τd, b)/∂(s, log a)| = a² σ(s) σ(−s)``, ``∂τr/∂b = e^u/(1 + u)`` (``u = τd/τr``) and the
+    coordinates' scales. ``τf ≤ 0`` gives NaN.
+
+    A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``s → −∞``, ``c = 0``.
+    """
+    s = tau_z[0]
+    a = kw["a_mu"] * jnp.exp(A_LOG_SCALE * tau_z[1])
+    t_d = a * jax.nn.sigmoid(s)
+    b = a * jax.nn.sigmoid(-s)
+    u = _lambert_w0(jnp.exp(s))
+    t_r = b * jnp.exp(u)
+    t_f = kw["c_mu"] + C_SCALE_S * tau_z[2] + b
+    t_f = jnp.where(t_f > 0.0, t_f, jnp.nan)
+    log_tau = jnp.log(jnp.stack([t_r, t_f]))
+    z_rf = (log_tau - kw["tau_mu"]) / kw["tau_sd"]
+    std = dist.Normal(0.0, 1.0)
+    sd_d = kw["tau_delay_scale"]
+    log_prior_delay = jnp.log(2.0 / sd_d) + std.log_prob(t_d / sd_d)      # half-normal
+    log_jac = (2.0 * jnp.log(a) + jax.nn.log_sigmoid(s) + jax.nn.log_sigmoid(-s)
+               + jnp.log(A_LOG_SCALE) + u - jnp.log1p(u) + jnp.log(C_SCALE_S))
+    log_prior = (log_prior_delay + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"]) - log_tau)
+                 + log_jac)
+    return jnp.stack([t_d, t_r, t_f]), log_prior
+
+
+def _physical(theta, kw, n_f: int, sample_inertia: bool):
+    """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
+    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2) and ``π`` (6,) kg m²."""
+    n_ev = kw["log_noise_hat"].shape[0]
+    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
+    tau, _ = _tau_from_z(tau_z, kw)
+    log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
+    pi = kw["inertia_mean"]
+    if sample_inertia:
+        pi = pi + kw["inertia_tril"] @ inertia_z
+    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi

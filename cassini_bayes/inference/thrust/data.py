@@ -1,0 +1,261 @@
+"""Data preparation of the thrust model: the events checked, padded to common lengths and
+turned into the prepared :class:`ThrustProblem` (:func:`prepare_thrust`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from cassini_bayes.errors import InputError, spelled
+from cassini_bayes.frames import skew
+from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
+from cassini_bayes.inference.laplace import laplace
+from cassini_bayes.inference.noise import rate_noise_levels
+from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
+from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.likelihood import time_tag_columns
+from cassini_bayes.inference.thrust.model import _laplace_density
+from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
+from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
+from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.telemetry import (PulseAtStartWarning, PulseLog, Telemetry,
+                                     check_pulses_in_span)
+
+__all__ = ["ThrustProblem", "prepare_thrust"]
+
+# A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
+_TAIL_S = 1.5
+_PULSE_BUCKET = 64
+
+
+class ThrustProblem(NamedTuple):
+    """Everything the thrust model needs, prepared once (SI units).
+
+    Attributes
+    ----------
+    model_kwargs : arrays for :func:`thrust_model` (events padded to common lengths).
+    mode : ``"mean"``, ``"branch"`` or ``"thruster"``.
+    names : thrust parameter names of the mode.
+    thrust_pred : predicted thrust (prior centre), N.
+    tau : :class:`TauPrior`.
+    inertia : :class:`InertiaGaussian` when the inertia is sampled, else ``None``.
+    inertia_fixed : (3, 3) kg m² used when not sampled.
+    sources : ``(telemetry, pulses)`` file names per event.
+    n_samples, n_pulses : per event.
+    fired : (8,) bool, thrusters with at least one pulse in any event.
+    noise_hat : (E, 2) data noise levels (σ_ω rad/s, σ_ρ rad/s).
+    layout : the nuisance layout (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`)
+        of the robust model, ``None`` for the idealised one.
+    """
+
+    model_kwargs: dict
+    mode: str
+    names: tuple[str, ...]
+    thrust_pred: float
+    tau: TauPrior
+    inertia: InertiaGaussian | None
+    inertia_fixed: np.ndarray
+    sources: tuple[tuple[str, str], ...]
+    n_samples: np.ndarray
+    n_pulses: np.ndarray
+    fired: np.ndarray
+    noise_hat: np.ndarray
+    layout: object = None
+
+
+def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
+    """Body wheel momentum (n, 3) N m s, the wheel noise matrix Σ J² g gᵀ (3, 3) and each active
+    wheel's ``J_k ρ_k`` (n,) N m s."""
+    h = np.zeros((tel.n, 3))
+    wcov = np.zeros((3, 3))
+    per_wheel = {}
+    for name in tel.active_wheels():
+        w = spacecraft.wheel(name)
+        rate = np.nan_to_num(np.asarray(tel.wheel_rate(name), float))
+        per_wheel[name] = w.inertia * rate
+        h += w.inertia * rate[:, None] * w.axis[None, :]
+        wcov += w.inertia**2 * np.outer(w.axis, w.axis)
+    return h, wcov, per_wheel
+
+
+def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia: np.ndarray,
+                      h: np.ndarray, per_wheel: dict) -> np.ndarray:
+    """(n, 3, R) columns of ``ν`` in the predicted left side of event ``e`` (module docstring)."""
+    n = t.shape[0]
+    cols = np.zeros((n, 3, layout.size))
+    sl = layout.slices
+    dt = (t - t[0])[:, None]
+    c_t = np.concatenate([np.zeros((1, 3)),
+                          np.cumsum(0.5 * (h[1:] + h[:-1]) * np.diff(t)[:, None], 0)])
+    b0 = sl["gyro_bias"].start + 3 * e
+    cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
+    cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
+    cols[:, :, layout.wheel_block] = -wheel_scale_columns(layout, h, per_wheel)  # −J_k ρ_k g_k
+    a0 = sl["wheel_axes"].start
+    for k, name in enumerate(layout.wheels):
+        if name in per_wheel:
+            for j in range(2):
+                cols[:, :, a0 + 2 * k + j] = -per_wheel[name][:, None] * layout.tilt_u[k, j]
+    t0 = sl["body_torque"].start + 3 * e
+    cols[:, :, t0:t0 + 3] = dt[:, :, None] * np.eye(3)[None]              # T_e (t − t_0)
+    return cols
+
+
+def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
+    """Sample index of each pulse's first sample at or after its command (n when none)."""
+    return np.searchsorted(t, log.t_on, side="left")
+
+
+def _checked_events(events) -> tuple[list[Telemetry], list[PulseLog]]:
+    """The events' telemetry and pulse logs (pulses outside the span dropped), one-line
+    InputErrors for events that cannot calibrate anything."""
+    if not events:
+        raise InputError("no biasing event given; pass "
+                         + spelled("--telemetry F.csv --pulses P.csv", "telemetry and pulses"))
+    logs, tels = [], []
+    for tel, log in events:
+        if log is None:
+            raise InputError("thrust calibration needs the pulse log of every event ("
+                             + spelled("--pulses P.csv", "pulses")
+                             + ", columns t_on, thruster, width)", path=tel.source)
+        if tel.n < 10:
+            raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            log = check_pulses_in_span(log, tel, tail_s=_TAIL_S)
+        for w in caught:   # the other span notes are for `check`; this one changes the model
+            if issubclass(w.category, PulseAtStartWarning):
+                warnings.warn(str(w.message), PulseAtStartWarning, stacklevel=3)
+        if log.t_on.size == 0:
+            raise InputError(f"no pulse of {log.source} falls inside the telemetry span "
+                             f"{tel.t[0]:.10g}..{tel.t[-1]:.10g} s; thrust calibration needs an "
+                             "event in which thrusters fire", path=tel.source)
+        if not tel.active_wheels():
+            raise InputError("no wheel rates (rwa1..rwa4, rpm); a biasing event needs them",
+                             path=tel.source)
+        logs.append(log)
+        tels.append(tel)
+
+    return tels, logs
+
+
+def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
+                   layout, i_lin: np.ndarray, robust: bool) -> tuple[dict, np.ndarray, np.ndarray]:
+    """The events' arrays padded to common lengths (the first half of ``model_kwargs``), the
+    thrusters that fired (8,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
+    inertia the robust columns are linear around."""
+    n_max = max(t.n for t in tels)
+    # pulse arrays padded to a multiple of _PULSE_BUCKET: events whose pulse counts differ a
+    # little (seeds of one scenario, SBC replicates) share shapes, so one compiled sampler
+    m_max = -(-max(len(lg.t_on) for lg in logs) // _PULSE_BUCKET) * _PULSE_BUCKET
+    dt_min = min(float(np.min(np.diff(t.t))) for t in tels)
+    w_max = max(float(np.max(lg.width)) for lg in logs)
+    # samples a pulse's thrust can still change after its first sample (≥ 1, static)
+    k_slots = int(np.ceil((w_max + 0.02 + _TAIL_S) / dt_min)) + 1
+    n_ev = len(tels)
+    t_a = np.zeros((n_ev, n_max))
+    w_a = np.zeros((n_ev, n_max, 3))
+    h_a = np.zeros((n_ev, n_max, 3))
+    mask = np.zeros((n_ev, n_max))
+    ton = np.zeros((n_ev, m_max))
+    thr = np.zeros((n_ev, m_max), int)
+    wid = np.zeros((n_ev, m_max))
+    slot = np.full((n_ev, m_max), n_max)
+    wcov = np.zeros((n_ev, 3, 3))
+    noise = np.zeros((n_ev, 2))
+    fired = np.zeros(8, bool)
+    n_nu = layout.size if robust else 0
+    nu_cols = np.zeros((n_ev, n_max, 3, n_nu))
+    for e, (tel, log) in enumerate(zip(tels, logs)):
+        n, m = tel.n, len(log.t_on)
+        t = np.asarray(tel.t, float)
+        h, wc, per_wheel = _wheel_momentum(tel, spacecraft)
+        if robust:
+            nu_cols[e, :n] = _nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
+                                               h, per_wheel)
+        # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
+        t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
+        w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
+        h_a[e] = np.r_[h, np.repeat(h[-1:], n_max - n, 0)]
+        mask[e, :n] = 1.0
+        ton[e, :m] = log.t_on
+        thr[e, :m] = log.thruster
+        wid[e, :m] = log.width      # padded pulses: width 0 → no impulse, slot n_max → dropped
+        slot[e, :m] = _pulse_slots(t, log)
+        wcov[e] = wc
+        noise[e] = rate_noise_levels(tel)
+        fired[np.unique(log.thruster)] = True
+
+    kw = dict(
+        t=jnp.asarray(t_a), omega=jnp.asarray(w_a), h_wheels=jnp.asarray(h_a),
+        mask=jnp.asarray(mask), t_on=jnp.asarray(ton), thruster=jnp.asarray(thr),
+        width=jnp.asarray(wid), slot=jnp.asarray(slot),
+        slot_offsets=jnp.arange(k_slots), wheel_cov=jnp.asarray(wcov),
+        log_noise_hat=jnp.asarray(np.log(noise)), nu_cols=jnp.asarray(nu_cols))
+    return kw, fired, noise
+
+
+def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
+                   mode: str = "mean", inertia: InertiaGaussian | None = None,
+                   robust: bool = False, wheel_errors: str = "per_wheel") -> ThrustProblem:
+    """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
+
+    ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
+    external torque); ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel
+    spin-inertia model.
+
+    Raises
+    ------
+    InputError
+        No event, a pulse log with no pulse inside its telemetry span (nothing to calibrate), an
+        unknown mode, too few samples.
+    """
+    names = thrust_names(mode)
+    tels, logs = _checked_events(events)
+    n_ev = len(tels)
+    i_fixed = np.asarray(spacecraft.inertia, float)
+    i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
+    wheels = sorted({w for tel in tels for w in tel.active_wheels()})
+    layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
+                             wheel_errors=wheel_errors)
+    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust)
+    th = spacecraft.thrusters
+    q_mat = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    tp = tau_prior(spacecraft)
+    if inertia is not None:
+        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
+        i_mean, i_tril = np.asarray(inertia.mean, float), tril
+    else:
+        i_mean, i_tril = np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
+    kw = dict(
+        **kw, q_matrix=jnp.asarray(q_mat),
+        tau_delay_scale=jnp.asarray(tp.delay_scale),
+        tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
+        a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
+        c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))),
+        f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
+        inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
+        nu_sd=jnp.asarray(layout.sd if robust else np.zeros(0)),
+    )
+    sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
+    kw["time_tag_cols"] = jax.vmap(
+        time_tag_columns, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None))(
+        kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
+        tuple(jnp.asarray(x) for x in tp.median()),
+        jnp.full(8, float(spacecraft.thrust)), kw["q_matrix"], jnp.asarray(sd_t))
+    n_f = len(names)
+    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
+    centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
+    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
+    return ThrustProblem(
+        model_kwargs=kw, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
+        inertia=inertia, inertia_fixed=i_fixed,
+        sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
+        n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
+        fired=fired, noise_hat=noise, layout=layout if robust else None)

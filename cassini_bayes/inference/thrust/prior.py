@@ -1,0 +1,174 @@
+"""The thrust model's prior, stated in the physical parameters: the thrust (log-normal about
+the spacecraft model's prediction), the pulse time constants (:class:`TauPrior`), the noise scale
+and the inertia (:func:`resolve_inertia`); draws from it, and the check that flags time constants
+the data leave at their prior (:mod:`cassini_bayes.inference.thrust`, "Priors").
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from cassini_bayes.errors import InputError, arg
+from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_prior_gaussian
+from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES, THRUSTER_NAMES
+from cassini_bayes.spacecraft import Spacecraft
+
+if TYPE_CHECKING:
+    from cassini_bayes.inference.thrust.data import ThrustProblem
+
+__all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inertia", "TauPrior",
+           "tau_prior", "CONTRACTION_UNIDENTIFIED", "PRIOR_CONFLICT_MASS",
+           "TauIdentificationWarning", "tau_identification", "draw_tau_prior", "thrust_names",
+           "sample_thrust_prior"]
+
+MODES = ("mean", "branch", "thruster")
+THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
+NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
+_NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
+_HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
+_BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
+
+
+def resolve_inertia(inertia: InertiaGaussian | str | None, spacecraft: Spacecraft,
+                    robust: bool) -> InertiaGaussian | None:
+    """The inertia's Gaussian, or ``None`` for a fixed inertia, from :func:`fit_thrust`'s
+    ``inertia`` argument."""
+    if inertia is None:
+        inertia = "prior" if robust else "fixed"
+    if isinstance(inertia, InertiaGaussian):
+        return inertia
+    if inertia == "prior":
+        return inertia_prior_gaussian(spacecraft)
+    if inertia == "fixed":
+        return None
+    raise InputError(f"inertia = {inertia!r}: give an InertiaGaussian, 'prior' or 'fixed'")
+
+
+class TauPrior(NamedTuple):
+    """Prior of ``(τd, τr, τf)`` (module docstring): ``τd ~ HalfNormal(delay_scale)`` (s);
+    ``log τr``, ``log τf`` ~ ``Normal(log_mean, log_sd)``, ``log_mean`` (2,) log s and
+    ``log_sd`` (2,) for rise and fall."""
+
+    delay_scale: float
+    log_mean: np.ndarray
+    log_sd: np.ndarray
+
+    def median(self) -> np.ndarray:
+        """(3,) s: the prior medians of ``τd, τr, τf`` (half-normal median 0.6745 σ)."""
+        return np.r_[_HALF_NORMAL_MEDIAN * self.delay_scale, np.exp(self.log_mean)]
+
+    def central(self, mass: float) -> np.ndarray:
+        """(3, 2) s: the central interval of each time constant holding ``mass`` of the prior."""
+        from scipy.stats import norm
+
+        z = np.array([-1.0, 1.0]) * norm.ppf(0.5 + 0.5 * mass)
+        delay = self.delay_scale * norm.ppf([0.75 - 0.25 * mass, 0.75 + 0.25 * mass])
+        lognormal = np.exp(self.log_mean[:, None] + z[None, :] * self.log_sd[:, None])
+        return np.vstack([delay, lognormal])
+
+    def variance(self) -> np.ndarray:
+        """(3,) s²: the prior variances of ``τd, τr, τf`` (half-normal, log-normal)."""
+        s2 = np.asarray(self.log_sd) ** 2
+        return np.r_[self.delay_scale**2 * (1.0 - 2.0 / np.pi),
+                     np.expm1(s2) * np.exp(2.0 * np.asarray(self.log_mean) + s2)]
+
+
+def tau_prior(spacecraft: Spacecraft) -> TauPrior:
+    """Prior of the time constants from the model's ``[pulse]`` section (module docstring)."""
+    p = spacecraft.pulse
+    ranges = np.array([p.tau_delay_range, p.tau_rise_range, p.tau_fall_range], float)
+    lo, hi = ranges[:, 0], ranges[:, 1]
+    if np.any(lo <= 0) or np.any(hi <= lo):
+        raise InputError(f"spacecraft model {spacecraft.name!r}: [pulse] tau_*_range must be "
+                         "positive [low, high] with low < high (s)", path=spacecraft.source or None)
+    log_sd = np.maximum((np.log(hi[1:]) - np.log(lo[1:])) / 4.0, p.tau_log_sd_min)
+    return TauPrior(float(hi[0]), 0.5 * (np.log(lo[1:]) + np.log(hi[1:])), log_sd)
+
+
+CONTRACTION_UNIDENTIFIED = 0.1
+"""Posterior/prior contraction ``1 − Var_post/Var_prior`` below which a time constant counts as
+not identified by the data (its posterior is essentially its prior)."""
+PRIOR_CONFLICT_MASS = 0.99
+"""A posterior mean outside the prior's central interval of this mass is a prior-data conflict."""
+
+
+class TauIdentificationWarning(UserWarning):
+    """A pulse time constant is not identified by the data, or its posterior conflicts with its
+    prior (:func:`tau_identification`)."""
+
+
+def tau_identification(posterior, prior: TauPrior) -> list[str]:
+    """One line per time constant the data cannot identify (posterior/prior contraction below
+    :data:`CONTRACTION_UNIDENTIFIED`) or whose posterior mean lies outside the prior's central
+    :data:`PRIOR_CONFLICT_MASS` (the data disagree with the spacecraft model's ``[pulse]``
+    ranges). ``posterior``: a mapping of ``tau_delay, tau_rise, tau_fall`` to draws (s)."""
+    var_prior = prior.variance()
+    central = prior.central(PRIOR_CONFLICT_MASS)
+    out = []
+    for i, name in enumerate(TAU_NAMES):
+        x = np.asarray(posterior[name], float).ravel()
+        contraction = 1.0 - float(np.var(x, ddof=1)) / var_prior[i]
+        if contraction < CONTRACTION_UNIDENTIFIED:
+            out.append(f"{name}: not identified by the data (posterior/prior contraction "
+                       f"{contraction:.2f} < {CONTRACTION_UNIDENTIFIED:g}); its posterior is "
+                       "essentially the [pulse] prior, and the thrust's interval includes that "
+                       "prior's spread")
+        mean, (lo, hi) = float(np.mean(x)), central[i]
+        if not lo <= mean <= hi:
+            out.append(f"{name}: posterior mean {1e3 * mean:.3g} ms lies outside the prior's "
+                       f"central {100 * PRIOR_CONFLICT_MASS:g} % ({1e3 * lo:.3g} to "
+                       f"{1e3 * hi:.3g} ms): the data disagree with the spacecraft model's "
+                       "[pulse] ranges; check the valve response and the prior")
+    return out
+
+
+def draw_tau_prior(key, prior: TauPrior, shape: tuple[int, ...] = ()):
+    """Draws ``shape + (3,)`` (s) of ``(τd, τr, τf)`` from :class:`TauPrior` (JAX, traceable)."""
+    z = jax.random.normal(key, shape + (3,))
+    lead = (1,) * len(shape)
+    mu = jnp.reshape(jnp.asarray(prior.log_mean), lead + (2,))
+    sd = jnp.reshape(jnp.asarray(prior.log_sd), lead + (2,))
+    t_d = prior.delay_scale * jnp.abs(z[..., :1])
+    return jnp.concatenate([t_d, jnp.exp(mu + sd * z[..., 1:])], -1)
+
+
+def thrust_names(mode: str) -> tuple[str, ...]:
+    """Names of the thrust parameters of a mode: ``F``; ``F_Z, F_Y``; ``F_Z1 … F_Y4``."""
+    if mode == "mean":
+        return ("F",)
+    if mode == "branch":
+        return ("F_Z", "F_Y")
+    if mode == "thruster":
+        return tuple(f"F_{s}" for s in THRUSTER_NAMES)
+    raise InputError(f"{arg('mode', mode, cli_quote=True)}: choose one of {', '.join(MODES)}")
+
+
+def _thrust_index(mode: str) -> np.ndarray:
+    """(8,) index of the thrust parameter that drives each thruster."""
+    return {"mean": np.zeros(8, int), "branch": _BRANCH_INDEX,
+            "thruster": np.arange(8)}[mode]
+
+
+def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.ndarray]:
+    """``n`` draws of the physical parameters from the stated prior (module docstring)."""
+    k_f, k_t, k_s, k_i = jax.random.split(key, 4)
+    kw = problem.model_kwargs
+    n_ev = kw["log_noise_hat"].shape[0]
+    f_z = jax.random.normal(k_f, (n, len(problem.names)))
+    noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
+    thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
+    tau = np.asarray(draw_tau_prior(k_t, problem.tau, (n,)))
+    out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
+    out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
+    sig = np.exp(np.asarray(kw["log_noise_hat"])[None] + _NOISE_STEP * np.asarray(noise_z))
+    out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]
+    if problem.inertia is not None:
+        z = np.asarray(jax.random.normal(k_i, (n, 6)))
+        pi = np.asarray(problem.inertia.mean) + z @ np.linalg.cholesky(
+            np.asarray(problem.inertia.cov) + 1e-9 * np.eye(6)).T
+        out.update({name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)})
+    return out

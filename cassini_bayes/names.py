@@ -1,0 +1,28 @@
+"""One vocabulary of parameter and effect names, shared by the physics, the inference, the
+summaries and the report (posterior site names in ``posterior.nc`` and ``summary.json``).
+
+Pure constants: any layer may import this module.
+"""
+
+from __future__ import annotations
+
+__all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
+           "INERTIA_NOISE_NAMES", "EFFECTS"]
+
+INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+"""Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
+THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
+"""The eight RCS thrusters (Feldman & Lee 2006 Eq 16 order)."""
+F_NAMES = ("F",) + tuple(f"F_{t}" for t in THRUSTER_NAMES)
+"""Thrust sites (N): the mean ``F`` and one per thruster (the branch sites are ``F_Z``, ``F_Y``)."""
+TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
+"""Pulse time constants (s)."""
+U4_NAMES = ("u4_x", "u4_y", "u4_z")
+"""Components of the solved wheel's spin axis (body axes)."""
+INERTIA_NOISE_NAMES = ("sigma_omega", "sigma_rho", "sigma_theta")
+"""White-noise levels of the inertia model: gyro (rad/s), wheel rate (rad/s), attitude (rad)."""
+EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
+           "wheel_inertia": "wheel_scale", "wheel_inertia_common": "wheel_scale_common",
+           "wheel_axes": "wheel_tilt", "body_torque": "T_body",
+           "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
+"""Robust nuisance effect → its posterior site name."""
