@@ -46,8 +46,8 @@ from scipy.special import log_ndtr, logsumexp
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.leak import ETA, residual_momentum
-from cassini_bayes.physics.impulse import (THRUSTER_NAMES, impulse_from_on_times,
-                                           impulse_from_pulses, moment_matrix)
+from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times, moment_matrix
+from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
@@ -60,7 +60,6 @@ FRACTION_SCALES = 10.0 ** np.arange(-4.0, 0.01, 0.5)
 OFFSET_SD_NMS = 10.0
 """Prior sd of the residual's offset ``r_0`` per axis, N m s (wide: it only absorbs noise)."""
 _NOISE_FLOOR_NMS = 1e-6
-_ROWS = 2048            # telemetry rows per block of the pulse-impulse sum (memory O(rows × pulses))
 
 
 @dataclass(frozen=True)
@@ -129,8 +128,14 @@ class LeakPosterior:
 
 
 def _impulses(tel: Telemetry, pulses: PulseLog | None, sc: Spacecraft) -> np.ndarray:
-    """Modelled impulses (n, 8), N s: the pulse log under the model's pulse shape, else the
-    telemetry's on-times times the model thrust (Feldman & Lee Eq 17)."""
+    """Modelled impulses (n, 8), N s, from the first sample: the pulse log under the model's
+    pulse shape (:func:`~cassini_bayes.physics.pulse.pulse_impulse_until`), else the telemetry's
+    on-times times the model thrust (Feldman & Lee Eq 17).
+
+    A pulse has delivered all of its impulse ``_TAIL_TAUS`` fall times after its end (the rest is
+    below e⁻⁴⁰), so each sample sums the finished pulses (a cumulative sum) and evaluates the
+    profile only for the pulses still running: O(n + pulses) for a stretch of hours.
+    """
     t = np.asarray(tel.t, float)
     if pulses is None:
         if tel.on_times is None:
@@ -138,12 +143,28 @@ def _impulses(tel: Telemetry, pulses: PulseLog | None, sc: Spacecraft) -> np.nda
                              path=tel.source)
         return np.asarray(impulse_from_on_times(tel.on_times, sc.thrust))
     p = sc.pulse
-    keep = pulses.t_on <= t[-1]
-    args = (pulses.t_on[keep], pulses.thruster[keep], pulses.width[keep], p.tau_delay,
-            p.tau_rise, p.tau_fall, sc.thrust)
-    blocks = [np.asarray(impulse_from_pulses(np.r_[t[0], t[i:i + _ROWS]], *args))[1:]
-              for i in range(0, t.size, _ROWS)]
-    return np.concatenate(blocks)
+    t_on, k, w = (np.asarray(a) for a in (pulses.t_on, pulses.thruster, pulses.width))
+
+    def delivered(dt, width):
+        return np.asarray(pulse_impulse_until(dt, width, p.tau_delay, p.tau_rise, p.tau_fall),
+                          float) * sc.thrust
+
+    end = t_on + w + p.tau_delay + _TAIL_TAUS * p.tau_fall
+    j = np.zeros((t.size, 8))
+    full = delivered(end - t_on, w)
+    first_done = np.searchsorted(t, end, side="left")       # first sample after each pulse ends
+    np.add.at(j, (first_done[first_done < t.size], k[first_done < t.size]),
+              full[first_done < t.size])
+    j = np.cumsum(j, axis=0)
+    first = np.searchsorted(t, t_on, side="right")          # first sample after the command
+    count = np.maximum(first_done - first, 0)
+    rows = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+    which = np.repeat(np.arange(t_on.size), count)
+    np.add.at(j, (rows, k[which]), delivered(t[rows] - t_on[which], w[which]))
+    return j - j[:1]
+
+
+_TAIL_TAUS = 40.0
 
 
 def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft) -> LeakInputs:
@@ -234,16 +255,12 @@ def _fraction(log_bf: np.ndarray, m: np.ndarray, prec: np.ndarray, k: int):
     w = np.exp(log_bf[:, k] - logsumexp(log_bf[:, k]))                         # (G, S)
     s = 1.0 / np.sqrt(prec[:, k])
     a = m[:, k] / s
-    ratio = np.exp(norm_logpdf(a) - log_ndtr(a))                              # φ(a)/Φ(a)
+    ratio = np.exp(-0.5 * a * a - 0.5 * np.log(2.0 * np.pi) - log_ndtr(a))                              # φ(a)/Φ(a)
     mean = m[:, k] + s * ratio
     var = s * s * (1.0 - ratio * (a + ratio))
     mu = float(np.sum(w * mean))
     sd = float(np.sqrt(max(np.sum(w * (var + mean * mean)) - mu * mu, 0.0)))
     return mu, sd, w.sum(axis=1)
-
-
-def norm_logpdf(x):
-    return -0.5 * x * x - 0.5 * np.log(2.0 * np.pi)
 
 
 def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ETA,
