@@ -88,9 +88,9 @@ class LeakPosterior:
     ``HYPOTHESES`` (``none, Z1 … Y4``) given the data up to each check.
     detection_time_s : first check with ``P(leak) ≥ p_detect`` (``None``: never).
     thruster : the most probable leaking thruster at that check (``None``: none detected).
-    fraction_mean, fraction_sd : posterior of the leak fraction of the most probable thruster at
-    the last check (or at the detection), and ``torque_nm`` (3,) its mean torque, N m.
-    onset_s : posterior mean of the onset for that thruster, s. noise_sd_nms : (3,) white-noise sd.
+    fraction_mean, fraction_sd : posterior of that thruster's leak fraction (without a detection:
+    of the thruster most probable at the last check) given all the data, and ``torque_nm`` (3,)
+    its mean torque, N m. onset_s : posterior mean of its onset, s. noise_sd_nms : (3,) white-noise sd.
     """
 
     t_check: np.ndarray
@@ -285,7 +285,7 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
                              n - 1])
     checks = checks[checks >= 2]
     grid = np.unique(np.searchsorted(t, np.arange(0.0, t[-1], onset_step_s)))
-    prob, det, at_det = [], None, None
+    prob, det = [], None
     for i, c in enumerate(checks):
         onsets = grid[grid < c]
         log_bf, m, prec = sums.evidence(c, onsets)
@@ -293,11 +293,10 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
         log_post = np.r_[np.log1p(-prior_leak), np.log(prior_leak / 8.0) + log_k]
         prob.append(np.exp(log_post - logsumexp(log_post)))
         if det is None and 1.0 - prob[-1][0] >= p_detect:
-            det, at_det = i, (log_bf, m, prec, onsets)
+            det = i
     prob = np.array(prob)
-    log_bf, m, prec, onsets = at_det if at_det is not None else (log_bf, m, prec, onsets)
-    row = prob[det if det is not None else -1]
-    k = int(np.argmax(row[1:]))
+    # the fraction and onset of the most probable thruster, from all the data (the last check)
+    k = int(np.argmax(prob[det if det is not None else -1][1:]))
     fm, fs, w_onset = _fraction(log_bf, m, prec, k)
     t_check = inp.t[checks]
     return LeakPosterior(
