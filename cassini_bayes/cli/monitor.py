@@ -32,7 +32,8 @@ def _positive(value: float, option: str) -> float:
 
 def run_leak_monitor(telemetry: Path, pulses: Path | None, spacecraft: str, out: Path, *,
                      force: bool = False, prior_leak: float = 0.01, p_detect: float = 0.99,
-                     check_step_s: float = 60.0, onset_step_s: float = 60.0,
+                     sample_step_s: float = 10.0, check_step_s: float = 60.0,
+                     onset_step_s: float = 60.0,
                      eta: float = 0.05, threshold_nms: float = 50.0,
                      t_limit_h: float = 10.0) -> dict:
     """Both monitors on one stretch; writes ``out`` and returns the summary."""
@@ -45,7 +46,8 @@ def run_leak_monitor(telemetry: Path, pulses: Path | None, spacecraft: str, out:
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
-    for value, option in ((check_step_s, "--check-step"), (onset_step_s, "--onset-step"),
+    for value, option in ((sample_step_s, "--sample-step"), (check_step_s, "--check-step"),
+                          (onset_step_s, "--onset-step"),
                           (threshold_nms, "--threshold"), (t_limit_h, "--t-limit")):
         _positive(value, option)
     if eta < 0:
@@ -56,8 +58,9 @@ def run_leak_monitor(telemetry: Path, pulses: Path | None, spacecraft: str, out:
     tel = read_telemetry(telemetry)
     log = read_pulses(pulses) if pulses is not None else None
     inp = leak_inputs(tel, log, sc)
-    post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, check_step_s=check_step_s,
-                          onset_step_s=onset_step_s, p_detect=p_detect)
+    post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
+                          check_step_s=check_step_s, onset_step_s=onset_step_s,
+                          p_detect=p_detect)
     lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix, r_t_nms=threshold_nms,
                             t_limit_s=t_limit_h * 3600.0, eta=eta)
     summary = {
@@ -72,9 +75,11 @@ def run_leak_monitor(telemetry: Path, pulses: Path | None, spacecraft: str, out:
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
     }
     config = {"command": "monitor leak", "version": __version__,
-              "inputs": {"telemetry": file_record(telemetry), "spacecraft": file_record(model_path(spacecraft)),
-                  **({"pulses": file_record(pulses)} if pulses is not None else {})},
+              "inputs": {"telemetry": file_record(telemetry),
+                         "spacecraft": file_record(model_path(spacecraft)),
+                         **({"pulses": file_record(pulses)} if pulses is not None else {})},
               "settings": {"prior_leak": prior_leak, "p_detect": p_detect,
+                           "sample_step_s": sample_step_s,
                            "check_step_s": check_step_s, "onset_step_s": onset_step_s,
                            "eta": eta, "threshold_nms": threshold_nms, "t_limit_h": t_limit_h}}
     with RunDir(out, force=force, inputs=inputs) as rd:
@@ -103,6 +108,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                          help="Prior probability of a leak in the stretch."),
         p_detect: float = typer.Option(0.99, "--p-detect", min=0.5, max=1 - 1e-12,
                                        help="Alarm when P(leak) reaches this."),
+        sample_step: float = typer.Option(10.0, "--sample-step",
+                                          help="Spacing of the residual samples used, s."),
         check_step: float = typer.Option(60.0, "--check-step", help="Seconds between checks."),
         onset_step: float = typer.Option(60.0, "--onset-step",
                                          help="Onset grid spacing, s."),
@@ -115,12 +122,14 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         console = Console(stderr=True, highlight=False)
         t0 = time.perf_counter()
         s = run_leak_monitor(telemetry, pulses, spacecraft, out, force=force,
-                             prior_leak=prior_leak, p_detect=p_detect, check_step_s=check_step,
+                             prior_leak=prior_leak, p_detect=p_detect,
+                             sample_step_s=sample_step, check_step_s=check_step,
                              onset_step_s=onset_step, eta=eta, threshold_nms=threshold,
                              t_limit_h=t_limit)
         b, lee = s["bayes"], s["lee"]
-        said = (f"leak in {b['thruster']} at {b['detection_time_s']:.0f} s"
-                if b["thruster"] else "no leak")
+        said = (f"leak in {b['thruster']} at {b['isolation_time_s']:.0f} s"
+                if b["thruster"] else "leak, thruster not isolated" if b["detection_time_s"]
+                else "no leak")
         console.print(f"[green]✓[/green] P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
                       + (f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
                          if lee["thruster"] else "no trigger")

@@ -39,6 +39,7 @@ a leak only through the thruster that fights it, and only at the cost of a ~100 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,13 +53,19 @@ from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["LeakInputs", "LeakPosterior", "leak_inputs", "leak_posterior", "HYPOTHESES",
-           "FRACTION_SCALES", "OFFSET_SD_NMS"]
+           "FRACTION_SCALES", "OFFSET_SD_NMS", "SAMPLE_STEP_S"]
 
 HYPOTHESES = ("none",) + THRUSTER_NAMES
 FRACTION_SCALES = 10.0 ** np.arange(-4.0, 0.01, 0.5)
 """Scales of the half-normal mixture prior on the leak fraction (fractions of the thrust)."""
 OFFSET_SD_NMS = 10.0
 """Prior sd of the residual's offset ``r_0`` per axis, N m s (wide: it only absorbs noise)."""
+SAMPLE_STEP_S = 10.0
+"""Spacing (s) of the residual samples the monitor uses. Besides its white noise the residual
+wanders slowly by ~5e-4 N m s (the 1 s trapezoid of the gyroscopic impulse across pulses, the
+thrust errors' pulse-level detail): at 1 s the white model, with its ~0.007 N m s level, would
+read that wander as a torque of ~1e-7 N m and raise false alarms on most 4 h cruise stretches;
+at 10 s the white level, measured at that spacing, covers it (docs/leak.md)."""
 _NOISE_FLOOR_NMS = 1e-6
 
 
@@ -87,16 +94,19 @@ class LeakPosterior:
     t_check : (c,) times of the checks, s. prob : (c, 9) posterior probability of
     ``HYPOTHESES`` (``none, Z1 … Y4``) given the data up to each check.
     detection_time_s : first check with ``P(leak) ≥ p_detect`` (``None``: never).
-    thruster : the most probable leaking thruster at that check (``None``: none detected).
-    fraction_mean, fraction_sd : posterior of that thruster's leak fraction (without a detection:
+    isolation_time_s : first check with one thruster's ``P ≥ p_detect`` (``None``: never), and
+    ``thruster`` that thruster (``None``: none isolated).
+    fraction_mean, fraction_sd : posterior of that thruster's leak fraction (without isolation:
     of the thruster most probable at the last check) given all the data, and ``torque_nm`` (3,)
-    its mean torque, N m. onset_s : posterior mean of its onset, s. noise_sd_nms : (3,) white-noise sd.
+    its mean torque, N m. onset_s : posterior mean of its onset, s.
+    noise_sd_nms : (3,) white-noise sd per axis, N m s.
     """
 
     t_check: np.ndarray
     prob: np.ndarray
     p_detect: float
     detection_time_s: float | None
+    isolation_time_s: float | None
     thruster: str | None
     fraction_mean: float
     fraction_sd: float
@@ -117,6 +127,7 @@ class LeakPosterior:
             "p_leak": float(1.0 - last[0]),
             "p_detect": self.p_detect,
             "detection_time_s": self.detection_time_s,
+            "isolation_time_s": self.isolation_time_s,
             "thruster": self.thruster,
             "fraction_mean": self.fraction_mean,
             "fraction_sd": self.fraction_sd,
@@ -199,7 +210,7 @@ def _cum(a: np.ndarray) -> np.ndarray:
 class _Sums:
     """Prefix sums of a stretch for the closed-form evidence at any check and onset."""
 
-    def __init__(self, inp: LeakInputs, eta: float):
+    def __init__(self, inp: LeakInputs, eta: float, raw: LeakInputs):
         t = inp.t - inp.t[0]
         n = t.size
         y, q = inp.residual, inp.q_matrix
@@ -211,6 +222,7 @@ class _Sums:
                                       np.full(3, max(inp.torque_sd_nm, 1e-12) ** 2),
                                       np.full(8, max(eta, 1e-12) ** 2)]
         self.t, self.y = t, y
+        self.raw_t, self.raw_y = raw.t, raw.residual
         self.nn = _cum(np.einsum("iap,iaq->iapq", cols, cols))
         self.ny = _cum(np.einsum("iap,ia->iap", cols, y))
         self.n1, self.nt = _cum(cols), _cum(t[:, None, None] * cols)
@@ -218,12 +230,19 @@ class _Sums:
         self.c1, self.ct, self.ctt = _cum(np.ones(n)), _cum(t), _cum(t * t)
         self.u = q * inp.thrust_n[None, :]              # (3, 8): torque per unit fraction, N m
 
+    def noise_sd(self, c: int) -> np.ndarray:
+        """White-noise sd per axis (N m s) from the data up to row ``c``: the larger of the
+        levels seen between the used rows and between the raw telemetry rows (the latter is
+        reliable from a few dozen seconds on, the former holds the slow wander)."""
+        raw = self.raw_y[:np.searchsorted(self.raw_t, self.t[c] + self.raw_t[0], "right")]
+        return np.maximum(_noise_sd(self.y[:c + 1]), _noise_sd(raw))
+
     def evidence(self, c: int, onsets: np.ndarray):
         """Per onset (G), thruster (8) and prior scale (S), with the data rows 0..c: the log
         Bayes factor against no leak, and the Gaussian-prior posterior mean ``m`` and precision
         of the fraction (its half-normal posterior is that Gaussian cut at 0)."""
         e, t = c + 1, self.t
-        lam = 1.0 / _noise_sd(self.y[:e]) ** 2          # (3,) noise precision per axis
+        lam = 1.0 / self.noise_sd(c) ** 2               # (3,) noise precision per axis
         a_mat = np.diag(self.prior_prec) + np.einsum("a,apq->pq", lam, self.nn[e])
         b0 = np.einsum("a,ap->p", lam, self.ny[e])
         tl = t[onsets]
@@ -255,7 +274,7 @@ def _fraction(log_bf: np.ndarray, m: np.ndarray, prec: np.ndarray, k: int):
     w = np.exp(log_bf[:, k] - logsumexp(log_bf[:, k]))                         # (G, S)
     s = 1.0 / np.sqrt(prec[:, k])
     a = m[:, k] / s
-    ratio = np.exp(-0.5 * a * a - 0.5 * np.log(2.0 * np.pi) - log_ndtr(a))                              # φ(a)/Φ(a)
+    ratio = np.exp(-0.5 * a * a - 0.5 * np.log(2.0 * np.pi) - log_ndtr(a))   # φ(a) / Φ(a)
     mean = m[:, k] + s * ratio
     var = s * s * (1.0 - ratio * (a + ratio))
     mu = float(np.sum(w * mean))
@@ -263,29 +282,41 @@ def _fraction(log_bf: np.ndarray, m: np.ndarray, prec: np.ndarray, k: int):
     return mu, sd, w.sum(axis=1)
 
 
+def _thinned(inp: LeakInputs, step_s: float) -> LeakInputs:
+    """The rows nearest a grid every ``step_s`` (and the last one)."""
+    t = inp.t
+    idx = np.unique(np.r_[np.searchsorted(t, np.arange(t[0], t[-1], step_s)), t.size - 1])
+    return dataclasses.replace(inp, t=t[idx], residual=inp.residual[idx], impulse=inp.impulse[idx])
+
+
 def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ETA,
-                   check_step_s: float = 60.0, onset_step_s: float = 60.0,
-                   p_detect: float = 0.99) -> LeakPosterior:
-    """Run the Bayesian monitor over a stretch, as it would run on board: a check every
-    ``check_step_s`` (and at the last sample) sees only the data up to it; onsets on a grid every
-    ``onset_step_s`` from the first sample up to the check; ``prior_leak``: prior probability of a
-    leak in the stretch; detection at the first check with ``P(leak) ≥ p_detect``."""
-    n = inp.t.size
-    if n < 3:
-        raise InputError(f"has {n} telemetry rows; the leak monitor needs at least 3",
-                         path="telemetry")
+                   sample_step_s: float = SAMPLE_STEP_S, check_step_s: float = 60.0,
+                   onset_step_s: float = 60.0, p_detect: float = 0.99) -> LeakPosterior:
+    """Run the Bayesian monitor over a stretch, as it would run on board: the residual taken
+    every ``sample_step_s`` (:data:`SAMPLE_STEP_S`); a check every ``check_step_s`` (and at the
+    last sample) sees only the data up to it; onsets on a grid every ``onset_step_s`` from the
+    first sample up to the check; ``prior_leak``: prior probability of a leak in the stretch.
+    Detection: the first check with ``P(leak) ≥ p_detect``; isolation: the first with one
+    thruster's ``P ≥ p_detect`` (that thruster is the answer)."""
     for name, v in (("prior_leak", prior_leak), ("p_detect", p_detect)):
         if not 0.0 < v < 1.0:
             raise InputError(f"must lie strictly between 0 and 1, got {v}", path=name)
-    if check_step_s <= 0 or onset_step_s <= 0:
-        raise InputError("check and onset steps must be positive seconds", path="leak monitor")
-    sums = _Sums(inp, eta)
+    for name, v in (("sample_step_s", sample_step_s), ("check_step_s", check_step_s),
+                    ("onset_step_s", onset_step_s)):
+        if not v > 0:
+            raise InputError(f"must be positive seconds, got {v}", path=name)
+    raw, inp = inp, _thinned(inp, sample_step_s)
+    n = inp.t.size
+    if n < 3:
+        raise InputError(f"has {n} rows {sample_step_s:g} s apart; the leak monitor needs at "
+                         "least 3", path="telemetry")
+    sums = _Sums(inp, eta, raw)
     t = sums.t
     checks = np.unique(np.r_[np.searchsorted(t, np.arange(check_step_s, t[-1], check_step_s)),
                              n - 1])
     checks = checks[checks >= 2]
     grid = np.unique(np.searchsorted(t, np.arange(0.0, t[-1], onset_step_s)))
-    prob, det = [], None
+    prob, det, iso = [], None, None
     for i, c in enumerate(checks):
         onsets = grid[grid < c]
         log_bf, m, prec = sums.evidence(c, onsets)
@@ -294,15 +325,18 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
         prob.append(np.exp(log_post - logsumexp(log_post)))
         if det is None and 1.0 - prob[-1][0] >= p_detect:
             det = i
+        if iso is None and prob[-1][1:].max() >= p_detect:
+            iso = i
     prob = np.array(prob)
     # the fraction and onset of the most probable thruster, from all the data (the last check)
-    k = int(np.argmax(prob[det if det is not None else -1][1:]))
+    k = int(np.argmax(prob[iso if iso is not None else -1][1:]))
     fm, fs, w_onset = _fraction(log_bf, m, prec, k)
     t_check = inp.t[checks]
     return LeakPosterior(
         t_check=t_check, prob=prob, p_detect=p_detect,
         detection_time_s=None if det is None else float(t_check[det]),
-        thruster=None if det is None else THRUSTER_NAMES[k],
+        isolation_time_s=None if iso is None else float(t_check[iso]),
+        thruster=None if iso is None else THRUSTER_NAMES[k],
         fraction_mean=fm, fraction_sd=fs, torque_nm=fm * sums.u[:, k],
         onset_s=float(inp.t[0] + np.sum(w_onset * t[onsets])),
-        noise_sd_nms=_noise_sd(inp.residual))
+        noise_sd_nms=sums.noise_sd(n - 1))
