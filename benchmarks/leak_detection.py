@@ -9,7 +9,7 @@ and 0.1 % of thrust (his sensitivity claim) — with the onset drawn in [600, 36
 no leak. Both monitors see the same telemetry, pulse log and prior spacecraft model.
 
 Decision rules, fixed before the runs: Bayesian — alarm (detection) at the first check (every
-30 s, residual every 10 s) with P(leak) ≥ 0.99, isolation at the first with one thruster's
+60 s, residual every 60 s) with P(leak) ≥ 0.99, isolation at the first with one thruster's
 P ≥ 0.99, prior probability of a leak 0.01 per stretch; Lee — R_T = 50 N m s, T_limit = 10 h,
 Eq 11 correction with η = 0.05, isolation by the polarities of R at the trigger. An alarm before
 the onset, or on a control run, is a false alarm.
@@ -57,7 +57,7 @@ def _run(s, rng, b, seed):
                         wheel_rates=a.wheel_rates_meas, wheel_names=s.wheel_names,
                         on_times=a.on_times, source=f"<{s.name}>")
         inp = leak_inputs(tel, pulse_log(a, s), s.prior)
-        bay = leak_posterior(inp, check_step_s=30.0)
+        bay = leak_posterior(inp, check_step_s=60.0)
         lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix)
         out.append({"bayes": (bay.detection_time_s, bay.thruster, bay.isolation_time_s),
                     "lee": (lee.detection_time_s,

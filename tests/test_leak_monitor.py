@@ -184,7 +184,7 @@ def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
     assert s["lee"]["thruster"] == "Z1"
     assert s["bayes"]["detection_time_s"] < s["lee"]["detection_time_s"]
     rows = (out / "probabilities.csv").read_text().splitlines()
-    assert rows[0].startswith("t_s,p_none,p_Z1") and len(rows) == 1 + 45
+    assert rows[0].startswith("t_s,p_none,p_Z1") and len(rows) == 1 + 14
     truth = json.loads((tmp_path / "sim" / "truth.json").read_text())
     assert truth["leak"]["thruster"] == "Z1" and truth["leak"]["torque_nm"][2] == 0.0
     # a second run is refused without --force, replaces with it

@@ -32,8 +32,8 @@ def _positive(value: float, option: str) -> float:
 
 def run_leak_monitor(telemetry: Path, pulses: Path | None, spacecraft: str, out: Path, *,
                      force: bool = False, prior_leak: float = 0.01, p_detect: float = 0.99,
-                     sample_step_s: float = 10.0, check_step_s: float = 60.0,
-                     onset_step_s: float = 60.0,
+                     sample_step_s: float = 60.0, check_step_s: float = 60.0,
+                     onset_step_s: float = 20.0,
                      eta: float = 0.05, threshold_nms: float = 50.0,
                      t_limit_h: float = 10.0) -> dict:
     """Both monitors on one stretch; writes ``out`` and returns the summary."""
@@ -108,10 +108,10 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                          help="Prior probability of a leak in the stretch."),
         p_detect: float = typer.Option(0.99, "--p-detect", min=0.5, max=1 - 1e-12,
                                        help="Alarm when P(leak) reaches this."),
-        sample_step: float = typer.Option(10.0, "--sample-step",
+        sample_step: float = typer.Option(60.0, "--sample-step",
                                           help="Spacing of the residual samples used, s."),
         check_step: float = typer.Option(60.0, "--check-step", help="Seconds between checks."),
-        onset_step: float = typer.Option(60.0, "--onset-step",
+        onset_step: float = typer.Option(20.0, "--onset-step",
                                          help="Onset grid spacing, s."),
         eta: float = typer.Option(0.05, "--eta", help="Thruster-to-thruster variation "
                                   "(fraction, Lee Eq 11)."),
