@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
-from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.estimators.leak import leak_torque
+from cassini_bayes.physics.impulse import THRUSTER_NAMES, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 from cassini_bayes.simulate import Scenario, SimResult, quiet_windows
 from cassini_bayes.spacecraft import Spacecraft
@@ -78,7 +79,21 @@ def truth_document(result: SimResult, seed: int) -> dict:
         "momentum_balance_rel_error": drift,
         "max_pointing_error_rad": float(np.max(np.linalg.norm(a.pointing_error, axis=1))),
         "n_pulses": 0 if result.pulses is None else int(result.pulses.t_on.size),
+        "leak": _leak_document(result),
     }
+
+
+def _leak_document(result: SimResult) -> dict | None:
+    """The scenario's leak and its true torque ``f F_k Q[:, k]`` (N m), or ``None``."""
+    s, lk = result.scenario, result.scenario.leak
+    if lk is None:
+        return None
+    th = s.truth.thrusters
+    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    thrust = float(np.asarray(result.params.thrust_n)[lk.thruster])
+    return {"thruster": THRUSTER_NAMES[lk.thruster], "fraction": lk.fraction,
+            "t_start_s": lk.t_start_s, "thrust_n": thrust,
+            "torque_nm": [float(x) for x in leak_torque(q, lk.thruster, lk.fraction, thrust)]}
 
 
 @dataclass(frozen=True)

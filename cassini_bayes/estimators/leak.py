@@ -8,17 +8,20 @@ thruster angular impulse. The correction for thruster-to-thruster variation is E
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import jax
 import numpy as np
 
 from cassini_bayes.physics.impulse import angular_impulse, impulse_lhs
 
-__all__ = ["residual_momentum", "leak_torque", "momentum_correction", "LEAK_THRESHOLD_NMS",
-           "ETA", "Z_ARM_M"]
+__all__ = ["residual_momentum", "leak_torque", "momentum_correction", "threshold_monitor",
+           "ThresholdResult", "LEAK_THRESHOLD_NMS", "T_LIMIT_CRUISE_S", "ETA", "Z_ARM_M"]
 
 _lhs = jax.jit(impulse_lhs)
 
 LEAK_THRESHOLD_NMS = 50.0  # Lee §3.2: R_T
+T_LIMIT_CRUISE_S = 36000.0  # Lee §3.2: T_limit = 10 h in cruise
 ETA = 0.05                 # Lee Eq 11: thruster-to-thruster variation at launch
 Z_ARM_M = 1.6              # Lee Eq 11: mean moment arm of the Z-facing thrusters, m
 
@@ -62,3 +65,59 @@ def momentum_correction(delta_j_ns, eta: float = ETA, arm_m: float = Z_ARM_M) ->
     dj_y = np.abs(z1 + z4 - z2 - z3)
     dj_z = np.abs(y2 + y4 - y1 - y3)
     return 2.0 * eta * arm_m * np.stack([dj_x, dj_y, dj_z], -1)
+
+
+@dataclass(frozen=True)
+class ThresholdResult:
+    """Lee's monitor over a stretch: ``detection_time_s`` (first trigger with
+    ``T_trigger ≤ T_limit``, ``None``: none), its ``axis`` (0..2), the thruster whose torque
+    column best matches the polarities of ``R`` then (``None``: none), and the times of the
+    triggers that were dismissed (``T_trigger > T_limit``) or acted on."""
+
+    detection_time_s: float | None
+    axis: int | None
+    thruster: int | None
+    triggers_s: tuple[float, ...]
+    dismissed_s: tuple[float, ...]
+
+
+def threshold_monitor(t_s, residual_nms, impulse_ns, q_matrix, *,
+                      r_t_nms: float = LEAK_THRESHOLD_NMS, t_limit_s: float = T_LIMIT_CRUISE_S,
+                      eta: float = ETA, arm_m: float = Z_ARM_M) -> ThresholdResult:
+    """Lee's threshold test (§3.2, Eqs 10-11) on a residual ``R`` (n, 3) N m s.
+
+    From the last reset, the check is ``|R_i − R_i(reset)| − C_i ≥ r_t_nms`` with ``C`` the
+    accumulated Eq 11 correction (:func:`momentum_correction` of each sample's impulses
+    ``impulse_ns`` (n, 8) N s). The paper "adds" ``R^corr`` to ``R``; as ``R^corr ≥ 0`` bounds the
+    momentum thruster-to-thruster variation may have built up, we read it as a margin on
+    ``|R_i|`` (our reading). A trigger within ``t_limit_s`` of the reset is a leak (the first is
+    the detection); a later one is dismissed as slow accumulation. Both reset ``R`` and ``C``.
+    The leaking thruster is the column of ``q_matrix`` (3, 8) closest in direction to ``R`` since
+    the reset ("the polarities of R_i reveal the identity of the leaky thruster").
+    """
+    t = np.asarray(t_s, float)
+    r = np.asarray(residual_nms, float)
+    corr = np.cumsum(momentum_correction(np.diff(np.asarray(impulse_ns, float), axis=0,
+                                                 prepend=0.0), eta, arm_m), axis=0)
+    q = np.asarray(q_matrix, float)
+    q_unit = q / np.linalg.norm(q, axis=0)
+    start, triggers, dismissed = 0, [], []
+    detection = axis = thruster = None
+    while start < t.size:
+        excess = np.abs(r[start:] - r[start]) - (corr[start:] - corr[start]) - r_t_nms
+        hit = np.nonzero(np.any(excess >= 0.0, axis=1))[0]
+        if hit.size == 0:
+            break
+        i = start + int(hit[0])
+        if t[i] - t[start] <= t_limit_s:
+            triggers.append(float(t[i]))
+            if detection is None:
+                d = r[i] - r[start]
+                detection, axis = float(t[i]), int(np.argmax(excess[hit[0]]))
+                thruster = int(np.argmax(q_unit.T @ (d / np.linalg.norm(d))))
+        else:
+            dismissed.append(float(t[i]))
+        start = i
+        if i == t.size - 1:
+            break
+    return ThresholdResult(detection, axis, thruster, tuple(triggers), tuple(dismissed))

@@ -163,6 +163,7 @@ class _Config:
     min_off_s: float
     wheel_gain: float
     flex: bool
+    leak: bool
 
 
 def truth_params(scenario: Scenario) -> TruthParams:
@@ -204,12 +205,13 @@ def _config(s: Scenario) -> _Config:
         rate_gain_s=s.rcs.rate_gain_s, width_gain=s.rcs.width_gain_s_per_rad,
         max_units=int(round(s.rcs.max_pulse_s / ctl.COMMAND_RESOLUTION_S)),
         min_off_s=s.rcs.min_off_s, wheel_gain=s.rcs.wheel_rate_gain_per_s,
-        flex=s.flex is not None)
+        flex=s.flex is not None, leak=s.leak is not None)
 
 
 def _plan(s: Scenario) -> np.ndarray:
     """Per-step commands (n_out, sps, P): ``cmd(10)`` then, with thrusters, open-loop pulse units
-    (8), dead-bands (3), wheel ramp targets (k) and torque limits (k)."""
+    (8), dead-bands (3), wheel ramp targets (k) and torque limits (k); last, with a leak, each
+    thruster's leak fraction averaged over the step (8)."""
     n = s.n_steps
     t = np.arange(n) * s.dt_s
     slews = [(sl.t_start_s, sl.axis, sl.angle_rad, sl.rate_rad_s, sl.accel_rad_s2)
@@ -233,6 +235,12 @@ def _plan(s: Scenario) -> np.ndarray:
             target[m, r.wheel] = r.target_rad_s
             tmax[m, r.wheel] = r.torque_nm
         cols += [forced, db, target, tmax]
+    if s.leak is not None:
+        leak = np.zeros((n, 8))
+        # the share of each step after the onset, so the leak impulse is exact
+        leak[:, s.leak.thruster] = s.leak.fraction * np.clip(
+            (t + s.dt_s - s.leak.t_start_s) / s.dt_s, 0.0, 1.0)
+        cols.append(leak)
     plan = np.concatenate(cols, axis=1)
     return plan.reshape(s.n_samples - 1, s.steps_per_sample, -1)
 
@@ -346,6 +354,9 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
             out_units = units.astype(jnp.int8)
         else:
             out_units = jnp.zeros((8,), jnp.int8)[:0]
+        if cfg.leak:
+            # stuck-open valve (Lee §3.2): f F_k of thrust, torque f F_k Q[:, k] (Eq 16)
+            body_imp = body_imp + carr["q_matrix"] @ (truth.thrust_n * row[-8:] * dt)
         # linear-in-time inertial torque: its mean over the step is its value at mid-step
         t_n = truth.torque_inertial_nm + truth.torque_inertial_rate_nm_s * (t + 0.5 * dt)
         if cfg.flex:

@@ -36,6 +36,9 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [flex_mode] freq_hz, damping, coupling = [3] (kg^½ m): one flexible or slosh mode
                 (:class:`FlexMode`; off when the section is absent)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
+    [leak]      thruster = "Z1"…"Y4", fraction (0 < f ≤ 1 of the true thrust), t_start_s: from
+                ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a stuck-open valve leaking
+                ``f`` of thruster ``k``'s thrust, Lee §3.2; off when the section is absent)
 
 Bounds (docs/limits.md): a run has at most :data:`MAX_STEPS` integration steps and
 :data:`MAX_SAMPLES` telemetry samples; every number is at most :data:`NUMBER_ABS_MAX` in
@@ -62,7 +65,7 @@ from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S
 from cassini_bayes.telemetry import MAX_ROWS, OMEGA_ABS_MAX, WHEEL_RPM_MAX
 
 __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "FlexMode", "Window",
-           "RwaControl", "RcsControl", "Scenario", "load_scenario", "scenario_from_dict",
+           "RwaControl", "RcsControl", "Leak", "Scenario", "load_scenario", "scenario_from_dict",
            "scenario_path", "check_size", "MAX_STEPS", "MAX_SAMPLES"]
 
 RPM = 2.0 * np.pi / 60.0
@@ -180,6 +183,15 @@ class Window:
 
 
 @dataclass(frozen=True)
+class Leak:
+    """A leaking thruster: index 0..7 (``Z1 … Y4``), fraction of its true thrust, onset (s)."""
+
+    thruster: int
+    fraction: float
+    t_start_s: float
+
+
+@dataclass(frozen=True)
 class RwaControl:
     """RWA PD controller: bandwidth (rad/s), damping ratio, believed wheel axes (k, 3)."""
 
@@ -233,6 +245,7 @@ class Scenario:
     noise: Noise = field(default_factory=Noise)
     flex: FlexMode | None = None
     windows: tuple[Window, ...] = ()
+    leak: Leak | None = None
     truth_model_path: str = ""
     prior_model_path: str = ""
 
@@ -421,11 +434,27 @@ def _flex_mode(top: _Reader, inertia: np.ndarray, dt: float, src: str) -> FlexMo
     return FlexMode(f, zeta, tuple(float(x) for x in delta))
 
 
+def _leak(top: _Reader, duration: float, dt: float) -> Leak | None:
+    """The optional ``[leak]`` section (all three keys required)."""
+    if not top.has("leak"):
+        return None
+    lk = top.sub("leak", {"thruster", "fraction", "t_start_s"})
+    name = lk.str_("thruster").upper()
+    if name not in THRUSTER_NAMES:
+        raise lk.err("thruster", f"must be one of {', '.join(THRUSTER_NAMES)}, got {name!r}")
+    f = lk.num("fraction", positive=True)
+    if f > 1.0:
+        raise lk.err("fraction", f"= {f} must be at most 1 (a fraction of the thrust)")
+    t0 = lk.num("t_start_s")
+    _check_time(lk, "t_start_s", t0, duration)
+    return Leak(THRUSTER_NAMES.index(name), f, t0)
+
+
 def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     """Build and validate a :class:`Scenario` from the TOML schema (as a dict)."""
     top = _Reader(d, "", src, {"name", "description", "seed", "run", "truth", "prior", "initial",
                                "rwa_controller", "rcs_controller", "slew", "wheel_ramp",
-                               "deadband", "pulse", "noise", "window", "flex_mode"})
+                               "deadband", "pulse", "noise", "window", "flex_mode", "leak"})
     seed = top.t.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
         raise top.err("seed", f"must be an integer in 0 .. 2^32 - 1, got {seed!r}")
@@ -650,6 +679,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         if t1 <= t0:
             raise r.err("t1_s", f"= {t1} must be after t0_s = {t0}")
         windows.append(Window(r.str_("name"), t0, t1))
+    leak = _leak(top, duration, dt)
 
     return Scenario(
         name=top.str_("name", Path(src).stem), description=top.str_("description", ""),
@@ -664,6 +694,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         slews=tuple(slews), wheel_ramps=tuple(ramps),
         deadbands=tuple(sorted(deadbands, key=lambda c: c.t_s)),
         pulses=tuple(pulses), noise=noise, flex=flex, windows=tuple(windows),
+        leak=leak,
         truth_model_path=truth_path, prior_model_path=prior_path,
     )
 

@@ -1,0 +1,201 @@
+"""Thruster-leak detection (issue 17): the simulator's ``[leak]``, the Bayesian monitor
+(:mod:`cassini_bayes.inference.leak`), Lee's threshold monitor and ``monitor leak``.
+
+Error rates of the assertions on the monitor's probabilities: under no leak the averaged Bayes
+factor has expectation 1, so ``P(none) < 0.5`` (a Bayes factor ≥ 99 at the 1 % prior) happens on
+at most ~1 % of clean stretches (Markov's inequality; the noise level is estimated, so this is
+approximate); the leak cases are thousands of noise sds above it. Every random draw here has a
+fixed key, so the tests are deterministic.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import jax
+import numpy as np
+import pytest
+
+from cassini_bayes.cli import main
+from cassini_bayes.cli.simulate import write_run
+from cassini_bayes.errors import InputError
+from cassini_bayes.estimators.leak import leak_torque, residual_momentum, threshold_monitor
+from cassini_bayes.inference.leak import HYPOTHESES, LeakInputs, leak_inputs, leak_posterior
+from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.simulate import scenario_from_dict, simulate
+
+Q = np.asarray(moment_matrix(1.234, 1.580, 2.880, 3.019))
+ONSET_S = 200.0
+
+
+def _scenario_dict(**leak):
+    return {
+        "name": "leak_test", "seed": 5,
+        "run": {"duration_s": 900.0, "dt_s": 0.125, "sample_period_s": 1.0, "control": "rcs"},
+        "truth": {"model": "models/cassini_post_probe.toml",
+                  "thrust_n": [0.72, 0.68, 0.70, 0.71, 0.69, 0.73, 0.67, 0.70]},
+        "prior": {"model": "models/cassini_post_probe.toml"},
+        "initial": {"wheels_on": ["RWA1", "RWA2", "RWA3"],
+                    "wheel_rpm": {"RWA1": -794.0, "RWA2": -870.0, "RWA3": -296.0}},
+        "leak": {"thruster": "Z1", "fraction": 0.1, "t_start_s": ONSET_S, **leak},
+        "noise": {"gyro_rad_s": 1e-6, "star_tracker_rad": 5e-5, "tach_noise_rpm": 0.05,
+                  "tach_quantum_rpm": 0.1},
+    }
+
+
+@pytest.fixture(scope="module")
+def leak_run():
+    s = scenario_from_dict(_scenario_dict())
+    return simulate(jax.random.PRNGKey(3), s)
+
+
+# --- simulator -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("leak, words", [
+    ({"thruster": "Z9"}, "'leak.thruster' must be one of"),
+    ({"fraction": 1.5}, "'leak.fraction' = 1.5 must be at most 1"),
+    ({"fraction": 0.0}, "'leak.fraction' must be positive"),
+    ({"t_start_s": 1000.0}, "'leak.t_start_s' = 1000.0 s lies outside the run"),
+    ({"size": 1}, "unknown key 'leak.size'"),
+])
+def test_leak_section_is_validated(leak, words):
+    with pytest.raises(InputError, match=words):
+        scenario_from_dict(_scenario_dict(**leak), "s.toml")
+
+
+def test_missing_leak_key_is_named():
+    d = _scenario_dict()
+    del d["leak"]["fraction"]
+    with pytest.raises(InputError, match="missing required key 'leak.fraction'"):
+        scenario_from_dict(d)
+
+
+def test_simulated_leak_is_the_q_column_torque(leak_run):
+    """Noise-free residual with the true thruster impulses is the leak's ramp (to the
+    trapezoid-rule error of the 1 s gyroscopic impulse, ~1e-4 of it)."""
+    s, a = leak_run.scenario, leak_run.arrays
+    tel = leak_run.truth
+    h = sum(w.inertia * np.asarray(tel.wheel_rates)[:, k, None] * w.axis[None, :]
+            for k, w in enumerate(s.truth.wheels) if s.wheels_on[k])
+    r = residual_momentum(tel.t, tel.omega, s.truth.inertia, h, Q, np.asarray(a.thruster_impulse))
+    tq = leak_torque(Q, 0, 0.1, 0.72)
+    expect = np.clip(tel.t - ONSET_S, 0.0, None)[:, None] * tq[None, :]
+    assert np.abs(r - expect).max() < 2e-4 * np.abs(expect).max()
+    assert leak_run.pulses is not None  # the controller fights the leak with thrusters
+
+
+# --- Bayesian monitor ----------------------------------------------------------------------------
+
+
+def test_monitor_finds_z1_in_a_simulated_leak(leak_run):
+    s = leak_run.scenario
+    post = leak_posterior(leak_inputs(leak_run.telemetry, leak_run.pulses, s.prior),
+                          check_step_s=20.0, onset_step_s=20.0)
+    p = dict(zip(HYPOTHESES, post.prob[-1]))
+    assert p["Z1"] > 0.99
+    assert post.thruster == "Z1"
+    assert ONSET_S < post.detection_time_s <= ONSET_S + 60.0
+    # the fraction of the model's 0.699 N: 0.1 * 0.72 / 0.699
+    assert post.fraction_mean == pytest.approx(0.1 * 0.72 / 0.699, rel=0.01)
+    assert abs(post.onset_s - ONSET_S) <= 20.0
+    # before the onset no check called a leak
+    assert np.all(post.p_leak[post.t_check < ONSET_S] < 0.5)
+
+
+def test_monitor_says_none_on_the_clean_part(leak_run):
+    tel = leak_run.telemetry.slice(0.0, ONSET_S - 1.0)
+    post = leak_posterior(leak_inputs(tel, leak_run.pulses, leak_run.scenario.prior),
+                          check_step_s=20.0)
+    assert post.prob[-1][0] > 0.9
+    assert post.detection_time_s is None and post.thruster is None
+
+
+def _synthetic(rng, n=1800, leak=None, sd=0.01):
+    t = np.arange(float(n))
+    r = sd * rng.standard_normal((n, 3))
+    if leak is not None:
+        k, f, t0 = leak
+        r += np.clip(t - t0, 0, None)[:, None] * leak_torque(Q, k, f, 0.7)[None, :]
+    return LeakInputs(t, r, np.zeros((n, 8)), Q, np.full(8, 0.7), 15e-6)
+
+
+def test_clean_synthetic_stretches_rarely_alarm():
+    rng = np.random.default_rng(11)
+    p_none = [leak_posterior(_synthetic(rng), check_step_s=300.0).prob[-1][0]
+              for _ in range(20)]
+    assert sum(p < 0.5 for p in p_none) <= 1     # expected ≤ ~1 % of 20
+
+
+@pytest.mark.parametrize("k", range(8))
+def test_every_thruster_is_isolated(k):
+    rng = np.random.default_rng(k)
+    post = leak_posterior(_synthetic(rng, leak=(k, 0.001, 600.0)), check_step_s=300.0)
+    assert post.thruster == HYPOTHESES[k + 1]
+    assert post.prob[-1][k + 1] > 0.99
+    assert post.fraction_mean == pytest.approx(0.001, rel=0.05)
+
+
+def test_monitor_bad_settings_are_one_line():
+    inp = _synthetic(np.random.default_rng(0), n=100)
+    with pytest.raises(InputError, match="prior_leak"):
+        leak_posterior(inp, prior_leak=1.0)
+    with pytest.raises(InputError, match="at least 3"):
+        leak_posterior(dataclasses.replace(inp, t=inp.t[:2], residual=inp.residual[:2],
+                                           impulse=inp.impulse[:2]))
+
+
+# --- Lee's threshold monitor ---------------------------------------------------------------------
+
+
+def test_threshold_monitor_triggers_at_r_t_over_the_torque():
+    t = np.arange(0.0, 2000.0)
+    tq = leak_torque(Q, 0, 0.1, 1.0)
+    r = np.clip(t - 100.0, 0, None)[:, None] * tq[None, :]
+    res = threshold_monitor(t, r, np.zeros((t.size, 8)), Q)
+    assert res.detection_time_s == pytest.approx(100.0 + np.ceil(50.0 / 0.158), abs=1.0)
+    assert res.axis == 0 and res.thruster == 0
+    # R is reset at each trigger and triggers again R_T / 0.158 s later (the branch swap)
+    assert np.allclose(np.diff(res.triggers_s), np.ceil(50.0 / 0.158), atol=1.0)
+
+
+def test_threshold_monitor_dismisses_slow_accumulation():
+    t = np.arange(0.0, 40000.0, 10.0)
+    r = np.zeros((t.size, 3))
+    r[:, 0] = 0.004 * t                         # 50 N m s after 3.5 h
+    assert threshold_monitor(t, r, np.zeros((t.size, 8)), Q).detection_time_s is not None
+    slow = threshold_monitor(t, r, np.zeros((t.size, 8)), Q, t_limit_s=3.0 * 3600.0)
+    assert slow.detection_time_s is None and len(slow.dismissed_s) == 3
+
+
+# --- CLI -----------------------------------------------------------------------------------------
+
+
+def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
+    write_run(leak_run, tmp_path / "sim", seed=3)
+    out = tmp_path / "mon"
+    args = ["monitor", "leak", str(tmp_path / "sim" / "telemetry.csv"), "--pulses",
+            str(tmp_path / "sim" / "pulses.csv"), "--spacecraft", "cassini_post_probe",
+            "--out", str(out), "--check-step", "20"]
+    assert main(args) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["bayes"]["thruster"] == "Z1" and s["bayes"]["p_hypothesis"]["Z1"] > 0.99
+    assert s["lee"]["thruster"] == "Z1"
+    assert s["bayes"]["detection_time_s"] < s["lee"]["detection_time_s"]
+    rows = (out / "probabilities.csv").read_text().splitlines()
+    assert rows[0].startswith("t_s,p_none,p_Z1") and len(rows) == 1 + 14
+    truth = json.loads((tmp_path / "sim" / "truth.json").read_text())
+    assert truth["leak"]["thruster"] == "Z1" and truth["leak"]["torque_nm"][2] == 0.0
+    # a second run is refused without --force, replaces with it
+    assert main(args) == 2
+    assert "already exists" in capsys.readouterr().err
+    assert main(args + ["--force"]) == 0
+
+
+def test_cli_monitor_bad_option_is_one_line(leak_run, tmp_path, capsys):
+    write_run(leak_run, tmp_path / "sim", seed=3)
+    rc = main(["monitor", "leak", str(tmp_path / "sim" / "telemetry.csv"), "--spacecraft",
+               "cassini_post_probe", "--out", str(tmp_path / "m"), "--check-step", "0"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--check-step" in err and "Traceback" not in err
