@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from cassini_bayes.cli import main
-from cassini_bayes.cli.simulate import write_run
+from cassini_bayes.api import Simulation
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.leak import leak_torque, residual_momentum, threshold_monitor
 from cassini_bayes.inference.leak import HYPOTHESES, LeakInputs, leak_inputs, leak_posterior
@@ -173,7 +173,7 @@ def test_threshold_monitor_dismisses_slow_accumulation():
 
 
 def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
-    write_run(leak_run, tmp_path / "sim", seed=3)
+    Simulation(leak_run, 3).save(tmp_path / "sim")
     out = tmp_path / "mon"
     args = ["monitor", "leak", str(tmp_path / "sim" / "telemetry.csv"), "--pulses",
             str(tmp_path / "sim" / "pulses.csv"), "--spacecraft", "cassini_post_probe",
@@ -194,7 +194,7 @@ def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
 
 
 def test_cli_monitor_bad_option_is_one_line(leak_run, tmp_path, capsys):
-    write_run(leak_run, tmp_path / "sim", seed=3)
+    Simulation(leak_run, 3).save(tmp_path / "sim")
     rc = main(["monitor", "leak", str(tmp_path / "sim" / "telemetry.csv"), "--spacecraft",
                "cassini_post_probe", "--out", str(tmp_path / "m"), "--check-step", "0"])
     err = capsys.readouterr().err
