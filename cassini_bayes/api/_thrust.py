@@ -20,6 +20,7 @@ def thrust_baseline(events, spacecraft, mode: str) -> tuple[dict | None, list[st
     import numpy as np
 
     from cassini_bayes.estimators import thrust as est
+    from cassini_bayes.estimators.baseline import wheel_momentum
     from cassini_bayes.physics.impulse import moment_matrix
 
     th = spacecraft.thrusters
@@ -28,12 +29,7 @@ def thrust_baseline(events, spacecraft, mode: str) -> tuple[dict | None, list[st
     vs, js = [], []
     try:
         for tel, log in events:
-            rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
-            h = np.zeros((tel.n, 3))
-            for k, name in enumerate(tel.wheel_names):
-                if name in tel.active_wheels():
-                    w = spacecraft.wheel(name)
-                    h += w.inertia * rates[:, k, None] * w.axis[None, :]
+            h = wheel_momentum(tel, spacecraft)
             v, j = est.regression_inputs(tel.t, tel.omega, h, spacecraft.inertia,
                                          pulses=(log.t_on, log.thruster, log.width),
                                          tau=(p.tau_delay, p.tau_rise, p.tau_fall))

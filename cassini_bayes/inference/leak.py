@@ -50,6 +50,7 @@ import numpy as np
 from scipy.special import log_ndtr, logsumexp
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.leak import ETA, residual_momentum
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times, moment_matrix
 from cassini_bayes.physics.pulse import pulse_impulse_until
@@ -187,12 +188,7 @@ _TAIL_TAUS = 40.0
 
 def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft) -> LeakInputs:
     """Residual momentum (Lee Eq 10) and modelled impulses of a telemetry stretch."""
-    rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
-    h = np.zeros((tel.n, 3))
-    for k, name in enumerate(tel.wheel_names):
-        if name in tel.active_wheels():
-            w = spacecraft.wheel(name)
-            h += w.inertia * rates[:, k, None] * w.axis[None, :]
+    h = wheel_momentum(tel, spacecraft)
     th = spacecraft.thrusters
     q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
     j = _impulses(tel, pulses, spacecraft)
