@@ -31,7 +31,8 @@ from cassini_bayes.analysis.propagation import LineInterval, propagate
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
 
-__all__ = ["Posterior", "load_posterior", "posterior_from_idata", "BudgetRow",
+__all__ = ["Posterior", "load_posterior", "posterior_from_idata", "BudgetRow", "budget_table",
+           "budget_csv", "TABLE_COLUMNS",
            "PosteriorBudget", "DEFAULT_MANEUVER", "posterior_budget", "LEE_CONTROL_LINE"]
 
 KINDS = ("inertia", "thrust", "rwa4")
@@ -64,6 +65,9 @@ class Posterior(NamedTuple):
         return est
 
 
+_A_FIT = {"inertia": "an inertia fit", "thrust": "a thrust fit", "rwa4": "an RWA4 fit"}
+
+
 def posterior_from_idata(idata, kind: str, source: str, method: str | None = None) -> Posterior:
     """The :class:`Posterior` of ``kind`` from an InferenceData (``source`` names it in errors)."""
     if kind not in KINDS:
@@ -74,7 +78,7 @@ def posterior_from_idata(idata, kind: str, source: str, method: str | None = Non
     missing = [n for n in need if n not in names]
     if missing:
         raise InputError(f"{source}: no {kind} draws ({', '.join(missing)} missing); give the run "
-                         f"directory of a {kind} fit")
+                         f"directory of {_A_FIT[kind]}")
     keep = {"inertia": INERTIA_NAMES, "thrust": ("F",) + TAU_NAMES, "rwa4": U4_NAMES}[kind]
     draws = {n: np.asarray(post[n].values, float).reshape(-1) for n in keep if n in names}
     if kind == "rwa4":
@@ -103,11 +107,11 @@ def load_posterior(run_dir, kind: str, *, option: str | None = None) -> Posterio
     run_dir = Path(run_dir)
     nc = run_dir / "posterior.nc"
     if not run_dir.is_dir():
-        raise InputError(f"{where}: run directory not found; give the --out directory of a "
-                         f"{kind} fit")
+        raise InputError(f"{where}: run directory not found; give the --out directory of "
+                         f"{_A_FIT[kind]}")
     if not nc.is_file():
-        raise InputError(f"{where}: no posterior.nc there; give the --out directory of a "
-                         f"{kind} fit")
+        raise InputError(f"{where}: no posterior.nc there; give the --out directory of "
+                         f"{_A_FIT[kind]}")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -307,3 +311,53 @@ def _pointing_rows(rows, add, d_i, d_r, inertia, axis_hat, maneuver) -> None:
         add(budget, "root-sum-square", "mrad", fid,
             lambda d, part=part, p=paper_control, a=assumed_sq: np.sqrt(a + p * p + part(d) ** 2),
             knowledge, inputs + "; other lines the paper's")
+
+
+TABLE_COLUMNS = ("budget", "line", "paper", "posterior: median [5 %, 95 %]",
+                 "attribution (one at a time)", "inputs")
+
+
+def _attribution_text(iv: LineInterval) -> str:
+    shown = sorted(((v, k) for k, v in iv.shares.items() if v >= 0.005), reverse=True)
+    if len(iv.shares) > 1 and not 0.5 <= iv.share_sum <= 2.0:
+        # correlated parameters that compensate each other (or a strongly non-additive line):
+        # the one-at-a-time spreads are shown relative to each other
+        text = ", ".join(f"{k} {100 * v / iv.share_sum:.0f} %" for v, k in shown)
+        return f"{text} (relative; alone they spread the line {iv.share_sum:.3g}× its variance)"
+    text = ", ".join(f"{k} {100 * v:.0f} %" for v, k in shown) or "—"
+    if len(iv.shares) > 1 and abs(iv.share_sum - 1.0) > 0.05:
+        text += f" (sum {100 * iv.share_sum:.0f} %)"
+    return text
+
+
+def budget_table(budget: PosteriorBudget) -> tuple[tuple[str, ...], list[tuple[str, ...]]]:
+    """Columns and text rows of the budget: each line's paper value beside its posterior
+    interval (or the paper's value it keeps) and its attribution."""
+    rows = []
+    for r in budget.rows:
+        if r.interval is None:
+            ours, attr = f"{r.value:.4g} {r.unit} (kept)", "—"
+        else:
+            ours, attr = f"{r.interval.text(3)} {r.unit}", _attribution_text(r.interval)
+        rows.append((r.budget, r.line, r.paper or "—", ours, attr, r.inputs))
+    return TABLE_COLUMNS, rows
+
+
+def budget_csv(budget: PosteriorBudget) -> str:
+    """The budget as CSV text: one row per line, the shares as ``name=share`` pairs."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["budget", "line", "unit", "paper", "median", "low", "high", "level", "value",
+                "share_sum", "shares", "inputs"])
+    for r in budget.rows:
+        iv = r.interval
+        nums = (["", "", "", ""] if iv is None else
+                [f"{iv.median:.6g}", f"{iv.low:.6g}", f"{iv.high:.6g}", f"{iv.level:g}"])
+        shares = "" if iv is None else ";".join(f"{k}={v:.4g}" for k, v in iv.shares.items())
+        w.writerow([r.budget, r.line, r.unit, r.paper, *nums,
+                    "" if r.value is None else f"{r.value:.6g}",
+                    "" if iv is None else f"{iv.share_sum:.4g}", shares, r.inputs])
+    return buf.getvalue()

@@ -115,5 +115,5 @@ def propagate(line: Line, draws: Draws, *, level: float = 0.9,
         alone = {k: (v if k == name else np.broadcast_to(center[k], v.shape))
                  for k, v in draws.items()}
         var = float(np.var(np.asarray(line(alone), float)))
-        shares[name] = var / total if total > 0 else 0.0
+        shares[name] = var / total if total > 0 and var > 1e-12 * total else 0.0
     return values, LineInterval(med, lo, hi, level, shares, float(sum(shares.values())), n)
