@@ -207,7 +207,8 @@ def _fmt_fact(fact_id: str) -> str:
 
 
 def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior | None = None,
-                     rwa4: Posterior | None = None, n_draws: int = 4000, level: float = 0.9,
+                     rwa4: Posterior | None = None, extra_axes: tuple[Posterior, ...] = (),
+                     n_draws: int = 4000, level: float = 0.9,
                      maneuver: bl.Maneuver = DEFAULT_MANEUVER,
                      pulse_widths_s=(0.125,), pulse_counts=None) -> PosteriorBudget:
     """The budget lines computed from the given posteriors (module docstring).
@@ -258,10 +259,13 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
                 lambda d: bl.tau_thrust_error_pct(d, tau_hat, pulse_widths_s, pulse_counts),
                 {n: d_t[n] for n in TAU_NAMES}, "posterior: thrust time constants")
     axis_hat = rwa4.estimate()["u4"] if rwa4 else np.asarray(axis_on_cone(RWA1_PHI_RAD))
-    if rwa4:
-        fid = "rwa4_rwa_expected_deg" if rwa4.method == "rwa" else "rwa4_rcs_total_deg"
-        add(f"rwa4 ({rwa4.method or 'method not recorded'})", "RWA4 axis knowledge", "deg", fid,
-            lambda d: bl.axis_error_deg(d, axis_hat), d_r, "posterior: RWA4")
+    for i, p in enumerate(((rwa4,) if rwa4 else ()) + tuple(extra_axes)):
+        if p.kind != "rwa4":
+            raise InputError(f"{p.source}: a {p.kind} posterior given as an RWA4 posterior")
+        fid = "rwa4_rwa_expected_deg" if p.method == "rwa" else "rwa4_rcs_total_deg"
+        d = d_r if i == 0 else _resample(jax.random.fold_in(k_r, i), p.draws, n_draws)
+        add(f"rwa4 ({p.method or 'method not recorded'})", "RWA4 axis knowledge", "deg", fid,
+            lambda d, a=p.estimate()["u4"]: bl.axis_error_deg(d, a), d, "posterior: RWA4")
     if inertia:
         est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES])
         draws = dict(d_i) | (dict(d_r) if rwa4 else {})
@@ -270,6 +274,7 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
             draws, "posterior: inertia" + (", RWA4 axis" if rwa4 else "; axis at RWA1"))
     _pointing_rows(rows, add, d_i, d_r, inertia, axis_hat, maneuver)
     sources = {k: p.source for k, p in post.items() if p is not None}
+    sources |= {f"rwa4 ({p.method})": p.source for p in extra_axes}
     return PosteriorBudget(tuple(rows), n_draws, level, sources, maneuver)
 
 
