@@ -77,11 +77,14 @@ def tau_thrust_error_pct(d, tau_estimate_s, widths_s, counts=None) -> np.ndarray
     """
     from cassini_bayes.physics.pulse import mix_ratio
 
-    w = np.asarray(widths_s, float)
+    w = np.atleast_1d(np.asarray(widths_s, float))
+    c = np.ones_like(w) if counts is None else np.asarray(counts, float)
     tau = _stack(d, TAU_NAMES)
-    r_true = np.asarray(mix_ratio(w, counts, tau[:, :1], tau[:, 1:2], tau[:, 2:3]))
+    n = tau.shape[0]
+    wn, cn = np.broadcast_to(w, (n, w.size)), np.broadcast_to(c, (n, w.size))
+    r_true = np.asarray(mix_ratio(wn, cn, tau[:, :1], tau[:, 1:2], tau[:, 2:3]))
     te = np.asarray(tau_estimate_s, float)
-    r_est = float(mix_ratio(w, counts, te[0], te[1], te[2]))
+    r_est = float(mix_ratio(w, c, te[0], te[1], te[2]))
     return 100.0 * np.abs(r_true / r_est - 1.0)
 
 

@@ -353,8 +353,9 @@ def _from_posteriors(key, posteriors, n_draws):
         iv = r.interval
         label = f"{r.budget}: {r.line}"
         if f.kind == "budget" and iv is not None:
-            checks.append(check_fact(r.fact_id, iv.high, label=f"{label}, posterior 95th "
-                                     "percentile", decimals=4,
+            checks.append(check_fact(r.fact_id, iv.high, decimals=4,
+                                     label=f"{label}: from posteriors, median [5 %, 95 %] "
+                                           f"{iv.text(3)} {r.unit}; 95th percentile",
                                      note=f"median [5 %, 95 %] {iv.text(3)} {r.unit}; "
                                           f"{r.inputs}"))
         elif f.kind == "value":  # Lee's RSS: the paper's own entries give 1.186 / 0.244
