@@ -341,3 +341,34 @@ def test_error_budgets_posterior_section(runs):
     checks, table, summary, _ = _from_posteriors(
         jax.random.key(0), dict.fromkeys(post), 200)
     assert [round(c.ours, 3) for c in checks] == [1.186, 0.244]
+
+
+def test_thrust_mass_property_line_is_linear_in_the_inertia_error():
+    sens = np.array([1e-5, 2e-5, -3e-5, 0.0, 1e-4, 0.0])
+    truth = EST + np.array([10.0, -5.0, 2.0, 7.0, -1.0, 3.0])
+    out = bl.thrust_mass_property_pct(_inertia_draws(truth), EST, sens)
+    assert out == pytest.approx([abs((EST - truth) @ sens)])
+
+
+def test_thrust_sensitivity_to_the_assumed_inertia_is_exact():
+    """The least-squares thrust (Feldman & Lee Eq 23) is linear in the assumed inertia: the
+    one-difference sensitivity predicts a large perturbation to rounding."""
+    from cassini_bayes.estimators.baseline import fit_thrust_baseline
+    from cassini_bayes.experiments.error_budgets import thrust_inertia_sensitivity
+    from cassini_bayes.simulate import load_scenario, simulate, truth_params
+
+    key = jax.random.key(0)
+    sens = thrust_inertia_sensitivity(key, "biasing_day028")
+    sc = load_scenario("biasing_day028")
+    sim, tp = simulate(key, sc), truth_params(sc)
+    p = sc.prior.pulse
+    entries = np.asarray(tp.inertia, float)
+    f_true = float(np.mean(np.asarray(tp.thrust_n)))
+
+    def thrust(e):
+        return float(fit_thrust_baseline(sim.truth, sc.prior, sim.pulses, inertia=bl.inertia_of(e),
+                                         tau=(p.tau_delay, p.tau_rise, p.tau_fall)).estimate[0])
+
+    step = np.array([300.0, -200.0, 100.0, 50.0, -40.0, 30.0])
+    change = 100 * (thrust(entries + step) - thrust(entries)) / f_true
+    assert change == pytest.approx(step @ sens, rel=1e-6)

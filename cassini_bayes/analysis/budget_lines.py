@@ -14,6 +14,8 @@ Lines:
 * :func:`thrust_error_pct` — the thrust calibration, against its ±10 %;
 * :func:`tau_thrust_error_pct` — thrust adjusted for pulse dynamics (Feldman & Lee §V, ``F/R``)
   with the estimated time constants when the true ones are the draws;
+* :func:`thrust_mass_property_pct` — the least-squares thrust (Feldman & Lee Eq 23) computed with
+  the estimated inertia when the truth is the draw, through its sensitivity to the inertia;
 * :func:`axis_error_deg` — the RWA4 spin axis (Brown 2012), against 3° (RCS) / 1° (RWA);
 * :func:`rcs_mass_property_deg` — Brown's extra RCS-method error from mass-property knowledge
   (Eq 1 over a short drift, ``û ∝ Î I⁻¹ u``), against its 1.5°;
@@ -35,6 +37,7 @@ __all__ = [
     "inertia_worst_moment_pct",
     "thrust_error_pct",
     "tau_thrust_error_pct",
+    "thrust_mass_property_pct",
     "axis_error_deg",
     "rcs_mass_property_deg",
     "Maneuver",
@@ -86,6 +89,18 @@ def tau_thrust_error_pct(d, tau_estimate_s, widths_s, counts=None) -> np.ndarray
     te = np.asarray(tau_estimate_s, float)
     r_est = float(mix_ratio(w, c, te[0], te[1], te[2]))
     return 100.0 * np.abs(r_true / r_est - 1.0)
+
+
+def thrust_mass_property_pct(d, inertia_estimate, sensitivity_pct) -> np.ndarray:
+    """``|s · (Î − I)|`` (%): the thrust error from inertia knowledge.
+
+    The least-squares thrust (Feldman & Lee Eqs 19-23) is linear in the inertia it assumes (the
+    body momentum ``I ω``), so its error is the sensitivity ``sensitivity_pct`` (6,) — % of the
+    thrust per kg m² of each entry ``Ixx … Iyz`` — times the difference between the estimate
+    ``inertia_estimate`` (6,) and the true entries (the draws).
+    """
+    diff = np.asarray(inertia_estimate, float) - _stack(d, INERTIA_NAMES)
+    return np.abs(diff @ np.asarray(sensitivity_pct, float))
 
 
 def _unit(v) -> np.ndarray:

@@ -210,7 +210,8 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
                      rwa4: Posterior | None = None, extra_axes: tuple[Posterior, ...] = (),
                      n_draws: int = 4000, level: float = 0.9,
                      maneuver: bl.Maneuver = DEFAULT_MANEUVER,
-                     pulse_widths_s=(0.125,), pulse_counts=None) -> PosteriorBudget:
+                     pulse_widths_s=(0.125,), pulse_counts=None,
+                     thrust_inertia_sensitivity=None) -> PosteriorBudget:
     """The budget lines computed from the given posteriors (module docstring).
 
     Parameters
@@ -222,6 +223,9 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
     maneuver : the turn Lee's control line is evaluated on.
     pulse_widths_s, pulse_counts : pulse mix of the thrust's pulse-time-constant line (default:
         125 ms pulses, as Feldman & Lee Table 2).
+    thrust_inertia_sensitivity : (name, (6,) % of thrust per kg m² of ``Ixx … Iyz``) of the
+        least-squares thrust on a biasing event; with an inertia posterior it adds the thrust's
+        mass-property line (it needs the event's telemetry, so only the caller can give it).
     """
     if n_draws < 10:
         raise InputError(f"n_draws must be at least 10, got {n_draws}")
@@ -258,6 +262,12 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
                 "%", "thrust_accuracy_pct",
                 lambda d: bl.tau_thrust_error_pct(d, tau_hat, pulse_widths_s, pulse_counts),
                 {n: d_t[n] for n in TAU_NAMES}, "posterior: thrust time constants")
+    if inertia and thrust_inertia_sensitivity is not None:
+        event, sens = thrust_inertia_sensitivity
+        est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES])
+        add("thrust", "mass properties (least-squares Eq 23)", "%", "thrust_accuracy_pct",
+            lambda d: bl.thrust_mass_property_pct(d, est, sens), d_i,
+            f"posterior: inertia; sensitivity on {event}")
     axis_hat = rwa4.estimate()["u4"] if rwa4 else np.asarray(axis_on_cone(RWA1_PHI_RAD))
     for i, p in enumerate(((rwa4,) if rwa4 else ()) + tuple(extra_axes)):
         if p.kind != "rwa4":

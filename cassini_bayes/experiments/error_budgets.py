@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.analysis.paper_facts import fact
+from cassini_bayes.estimators.baseline import fit_thrust_baseline
 from cassini_bayes.experiments._core import (
     Check,
     ExperimentOutput,
@@ -321,8 +322,13 @@ def error_budgets(key, settings, ctx) -> ExperimentOutput:
         "which assumes independent sources; the 'all sources on' row checks that assumption.",
     )
     ctx.progress(0.95, "budgets from posteriors")
+    sensitivity = None
+    if "thrust" in cals and posteriors["inertia"] is not None:
+        k_nom = jax.random.split(jax.random.fold_in(key, cals.index("thrust")), 5)[0]
+        name = settings["scenarios"]["thrust"]
+        sensitivity = (name, thrust_inertia_sensitivity(k_nom, name))
     post_checks, post_table, post_summary, post_note = _from_posteriors(
-        jax.random.fold_in(key, 0x6275), posteriors, settings["posterior_draws"])
+        jax.random.fold_in(key, 0x6275), posteriors, settings["posterior_draws"], sensitivity)
     checks += post_checks
     tables.append(post_table)
     summary["from_posteriors"] = post_summary
@@ -337,14 +343,39 @@ def error_budgets(key, settings, ctx) -> ExperimentOutput:
                                                "paper's budget (dashed)."),))
 
 
-def _from_posteriors(key, posteriors, n_draws):
+def thrust_inertia_sensitivity(key, scenario_name: str) -> np.ndarray:
+    """(6,) change of the least-squares thrust (% of the true thrust) per kg m² of each assumed
+    inertia entry ``Ixx … Iyz``, on the noise-free biasing event ``scenario_name`` simulated with
+    ``key`` (the estimate is linear in the assumed inertia: one difference per entry is exact)."""
+    from cassini_bayes.analysis.budget_lines import inertia_of
+    from cassini_bayes.simulate import load_scenario, simulate, truth_params
+
+    scenario = load_scenario(scenario_name)
+    sim = simulate(key, scenario)
+    tp = truth_params(scenario)
+    p = scenario.prior.pulse
+    tau = (p.tau_delay, p.tau_rise, p.tau_fall)
+    f_true = float(np.mean(np.asarray(tp.thrust_n)))
+    entries = np.asarray(tp.inertia, float)
+
+    def thrust(e):
+        fit = fit_thrust_baseline(sim.truth, scenario.prior, sim.pulses, tau=tau,
+                                  inertia=inertia_of(e))
+        return float(fit.estimate[0])
+
+    f0 = thrust(entries)
+    return np.array([100.0 * (thrust(entries + np.eye(6)[k]) - f0) / f_true for k in range(6)])
+
+
+def _from_posteriors(key, posteriors, n_draws, sensitivity=None):
     """Checks, table, summary and note of the budgets propagated from the fits' posteriors."""
     from cassini_bayes.analysis.posterior_budgets import budget_table, posterior_budget
 
     rwa4 = posteriors["rwa4_rwa"] or posteriors["rwa4_rcs"]
     extra = tuple(p for p in (posteriors["rwa4_rcs"],) if p is not None and p is not rwa4)
     bud = posterior_budget(key, inertia=posteriors["inertia"], thrust=posteriors["thrust"],
-                           rwa4=rwa4, extra_axes=extra, n_draws=n_draws)
+                           rwa4=rwa4, extra_axes=extra, n_draws=n_draws,
+                           thrust_inertia_sensitivity=sensitivity)
     checks = []
     for r in bud.rows:
         if r.fact_id is None:
