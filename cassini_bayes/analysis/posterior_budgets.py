@@ -246,8 +246,8 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
         rows.append(row)
         return row
 
+    est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES]) if inertia else None
     if inertia:
-        est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES])
         add("inertia", "inertia knowledge, worst moment (Eq 12)", "%", "inertia_accuracy_pct",
             lambda d: bl.inertia_worst_moment_pct(d, est), d_i, "posterior: inertia")
     if thrust:
@@ -264,7 +264,6 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
                 {n: d_t[n] for n in TAU_NAMES}, "posterior: thrust time constants")
     if inertia and thrust_inertia_sensitivity is not None:
         event, sens = thrust_inertia_sensitivity
-        est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES])
         add("thrust", "mass properties (least-squares Eq 23)", "%", "thrust_accuracy_pct",
             lambda d: bl.thrust_mass_property_pct(d, est, sens), d_i,
             f"posterior: inertia; sensitivity on {event}")
@@ -277,22 +276,20 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
         add(f"rwa4 ({p.method or 'method not recorded'})", "RWA4 axis knowledge", "deg", fid,
             lambda d, a=p.estimate()["u4"]: bl.axis_error_deg(d, a), d, "posterior: RWA4")
     if inertia:
-        est = np.array([inertia.estimate()[n] for n in INERTIA_NAMES])
         draws = dict(d_i) | (dict(d_r) if rwa4 else {})
         add("rwa4 mass properties", "extra RCS-method error (Brown Eq 1)", "deg",
             "rwa4_mass_property_deg", lambda d: bl.rcs_mass_property_deg(d, est, axis_hat),
             draws, "posterior: inertia" + (", RWA4 axis" if rwa4 else "; axis at RWA1"))
-    _pointing_rows(rows, add, d_i, d_r, inertia, axis_hat, maneuver)
+    _pointing_rows(add, rows, d_i, d_r, est, axis_hat, maneuver)
     sources = {k: p.source for k, p in post.items() if p is not None}
     sources |= {f"rwa4 ({p.method})": p.source for p in extra_axes}
     return PosteriorBudget(tuple(rows), n_draws, level, sources, maneuver)
 
 
-def _pointing_rows(rows, add, d_i, d_r, inertia, axis_hat, maneuver) -> None:
-    """Lee Table 2 per axis: the paper's lines, the control line with the knowledge part, RSS."""
+def _pointing_rows(add, rows, d_i, d_r, i_hat, axis_hat, maneuver) -> None:
+    """Lee Table 2 per axis: the paper's lines, the control line with the knowledge part, RSS
+    (``i_hat`` the believed inertia entries, ``None`` without an inertia posterior)."""
     knowledge = (d_i or {}) | (d_r or {})
-    i_hat = (np.array([inertia.estimate()[n] for n in INERTIA_NAMES]) if inertia
-             else None)
     which = ", ".join(n for n, d in (("inertia", d_i), ("RWA4 axis", d_r)) if d is not None)
     inputs = f"posterior: {which}" if which else ""
     for col, axis in ((0, "X"), (1, "Z")):
