@@ -317,6 +317,7 @@ def test_experiments_find_the_fits_of_the_same_reproduce_run(runs, tmp_path):
     shutil.copytree(runs["inertia"], tmp_path / AUTO_RUNS["inertia"][0])
     found = find_posterior("auto", "inertia", "posteriors.inertia", ctx)
     assert found.kind == "inertia" and found.draws["Ixx"].shape == (200,)
+    assert found.source == "../inertia_table1/fits/post_probe"
     with pytest.raises(InputError, match=r"experiments/x.toml: settings.posteriors.thrust"):
         find_posterior(str(tmp_path / "nope"), "thrust", "posteriors.thrust", ctx)
     rwa = find_posterior(str(runs["inertia"].parent / "rwa4"), "rwa4_rcs", "p", ctx)

@@ -45,4 +45,6 @@ def find_posterior(value: str, which: str, setting: str, ctx):
         raise ctx.error(str(e)) from None
     if kind == "rwa4" and post.method is None:
         post = post._replace(method=which.split("_")[1])
+    if value == "auto":  # the temporary folder is renamed: name the fit relative to this run
+        post = post._replace(source=f"../{sub}")
     return post
