@@ -104,8 +104,11 @@ def budget_run(tmp_path_factory):
 def test_error_budget_quick_run_has_its_sections_and_figure(budget_run):
     rec, out = budget_run
     results = json.loads((out / "results.json").read_text())
-    assert set(results["results"]) == set(rec.settings["calibrations"])
     page = (out / "report.html").read_text()
+    assert set(results["results"]) == set(rec.settings["calibrations"]) | {"from_posteriors"}
+    # run alone (no fits beside it) the budgets from posteriors keep the papers' values
+    assert results["results"]["from_posteriors"]["sources"] == {}
+    assert "Budgets from posteriors, beside the papers" in page
     assert page.count("data:image/png;base64,") == len(results["figures"]) == 1
     for cal in rec.settings["calibrations"]:
         assert "error budget" in page

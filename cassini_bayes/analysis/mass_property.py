@@ -26,6 +26,8 @@ Here:
   element independently between the smallest and the largest observed difference;
 * the perturbation of each element is ``"uniform"`` over its interval (default; "varied randomly
   within the stated uncertainties") or ``"normal"`` with the interval as ±3σ about its centre;
+* :func:`mass_property_mc_posterior` replaces the box by an inertia posterior: the assumed
+  inertia is the posterior mean and the true one each posterior draw (docs/budgets.md);
 * the true axis ``u`` is drawn on RWA4's articulation cone (54.7356° from +Z, articulation angle
   uniform over an interval; RWA1 is at 90°) or fixed at the RWA1 axis.
 
@@ -62,6 +64,7 @@ __all__ = [
     "sample_assumed_inertia",
     "MassPropertyDraws",
     "mass_property_mc",
+    "mass_property_mc_posterior",
     "ErrorSummary",
     "summarise_errors",
     "plot_mass_property",
@@ -256,6 +259,25 @@ def mass_property_mc(key, inertia_true, box: PerturbationBox, n: int = 100_000, 
     return _mc(key, f(inertia_true, dtype=float), f(box.moi_low, dtype=float),
                f(box.moi_high, dtype=float), f(box.poi_low, dtype=float),
                f(box.poi_high, dtype=float), lo, hi, int(n), distribution)
+
+
+def mass_property_mc_posterior(key, inertia_draws, inertia_assumed, n: int = 100_000, *,
+                               phi_range_rad=(RWA1_PHI_RAD, RWA1_PHI_RAD)) -> MassPropertyDraws:
+    """Brown's Monte Carlo fed from an inertia posterior instead of a box.
+
+    The calibration assumes ``inertia_assumed`` (3, 3) (the posterior mean, what it would
+    upload); the true inertia is each of ``n`` draws taken, with replacement, from
+    ``inertia_draws`` (m, 3, 3) kg m² (the posterior); the true axis is drawn on the cone as in
+    :func:`mass_property_mc`. Returns the extra RCS-method error of every draw.
+    """
+    key_i, key_phi = jax.random.split(key)
+    draws = jnp.asarray(inertia_draws, dtype=float)
+    idx = jax.random.choice(key_i, draws.shape[0], (int(n),), replace=True)
+    lo, hi = (float(x) for x in phi_range_rad)
+    phi = jax.random.uniform(key_phi, (int(n),), minval=lo, maxval=hi)
+    err = rcs_axis_error_rad(draws[idx], jnp.asarray(inertia_assumed, dtype=float),
+                             axis_on_cone(phi))
+    return MassPropertyDraws(phi, err)
 
 
 @dataclass(frozen=True)

@@ -41,6 +41,7 @@ __all__ = [
     "FSDS_TRUE_THRUST_N",
     "INERTIA_2000_PREDICTED",
     "INERTIA_2000_ESTIMATED",
+    "LEE_POINTING_TABLE2",
 ]
 
 
@@ -131,6 +132,20 @@ TABLE2 = {
 FSDS_PULSE_MIX = ((0.125, 133), (0.250, 16), (0.500, 1), (0.750, 1))
 FSDS_LS_THRUST_N = 0.98   # plain least-squares thrust of the FSDS test (000 §V)
 FSDS_TRUE_THRUST_N = 0.75  # thrust simulated by the FSDS (000 §V)
+
+
+# Lee, Table 2: Cassini science pointing control error budget, 3-sigma contributions (mrad) about
+# the spacecraft X and Z axes (the camera looks along Y). Their RSS is 1.186 / 0.244 mrad; the paper
+# prints 1.18 / 0.23.
+LEE_POINTING_TABLE2 = (
+    ("Attitude determination error", 0.22, 0.06),
+    ("Star tracker geometric distortion error", 0.56, 0.035),
+    ("Post-calibration misalignment between camera and star tracker boresight vectors", 1.0, 0.1),
+    ("Star tracker boresight vector shift between calibrations", 0.2, 0.2),
+    ("Reaction wheel-based attitude control error", 0.04, 0.04),
+    ("IVP timing error", 0.037, 0.037),
+    ("IVP modeling error", 0.04, 0.04),
+)
 
 
 def _rows() -> tuple[PaperFact, ...]:

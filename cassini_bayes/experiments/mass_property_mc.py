@@ -9,6 +9,7 @@ from cassini_bayes.analysis.mass_property import (
     RWA1_PHI_RAD,
     flight_estimate_box,
     mass_property_mc,
+    mass_property_mc_posterior,
     plot_mass_property,
     requirement_box,
     summarise_errors,
@@ -23,6 +24,7 @@ from cassini_bayes.experiments._core import (
     png,
     register,
 )
+from cassini_bayes.experiments._posteriors import find_posterior
 from cassini_bayes.spacecraft import load_spacecraft
 
 _EPOCHS = (*TABLE1, "march_2000")
@@ -32,10 +34,11 @@ _EPOCHS = (*TABLE1, "march_2000")
     "mass_property_mc",
     defaults={"spacecraft": "cassini_post_probe", "n_draws": 100_000, "distribution": "uniform",
               "axis": "cone", "phi_range_deg": [-30.0, 210.0],
-              "flight_epochs": ["pre_soi", "post_prm", "post_probe"], "scale_points": 10},
+              "flight_epochs": ["pre_soi", "post_prm", "post_probe"], "scale_points": 10,
+              "inertia_posterior": "auto"},
     quick={"n_draws": 2000, "scale_points": 3},
     choices={"distribution": ("uniform", "normal"), "axis": ("cone", "rwa1")},
-    order=20,
+    order=45,  # after inertia_table1, whose Post-PROBE posterior analysis 3 reads
     description="Extra RWA4 axis error from mass-property uncertainty (Brown §III.B Monte Carlo)",
 )
 def mass_property(key, settings, ctx) -> ExperimentOutput:
@@ -45,7 +48,10 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
     ``distribution`` (``uniform`` within the bounds or ``normal`` with bounds = ±3σ), ``axis``
     (``cone``: true axis drawn on the articulation cone over ``phi_range_deg``; ``rwa1``: at RWA1),
     ``flight_epochs`` (Table 1 columns, or ``march_2000``, spanning analysis 2's range),
-    ``scale_points`` (points of the 99th-percentile-vs-box-size curve).
+    ``scale_points`` (points of the 99th-percentile-vs-box-size curve), ``inertia_posterior``
+    (run directory of an inertia fit for analysis 3, the Monte Carlo fed from its posterior;
+    ``"auto"``: the Post-PROBE fit of ``inertia_table1`` in the same ``reproduce`` run; ``""``:
+    none).
     """
     if settings["n_draws"] < 100:
         raise ctx.error("'settings.n_draws' must be at least 100")
@@ -70,6 +76,16 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
     draws = {label: mass_property_mc(k, sc.inertia, box, n, phi_range_rad=phi_range,
                                      distribution=dist)
              for (label, box), k in zip(boxes.items(), (key_1, key_2))}
+    posterior = find_posterior(settings["inertia_posterior"], "inertia", "inertia_posterior", ctx)
+    label_3 = "3: inertia posterior"
+    if posterior is not None:
+        from cassini_bayes.analysis.budget_lines import inertia_of
+        from cassini_bayes.names import INERTIA_NAMES
+
+        entries = np.stack([posterior.draws[k] for k in INERTIA_NAMES], -1)
+        draws[label_3] = mass_property_mc_posterior(
+            jax.random.fold_in(key, 3), inertia_of(entries), inertia_of(entries.mean(0)), n,
+            phi_range_rad=phi_range)
     ctx.progress(0.5, "Monte Carlo draws done")
     stats = {label: summarise_errors(d.error_rad) for label, d in draws.items()}
 
@@ -114,6 +130,16 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
                             note=f"products ±{scale_at_budget * sc.poi_uncertainty:.0f} kg m²; "
                                  "box scaled about zero"))
 
+    if posterior is not None:
+        checks.append(Check(f"analysis {label_3}: median [5 %, 95 %] of the extra error",
+                            float(np.median(np.degrees(draws[label_3].error_rad))), "deg",
+                            decimals=5, fact_id="rwa4_mass_property_deg",
+                            paper=fact("rwa4_mass_property_deg").printed,
+                            passed=bool(stats[label_3].p99_deg <= budget.value),
+                            note="90 % interval [" + ", ".join(
+                                f"{v:.3g}" for v in np.percentile(
+                                    np.degrees(draws[label_3].error_rad), [5, 95]))
+                                 + f"] deg; inertia posterior {posterior.source}"))
     pct = Table(
         "Extra axis error (deg)",
         ("analysis", "mean", "50 %", "95 %", "99 %", "max"),
@@ -164,7 +190,13 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
         "element uncertainties are not printed. Analysis 2 varies Î over the observed "
         "prediction − flight-estimate differences (Feldman & Lee Table 1"
         + (", March 2000 Eq 1 vs Eq 8" if "march_2000" in settings["flight_epochs"] else "")
-        + ").",
+        + ")."
+        + (f" Analysis 3 replaces the box by the inertia posterior of {posterior.source}: the "
+           "calibration assumes the posterior mean, the truth is each posterior draw (resampled), "
+           "so its spread is what the calibrated inertia leaves of the mass-property error."
+           if posterior is not None else " Analysis 3 (the Monte Carlo fed from an inertia "
+           "posterior) needs settings.inertia_posterior or an inertia_table1 run before it in "
+           "the same reproduce run: not run."),
         _reading(stats, budget.value, scale_at_budget, sc.moi_uncertainty, sc.poi_uncertainty),
     )
     summary = {
@@ -172,7 +204,9 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
         "phi_range_deg": list(phi_deg) if settings["axis"] == "cone" else [90.0, 90.0],
         "spacecraft": sc.name,
         "analyses": {label: {"box": boxes[label].to_dict(), "error_deg": stats[label].to_dict()}
-                     for label in boxes},
+                     for label in boxes}
+        | ({label_3: {"inertia_posterior": posterior.source,
+                      "error_deg": stats[label_3].to_dict()}} if posterior is not None else {}),
         "testbed_worst_deg": testbed_worst,
         "combined_linear_deg": {k: testbed_worst + s.p99_deg for k, s in stats.items()},
         "combined_rss_deg": {k: float(np.hypot(testbed_worst, s.p99_deg))
