@@ -297,3 +297,14 @@ def test_full_real_variants_momentum_balance(name):
     res = simulate(jax.random.key(0), load_scenario(name))
     assert _balance(res) < 1e-9
     assert np.max(np.abs(res.arrays.pointing_error[:, :2])) < (0.16 if "rcs" in name else 2e-3)
+
+
+def test_cli_simulate_takes_a_shipped_scenario_by_name(tmp_path, run_cli, monkeypatch):
+    """``simulate slew_2000_03_15`` (no path, no suffix) finds the shipped scenario from any
+    folder; a name that is neither a file nor shipped is one line naming it."""
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run_cli("simulate", "slew_2000_03_15", "--out", tmp_path / "o")
+    assert code == 0, err
+    assert json.loads((tmp_path / "o" / "truth.json").read_text())["scenario"]
+    code, _, err = run_cli("simulate", "no_such_scenario", "--out", tmp_path / "p")
+    assert code == 2 and "no_such_scenario" in err and len(err.strip().splitlines()) == 1

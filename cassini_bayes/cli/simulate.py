@@ -26,7 +26,8 @@ ORDER = 20
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     @app.command("simulate")
     def simulate_cmd(
-        scenario: Path = typer.Argument(..., help="Scenario TOML (experiments/scenarios/…)."),
+        scenario: Path = typer.Argument(..., help="Scenario TOML, or a shipped scenario's name "
+                                      "(slews_post_probe; experiments/scenarios/)."),
         out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
         seed: int | None = seed_option(None, "Seed of the sensor noise (default: the "
                                        "scenario's)."),
@@ -35,10 +36,14 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     ) -> None:
         """Simulate a scenario: telemetry.csv, pulses.csv (if thrusters fire), truth.json."""
         console = Console(stderr=True, highlight=False)
-        text_file(scenario, "scenario")  # a directory or a binary file: one line
-        check_out(out, force=force, inputs=[scenario])
         from cassini_bayes.api import simulate
         from cassini_bayes.simulate import load_scenario
+        from cassini_bayes.simulate.scenario import scenario_path
+
+        if not scenario.exists() and scenario_path(str(scenario)).is_file():
+            scenario = scenario_path(str(scenario))  # a shipped scenario's name
+        text_file(scenario, "scenario")  # a directory or a binary file: one line
+        check_out(out, force=force, inputs=[scenario])
 
         sc = load_scenario(scenario)
         seed_ = check_seed(sc.seed, str(scenario)) if seed is None else seed
