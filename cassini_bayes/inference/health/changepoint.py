@@ -157,6 +157,17 @@ class HealthPosterior:
         return out
 
 
+    def relative_thrust_bands(self, grid_days, rng: np.random.Generator, n_draws: int = 4000,
+                              quantiles=(0.05, 0.5, 0.95)) -> np.ndarray:
+        """``(K, G, Q)``: quantiles of each channel's thrust relative to its first calibration,
+        ``exp(d_k 1[t ≥ τ])``, at the dates ``grid_days`` (from ``n_draws`` exact draws)."""
+        dr = self.draws(rng, n_draws)
+        grid = np.asarray(grid_days, float)
+        after = np.where(dr["change"][:, None], dr["tau"][:, None] <= grid[None, :], False)
+        ratio = np.exp(dr["d"][:, :, None] * after[:, None, :])          # (D, K, G)
+        return np.moveaxis(np.quantile(ratio, quantiles, axis=0), 0, -1)
+
+
 def _cum(a: np.ndarray) -> np.ndarray:
     """Prefix sums over events (axis 0) with a leading zero."""
     return np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, axis=0)])
