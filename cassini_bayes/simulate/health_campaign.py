@@ -3,7 +3,8 @@
 A campaign TOML names an event template (a scenario TOML, e.g. ``health_event.toml``) and says how
 the events differ::
 
-    name, description, seed, event = "health_event.toml"   (relative to the campaign file)
+    name, description, seed, event = "health_event.toml"   (relative to the campaign file,
+                  else a shipped scenario's name)
     [campaign]    n_events, span_days, date_jitter (0..1 of the mean spacing),
                   wheel_rpm = [lo, hi] (each wheel's biasing target: |rpm| uniform, random sign),
                   thrust_n (nominal true thrust, N)
@@ -93,7 +94,7 @@ def load_campaign(path: str | Path) -> Campaign:
         raise InputError("a campaign needs 'event = \"TEMPLATE.toml\"' and a [campaign] table",
                          path=src)
     ev = Path(str(d["event"]))
-    ev = ev if ev.is_absolute() else p.parent / ev
+    ev = p.parent / ev if not ev.is_absolute() and (p.parent / ev).exists() else ev
     template = read_toml(scenario_path(str(ev)), "event scenario", "experiments/scenarios/")
     c, e = d["campaign"], d.get("errors", {})
     seed = d.get("seed", 0)

@@ -135,7 +135,7 @@ class HealthPosterior:
         """``n`` exact posterior draws: ``change`` (bool), ``tau`` (days; NaN without a
         change), ``b``, ``d`` (n, K) and ``sigma`` (n, K)."""
         k_ch = self._w.shape[1]
-        p = np.r_[1.0 - self.p_change, self.interval_prob]
+        p = np.maximum(np.r_[1.0 - self.p_change, self.interval_prob], 0.0)
         p = p / p.sum()
         which = rng.choice(p.size, size=n, p=p)          # 0: no change, j+1: interval j
         out = {"change": which > 0, "tau": np.full(n, np.nan), "b": np.zeros((n, k_ch)),
@@ -146,11 +146,11 @@ class HealthPosterior:
                 out["tau"][i] = rng.uniform(self.dates[j], self.dates[j + 1])
             for k in range(k_ch):
                 if c == 0 or rng.uniform() >= self.step_prob[j, k]:
-                    g = rng.choice(SCATTER_GRID.size, p=self._w0[k])
+                    g = rng.choice(SCATTER_GRID.size, p=self._w0[k] / self._w0[k].sum())
                     out["sigma"][i, k] = SCATTER_GRID[g]
                     out["b"][i, k] = rng.normal(self._mean0[k, g], np.sqrt(self._var0[k, g]))
                     continue
-                g = rng.choice(SCATTER_GRID.size, p=self._w[j, k])
+                g = rng.choice(SCATTER_GRID.size, p=self._w[j, k] / self._w[j, k].sum())
                 out["sigma"][i, k] = SCATTER_GRID[g]
                 out["b"][i, k], out["d"][i, k] = rng.multivariate_normal(self._mean[j, k, g],
                                                                          self._cov[j, k, g])
