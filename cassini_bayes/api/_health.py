@@ -102,7 +102,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
 
 
 def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
-               p_change: float = 0.2, p_channel: float = 0.5, step_sd: float = 0.1,
+               p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
     """Posterior of each thrust channel's health over many biasing events; what
     ``cassini-bayes fit health`` computes (exact, no sampling: the same inputs give the same

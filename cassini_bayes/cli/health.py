@@ -35,7 +35,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         fraction: float = typer.Option(0.05, "--fraction", min=1e-6, max=0.999,
                                        help="Loss asked about: P(thrust more than this "
                                             "fraction below its first calibration)."),
-        p_change: float = typer.Option(0.2, "--p-change", min=1e-9, max=1 - 1e-9,
+        p_change: float = typer.Option(0.1, "--p-change", min=1e-9, max=1 - 1e-9,
                                        help="Prior probability of a change over the events."),
         p_channel: float = typer.Option(0.5, "--p-channel", min=1e-9, max=1 - 1e-9,
                                         help="Prior probability that a channel steps at it."),

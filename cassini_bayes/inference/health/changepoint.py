@@ -53,7 +53,7 @@ class HealthPrior:
     baseline_sd : sd of each ``b_k`` about ``log(nominal_thrust_n)``.
     """
 
-    p_change: float = 0.5
+    p_change: float = 0.1
     p_channel: float = 0.5
     step_sd: float = 0.1
     baseline_sd: float = 0.5
