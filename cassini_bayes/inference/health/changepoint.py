@@ -243,5 +243,6 @@ def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrio
                     np.stack([-a12 / det, a11 / det], -1)], -2)
     return HealthPosterior(
         dates=t, y=y, s=s, prior=prior, p_change=float(interval_prob.sum()),
-        interval_prob=interval_prob, step_prob=step_prob, log_evidence=float(log_z), _w=w1, _mean=mean, _cov=cov,
+        interval_prob=interval_prob, step_prob=step_prob, log_evidence=float(log_z), _w=w1,
+        _mean=mean, _cov=cov,
         _w0=w0, _mean0=tot_h / a0 + np.log(prior.nominal_thrust_n), _var0=1.0 / a0)

@@ -25,10 +25,11 @@ least-squares covariance ignores. Two per-event errors the residual cannot show 
 through the estimator's exact sensitivities: the pulse time constants of this event differing
 from the model's by ``tau_sd_frac`` (each, independently; an event of short pulses is far more
 sensitive than one of long pulses) and each wheel's spin inertia by the model's
-``[wheel_knowledge] inertia_sd_frac`` (their effect depends on the event's wheel speeds). Errors shared by every event (the spacecraft inertia, a common
-wheel-inertia scale, a time-constant error) scale every event's thrust alike; they are not in
-this covariance — the health model absorbs them in its baseline, which cancels in a ratio to the
-first calibration. The time constants are the spacecraft model's (shared by all events).
+``[wheel_knowledge] inertia_sd_frac`` (their effect depends on the event's wheel speeds). Errors
+shared by every event (the spacecraft inertia, a common wheel-inertia scale, a time-constant error)
+scale every event's thrust alike; they are not in this covariance — the health model absorbs them in
+its baseline, which cancels in a ratio to the first calibration. The time constants are the
+spacecraft model's (shared by all events).
 """
 
 from __future__ import annotations
