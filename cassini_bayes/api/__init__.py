@@ -12,6 +12,7 @@ Also here, for the experiments and the CLI: the per-model summary builders
 """
 
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
 from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
 from cassini_bayes.api._result import (FitResult, collect_warnings, fit_config, write_run,
                                        write_run_files)
@@ -28,4 +29,5 @@ __all__ = [
     "request_host_devices", "inertia_baseline", "inertia_summary", "thrust_baseline",
     "thrust_sensitivity", "thrust_summary", "rwa4_sensitivity", "rwa4_summary", "write_run",
     "write_run_files", "fit_config", "collect_warnings", "truth_document",
+    "fit_health", "HealthResult", "simulate_health_campaign",
 ]

@@ -1,0 +1,285 @@
+"""Thruster health over many biasing events: :func:`fit_health`, :func:`simulate_health_campaign`.
+
+An *event list* is a CSV ``events.csv`` with columns ``date_days`` (days, any origin),
+``telemetry`` and ``pulses`` (paths relative to the CSV). A folder stands for its ``events.csv``.
+``cassini-bayes simulate-health`` writes such a folder; docs/health.md describes the model.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+import numpy as np
+
+from cassini_bayes import __version__
+from cassini_bayes.errors import InputError, arg
+
+__all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
+           "HEALTH_FRACTION"]
+
+HEALTH_FRACTION = 0.05
+"""Default loss reported: ``P(thrust more than 5 % below its first calibration)``."""
+_BRANCHES = {"Z3|Z4": (2, 3)}
+
+
+@dataclass(frozen=True)
+class HealthResult:
+    """A health fit: ``posterior`` (:class:`~cassini_bayes.inference.health.HealthPosterior`),
+    the per-event ``summaries``, the event ``files`` ((date, telemetry, pulses) each), the loss
+    ``fraction``, the JSON ``summary`` and the ``config``."""
+
+    posterior: object
+    summaries: tuple
+    files: tuple
+    fraction: float
+    summary: dict
+    config: dict
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
+        sd, ``P(down)`` per channel), ``thrust_bands.csv`` (relative thrust quantiles per channel
+        on a date grid) and ``health.png`` into ``out`` atomically; returns it."""
+        from cassini_bayes.rundir import RunDir, write_config, write_summary
+
+        with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
+            write_summary(rd.path, self.summary)
+            write_config(rd.path, self.config)
+            _write_csv(rd.path / "health.csv", *health_table(self))
+            _write_csv(rd.path / "thrust_bands.csv", *band_table(self.posterior))
+            try:
+                from cassini_bayes.report.health import plot_health
+
+                plot_health(self.posterior, self.fraction).savefig(rd.path / "health.png",
+                                                                  dpi=110)
+            except ImportError:  # matplotlib missing: the numbers are written regardless
+                pass
+        return rd.final
+
+
+def _write_csv(path: Path, header: list[str], rows) -> None:
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for r in rows:
+            w.writerow([f"{x:.10g}" if isinstance(x, float) else x for x in r])
+
+
+def read_event_list(events) -> list[tuple[float, Path, Path]]:
+    """``(date_days, telemetry, pulses)`` of each event from ``events``: one or more
+    ``events.csv`` files or folders holding one, or a list of ``(date_days, telemetry, pulses)``
+    tuples."""
+    if isinstance(events, (str, os.PathLike)):
+        events = [events]
+    out = []
+    for item in events:
+        if isinstance(item, tuple):
+            if len(item) != 3:
+                raise InputError(f"{arg('events')}: give (date_days, telemetry, pulses) tuples")
+            out.append((float(item[0]), Path(item[1]), Path(item[2])))
+            continue
+        p = Path(item)
+        p = p / "events.csv" if p.is_dir() else p
+        if not p.is_file():
+            raise InputError("is not an events.csv file or a folder holding one (columns "
+                             "date_days, telemetry, pulses)", path=str(item))
+        with open(p, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        for i, r in enumerate(rows):
+            if not r or not {"date_days", "telemetry", "pulses"} <= r.keys():
+                raise InputError("needs the columns date_days, telemetry, pulses", path=str(p))
+            try:
+                day = float(r["date_days"])
+            except ValueError:
+                raise InputError(f"row {i + 2}: date_days {r['date_days']!r} is not a number "
+                                 "of days", path=str(p)) from None
+            out.append((day, p.parent / r["telemetry"], p.parent / r["pulses"]))
+    if len(out) < 2:
+        raise InputError(f"{arg('events')}: {len(out)} event(s); a health fit needs at least 2")
+    return sorted(out, key=lambda e: e[0])
+
+
+def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
+               p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
+               tau_sd_frac: float | None = None) -> HealthResult:
+    """Posterior of each thrust channel's health over many biasing events; what
+    ``cassini-bayes fit health`` computes (exact, no sampling: the same inputs give the same
+    numbers).
+
+    Parameters
+    ----------
+    events : event list(s) (:func:`read_event_list`).
+    spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, model TOML path or name.
+    fraction : the loss asked about: ``P(thrust more than fraction below the first
+        calibration)`` at each event date.
+    p_change, p_channel, step_sd : the change-point prior
+        (:class:`~cassini_bayes.inference.health.HealthPrior`).
+    tau_sd_frac : per-event variation of the pulse time constants propagated into each event's
+        summary (default :data:`~cassini_bayes.inference.health.summary.TAU_SD_FRAC`).
+    """
+    from cassini_bayes.api._inputs import spacecraft_input
+    from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
+    from cassini_bayes.inference.health.summary import TAU_SD_FRAC
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.telemetry import read_pulses, read_telemetry
+
+    if not 0.0 < fraction < 1.0:
+        raise InputError(f"{arg('fraction')} must lie strictly between 0 and 1, got {fraction}")
+    tau_sd = TAU_SD_FRAC if tau_sd_frac is None else float(tau_sd_frac)
+    if tau_sd < 0:
+        raise InputError(f"{arg('tau_sd_frac')} must not be negative, got {tau_sd}")
+    sc, sc_record, _ = spacecraft_input(spacecraft)
+    files = read_event_list(events)
+    summaries = []
+    for day, tel_path, log_path in files:
+        summaries.append(event_summary(read_telemetry(tel_path), read_pulses(log_path), sc,
+                                       tau_sd_frac=tau_sd))
+    prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,
+                        nominal_thrust_n=float(sc.thrust)).check()
+    post = health_posterior([f[0] for f in files], np.array([s.log_thrust for s in summaries]),
+                            np.array([np.sqrt(np.diag(s.cov)) for s in summaries]), prior)
+    summary = health_summary(post, fraction)
+    config = {"command": "fit health", "version": __version__,
+              "inputs": {"events": [{"date_days": d, "telemetry": file_record(t),
+                                     "pulses": file_record(p)} for d, t, p in files],
+                         "spacecraft": sc_record},
+              "settings": {"fraction": fraction, "p_change": p_change, "p_channel": p_channel,
+                           "step_sd": step_sd, "tau_sd_frac": tau_sd}}
+    return HealthResult(post, tuple(summaries), tuple(files), fraction, summary, config)
+
+
+def health_summary(post, fraction: float) -> dict:
+    """``summary.json`` of a health fit: the change probability and date, and per channel the
+    step and ``P(down by more than fraction)`` at the last event."""
+    from cassini_bayes.inference.health import CHANNELS
+
+    lo, hi = post.change_date_interval(0.9)
+    med = float(post.change_date_quantiles([0.5])[0])
+    rng = np.random.default_rng(0)
+    dr = post.draws(rng, 4000)
+    channels = {}
+    for k, name in enumerate(CHANNELS):
+        ratio = np.exp(dr["d"][:, k])
+        channels[name] = {
+            "p_down_last": float(post.p_down([k], fraction)[-1]),
+            "ratio_last_mean": float(ratio.mean()),
+            "ratio_last_90": [float(x) for x in np.quantile(ratio, [0.05, 0.95])],
+            "p_step_given_change": float(np.sum(post.interval_prob * post.step_prob[:, k])
+                                         / max(post.p_change, 1e-300)),
+            "n_events": int(np.isfinite(post.y[:, k]).sum()),
+        }
+    return {
+        "command": "fit health", "version": __version__, "model": "change point",
+        "n_events": int(post.dates.size), "first_date_days": float(post.dates[0]),
+        "last_date_days": float(post.dates[-1]), "fraction": fraction,
+        "p_change": post.p_change,
+        "change_date_days": {"median": med, "interval_90": [lo, hi],
+                             "note": "given a change; uniform within the interval between "
+                                     "the two events around it"},
+        "channels": channels,
+        "p_down_last": {b: float(post.p_down(list(ks), fraction)[-1])
+                        for b, ks in _BRANCHES.items()},
+        "y_pairs": "Y13 and Y24 are the pair means (F_Y1+F_Y3)/2, (F_Y2+F_Y4)/2 (Feldman & Lee "
+                   "Eq 21); the split within a pair is not identifiable and not reported",
+        "prior": {"p_change": post.prior.p_change, "p_channel": post.prior.p_channel,
+                  "step_sd": post.prior.step_sd, "baseline_sd": post.prior.baseline_sd},
+    }
+
+
+def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
+    """``health.csv``: per event its date, each channel's estimate (N) and log sd, and the
+    posterior ``P(down)`` per channel and for Z3 or Z4 at its date."""
+    from cassini_bayes.inference.health import CHANNELS
+
+    post = res.posterior
+    order = np.argsort([f[0] for f in res.files], kind="stable")
+    p = [post.p_down([k], res.fraction) for k in range(len(CHANNELS))]
+    p_b = {b: post.p_down(list(ks), res.fraction) for b, ks in _BRANCHES.items()}
+    header = (["date_days", "telemetry"] + [f"thrust_{c}_n" for c in CHANNELS]
+              + [f"sd_log_{c}" for c in CHANNELS] + [f"p_down_{c}" for c in CHANNELS]
+              + [f"p_down_{b.replace('|', '_or_')}" for b in _BRANCHES])
+    rows = []
+    for e, i in enumerate(order):
+        rows.append([float(post.dates[e]), str(res.files[i][1])]
+                    + [float(x) for x in np.exp(post.y[e])]
+                    + [float(x) for x in post.s[e]]
+                    + [float(x[e]) for x in p] + [float(x[e]) for x in p_b.values()])
+    return header, rows
+
+
+def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
+    """``thrust_bands.csv``: on a grid of dates, each channel's thrust relative to its first
+    calibration, posterior 5/25/50/75/95 % quantiles (from exact draws, seed 0)."""
+    from cassini_bayes.inference.health import CHANNELS
+
+    grid = np.linspace(post.dates[0], post.dates[-1], n_grid)
+    q = post.relative_thrust_bands(grid, np.random.default_rng(0), n_draws, _QUANTS)
+    header = ["date_days"] + [f"{c}_q{int(p * 100):02d}" for c in CHANNELS for p in _QUANTS]
+    rows = [[float(grid[i])] + [float(x) for x in q[:, i].ravel()] for i in range(grid.size)]
+    return header, rows
+
+
+_QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
+
+
+def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
+                             force: bool = False) -> Path:
+    """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.
+    ``"health_degradation"``) into ``out``: one folder per event (``telemetry.csv``,
+    ``pulses.csv``, ``truth.json``), ``events.csv`` (the event list :func:`fit_health` reads)
+    and ``truth.json`` (dates, true thrusts, the degradation); atomically."""
+    from cassini_bayes.api._inputs import check_seed
+    from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.rundir import RunDir
+    from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
+    from cassini_bayes.telemetry import write_pulses, write_telemetry
+
+    camp = load_campaign(campaign)
+    seed = check_seed(camp.seed if seed is None else seed)
+    events = campaign_events(camp, seed)
+    with RunDir(out, force=force) as rd:
+        rows = []
+        for k, ev in enumerate(events):
+            sim = simulate(ev.scenario)
+            d = rd.path / f"event_{k:03d}"
+            d.mkdir()
+            write_telemetry(d / "telemetry.csv", sim.telemetry)
+            write_pulses(d / "pulses.csv", sim.pulses)
+            (d / "truth.json").write_text(json.dumps(sim.truth(), indent=2) + "\n")
+            rows.append([ev.date_days, f"{d.name}/telemetry.csv", f"{d.name}/pulses.csv"])
+        _write_csv(rd.path / "events.csv", ["date_days", "telemetry", "pulses"], rows)
+        truth = {"scenario": camp.name, "scenario_file": camp.source, "version": __version__,
+                 "seed": seed, "description": camp.description,
+                 "dates_days": [ev.date_days for ev in events],
+                 "thrust_n": [dict(zip(THRUSTER_NAMES, map(float, ev.thrust_n)))
+                              for ev in events],
+                 "degradation": (None if not camp.degraded else
+                                 {"thrusters": [THRUSTER_NAMES[i] for i in camp.degraded],
+                                  "fraction": camp.degradation_fraction,
+                                  "day": camp.degradation_day})}
+        (rd.path / "truth.json").write_text(json.dumps(truth, indent=2) + "\n")
+    return rd.final
+
+
+def campaign_summaries(campaign, seed: int, *, tau_sd_frac: float | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """In memory, without files: ``(dates (N,), log thrust (N, 6), sd (N, 6))`` of a simulated
+    campaign's events (what the benchmark and the tests feed :func:`health_posterior`)."""
+    from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.inference.health import event_summary
+    from cassini_bayes.inference.health.summary import TAU_SD_FRAC
+    from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
+
+    camp = campaign if not isinstance(campaign, (str, os.PathLike)) else load_campaign(campaign)
+    ys, ss, ds = [], [], []
+    for ev in campaign_events(camp, seed):
+        sim = simulate(ev.scenario)
+        sm = event_summary(sim.telemetry, sim.pulses, sim.prior,
+                           tau_sd_frac=TAU_SD_FRAC if tau_sd_frac is None else tau_sd_frac)
+        ys.append(sm.log_thrust)
+        ss.append(np.sqrt(np.diag(sm.cov)))
+        ds.append(ev.date_days)
+    return np.array(ds), np.array(ys), np.array(ss)
