@@ -409,7 +409,10 @@ def _from_posteriors(key, posteriors, n_draws, sensitivity=None):
             "90 % credible interval. Attribution: the share of the line's variance each "
             "calibrated parameter causes when it alone varies, the others at their posterior "
             "medians. Lines with no calibrated input (most of Lee's pointing budget) keep the "
-            "paper's values. The per-source budgets above are the least-squares method's; the "
+            "paper's values. The inertia and thrust posteriors found by 'auto' are the "
+            "idealised fits of the clean Table 1/2 scenarios, so their lines are the "
+            "noise-limited part only; docs/budgets.md gives a robust fit's budget for "
+            "comparison. The per-source budgets above are the least-squares method's; the "
             "posterior already holds the noise sources, so its knowledge lines replace them.")
     return tuple(checks), table, bud.to_dict(), note
 
