@@ -15,8 +15,8 @@ hypothesis ``k`` (thruster ``k`` leaks a fraction ``f`` of its thrust from ``t_L
   Bayesian counterpart of Lee Eq 11), prior ``N(0, η²)``, η = 0.05 as Lee's launch value, times
   the modelled impulse ``J_j(t)`` (N s) and the moment arm ``Q[:, j]`` (Feldman & Lee Eq 16);
 * the leak column ``F Q[:, k] (t − t_L)_+``: a 10 % Z1 leak at 1 N is (−0.158, +0.123, 0) N m;
-* ``e_i`` white noise, per axis, its sd from the data (median absolute deviation of the first
-  differences ÷ √2; the larger of the levels of the raw rows and of the rows used). ``R`` is an
+* ``e_i`` white noise, per axis, its sd from the data (median absolute deviation of the second
+  differences ÷ √6, blind to a leak's slope; the larger of the levels of the raw rows and of the rows used). ``R`` is an
   *integral* of the torque residual, but its noise is not a random walk: ``I Δω`` and
   ``ΔH_RWA`` are differences of sampled states, so the gyro and tach noise enter each sample
   once. What is integrated — the gyroscopic impulse ``ΔG`` from noisy 1 s rates, across pulses —
@@ -198,11 +198,15 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
 
 
 def _noise_sd(r: np.ndarray) -> np.ndarray:
-    d = np.diff(r, axis=0)
+    """White-noise sd per axis (N m s) of rows ``r`` (n, 3): the median absolute deviation of
+    the second differences ÷ √6. A leak or a torque adds a constant to every first difference
+    after its onset, which second differences remove (but at the onset's one row); first
+    differences read a leak's slope as noise (1.1-2× the level, docs/sbc/leak)."""
+    d = np.diff(r, n=2, axis=0)
     if d.shape[0] < 2:
         return np.full(3, _NOISE_FLOOR_NMS)
     mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    return np.maximum(1.4826 * mad / np.sqrt(2.0), _NOISE_FLOOR_NMS)
+    return np.maximum(1.4826 * mad / np.sqrt(6.0), _NOISE_FLOOR_NMS)
 
 
 def _cum(a: np.ndarray) -> np.ndarray:
