@@ -6,8 +6,8 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
 * runs NUTS (NumPyro's ``hmc(algo="NUTS")`` kernel: windowed step-size and dense mass-matrix
   adaptation by default — the inertia entries, momenta and torques are strongly correlated; the
   models already whiten their coordinates, so the dense adaptation only corrects what is left),
-* compiles warmup and sampling of all chains into **one** XLA program (two ``lax.scan`` loops,
-  then the deterministic sites by ``vmap``), cached per (model, settings, chain method) and called
+* compiles warmup and sampling of all chains into **one** XLA program (one ``lax.scan`` loop
+  over warm-up and draws, then the deterministic sites by ``vmap``), cached per (model, settings, chain method) and called
   with the data as arguments: fitting new data of the same shapes never recompiles (tested by
   counting XLA compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
   a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
@@ -36,6 +36,7 @@ divergences from ``sample_stats.diverging``. ``converged`` means ``max R-hat ≤
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Callable, Mapping, NamedTuple, Sequence
 
 import arviz as az
@@ -165,9 +166,11 @@ def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
 def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable:
     """One compiled function ``(keys, init_z, model_kwargs) -> draws`` for all chains.
 
-    Warmup (step size and mass-matrix adaptation, NumPyro's windowed scheme) and sampling are two
-    ``lax.scan`` loops inside one program, so a fit is a single call into XLA; the program is
-    cached per (model, settings, chain method) and reused for any data of the same shapes.
+    Warmup (step size and mass-matrix adaptation, NumPyro's windowed scheme) and sampling are one
+    ``lax.scan`` loop inside one program (NumPyro's kernel adapts while its iteration count is
+    below the warm-up length), so a fit is a single call into XLA and the kernel is traced and
+    compiled once; the program is cached per (model, settings, chain method) and reused for any
+    data of the same shapes.
     """
     def one_chain(key, init_z, kwargs):
         def pot(z):
@@ -196,8 +199,10 @@ def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable
             return st, (st.z, st.diverging, st.energy, st.num_steps, st.accept_prob,
                         st.potential_energy, st.adapt_state.step_size)
 
-        state, _ = lax.scan(step, state, None, length=s.warmup)
-        _, (zs, div, energy, nsteps, acc, pe, eps) = lax.scan(draw, state, None, length=s.draws)
+        # one loop over warm-up and draws (the kernel adapts while ``i < warmup``): the NUTS
+        # kernel is traced and compiled once, not once per loop; the warm-up rows are dropped
+        _, out = lax.scan(draw, state, None, length=s.warmup + s.draws)
+        zs, div, energy, nsteps, acc, pe, eps = jax.tree.map(lambda x: x[s.warmup:], out)
         samples = jax.vmap(lambda z: constrain_fn(model, (), kwargs, z,
                                                   return_deterministic=True))(zs)
         stats = {"diverging": div, "energy": energy, "n_steps": nsteps,
@@ -210,6 +215,22 @@ def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable
     if method == "sequential":
         return jax.jit(lambda keys, z, kw: lax.map(lambda a: one_chain(a[0], a[1], kw), (keys, z)))
     return jax.jit(jax.vmap(one_chain, in_axes=(0, 0, None)))
+
+
+@partial(jax.jit, static_argnums=(1, 2))
+def _start(key, chains: int, shapes: tuple):
+    """The prior's key, the chains' keys and their initial values, one XLA program.
+
+    The key is split into (sampler, prior, initial values); chain ``c`` gets the ``c``-th split of
+    the sampler key; initial values are ``Uniform(−2, 2)`` in the unconstrained (whitened)
+    space (NumPyro's ``init_to_uniform(radius=2)``), one key per site in name order (``shapes``:
+    sorted ``(name, shape)`` pairs).
+    """
+    key_mcmc, key_prior, key_init = jax.random.split(key, 3)
+    init_keys = jax.random.split(key_init, len(shapes))
+    init_z = {name: jax.random.uniform(k, (chains,) + shp, minval=-2.0, maxval=2.0)
+              for k, (name, shp) in zip(init_keys, shapes)}
+    return key_prior, jax.random.split(key_mcmc, chains), init_z
 
 
 def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> Callable:
@@ -251,17 +272,14 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
         ``energy``, ``n_steps``, ``tree_depth``, ``acceptance_rate``, ``lp``, ``step_size``) and,
         when drawn, ``prior``.
     """
-    key_mcmc, key_prior, key_init = jax.random.split(key, 3)
     s = settings
     method = s.chain_method or choose_chain_method(s.chains)
     fn = _sampler_for(model, s, method)
-    kwargs = {k: jnp.asarray(v) for k, v in model_kwargs.items()}
+    # device_put: jnp.asarray would compile a one-operation program per array shape
+    kwargs = {k: v if isinstance(v, jax.Array) else jax.device_put(np.asarray(v))
+              for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
-    init_keys = jax.random.split(key_init, len(shapes))
-    # init_to_uniform(radius=2) in the (whitened) unconstrained space, per chain.
-    init_z = {name: jax.random.uniform(k, (s.chains,) + shp, minval=-2.0, maxval=2.0)
-              for k, (name, shp) in zip(init_keys, sorted(shapes.items()))}
-    keys = jax.random.split(key_mcmc, s.chains)
+    key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
     if s.progress:
         from rich.progress import Progress
 
