@@ -217,6 +217,17 @@ def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable
     return jax.jit(jax.vmap(one_chain, in_axes=(0, 0, None)))
 
 
+def _on_device(x):
+    """``jnp.asarray(x)`` without its cost: for a NumPy array or a Python number that compiles a
+    one-operation XLA program per shape (in every process); ``device_put`` only copies (Python
+    numbers stay weakly typed either way)."""
+    if isinstance(x, jax.Array):
+        return x
+    if isinstance(x, (np.ndarray, np.generic, int, float, bool)):
+        return jax.device_put(x)
+    return jnp.asarray(x)
+
+
 @partial(jax.jit, static_argnums=(1, 2))
 def _start(key, chains: int, shapes: tuple):
     """The prior's key, the chains' keys and their initial values, one XLA program.
@@ -275,9 +286,7 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
     s = settings
     method = s.chain_method or choose_chain_method(s.chains)
     fn = _sampler_for(model, s, method)
-    # device_put: jnp.asarray would compile a one-operation program per array shape
-    kwargs = {k: v if isinstance(v, jax.Array) else jax.device_put(np.asarray(v))
-              for k, v in model_kwargs.items()}
+    kwargs = {k: _on_device(v) for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
     key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
     if s.progress:
