@@ -18,7 +18,7 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
   (``jax_num_cpu_devices``); measured with benchmarks/bench_inertia.py on the 2-core machine,
   4 × 2000 iterations: 1.8 s parallel vs 3.1 s vectorized (loaded machine),
 * shows a rich progress bar when asked (``jax.debug.callback`` every 50 iterations; compiled in
-  only then),
+  only then), as a step of :mod:`cassini_bayes.inference.progress`,
 * converts to InferenceData (``posterior``, ``sample_stats``) and adds a ``prior`` group from the
   model's own prior sampler (or ``numpyro.infer.Predictive`` when the model's sites are proper).
 
@@ -50,6 +50,7 @@ from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
 
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.inference import progress
 
 __all__ = [
     "SamplerSettings",
@@ -145,7 +146,9 @@ def clear_cache() -> None:
 def _progress_tick(i):
     bar = _PROGRESS.get("bar")
     if bar is not None:
-        bar.advance(_PROGRESS["task"], _PROGRESS_EVERY * int(np.size(i)))
+        phase = "warm-up" if int(np.max(i)) <= _PROGRESS["warmup"] else "sampling"
+        bar.update(_PROGRESS["task"], advance=_PROGRESS_EVERY * int(np.size(i)),
+                   description=f"{_PROGRESS['label']}: {phase}")
 
 
 def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
@@ -289,13 +292,11 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
     kwargs = {k: _on_device(v) for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
     key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
-    if s.progress:
-        from rich.progress import Progress
-
-        with Progress(transient=True) as bar:
-            _PROGRESS.update(bar=bar, task=bar.add_task(
-                f"NUTS {s.chains} chains × {s.warmup}+{s.draws}",
-                total=s.chains * (s.warmup + s.draws)))
+    if s.progress:  # the bar: "compiling" until the first tick, then warm-up, sampling
+        label = f"NUTS, {s.chains} chains × {s.warmup} warm-up + {s.draws} draws"
+        with progress.shown(), progress.step(f"{label}: compiling the sampler",
+                                             total=s.chains * (s.warmup + s.draws)) as task:
+            _PROGRESS.update(bar=progress.active(), task=task, label=label, warmup=s.warmup)
             try:
                 samples, stats = jax.block_until_ready(fn(keys, init_z, kwargs))
             finally:
