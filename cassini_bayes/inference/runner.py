@@ -6,10 +6,11 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
 * runs NUTS (NumPyro's ``hmc(algo="NUTS")`` kernel: windowed step-size and dense mass-matrix
   adaptation by default — the inertia entries, momenta and torques are strongly correlated; the
   models already whiten their coordinates, so the dense adaptation only corrects what is left),
-* compiles warmup and sampling of all chains into **one** XLA program (one ``lax.scan`` loop
-  over warm-up and draws, then the deterministic sites by ``vmap``), cached per (model, settings, chain method) and called
-  with the data as arguments: fitting new data of the same shapes never recompiles (tested by
-  counting XLA compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
+* compiles the sampling of all chains into three XLA programs (start; a ``lax.scan`` piece of
+  the loop over warm-up and draws, called about ten times; the deterministic sites of the draws
+  by ``vmap``), cached per (model, settings, chain method) and called with the data as
+  arguments: fitting new data of the same shapes never recompiles (tested by counting XLA
+  compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
   a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
@@ -17,8 +18,10 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
   chains; more threads than cores still beats lock-step), before the backend starts
   (``jax_num_cpu_devices``); measured with benchmarks/bench_inertia.py on the 2-core machine,
   4 × 2000 iterations: 1.8 s parallel vs 3.1 s vectorized (loaded machine),
-* shows a rich progress bar when asked (``jax.debug.callback`` every 50 iterations; compiled in
-  only then), as a step of :mod:`cassini_bayes.inference.progress`,
+* shows a rich progress bar when asked, as a step of :mod:`cassini_bayes.inference.progress`:
+  the loop runs in about ten calls of one program (:func:`_build_sampler`), so the bar needs no
+  callback inside the compiled code and the same programs, all kept by the persistent
+  compilation cache, run with and without it,
 * converts to InferenceData (``posterior``, ``sample_stats``) and adds a ``prior`` group from the
   model's own prior sampler (or ``numpyro.infer.Predictive`` when the model's sites are proper).
 
@@ -133,9 +136,8 @@ def choose_chain_method(chains: int) -> str:
     return "vectorized"
 
 
-_SAMPLER_CACHE: dict[tuple, Callable] = {}
-_PROGRESS: dict = {}
-_PROGRESS_EVERY = 50
+_SAMPLER_CACHE: dict[tuple, "_Sampler"] = {}
+_UPDATES = 10  # progress updates per run, at least: the loop runs in about this many pieces
 
 
 def clear_cache() -> None:
@@ -143,12 +145,11 @@ def clear_cache() -> None:
     _SAMPLER_CACHE.clear()
 
 
-def _progress_tick(i):
-    bar = _PROGRESS.get("bar")
-    if bar is not None:
-        phase = "warm-up" if int(np.max(i)) <= _PROGRESS["warmup"] else "sampling"
-        bar.update(_PROGRESS["task"], advance=_PROGRESS_EVERY * int(np.size(i)),
-                   description=f"{_PROGRESS['label']}: {phase}")
+def _piece(total: int) -> int:
+    """Iterations per call of the sampler's loop: the largest divisor of ``total`` that is at
+    most ``total / _UPDATES`` (so every call is the same program; 1 when ``total`` is prime)."""
+    top = max(1, total // _UPDATES)
+    return next(d for d in range(top, 0, -1) if total % d == 0)
 
 
 def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
@@ -166,58 +167,91 @@ def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
     return {k: v.shape for k, v in out.items()}
 
 
-def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable:
-    """One compiled function ``(keys, init_z, model_kwargs) -> draws`` for all chains.
+class _Sampler(NamedTuple):
+    """The three compiled pieces of a run, all chains at once (:func:`_build_sampler`)."""
 
-    Warmup (step size and mass-matrix adaptation, NumPyro's windowed scheme) and sampling are one
-    ``lax.scan`` loop inside one program (NumPyro's kernel adapts while its iteration count is
-    below the warm-up length), so a fit is a single call into XLA and the kernel is traced and
-    compiled once; the program is cached per (model, settings, chain method) and reused for any
+    start: Callable      # (keys, init_z, kwargs) -> NUTS states
+    advance: Callable    # (states, kwargs) -> (states, per-iteration records), ``piece`` its
+    finish: Callable     # (zs, stats, kwargs) -> (posterior sites, sample stats)
+    piece: int           # iterations per ``advance``
+
+
+def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
+    """The sampler of ``model`` under ``s``, all chains batched by ``method``, in three programs.
+
+    ``start`` places each chain (a start outside a hard support is halved toward the Laplace
+    centre until the density is finite) and initialises NumPyro's NUTS kernel; ``advance`` runs
+    ``piece`` iterations of it (one ``lax.scan``; the kernel adapts step size and dense mass
+    matrix, NumPyro's windowed scheme, while its iteration count is below the warm-up length);
+    ``finish`` maps the kept draws to the model's sites (deterministics included) and the
+    sample statistics. The loop over warm-up and draws is ``advance`` called
+    ``(warmup + draws) / piece`` times from Python, so the programs hold no callback: a
+    progress bar costs nothing, the programs are the same with and without one (so are the
+    draws), and the persistent compilation cache keeps them (JAX never caches a program that
+    calls back into Python). Cached per (model, settings, chain method) and reused for any
     data of the same shapes.
     """
-    def one_chain(key, init_z, kwargs):
-        def pot(z):
-            return potential_energy(model, (), kwargs, z)
+    def potential_for(**kwargs):
+        return lambda z: potential_energy(model, (), kwargs, z)
 
-        init_kernel, sample_kernel = hmc(potential_fn=pot, algo="NUTS")
+    init_kernel, sample_kernel = hmc(potential_fn_gen=potential_for, algo="NUTS")
+
+    def start(key, init_z, kwargs):
+        pot = potential_for(**kwargs)
         # a start outside a hard support (e.g. RWA4's physical inertia) leaves the chain stuck:
         # halve it toward w = 0 (the Laplace centre) until the density is finite; finite starts
         # are left as they are
         init_z = lax.while_loop(
             lambda c: ~jnp.isfinite(pot(c[0])) & (c[1] < 30),
             lambda c: (jax.tree.map(lambda x: 0.5 * x, c[0]), c[1] + 1), (init_z, 0))[0]
-        state = init_kernel(init_z, s.warmup, dense_mass=s.dense_mass,
-                            target_accept_prob=s.target_accept, max_tree_depth=s.max_tree_depth,
-                            rng_key=key)
+        return init_kernel(init_z, s.warmup, dense_mass=s.dense_mass,
+                           target_accept_prob=s.target_accept,
+                           max_tree_depth=s.max_tree_depth, rng_key=key, model_kwargs=kwargs)
 
-        def step(st, _):
-            st = sample_kernel(st)
-            if s.progress:
-                lax.cond(st.i % _PROGRESS_EVERY == 0,
-                         lambda: jax.debug.callback(_progress_tick, st.i), lambda: None)
-            return st, None
+    piece = _piece(s.warmup + s.draws)
 
+    def advance(state, kwargs):
         def draw(st, _):
-            st, _ = step(st, None)
+            st = sample_kernel(st, model_kwargs=kwargs)
             return st, (st.z, st.diverging, st.energy, st.num_steps, st.accept_prob,
                         st.potential_energy, st.adapt_state.step_size)
 
-        # one loop over warm-up and draws (the kernel adapts while ``i < warmup``): the NUTS
-        # kernel is traced and compiled once, not once per loop; the warm-up rows are dropped
-        _, out = lax.scan(draw, state, None, length=s.warmup + s.draws)
-        zs, div, energy, nsteps, acc, pe, eps = jax.tree.map(lambda x: x[s.warmup:], out)
+        return lax.scan(draw, state, None, length=piece)
+
+    def finish(zs, stats, kwargs):
+        div, energy, nsteps, acc, pe, eps = stats
         samples = jax.vmap(lambda z: constrain_fn(model, (), kwargs, z,
                                                   return_deterministic=True))(zs)
-        stats = {"diverging": div, "energy": energy, "n_steps": nsteps,
-                 "tree_depth": jnp.floor(jnp.log2(nsteps + 1)).astype(int),
-                 "acceptance_rate": acc, "lp": -pe, "step_size": eps}
-        return samples, stats
+        return samples, {"diverging": div, "energy": energy, "n_steps": nsteps,
+                         "tree_depth": jnp.floor(jnp.log2(nsteps + 1)).astype(int),
+                         "acceptance_rate": acc, "lp": -pe, "step_size": eps}
 
     if method == "parallel":
-        return jax.pmap(one_chain, in_axes=(0, 0, None))
-    if method == "sequential":
-        return jax.jit(lambda keys, z, kw: lax.map(lambda a: one_chain(a[0], a[1], kw), (keys, z)))
-    return jax.jit(jax.vmap(one_chain, in_axes=(0, 0, None)))
+        batch = lambda f, n: jax.pmap(f, in_axes=(0,) * n + (None,))  # noqa: E731
+    elif method == "sequential":
+        def batch(f, n):
+            return jax.jit(lambda *a: lax.map(lambda b: f(*b, a[-1]), a[:-1]))
+    else:
+        batch = lambda f, n: jax.jit(jax.vmap(f, in_axes=(0,) * n + (None,)))  # noqa: E731
+    return _Sampler(batch(start, 2), batch(advance, 1), batch(finish, 2), piece)
+
+
+def _run_chains(fn: _Sampler, s: SamplerSettings, keys, init_z, kwargs, on_piece=None):
+    """Warm-up and draws of every chain: ``fn.advance`` over the whole loop, the warm-up rows
+    dropped on the host, then ``fn.finish`` on the draws. ``on_piece(done)`` (iterations done
+    per chain) after each piece, when given."""
+    state = fn.start(keys, init_z, kwargs)
+    kept = []
+    for first in range(0, s.warmup + s.draws, fn.piece):
+        state, rec = fn.advance(state, kwargs)
+        if first + fn.piece > s.warmup:   # a piece with draws in it: keep those rows
+            skip = max(0, s.warmup - first)
+            kept.append(jax.tree.map(lambda x: np.asarray(x)[:, skip:], rec))
+        if on_piece is not None:
+            jax.block_until_ready(state)
+            on_piece(first + fn.piece)
+    rec = jax.tree.map(lambda *x: np.concatenate(x, 1), *kept)
+    return fn.finish(jax.device_put(rec[0]), jax.device_put(rec[1:]), kwargs)
 
 
 def _on_device(x):
@@ -247,9 +281,9 @@ def _start(key, chains: int, shapes: tuple):
     return key_prior, jax.random.split(key_mcmc, chains), init_z
 
 
-def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> Callable:
+def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
     key = (model, s.chains, s.warmup, s.draws, s.dense_mass, float(s.target_accept),
-           s.max_tree_depth, method, bool(s.progress))
+           s.max_tree_depth, method)
     fn = _SAMPLER_CACHE.get(key)
     if fn is None:
         fn = _SAMPLER_CACHE[key] = _build_sampler(model, s, method)
@@ -292,17 +326,19 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
     kwargs = {k: _on_device(v) for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
     key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
-    if s.progress:  # the bar: "compiling" until the first tick, then warm-up, sampling
+    if s.progress:  # a bar: "compiling" until the first piece is done, then warm-up, sampling
         label = f"NUTS, {s.chains} chains × {s.warmup} warm-up + {s.draws} draws"
         with progress.shown(), progress.step(f"{label}: compiling the sampler",
-                                             total=s.chains * (s.warmup + s.draws)) as task:
-            _PROGRESS.update(bar=progress.active(), task=task, label=label, warmup=s.warmup)
-            try:
-                samples, stats = jax.block_until_ready(fn(keys, init_z, kwargs))
-            finally:
-                _PROGRESS.clear()
+                                             total=s.warmup + s.draws) as task:
+            def on_piece(done):
+                bar = progress.active()
+                if bar is not None:
+                    phase = "warm-up" if done <= s.warmup else "sampling"
+                    bar.update(task, completed=done, description=f"{label}: {phase}")
+
+            samples, stats = _run_chains(fn, s, keys, init_z, kwargs, on_piece)
     else:
-        samples, stats = fn(keys, init_z, kwargs)
+        samples, stats = _run_chains(fn, s, keys, init_z, kwargs)
     posterior = {k: np.asarray(v) for k, v in samples.items()}
     sample_stats = {k: np.asarray(v) for k, v in stats.items()}
     idata = az.from_dict(posterior=posterior, sample_stats=sample_stats,
