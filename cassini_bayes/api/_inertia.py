@@ -95,7 +95,8 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
         idealised model (``--idealised``).
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
     torque : include a constant inertial external torque per file.
-    progress : show a progress bar.
+    progress : show the fit's steps (and the sampler's bar) on the terminal
+        (:mod:`cassini_bayes.inference.progress`).
 
     Returns
     -------
