@@ -13,10 +13,17 @@ loaded from the cache) with the seconds it took, and the seconds spent tracing a
 MLIR (which the cache does not save), plus the cache's hits and misses (the fit's config.toml).
 Prints per run the wall time (of it, the start-up before the command runs: imports), the XLA
 compile (or cache-load) seconds, tracing, lowering and the rest (sampling, files, the report),
-then the slowest programs of the cache-off runs; ``--json`` writes everything. Not a test: the
-numbers are in docs/performance.md.
+then the slowest programs of the cache-off runs; ``--json`` writes everything. Every row carries
+the 1-minute load average at its start (the machine is shared: compare rows of one run, and
+ratios). ``--where`` also lists, per run, the package lines that caused the programs to be built
+(the stack at each lowering), to find eager array operations worth putting under ``jit``.
 
-    python benchmarks/compile_cache.py [--only inertia|thrust] [--top 12] [--json cache.json]
+``--reproduce`` instead times ``cassini-bayes reproduce`` (the full settings; ``--quick`` for the
+small ones) twice in fresh processes on one fresh cache folder: cold (compiles and writes) and
+warm (loads). Not a test: the numbers are in docs/performance.md.
+
+    python benchmarks/compile_cache.py [--only inertia|thrust] [--top 12] [--where]
+                                       [--reproduce [--quick]] [--json cache.json]
 """
 
 from __future__ import annotations
@@ -37,24 +44,36 @@ COMPILE = "/jax/core/compile/backend_compile_duration"
 TRACE = "/jax/core/compile/jaxpr_trace_duration"
 LOWER = "/jax/core/compile/jaxpr_to_mlir_module_duration"
 
-# run in the child: ``cassini-bayes ARGS`` in-process, with JAX's duration events recorded
+# run in the child: ``cassini-bayes ARGS`` in-process, with JAX's duration events recorded and,
+# with WHERE set, the package lines on the stack at each XLA lowering
 _CHILD = """
-import json, sys, time
+import collections, json, os, sys, time, traceback
 from jax import monitoring
 events = []
 monitoring.register_event_duration_secs_listener(
     lambda event, secs, **kw: events.append((event, kw.get("fun_name", ""), secs)))
+where = collections.Counter()
+if os.environ.get("WHERE"):
+    from jax._src.interpreters import pxla
+    lower = pxla.lower_sharding_computation
+    def traced_lower(*args, **kwargs):
+        own = [f for f in traceback.extract_stack() if "cassini_bayes" in f.filename]
+        where[" <- ".join(f"{f.filename.split('cassini_bayes/')[-1]}:{f.lineno}"
+                          for f in own[-2:][::-1])] += 1
+        return lower(*args, **kwargs)
+    pxla.lower_sharding_computation = traced_lower
 from cassini_bayes.cli import main
 t0 = time.perf_counter()
 code = main(sys.argv[2:])
-json.dump({"code": code, "cli_s": time.perf_counter() - t0, "events": events},
-          open(sys.argv[1], "w"))
+json.dump({"code": code, "cli_s": time.perf_counter() - t0, "events": events,
+           "where": where.most_common()}, open(sys.argv[1], "w"))
 """
 
 
-def _run(args: list[str], cache: str, record: Path) -> dict:
+def _run(args: list[str], cache: str, record: Path, where: bool = False) -> dict:
     """One ``cassini-bayes ARGS`` in a fresh process with ``CASSINI_BAYES_JAX_CACHE=cache``."""
-    env = {**os.environ, "CASSINI_BAYES_JAX_CACHE": cache}
+    env = {**os.environ, "CASSINI_BAYES_JAX_CACHE": cache, "WHERE": "1" if where else ""}
+    load = os.getloadavg()[0]
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-c", _CHILD, str(record), *args], env=env,
                        capture_output=True, text=True)
@@ -64,7 +83,7 @@ def _run(args: list[str], cache: str, record: Path) -> dict:
     rec = json.loads(record.read_text())
     if rec["code"] not in (0, 3):
         raise SystemExit(f"cassini-bayes {' '.join(args)} exited {rec['code']}:\n{r.stderr}")
-    return {"wall_s": wall, **rec}
+    return {"wall_s": wall, "load_1min": load, **rec}
 
 
 def _summary(name: str, rec: dict, config: Path | None) -> dict:
@@ -77,6 +96,7 @@ def _summary(name: str, rec: dict, config: Path | None) -> dict:
             programs[fun][1] += secs
     cache = tomllib.loads(config.read_text()).get("jax_cache", {}) if config else {}
     return {"run": name, "wall_s": rec["wall_s"], "cli_s": rec["cli_s"],
+            "load_1min": rec["load_1min"], "where": rec.get("where", []),
             "programs": sum(n for n, _ in programs.values()),
             "compile_s": by_event[COMPILE], "trace_s": by_event[TRACE],
             "lower_s": by_event[LOWER], "hits": cache.get("hits"),
@@ -108,15 +128,48 @@ def _print(row: dict) -> None:
     print(f"{row['run']:<20} wall {row['wall_s']:5.1f} s (start-up "
           f"{row['wall_s'] - row['cli_s']:4.1f} s)  programs {row['programs']:4d}  compile/load "
           f"{row['compile_s']:5.1f} s  trace {row['trace_s']:4.1f} s  lower {row['lower_s']:4.1f} "
-          f"s  rest {other:5.1f} s{hm}", flush=True)
+          f"s  rest {other:5.1f} s{hm}  (load {row['load_1min']:.1f})", flush=True)
+
+
+def _reproduce(quick: bool) -> list[dict]:
+    """``cassini-bayes reproduce`` cold then warm on one fresh cache folder, each a fresh
+    process: wall seconds and the load average at the start."""
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="compile_cache_reproduce_") as tmp:
+        env = {**os.environ, "CASSINI_BAYES_JAX_CACHE": str(Path(tmp) / "jax")}
+        for run in ("cold", "warm"):
+            out = Path(tmp) / f"reproduce-{run}"
+            cmd = [sys.executable, "-m", "cassini_bayes.cli", "reproduce", "--out", str(out)]
+            load = os.getloadavg()[0]
+            t0 = time.perf_counter()
+            r = subprocess.run(cmd + (["--quick"] if quick else []), env=env,
+                               capture_output=True, text=True)
+            wall = time.perf_counter() - t0
+            if r.returncode not in (0, 3):
+                raise SystemExit(f"reproduce ({run}) exited {r.returncode}:\n{r.stderr}")
+            rows.append({"run": f"reproduce {run}", "wall_s": wall, "load_1min": load,
+                         "exit": r.returncode})
+            print(f"reproduce{' --quick' if quick else ''} {run:<5} wall {wall:6.1f} s  "
+                  f"(exit {r.returncode}, load {load:.1f})", flush=True)
+    return rows
 
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", choices=["inertia", "thrust"], default=None)
     ap.add_argument("--top", type=int, default=12, help="slowest programs listed per fit")
+    ap.add_argument("--where", action="store_true",
+                    help="list the package lines that built the programs, per run")
+    ap.add_argument("--reproduce", action="store_true",
+                    help="time `cassini-bayes reproduce`, cold and warm, instead of the fits")
+    ap.add_argument("--quick", action="store_true", help="with --reproduce: its --quick")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if args.reproduce:
+        result = {"cpu_count": os.cpu_count(), "runs": _reproduce(args.quick)}
+        if args.json:
+            args.json.write_text(json.dumps(result, indent=1) + "\n")
+        return result
     plans = {"inertia": ("slews_post_probe", ["off 1st", "off 2nd", "cold", "warm"]),
              "thrust": ("biasing_day028", ["off", "cold", "warm"])}
     rows: list[dict] = []
@@ -130,10 +183,14 @@ def main(argv: list[str] | None = None) -> dict:
             for i, run in enumerate(runs):
                 out = tmp / f"{kind}-{i}"
                 rec = _run(_fit_args(kind, data, out), "off" if run.startswith("off") else cache,
-                           tmp / f"{kind}-{i}.json")
+                           tmp / f"{kind}-{i}.json", where=args.where)
                 row = _summary(f"fit {kind} {run}", rec, out / "config.toml")
                 rows.append(row)
                 _print(row)
+    for row in rows if args.where else []:
+        print(f"\n{row['run']}: programs built, by package line (count, innermost first):")
+        for line, n in row["where"][:args.top]:
+            print(f"  {n:4d}  {line}")
     for row in rows:
         if not row["run"].endswith(("off 1st", "off")):
             continue

@@ -59,6 +59,7 @@ print(json.dumps({"out": out, "stats": _jax_cache.stats().to_dict()}))
 _SMALL_FIT = """
 import sys
 import cassini_bayes, jax, numpy as np, numpyro, numpyro.distributions as dist
+from cassini_bayes import _jax_cache
 from cassini_bayes.inference.runner import SamplerSettings, run_nuts
 
 def model(*, y):
@@ -67,8 +68,10 @@ def model(*, y):
     numpyro.sample("y", dist.Normal(mu, sigma), obs=y)
 
 y = jax.random.normal(jax.random.key(0), (40,)) * 1.5 + 3.0
+progress = len(sys.argv) > 2 and sys.argv[2] == "progress"
 idata = run_nuts(jax.random.key(7), model, model_kwargs={"y": y}, prior_draws=0,
-                 settings=SamplerSettings(chains=2, warmup=100, draws=100))
+                 settings=SamplerSettings(chains=2, warmup=100, draws=100, progress=progress))
+print(_jax_cache.stats().misses)
 np.savez(sys.argv[1], **{k: idata.posterior[k].values for k in ("mu", "sigma")},
          **{k: idata.sample_stats[k].values for k in ("energy", "step_size", "tree_depth")})
 """
@@ -150,6 +153,23 @@ def test_same_draws_with_fresh_warm_and_no_cache(tmp_path):
         assert draws[name].keys() == draws["fresh"].keys()
         for k in draws["fresh"]:
             np.testing.assert_array_equal(draws[name][k], draws["fresh"][k], err_msg=f"{name} {k}")
+
+
+def test_progress_bar_changes_no_draw_and_keeps_the_cache(tmp_path):
+    """With the progress bar (a terminal) the sampler runs the same programs, which the cache
+    keeps (JAX never caches a program that calls back into Python: the bar is driven from
+    Python between pieces of the loop), and gives the same draws as without it."""
+    cache = str(tmp_path / "jax")
+    draws, misses = {}, {}
+    for name, progress in [("plain", ""), ("bar", "progress"), ("bar again", "progress")]:
+        r = _python(_SMALL_FIT, tmp_path / f"{name}.npz", progress, cache=cache)
+        assert r.returncode == 0, r.stderr
+        misses[name] = int(r.stdout.split()[-1])
+        with np.load(tmp_path / f"{name}.npz") as saved:
+            draws[name] = dict(saved)
+    assert misses["plain"] > 0 and misses["bar"] == 0 and misses["bar again"] == 0
+    for k in draws["plain"]:
+        np.testing.assert_array_equal(draws["bar"][k], draws["plain"][k], err_msg=k)
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Sequence
 
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
-                                       spacecraft_input, telemetry_inputs)
+                                       shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
@@ -73,6 +73,7 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
     return summary
 
 
+@shows_progress
 def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
                 wheel_errors: str = "per_wheel", torque: bool = True,
@@ -94,7 +95,8 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
         idealised model (``--idealised``).
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
     torque : include a constant inertial external torque per file.
-    progress : show a progress bar.
+    progress : show the fit's steps (and the sampler's bar) on the terminal
+        (:mod:`cassini_bayes.inference.progress`).
 
     Returns
     -------
@@ -104,6 +106,7 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     import jax
 
     from cassini_bayes.consistency import check_inertia_data
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
 
     seed = check_seed(seed)
@@ -111,15 +114,17 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     tels, records, paths = telemetry_inputs(telemetry)
-    check_inertia_data(tels, sc)  # units and conventions by the physics, before any sampling
+    with step("checking the data"):
+        check_inertia_data(tels, sc)  # units and conventions by the physics, before sampling
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = sample_inertia(key, tels, sc, torque=torque, robust=robust, settings=settings,
                               wheel_errors=wheel_errors)
-    baseline, base_warns = inertia_baseline(tels, sc)
-    summary = inertia_summary(post, seed=seed, torque=torque, robust=robust,
-                              wheel_errors=wheel_errors, baseline=baseline,
-                              warnings=warns + base_warns)
+    with step("summaries, baseline and adequacy checks"):
+        baseline, base_warns = inertia_baseline(tels, sc)
+        summary = inertia_summary(post, seed=seed, torque=torque, robust=robust,
+                                  wheel_errors=wheel_errors, baseline=baseline,
+                                  warnings=warns + base_warns)
     config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": records, "spacecraft": sc_record},
                         options={"torque": torque, "idealised": not robust,

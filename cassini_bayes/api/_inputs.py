@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 from pathlib import Path
 from typing import Sequence
@@ -11,13 +12,26 @@ from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
-           "choice", "sampler_settings", "check_seed"]
+           "choice", "sampler_settings", "check_seed", "shows_progress"]
 
 WHEEL_ERRORS = ("per_wheel", "common")
 # jax.random.key takes a signed 64-bit seed; the package takes its non-negative half
 SEED_MAX = 2**63 - 1
 
 PathLike = str | os.PathLike
+
+
+def shows_progress(fit):
+    """Decorate a fit function: with ``progress=True`` its steps are shown on the terminal
+    (:func:`cassini_bayes.inference.progress.shown`) while it runs."""
+    @functools.wraps(fit)
+    def wrapper(*args, progress: bool = False, **kwargs):
+        from cassini_bayes.inference.progress import shown
+
+        with shown(bool(progress)):
+            return fit(*args, progress=progress, **kwargs)
+
+    return wrapper
 
 
 def _is_path(x) -> bool:

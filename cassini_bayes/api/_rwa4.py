@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
-                                       spacecraft_input, telemetry_inputs)
+                                       shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
 from cassini_bayes.errors import InputError, arg
@@ -73,6 +73,7 @@ def _window_pairs(windows) -> list | None:
     return pairs
 
 
+@shows_progress
 def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
              inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
              draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
@@ -105,6 +106,7 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     import jax
 
     from cassini_bayes.consistency import check_rwa4_data
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
 
     seed = check_seed(seed)
@@ -120,14 +122,16 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
         raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
                          f"{len(tels)}")
     tel = tels[0]
-    check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
+    with step("checking the data"):
+        check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
                            inertia=inertia, settings=settings, robust=robust,
                            wheel_errors=wheel_errors)
-    summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
-                           wheel_errors=wheel_errors, warnings=warns)
+    with step("summaries and adequacy checks"):
+        summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
+                               wheel_errors=wheel_errors, warnings=warns)
     pr = post.problem
     config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": records[0], "spacecraft": sc_record,

@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Sequence
 
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_inputs,
-                                       sampler_settings, spacecraft_input, telemetry_inputs)
+                                       sampler_settings, shows_progress, spacecraft_input,
+                                       telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import InputError, arg
 
@@ -138,6 +139,7 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
     return (inertia_from_run(path), {"inertia_posterior": str(path.resolve())}, [path])
 
 
+@shows_progress
 def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
                inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
@@ -177,6 +179,7 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
     import jax
 
     from cassini_bayes.consistency import check_thrust_data
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
 
     seed = check_seed(seed)
@@ -194,15 +197,17 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
         raise InputError(f"{len(tels)} telemetry but {len(logs)} pulse log(s); give one pulse "
                          "log per telemetry, in the same order")
     events = list(zip(tels, logs))
-    check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
+    with step("checking the data"):
+        check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:
         post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
                              robust=robust, wheel_errors=wheel_errors)
-    baseline, base_warns = thrust_baseline(events, sc, mode)
-    summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
-                             wheel_errors=wheel_errors, baseline=baseline,
-                             warnings=warns + base_warns)
+    with step("summaries, baseline and adequacy checks"):
+        baseline, base_warns = thrust_baseline(events, sc, mode)
+        summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
+                                 wheel_errors=wheel_errors, baseline=baseline,
+                                 warnings=warns + base_warns)
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": tel_records, "pulses": log_records,
                                 "spacecraft": sc_record, **inertia_input},

@@ -80,7 +80,10 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     from cassini_bayes.api import collect_warnings
     from cassini_bayes.errors import InadequateModelError, NotConvergedError
 
-    with collect_warnings() as report_warnings:
+    from cassini_bayes.inference.progress import shown, step
+
+    with (collect_warnings() as report_warnings, shown(sys.stderr.isatty()),
+          step(f"writing {out} (posterior.nc, summary.json, config.toml, report.html)")):
         final = result.save(out, force=force)
     summary = result.summary()
     console = _console()

@@ -6,10 +6,11 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
 * runs NUTS (NumPyro's ``hmc(algo="NUTS")`` kernel: windowed step-size and dense mass-matrix
   adaptation by default — the inertia entries, momenta and torques are strongly correlated; the
   models already whiten their coordinates, so the dense adaptation only corrects what is left),
-* compiles warmup and sampling of all chains into **one** XLA program (two ``lax.scan`` loops,
-  then the deterministic sites by ``vmap``), cached per (model, settings, chain method) and called
-  with the data as arguments: fitting new data of the same shapes never recompiles (tested by
-  counting XLA compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
+* compiles the sampling of all chains into three XLA programs (start; a ``lax.scan`` piece of
+  the loop over warm-up and draws, called about ten times; the deterministic sites of the draws
+  by ``vmap``), cached per (model, settings, chain method) and called with the data as
+  arguments: fitting new data of the same shapes never recompiles (tested by counting XLA
+  compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
   a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
@@ -17,8 +18,10 @@ arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nu
   chains; more threads than cores still beats lock-step), before the backend starts
   (``jax_num_cpu_devices``); measured with benchmarks/bench_inertia.py on the 2-core machine,
   4 × 2000 iterations: 1.8 s parallel vs 3.1 s vectorized (loaded machine),
-* shows a rich progress bar when asked (``jax.debug.callback`` every 50 iterations; compiled in
-  only then),
+* shows a rich progress bar when asked, as a step of :mod:`cassini_bayes.inference.progress`:
+  the loop runs in about ten calls of one program (:func:`_build_sampler`), so the bar needs no
+  callback inside the compiled code and the same programs, all kept by the persistent
+  compilation cache, run with and without it,
 * converts to InferenceData (``posterior``, ``sample_stats``) and adds a ``prior`` group from the
   model's own prior sampler (or ``numpyro.infer.Predictive`` when the model's sites are proper).
 
@@ -36,6 +39,7 @@ divergences from ``sample_stats.diverging``. ``converged`` means ``max R-hat ≤
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Callable, Mapping, NamedTuple, Sequence
 
 import arviz as az
@@ -49,6 +53,7 @@ from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
 
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.inference import progress
 
 __all__ = [
     "SamplerSettings",
@@ -131,9 +136,8 @@ def choose_chain_method(chains: int) -> str:
     return "vectorized"
 
 
-_SAMPLER_CACHE: dict[tuple, Callable] = {}
-_PROGRESS: dict = {}
-_PROGRESS_EVERY = 50
+_SAMPLER_CACHE: dict[tuple, "_Sampler"] = {}
+_UPDATES = 10  # progress updates per run, at least: the loop runs in about this many pieces
 
 
 def clear_cache() -> None:
@@ -141,10 +145,11 @@ def clear_cache() -> None:
     _SAMPLER_CACHE.clear()
 
 
-def _progress_tick(i):
-    bar = _PROGRESS.get("bar")
-    if bar is not None:
-        bar.advance(_PROGRESS["task"], _PROGRESS_EVERY * int(np.size(i)))
+def _piece(total: int) -> int:
+    """Iterations per call of the sampler's loop: the largest divisor of ``total`` that is at
+    most ``total / _UPDATES`` (so every call is the same program; 1 when ``total`` is prime)."""
+    top = max(1, total // _UPDATES)
+    return next(d for d in range(top, 0, -1) if total % d == 0)
 
 
 def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
@@ -162,59 +167,123 @@ def _site_shapes(model: Callable, model_kwargs: Mapping) -> dict[str, tuple]:
     return {k: v.shape for k, v in out.items()}
 
 
-def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> Callable:
-    """One compiled function ``(keys, init_z, model_kwargs) -> draws`` for all chains.
+class _Sampler(NamedTuple):
+    """The three compiled pieces of a run, all chains at once (:func:`_build_sampler`)."""
 
-    Warmup (step size and mass-matrix adaptation, NumPyro's windowed scheme) and sampling are two
-    ``lax.scan`` loops inside one program, so a fit is a single call into XLA; the program is
-    cached per (model, settings, chain method) and reused for any data of the same shapes.
+    start: Callable      # (keys, init_z, kwargs) -> NUTS states
+    advance: Callable    # (states, kwargs) -> (states, per-iteration records), ``piece`` its
+    finish: Callable     # (zs, stats, kwargs) -> (posterior sites, sample stats)
+    piece: int           # iterations per ``advance``
+
+
+def _build_sampler(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
+    """The sampler of ``model`` under ``s``, all chains batched by ``method``, in three programs.
+
+    ``start`` places each chain (a start outside a hard support is halved toward the Laplace
+    centre until the density is finite) and initialises NumPyro's NUTS kernel; ``advance`` runs
+    ``piece`` iterations of it (one ``lax.scan``; the kernel adapts step size and dense mass
+    matrix, NumPyro's windowed scheme, while its iteration count is below the warm-up length);
+    ``finish`` maps the kept draws to the model's sites (deterministics included) and the
+    sample statistics. The loop over warm-up and draws is ``advance`` called
+    ``(warmup + draws) / piece`` times from Python, so the programs hold no callback: a
+    progress bar costs nothing, the programs are the same with and without one (so are the
+    draws), and the persistent compilation cache keeps them (JAX never caches a program that
+    calls back into Python). Cached per (model, settings, chain method) and reused for any
+    data of the same shapes.
     """
-    def one_chain(key, init_z, kwargs):
-        def pot(z):
-            return potential_energy(model, (), kwargs, z)
+    def potential_for(**kwargs):
+        return lambda z: potential_energy(model, (), kwargs, z)
 
-        init_kernel, sample_kernel = hmc(potential_fn=pot, algo="NUTS")
+    init_kernel, sample_kernel = hmc(potential_fn_gen=potential_for, algo="NUTS")
+
+    def start(key, init_z, kwargs):
+        pot = potential_for(**kwargs)
         # a start outside a hard support (e.g. RWA4's physical inertia) leaves the chain stuck:
         # halve it toward w = 0 (the Laplace centre) until the density is finite; finite starts
         # are left as they are
         init_z = lax.while_loop(
             lambda c: ~jnp.isfinite(pot(c[0])) & (c[1] < 30),
             lambda c: (jax.tree.map(lambda x: 0.5 * x, c[0]), c[1] + 1), (init_z, 0))[0]
-        state = init_kernel(init_z, s.warmup, dense_mass=s.dense_mass,
-                            target_accept_prob=s.target_accept, max_tree_depth=s.max_tree_depth,
-                            rng_key=key)
+        return init_kernel(init_z, s.warmup, dense_mass=s.dense_mass,
+                           target_accept_prob=s.target_accept,
+                           max_tree_depth=s.max_tree_depth, rng_key=key, model_kwargs=kwargs)
 
-        def step(st, _):
-            st = sample_kernel(st)
-            if s.progress:
-                lax.cond(st.i % _PROGRESS_EVERY == 0,
-                         lambda: jax.debug.callback(_progress_tick, st.i), lambda: None)
-            return st, None
+    piece = _piece(s.warmup + s.draws)
 
+    def advance(state, kwargs):
         def draw(st, _):
-            st, _ = step(st, None)
+            st = sample_kernel(st, model_kwargs=kwargs)
             return st, (st.z, st.diverging, st.energy, st.num_steps, st.accept_prob,
                         st.potential_energy, st.adapt_state.step_size)
 
-        state, _ = lax.scan(step, state, None, length=s.warmup)
-        _, (zs, div, energy, nsteps, acc, pe, eps) = lax.scan(draw, state, None, length=s.draws)
+        return lax.scan(draw, state, None, length=piece)
+
+    def finish(zs, stats, kwargs):
+        div, energy, nsteps, acc, pe, eps = stats
         samples = jax.vmap(lambda z: constrain_fn(model, (), kwargs, z,
                                                   return_deterministic=True))(zs)
-        stats = {"diverging": div, "energy": energy, "n_steps": nsteps,
-                 "tree_depth": jnp.floor(jnp.log2(nsteps + 1)).astype(int),
-                 "acceptance_rate": acc, "lp": -pe, "step_size": eps}
-        return samples, stats
+        return samples, {"diverging": div, "energy": energy, "n_steps": nsteps,
+                         "tree_depth": jnp.floor(jnp.log2(nsteps + 1)).astype(int),
+                         "acceptance_rate": acc, "lp": -pe, "step_size": eps}
 
     if method == "parallel":
-        return jax.pmap(one_chain, in_axes=(0, 0, None))
-    if method == "sequential":
-        return jax.jit(lambda keys, z, kw: lax.map(lambda a: one_chain(a[0], a[1], kw), (keys, z)))
-    return jax.jit(jax.vmap(one_chain, in_axes=(0, 0, None)))
+        batch = lambda f, n: jax.pmap(f, in_axes=(0,) * n + (None,))  # noqa: E731
+    elif method == "sequential":
+        def batch(f, n):
+            return jax.jit(lambda *a: lax.map(lambda b: f(*b, a[-1]), a[:-1]))
+    else:
+        batch = lambda f, n: jax.jit(jax.vmap(f, in_axes=(0,) * n + (None,)))  # noqa: E731
+    return _Sampler(batch(start, 2), batch(advance, 1), batch(finish, 2), piece)
 
 
-def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> Callable:
+def _run_chains(fn: _Sampler, s: SamplerSettings, keys, init_z, kwargs, on_piece=None):
+    """Warm-up and draws of every chain: ``fn.advance`` over the whole loop, the warm-up rows
+    dropped on the host, then ``fn.finish`` on the draws. ``on_piece(done)`` (iterations done
+    per chain) after each piece, when given."""
+    state = fn.start(keys, init_z, kwargs)
+    kept = []
+    for first in range(0, s.warmup + s.draws, fn.piece):
+        state, rec = fn.advance(state, kwargs)
+        if first + fn.piece > s.warmup:   # a piece with draws in it: keep those rows
+            skip = max(0, s.warmup - first)
+            kept.append(jax.tree.map(lambda x: np.asarray(x)[:, skip:], rec))
+        if on_piece is not None:
+            jax.block_until_ready(state)
+            on_piece(first + fn.piece)
+    rec = jax.tree.map(lambda *x: np.concatenate(x, 1), *kept)
+    return fn.finish(jax.device_put(rec[0]), jax.device_put(rec[1:]), kwargs)
+
+
+def _on_device(x):
+    """``jnp.asarray(x)`` without its cost: for a NumPy array or a Python number that compiles a
+    one-operation XLA program per shape (in every process); ``device_put`` only copies (Python
+    numbers stay weakly typed either way)."""
+    if isinstance(x, jax.Array):
+        return x
+    if isinstance(x, (np.ndarray, np.generic, int, float, bool)):
+        return jax.device_put(x)
+    return jnp.asarray(x)
+
+
+@partial(jax.jit, static_argnums=(1, 2))
+def _start(key, chains: int, shapes: tuple):
+    """The prior's key, the chains' keys and their initial values, one XLA program.
+
+    The key is split into (sampler, prior, initial values); chain ``c`` gets the ``c``-th split of
+    the sampler key; initial values are ``Uniform(−2, 2)`` in the unconstrained (whitened)
+    space (NumPyro's ``init_to_uniform(radius=2)``), one key per site in name order (``shapes``:
+    sorted ``(name, shape)`` pairs).
+    """
+    key_mcmc, key_prior, key_init = jax.random.split(key, 3)
+    init_keys = jax.random.split(key_init, len(shapes))
+    init_z = {name: jax.random.uniform(k, (chains,) + shp, minval=-2.0, maxval=2.0)
+              for k, (name, shp) in zip(init_keys, shapes)}
+    return key_prior, jax.random.split(key_mcmc, chains), init_z
+
+
+def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
     key = (model, s.chains, s.warmup, s.draws, s.dense_mass, float(s.target_accept),
-           s.max_tree_depth, method, bool(s.progress))
+           s.max_tree_depth, method)
     fn = _SAMPLER_CACHE.get(key)
     if fn is None:
         fn = _SAMPLER_CACHE[key] = _build_sampler(model, s, method)
@@ -251,30 +320,25 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
         ``energy``, ``n_steps``, ``tree_depth``, ``acceptance_rate``, ``lp``, ``step_size``) and,
         when drawn, ``prior``.
     """
-    key_mcmc, key_prior, key_init = jax.random.split(key, 3)
     s = settings
     method = s.chain_method or choose_chain_method(s.chains)
     fn = _sampler_for(model, s, method)
-    kwargs = {k: jnp.asarray(v) for k, v in model_kwargs.items()}
+    kwargs = {k: _on_device(v) for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
-    init_keys = jax.random.split(key_init, len(shapes))
-    # init_to_uniform(radius=2) in the (whitened) unconstrained space, per chain.
-    init_z = {name: jax.random.uniform(k, (s.chains,) + shp, minval=-2.0, maxval=2.0)
-              for k, (name, shp) in zip(init_keys, sorted(shapes.items()))}
-    keys = jax.random.split(key_mcmc, s.chains)
-    if s.progress:
-        from rich.progress import Progress
+    key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
+    if s.progress:  # a bar: "compiling" until the first piece is done, then warm-up, sampling
+        label = f"NUTS, {s.chains} chains × {s.warmup} warm-up + {s.draws} draws"
+        with progress.shown(), progress.step(f"{label}: compiling the sampler",
+                                             total=s.warmup + s.draws) as task:
+            def on_piece(done):
+                bar = progress.active()
+                if bar is not None:
+                    phase = "warm-up" if done <= s.warmup else "sampling"
+                    bar.update(task, completed=done, description=f"{label}: {phase}")
 
-        with Progress(transient=True) as bar:
-            _PROGRESS.update(bar=bar, task=bar.add_task(
-                f"NUTS {s.chains} chains × {s.warmup}+{s.draws}",
-                total=s.chains * (s.warmup + s.draws)))
-            try:
-                samples, stats = jax.block_until_ready(fn(keys, init_z, kwargs))
-            finally:
-                _PROGRESS.clear()
+            samples, stats = _run_chains(fn, s, keys, init_z, kwargs, on_piece)
     else:
-        samples, stats = fn(keys, init_z, kwargs)
+        samples, stats = _run_chains(fn, s, keys, init_z, kwargs)
     posterior = {k: np.asarray(v) for k, v in samples.items()}
     sample_stats = {k: np.asarray(v) for k, v in stats.items()}
     idata = az.from_dict(posterior=posterior, sample_stats=sample_stats,

@@ -9,7 +9,6 @@ import warnings
 from typing import NamedTuple, Sequence
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.errors import InputError, UnidentifiableError
@@ -39,7 +38,7 @@ def _file_arrays(q, omega, rates, axes, inertias):
     a = dcm(q)
     h_w = wheel_momentum_body(rates, axes, inertias)
     inc = quat_to_rotvec(quat_multiply(q[1:], quat_conjugate(q[:-1])))
-    return a, h_w, regressor(omega), inc
+    return a, h_w, regressor(omega), inc, q
 
 
 def _noise_from_arrays(omega, rates, inc) -> np.ndarray:
@@ -58,8 +57,8 @@ def noise_levels(tel: Telemetry, spacecraft: Spacecraft) -> np.ndarray:
     it is only the centre of a wide prior.
     """
     rates, axes, js = _wheel_arrays(tel, spacecraft)
-    _, _, _, inc = _file_arrays(jnp.asarray(tel.q, float), jnp.asarray(tel.omega, float),
-                                jnp.asarray(rates), jnp.asarray(axes), jnp.asarray(js))
+    inc = _file_arrays(np.asarray(tel.q, float), np.asarray(tel.omega, float), rates, axes,
+                       js)[3]
     return _noise_from_arrays(np.asarray(tel.omega, float), rates, np.asarray(inc))
 
 
@@ -192,9 +191,7 @@ def file_data(f: int, tel: Telemetry, spacecraft: Spacecraft, p_full: int) -> di
     rates, axes, js = _wheel_arrays(tel, spacecraft)
     q_in = np.asarray(tel.q, float)
     w = np.asarray(tel.omega, float)
-    a, h_w, reg, inc = (np.asarray(x) for x in _file_arrays(
-        jnp.asarray(q_in), jnp.asarray(w), jnp.asarray(rates), jnp.asarray(axes),
-        jnp.asarray(js)))
+    a, h_w, reg, inc, q_cont = (np.asarray(x) for x in _file_arrays(q_in, w, rates, axes, js))
     t = np.asarray(tel.t, float)
     dt = t - t[0]
     cols = np.zeros((tel.n, 3, p_full))  # e_t = cols_t θ − y_t (body axes)
@@ -207,7 +204,7 @@ def file_data(f: int, tel: Telemetry, spacecraft: Spacecraft, p_full: int) -> di
                 wheel_h={n: rates[:, k] * js[k] for k, n in enumerate(names)},
                 wcov=np.einsum("k,ki,kj->ij", js**2, axes, axes),
                 s_hat=_noise_from_arrays(w, rates, inc),
-                q=np.asarray(quat_continuous(jnp.asarray(q_in))))
+                q=q_cont)
 
 
 def _check_excitation(files: list[dict], telemetries: Sequence[Telemetry]) -> None:
@@ -242,14 +239,15 @@ def _residual_data(files: list[dict]) -> dict:
     n_files = len(files)
     onehot = np.concatenate([np.full(fd["t"].size, f) for f, fd in enumerate(files)])
     onehot = (onehot[None, :] == np.arange(n_files)[:, None]).astype(float)
-    return dict(
-        omega_t=jnp.asarray(np.concatenate([fd["w"] for fd in files]).T),
-        h_wheels_t=jnp.asarray(np.concatenate([fd["h_w"] for fd in files]).T),
-        a_t=jnp.asarray(np.ascontiguousarray(np.moveaxis(
-            np.concatenate([fd["a"] for fd in files]), 0, -1))),
-        dt=jnp.asarray(np.concatenate([fd["dt"] for fd in files])),
-        onehot=jnp.asarray(onehot),
-        wheel_cov_t=jnp.asarray(np.concatenate(
+    # device_put, not jnp.asarray: that compiles a one-operation program per shape (every
+    # process; docs/performance.md)
+    return jax.device_put(dict(
+        omega_t=np.concatenate([fd["w"] for fd in files]).T,
+        h_wheels_t=np.concatenate([fd["h_w"] for fd in files]).T,
+        a_t=np.ascontiguousarray(np.moveaxis(np.concatenate([fd["a"] for fd in files]), 0, -1)),
+        dt=np.concatenate([fd["dt"] for fd in files]),
+        onehot=onehot,
+        wheel_cov_t=np.concatenate(
             [np.broadcast_to([fd["wcov"][i, j] for i, j in _SYM], (fd["t"].size, 6))
              for fd in files]).T.copy()))
 
@@ -310,16 +308,13 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     centre, tril, cov, c_sd = whitening(info, prior_prec, theta, setup, robust=robust)
     sens = _sensitivity(info_full, full_prec, full_sd, setup, n_files)
 
-    model_kwargs = dict(
-        fmat=jnp.asarray(fmat), gvec=jnp.asarray(gvec), q_star=jnp.asarray(q_star),
-        n_obs=jnp.asarray(n_obs), theta_star=jnp.asarray(theta),
-        centre=jnp.asarray(centre), tril=jnp.asarray(tril),
-        pi_mean=jnp.asarray(setup.prior.mean), pi_sd=jnp.asarray(setup.prior.sd),
-        log_noise=jnp.asarray(log_s),
-    )
+    model_kwargs = dict(fmat=fmat, gvec=gvec, q_star=q_star, n_obs=n_obs, theta_star=theta,
+                        centre=centre, tril=tril, pi_mean=setup.prior.mean,
+                        pi_sd=setup.prior.sd, log_noise=log_s)
     if robust:
-        model_kwargs["nu_sd"] = jnp.asarray(setup.layout.sd)
-        model_kwargs["nu_weights"] = jnp.asarray(setup.layout.scale_weights)
+        model_kwargs["nu_sd"] = setup.layout.sd
+        model_kwargs["nu_weights"] = setup.layout.scale_weights
+    model_kwargs = jax.device_put({k: np.asarray(v) for k, v in model_kwargs.items()})
     return InertiaProblem(
         model_kwargs=model_kwargs, torque=torque, prior=setup.prior,
         t=np.concatenate([fd["t"] for fd in files]),

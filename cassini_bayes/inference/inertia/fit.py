@@ -144,11 +144,13 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     UnidentifiableError
         The slews do not excite the inertia at all.
     """
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
-    problem = prepare_inertia(telemetries, spacecraft, torque=torque, robust=robust,
-                              wheel_errors=wheel_errors)
+    with step("preparing: noise levels, least squares, whitening"):
+        problem = prepare_inertia(telemetries, spacecraft, torque=torque, robust=robust,
+                                  wheel_errors=wheel_errors)
     _warn_weak(problem)
     n_files = len(telemetries)
     kw = problem.model_kwargs

@@ -13,16 +13,15 @@ from __future__ import annotations
 from typing import Sequence
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.errors import UnidentifiableError
 from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_PRIOR_LOG_SD,
                                                    TORQUE_PRIOR_SD_NM, cholesky_params_from_pi,
-                                                   is_physical, pi_from_cholesky_params)
+                                                   _inertia_matrix, is_physical,
+                                                   pi_from_cholesky_params)
 from cassini_bayes.inference.nuisance import robust_columns
 from cassini_bayes.names import INERTIA_NAMES
-from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.telemetry import Telemetry
 
 __all__ = ["set_robust_columns", "full_prior", "gls", "sufficient_statistics",
@@ -44,7 +43,7 @@ def _body_cov_terms(inertia: np.ndarray, wheel_cov: np.ndarray, h_body: np.ndarr
 def set_robust_columns(files: list[dict], setup, pi) -> None:
     """Rebuild each file's robust columns of ``ν``, linear around the inertia ``pi`` (the prior
     mean when ``pi`` is not physical)."""
-    i_star = np.asarray(inertia_matrix(pi if is_physical(pi) else setup.prior.mean))
+    i_star = np.asarray(_inertia_matrix(pi if is_physical(pi) else setup.prior.mean))
     for f, fd in enumerate(files):
         fd["cols"][:, :, setup.p_base:] = robust_columns(setup.layout, f, i_star, fd["w"],
                                                          fd["h_w"], fd["wheel_h"], fd["a"],
@@ -59,7 +58,7 @@ def _fitted(x, fit_map):
 def _weights(fd: dict, f: int, th_full, ls, prior_mean):
     """``B_t⁻¹``, the three terms of ``B_t`` per unit variance, and ``B_t`` of file ``f`` at the
     full vector ``th_full`` and log noise levels ``ls`` (3,)."""
-    i_m = np.asarray(inertia_matrix(th_full[:6] if is_physical(th_full[:6]) else prior_mean))
+    i_m = np.asarray(_inertia_matrix(th_full[:6] if is_physical(th_full[:6]) else prior_mean))
     j0 = 6 + 6 * f
     h_n = th_full[j0:j0 + 3] + np.outer(fd["dt"], th_full[j0 + 3:j0 + 6])
     h_body = np.einsum("nij,nj->ni", fd["a"], np.broadcast_to(h_n, fd["w"].shape))
@@ -183,6 +182,10 @@ def information_ratio(info, prior_prec, prior,
     return ratio, weak
 
 
+# one XLA program (run eagerly, the forward-mode Jacobian compiles some thirty)
+_pi_jacobian = jax.jit(jax.jacfwd(pi_from_cholesky_params))
+
+
 def whitening(info, prior_prec, theta, setup, *, robust: bool) -> tuple:
     """The Laplace approximation (prior included) pushed through the log-Cholesky map: the
     sampler's ``centre`` and ``tril`` (``θ = centre + tril z``), the covariance of the model's
@@ -196,7 +199,7 @@ def whitening(info, prior_prec, theta, setup, *, robust: bool) -> tuple:
         c_sd = float(np.sqrt(scale_w @ cov[np.ix_(w_act, w_act)] @ scale_w))
     pi_c = theta[:6] if is_physical(theta[:6]) else setup.prior.mean
     lp_c = cholesky_params_from_pi(pi_c)
-    jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
+    jac = np.asarray(_pi_jacobian(lp_c))
     tmat = np.eye(setup.active.size)
     tmat[:6, :6] = np.linalg.inv(jac)
     cov_theta = tmat @ cov @ tmat.T

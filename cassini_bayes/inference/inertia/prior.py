@@ -6,6 +6,7 @@ knowledge as one sd), the priors of ``H_0``, ``T_N`` and the noise scale, and dr
 
 from __future__ import annotations
 
+from functools import partial
 from typing import NamedTuple
 
 import jax
@@ -46,9 +47,15 @@ def pi_from_cholesky_params(lp):
     return inertia_vector(tr[..., None, None] * jnp.broadcast_to(jnp.eye(3), sigma.shape) - sigma)
 
 
+# jitted once: called eagerly, each would compile a handful of one-operation XLA programs
+# (a slice and a stack each) per shape, every process (docs/performance.md)
+_inertia_matrix = jax.jit(inertia_matrix)
+_inertia_vector = jax.jit(inertia_vector)
+
+
 def cholesky_params_from_pi(pi) -> np.ndarray:
     """Inverse of :func:`pi_from_cholesky_params`; raises ``ValueError`` for a non-physical π."""
-    i_m = np.asarray(inertia_matrix(np.asarray(pi, float)))
+    i_m = np.asarray(_inertia_matrix(np.asarray(pi, float)))
     sigma = 0.5 * np.trace(i_m) * np.eye(3) - i_m
     l_mat = np.linalg.cholesky(sigma)  # LinAlgError (a ValueError) when not physical
     return np.array([np.log(l_mat[0, 0]), np.log(l_mat[1, 1]), np.log(l_mat[2, 2]),
@@ -57,7 +64,7 @@ def cholesky_params_from_pi(pi) -> np.ndarray:
 
 def is_physical(pi) -> np.ndarray:
     """Whether each ``π`` (..., 6) is positive definite and obeys the triangle inequalities."""
-    i_m = np.asarray(inertia_matrix(np.asarray(pi, float)))
+    i_m = np.asarray(_inertia_matrix(np.asarray(pi, float)))
     sigma = 0.5 * np.trace(i_m, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - i_m
     return np.linalg.eigvalsh(sigma)[..., 0] > 0
 
@@ -86,10 +93,32 @@ class InertiaPrior(NamedTuple):
 
 def inertia_prior(spacecraft: Spacecraft) -> InertiaPrior:
     """Prior of the inertia entries from a spacecraft model (see the module docstring)."""
-    mean = np.asarray(inertia_vector(spacecraft.inertia), float)
+    mean = np.asarray(_inertia_vector(np.asarray(spacecraft.inertia, float)), float)
     sd = np.concatenate([spacecraft.moi_uncertainty * mean[:3],
                          np.full(3, spacecraft.poi_uncertainty)])
     return InertiaPrior(mean, sd)
+
+
+def _pi_normals(key_pi, r, n: int):
+    """Standard normal draws (2n + 16, 6) of rejection round ``r`` of :func:`sample_prior`."""
+    return jax.random.normal(jax.random.fold_in(key_pi, r), (2 * n + 16, 6))
+
+
+@partial(jax.jit, static_argnums=(1, 2, 3, 4))
+def _prior_normals(key, n: int, n_files: int, n_noise: int, n_nu: int) -> dict:
+    """Every standard normal draw of :func:`sample_prior` in one XLA program (each drawn
+    eagerly would be a program of its own): the first rejection round's, ``H0``'s, ``T_N``'s,
+    the noise scales' (``n_noise`` files) and the nuisance's (``n_nu``), from the same keys as
+    always, so the draws are the same."""
+    key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
+    return {"key_pi": key_pi, "pi": _pi_normals(key_pi, 0, n),
+            "H0": jax.random.normal(key_h, (n, n_files, 3)),
+            "T_N": jax.random.normal(key_t, (n, n_files, 3)),
+            "noise": jax.random.normal(key_s, (n, n_noise)),
+            "nu": jax.random.normal(jax.random.fold_in(key_s, 1), (n, n_nu))}
+
+
+_pi_normals_jit = jax.jit(_pi_normals, static_argnums=2)
 
 
 def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: bool = True,
@@ -106,11 +135,12 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
     The same function gives the simulator and SBC their truth, so the model's prior and the
     truth's prior agree exactly.
     """
-    key_pi, key_h, key_t, key_s = jax.random.split(key, 4)
+    n_files_noise = 0 if log_noise is None else np.shape(log_noise)[0]
+    draws = _prior_normals(key, n, n_files, n_files_noise, 0 if layout is None else layout.size)
     kept = []
     total = 0
     for r in range(max_rounds):
-        z = np.asarray(jax.random.normal(jax.random.fold_in(key_pi, r), (2 * n + 16, 6)))
+        z = np.asarray(draws["pi"] if r == 0 else _pi_normals_jit(draws["key_pi"], r, n))
         pi = prior.mean + prior.sd * z
         pi = pi[is_physical(pi)]
         kept.append(pi)
@@ -122,18 +152,16 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
                          "spacecraft model's inertia and its uncertainties")
     pi = np.concatenate(kept)[:n]
     out = {name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)}
-    out["H0"] = H0_PRIOR_SD_NMS * np.asarray(jax.random.normal(key_h, (n, n_files, 3)))
+    out["H0"] = H0_PRIOR_SD_NMS * np.asarray(draws["H0"])
     if torque:
-        out["T_N"] = TORQUE_PRIOR_SD_NM * np.asarray(jax.random.normal(key_t, (n, n_files, 3)))
+        out["T_N"] = TORQUE_PRIOR_SD_NM * np.asarray(draws["T_N"])
     if log_noise is not None:
-        log_scale = NOISE_PRIOR_LOG_SD * np.asarray(
-            jax.random.normal(key_s, (n, np.shape(log_noise)[0])))
+        log_scale = NOISE_PRIOR_LOG_SD * np.asarray(draws["noise"])
         out["noise_scale"] = np.exp(log_scale)
         ls = np.asarray(log_noise) + log_scale[..., None]
         for i, name in enumerate(NOISE_NAMES):
             out[name] = np.exp(ls[..., i])
     if layout is not None:
-        nu = layout.sd * np.asarray(jax.random.normal(jax.random.fold_in(key_s, 1),
-                                                      (n, layout.size)))
+        nu = layout.sd * np.asarray(draws["nu"])
         out.update(split_nuisance(nu, layout))
     return out

@@ -111,12 +111,14 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
         ``rho4_attitude_mean`` rad/s, ``n_samples``), ``constant_data`` (baseline axis,
         windows, spin change, inertia prior).
     """
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
-    problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
-                           inertia=inertia, wheel=wheel, robust=robust,
-                           wheel_errors=wheel_errors)
+    with step("preparing: windows, Laplace approximation (mode and curvature)"):
+        problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
+                               inertia=inertia, wheel=wheel, robust=robust,
+                               wheel_errors=wheel_errors)
     kw = problem.model_kwargs
     coords = {"w_dim": np.arange(_DIM)}
     dims = {"w": ["w_dim"]}

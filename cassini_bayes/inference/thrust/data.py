@@ -192,13 +192,17 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         noise[e] = rate_noise_levels(tel)
         fired[np.unique(log.thruster)] = True
 
-    kw = dict(
-        t=jnp.asarray(t_a), omega=jnp.asarray(w_a), h_wheels=jnp.asarray(h_a),
-        mask=jnp.asarray(mask), t_on=jnp.asarray(ton), thruster=jnp.asarray(thr),
-        width=jnp.asarray(wid), slot=jnp.asarray(slot),
-        slot_offsets=jnp.arange(k_slots), wheel_cov=jnp.asarray(wcov),
-        log_noise_hat=jnp.asarray(np.log(noise)), nu_cols=jnp.asarray(nu_cols))
+    kw = jax.device_put(dict(
+        t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid, slot=slot,
+        slot_offsets=np.arange(k_slots), wheel_cov=wcov, log_noise_hat=np.log(noise),
+        nu_cols=nu_cols))
     return kw, fired, noise
+
+
+# every event's time-tag columns, one XLA program (run eagerly, the vmapped forward-mode
+# derivative compiles some seventy one-operation programs)
+_time_tag_columns = jax.jit(jax.vmap(time_tag_columns,
+                                     in_axes=(0, 0, 0, 0, 0, None, None, None, None, None)))
 
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -233,26 +237,23 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         i_mean, i_tril = np.asarray(inertia.mean, float), tril
     else:
         i_mean, i_tril = np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
-    kw = dict(
-        **kw, q_matrix=jnp.asarray(q_mat),
-        tau_delay_scale=jnp.asarray(tp.delay_scale),
-        tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
-        a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
-        c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))),
-        f_mu=jnp.asarray(np.log(spacecraft.thrust)), f_index=jnp.asarray(_thrust_index(mode)),
-        inertia_mean=jnp.asarray(i_mean), inertia_tril=jnp.asarray(i_tril),
-        nu_sd=jnp.asarray(layout.sd if robust else np.zeros(0)),
-    )
+    # device_put, not jnp.asarray (a compiled one-operation program per shape, every process;
+    # Python numbers stay weakly typed either way)
+    kw = dict(**kw, **jax.device_put(dict(
+        q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
+        a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
+        f_mu=np.log(spacecraft.thrust), f_index=_thrust_index(mode), inertia_mean=i_mean,
+        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0))))
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
-    kw["time_tag_cols"] = jax.vmap(
-        time_tag_columns, in_axes=(0, 0, 0, 0, 0, None, None, None, None, None))(
+    kw["time_tag_cols"] = _time_tag_columns(
         kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-        tuple(jnp.asarray(x) for x in tp.median()),
-        jnp.full(8, float(spacecraft.thrust)), kw["q_matrix"], jnp.asarray(sd_t))
+        tuple(jax.device_put(x) for x in tp.median()),
+        jax.device_put(np.full(8, float(spacecraft.thrust))), kw["q_matrix"],
+        jax.device_put(sd_t))
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
     centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
-    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
+    kw["centre"], kw["tril"] = jax.device_put(centre), jax.device_put(tril)
     return ThrustProblem(
         model_kwargs=kw, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
         inertia=inertia, inertia_fixed=i_fixed,

@@ -176,12 +176,14 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         A pulse acts on the first sample of an event (only its impulse after that sample is
         modelled: the event's free offset absorbs the rest).
     """
+    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
 
     settings = settings or SamplerSettings()
     inertia = resolve_inertia(inertia, spacecraft, robust)
-    problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust,
-                             wheel_errors=wheel_errors)
+    with step("preparing: events, Laplace approximation (mode and curvature)"):
+        problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust,
+                                 wheel_errors=wheel_errors)
     unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
@@ -203,12 +205,13 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
-    nu_draws = None
-    if robust:
-        nu_draws = _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem,
-                                       sample_inertia, coords, dims)
-    post = idata.posterior
-    d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
+    with step("nuisance draws and residuals"):
+        nu_draws = None
+        if robust:
+            nu_draws = _add_nuisance_draws(jax.random.fold_in(key, 7), idata, problem,
+                                           sample_inertia, coords, dims)
+        post = idata.posterior
+        d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
     replace_groups(idata, _data_groups(problem, d))
     for line in tau_identification(post, problem.tau):
         warnings.warn(line, TauIdentificationWarning, stacklevel=2)
