@@ -226,6 +226,7 @@ def build_model(spec: ModelSpec) -> SbcModel:
 # ------------------------------------------------------------------- vectorisable NUTS fit
 
 
+@functools.lru_cache(maxsize=32)
 def nuts_fit(model: Callable, names: tuple[str, ...], settings) -> Callable:
     """A pure ``fit(key, data) -> SbcFit``: the package's NUTS sampler, vmappable over data sets.
 
@@ -256,7 +257,8 @@ def nuts_fit(model: Callable, names: tuple[str, ...], settings) -> Callable:
     -------
     callable
         ``fit(key, kwargs) -> SbcFit`` with all post-warm-up draws, shape ``(chains, draws)``
-        each (the campaign thins them).
+        each (the campaign thins them); one object per (model, names, settings), so adapters
+        that share a sampler share its compiled programs.
     """
     from cassini_bayes.inference.runner import _sampler_for, _site_shapes
 
