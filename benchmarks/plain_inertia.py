@@ -18,13 +18,16 @@ Gaussian noise. With the wheel momentum on the data side, per sample and axis::
 a linear regression in ``π = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` (kg m²), ``H_0`` (N m s) and ``T_N``
 (N m). Priors — the ones ``cassini-bayes fit inertia`` states: ``π ~ Normal(predicted, knowledge
 sd)`` from the spacecraft model (``DATA.npz``: ``prior_mean``, ``prior_sd``), ``H_0 ~ Normal(0, 100
-N m s)``, ``T_N ~ Normal(0, 15 µN m)`` per axis; the noise, which the package models per sensor,
-is one ``σ ~ HalfNormal(1 N m s)`` here (a user's first model). The package's prior also truncates
-``π`` to physical tensors; the posterior lies far inside, so the truncation changes nothing here.
+N m s)``, ``T_N ~ Normal(0, 15 µN m)`` per axis, sampled in µN m (in N m its scale, 1e-5, is
+10⁸ times smaller than the inertia's and the samplers' initial points land ~10⁵ prior sd out: PyMC
+and NumPyro then did not converge in 300 warm-up steps); the noise, which the package models per
+sensor, is one ``σ ~ HalfNormal(1 N m s)`` here (a user's first model). The package's prior also
+truncates ``π`` to physical tensors; the posterior lies far inside, so that changes nothing here.
 
 Samplers at their defaults: PyMC ``pm.sample`` (NUTS, ``jitter+adapt_diag``, target acceptance
-0.8, chains in ``min(4, cores)`` processes); nutpie ``compile_pymc_model`` + ``sample`` (numba
-backend, chains in threads); NumPyro ``MCMC(NUTS(model))`` (diagonal mass matrix, target 0.8,
+0.8; chains in ``cores = os.cpu_count()`` processes — PyMC's own default takes half the CPUs,
+one on a 2-core machine, and would run the chains one after the other); nutpie
+``compile_pymc_model`` + ``sample`` (numba backend, chains in threads); NumPyro ``MCMC(NUTS(model))`` (diagonal mass matrix, target 0.8,
 ``init_to_uniform``), chains in parallel on four host devices and 64-bit floats (a careful user's
 two lines: without them the chains run one after the other in float32).
 
@@ -48,7 +51,7 @@ import numpy as np  # noqa: E402
 
 NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 H0_SD_NMS = 100.0
-TORQUE_SD_NM = 15e-6
+TORQUE_SD_UNM = 15.0          # µN m: the torque is sampled in the unit of its prior
 SIGMA_SCALE_NMS = 1.0
 
 
@@ -66,18 +69,19 @@ def pymc_model(d: dict):
     import pymc as pm
     import pytensor.tensor as pt
 
+    a, omega, dt = (pt.as_tensor(d[k]) for k in ("a", "omega", "dt"))
     with pm.Model() as model:
         pi = [pm.Normal(n, mu=m, sigma=s) for n, m, s in zip(NAMES, d["prior_mean"],
                                                               d["prior_sd"])]
         h0 = pm.Normal("H0", 0.0, H0_SD_NMS, shape=3)
-        t_n = pm.Normal("T_N", 0.0, TORQUE_SD_NM, shape=3)
+        t_n = 1e-6 * pm.Normal("T_N_uNm", 0.0, TORQUE_SD_UNM, shape=3)
         sigma = pm.HalfNormal("sigma", SIGMA_SCALE_NMS)
         xx, yy, zz, xy, xz, yz = pi
         inertia = pt.stack([pt.stack([xx, xy, xz]), pt.stack([xy, yy, yz]),
                             pt.stack([xz, yz, zz])])
-        body = pt.dot(d["omega"], inertia)                          # I ω_t, (n, 3)
-        inertial = (d["a"] * body[:, :, None]).sum(axis=1)          # A_tᵀ I ω_t
-        mu = h0[None, :] + d["dt"][:, None] * t_n[None, :] - inertial
+        body = pt.dot(omega, inertia)                               # I ω_t, (n, 3)
+        inertial = (a * body[:, :, None]).sum(axis=1)               # A_tᵀ I ω_t
+        mu = h0[None, :] + dt[:, None] * t_n[None, :] - inertial
         pm.Normal("h", mu=mu, sigma=sigma, observed=d["y"])
     return model
 
@@ -94,7 +98,8 @@ def numpyro_model(d: dict):
         pi = [numpyro.sample(n, dist.Normal(m, s)) for n, m, s in zip(NAMES, d["prior_mean"],
                                                                        d["prior_sd"])]
         h0 = numpyro.sample("H0", dist.Normal(0.0, H0_SD_NMS).expand([3]).to_event(1))
-        t_n = numpyro.sample("T_N", dist.Normal(0.0, TORQUE_SD_NM).expand([3]).to_event(1))
+        t_n = 1e-6 * numpyro.sample("T_N_uNm",
+                                    dist.Normal(0.0, TORQUE_SD_UNM).expand([3]).to_event(1))
         sigma = numpyro.sample("sigma", dist.HalfNormal(SIGMA_SCALE_NMS))
         xx, yy, zz, xy, xz, yz = pi
         inertia = jnp.stack([jnp.stack([xx, xy, xz]), jnp.stack([xy, yy, yz]),
@@ -113,7 +118,8 @@ def run_pymc(d, args) -> dict:
     model = pymc_model(d)
     with model:
         idata = pm.sample(draws=args.draws, tune=args.warmup, chains=args.chains,
-                          random_seed=args.seed, progressbar=False, compute_convergence_checks=False)
+                          cores=min(args.chains, os.cpu_count() or 1), random_seed=args.seed,
+                          progressbar=False, compute_convergence_checks=False)
     t_fit = time.perf_counter() - t
     return {"idata": idata, "t_fit": t_fit,
             "t_sample": float(idata.posterior.attrs["sampling_time"])}
