@@ -33,11 +33,12 @@ replaces a previous result — only a directory this package wrote
 
     cassini-bayes sbc thrust -n 208 --batch 4 --executor dask --workers 16 --out sbc-thrust
     cassini-bayes sbc rwa4 -n 208 --batch 4 --executor dask --workers 16 --out sbc-rwa4
-    cassini-bayes sbc inertia -n 208 --batch 4 --executor dask --workers 16 --out sbc-inertia
+    cassini-bayes sbc inertia -n 208 --batch 16 --out sbc-inertia
 
-(the thrust and RWA4 fits are not vectorised across replicates: a local Dask cluster of one
-single-threaded worker per core is how they use the machine; the same seed gives the same ranks
-with either executor).
+(the inertia and toy models are fitted by one vmapped NUTS program per batch; the thrust and
+RWA4 fits are not vectorised across replicates: a local Dask cluster of one single-threaded worker
+per core is how they use the machine; the same seed gives the same ranks with either executor).
+Measured throughput and the campaigns' results: ``docs/sbc/``.
 """
 
 from __future__ import annotations
