@@ -175,7 +175,6 @@ def fill_cache(system: str, sim: Path, spacecraft: Path, data: Path, work: Path)
 def run_once(system: str, sim: Path, spacecraft: Path, data: Path, work: Path, seed: int,
              rnd: int) -> dict:
     import arviz as az
-    import numpy as np
 
     cmd, env, rec = _command(system, sim, spacecraft, data, work, seed, rnd)
     load0 = _loadavg()
