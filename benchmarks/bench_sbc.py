@@ -1,18 +1,22 @@
 """Benchmark: SBC replicates per minute, per model and batch size, on this machine.
 
     python benchmarks/bench_sbc.py [--models toy,inertia,thrust,rwa4] [--batches 1,8,16,32]
-        [--fit-batch 4] [--repeat 1]
+        [--fit-batch 4] [--repeat 1] [--mcmc-loop 4]
 
 For each model and batch size ``B`` it runs :func:`cassini_bayes.analysis.campaign.run_batch`
 (the unit of work of every executor: prior draws, vmapped simulation, fits, ranks) once to compile,
 then ``--repeat`` more batches, and reports the warm throughput ``60 B / seconds-per-batch``
 (compilation excluded and reported separately). For the toy model it also times the obvious
 alternative, a loop of ``numpyro.infer.MCMC`` (same NUTS settings, chains vectorised,
-``jit_model_args=True``) over replicates, as the baseline of the ratio. The inertia, thrust and
-RWA4 adapters fit their replicates one after the other (``vectorized=False``), with batches of
-``--fit-batch`` replicates; their default sampler settings (300 warm-up, 300 draws, 2 chains) are
-the ones a campaign uses. Projected time of a campaign: ``N / rate`` minutes on one core-pair;
-with a Dask cluster of ``W`` workers roughly ``W`` times faster.
+``jit_model_args=True``) over replicates, as the baseline of the ratio. The vectorised adapters
+(``toy``, ``inertia``: one vmapped NUTS program per batch) run at each of ``--batches``; the
+thrust and RWA4 adapters fit their replicates one after the other (``vectorized=False``), with
+batches of ``--fit-batch`` replicates. Every adapter runs at its default sampler settings (for
+the simulator models 300 warm-up, 300 draws, 2 chains), the ones a campaign uses. Projected time
+of a campaign: ``N / rate`` minutes on this machine; with a Dask cluster of ``W`` workers on
+``W`` free cores roughly ``W`` times faster. The load average is printed beside each figure (the
+machine may be shared), and the process's CPU seconds per replicate: on a loaded machine
+``60 / CPU-seconds`` is about the rate the process reaches with a core of its own.
 """
 
 from __future__ import annotations
@@ -33,15 +37,16 @@ from cassini_bayes.analysis.campaign import run_batch  # noqa: E402
 from cassini_bayes.analysis.sbc_models import ModelSpec, build_model  # noqa: E402
 
 
-def time_batches(spec: ModelSpec, batch: int, repeat: int) -> tuple[float, float]:
-    """(compile-and-first-batch seconds, warm seconds per batch)."""
+def time_batches(spec: ModelSpec, batch: int, repeat: int) -> tuple[float, float, float]:
+    """(compile-and-first-batch seconds, warm wall seconds per batch, warm CPU seconds per batch
+    of this process, all its threads)."""
     t0 = time.perf_counter()
     run_batch(spec, 0, 0, batch)
     first = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for b in range(1, repeat + 1):
         run_batch(spec, 0, b, batch)
-    return first, (time.perf_counter() - t0) / repeat
+    return (first, (time.perf_counter() - t0) / repeat, (time.process_time() - c0) / repeat)
 
 
 def mcmc_loop_baseline(n: int) -> tuple[float, float]:
@@ -91,15 +96,18 @@ def main(argv=None) -> int:
     rows = []
     for name in args.models.split(","):
         spec = ModelSpec.make(name)
-        sizes = ([int(b) for b in args.batches.split(",")] if name == "toy"
+        sizes = ([int(b) for b in args.batches.split(",")] if build_model(spec).vectorized
                  else [args.fit_batch])
         for b in sizes:
-            first, warm = time_batches(spec, b, args.repeat)
+            load = os.getloadavg()[0]
+            first, warm, cpu = time_batches(spec, b, args.repeat)
             how = "vmapped batch" if build_model(spec).vectorized else "batch (fits one by one)"
             rows.append((name, f"{how} B={b}", first, warm / b, 60 * b / warm))
             print(f"{rows[-1][0]:8s} {rows[-1][1]:28s} first {first:7.1f} s   "
                   f"{warm / b:7.3f} s/replicate   {60 * b / warm:8.1f} replicates/min   "
-                  f"(200 replicates: {200 * warm / b / 60:6.1f} min)", flush=True)
+                  f"CPU {cpu / b:6.3f} s/replicate ({60 * b / cpu:7.1f} per CPU-minute)   "
+                  f"(200 replicates: {200 * warm / b / 60:6.1f} min)   load "
+                  f"{load:.1f}-{os.getloadavg()[0]:.1f}", flush=True)
         if name == "toy" and args.mcmc_loop:
             first, per = mcmc_loop_baseline(args.mcmc_loop)
             rows.append((name, "loop of numpyro MCMC", first, per, 60 / per))

@@ -1,9 +1,10 @@
 """SBC adapters of the thrust and RWA4 models (cassini_bayes.analysis.sbc_models).
 
 Cost on the shared 2-core machine: compiling the simulator and the sampler of either model takes
-about a minute before the first replicate; warm, a campaign runs ~20-40 thrust or RWA4 replicates
-per minute (benchmarks/bench_sbc.py). The fast tests below therefore check each adapter without
-fitting (its truth is drawn from the fit's stated prior, the truth reaches the simulator, the
+about a minute before the first replicate; warm, a campaign ran ~80 thrust and ~200 RWA4
+replicates per minute on the shared machine (benchmarks/bench_sbc.py,
+docs/sbc/inertia/README.md). The fast tests below therefore check each adapter without fitting
+(its truth is drawn from the fit's stated prior, the truth reaches the simulator, the
 mis-specification switches do what they say); every test that fits — the tiny end-to-end SBC
 through the campaign machinery with the detection of a mis-specified variant, and the
 ≥ 200-replicate campaigns — is marked slow.

@@ -9,15 +9,19 @@ through floating-point rounding of the vectorised programs; a resumed campaign m
 and the manifest check enforces it.) A last batch that runs past ``N`` is computed whole (the
 compiled program keeps one shape) and its extra replicates are ignored.
 
-Each batch: one ``jax.vmap`` draws the parameters and simulates the data of all ``B`` replicates;
-one ``jax.vmap`` of the model's sampler fits them (every replicate's chains advance in lock-step in
-one compiled program; see :func:`cassini_bayes.analysis.sbc_models.nuts_fit`); ranks of the truth
-among the thinned draws come from :func:`cassini_bayes.analysis.sbc.ranks`. Measured on the 2-core
-machine (``benchmarks/bench_sbc.py``, toy model, 2 chains × 150 + 150, shared with other jobs):
-B = 1, 8, 16, 32 give about 1050, 1010, 1570, 1380 replicates/min once compiled (lock-step NUTS
-wastes little on a model whose trees have similar depths; B = 16 is the default), against about 4
-replicates/min for a loop calling ``numpyro.infer.MCMC.run`` per replicate, which re-traces its
-sampler on every call.
+Each batch: the parameters and data of all ``B`` replicates are drawn and simulated in one
+``jax.vmap`` (or the model's own batched simulator); a vectorised model (toy, inertia) then fits
+them with one ``jax.vmap`` of the package's NUTS program over the ``B`` data sets (every
+replicate's chains advance in lock-step in one compiled program, compiled once per model and
+shapes; see :func:`cassini_bayes.analysis.sbc_models.nuts_fit`), after the model's per-replicate
+``prepare`` step when it has one (the inertia model's NumPy data preparation); the thrust and RWA4
+fits run one after the other. The draws are thinned by the model's ``thin`` and ranked
+(:func:`cassini_bayes.analysis.sbc.ranks`); each replicate's effective sample size before
+thinning is recorded beside its R-hat, to check that the ``L`` ranked draws are about as good as
+independent ones (``ESS ≥ L``; Talts et al. 2018, Sec. 5.1). Throughput (``benchmarks/
+bench_sbc.py``; ``docs/sbc/``): the toy model runs thousands of replicates a minute once compiled;
+the inertia model's replicates cost mostly their NumPy preparation, the sampler about 0.06 s a
+replicate at ``B = 16``.
 
 Checkpoints: ``WORKDIR/manifest.json`` records what the campaign is (model, options, scenario
 hash, seed, batch size, package version); every finished batch is written to
@@ -70,7 +74,7 @@ __all__ = [
 ]
 
 EXECUTORS = ("local", "dask")
-_FIELDS = ("index", "truth", "draws", "rank", "n_divergent", "rhat", "failed")
+_FIELDS = ("index", "truth", "draws", "rank", "n_divergent", "rhat", "ess", "failed")
 
 
 class BatchResult(NamedTuple):
@@ -90,6 +94,10 @@ class BatchResult(NamedTuple):
         Divergent transitions after warm-up, shape ``(B,)``.
     rhat : numpy.ndarray
         Split R-hat of the thinned chains (NaN when too short), shape ``(B, P)``.
+    ess : numpy.ndarray
+        Smallest effective sample size over the parameters, of the draws before thinning
+        (NaN when too short), shape ``(B,)``; ``ess ≥ L`` means the thinning left draws about as
+        good as independent ones.
     failed : numpy.ndarray
         Non-finite truth or draws, shape ``(B,)``.
     """
@@ -100,6 +108,7 @@ class BatchResult(NamedTuple):
     rank: np.ndarray
     n_divergent: np.ndarray
     rhat: np.ndarray
+    ess: np.ndarray
     failed: np.ndarray
 
 
@@ -110,7 +119,7 @@ class CampaignResult(NamedTuple):
     ----------
     names : tuple of str
         Parameter names (the ``P`` columns).
-    truth, draws, rank, n_divergent, rhat, failed : numpy.ndarray
+    truth, draws, rank, n_divergent, rhat, ess, failed : numpy.ndarray
         As in :class:`BatchResult`, stacked over replicates ``0..N−1``.
     converged : numpy.ndarray
         No divergence and every R-hat ≤ the model's ``rhat_max``, shape ``(N,)``.
@@ -130,6 +139,7 @@ class CampaignResult(NamedTuple):
     rank: np.ndarray
     n_divergent: np.ndarray
     rhat: np.ndarray
+    ess: np.ndarray
     failed: np.ndarray
     converged: np.ndarray
     n_draws: int
@@ -170,23 +180,61 @@ def _programs(spec: ModelSpec) -> tuple[SbcModel, Callable, Callable, Callable]:
             truth = np.stack([np.asarray(params[n], dtype=np.float64) for n in names], axis=1)
             return truth, data
 
-    return (model, simulate_batch, _fit_program(model.fit, names, model.vectorized),
-            _rank_program())
+    return model, simulate_batch, _fit_program(model), _rank_program()
 
 
 @functools.lru_cache(maxsize=16)
-def _fit_program(fit: Callable, names: tuple[str, ...], vectorized: bool) -> Callable:
-    """``(keys (B,), data (B, ...)) -> (draws (B, P, L), chains (B, P, C, D), n_div (B,))``."""
+def _vmapped_fit(fit: Callable, names: tuple[str, ...]) -> Callable:
+    """One compiled program ``(keys (B,), data (B, ...)) -> (chains (B, P, C, D), n_div (B,))``:
+    ``jax.vmap`` of a pure ``fit`` over replicates (cached by ``fit``, so two specs sharing a
+    sampler share the compilation)."""
 
     def fit_one(key, data):
         _, _, k_fit, _ = jax.random.split(key, 4)
         out = fit(k_fit, data)
-        chains = jnp.stack([out.draws[n] for n in names])  # (P, chains, draws)
-        draws = jnp.reshape(chains, (chains.shape[0], -1))  # (P, chains * draws)
-        return draws, chains, jnp.asarray(out.n_divergent)
+        return jnp.stack([out.draws[n] for n in names]), jnp.asarray(out.n_divergent)
 
-    if vectorized:
-        return jax.jit(jax.vmap(fit_one))
+    return jax.jit(jax.vmap(fit_one))
+
+
+def _warn_failed(e: Exception) -> None:
+    warnings.warn(f"SBC replicate fit failed ({type(e).__name__}: {e}); recorded as a failure",
+                  RuntimeWarning, stacklevel=3)
+
+
+def _prepared(prepare: Callable, data, b: int) -> tuple[Any, np.ndarray]:
+    """``prepare`` of each replicate of a batch, stacked; a replicate whose preparation raises is
+    given another replicate's data (one shape for the compiled fit) and flagged ``False``."""
+    out: list = [None] * b
+    for i in range(b):
+        try:
+            out[i] = prepare(jax.tree.map(lambda a, i=i: np.asarray(a[i]), data))
+        except Exception as e:  # noqa: BLE001 - any failure of one replicate is recorded
+            _warn_failed(e)
+    ok = np.array([o is not None for o in out])
+    if not ok.any():
+        raise RuntimeError("every replicate of the batch failed; see the warnings above")
+    good = out[int(np.argmax(ok))]
+    out = [o if o is not None else good for o in out]
+    return jax.tree.map(lambda *xs: jnp.stack([jnp.asarray(x) for x in xs]), *out), ok
+
+
+def _fit_program(model: SbcModel) -> Callable:
+    """``(keys (B,), data (B, ...)) -> (chains (B, P, C, D), n_div (B,))``, all post-warm-up
+    draws; a failed replicate's are NaN."""
+    names = model.parameter_names
+    if model.vectorized:
+        vmapped = _vmapped_fit(model.fit, names)
+        if model.prepare is None:
+            return vmapped
+
+        def fit_prepared(keys, data):
+            stacked, ok = _prepared(model.prepare, data, keys.shape[0])
+            chains, n_div = vmapped(keys, stacked)
+            nan = np.where(ok[:, None, None, None], 0.0, np.nan)
+            return np.asarray(chains) + nan, np.where(ok, np.asarray(n_div), 0)
+
+        return fit_prepared
 
     def fit_batch(keys, data):
         # One replicate whose fit raises (a numerical failure, an unidentifiable draw) must not
@@ -194,17 +242,17 @@ def _fit_program(fit: Callable, names: tuple[str, ...], vectorized: bool) -> Cal
         outs: list = [None] * keys.shape[0]
         for i in range(keys.shape[0]):
             try:
-                outs[i] = fit_one(keys[i], jax.tree.map(lambda a, i=i: a[i], data))
+                _, _, k_fit, _ = jax.random.split(keys[i], 4)
+                out = model.fit(k_fit, jax.tree.map(lambda a, i=i: a[i], data))
+                outs[i] = (np.stack([np.asarray(out.draws[n]) for n in names]),
+                           int(out.n_divergent))
             except Exception as e:  # noqa: BLE001 - any failure of one fit is recorded
-                warnings.warn(f"SBC replicate fit failed ({type(e).__name__}: {e}); "
-                              "recorded as a failure", RuntimeWarning, stacklevel=2)
+                _warn_failed(e)
         good = next((o for o in outs if o is not None), None)
         if good is None:
             raise RuntimeError("every fit of the batch failed; see the warnings above")
-        nan = tuple(jnp.full_like(x, jnp.nan, dtype=jnp.float64) for x in good[:2]) + (
-            jnp.asarray(0),)
-        outs = [o if o is not None else nan for o in outs]
-        return tuple(jnp.stack([jnp.asarray(o[k]) for o in outs]) for k in range(3))
+        outs = [o if o is not None else (np.full_like(good[0], np.nan), 0) for o in outs]
+        return np.stack([o[0] for o in outs]), np.array([o[1] for o in outs])
 
     return fit_batch
 
@@ -229,28 +277,50 @@ def _split_rhat(chains: np.ndarray) -> np.ndarray:
         return np.asarray(split_gelman_rubin(np.transpose(chains, (2, 3, 0, 1))))
 
 
+def _min_ess(chains: np.ndarray) -> np.ndarray:
+    """Smallest effective sample size over the parameters per replicate, from the ``(B, P,
+    chains, draws)`` draws before thinning (NumPyro's estimator: Geyer's initial monotone
+    sequence over the chains' autocorrelations, Stan's definition); NaN when too short."""
+    from numpyro.diagnostics import effective_sample_size
+
+    b, _, c, d = chains.shape
+    if d < 4:
+        return np.full(b, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ess = np.asarray(effective_sample_size(np.transpose(chains, (2, 3, 0, 1))))
+    return ess.min(axis=1)
+
+
 def run_batch(spec: ModelSpec, seed: int, batch_index: int, batch_size: int) -> dict[str, Any]:
     """Simulate, fit and rank replicates ``batch_index·B … (batch_index+1)·B − 1``.
 
     This is the unit of work of every executor (a Dask task runs exactly this); its arguments
-    and result are plain, picklable data.
+    and result are plain, picklable data. The fits' draws are thinned by the model's
+    ``settings["thin"]`` (default 1) before ranking: ``L = chains · ⌊draws / thin⌋`` draws,
+    every ``thin``-th of each chain; the effective sample size of the draws before thinning is
+    recorded, and ``ess ≥ L`` says the ``L`` ranked draws are about as good as independent ones
+    (Talts et al. 2018, Sec. 5.1: ranks among autocorrelated draws are not uniform).
 
     Returns
     -------
     dict
         The fields of :class:`BatchResult` as NumPy arrays.
     """
-    _, simulate_batch, fit_batch, rank_batch = _programs(spec)
+    model, simulate_batch, fit_batch, rank_batch = _programs(spec)
+    thin = int(model.settings.get("thin", 1))
     index = np.arange(batch_index * batch_size, (batch_index + 1) * batch_size, dtype=np.int64)
     keys = replicate_keys(seed, index)
     truth, data = simulate_batch(keys)
-    draws, chains, n_div = fit_batch(keys, data)
-    rank = np.asarray(rank_batch(keys, draws, truth))
-    truth, draws = np.asarray(truth), np.asarray(draws)
+    chains, n_div = fit_batch(keys, data)
+    chains = np.asarray(chains, dtype=np.float64)
+    kept = chains[..., thin - 1::thin]
+    draws = kept.reshape(kept.shape[:2] + (-1,))
+    rank = np.asarray(rank_batch(keys, jnp.asarray(draws), truth))
+    truth = np.asarray(truth)
     failed = ~(np.isfinite(truth).all(axis=1) & np.isfinite(draws).all(axis=(1, 2)))
     rank = np.where(failed[:, None], -1, rank)
     return BatchResult(index, truth, draws, rank, np.asarray(n_div, dtype=np.int64),
-                       _split_rhat(np.asarray(chains)), failed)._asdict()
+                       _split_rhat(kept), _min_ess(chains), failed)._asdict()
 
 
 # ------------------------------------------------------------------------------ checkpoints
@@ -456,6 +526,6 @@ def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike,
         rhat_ok = np.all(np.nan_to_num(cat["rhat"], nan=1.0) <= model.rhat_max, axis=1)
     converged = (cat["n_divergent"] == 0) & rhat_ok & ~cat["failed"]
     return CampaignResult(model.parameter_names, cat["truth"], cat["draws"], cat["rank"],
-                          cat["n_divergent"], cat["rhat"], cat["failed"], converged,
+                          cat["n_divergent"], cat["rhat"], cat["ess"], cat["failed"], converged,
                           int(cat["draws"].shape[-1]), int(seed), int(batch_size), len(todo),
                           dict(model.settings))

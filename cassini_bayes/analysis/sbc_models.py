@@ -11,18 +11,22 @@ in :class:`SbcModel`:
     Synthetic data (any pytree of arrays with fixed shapes, e.g. a ``Telemetry``) for those
     parameters, from the package's simulator.
 ``fit(key, data) -> SbcFit``
-    Posterior draws of every named parameter, shape ``(chains, draws)`` each, **already thinned**
-    so the draws are close to independent (Talts et al. 2018, Sec. 5.1), plus the number of
-    divergent transitions after warm-up.
+    All post-warm-up posterior draws of every named parameter, shape ``(chains, draws)`` each,
+    plus the number of divergent transitions after warm-up. The campaign thins them by the
+    model's ``settings["thin"]`` (so the ``L`` ranked draws are close to independent, Talts et al.
+    2018, Sec. 5.1) and checks that thinning against each replicate's effective sample size.
 ``parameter_names``
     The scalar parameters to rank, in a fixed order.
 
-When ``vectorized`` is true all three functions are pure JAX (jit- and vmap-able, no Python
-control flow on values): a batch of replicates is then simulated with one ``jax.vmap`` and fitted
-with one ``jax.vmap`` of the sampler, every replicate's chains advancing in lock-step in one
-compiled program (see :func:`nuts_fit`). A model whose fit is not traceable (e.g. one that calls
-``numpyro.infer.MCMC`` with Python-side checks) sets ``vectorized=False``; its replicates are then
-simulated in a vmapped batch and fitted one after the other.
+When ``vectorized`` is true ``fit`` is pure JAX (jit- and vmap-able, no Python control flow on
+values): a batch of replicates is fitted with one ``jax.vmap`` of the package's NUTS program,
+every replicate's chains advancing in lock-step in one compiled program (see :func:`nuts_fit`).
+A model may then also give ``prepare(data_i) -> fit data``, a per-replicate step that is not
+traceable (the inertia model's NumPy data preparation): the campaign runs it replicate by
+replicate and stacks its outputs, which must have the same shapes for every replicate, before the
+one vmapped fit. A model whose fit is not traceable at all (the thrust and RWA4 fits, whose
+Laplace steps run in NumPy/SciPy between compiled programs) sets ``vectorized=False``; its
+replicates are simulated in a vmapped batch and fitted one after the other.
 
 Adapters are built by name from a :class:`ModelSpec` (plain data: the model name, an optional
 scenario file's *text* and options), so that a Dask worker on another machine can rebuild the same
@@ -43,6 +47,7 @@ Registered here (the simulator models' default scenarios are shipped files under
     the simulator (:func:`cassini_bayes.simulate.run.simulate_batch`); truth from the posterior's
     own prior (:func:`cassini_bayes.inference.inertia.sample_prior`). ``--scenario`` takes a
     simulator scenario TOML (default :data:`INERTIA_SCENARIO`: three one-axis slews, one hour).
+    Vectorised: the package's data preparation per replicate, then one vmapped NUTS program.
 ``thrust``
     Mean thrust and pulse time constants (:func:`cassini_bayes.inference.thrust.fit_thrust`,
     mode ``mean``) on a short RCS-controlled wheel-biasing event (:data:`THRUST_SCENARIO`); truth
@@ -55,9 +60,12 @@ Registered here (the simulator models' default scenarios are shipped files under
     uniform on the sphere (or the cone prior) into ``TruthParams.wheel_axes`` and the inertia
     from its prior. Mis-specification: ``rwa4_inertia_factor``.
 
-The thrust and RWA4 fits prepare their data (a Laplace step) in NumPy/SciPy and are not
-traceable: like ``inertia`` they run one replicate after the other (``vectorized=False``), and a
-campaign uses many cores through the Dask executor (one single-threaded worker per core).
+The thrust and RWA4 fits prepare their data (a Laplace step) in NumPy/SciPy inside
+``fit_thrust``/``fit_rwa4`` and are not traceable: they run one replicate after the other
+(``vectorized=False``), and a campaign uses many cores through the Dask executor (one
+single-threaded worker per core). Vectorising them as ``inertia`` is — their preparation as
+``prepare``, their NumPyro model through :func:`nuts_fit` — needs those steps as functions of their
+own in :mod:`cassini_bayes.inference.thrust` and :mod:`cassini_bayes.inference.rwa4`.
 """
 
 from __future__ import annotations
@@ -71,6 +79,7 @@ from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
+from jax import lax
 
 from cassini_bayes._paths import SCENARIOS_DIR
 from cassini_bayes.errors import InputError
@@ -93,7 +102,8 @@ class SbcFit(NamedTuple):
     Attributes
     ----------
     draws : dict of str to jax.Array
-        ``name -> (chains, draws)`` thinned posterior draws, in the units of ``prior_sample``.
+        ``name -> (chains, draws)`` post-warm-up posterior draws (not thinned), in the units of
+        ``prior_sample``.
     n_divergent : jax.Array
         Number of divergent transitions after warm-up (all chains), integer scalar.
     """
@@ -117,9 +127,10 @@ class SbcModel:
     simulate : callable
         ``(key, params) -> data``.
     fit : callable
-        ``(key, data) -> SbcFit``.
+        ``(key, data) -> SbcFit``; with ``prepare``, ``data`` is what ``prepare`` returns.
     vectorized : bool
-        Whether the three functions are pure JAX and can be vmapped over replicates.
+        Whether ``fit`` is pure JAX and is vmapped over replicates (and, without
+        ``simulate_batch``, ``prior_sample`` and ``simulate`` too).
     settings : dict
         Sampler and scenario settings recorded in the run's ``summary.json``/``config.toml``.
     rhat_max : float
@@ -130,6 +141,10 @@ class SbcModel:
         sampler is not traceable (e.g. rejection sampling in NumPy) draws its truths here and
         calls the simulator's own vmapped batch. Default: ``jax.vmap`` of ``prior_sample`` and
         ``simulate``. Either way replicate ``i``'s truth and data depend on its keys only.
+    prepare : callable, optional
+        ``(data of one replicate, NumPy) -> fit data`` (a pytree of arrays of the same shapes for
+        every replicate), run replicate by replicate before a vectorised ``fit``; an exception
+        there marks that replicate failed.
     """
 
     name: str
@@ -141,6 +156,7 @@ class SbcModel:
     settings: Mapping[str, Any] = field(default_factory=dict)
     rhat_max: float = 1.05
     simulate_batch: Callable[[jax.Array, jax.Array], tuple[dict[str, Any], Any]] | None = None
+    prepare: Callable[[Any], Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -211,73 +227,65 @@ def build_model(spec: ModelSpec) -> SbcModel:
 # ------------------------------------------------------------------- vectorisable NUTS fit
 
 
-def nuts_fit(model: Callable, example_data: Any, names: tuple[str, ...], *,
-             num_warmup: int, num_draws: int, num_chains: int = 2, thin: int = 1,
-             init_radius: float = 2.0, target_accept_prob: float = 0.8,
-             max_tree_depth: int = 10, dense_mass: bool = False) -> Callable:
-    """A pure ``fit(key, data) -> SbcFit`` running NumPyro's NUTS, vmappable over replicates.
+@functools.lru_cache(maxsize=32)
+def nuts_fit(model: Callable, names: tuple[str, ...], settings) -> Callable:
+    """A pure ``fit(key, data) -> SbcFit``: the package's NUTS sampler, vmappable over data sets.
 
-    NumPyro's functional sampler (:func:`numpyro.infer.hmc.hmc`, the core behind ``MCMC``) is
-    driven by a ``lax.scan``; the model's data enter through ``potential_fn_gen`` so the same
-    compiled program serves every replicate. ``jax.vmap`` of this function over replicates runs
-    every replicate's chains in lock-step — the "vectorised chains across replicates" a campaign
-    uses. Chains start uniformly in ``[-init_radius, init_radius]`` of the unconstrained space
-    (NumPyro's ``init_to_uniform``) and adapt step size and a diagonal (or dense) mass matrix
-    (Stan's windowed adaptation) during ``num_warmup`` steps.
+    This is not a second sampler: it calls the one compiled NUTS program of
+    :mod:`cassini_bayes.inference.runner` (its windowed step-size and mass-matrix adaptation,
+    warm-up and draws in one XLA program, chains vectorised) and sets up its initial values and
+    keys exactly as :func:`~cassini_bayes.inference.runner.run_nuts` does, so ``fit(key, kwargs)``
+    draws what ``run_nuts(key, model, model_kwargs=kwargs, settings=settings)`` draws (tested for
+    the inertia model to rounding: vmapping over replicates may reorder floating-point
+    reductions). What ``run_nuts`` adds — the InferenceData, its prior group, the ArviZ
+    diagnostics — is exactly what a campaign does not need per replicate; leaving it out makes the
+    fit a pure JAX function, and ``jax.vmap`` of it over replicates runs every replicate's chains
+    in lock-step in one compiled program (one compilation per model and shapes; see
+    :mod:`cassini_bayes.analysis.campaign`).
 
     Parameters
     ----------
     model : callable
-        NumPyro model ``model(data)``; ``names`` are sample or deterministic sites of it.
-    example_data : pytree
-        Data of the shapes the fit will see (used once, to find the parameter layout).
+        NumPyro model taking its data as keyword arguments, with unconstrained latent sites (the
+        runner's contract); ``names`` are sample or deterministic sites of it, each a scalar.
     names : tuple of str
-        Sites to return, each a scalar.
-    num_warmup, num_draws, num_chains, thin : int
-        Warm-up steps, kept steps per chain, chains, thinning (keeps every ``thin``-th draw).
+        Sites to return.
+    settings : cassini_bayes.inference.runner.SamplerSettings
+        Chains, warm-up, draws, mass matrix, target acceptance, tree depth (``chain_method`` and
+        ``progress`` are ignored: chains are vectorised, no progress bar).
 
     Returns
     -------
     callable
-        ``fit(key, data) -> SbcFit`` with draws of shape ``(num_chains, num_draws // thin)``.
+        ``fit(key, kwargs) -> SbcFit`` with all post-warm-up draws, shape ``(chains, draws)``
+        each (the campaign thins them); one object per (model, names, settings), so adapters
+        that share a sampler share its compiled programs.
     """
-    from numpyro.infer.hmc import hmc
-    from numpyro.infer.util import initialize_model
+    from cassini_bayes.inference.runner import _sampler_for, _site_shapes
 
-    info = initialize_model(jax.random.key(0), model, model_args=(example_data,),
-                            dynamic_args=True)
-    potential_fn_gen, postprocess_fn_gen = info.potential_fn, info.postprocess_fn
-    z_layout = jax.tree.map(jnp.shape, info.param_info.z)
-    leaves, treedef = jax.tree.flatten(z_layout, is_leaf=lambda x: isinstance(x, tuple))
+    settings = settings._replace(chain_method="vectorized", progress=False)
+    sampler = _sampler_for(model, settings, "vectorized")
 
-    def init_z(key):
-        keys = jax.random.split(key, len(leaves))
-        vals = [jax.random.uniform(k, s, minval=-init_radius, maxval=init_radius)
-                for k, s in zip(keys, leaves)]
-        return jax.tree.unflatten(treedef, vals)
+    def fit(key, kwargs):
+        key_mcmc, _, key_init = jax.random.split(key, 3)  # as run_nuts: sampler, prior, init
+        shapes = _site_shapes(model, kwargs)
+        init_keys = jax.random.split(key_init, len(shapes))
+        init_z = {name: jax.random.uniform(k, (settings.chains,) + shp, minval=-2.0, maxval=2.0)
+                  for k, (name, shp) in zip(init_keys, sorted(shapes.items()))}
+        state = sampler.start(jax.random.split(key_mcmc, settings.chains), init_z, kwargs)
+        # the runner's loop (``advance`` called piece by piece from Python) as one scan, so that
+        # the whole fit is one traced function that vmaps over replicates
+        n_pieces = (settings.warmup + settings.draws) // sampler.piece
+        _, rec = lax.scan(lambda st, _: sampler.advance(st, kwargs), state, None,
+                          length=n_pieces)
 
-    def fit(key, data):
-        init_kernel, sample_kernel = hmc(potential_fn_gen=potential_fn_gen, algo="NUTS")
+        def kept(x):  # (pieces, chains, piece, ...) -> the draws, (chains, draws, ...)
+            x = jnp.moveaxis(x, 0, 1)
+            return x.reshape((x.shape[0], -1) + x.shape[3:])[:, settings.warmup:]
 
-        def chain(key):
-            key_init, key_run = jax.random.split(key)
-            state = init_kernel(init_z(key_init), num_warmup, model_args=(data,),
-                                rng_key=key_run, target_accept_prob=target_accept_prob,
-                                max_tree_depth=max_tree_depth, dense_mass=dense_mass)
-
-            def step(s, _):
-                s = sample_kernel(s, model_args=(data,))
-                return s, (s.z, s.diverging)
-
-            # one scan over warm-up and sampling: the NUTS kernel is compiled once
-            _, (zs, diverging) = jax.lax.scan(step, state, None, length=num_warmup + num_draws)
-            zs = jax.tree.map(lambda a: a[num_warmup + thin - 1::thin], zs)
-            diverging = diverging[num_warmup:]
-            values = jax.vmap(postprocess_fn_gen(data))(zs)
-            return {n: values[n] for n in names}, jnp.sum(diverging)
-
-        draws, diverging = jax.vmap(chain)(jax.random.split(key, num_chains))
-        return SbcFit(draws, jnp.sum(diverging))
+        rec = jax.tree.map(kept, rec)
+        samples, stats = sampler.finish(rec[0], rec[1:], kwargs)
+        return SbcFit({n: samples[n] for n in names}, jnp.sum(stats["diverging"]))
 
     return fit
 
@@ -292,7 +300,9 @@ def toy_model(*, n_obs: int = 20, likelihood_noise_factor: float = 1.0,
 
     ``y_i = alpha + beta x_i + sigma ε_i`` on ``x`` evenly spaced in ``[-1, 1]`` (dimensionless),
     priors ``alpha, beta ~ Normal(0, 1)``, ``sigma ~ LogNormal(log 0.5, 0.3)``. The posterior is
-    fitted by NUTS (:func:`nuts_fit`); ``2 · num_draws / thin`` draws are ranked.
+    fitted by the package's NUTS (:func:`nuts_fit`; ``sigma`` sampled as ``log sigma``, the
+    runner's unconstrained coordinates, with a diagonal mass matrix and target acceptance 0.8);
+    ``num_chains · num_draws / thin`` draws are ranked.
 
     Two switches mis-specify it on purpose (SBC must then fail): the fit's likelihood uses
     ``likelihood_noise_factor · sigma``, the simulator ``simulator_noise_factor · sigma``. With
@@ -312,9 +322,10 @@ def toy_model(*, n_obs: int = 20, likelihood_noise_factor: float = 1.0,
 
     def simulate(key, params):
         mean = params["alpha"] + params["beta"] * x
-        return mean + simulator_noise_factor * params["sigma"] * jax.random.normal(key, x.shape)
+        noise = simulator_noise_factor * params["sigma"] * jax.random.normal(key, x.shape)
+        return {"y": mean + noise}
 
-    fit = _toy_fit(n_obs, likelihood_noise_factor, num_warmup, num_draws, num_chains, thin)
+    fit = _toy_fit(n_obs, likelihood_noise_factor, num_warmup, num_draws, num_chains)
     settings = {"n_obs": n_obs, "likelihood_noise_factor": likelihood_noise_factor,
                 "simulator_noise_factor": simulator_noise_factor, "num_warmup": num_warmup,
                 "num_draws": num_draws, "num_chains": num_chains, "thin": thin}
@@ -326,7 +337,8 @@ _TOY_LOG_SIGMA_SCALE = 0.3
 
 
 @functools.lru_cache(maxsize=8)
-def _toy_fit(n_obs, likelihood_noise_factor, num_warmup, num_draws, num_chains, thin):
+def _toy_numpyro_model(n_obs: int, likelihood_noise_factor: float) -> Callable:
+    """The toy model's NumPyro model ``model(y)`` (one object per setting: compiled once)."""
     import numpyro
     import numpyro.distributions as dist
 
@@ -335,11 +347,26 @@ def _toy_fit(n_obs, likelihood_noise_factor, num_warmup, num_draws, num_chains, 
     def model(y):
         alpha = numpyro.sample("alpha", dist.Normal(0.0, 1.0))
         beta = numpyro.sample("beta", dist.Normal(0.0, 1.0))
-        sigma = numpyro.sample("sigma", dist.LogNormal(_TOY_LOG_SIGMA_LOC, _TOY_LOG_SIGMA_SCALE))
+        log_sigma = numpyro.sample("log_sigma", dist.Normal(_TOY_LOG_SIGMA_LOC,
+                                                            _TOY_LOG_SIGMA_SCALE))
+        sigma = numpyro.deterministic("sigma", jnp.exp(log_sigma))
         numpyro.sample("y", dist.Normal(alpha + beta * x, likelihood_noise_factor * sigma), obs=y)
 
-    return nuts_fit(model, jnp.zeros(n_obs), ("alpha", "beta", "sigma"), num_warmup=num_warmup,
-                    num_draws=num_draws, num_chains=num_chains, thin=thin)
+    return model
+
+
+def _toy_settings(num_warmup: int, num_draws: int, num_chains: int):
+    """The toy model's NUTS settings: a diagonal mass matrix, target acceptance 0.8."""
+    from cassini_bayes.inference.runner import SamplerSettings
+
+    return SamplerSettings(chains=num_chains, warmup=num_warmup, draws=num_draws,
+                           dense_mass=False, target_accept=0.8)
+
+
+@functools.lru_cache(maxsize=8)
+def _toy_fit(n_obs, likelihood_noise_factor, num_warmup, num_draws, num_chains):
+    return nuts_fit(_toy_numpyro_model(n_obs, likelihood_noise_factor), ("alpha", "beta", "sigma"),
+                    _toy_settings(num_warmup, num_draws, num_chains))
 
 
 _TOY_KEYS = {"n_obs", "likelihood_noise_factor", "simulator_noise_factor", "num_warmup",
@@ -373,9 +400,14 @@ def _inertia(spec: ModelSpec) -> SbcModel:
     (the stated prior of the posterior, rejection of non-physical tensors) with the scenario's
     ``[prior]`` spacecraft, and a constant inertial torque from its ``T_N`` prior; the rest of the
     truth (wheels, noise levels) is the scenario's. Data: the scenario's slews through
-    :func:`cassini_bayes.simulate.run.simulate_batch` (one vmapped call per batch). Fit:
-    :func:`cassini_bayes.inference.inertia.fit_inertia` per replicate (its Laplace centring is
-    NumPy, so fits run one after the other; the compiled sampler is reused). Options:
+    :func:`cassini_bayes.simulate.run.simulate_batch` (one vmapped call per batch). Fit: the
+    idealised model of :func:`cassini_bayes.inference.inertia.fit_inertia` (``robust=False``: the
+    simulator draws no sensor or wheel errors), in its two steps: per replicate the package's own
+    data preparation :func:`~cassini_bayes.inference.inertia.prepare_inertia` (empirical-Bayes GLS,
+    sufficient statistics, Laplace whitening; NumPy), then one ``jax.vmap`` over the batch of the
+    package's NUTS program on those statistics (:func:`nuts_fit` on
+    :func:`~cassini_bayes.inference.inertia.inertia_model`): the same draws ``fit_inertia`` gives
+    with the same key, all replicates of a batch in one compiled call. Options:
     ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``torque`` (True), and
     ``wheel_inertia_factor`` (1.0): the simulator's wheel spin inertias times this factor while
     the fit keeps the model's — a deliberate mis-specification (the wheel/spacecraft inertia
@@ -383,26 +415,19 @@ def _inertia(spec: ModelSpec) -> SbcModel:
     """
     import numpy as np
 
-    from cassini_bayes.inference.inertia import INERTIA_NAMES, fit_inertia, inertia_prior
+    from cassini_bayes.inference.inertia import (INERTIA_NAMES, inertia_model, inertia_prior,
+                                                 prepare_inertia)
     from cassini_bayes.inference.inertia import sample_prior as inertia_sample_prior
-    from cassini_bayes.inference.runner import SamplerSettings
-    from cassini_bayes.simulate.run import TruthParams, simulate_batch, truth_params
-    from cassini_bayes.telemetry import Telemetry
+    from cassini_bayes.simulate.run import simulate_batch, truth_params
 
     scenario = _scenario(spec, INERTIA_SCENARIO)
     opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "torque": True,
             "wheel_inertia_factor": 1.0, **dict(spec.options)}
-    unknown = set(opts) - _INERTIA_KEYS
-    if unknown:
-        raise InputError(f"unknown inertia SBC option(s) {sorted(unknown)}; allowed: "
-                         f"{sorted(_INERTIA_KEYS)}")
+    _check_options("inertia", opts, _INERTIA_KEYS)
     names = tuple(INERTIA_NAMES)
     prior = inertia_prior(scenario.prior)
     base = truth_params(scenario)
     torque = bool(opts["torque"])
-    settings = SamplerSettings(chains=opts["num_chains"], warmup=opts["num_warmup"],
-                               draws=opts["num_draws"], chain_method="vectorized")
-    thin = int(opts["thin"])
 
     def draw_truth(key):
         d = inertia_sample_prior(key, prior, 1, torque=torque)
@@ -418,39 +443,24 @@ def _inertia(spec: ModelSpec) -> SbcModel:
         drawn = [draw_truth(k) for k in prior_keys]
         pi = np.stack([d[0] for d in drawn])
         tq = np.stack([d[1] for d in drawn])
-        b = pi.shape[0]
-
-        def tile(a):
-            return jnp.broadcast_to(jnp.asarray(a), (b,) + jnp.shape(a))
-
-        # The scenario's truth for everything else, tiled over the batch (any field the
-        # simulator adds later is carried along unchanged).
-        tiled = TruthParams(*(tile(x) for x in base))
+        tiled = _tiled_truth(base, pi.shape[0])
         truth = tiled._replace(
             inertia=jnp.asarray(pi), torque_inertial_nm=jnp.asarray(tq),
             wheel_inertias=tiled.wheel_inertias * float(opts["wheel_inertia_factor"]))
-        arrays = simulate_batch(sim_keys, scenario, truth)
-        return dict(zip(names, pi.T)), arrays
+        return dict(zip(names, pi.T)), simulate_batch(sim_keys, scenario, truth)
 
     def simulate(key, params):
         raise NotImplementedError("the inertia adapter simulates in batches (simulate_batch)")
 
-    def fit(key, arrays):
-        tel = Telemetry(t=np.asarray(arrays.t), q=np.asarray(arrays.q_meas),
-                        omega=np.asarray(arrays.omega_meas),
-                        wheel_rates=np.asarray(arrays.wheel_rates_meas),
-                        wheel_names=scenario.wheel_names, on_times=None,
-                        source="<sbc inertia replicate>")
-        post = fit_inertia(key, [tel], scenario.prior, torque=torque, robust=False,
-                           settings=settings, prior_draws=0)
-        idata = post.idata
-        draws = {n: jnp.asarray(idata.posterior[n].values[:, thin - 1::thin]) for n in names}
-        n_div = jnp.asarray(int(idata.sample_stats["diverging"].values.sum()))
-        return SbcFit(draws, n_div)
+    def prepare(arrays):
+        tel = _telemetry(arrays, scenario, "<sbc inertia replicate>")
+        return prepare_inertia([tel], scenario.prior, torque=torque, robust=False).model_kwargs
 
+    fit = nuts_fit(inertia_model(torque, False), names, _sampler_settings(opts))
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}
-    return SbcModel("inertia", names, prior_sample, simulate, fit, vectorized=False,
-                    settings=record, rhat_max=1.05, simulate_batch=simulate_batch_fn)
+    return SbcModel("inertia", names, prior_sample, simulate, fit, vectorized=True,
+                    settings=record, rhat_max=1.05, simulate_batch=simulate_batch_fn,
+                    prepare=prepare)
 
 
 # ---------------------------------------------------------------------------- shared helpers
@@ -509,9 +519,9 @@ def _telemetry(arrays, scenario, source: str):
                      source=source)
 
 
-def _thinned(idata, names: tuple[str, ...], thin: int) -> SbcFit:
-    """Thinned ``(chains, draws)`` posterior draws of ``names`` and the divergence count."""
-    draws = {n: jnp.asarray(idata.posterior[n].values[:, thin - 1::thin]) for n in names}
+def _posterior_draws(idata, names: tuple[str, ...]) -> SbcFit:
+    """The ``(chains, draws)`` posterior draws of ``names`` and the divergence count."""
+    draws = {n: jnp.asarray(idata.posterior[n].values) for n in names}
     return SbcFit(draws, jnp.asarray(int(idata.sample_stats["diverging"].values.sum())))
 
 
@@ -584,7 +594,7 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     base = truth_params(scenario)._replace(
         inertia=jnp.asarray(inertia_vector(spacecraft.inertia)))
     settings = _sampler_settings(opts)
-    thin, robust = int(opts["thin"]), bool(opts["robust"])
+    robust = bool(opts["robust"])
 
     def prior_sample(key):
         k_f, k_t = jax.random.split(key)
@@ -616,7 +626,7 @@ def _thrust(spec: ModelSpec) -> SbcModel:
         # the stated model, whose inertia prior is then a point
         post = fit_thrust(key, [(tel, log)], spacecraft, mode="mean", settings=settings,
                           prior_draws=0, robust=robust, inertia="fixed")
-        return _thinned(post.idata, names, thin)
+        return _posterior_draws(post.idata, names)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}
     return SbcModel("thrust", names, prior_sample, simulate, fit, vectorized=False,
@@ -708,7 +718,6 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     factor = np.ones(len(scenario.wheel_names))
     factor[k4] = float(opts["rwa4_inertia_factor"])
     settings = _sampler_settings(opts)
-    thin = int(opts["thin"])
 
     def draw(key):
         u, pi = _draw_rwa4_truth(key, ip.mean, ip.sd, cone)
@@ -737,7 +746,7 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
         tel = _telemetry(arrays, scenario, "<sbc rwa4 replicate>")
         post = fit_rwa4(key, tel, spacecraft, method="rcs", pairs=pairs, prior=opts["prior"],
                         settings=settings, prior_draws=0, robust=False)
-        return _thinned(post.idata, names, thin)
+        return _posterior_draws(post.idata, names)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}
     return SbcModel("rwa4", names, prior_sample, simulate, fit, vectorized=False,

@@ -14,7 +14,9 @@ Runs an SBC campaign (:mod:`cassini_bayes.analysis.campaign`) of a registered mo
   errors, number of replicates, failed and non-converged counts, seed, version;
 - ``report.html`` — self-contained: tables, rank histograms, ECDF-difference plots;
 - ``config.toml`` — model, scenario, settings, seed, batch size: enough to re-run it;
-- ``replicates.npz`` — per replicate: truth, thinned draws, ranks, divergences, R-hat.
+- ``replicates.npz`` — per replicate: truth, thinned draws, ranks, divergences, R-hat, and the
+  effective sample size of the draws before thinning (``ess``; ``summary.json`` counts the
+  replicates whose ESS is below the number of ranked draws).
 
 While it runs, finished batches are checkpointed in the hidden sibling ``.DIR.sbc-work``; a
 campaign that was interrupted continues from there with ``--resume`` (same seed and batch size
@@ -31,11 +33,12 @@ replaces a previous result — only a directory this package wrote
 
     cassini-bayes sbc thrust -n 208 --batch 4 --executor dask --workers 16 --out sbc-thrust
     cassini-bayes sbc rwa4 -n 208 --batch 4 --executor dask --workers 16 --out sbc-rwa4
-    cassini-bayes sbc inertia -n 208 --batch 4 --executor dask --workers 16 --out sbc-inertia
+    cassini-bayes sbc inertia -n 208 --batch 16 --out sbc-inertia
 
-(the thrust and RWA4 fits are not vectorised across replicates: a local Dask cluster of one
-single-threaded worker per core is how they use the machine; the same seed gives the same ranks
-with either executor).
+(the inertia and toy models are fitted by one vmapped NUTS program per batch; the thrust and
+RWA4 fits are not vectorised across replicates: a local Dask cluster of one single-threaded worker
+per core is how they use the machine; the same seed gives the same ranks with either executor).
+Measured throughput and the campaigns' results: ``docs/sbc/``.
 """
 
 from __future__ import annotations
@@ -200,7 +203,8 @@ def _print_summary(summary: dict, out: Path) -> None:
     verdict = "PASSED" if summary["passed"] else "FAILED"
     console.print(f"uniformity {verdict} at family-wise alpha={summary['alpha_family']}; "
                   f"failed replicates {summary['failures']}, not converged "
-                  f"{summary['non_converged']}; wrote {out}")
+                  f"{summary['non_converged']}, ESS below the {summary['draws_per_replicate']} "
+                  f"ranked draws {summary['ess']['below_draws']}; wrote {out}")
 
 
 # -------------------------------------------------------------------------------- run dir
@@ -239,6 +243,7 @@ def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
         "failures": int(result.failed.sum()),
         "non_converged": int((~result.converged & ~result.failed).sum()),
         "divergent_transitions": int(result.n_divergent.sum()),
+        "ess": _ess_summary(result, ok),
         "statistics": {
             "chi2": "Pearson chi-square on binned ranks, p from scipy.stats.chi2 (bins - 1 df)",
             "ecdf": "Saeilynoja et al. (2022) ECDF simultaneous-band statistic, simulated null",
@@ -254,6 +259,18 @@ def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
         "version": __version__,
     }
     return sbc, summary
+
+
+def _ess_summary(result, ok) -> dict:
+    """Effective sample sizes of the replicates' draws before thinning, against the ``L`` ranked
+    draws: ``below_draws`` replicates have ``ESS < L`` (their ranked draws are autocorrelated)."""
+    ess = result.ess[ok]
+    finite = ess[np.isfinite(ess)]
+    return {"description": "smallest effective sample size over the parameters of each "
+                           "replicate's draws before thinning (NumPyro estimator)",
+            "min": float(finite.min()) if finite.size else None,
+            "median": float(np.median(finite)) if finite.size else None,
+            "below_draws": int(np.sum(~(ess >= result.n_draws)))}
 
 
 def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "local",
@@ -279,7 +296,8 @@ def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "
         (tmp / "config.toml").write_text(tomli_w.dumps(config))
         np.savez(tmp / "replicates.npz", names=np.asarray(result.names), truth=result.truth,
                  draws=result.draws, rank=result.rank, n_divergent=result.n_divergent,
-                 rhat=result.rhat, failed=result.failed, converged=result.converged)
+                 rhat=result.rhat, ess=result.ess, failed=result.failed,
+                 converged=result.converged)
         (tmp / "report.html").write_text(_report_html(sbc, summary))
     return summary
 
@@ -333,7 +351,9 @@ def _report_html(sbc, summary: dict) -> str:
                     summary["passed"])
               + paragraph(f"model {summary['model']}, {summary['replicates']} replicates "
                           f"({summary['failures']} failed, {summary['non_converged']} not "
-                          f"converged), {summary['draws_per_replicate']} thinned draws each, "
+                          f"converged, {summary['ess']['below_draws']} with an effective sample "
+                          "size below the ranked draws), "
+                          f"{summary['draws_per_replicate']} thinned draws each, "
                           f"seed {summary['seed']}, cassini-bayes {summary['version']}"))
     sections = [
         section("Uniformity of ranks", [
