@@ -51,8 +51,10 @@ def set_robust_columns(files: list[dict], setup, pi) -> None:
 
 
 def _fitted(x, fit_map):
-    """The fitted columns ``x @ fit_map`` of (n, 3, p_full) columns ``x``."""
-    return np.einsum("nip,pq->niq", x, fit_map, optimize=True)
+    """The fitted columns ``x @ fit_map`` of (n, 3, p_full) columns ``x`` (``fit_map``: the
+    columns wanted of the (p_full, p_full) map). A matrix product: NumPy's ``einsum`` of the same
+    (its batched path) took ~10 ms a call, half of an SBC replicate's preparation."""
+    return x @ fit_map
 
 
 def _weights(fd: dict, f: int, th_full, ls, prior_mean):
@@ -113,7 +115,7 @@ def gls(files: list[dict], setup, full_prec, full_mean, *, robust: bool,
         rhs = np.zeros(p_tot)
         for f, fd in enumerate(files):
             w_inv, _, _ = _weights(fd, f, theta_full, log_s[f], setup.prior.mean)
-            c = _fitted(fd["cols"], setup.fit_map)[:, :, active]
+            c = _fitted(fd["cols"], setup.fit_map[:, active])
             wc = np.einsum("nij,njq->niq", w_inv, c)
             info += np.einsum("nip,niq->pq", c, wc, optimize=True)
             rhs += np.einsum("niq,ni->q", wc, fd["y"], optimize=True)
@@ -152,7 +154,7 @@ def sufficient_statistics(files: list[dict], setup, theta_full, log_s) -> tuple:
         f_fit = fit_map.T @ f_full @ fit_map
         fmat[f] = f_fit[np.ix_(active, active)]
         e = np.einsum("nip,p->ni", fd["cols"], fit_map @ theta_full) - fd["y"]
-        gvec[f] = np.einsum("niq,ni->q", _fitted(wc_full, fit_map)[:, :, active], e,
+        gvec[f] = np.einsum("niq,ni->q", _fitted(wc_full, fit_map[:, active]), e,
                             optimize=True)
         q_star[f] = np.einsum("ni,nij,nj->", e, w_inv, e)
         n_obs[f] = 3 * e.shape[0]
