@@ -107,13 +107,14 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
     monitor's priors (``prior_leak`` of a leak, shared by the eight thrusters; the spacecraft
     model ``cassini_post_probe``'s moment arms and torque prior).
 
-    The monitor takes its white-noise level from the data (median absolute first difference):
-    where the thrust errors' share of each difference, ``δ_j Q[:, j] ΔJ_j``, is comparable with
-    the noise (many pulses per sample), that level is too high and the fraction's posterior
-    too wide — which this SBC shows (docs/sbc/leak/README.md)."""
+    The torque is drawn from the monitor's scale-mixture prior (``TORQUE_SCALES``). The monitor
+    takes its white-noise level from the data (median absolute second difference): where the
+    thrust errors' share of each difference, ``δ_j Q[:, j] ΔJ_j``, is comparable with the noise
+    (many pulses per sample), that level is too high and the fraction's posterior too wide
+    (docs/sbc/leak/README.md)."""
     from cassini_bayes.estimators.leak import ETA
     from cassini_bayes.inference.leak import (FRACTION_SCALES, OFFSET_SD_NMS, SAMPLE_STEP_S,
-                                              LeakInputs, _Sums, leak_posterior)
+                                              TORQUE_SCALES, LeakInputs, _Sums, leak_posterior)
     from cassini_bayes.physics.impulse import moment_matrix
     from cassini_bayes.spacecraft import load_spacecraft
 
@@ -132,8 +133,10 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
         k = int(rng.integers(0, 8))
         frac = abs(rng.normal(0.0, FRACTION_SCALES[rng.integers(0, FRACTION_SCALES.size)]))
         onset = grid[rng.integers(0, grid.size)]
+        scales, weights = zip(*TORQUE_SCALES)
+        t_sd = torque_sd * scales[rng.choice(len(scales), p=weights)]
         r = (rng.normal(0.0, OFFSET_SD_NMS, 3)[None, :]
-             + t[:, None] * rng.normal(0.0, torque_sd, 3)[None, :]
+             + t[:, None] * rng.normal(0.0, t_sd, 3)[None, :]
              + (j * rng.normal(0.0, ETA, 8)[None, :]) @ q.T
              + rng.normal(0.0, noise_nms, (n, 3)))
         if is_leak:

@@ -9,8 +9,11 @@ hypothesis ``k`` (thruster ``k`` leaks a fraction ``f`` of its thrust from ``t_L
     R(t_i) = r_0 + T (t_i − t_0) + Σ_j δ_j Q[:, j] J_j(t_i) + f F Q[:, k] (t_i − t_L)_+ + e_i
 
 * ``r_0`` (3,) the offset of the first sample's noise, prior ``N(0, 10² N m s)`` per axis;
-* ``T`` (3,) an unknown constant external torque (N m), prior ``N(0, σ_T²)`` with ``σ_T`` the
-  spacecraft model's ``[torque_knowledge] sd_nm``;
+* ``T`` (3,) an unknown constant external torque (N m), prior a scale mixture of normals: with
+  probability 0.9 ``N(0, σ_T²)``, ``σ_T`` the spacecraft model's ``[torque_knowledge] sd_nm``,
+  and with 0.1 ten times wider (:data:`TORQUE_SCALES`): a torque several ``σ_T`` off the model
+  file's knowledge is then an unusual torque, not a leak that started with the stretch (with a
+  normal prior alone one of 7 σ_T raised a false alarm, docs/leak.md);
 * ``δ_j`` the fractional thrust error of thruster ``j`` (thruster-to-thruster variation, the
   Bayesian counterpart of Lee Eq 11), prior ``N(0, η²)``, η = 0.05 as Lee's launch value, times
   the modelled impulse ``J_j(t)`` (N s) and the moment arm ``Q[:, j]`` (Feldman & Lee Eq 16);
@@ -58,11 +61,14 @@ from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["LeakInputs", "LeakPosterior", "leak_inputs", "leak_posterior", "HYPOTHESES",
-           "FRACTION_SCALES", "OFFSET_SD_NMS", "SAMPLE_STEP_S"]
+           "FRACTION_SCALES", "OFFSET_SD_NMS", "SAMPLE_STEP_S", "TORQUE_SCALES"]
 
 HYPOTHESES = ("none",) + THRUSTER_NAMES
 FRACTION_SCALES = 10.0 ** np.arange(-4.0, 0.01, 0.5)
 """Scales of the half-normal mixture prior on the leak fraction (fractions of the thrust)."""
+TORQUE_SCALES = ((1.0, 0.9), (10.0, 0.1))
+"""The external torque's prior: ``(multiple of the model file's sd, weight)`` of each normal
+component of its scale mixture (a contaminated normal)."""
 OFFSET_SD_NMS = 10.0
 """Prior sd of the residual's offset ``r_0`` per axis, N m s (wide: it only absorbs noise)."""
 SAMPLE_STEP_S = 60.0
@@ -225,9 +231,12 @@ class _Sums:
         eye = np.eye(3)
         cols = np.concatenate([np.broadcast_to(eye, (n, 3, 3)), t[:, None, None] * eye[None],
                                q[None, :, :] * inp.impulse[:, None, :]], axis=2)
-        self.prior_prec = 1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
-                                      np.full(3, max(inp.torque_sd_nm, 1e-12) ** 2),
-                                      np.full(8, max(eta, 1e-12) ** 2)]
+        # one nuisance prior precision per component of the torque's scale mixture
+        self.prior_prec = [1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
+                                       np.full(3, (scale * max(inp.torque_sd_nm, 1e-12)) ** 2),
+                                       np.full(8, max(eta, 1e-12) ** 2)]
+                           for scale, _ in TORQUE_SCALES]
+        self.log_w = np.log([w for _, w in TORQUE_SCALES])
         self.t, self.y = t, y
         self.raw_t, self.raw_y = raw.t, raw.residual
         self.nn = _cum(np.einsum("iap,iaq->iapq", cols, cols))
@@ -245,13 +254,29 @@ class _Sums:
         return np.maximum(_noise_sd(self.y[:c + 1]), _noise_sd(raw))
 
     def evidence(self, c: int, tl: np.ndarray):
-        """Per onset (G), thruster (8) and prior scale (S), with the data rows 0..c: the log
-        Bayes factor against no leak, and the Gaussian-prior posterior mean ``m`` and precision
-        of the fraction (its half-normal posterior is that Gaussian cut at 0)."""
-        e, t = c + 1, self.t
+        """Per onset (G), thruster (8) and prior component (S fraction scales × the torque's
+        components, weighted), with the data rows 0..c: the log Bayes factor against no leak
+        (weighted so that its mean over onsets and fraction scales is the thruster's), and the
+        Gaussian-prior posterior mean ``m`` and precision of the fraction (its half-normal
+        posterior is that Gaussian cut at 0)."""
         lam = 1.0 / self.noise_sd(c) ** 2               # (3,) noise precision per axis
-        a_mat = np.diag(self.prior_prec) + np.einsum("a,apq->pq", lam, self.nn[e])
+        parts = [self._evidence(c, tl, lam, prec) for prec in self.prior_prec]
+        # log evidence of "no leak" under each torque component, up to a common constant
+        # (Gaussian marginal: −½ log|A| + ½ log|P| + ½ bᵀA⁻¹b)
+        log_z0 = self.log_w + np.array([p[3] for p in parts])
+        log_none = logsumexp(log_z0)
+        log_bf = np.concatenate([lz - log_none + p[0] for lz, p in zip(log_z0, parts)], axis=-1)
+        return (log_bf, np.concatenate([p[1] for p in parts], axis=-1),
+                np.concatenate([p[2] for p in parts], axis=-1))
+
+    def _evidence(self, c: int, tl: np.ndarray, lam: np.ndarray, prior_prec: np.ndarray):
+        """:meth:`evidence` under one nuisance prior (precisions ``prior_prec``), with the log
+        evidence of "no leak" under it (up to a constant common to all priors)."""
+        e, t = c + 1, self.t
+        a_mat = np.diag(prior_prec) + np.einsum("a,apq->pq", lam, self.nn[e])
         b0 = np.einsum("a,ap->p", lam, self.ny[e])
+        log_z0 = 0.5 * (np.sum(np.log(prior_prec)) - np.linalg.slogdet(a_mat)[1]
+                        + b0 @ np.linalg.solve(a_mat, b0))
         onsets = np.searchsorted(t, tl, side="right")   # first row after each onset
         # sums over rows L..c of h = t − t_L: Σh², Σ h N, Σ h y
         s1, st = self.c1[e] - self.c1[onsets], self.ct[e] - self.ct[onsets]
@@ -272,7 +297,7 @@ class _Sums:
         m = z / prec
         log_bf = (-0.5 * np.log(prec * s2) + 0.5 * z * z / prec + np.log(2.0)
                   + log_ndtr(m * np.sqrt(prec)))
-        return log_bf, m, prec
+        return log_bf, m, prec, log_z0
 
 
 def _fraction(log_bf: np.ndarray, m: np.ndarray, prec: np.ndarray, k: int):
