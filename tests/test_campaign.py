@@ -153,7 +153,7 @@ def test_dask_process_workers_give_identical_ranks(reference, tmp_path):
 
 
 def test_cli_resume_finishes_an_interrupted_campaign(run_cli, reference, tmp_path):
-    from cassini_bayes.cli.sbc import work_dir
+    from cassini_bayes.analysis.sbc_run import work_dir
 
     out = tmp_path / "run"
 

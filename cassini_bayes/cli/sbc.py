@@ -43,28 +43,19 @@ Measured throughput and the campaigns' results: ``docs/sbc/``.
 
 from __future__ import annotations
 
-import datetime as _dt
-import json
 import shutil
 from pathlib import Path
 
-import numpy as np
 import typer
 
-from cassini_bayes import __version__
 from cassini_bayes._paths import text_file
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.errors import InputError, Interrupted
-from cassini_bayes.rundir import RunDir, check_out
+from cassini_bayes.rundir import check_out
 
 ORDER = 60
 
-__all__ = ["register", "write_run", "work_dir", "parse_options", "check_sampler_options"]
-
-
-def work_dir(out: Path) -> Path:
-    """Checkpoint directory of the campaign whose result goes to ``out``."""
-    return out.parent / f".{out.name}.sbc-work"
+__all__ = ["register", "parse_options", "check_sampler_options"]
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
@@ -100,6 +91,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         """Simulation-based calibration (ranks, uniformity tests, coverage) of MODEL."""
         from cassini_bayes.analysis.campaign import run_campaign
         from cassini_bayes.analysis.sbc_models import ModelSpec, registered_models
+        from cassini_bayes.analysis.sbc_run import work_dir, write_run
 
         if model not in registered_models():
             raise InputError(f"unknown model {model!r} for sbc; choose one of "
@@ -205,176 +197,3 @@ def _print_summary(summary: dict, out: Path) -> None:
                   f"failed replicates {summary['failures']}, not converged "
                   f"{summary['non_converged']}, ESS below the {summary['draws_per_replicate']} "
                   f"ranked draws {summary['ess']['below_draws']}; wrote {out}")
-
-
-# -------------------------------------------------------------------------------- run dir
-
-
-def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
-    """``(SbcResult, summary dict)`` of a finished campaign (failed replicates left out)."""
-    from cassini_bayes.analysis.sbc import sbc_result
-
-    ok = ~result.failed
-    names = result.names
-    draws = {n: result.draws[ok, j] for j, n in enumerate(names)}
-    truth = {n: result.truth[ok, j] for j, n in enumerate(names)}
-    if ok.sum() < 2:
-        raise InputError(f"only {int(ok.sum())} of {len(ok)} replicates produced finite draws; "
-                         "check the model and scenario")
-    sbc = sbc_result(names, result.rank[ok], result.n_draws, draws=draws, truth=truth,
-                     alpha_family=alpha)
-    params = {}
-    for n, p in sbc.parameters.items():
-        params[n] = {
-            "chi2": {"statistic": p.chi2.statistic, "df": p.chi2.df, "bins": p.chi2.bins,
-                     "p_value": p.chi2.p_value},
-            "ecdf": {"statistic": p.ecdf.statistic, "p_value": p.ecdf.p_value},
-            "passed": bool(p.chi2.p_value >= sbc.alpha and p.ecdf.p_value >= sbc.alpha),
-            "coverage": {f"{round(100 * c):d}": {"nominal": c, "observed": float(o), "se": float(s)}
-                         for c, o, s in zip(p.coverage.levels, p.coverage.observed,
-                                            p.coverage.se)},
-        }
-    summary = {
-        "kind": "sbc",
-        "model": spec.name,
-        "replicates": len(result.failed),
-        "replicates_used": int(ok.sum()),
-        "draws_per_replicate": int(result.n_draws),
-        "failures": int(result.failed.sum()),
-        "non_converged": int((~result.converged & ~result.failed).sum()),
-        "divergent_transitions": int(result.n_divergent.sum()),
-        "ess": _ess_summary(result, ok),
-        "statistics": {
-            "chi2": "Pearson chi-square on binned ranks, p from scipy.stats.chi2 (bins - 1 df)",
-            "ecdf": "Saeilynoja et al. (2022) ECDF simultaneous-band statistic, simulated null",
-        },
-        "alpha_family": float(alpha),
-        "alpha_per_parameter": float(sbc.alpha),
-        "passed": sbc.passed("both"),
-        "parameters": params,
-        "settings": result.settings,
-        "seed": int(result.seed),
-        "batch_size": int(result.batch_size),
-        "executor": executor,
-        "version": __version__,
-    }
-    return sbc, summary
-
-
-def _ess_summary(result, ok) -> dict:
-    """Effective sample sizes of the replicates' draws before thinning, against the ``L`` ranked
-    draws: ``below_draws`` replicates have ``ESS < L`` (their ranked draws are autocorrelated)."""
-    ess = result.ess[ok]
-    finite = ess[np.isfinite(ess)]
-    return {"description": "smallest effective sample size over the parameters of each "
-                           "replicate's draws before thinning (NumPyro estimator)",
-            "min": float(finite.min()) if finite.size else None,
-            "median": float(np.median(finite)) if finite.size else None,
-            "below_draws": int(np.sum(~(ess >= result.n_draws)))}
-
-
-def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "local",
-              force: bool = False) -> dict:
-    """Write the run directory ``out`` atomically (:class:`cassini_bayes.rundir.RunDir`).
-
-    Returns the ``summary.json`` content.
-    """
-    import tomli_w
-
-    sbc, summary = summarize(spec, result, alpha=alpha, executor=executor)
-    with RunDir(out, force=force) as rd:
-        tmp = rd.path
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        config = {"command": "sbc", "model": spec.name, "replicates": summary["replicates"],
-                  "seed": summary["seed"], "batch": summary["batch_size"], "alpha": alpha,
-                  "executor": executor, "version": __version__,
-                  "created": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
-                  "settings": _toml_safe(result.settings),
-                  "options": _toml_safe(dict(spec.options))}
-        if spec.scenario_text:
-            config["scenario"] = spec.scenario_text
-        (tmp / "config.toml").write_text(tomli_w.dumps(config))
-        np.savez(tmp / "replicates.npz", names=np.asarray(result.names), truth=result.truth,
-                 draws=result.draws, rank=result.rank, n_divergent=result.n_divergent,
-                 rhat=result.rhat, ess=result.ess, failed=result.failed,
-                 converged=result.converged)
-        (tmp / "report.html").write_text(_report_html(sbc, summary))
-    return summary
-
-
-def _toml_safe(d: dict) -> dict:
-    return {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in d.items()
-            if v is not None}
-
-
-def _png(fig) -> bytes:
-    import io
-
-    import matplotlib.pyplot as plt
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
-
-
-def _report_html(sbc, summary: dict) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from cassini_bayes.analysis.sbc import plot_ecdf_difference, plot_rank_histograms
-    from cassini_bayes.report.html import badge, figure, html_page, paragraph, section, table
-
-    a = summary["alpha_per_parameter"]
-    rows, cls = [], []
-    for n, p in summary["parameters"].items():
-        rows.append([n, f"{p['chi2']['statistic']:.2f}", p["chi2"]["bins"],
-                     f"{p['chi2']['p_value']:.3g}", f"{p['ecdf']['statistic']:.4f}",
-                     f"{p['ecdf']['p_value']:.3g}", "pass" if p["passed"] else "FAIL"])
-        cls.append(["", "", "", "bad" if p["chi2"]["p_value"] < a else "good", "",
-                    "bad" if p["ecdf"]["p_value"] < a else "good",
-                    "good" if p["passed"] else "bad"])
-    uni = table(["parameter", "χ²", "bins", "χ² p", "ECDF γ", "ECDF p", "verdict"], rows,
-                classes=cls)
-    crow, ccls = [], []
-    for n, p in summary["parameters"].items():
-        row, rc = [n], [""]
-        for k in ("50", "80", "90", "95"):
-            c = p["coverage"][k]
-            row.append(f"{c['observed']:.3f} ± {c['se']:.3f}")
-            z = abs(c["observed"] - c["nominal"]) / c["se"]
-            rc.append("bad" if z > 3 else ("warn" if z > 2 else "good"))
-        crow.append(row)
-        ccls.append(rc)
-    cov = table(["parameter", "50 %", "80 %", "90 %", "95 %"], crow, classes=ccls)
-    header = (badge("uniformity passed" if summary["passed"] else "uniformity FAILED",
-                    summary["passed"])
-              + paragraph(f"model {summary['model']}, {summary['replicates']} replicates "
-                          f"({summary['failures']} failed, {summary['non_converged']} not "
-                          f"converged, {summary['ess']['below_draws']} with an effective sample "
-                          "size below the ranked draws), "
-                          f"{summary['draws_per_replicate']} thinned draws each, "
-                          f"seed {summary['seed']}, cassini-bayes {summary['version']}"))
-    sections = [
-        section("Uniformity of ranks", [
-            uni,
-            paragraph("Ranks of the true parameter among the thinned posterior draws are "
-                      "discrete-uniform when the posterior is calibrated (Talts et al. 2018). "
-                      f"Each parameter is tested at alpha = {a:.3g} (family-wise "
-                      f"{summary['alpha_family']} per statistic, Bonferroni): Pearson chi-square "
-                      "on binned ranks, and the ECDF simultaneous-band statistic of Säilynoja et "
-                      "al. (2022) with a simulated null.", note=True)]),
-        section("Coverage of central intervals", [
-            cov,
-            paragraph("Fraction of replicates whose truth lies in the posterior's central "
-                      "interval, ± the binomial standard error at the nominal level; red beyond "
-                      "3 standard errors, amber beyond 2.", note=True)]),
-        section("Rank histograms", figure(
-            _png(plot_rank_histograms(sbc)),
-            "Rank histograms; grey: 99 % pointwise binomial band of a uniform histogram.")),
-        section("ECDF difference", figure(
-            _png(plot_ecdf_difference(sbc)),
-            f"ECDF of the ranks minus the uniform CDF, with ArviZ's simultaneous "
-            f"{100 * (1 - a):.2f} % band (Säilynoja et al. 2022).")),
-    ]
-    return html_page(f"SBC: {summary['model']}", sections, header=header)
