@@ -82,6 +82,22 @@ def test_fit_gives_the_pinned_numbers(model, inputs, tmp_path):
     fit = _api_fit(model, inputs[model], as_objects=False)
     assert_same(PINNED[model], numbers(fit.summary()), f"{model} (API vs pin)")
     assert sorted(p.name for p in fit.save(tmp_path / "run").iterdir()) == RUN_FILES
+    if model == "rwa4":   # RCS, no inertia posterior: a warning exactly when the cone passes 3°
+        cone = fit.summary()["direction"]["cone_deg"]["95"]     # 2.18° here
+        assert (cone > 3.0) == any("flight-calibrated" in w for w in fit.warnings)
+
+
+def test_rcs_fit_beyond_browns_budget_without_an_inertia_posterior_warns():
+    """Brown's 3° for the RCS method assumes a flight-calibrated inertia; with the model file's
+    ±10 % knowledge the cone is ~6° (docs/robust/README.md), and the fit says so, naming the
+    argument that fixes it. Not for the RWA method, nor with an inertia posterior."""
+    from cassini_bayes.api._rwa4 import rcs_budget_warning
+
+    msg = rcs_budget_warning("rcs", False, 5.87)
+    assert "5.87°" in msg and "3° budget" in msg and "inertia_posterior" in msg
+    assert rcs_budget_warning("rcs", False, 2.9) == ""
+    assert rcs_budget_warning("rcs", True, 5.87) == ""
+    assert rcs_budget_warning("rwa", False, 5.87) == ""
 
 
 def test_paths_in_and_save_refuses_to_overwrite(inputs, tmp_path):

@@ -10,6 +10,10 @@ from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
 from cassini_bayes.errors import InputError, arg
 
+RCS_BUDGET_DEG = 3.0
+"""Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
+mass properties), with a flight-calibrated inertia."""
+
 __all__ = ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"]
 
 
@@ -59,6 +63,18 @@ def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, whee
     summary["wheel_errors"] = wheel_errors if robust else None
     summary["sensitivity"] = rwa4_sensitivity(post)
     return summary
+
+
+def rcs_budget_warning(method: str, has_inertia_posterior: bool, cone95_deg: float) -> str:
+    """The warning (or ``""``) of an RCS fit whose 95 % cone exceeds Brown's 3° with only the
+    model file's inertia knowledge: Brown §III's budget assumes "the inertia properties of both
+    the spacecraft and reaction wheel are known quite accurately" (a flight calibration)."""
+    if method != "rcs" or has_inertia_posterior or not cone95_deg > RCS_BUDGET_DEG:
+        return ""
+    return (f"the axis's 95 % cone is {cone95_deg:.2f}°, wider than the RCS method's "
+            f"{RCS_BUDGET_DEG:g}° budget (Brown), which assumes a flight-calibrated inertia; this "
+            "fit has only the model file's inertia knowledge: give an inertia fit's posterior "
+            f"({arg('inertia_posterior')})")
 
 
 def _window_pairs(windows) -> list | None:
@@ -129,6 +145,10 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
         post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
                            inertia=inertia, settings=settings, robust=robust,
                            wheel_errors=wheel_errors)
+    budget = rcs_budget_warning(method, inertia_posterior is not None,
+                                post.direction["cone_deg"]["95"])
+    if budget:
+        warns.append(budget)
     with step("summaries and adequacy checks"):
         summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
                                wheel_errors=wheel_errors, warnings=warns)
