@@ -1,4 +1,4 @@
-"""Thruster-health campaigns: detection delay, false alarms and change-date coverage (issue 17).
+"""Thruster-health campaigns: detection delay, false alarms and change-date coverage.
 
 For each seed, both campaign files (``experiments/scenarios/health_degradation.toml``: Z3/Z4
 lose 7 % on day 400; ``health_control.toml``: no change; 32 events over 730 days, event dates,

@@ -1,4 +1,4 @@
-"""SBC of the thruster-health change-point model and of the Bayesian leak monitor (issue 17).
+"""SBC of the thruster-health change-point model and of the Bayesian leak monitor.
 
     python benchmarks/health_sbc.py [--reps 400] [--leak-reps 1000] [--seed 1] [--out docs/sbc]
 

@@ -1,4 +1,4 @@
-"""Leak-detection campaign: the Bayesian monitor against Lee's threshold monitor (issue 17).
+"""Leak-detection campaign: the Bayesian monitor against Lee's threshold monitor.
 
 Simulated cruise stretches (``experiments/scenarios/leak_cruise.toml``: attitude held by the RCS
 dead-band controller) of ``--hours`` each, every one with its own thruster-to-thruster variation

@@ -1,4 +1,4 @@
-"""Thruster health over many biasing events (issue 17): the per-event summary, the exact
+"""Thruster health over many biasing events: the per-event summary, the exact
 change-point model, the campaign simulator, ``fit health`` / ``simulate-health``, and the SBC glue.
 
 Every random draw has a fixed seed, so each test is deterministic: its "false-failure rate" is 0

@@ -1,4 +1,4 @@
-"""Thruster-leak detection (issue 17): the simulator's ``[leak]``, the Bayesian monitor
+"""Thruster-leak detection: the simulator's ``[leak]``, the Bayesian monitor
 (:mod:`cassini_bayes.inference.leak`), Lee's threshold monitor and ``monitor leak``.
 
 Error rates of the assertions on the monitor's probabilities: under no leak the averaged Bayes

@@ -1,4 +1,4 @@
-"""SBC of the exact health and leak models (issue 17), with the statistics of
+"""SBC of the exact health and leak models, with the statistics of
 :mod:`cassini_bayes.analysis.sbc`.
 
 Both models are exact (no sampler), so each replicate draws its truth from the model's own prior,
