@@ -67,7 +67,7 @@ def main(argv=None) -> None:
     problem = prepare_inertia([tel_b], sc, robust=args.robust)
     t0 = time.perf_counter()
     idata = run_nuts(jax.random.key(2), inertia_model(True, args.robust),
-                     model_kwargs=problem.model_kwargs,
+                     model_kwargs={"data": problem.data},
                      settings=s, prior_draws=0)
     t_sampler = time.perf_counter() - t0
 

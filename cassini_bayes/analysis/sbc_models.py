@@ -454,7 +454,7 @@ def _inertia(spec: ModelSpec) -> SbcModel:
 
     def prepare(arrays):
         tel = _telemetry(arrays, scenario, "<sbc inertia replicate>")
-        return prepare_inertia([tel], scenario.prior, torque=torque, robust=False).model_kwargs
+        return {"data": prepare_inertia([tel], scenario.prior, torque=torque, robust=False).data}
 
     fit = nuts_fit(inertia_model(torque, False), names, _sampler_settings(opts))
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}

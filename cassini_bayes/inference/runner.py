@@ -323,7 +323,7 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
     s = settings
     method = s.chain_method or choose_chain_method(s.chains)
     fn = _sampler_for(model, s, method)
-    kwargs = {k: _on_device(v) for k, v in model_kwargs.items()}
+    kwargs = {k: jax.tree.map(_on_device, v) for k, v in model_kwargs.items()}
     shapes = _site_shapes(model, kwargs)
     key_prior, keys, init_z = _start(key, s.chains, tuple(sorted(shapes.items())))
     if s.progress:  # a bar: "compiling" until the first piece is done, then warm-up, sampling

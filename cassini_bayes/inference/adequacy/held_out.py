@@ -70,21 +70,21 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
     from cassini_bayes.inference.inertia import H0_PRIOR_SD_NMS, TORQUE_PRIOR_SD_NM
 
     name = "held_out"
-    kw = problem.model_kwargs
-    fmat = np.asarray(kw["fmat"])
+    data = problem.data
+    fmat = np.asarray(data.fmat)
     n_files = fmat.shape[0]
     if n_files < 2:
         return not_applicable(name, threshold, "one telemetry file: nothing to hold out")
-    gvec = np.asarray(kw["gvec"])
-    theta = np.asarray(kw["theta_star"])
-    nu_sd = np.asarray(kw["nu_sd"]) if "nu_sd" in kw else np.zeros(0)
+    gvec = np.asarray(data.gvec)
+    theta = np.asarray(data.theta_star)
+    nu_sd = np.zeros(0) if data.nu_sd is None else np.asarray(data.nu_sd)
     per_file = np.r_[np.full(3, H0_PRIOR_SD_NMS),
                      np.full(3, TORQUE_PRIOR_SD_NM)][:6 if problem.torque else 3]
-    sd = np.r_[np.asarray(kw["pi_sd"]), np.tile(per_file, n_files), nu_sd]
+    sd = np.r_[np.asarray(data.pi_sd), np.tile(per_file, n_files), nu_sd]
     if sd.size != fmat.shape[1]:
         return not_applicable(name, threshold, "the inertia model's parameter layout is not the "
                               "one this check knows (π, H_0/T_N per file, ν)")
-    mean = np.r_[np.asarray(kw["pi_mean"]), np.zeros(sd.size - 6)]
+    mean = np.r_[np.asarray(data.pi_mean), np.zeros(sd.size - 6)]
     prior_prec = 1.0 / sd**2
     prior_lin = prior_prec * (mean - theta)            # canonical form in δ = θ − θ*
     scale2 = np.asarray(idata.posterior["noise_scale"].mean(("chain", "draw"))).reshape(-1)**2

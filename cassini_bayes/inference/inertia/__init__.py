@@ -97,8 +97,8 @@ draws come from :func:`sample_prior` (rejection from the stated truncated Normal
 simulator and SBC can use to draw truth from the same prior.
 """
 
-from cassini_bayes.inference.inertia.data import (MIN_RATE_SNR, InertiaProblem, noise_levels,
-                                                  prepare_inertia)
+from cassini_bayes.inference.inertia.data import (MIN_RATE_SNR, InertiaData, InertiaProblem,
+                                                  noise_levels, prepare_inertia)
 from cassini_bayes.inference.inertia.fit import (AXES, ROBUST_SITES, InertiaPosterior,
                                                  fit_inertia, robust_sites)
 from cassini_bayes.inference.inertia.knowledge import (InertiaGaussian, inertia_from_idata,
@@ -121,7 +121,7 @@ __all__ = [
     "MIN_RATE_SNR",
     "AXES",
     "InertiaPrior",
-    "InertiaProblem",
+    "InertiaData", "InertiaProblem",
     "InertiaGaussian",
     "inertia_prior",
     "inertia_prior_gaussian",

@@ -62,17 +62,49 @@ def noise_levels(tel: Telemetry, spacecraft: Spacecraft) -> np.ndarray:
     return _noise_from_arrays(np.asarray(tel.omega, float), rates, np.asarray(inc))
 
 
-class InertiaProblem(NamedTuple):
-    """Everything the inertia model needs, prepared once from the data (SI units).
-
-    ``model_kwargs`` are the arrays passed to :func:`inertia_model` (all samples of all files
-    concatenated along one axis of length ``N``, sample index last; ``onehot`` (F, N) says which
-    file a sample belongs to), so two problems with the same shapes reuse one compiled sampler.
-    The other fields describe the data for the run directory and the report.
+class InertiaData(NamedTuple):
+    """The arrays of :func:`~cassini_bayes.inference.inertia.model.inertia_model` (a pytree: the
+    sampler traces it, so problems of the same shapes share one compiled program). ``F`` files,
+    ``P`` parameters ``[π (6), (H_0, T_N) per file, ν]``.
 
     Attributes
     ----------
-    model_kwargs : dict of arrays for :func:`inertia_model`.
+    fmat : (F, P, P) per-file information ``Σ_t Cᵀ B̂_t⁻¹ C`` at the empirical-Bayes noise.
+    gvec : (F, P) per-file score ``Σ_t Cᵀ B̂_t⁻¹ e_t`` at ``theta_star``.
+    q_star : (F,) per-file ``Σ_t e_tᵀ B̂_t⁻¹ e_t`` at ``theta_star``.
+    n_obs : (F,) scalar observations per file (3 per sample).
+    theta_star : (P,) the linearisation point (the GLS mode).
+    centre, tril : (P,), (P, P) the sampler's whitening ``θ = centre + tril z``.
+    pi_mean, pi_sd : (6,) the prior of ``π`` (kg m²).
+    log_noise : (F, 3) log empirical-Bayes noise levels (rad/s, rad/s, rad).
+    nu_sd, nu_weights : the robust nuisance's prior sds (R,) and the wheel block's weights of the
+        common scale; ``None`` in the idealised model.
+    """
+
+    fmat: object
+    gvec: object
+    q_star: object
+    n_obs: object
+    theta_star: object
+    centre: object
+    tril: object
+    pi_mean: object
+    pi_sd: object
+    log_noise: object
+    nu_sd: object = None
+    nu_weights: object = None
+
+
+class InertiaProblem(NamedTuple):
+    """Everything the inertia model needs, prepared once from the data (SI units).
+
+    ``data`` holds the arrays of :func:`inertia_model` (per-file sufficient statistics, so two
+    problems with the same shapes reuse one compiled sampler); the other fields describe the data
+    for the run directory and the report.
+
+    Attributes
+    ----------
+    data : :class:`InertiaData`, the arrays of :func:`inertia_model`.
     torque : whether ``T_N`` is a parameter (selects the model function).
     prior : the stated prior of ``π``.
     t : (N,) sample times, s; ``file_idx`` (N,) int.
@@ -93,7 +125,7 @@ class InertiaProblem(NamedTuple):
     robust_cols : (N, 3, R) body columns of ``ν`` (robust only), to correct the residuals.
     """
 
-    model_kwargs: dict
+    data: InertiaData
     torque: bool
     prior: InertiaPrior
     t: np.ndarray
@@ -308,15 +340,13 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     centre, tril, cov, c_sd = whitening(info, prior_prec, theta, setup, robust=robust)
     sens = _sensitivity(info_full, full_prec, full_sd, setup, n_files)
 
-    model_kwargs = dict(fmat=fmat, gvec=gvec, q_star=q_star, n_obs=n_obs, theta_star=theta,
-                        centre=centre, tril=tril, pi_mean=setup.prior.mean,
-                        pi_sd=setup.prior.sd, log_noise=log_s)
-    if robust:
-        model_kwargs["nu_sd"] = setup.layout.sd
-        model_kwargs["nu_weights"] = setup.layout.scale_weights
-    model_kwargs = jax.device_put({k: np.asarray(v) for k, v in model_kwargs.items()})
+    data = InertiaData(fmat=fmat, gvec=gvec, q_star=q_star, n_obs=n_obs, theta_star=theta,
+                       centre=centre, tril=tril, pi_mean=setup.prior.mean, pi_sd=setup.prior.sd,
+                       log_noise=log_s, nu_sd=setup.layout.sd if robust else None,
+                       nu_weights=setup.layout.scale_weights if robust else None)
+    data = jax.device_put(jax.tree.map(np.asarray, data))
     return InertiaProblem(
-        model_kwargs=model_kwargs, torque=torque, prior=setup.prior,
+        data=data, torque=torque, prior=setup.prior,
         t=np.concatenate([fd["t"] for fd in files]),
         file_idx=np.concatenate([np.full(fd["t"].size, f) for f, fd in enumerate(files)]),
         omega=np.concatenate([fd["w"] for fd in files]),

@@ -153,9 +153,9 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
                                   wheel_errors=wheel_errors)
     _warn_weak(problem)
     n_files = len(telemetries)
-    kw = problem.model_kwargs
+    data = problem.data
     coords = {"file": np.arange(n_files), "axis": list(AXES), "noise": list(NOISE_NAMES),
-              "z_dim": np.arange(kw["centre"].shape[0]), "noise_z_dim": np.arange(n_files),
+              "z_dim": np.arange(data.centre.shape[0]), "noise_z_dim": np.arange(n_files),
               "wheel": list(problem.layout.wheels), "tilt": ["u1", "u2"]}
     dims = {"H0": ["file", "axis"], "T_N": ["file", "axis"], "z": ["z_dim"],
             "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
@@ -163,13 +163,13 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
             "T_body": ["file", "axis"], "T_N_rate": ["file", "axis"],
             **({"wheel_scale": ["wheel"]} if wheel_errors == "per_wheel" else {}),
             **{name: ["file"] for name in NOISE_NAMES}}
-    log_nh = np.asarray(kw["log_noise"])
+    log_nh = np.asarray(data.log_noise)
 
     def prior(key_prior, n):
         return sample_prior(key_prior, problem.prior, n, n_files=n_files, torque=torque,
                             log_noise=log_nh, layout=problem.layout if robust else None)
 
-    idata = run_nuts(key, problem_model(problem), model_kwargs=kw,
+    idata = run_nuts(key, problem_model(problem), model_kwargs={"data": data},
                      settings=settings, coords=coords, dims=dims, prior=prior,
                      prior_draws=prior_draws)
 

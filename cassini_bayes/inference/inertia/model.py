@@ -19,7 +19,7 @@ from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_NAMES,
 from cassini_bayes.names import INERTIA_NAMES
 
 if TYPE_CHECKING:
-    from cassini_bayes.inference.inertia.data import InertiaProblem
+    from cassini_bayes.inference.inertia.data import InertiaData, InertiaProblem
 
 __all__ = ["inertia_model", "problem_model"]
 
@@ -33,9 +33,10 @@ def _unpack(theta, n_files: int, torque: bool):
     return lp, h0, tq
 
 
-def _model(*, fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise,
-           torque: bool, per_wheel: bool = True, common: bool = False, n_torque_sets: int = 1,
-           nu_sd=None, nu_weights=None):
+def _model(data: InertiaData, *, torque: bool, per_wheel: bool = True, common: bool = False,
+           n_torque_sets: int = 1):
+    (fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise, nu_sd,
+     nu_weights) = data
     n_files = log_noise.shape[0]
     p_tot = centre.shape[0]
     z = numpyro.sample("z", dist.ImproperUniform(constraints.real_vector, (), (p_tot,)))
@@ -119,7 +120,7 @@ def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_w
     """The NumPyro model function (one object per flag set, so compiled code is reused); the
     flags must match the problem's (:func:`problem_model` reads them from it).
 
-    Call it with ``**InertiaProblem.model_kwargs`` (per-file sufficient statistics, so its shapes
+    Call it with ``data=InertiaProblem.data`` (per-file sufficient statistics, so its shapes
     depend on the number of files, wheels and the flags only, not on the number of samples).
     Posterior sites: ``Ixx … Iyz`` (kg m²), ``H0`` (file, axis) N m s, ``T_N`` (file, axis) N m
     when ``torque``, ``noise_scale`` (file), ``sigma_omega``, ``sigma_rho`` (rad/s) and
@@ -131,13 +132,11 @@ def inertia_model(torque: bool, robust: bool = False, wheel_errors: str = "per_w
     ``torque_rate`` the inertial torque rate ``T_N_rate`` (file, axis) N m/s
     (:mod:`cassini_bayes.inference.nuisance`).
     """
-    def model(**kwargs):
+    def model(data: InertiaData):
         if not robust:
-            kwargs.pop("nu_sd", None)
-            kwargs.pop("nu_weights", None)
-        return _model(torque=torque, per_wheel=wheel_errors == "per_wheel",
-                      common=robust and common, n_torque_sets=1 + int(robust and torque_rate),
-                      **kwargs)
+            data = data._replace(nu_sd=None, nu_weights=None)
+        return _model(data, torque=torque, per_wheel=wheel_errors == "per_wheel",
+                      common=robust and common, n_torque_sets=1 + int(robust and torque_rate))
 
     model.__name__ = (f"inertia_model_torque_{torque}_robust_{robust}_{wheel_errors}"
                       f"_common_{common}_rate_{torque_rate}")
