@@ -123,10 +123,10 @@ def test_whitened_axes_are_gaussian():
         sc, r = _sim(name, 21)
         p = prepare_rwa4(r.telemetry, sc.prior, method=method)
         assert p.chart == method
-        kw = p.model_kwargs
-        f = jax.jit(lambda w, kw=kw, c=p.chart: _LOG_DENSITY[c](kw["centre"] + kw["tril"] @ w,
+        kw = p.data
+        f = jax.jit(lambda w, kw=kw, c=p.chart: _LOG_DENSITY[c](kw.centre + kw.tril @ w,
                                                                 kw))
-        n = kw["centre"].shape[0]
+        n = kw.centre.shape[0]
         l0 = float(f(jnp.zeros(n)))
         for i in range(n):
             checks = ((-1, -0.5, 0.5), (1, -0.5, 0.5))

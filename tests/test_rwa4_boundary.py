@@ -8,6 +8,8 @@ diverge, and the Laplace step must never raise.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -84,9 +86,10 @@ def test_sbc_truths_and_posterior_prior_group_use_the_same_sampler():
         np.testing.assert_array_equal(pi, expected)
 
 
-def _chart_kwargs() -> dict:
-    """Sampler-chart constants like :func:`prepare_rwa4`'s, for the Cassini prior and a fixed
-    (well-conditioned, otherwise arbitrary) balance map."""
+def _chart_kwargs() -> SimpleNamespace:
+    """Sampler-chart constants like :func:`prepare_rwa4`'s (the chart fields of its
+    ``Rwa4Data``), for the Cassini prior and a fixed (well-conditioned, otherwise arbitrary)
+    balance map."""
     mean, cov = _cassini_prior()
     chol = np.linalg.cholesky(cov)
     u0 = np.array([0.5, -0.6, 0.62])
@@ -96,12 +99,12 @@ def _chart_kwargs() -> dict:
     cov_lp = np.linalg.solve(jac, np.linalg.solve(jac, cov).T)
     rng = np.random.default_rng(3)
     q_inv = np.linalg.qr(rng.standard_normal((6, 6)))[0] * np.array([20, 15, 30, 1, 1, 1.0])
-    return {k: jnp.asarray(v) for k, v in dict(
+    return SimpleNamespace(**{k: jnp.asarray(v) for k, v in dict(
         u0=u0, basis=rwa4_data._tangent_basis(u0), pi_mean=mean, pi_chol=chol,
         lp_centre=lp_c, lp_tril=np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)),
         margin_scale=(float(rwa4_prior._physical_margin(jnp.asarray(mean)))
                       / rwa4_prior._MARGIN_FRACTION),
-        q_inv=q_inv, z_offset=-0.95 * u0).items()}
+        q_inv=q_inv, z_offset=-0.95 * u0).items()})
 
 
 @pytest.mark.parametrize("chart", ["rcs", "rwa"])
@@ -122,15 +125,15 @@ def test_both_charts_state_the_same_prior(chart):
         u, pi, xi, log_jac = physical(t, kw)
         d_pi = jax.jacfwd(lambda s: physical(t.at[2:].set(s), kw)[1])(t[2:])
         gnomonic = -1.5 * jnp.log(1.0 + jnp.sum(t[:2] ** 2))
-        xi_err = jnp.max(jnp.abs(kw["pi_chol"] @ xi - (pi - kw["pi_mean"])))
+        xi_err = jnp.max(jnp.abs(kw.pi_chol @ xi - (pi - kw.pi_mean)))
         return (log_jac - jnp.linalg.slogdet(d_pi)[1] - gnomonic
-                - rwa4_prior._log_physical_factor(pi, kw["margin_scale"]),
+                - rwa4_prior._log_physical_factor(pi, kw.margin_scale),
                 rwa4_prior._physical_margin(pi), xi_err)
 
     res, margin, xi_err = map(np.asarray, jax.jit(jax.vmap(residual))(jnp.asarray(theta)))
     ok = margin > 0
     assert np.all(xi_err[ok] < 1e-6)                     # kg m²: π = μ + L ξ in both charts
-    assert ok.sum() > 200 and np.sum(ok & (margin < 2 * float(kw["margin_scale"]))) > 20
+    assert ok.sum() > 200 and np.sum(ok & (margin < 2 * float(kw.margin_scale))) > 20
     assert np.ptp(res[ok]) < 1e-6, np.ptp(res[ok])
 
 

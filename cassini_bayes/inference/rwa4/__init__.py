@@ -105,8 +105,8 @@ physical factor's barrier shows at ±3 (up to 6.7 below −4.5 on six replicates
 ±1): a soft, finite wall, no cliff.
 """
 
-from cassini_bayes.inference.rwa4.data import (MAX_SD_DIRECTION_DEG, METHODS, Rwa4Problem,
-                                               prepare_rwa4)
+from cassini_bayes.inference.rwa4.data import (MAX_SD_DIRECTION_DEG, METHODS, Rwa4Data,
+                                               Rwa4Problem, prepare_rwa4)
 from cassini_bayes.inference.rwa4.fit import Rwa4Posterior, axis_sensitivity, fit_rwa4
 from cassini_bayes.inference.rwa4.likelihood import balance_misfit
 from cassini_bayes.inference.rwa4.model import rwa4_model
@@ -126,7 +126,7 @@ __all__ = [
     "WHEEL",
     "detect_windows",
     "balance_misfit",
-    "Rwa4Problem",
+    "Rwa4Data", "Rwa4Problem",
     "prepare_rwa4",
     "rwa4_model",
     "sample_rwa4_prior",

@@ -28,11 +28,62 @@ from cassini_bayes.physics.momentum import inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 
-__all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Problem", "prepare_rwa4"]
+__all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Data", "Rwa4Problem", "prepare_rwa4"]
 
 METHODS = ("rcs", "rwa")
 MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
 _DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
+
+
+class Rwa4Data(NamedTuple):
+    """The arrays of :func:`~cassini_bayes.inference.rwa4.model.rwa4_model` (a pytree: problems
+    of the same shapes share one compiled sampler). ``G`` window pairs, ``R`` nuisance columns.
+
+    Attributes
+    ----------
+    m_pi, r_u, k_h, n_w, t_aa, j4, known_cov : the window means of :func:`_loglik` (its
+        docstring): per window (2G), ``A(q)ᵀ`` times the inertia regressor, times the solved
+        wheel's rate (rad/s), and times the known wheels' momentum (N m s); the sample counts;
+        the attitude products; the solved wheel's spin inertia (kg m²); ``Σ J² g gᵀ`` of the
+        known wheels.
+    nu_cols, nu_sd, nu_wheel : the robust model's nuisance columns (G, 3, R), prior sds (R,) and
+        solved-wheel marks (R,) (:func:`_nuisance_means`; ``R = 0`` in the idealised model).
+    u0, basis : the gnomonic chart's centre (3,) and tangent basis (2, 3).
+    pi_mean, pi_chol : the inertia prior's mean (6,) kg m² and Cholesky factor (6, 6).
+    log_noise_hat : (3,) log noise levels (rad/s, rad/s, rad).
+    margin_scale : the physical-inertia factor's scale (:func:`_margin_scale`).
+    cone_weight, cone_angle, cone_sd : the articulation-cone prior (weight 0 or 1; rad).
+    lp_centre, lp_tril : the RWA chart's log-Cholesky inertia coordinates.
+    z_offset, q_inv : the RCS chart's balance map (``None`` in the RWA chart).
+    centre, tril : the sampler's whitening ``θ = centre + tril w`` (``None`` until the Laplace
+        step has run).
+    """
+
+    m_pi: object
+    r_u: object
+    k_h: object
+    n_w: object
+    t_aa: object
+    j4: object
+    known_cov: object
+    nu_cols: object
+    nu_sd: object
+    nu_wheel: object
+    u0: object
+    basis: object
+    pi_mean: object
+    pi_chol: object
+    log_noise_hat: object
+    margin_scale: object
+    cone_weight: object
+    cone_angle: object
+    cone_sd: object
+    lp_centre: object
+    lp_tril: object
+    z_offset: object = None
+    q_inv: object = None
+    centre: object = None
+    tril: object = None
 
 
 class Rwa4Problem(NamedTuple):
@@ -40,7 +91,7 @@ class Rwa4Problem(NamedTuple):
 
     Attributes
     ----------
-    model_kwargs : arrays for :func:`rwa4_model`.
+    data : :class:`Rwa4Data`, the arrays of :func:`rwa4_model`.
     method : ``"rcs"`` or ``"rwa"``; prior : ``"uniform"`` or ``"cone"``.
     pairs : the ``(Time A, Time B)`` windows (s) used, one pair per group.
     inertia : the Gaussian inertia prior (mean (6,), cov (6, 6), kg m²).
@@ -53,11 +104,11 @@ class Rwa4Problem(NamedTuple):
     wheel : the wheel solved for.
     chart : ``"rcs"`` (balance coordinates) or ``"rwa"`` (direct), module docstring.
     layout : the nuisance layout of the robust model's effects (built for either model).
-    nuisance : their columns (:func:`_nuisance_means`; in ``model_kwargs`` only when ``robust``).
+    nuisance : their columns (:func:`_nuisance_means`; in ``data`` only when ``robust``).
     robust : whether the likelihood integrates the effects out.
     """
 
-    model_kwargs: dict
+    data: Rwa4Data
     method: str
     prior: str
     pairs: tuple[tuple[Window, Window], ...]
@@ -300,6 +351,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
               cone_angle=jnp.asarray(np.radians(CONE_ANGLE_DEG)),
               cone_sd=jnp.asarray(np.radians(CONE_SD_DEG)))
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
+    kw = Rwa4Data(**kw)
     centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
     cov_v = (tril @ tril.T)[:2, :2]
     sd_dir = float(np.degrees(np.sqrt(np.linalg.eigvalsh(cov_v)[-1])))
@@ -308,9 +360,9 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                          f"(Laplace sd > {MAX_SD_DIRECTION_DEG:g}°): no excitation between the "
                          "windows; choose windows across a spin change (RCS) or a slew (RWA)",
                          path=tel.source)
-    kw["centre"], kw["tril"] = jnp.asarray(centre), jnp.asarray(tril)
+    kw = kw._replace(centre=jnp.asarray(centre), tril=jnp.asarray(tril))
     return Rwa4Problem(
-        model_kwargs=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
+        data=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
         inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
         noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
         nuisance=nuisance, robust=robust)

@@ -34,26 +34,25 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     ∂d/∂θ, ``C`` the noise covariance); with ``ν_e ~ N(0, diag sd_e²)`` the axis shift ``U Δθ``
     (``U`` = ∂u/∂θ) has covariance ``U K diag(sd_e²) Kᵀ Uᵀ``, reported as √trace in degrees.
     """
-    kw = dict(problem.model_kwargs)
-    centre = kw.pop("centre")
-    kw.pop("tril")
-    ideal = {**kw, **_no_nuisance(len(problem.pairs))}
+    kw = problem.data
+    centre = kw.centre
+    ideal = kw._replace(**_no_nuisance(len(problem.pairs)))
     physical = _PHYSICAL[problem.chart]
     log_density = _LOG_DENSITY[problem.chart]
 
     def balance(theta):
         u, pi, _, _ = physical(theta, kw)
-        return _balance(u, pi, m_pi=kw["m_pi"], r_u=kw["r_u"], k_h=kw["k_h"],
-                        j4=kw["j4"]).ravel()
+        return _balance(u, pi, m_pi=kw.m_pi, r_u=kw.r_u, k_h=kw.k_h,
+                        j4=kw.j4).ravel()
 
     u, pi, _, _ = physical(centre, kw)
     hess = -np.asarray(jax.hessian(lambda th: log_density(th, ideal))(centre))
     jac = np.asarray(jax.jacfwd(balance)(centre))
     jac_u = np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(centre))
     noise = jax.scipy.linalg.block_diag(*_noise_cov(
-        u, pi, kw["log_noise_hat"], n_w=kw["n_w"], t_aa=kw["t_aa"], j4=kw["j4"],
-        known_cov=kw["known_cov"]))
-    cols = np.asarray(_nuisance_cols(u, r_u=kw["r_u"], j4=kw["j4"],
+        u, pi, kw.log_noise_hat, n_w=kw.n_w, t_aa=kw.t_aa, j4=kw.j4,
+        known_cov=kw.known_cov))
+    cols = np.asarray(_nuisance_cols(u, r_u=kw.r_u, j4=kw.j4,
                                      nu_cols=problem.nuisance["nu_cols"],
                                      nu_wheel=problem.nuisance["nu_wheel"]))
     cols = cols.reshape(jac.shape[0], -1)
@@ -119,12 +118,11 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
         problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
                                inertia=inertia, wheel=wheel, robust=robust,
                                wheel_errors=wheel_errors)
-    kw = problem.model_kwargs
     coords = {"w_dim": np.arange(_DIM)}
     dims = {"w": ["w_dim"]}
-    idata = run_nuts(key, rwa4_model(problem.chart), model_kwargs=kw, settings=settings,
-                     coords=coords, dims=dims, prior=lambda k, n: sample_rwa4_prior(k, problem, n),
-                     prior_draws=prior_draws)
+    idata = run_nuts(key, rwa4_model(problem.chart), model_kwargs={"data": problem.data},
+                     settings=settings, coords=coords, dims=dims,
+                     prior=lambda k, n: sample_rwa4_prior(k, problem, n), prior_draws=prior_draws)
     post = idata.posterior
     draws = np.stack([post[n].values.ravel() for n in U4_NAMES], -1)
     direction = direction_summary(draws)
@@ -137,14 +135,14 @@ def _data_groups(problem: Rwa4Problem) -> dict:
     """The ``observed_data`` (window means) and ``constant_data`` groups of :func:`fit_rwa4`."""
     import xarray as xr
 
-    kw = problem.model_kwargs
+    kw = problem.data
     observed = xr.Dataset(
-        {"h_known_mean": (("window", "axis"), np.asarray(kw["k_h"]), {"units": "N m s",
+        {"h_known_mean": (("window", "axis"), np.asarray(kw.k_h), {"units": "N m s",
                           "description": "window mean of A(q)ᵀ h_known (inertial)"}),
-         "rho4_attitude_mean": (("window", "axis", "axis2"), np.asarray(kw["r_u"]),
+         "rho4_attitude_mean": (("window", "axis", "axis2"), np.asarray(kw.r_u),
                                 {"units": "rad/s", "description": "window mean of ρ4 A(q)ᵀ"}),
-         "n_samples": ("window", np.asarray(kw["n_w"]))},
-        coords={"window": np.arange(np.asarray(kw["n_w"]).shape[0]), "axis": ["x", "y", "z"],
+         "n_samples": ("window", np.asarray(kw.n_w))},
+        coords={"window": np.arange(np.asarray(kw.n_w).shape[0]), "axis": ["x", "y", "z"],
                 "axis2": ["x", "y", "z"]}, attrs={"source": problem.source})
     win = np.array([[a[0], a[1], b[0], b[1]] for a, b in problem.pairs], float)
     constant = xr.Dataset(

@@ -76,16 +76,16 @@ def balance_misfit(problem: Rwa4Problem, u, pi) -> tuple[float, int]:
     (the axis's two are fitted; an inertia the balance also informs makes χ² smaller still). A
     model that fits gives ``χ²`` about its dof; an unmodelled effect larger than its prior
     allows shows as a large one."""
-    kw = problem.model_kwargs
+    kw = problem.data
     u = jnp.asarray(np.asarray(u, float) / np.linalg.norm(u))
     pi = jnp.asarray(pi, float)
-    d = np.asarray(_balance(u, pi, m_pi=kw["m_pi"], r_u=kw["r_u"], k_h=kw["k_h"],
-                            j4=kw["j4"])).ravel()
+    d = np.asarray(_balance(u, pi, m_pi=kw.m_pi, r_u=kw.r_u, k_h=kw.k_h,
+                            j4=kw.j4)).ravel()
     cov = np.asarray(jax.scipy.linalg.block_diag(*_noise_cov(
-        u, pi, kw["log_noise_hat"], n_w=kw["n_w"], t_aa=kw["t_aa"], j4=kw["j4"],
-        known_cov=kw["known_cov"])))
-    cols = np.asarray(_nuisance_cols(u, r_u=kw["r_u"], j4=kw["j4"], nu_cols=kw["nu_cols"],
-                                     nu_wheel=kw["nu_wheel"])).reshape(d.size, -1)
-    cols = cols * np.asarray(kw["nu_sd"])[None, :]
+        u, pi, kw.log_noise_hat, n_w=kw.n_w, t_aa=kw.t_aa, j4=kw.j4,
+        known_cov=kw.known_cov)))
+    cols = np.asarray(_nuisance_cols(u, r_u=kw.r_u, j4=kw.j4, nu_cols=kw.nu_cols,
+                                     nu_wheel=kw.nu_wheel)).reshape(d.size, -1)
+    cols = cols * np.asarray(kw.nu_sd)[None, :]
     chi2 = float(d @ np.linalg.solve(cov + cols @ cols.T, d))
     return chi2, max(d.size - 2, 1)

@@ -24,7 +24,7 @@ __all__ = ["rwa4_model"]
 def _gnomonic(v, kw):
     """Unit vector of the gnomonic chart ``v`` (2,) about ``u0`` and ``log dΩ/dv``."""
     s = 1.0 + jnp.sum(v**2)
-    u = (kw["u0"] + v @ kw["basis"]) / jnp.sqrt(s)
+    u = (kw.u0 + v @ kw.basis) / jnp.sqrt(s)
     return u, -1.5 * jnp.log(s)
 
 
@@ -34,13 +34,13 @@ def _physical_rwa(theta, kw):
     log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by construction,
     :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
     u, log_jac = _gnomonic(theta[:2], kw)
-    lp = kw["lp_centre"] + kw["lp_tril"] @ theta[2:8]
+    lp = kw.lp_centre + kw.lp_tril @ theta[2:8]
     pi = pi_from_cholesky_params(lp)
-    xi = jax.scipy.linalg.solve_triangular(kw["pi_chol"], pi - kw["pi_mean"], lower=True)
+    xi = jax.scipy.linalg.solve_triangular(kw.pi_chol, pi - kw.pi_mean, lower=True)
     # log|det ∂π/∂lp| up to a constant: exp of the diagonal gives Σ lp_ii, L → L Lᵀ gives
     # 2³ L00³ L11² L22, Σ → I = tr(Σ) 1 − Σ is linear
     return u, pi, xi, (log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
-                       + _log_physical_factor(pi, kw["margin_scale"]))
+                       + _log_physical_factor(pi, kw.margin_scale))
 
 
 def _physical_rcs(theta, kw):
@@ -49,11 +49,11 @@ def _physical_rcs(theta, kw):
     u, log_jac = _gnomonic(theta[:2], kw)
     z_dir, log_jac_z = _gnomonic(theta[3:5], kw)
     z = -jnp.exp(theta[2]) * z_dir
-    xi = kw["q_inv"] @ jnp.concatenate([z - kw["z_offset"], theta[5:8]])
-    pi = kw["pi_mean"] + kw["pi_chol"] @ xi
+    xi = kw.q_inv @ jnp.concatenate([z - kw.z_offset, theta[5:8]])
+    pi = kw.pi_mean + kw.pi_chol @ xi
     # d³z = |z|³ d log|z| dΩ; π linear in ξ: the physical truncation is an explicit factor
     return u, pi, xi, (log_jac + log_jac_z + 3.0 * theta[2]
-                       + _log_physical_factor(pi, kw["margin_scale"]))
+                       + _log_physical_factor(pi, kw.margin_scale))
 
 
 def _log_density_with(physical, theta, kw):
@@ -62,9 +62,9 @@ def _log_density_with(physical, theta, kw):
     # the sphere (chart Jacobian), times the articulation-cone factor when chosen
     log_prior = -0.5 * jnp.sum(xi**2) + log_jac
     angle = jnp.arccos(jnp.clip(u[2], -1.0, 1.0))
-    log_prior += -0.5 * kw["cone_weight"] * ((angle - kw["cone_angle"]) / kw["cone_sd"]) ** 2
-    data = {k: kw[k] for k in _DATA_KEYS}
-    return log_prior + _loglik(u, pi, kw["log_noise_hat"], **data)
+    log_prior += -0.5 * kw.cone_weight * ((angle - kw.cone_angle) / kw.cone_sd) ** 2
+    data = {k: getattr(kw, k) for k in _DATA_KEYS}
+    return log_prior + _loglik(u, pi, kw.log_noise_hat, **data)
 
 
 def _log_density_rcs(theta, kw):
@@ -88,18 +88,18 @@ def rwa4_model(chart: str = "rwa"):
     """The NumPyro model of a chart (``Rwa4Problem.chart``); one function object per chart, so
     compiled samplers are reused.
 
-    Call it with ``**Rwa4Problem.model_kwargs``. Posterior sites: ``u4_x``, ``u4_y``, ``u4_z``
+    Call it with ``data=Rwa4Problem.data``. Posterior sites: ``u4_x``, ``u4_y``, ``u4_z``
     (the solved wheel's axis), ``Ixx … Iyz`` (kg m²) and the sampler's whitened ``w``
     (``θ = centre + tril w``).
     """
     log_density, physical = _LOG_DENSITY[chart], _PHYSICAL[chart]
 
-    def model(*, centre, tril, **kw):
+    def model(data):
         w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (),
-                                                     centre.shape))
-        theta = centre + tril @ w
-        numpyro.factor("log_density", log_density(theta, kw))
-        u, pi, _, _ = physical(theta, kw)
+                                                     data.centre.shape))
+        theta = data.centre + data.tril @ w
+        numpyro.factor("log_density", log_density(theta, data))
+        u, pi, _, _ = physical(theta, data)
         for i, name in enumerate(U4_NAMES):
             numpyro.deterministic(name, u[i])
         for i, name in enumerate(INERTIA_NAMES):
