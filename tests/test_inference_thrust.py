@@ -6,6 +6,8 @@ sample, so they are marked ``slow``.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -223,16 +225,16 @@ def test_sampler_prior_density_is_the_stated_prior():
 
     sc = load_spacecraft("models/fsds.toml")
     tp = tau_prior(sc)
-    kw = dict(tau_delay_scale=jnp.asarray(tp.delay_scale), tau_mu=jnp.asarray(tp.log_mean),
-              tau_sd=jnp.asarray(tp.log_sd),
-              a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
-              c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))))
+    kw = SimpleNamespace(tau_delay_scale=jnp.asarray(tp.delay_scale),
+                         tau_mu=jnp.asarray(tp.log_mean), tau_sd=jnp.asarray(tp.log_sd),
+                         a_mu=jnp.asarray(float(rise_deficit(*tp.median()[:2]))),
+                         c_mu=jnp.asarray(float(long_pulse_excess(*tp.median()))))
 
     def coords(tau):
         a = float(rise_deficit(*tau[:2]))
         return jnp.array([np.log(tau[0] / (a - tau[0])),
-                          np.log(a / float(kw["a_mu"])) / A_LOG_SCALE,
-                          (float(long_pulse_excess(*tau)) - float(kw["c_mu"])) / C_SCALE_S])
+                          np.log(a / float(kw.a_mu)) / A_LOG_SCALE,
+                          (float(long_pulse_excess(*tau)) - float(kw.c_mu)) / C_SCALE_S])
 
     for tau in [(0.005, 0.020, 0.065), (1e-6, 0.045, 0.045), (0.0004, 0.030, 0.050),
                 (0.012, 0.015, 0.040), (0.020, 0.002, 0.060)]:
@@ -269,10 +271,10 @@ def test_pulse_on_at_the_first_sample_is_modelled_after_it_with_a_warning(monkey
     assert len(lines) == 2
     assert "Z1 at t_on = -0.2 s" in lines[0] and "Y2 at t_on = -0.135 s" in lines[1]
     assert prob.n_pulses[0] == 3
-    kw = prob.model_kwargs
+    kw = prob.data
     tau = (0.005, 0.020, 0.065)
-    j = np.asarray(pulse_increments(kw["t"][0], kw["t_on"][0], kw["thruster"][0], kw["width"][0],
-                                    kw["slot"][0], kw["slot_offsets"], *tau))
+    j = np.asarray(pulse_increments(kw.events.t[0], kw.events.t_on[0], kw.events.thruster[0], kw.events.width[0],
+                                    kw.events.slot[0], kw.slot_offsets, *tau))
     t = np.asarray(tel.t)
     for k, (on, w) in enumerate(zip(t_on[:2], width[:2])):
         col = [0, 5][k]

@@ -161,7 +161,7 @@ from cassini_bayes.inference.inertia.knowledge import (InertiaGaussian, inertia_
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.thrust.coords import (A_LOG_SCALE, C_SCALE_S, long_pulse_excess,
                                                    rise_deficit)
-from cassini_bayes.inference.thrust.data import ThrustProblem, prepare_thrust
+from cassini_bayes.inference.thrust.data import ThrustData, ThrustProblem, prepare_thrust
 from cassini_bayes.inference.thrust.fit import RESIDUAL_DRAWS, ThrustPosterior, fit_thrust
 from cassini_bayes.inference.thrust.likelihood import (impulse_residuals, pulse_increments,
                                                        time_tag_columns)
@@ -194,7 +194,7 @@ __all__ = [
     "CONTRACTION_UNIDENTIFIED",
     "PRIOR_CONFLICT_MASS",
     "thrust_names",
-    "ThrustProblem",
+    "ThrustData", "ThrustProblem",
     "prepare_thrust",
     "pulse_increments",
     "time_tag_columns",

@@ -82,21 +82,21 @@ def _tau_from_z(tau_z, kw):
     A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``s → −∞``, ``c = 0``.
     """
     s = tau_z[0]
-    a = kw["a_mu"] * jnp.exp(A_LOG_SCALE * tau_z[1])
+    a = kw.a_mu * jnp.exp(A_LOG_SCALE * tau_z[1])
     t_d = a * jax.nn.sigmoid(s)
     b = a * jax.nn.sigmoid(-s)
     u = _lambert_w0(jnp.exp(s))
     t_r = b * jnp.exp(u)
-    t_f = kw["c_mu"] + C_SCALE_S * tau_z[2] + b
+    t_f = kw.c_mu + C_SCALE_S * tau_z[2] + b
     t_f = jnp.where(t_f > 0.0, t_f, jnp.nan)
     log_tau = jnp.log(jnp.stack([t_r, t_f]))
-    z_rf = (log_tau - kw["tau_mu"]) / kw["tau_sd"]
+    z_rf = (log_tau - kw.tau_mu) / kw.tau_sd
     std = dist.Normal(0.0, 1.0)
-    sd_d = kw["tau_delay_scale"]
+    sd_d = kw.tau_delay_scale
     log_prior_delay = jnp.log(2.0 / sd_d) + std.log_prob(t_d / sd_d)      # half-normal
     log_jac = (2.0 * jnp.log(a) + jax.nn.log_sigmoid(s) + jax.nn.log_sigmoid(-s)
                + jnp.log(A_LOG_SCALE) + u - jnp.log1p(u) + jnp.log(C_SCALE_S))
-    log_prior = (log_prior_delay + jnp.sum(std.log_prob(z_rf) - jnp.log(kw["tau_sd"]) - log_tau)
+    log_prior = (log_prior_delay + jnp.sum(std.log_prob(z_rf) - jnp.log(kw.tau_sd) - log_tau)
                  + log_jac)
     return jnp.stack([t_d, t_r, t_f]), log_prior
 
@@ -104,12 +104,12 @@ def _tau_from_z(tau_z, kw):
 def _physical(theta, kw, n_f: int, sample_inertia: bool):
     """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
     the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2) and ``π`` (6,) kg m²."""
-    n_ev = kw["log_noise_hat"].shape[0]
+    n_ev = kw.log_noise_hat.shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
-    thrust = jnp.exp(kw["f_mu"] + THRUST_PRIOR_LOG_SD * f_z)
+    thrust = jnp.exp(kw.f_mu + THRUST_PRIOR_LOG_SD * f_z)
     tau, _ = _tau_from_z(tau_z, kw)
-    log_sigma = kw["log_noise_hat"] + _NOISE_STEP * noise_z[:, None]
-    pi = kw["inertia_mean"]
+    log_sigma = kw.log_noise_hat + _NOISE_STEP * noise_z[:, None]
+    pi = kw.inertia_mean
     if sample_inertia:
-        pi = pi + kw["inertia_tril"] @ inertia_z
-    return thrust, thrust[kw["f_index"]], tau, log_sigma, pi
+        pi = pi + kw.inertia_tril @ inertia_z
+    return thrust, thrust[kw.f_index], tau, log_sigma, pi

@@ -18,7 +18,7 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
 from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
-from cassini_bayes.inference.thrust.likelihood import time_tag_columns
+from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_columns
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
 from cassini_bayes.physics.impulse import moment_matrix
@@ -27,11 +27,50 @@ from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import (PulseAtStartWarning, PulseLog, Telemetry,
                                      check_pulses_in_span)
 
-__all__ = ["ThrustProblem", "prepare_thrust"]
+__all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
 _TAIL_S = 1.5
 _PULSE_BUCKET = 64
+
+
+class ThrustData(NamedTuple):
+    """The arrays of :func:`~cassini_bayes.inference.thrust.model.thrust_model` (a pytree:
+    problems of the same shapes share one compiled sampler). ``E`` events.
+
+    Attributes
+    ----------
+    events : :class:`~cassini_bayes.inference.thrust.likelihood.EventData`, each field with a
+        leading event axis (E), padded to common lengths.
+    slot_offsets : (k,) int, the samples after a pulse's first one its thrust can still change.
+    log_noise_hat : (E, 2) log data noise levels (σ_ω, σ_ρ rad/s).
+    q_matrix : (3, 8) m, torque per newton of each thruster (Feldman & Lee Eq 16).
+    tau_delay_scale, tau_mu, tau_sd, a_mu, c_mu : the pulse time constants' prior and the
+        sampler's centres of the rise deficit and the long-pulse excess, s (coords.py).
+    f_mu : log predicted thrust; f_index : (8,) int, each thruster's thrust parameter.
+    inertia_mean, inertia_tril : (6,) kg m² and (6, 6): the inertia (its prior when sampled;
+        ``inertia_tril`` zero when fixed).
+    nu_sd : (R,) prior sds of the robust nuisance (R = 0 when idealised).
+    centre, tril : the sampler's whitening ``θ = centre + tril w`` (``None`` until the Laplace
+        step has run).
+    """
+
+    events: EventData
+    slot_offsets: object
+    log_noise_hat: object
+    q_matrix: object
+    tau_delay_scale: object
+    tau_mu: object
+    tau_sd: object
+    a_mu: object
+    c_mu: object
+    f_mu: object
+    f_index: object
+    inertia_mean: object
+    inertia_tril: object
+    nu_sd: object
+    centre: object = None
+    tril: object = None
 
 
 class ThrustProblem(NamedTuple):
@@ -39,7 +78,7 @@ class ThrustProblem(NamedTuple):
 
     Attributes
     ----------
-    model_kwargs : arrays for :func:`thrust_model` (events padded to common lengths).
+    data : :class:`ThrustData`, the arrays of :func:`thrust_model`.
     mode : ``"mean"``, ``"branch"`` or ``"thruster"``.
     names : thrust parameter names of the mode.
     thrust_pred : predicted thrust (prior centre), N.
@@ -54,7 +93,7 @@ class ThrustProblem(NamedTuple):
         of the robust model, ``None`` for the idealised one.
     """
 
-    model_kwargs: dict
+    data: ThrustData
     mode: str
     names: tuple[str, ...]
     thrust_pred: float
@@ -147,7 +186,7 @@ def _checked_events(events) -> tuple[list[Telemetry], list[PulseLog]]:
 
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
                    layout, i_lin: np.ndarray, robust: bool) -> tuple[dict, np.ndarray, np.ndarray]:
-    """The events' arrays padded to common lengths (the first half of ``model_kwargs``), the
+    """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
     thrusters that fired (8,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
     inertia the robust columns are linear around."""
     n_max = max(t.n for t in tels)
@@ -245,17 +284,20 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         f_mu=np.log(spacecraft.thrust), f_index=_thrust_index(mode), inertia_mean=i_mean,
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0))))
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
-    kw["time_tag_cols"] = _time_tag_columns(
+    time_tag_cols = _time_tag_columns(
         kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
         tuple(jax.device_put(x) for x in tp.median()),
         jax.device_put(np.full(8, float(spacecraft.thrust))), kw["q_matrix"],
         jax.device_put(sd_t))
+    events = EventData(**{f: kw.pop(f) for f in EventData._fields if f != "time_tag_cols"},
+                       time_tag_cols=time_tag_cols)
+    data = ThrustData(events=events, **kw)
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
-    centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), kw)
-    kw["centre"], kw["tril"] = jax.device_put(centre), jax.device_put(tril)
+    centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), data)
+    data = data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
     return ThrustProblem(
-        model_kwargs=kw, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
+        data=data, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
         inertia=inertia, inertia_fixed=i_fixed,
         sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),

@@ -45,10 +45,10 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     Returns the draws of ``ν`` (chain × draw, R), in the posterior's flattened order."""
     import xarray as xr
 
-    kw = problem.model_kwargs
+    kw = problem.data
     w = np.asarray(idata.posterior["w"].values)
     n_chain, n_draw, dim = w.shape
-    n_nu = kw["nu_sd"].shape[0]
+    n_nu = kw.nu_sd.shape[0]
     eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
     nu = np.asarray(_nuisance_sampler(len(problem.names), sample_inertia)(
         jnp.asarray(w.reshape(-1, dim)), eps, kw))
@@ -97,15 +97,15 @@ def _data_groups(problem: ThrustProblem, d: np.ndarray) -> dict:
     (``d`` the posterior-mean residuals, :func:`_posterior_mean_residuals`)."""
     import xarray as xr
 
-    kw = problem.model_kwargs
+    kw = problem.data
     n_ev = len(problem.sources)
-    m = np.asarray(kw["mask"]) > 0
-    t_all = np.concatenate([np.asarray(kw["t"])[e][m[e]] for e in range(n_ev)])
+    m = np.asarray(kw.events.mask) > 0
+    t_all = np.concatenate([np.asarray(kw.events.t)[e][m[e]] for e in range(n_ev)])
     ev_all = np.concatenate([np.full(int(m[e].sum()), e) for e in range(n_ev)])
     r_all = np.concatenate([d[e][m[e]] for e in range(n_ev)])
-    i_fix = inertia_matrix(jnp.asarray(kw["inertia_mean"]))
-    v_all = np.concatenate([np.asarray(impulse_lhs(kw["t"][e], kw["omega"][e], i_fix,
-                                                   kw["h_wheels"][e]))[m[e]]
+    i_fix = inertia_matrix(jnp.asarray(kw.inertia_mean))
+    v_all = np.concatenate([np.asarray(impulse_lhs(kw.events.t[e], kw.events.omega[e], i_fix,
+                                                   kw.events.h_wheels[e]))[m[e]]
                             for e in range(n_ev)])
     t_coord = {"t": ("t", t_all, {"units": "s"}), "axis": ["x", "y", "z"],
                "event": ("t", ev_all)}
@@ -188,10 +188,10 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
                       "prior-dominated", stacklevel=2)
-    kw = problem.model_kwargs
+    kw = problem.data
     n_ev = len(problem.sources)
     sample_inertia = inertia is not None
-    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw["centre"].shape[0])}
+    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw.centre.shape[0])}
     dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"]}
     if robust:
         coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
@@ -201,7 +201,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      EFFECTS["body_torque"]: ["event", "axis"],
                      **({EFFECTS["wheel_inertia"]: ["wheel"]}
                         if wheel_errors == "per_wheel" else {})})
-    idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs=kw, settings=settings,
+    idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs={"data": kw}, settings=settings,
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)

@@ -24,8 +24,8 @@ __all__ = ["EventData", "pulse_increments", "time_tag_columns", "impulse_residua
 
 class EventData(NamedTuple):
     """One biasing event's arrays, padded to the events' common lengths (``n`` samples, ``m``
-    pulses): a pytree the likelihood is vmapped over. In ``ThrustProblem.model_kwargs`` each
-    field has a leading event axis (E) under the same name; :meth:`of` gathers them."""
+    pulses): a pytree the likelihood is vmapped over. In ``ThrustData.events`` each field has
+    a leading event axis (E)."""
 
     t: jax.Array               # (n,) s; padding repeats the last sample
     omega: jax.Array           # (n, 3) rad/s body rates
@@ -38,11 +38,6 @@ class EventData(NamedTuple):
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
     time_tag_cols: jax.Array   # (n, 3) N m s time-tag columns (:func:`time_tag_columns`)
-
-    @classmethod
-    def of(cls, kw: dict) -> EventData:
-        """The events' arrays (leading axis E) from ``model_kwargs``."""
-        return cls(*(kw[name] for name in cls._fields))
 
 
 def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, tau_rise, tau_fall):
@@ -144,12 +139,12 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     """Offset-free residuals ``V − Q (F ⊙ j) − cols ν − b̂`` (E, n_max, 3) N m s at given
     parameters (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2), robust
     nuisance ``nu`` (R,), default 0); padded rows are 0."""
-    kw = problem.model_kwargs
-    idx = np.asarray(kw["f_index"])
+    kw = problem.data
+    idx = np.asarray(kw.f_index)
     f8 = np.asarray(thrust, float)[idx]
-    pi = np.asarray(kw["inertia_mean"]) if pi is None else np.asarray(pi, float)
-    nu = np.zeros(kw["nu_sd"].shape[0]) if nu is None else np.asarray(nu, float)
+    pi = np.asarray(kw.inertia_mean) if pi is None else np.asarray(pi, float)
+    nu = np.zeros(kw.nu_sd.shape[0]) if nu is None else np.asarray(nu, float)
     d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
                        tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
-                       jnp.asarray(nu), EventData.of(kw), kw["slot_offsets"], kw["q_matrix"])
-    return np.asarray(d) * np.asarray(kw["mask"])[..., None]
+                       jnp.asarray(nu), kw.events, kw.slot_offsets, kw.q_matrix)
+    return np.asarray(d) * np.asarray(kw.events.mask)[..., None]

@@ -15,7 +15,7 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.inference.gaussian import OffsetMarginal, nuisance_marginal
 from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpack
-from cassini_bayes.inference.thrust.likelihood import EventData, _event_loglik
+from cassini_bayes.inference.thrust.likelihood import _event_loglik
 from cassini_bayes.inference.thrust.prior import _NOISE_STEP, NOISE_PRIOR_LOG_SD, thrust_names
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
@@ -26,14 +26,14 @@ def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
     _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
     return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
-        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, EventData.of(kw),
-        kw["slot_offsets"], kw["q_matrix"])
+        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events,
+        kw.slot_offsets, kw.q_matrix)
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring);
     the offsets and the robust model's nuisance ``ν`` are integrated out exactly."""
-    n_ev = kw["log_noise_hat"].shape[0]
+    n_ev = kw.log_noise_hat.shape[0]
     f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
     _, log_prior_tau = _tau_from_z(tau_z, kw)
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
@@ -42,8 +42,8 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
     st = _event_stats(theta, kw, n_f, sample_inertia)
     out = log_prior + jnp.sum(st.loglik)
-    if kw["nu_sd"].shape[0]:
-        out += nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw["nu_sd"])[0]
+    if kw.nu_sd.shape[0]:
+        out += nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)[0]
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
 
@@ -55,10 +55,10 @@ def _nuisance_sampler(n_f: int, sample_inertia: bool):
     draw)."""
     def one(args, kw):
         w, eps = args
-        st = _event_stats(kw["centre"] + kw["tril"] @ w, kw, n_f, sample_inertia)
-        _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw["nu_sd"])
+        st = _event_stats(kw.centre + kw.tril @ w, kw, n_f, sample_inertia)
+        _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
         z = mean + jax.scipy.linalg.solve_triangular(chol.T, eps, lower=False)
-        return kw["nu_sd"] * z
+        return kw.nu_sd * z
 
     @jax.jit
     def draws(w, eps, kw):
@@ -77,9 +77,9 @@ def _laplace_density(n_f: int, sample_inertia: bool):
     return f
 
 
-def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
-    w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), centre.shape))
-    theta = centre + tril @ w
+def _model(kw, *, names: tuple[str, ...], sample_inertia: bool):
+    w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), kw.centre.shape))
+    theta = kw.centre + kw.tril @ w
     numpyro.factor("log_density", _log_density(theta, kw, len(names), sample_inertia))
     thrust, _, tau, log_sigma, pi = _physical(theta, kw, len(names), sample_inertia)
     for i, name in enumerate(names):
@@ -98,15 +98,15 @@ def _model(*, centre, tril, names: tuple[str, ...], sample_inertia: bool, **kw):
 def thrust_model(mode: str, sample_inertia: bool = False):
     """The NumPyro model (one function object per mode, so compiled samplers are reused).
 
-    Call it with ``**ThrustProblem.model_kwargs``. Posterior sites: the thrust names of the mode
+    Call it with ``data=ThrustProblem.data``. Posterior sites: the thrust names of the mode
     (N), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
     rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``
     (the robust model's nuisance ``ν`` is integrated out; :func:`fit_thrust` adds its draws).
     """
     names = thrust_names(mode)
 
-    def model(**kwargs):
-        return _model(names=names, sample_inertia=sample_inertia, **kwargs)
+    def model(data):
+        return _model(data, names=names, sample_inertia=sample_inertia)
 
     model.__name__ = f"thrust_model_{mode}_{'inertia' if sample_inertia else 'fixed'}"
     return model

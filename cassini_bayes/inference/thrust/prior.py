@@ -156,15 +156,15 @@ def _thrust_index(mode: str) -> np.ndarray:
 def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.ndarray]:
     """``n`` draws of the physical parameters from the stated prior (module docstring)."""
     k_f, k_t, k_s, k_i = jax.random.split(key, 4)
-    kw = problem.model_kwargs
-    n_ev = kw["log_noise_hat"].shape[0]
+    kw = problem.data
+    n_ev = kw.log_noise_hat.shape[0]
     f_z = jax.random.normal(k_f, (n, len(problem.names)))
     noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
     thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
     tau = np.asarray(draw_tau_prior(k_t, problem.tau, (n,)))
     out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
     out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
-    sig = np.exp(np.asarray(kw["log_noise_hat"])[None] + _NOISE_STEP * np.asarray(noise_z))
+    sig = np.exp(np.asarray(kw.log_noise_hat)[None] + _NOISE_STEP * np.asarray(noise_z))
     out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]
     if problem.inertia is not None:
         z = np.asarray(jax.random.normal(k_i, (n, 6)))
