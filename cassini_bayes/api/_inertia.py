@@ -14,38 +14,19 @@ __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
 def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
     """The paper's all-axes least squares (Feldman & Lee Eq 11) on the same data, or ``None``,
-    with warning lines.
-
-    One file: :func:`cassini_bayes.estimators.inertia.fit_all_axes`. Several files: their Eq 11
-    systems (each anchored on its own first sample) stacked into one least-squares problem.
-    """
-    import numpy as np
-
-    from cassini_bayes.physics.momentum import INERTIA_NAMES, stacked_system, wheel_momentum_body
+    with warning lines: :func:`cassini_bayes.estimators.baseline.fit_inertia_baseline` with
+    ``method="all_axes"`` (several files: their Eq 11 systems, each anchored on its own first
+    sample, stacked into one least-squares problem)."""
+    from cassini_bayes.estimators.baseline import fit_inertia_baseline
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
 
     try:
-        from cassini_bayes.estimators.inertia import fit_all_axes
-
-        parts, msgs = [], []
-        for tel in telemetries:
-            names = tel.active_wheels()
-            rates = np.stack([np.nan_to_num(tel.wheel_rate(n)) for n in names], 1)
-            axes = np.stack([spacecraft.wheel(n).axis for n in names])
-            js = np.array([spacecraft.wheel(n).inertia for n in names])
-            h = np.asarray(wheel_momentum_body(rates, axes, js))
-            parts.append((tel.q, tel.omega, h))
-        if len(parts) == 1:
-            fit = fit_all_axes(*parts[0])
-            pi, msgs = fit.pi, list(fit.warnings)
-        else:
-            systems = [stacked_system(*p) for p in parts]
-            s = np.concatenate([np.asarray(a) for a, _ in systems])
-            g = np.concatenate([np.asarray(b) for _, b in systems])
-            pi = np.linalg.lstsq(s, g, rcond=None)[0]
-        return {n: float(v) for n, v in zip(INERTIA_NAMES, pi)}, [f"baseline: {m}" for m in msgs]
+        fit = fit_inertia_baseline(telemetries, spacecraft, method="all_axes")
     except Exception as e:  # the baseline must never sink the Bayesian fit
         return None, [f"baseline (Feldman & Lee Eq 11 least squares) unavailable: "
                       f"{' '.join(str(e).split())}"]
+    return ({n: float(v) for n, v in zip(INERTIA_NAMES, fit.pi)},
+            [f"baseline: {m}" for m in fit.warnings])
 
 
 def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
