@@ -65,6 +65,20 @@ def test_check_summarises_a_valid_file(files, run_cli):
     assert "2 quiet period(s), 1 slew(s)" in text
 
 
+def test_library_check_says_what_the_command_prints(files):
+    """``cassini_bayes.check_telemetry`` is what ``check`` prints, as data."""
+    import cassini_bayes as cb
+
+    c = cb.check_telemetry(files / "slew.csv", pulses=files / "pulses.csv")
+    assert c.n == 1200 and c.sampling() == "2 Hz (median step 0.5 s)"
+    assert [(w.name, w.on) for w in c.wheels] == [("RWA1", True), ("RWA2", True),
+                                                   ("RWA3", True), ("RWA4", False)]
+    assert (c.wheels[0].min_rpm, c.wheels[0].max_rpm) == pytest.approx((500.0, 1000.0))
+    assert [(k.name, k.pulses) for k in c.thrusters] == [("Y2", 2), ("Y4", 1)]
+    assert c.n_pulses == 3 and len(c.quiet) == 3
+    assert "give spacecraft" in c.physics       # an argument, not a flag, from Python
+
+
 def test_check_with_pulse_log(files, run_cli):
     code, out, err = run_cli("check", files / "slew.csv", "--pulses", files / "pulses.csv")
     assert code == 0, err

@@ -193,6 +193,23 @@ def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
     assert main(args + ["--force"]) == 0
 
 
+def test_library_monitor_is_what_the_cli_writes(leak_run, tmp_path):
+    """``cassini_bayes.monitor_leak`` gives the summary the command writes; its errors name the
+    argument, the command's the flag."""
+    import cassini_bayes as cb
+
+    Simulation(leak_run, 3).save(tmp_path / "sim")
+    tel, pul = tmp_path / "sim" / "telemetry.csv", tmp_path / "sim" / "pulses.csv"
+    res = cb.monitor_leak(tel, "cassini_post_probe", pulses=pul, check_step_s=20.0)
+    assert main(["monitor", "leak", str(tel), "--pulses", str(pul), "--spacecraft",
+                 "cassini_post_probe", "--out", str(tmp_path / "cli"), "--check-step",
+                 "20"]) == 0
+    assert json.loads((tmp_path / "cli" / "summary.json").read_text()) == json.loads(
+        (res.save(tmp_path / "api") / "summary.json").read_text())
+    with pytest.raises(InputError, match="check_step_s"):
+        cb.monitor_leak(tel, "cassini_post_probe", check_step_s=0.0)
+
+
 def test_cli_monitor_bad_option_is_one_line(leak_run, tmp_path, capsys):
     Simulation(leak_run, 3).save(tmp_path / "sim")
     rc = main(["monitor", "leak", str(tmp_path / "sim" / "telemetry.csv"), "--spacecraft",

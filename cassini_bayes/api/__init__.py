@@ -12,8 +12,10 @@ Also here, for the experiments and the CLI: the per-model summary builders
 """
 
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.api._check import TelemetryCheck, check_telemetry
 from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
 from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
+from cassini_bayes.api._leak import LeakResult, monitor_leak
 from cassini_bayes.api._result import (FitResult, collect_warnings, fit_config, write_run,
                                        write_run_files)
 from cassini_bayes.api._rwa4 import fit_rwa4, rwa4_sensitivity, rwa4_summary
@@ -29,5 +31,6 @@ __all__ = [
     "request_host_devices", "inertia_baseline", "inertia_summary", "thrust_baseline",
     "thrust_sensitivity", "thrust_summary", "rwa4_sensitivity", "rwa4_summary", "write_run",
     "write_run_files", "fit_config", "collect_warnings", "truth_document",
-    "fit_health", "HealthResult", "simulate_health_campaign",
+    "fit_health", "HealthResult", "simulate_health_campaign", "monitor_leak", "LeakResult",
+    "check_telemetry", "TelemetryCheck",
 ]

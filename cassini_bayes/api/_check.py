@@ -1,0 +1,182 @@
+"""What a telemetry file holds, after every check: :func:`check_telemetry`.
+
+The file (and pulse log) must pass every rule of :mod:`cassini_bayes.telemetry` and the physics
+checks of :mod:`cassini_bayes.consistency` (attitude against body rates; pulse log against the
+``on_*`` columns; with a spacecraft model, the wheel units by momentum conservation); otherwise
+:class:`~cassini_bayes.errors.InputError`. What ``cassini-bayes check`` prints.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
+
+
+@dataclass(frozen=True)
+class WheelStats:
+    """One wheel: ``on`` (it has data), and its rate's min, max, first and last value, rpm."""
+
+    name: str
+    on: bool
+    min_rpm: float = float("nan")
+    max_rpm: float = float("nan")
+    first_rpm: float = float("nan")
+    last_rpm: float = float("nan")
+
+
+@dataclass(frozen=True)
+class ThrusterStats:
+    """One thruster that fired: its pulse count and total on-time, s."""
+
+    name: str
+    pulses: int
+    on_time_s: float
+
+
+@dataclass(frozen=True)
+class TelemetryCheck:
+    """A telemetry file that passed every check, and what it holds.
+
+    ``t`` (n,) s; ``max_rate_rad_s`` the largest body rate; ``max_turn_rad`` the largest turn from
+    the first attitude; ``attitude`` and ``momentum`` the physics checks' results
+    (:func:`cassini_bayes.consistency.check_telemetry_data`; ``None`` where not made) and
+    ``physics`` what they established, in words; ``wheels``; ``thruster_source`` (``"on_*
+    columns"``, ``"pulse log FILE"`` or ``None`` when there is neither) and ``thrusters`` (those
+    that fired); ``quiet`` the quiet periods ``(t0, t1)`` s and the rules that made them
+    (``min_quiet_s``, ``rate_max_rad_s``, ``wheel_tol_rpm``); ``n_pulses`` of the pulse log
+    (``None`` without one); ``notes`` warnings to show.
+    """
+
+    t: np.ndarray
+    max_rate_rad_s: float
+    max_turn_rad: float
+    attitude: object
+    momentum: object
+    physics: str
+    wheels: tuple[WheelStats, ...]
+    thruster_source: str | None
+    thrusters: tuple[ThrusterStats, ...]
+    quiet: tuple[tuple[float, float], ...]
+    min_quiet_s: float
+    rate_max_rad_s: float
+    wheel_tol_rpm: float
+    n_pulses: int | None
+    notes: tuple[str, ...]
+
+    @property
+    def n(self) -> int:
+        """Number of rows."""
+        return int(self.t.size)
+
+    def sampling(self) -> str:
+        """The sampling rate in words (median step, and the range when irregular)."""
+        dt = np.diff(self.t)
+        med = float(np.median(dt))
+        text = f"{1.0 / med:.4g} Hz (median step {med:.4g} s"
+        if dt.max() > 1.5 * med or dt.min() < 0.5 * med:
+            text += f", irregular: {dt.min():.4g} to {dt.max():.4g} s"
+        return text + ")"
+
+
+def _physics_line(attitude, momentum, checked_units: bool) -> str:
+    """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
+    from cassini_bayes.consistency import MOMENTUM_ALIGN_MIN
+    from cassini_bayes.errors import spelled
+
+    if attitude is None:
+        text = "q vs ω not checked (the attitude hardly turns)"
+    else:
+        text = (f"q vs ω consistent (alignment {attitude.alignment[0]:.3f} over "
+                f"{attitude.segments} turning stretches, rate scale {attitude.scale:.3f})")
+    if not checked_units:
+        return text + f"; wheel units not checked (give {spelled('--spacecraft', 'spacecraft')})"
+    if momentum is None or momentum.alignment < MOMENTUM_ALIGN_MIN:
+        return text + "; wheel units not checked (no clean momentum exchange)"
+    return (text + f"; wheel rpm confirmed by momentum conservation (scale {momentum.scale:.3f}, "
+            "rad/s would give 9.55)")
+
+
+def _pulse_count(on: np.ndarray) -> int:
+    """Pulses in a cumulative on-time column: the rises of its increments."""
+    return int(np.count_nonzero(np.diff((np.diff(on) > 0).astype(int)) == 1) + (on[1] > on[0]))
+
+
+def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: float = 60.0,
+                    rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
+                    check_units: bool = True) -> TelemetryCheck:
+    """Validate a telemetry file (and pulse log) and say what it holds.
+
+    Parameters
+    ----------
+    telemetry : a telemetry CSV/Parquet path.
+    pulses : a pulse-log CSV path, validated and used for the thruster on-times (the
+        telemetry's ``on_*`` columns win when it has them).
+    spacecraft : a model TOML path or a shipped model's name: also check the wheel units by
+        momentum conservation.
+    min_quiet_s, rate_max_rad_s, wheel_tol_rpm : a quiet period is at least ``min_quiet_s``
+        long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
+        and no thruster firing (:func:`cassini_bayes.windows.quiet_periods`).
+    check_units : the rad/s-vs-rpm and deg/s heuristics (off for wheels idling below 12 rpm).
+
+    Raises
+    ------
+    InputError
+        The first rule or physics check the file breaks, in one line naming where.
+    """
+    from cassini_bayes.consistency import check_telemetry_data
+    from cassini_bayes.spacecraft import load_spacecraft
+    from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseSpanWarning,
+                                         _turn_angle, read_pulses, read_telemetry,
+                                         with_on_times)
+    from cassini_bayes.windows import quiet_periods
+
+    tel = read_telemetry(telemetry, check_units=check_units)
+    log = read_pulses(pulses) if pulses is not None else None
+    sc = load_spacecraft(spacecraft) if spacecraft is not None else None
+    attitude, momentum = check_telemetry_data(tel, sc, log)
+    notes: list[str] = []
+    source = None if tel.on_times is None and log is None else "on_* columns"
+    if log is not None and tel.on_times is not None:
+        notes.append(f"{telemetry} has on_* columns; they are used and {pulses} is only "
+                     "validated")
+    elif log is not None:
+        source = f"pulse log {pulses}"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PulseSpanWarning)
+            tel = with_on_times(tel, log)
+        notes += [str(w.message) for w in caught if issubclass(w.category, PulseSpanWarning)]
+
+    wheels = []
+    for j, name in enumerate(tel.wheel_names):
+        rpm = tel.wheel_rates[:, j] / RPM_TO_RAD_S
+        if not np.all(np.isfinite(rpm)):
+            wheels.append(WheelStats(name, False))
+            continue
+        wheels.append(WheelStats(name, True, float(rpm.min()), float(rpm.max()),
+                                 float(rpm[0]), float(rpm[-1])))
+    thrusters = []
+    if tel.on_times is not None:
+        for k, name in enumerate(THRUSTER_NAMES):
+            on = tel.on_times[:, k]
+            total = float(on[-1] - on[0])
+            if total <= 0:
+                continue
+            count = (int(np.count_nonzero(log.thruster == k)) if source != "on_* columns"
+                     else _pulse_count(on))
+            thrusters.append(ThrusterStats(name, count, total))
+    quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,
+                          wheel_tol_rpm=wheel_tol_rpm)
+    return TelemetryCheck(
+        t=np.asarray(tel.t, float),
+        max_rate_rad_s=float(np.linalg.norm(tel.omega, axis=1).max()),
+        max_turn_rad=float(_turn_angle(tel.q, tel.q[0]).max()),
+        attitude=attitude, momentum=momentum,
+        physics=_physics_line(attitude, momentum, sc is not None),
+        wheels=tuple(wheels), thruster_source=source, thrusters=tuple(thrusters),
+        quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
+        rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
+        n_pulses=None if log is None else len(log.t_on), notes=tuple(notes))

@@ -1,0 +1,121 @@
+"""Thruster-leak monitoring of one telemetry stretch: :func:`monitor_leak` (docs/leak.md).
+
+The Bayesian monitor (:mod:`cassini_bayes.inference.leak`) and Lee's threshold monitor
+(:func:`cassini_bayes.estimators.leak.threshold_monitor`) on the same residual momentum; what
+``cassini-bayes monitor leak`` runs.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from cassini_bayes import __version__
+from cassini_bayes.errors import InputError, spelled
+
+__all__ = ["LeakResult", "monitor_leak"]
+
+
+@dataclass(frozen=True)
+class LeakResult:
+    """Both monitors on one stretch: the Bayesian ``posterior``
+    (:class:`~cassini_bayes.inference.leak.LeakPosterior`), Lee's ``lee``
+    (:class:`~cassini_bayes.estimators.leak.ThresholdResult`), the ``summary`` (``summary.json``)
+    and ``config`` (``config.toml``) dicts, and the input ``files``."""
+
+    posterior: object
+    lee: object
+    summary: dict
+    config: dict
+    files: tuple
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``summary.json``, ``config.toml`` and ``probabilities.csv`` (every check's
+        probabilities of ``none, Z1 … Y4``) into ``out`` atomically; returns it. ``force``
+        replaces only a directory cassini-bayes wrote."""
+        from cassini_bayes.inference.leak import HYPOTHESES
+        from cassini_bayes.rundir import RunDir, write_config, write_summary
+
+        with RunDir(out, force=force, inputs=list(self.files)) as rd:
+            write_summary(rd.path, self.summary)
+            write_config(rd.path, self.config)
+            table = np.column_stack([self.posterior.t_check, self.posterior.prob])
+            np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
+                       header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
+        return rd.final
+
+
+def _positive(value: float, option: str, argument: str) -> float:
+    if not value > 0:
+        raise InputError(f"must be positive, got {value}", path=spelled(option, argument))
+    return value
+
+
+def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
+                 p_detect: float = 0.99, sample_step_s: float = 60.0,
+                 check_step_s: float = 60.0, onset_step_s: float = 20.0, eta: float = 0.05,
+                 threshold_nms: float = 50.0, t_limit_h: float = 10.0) -> LeakResult:
+    """Posterior probability of a leak per thruster over one telemetry stretch, beside Lee's
+    threshold monitor.
+
+    Parameters
+    ----------
+    telemetry : a telemetry CSV/Parquet path.
+    spacecraft : a spacecraft model TOML path or a shipped model's name.
+    pulses : a pulse-log CSV path (else the telemetry's on-times times the model's thrust).
+    prior_leak : prior probability of a leak in the stretch (shared by the eight thrusters).
+    p_detect : the alarm level of ``P(leak)`` (and of one thruster's probability, isolation).
+    sample_step_s, check_step_s, onset_step_s : spacing of the residual samples used, of the
+        checks and of the onset grid, s.
+    eta : thruster-to-thruster thrust variation, fraction (Lee Eq 11).
+    threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
+    """
+    from cassini_bayes._paths import model_path
+    from cassini_bayes.estimators.leak import threshold_monitor
+    from cassini_bayes.inference.leak import leak_inputs, leak_posterior
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.spacecraft import load_spacecraft
+    from cassini_bayes.telemetry import read_pulses, read_telemetry
+
+    for value, option, argument in (
+            (sample_step_s, "--sample-step", "sample_step_s"),
+            (check_step_s, "--check-step", "check_step_s"),
+            (onset_step_s, "--onset-step", "onset_step_s"),
+            (threshold_nms, "--threshold", "threshold_nms"), (t_limit_h, "--t-limit", "t_limit_h")):
+        _positive(value, option, argument)
+    if eta < 0:
+        raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))
+    sc = load_spacecraft(spacecraft)
+    tel = read_telemetry(telemetry)
+    log = read_pulses(pulses) if pulses is not None else None
+    inp = leak_inputs(tel, log, sc)
+    post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
+                          check_step_s=check_step_s, onset_step_s=onset_step_s,
+                          p_detect=p_detect)
+    lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix, r_t_nms=threshold_nms,
+                            t_limit_s=t_limit_h * 3600.0, eta=eta)
+    summary = {
+        "command": "monitor leak", "version": __version__,
+        "t_start_s": float(inp.t[0]), "t_end_s": float(inp.t[-1]),
+        "bayes": post.summary(),
+        "lee": {"detection_time_s": lee.detection_time_s,
+                "axis": None if lee.axis is None else "XYZ"[lee.axis],
+                "thruster": None if lee.thruster is None else THRUSTER_NAMES[lee.thruster],
+                "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
+                "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta},
+        "residual_end_nms": [float(x) for x in inp.residual[-1]],
+    }
+    config = {"command": "monitor leak", "version": __version__,
+              "inputs": {"telemetry": file_record(telemetry),
+                         "spacecraft": file_record(model_path(spacecraft)),
+                         **({"pulses": file_record(pulses)} if pulses is not None else {})},
+              "settings": {"prior_leak": prior_leak, "p_detect": p_detect,
+                           "sample_step_s": sample_step_s,
+                           "check_step_s": check_step_s, "onset_step_s": onset_step_s,
+                           "eta": eta, "threshold_nms": threshold_nms, "t_limit_h": t_limit_h}}
+    files = (Path(telemetry),) + ((Path(pulses),) if pulses is not None else ())
+    return LeakResult(post, lee, summary, config, files)
