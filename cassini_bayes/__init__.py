@@ -44,7 +44,7 @@ __all__ = [
     "fit_inertia", "fit_thrust", "fit_rwa4",
     "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
     "InputError", "request_host_devices",
-    "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry",
+    "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
 ]
 
 def _api():

@@ -279,6 +279,20 @@ def test_budget_command_end_to_end(runs, tmp_path, run_cli):
     assert set(json.loads((out / "summary.json").read_text())["sources"]) == {"thrust"}
 
 
+def test_library_budget_is_what_the_command_writes(runs, tmp_path, run_cli):
+    """``cassini_bayes.budget`` gives the command's summary; its errors name arguments."""
+    import cassini_bayes as cb
+
+    code, _, err = run_cli("budget", "--thrust", runs["thrust"], "--out", tmp_path / "cli",
+                           "--draws", 200)
+    assert code == 0, err
+    res = cb.budget(thrust=runs["thrust"], n_draws=200)
+    assert json.loads((tmp_path / "cli" / "summary.json").read_text()) == json.loads(
+        (res.save(tmp_path / "api") / "summary.json").read_text())
+    with pytest.raises(InputError, match="n_draws"):
+        cb.budget(thrust=runs["thrust"], n_draws=3)
+
+
 @pytest.mark.parametrize("args, words", [
     ((), "give at least one run directory"),
     (("--inertia", "{thrust}"), "--inertia"),

@@ -12,6 +12,7 @@ Also here, for the experiments and the CLI: the per-model summary builders
 """
 
 from cassini_bayes._devices import request_host_devices
+from cassini_bayes.api._budget import BudgetResult, budget
 from cassini_bayes.api._check import TelemetryCheck, check_telemetry
 from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
 from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
@@ -32,5 +33,5 @@ __all__ = [
     "thrust_sensitivity", "thrust_summary", "rwa4_sensitivity", "rwa4_summary", "write_run",
     "write_run_files", "fit_config", "collect_warnings", "truth_document",
     "fit_health", "HealthResult", "simulate_health_campaign", "monitor_leak", "LeakResult",
-    "check_telemetry", "TelemetryCheck",
+    "check_telemetry", "TelemetryCheck", "budget", "BudgetResult",
 ]

@@ -1,0 +1,90 @@
+"""Budgets whose inputs are posteriors: :func:`budget` (docs/budgets.md).
+
+The draws of the given fits' ``posterior.nc`` propagated through each budget line
+(:mod:`cassini_bayes.analysis.posterior_budgets`), every line a credible interval with its
+attribution to the calibrated parameters, beside the papers' numbers; what
+``cassini-bayes budget`` computes.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from cassini_bayes import __version__
+from cassini_bayes.errors import InputError, spelled
+
+__all__ = ["BudgetResult", "budget"]
+
+
+@dataclass(frozen=True)
+class BudgetResult:
+    """The propagated ``budget`` (:class:`~cassini_bayes.analysis.posterior_budgets.Budget`),
+    its ``summary`` (``summary.json``) and ``config`` (``config.toml``) dicts and the input run
+    directories ``runs`` (by kind)."""
+
+    budget: object
+    summary: dict
+    config: dict
+    runs: dict
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``summary.json``, ``config.toml``, ``budget.csv`` and ``report.html`` into
+        ``out`` atomically; returns it. ``force`` replaces only a directory cassini-bayes
+        wrote."""
+        from cassini_bayes.analysis.posterior_budgets import budget_csv, budget_table
+        from cassini_bayes.report.html import html_page, paragraph, section, table
+        from cassini_bayes.rundir import RunDir, write_config, write_summary
+
+        columns, rows = budget_table(self.budget)
+        page = html_page("Budgets from posteriors", [
+            section("Budget lines", [
+                paragraph("Each line propagated from the posterior draws of the runs below: "
+                          "median and 90 % credible interval, beside the paper's number; lines "
+                          "without a calibrated input keep the paper's value. Attribution: the "
+                          "share of the line's posterior variance each parameter causes when it "
+                          "alone varies (the others at their posterior medians); "
+                          "docs/budgets.md.", note=True),
+                table(list(columns), [list(r) for r in rows], left=3)]),
+            section("Inputs", paragraph("; ".join(f"{k}: {v}" for k, v in self.runs.items())))])
+        with RunDir(out, force=force, inputs=list(self.runs.values())) as rd:
+            write_summary(rd.path, self.summary)
+            write_config(rd.path, self.config)
+            (rd.path / "budget.csv").write_text(budget_csv(self.budget))
+            (rd.path / "report.html").write_text(page, encoding="utf-8")
+        return rd.final
+
+
+def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
+           n_draws: int = 4000) -> BudgetResult:
+    """Budget lines from the posteriors of fit run directories (any of the three; at least one).
+
+    Parameters
+    ----------
+    inertia, thrust, rwa4 : run directories of an inertia, a thrust (mean thrust ``F``) and an
+        RWA4 fit (``posterior.nc`` in each).
+    seed : seed of the resampling of the runs' draws to a common number.
+    n_draws : joint draws propagated (≥ 10).
+    """
+    import jax
+
+    from cassini_bayes.analysis.posterior_budgets import load_posterior, posterior_budget
+    from cassini_bayes.rundir import file_record
+
+    runs = {"inertia": inertia, "thrust": thrust, "rwa4": rwa4}
+    given = {k: Path(v) for k, v in runs.items() if v is not None}
+    if not given:
+        raise InputError("give at least one run directory: "
+                         + ", ".join(spelled(f"--{k} RUN", k) for k in runs))
+    if n_draws < 10:
+        raise InputError(f"must be at least 10, got {n_draws}",
+                         path=spelled("--draws", "n_draws"))
+    post = {k: load_posterior(v, k, option=spelled(f"--{k}", k)) for k, v in given.items()}
+    result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)
+    summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict()}
+    config = {"command": "budget", "version": __version__, "seed": seed,
+              "inputs": {k: {"run": str(v), "posterior": file_record(v / "posterior.nc")}
+                         for k, v in given.items()},
+              "settings": {"n_draws": n_draws, "level": result.level}}
+    return BudgetResult(result, summary, config, given)
