@@ -81,11 +81,9 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
-    for value, option, argument in (
-            (sample_step_s, "--sample-step", "sample_step_s"),
-            (check_step_s, "--check-step", "check_step_s"),
-            (onset_step_s, "--onset-step", "onset_step_s"),
-            (threshold_nms, "--threshold", "threshold_nms"), (t_limit_h, "--t-limit", "t_limit_h")):
+    # the Bayesian monitor checks its own settings (leak_posterior); these are Lee's
+    for value, option, argument in ((threshold_nms, "--threshold", "threshold_nms"),
+                                    (t_limit_h, "--t-limit", "t_limit_h")):
         _positive(value, option, argument)
     if eta < 0:
         raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import log_ndtr, logsumexp
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.leak import ETA, residual_momentum
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times, moment_matrix
@@ -275,8 +275,8 @@ class _Sums:
         e, t = c + 1, self.t
         a_mat = np.diag(prior_prec) + np.einsum("a,apq->pq", lam, self.nn[e])
         b0 = np.einsum("a,ap->p", lam, self.ny[e])
-        log_z0 = 0.5 * (np.sum(np.log(prior_prec)) - np.linalg.slogdet(a_mat)[1]
-                        + b0 @ np.linalg.solve(a_mat, b0))
+        sol_b = np.linalg.solve(a_mat, b0)
+        log_z0 = 0.5 * (np.sum(np.log(prior_prec)) - np.linalg.slogdet(a_mat)[1] + b0 @ sol_b)
         onsets = np.searchsorted(t, tl, side="right")   # first row after each onset
         # sums over rows L..c of h = t − t_L: Σh², Σ h N, Σ h y
         s1, st = self.c1[e] - self.c1[onsets], self.ct[e] - self.ct[onsets]
@@ -288,7 +288,6 @@ class _Sums:
         g = np.einsum("ak,gap->gkp", lu, shn)                                  # (G, 8, p0)
         xy = np.einsum("ak,ga->gk", lu, shy)
         p0 = g.shape[-1]
-        sol_b = np.linalg.solve(a_mat, b0)
         sol_g = np.linalg.solve(a_mat, g.reshape(-1, p0).T).T.reshape(g.shape)
         s_xx = np.maximum(xx - np.einsum("gkp,gkp->gk", g, sol_g), 1e-300)    # xᵀ C⁻¹ x
         z = (xy - np.einsum("gkp,p->gk", g, sol_b))[..., None]                 # xᵀ C⁻¹ y
@@ -330,13 +329,16 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
     first sample up to the check; ``prior_leak``: prior probability of a leak in the stretch.
     Detection: the first check with ``P(leak) ≥ p_detect``; isolation: the first with one
     thruster's ``P ≥ p_detect`` (that thruster is the answer)."""
-    for name, v in (("prior_leak", prior_leak), ("p_detect", p_detect)):
+    for name, flag, v in (("prior_leak", "--prior-leak", prior_leak),
+                          ("p_detect", "--p-detect", p_detect)):
         if not 0.0 < v < 1.0:
-            raise InputError(f"must lie strictly between 0 and 1, got {v}", path=name)
-    for name, v in (("sample_step_s", sample_step_s), ("check_step_s", check_step_s),
-                    ("onset_step_s", onset_step_s)):
+            raise InputError(f"must lie strictly between 0 and 1, got {v}",
+                             path=spelled(flag, name))
+    for name, flag, v in (("sample_step_s", "--sample-step", sample_step_s),
+                          ("check_step_s", "--check-step", check_step_s),
+                          ("onset_step_s", "--onset-step", onset_step_s)):
         if not v > 0:
-            raise InputError(f"must be positive seconds, got {v}", path=name)
+            raise InputError(f"must be positive seconds, got {v}", path=spelled(flag, name))
     raw, inp = inp, _thinned(inp, sample_step_s)
     n = inp.t.size
     if n < 3:
