@@ -3,7 +3,7 @@
 Run as a child process by ``benchmarks/bench_samplers.py``::
 
     python benchmarks/plain_inertia.py SYSTEM DATA.npz OUT.npz [--chains 4] [--warmup 1000]
-        [--draws 1000] [--seed 0]
+        [--draws 1000] [--seed 0] [--noise plain|package]
 
 ``SYSTEM`` is ``pymc``, ``nutpie`` or ``numpyro``. Each process imports only NumPy and its own
 framework (never ``cassini_bayes``), builds the model, samples once, and writes the draws of the
@@ -23,6 +23,13 @@ N m s)``, ``T_N ~ Normal(0, 15 µN m)`` per axis, sampled in µN m (in N m its s
 and NumPyro then did not converge in 300 warm-up steps); the noise, which the package models per
 sensor, is one ``σ ~ HalfNormal(1 N m s)`` here (a user's first model). The package's prior also
 truncates ``π`` to physical tensors; the posterior lies far inside, so that changes nothing here.
+
+``--noise package`` keeps everything else and replaces the single σ by the noise model of
+``cassini-bayes fit inertia --idealised``: the body residual ``e_t = I ω_t + H_w,t − A_t H_N,t``
+of each sample has covariance ``s² B̂_t``, ``B̂_t`` (errors in variables of gyro, wheel-rate and
+attitude noise, fixed by the package's empirical-Bayes step) given in ``DATA.npz`` as its inverse
+Cholesky factor ``W_t``, and ``log s ~ Normal(0, 1)``. The same posterior as the package's, written
+plainly: the check that the package's speed is not bought with a different answer.
 
 Samplers at their defaults: PyMC ``pm.sample`` (NUTS, ``jitter+adapt_diag``, target acceptance
 0.8; chains in ``cores = os.cpu_count()`` processes — PyMC's own default takes half the CPUs,
@@ -61,6 +68,8 @@ def load(path: str) -> dict:
     with np.load(path) as z:
         d = {k: np.asarray(z[k], dtype=np.float64) for k in z.files}
     d["y"] = np.einsum("nji,nj->ni", d["a"], d["h_wheels"])
+    if "whiten" in d:
+        d["wy"] = -np.einsum("nij,nj->ni", d["whiten"], d["h_wheels"])  # −W_t H_w,t
     return d
 
 
@@ -83,6 +92,30 @@ def pymc_model(d: dict):
         inertial = (a * body[:, :, None]).sum(axis=1)               # A_tᵀ I ω_t
         mu = h0[None, :] + dt[:, None] * t_n[None, :] - inertial
         pm.Normal("h", mu=mu, sigma=sigma, observed=d["y"])
+    return model
+
+
+def pymc_model_package_noise(d: dict):
+    """The same regression with the package's noise model (``--noise package``): per sample, the
+    body residual ``e_t = I ω_t + H_w,t − A_t (H_0 + T_N (t − t_0))`` whitened by ``W_t`` is
+    ``Normal(0, s²)``, ``log s ~ Normal(0, 1)``."""
+    import pymc as pm
+    import pytensor.tensor as pt
+
+    a, omega, dt, w = (pt.as_tensor(d[k]) for k in ("a", "omega", "dt", "whiten"))
+    with pm.Model() as model:
+        pi = [pm.Normal(n, mu=m, sigma=s) for n, m, s in zip(NAMES, d["prior_mean"],
+                                                              d["prior_sd"])]
+        h0 = pm.Normal("H0", 0.0, H0_SD_NMS, shape=3)
+        t_n = 1e-6 * pm.Normal("T_N_uNm", 0.0, TORQUE_SD_UNM, shape=3)
+        scale = pm.LogNormal("s", 0.0, 1.0)
+        xx, yy, zz, xy, xz, yz = pi
+        inertia = pt.stack([pt.stack([xx, xy, xz]), pt.stack([xy, yy, yz]),
+                            pt.stack([xz, yz, zz])])
+        h_n = h0[None, :] + dt[:, None] * t_n[None, :]              # inertial, (n, 3)
+        part = pt.dot(omega, inertia) - (a * h_n[:, None, :]).sum(axis=2)  # I ω_t − A_t H_N
+        pm.Normal("e", mu=(w * part[:, None, :]).sum(axis=2), sigma=scale,
+                  observed=d["wy"])
     return model
 
 
@@ -111,11 +144,35 @@ def numpyro_model(d: dict):
     return model
 
 
+def numpyro_model_package_noise(d: dict):
+    """:func:`pymc_model_package_noise` in NumPyro."""
+    import jax.numpy as jnp
+    import numpyro
+    import numpyro.distributions as dist
+
+    a, omega, dt, w, wy = (jnp.asarray(d[k]) for k in ("a", "omega", "dt", "whiten", "wy"))
+
+    def model():
+        pi = [numpyro.sample(n, dist.Normal(m, s)) for n, m, s in zip(NAMES, d["prior_mean"],
+                                                                       d["prior_sd"])]
+        h0 = numpyro.sample("H0", dist.Normal(0.0, H0_SD_NMS).expand([3]).to_event(1))
+        t_n = 1e-6 * numpyro.sample("T_N_uNm",
+                                    dist.Normal(0.0, TORQUE_SD_UNM).expand([3]).to_event(1))
+        scale = numpyro.sample("s", dist.LogNormal(0.0, 1.0))
+        xx, yy, zz, xy, xz, yz = pi
+        inertia = jnp.stack([jnp.stack([xx, xy, xz]), jnp.stack([xy, yy, yz]),
+                             jnp.stack([xz, yz, zz])])
+        part = omega @ inertia - jnp.einsum("nij,nj->ni", a, h0 + dt[:, None] * t_n)
+        numpyro.sample("e", dist.Normal(jnp.einsum("nij,nj->ni", w, part), scale), obs=wy)
+
+    return model
+
+
 def run_pymc(d, args) -> dict:
     import pymc as pm
 
     t = time.perf_counter()
-    model = pymc_model(d)
+    model = (pymc_model_package_noise if args.noise == "package" else pymc_model)(d)
     with model:
         idata = pm.sample(draws=args.draws, tune=args.warmup, chains=args.chains,
                           cores=min(args.chains, os.cpu_count() or 1), random_seed=args.seed,
@@ -129,7 +186,8 @@ def run_nutpie(d, args) -> dict:
     import nutpie
 
     t = time.perf_counter()
-    compiled = nutpie.compile_pymc_model(pymc_model(d))
+    build = pymc_model_package_noise if args.noise == "package" else pymc_model
+    compiled = nutpie.compile_pymc_model(build(d))
     t_compile = time.perf_counter() - t
     t1 = time.perf_counter()
     idata = nutpie.sample(compiled, draws=args.draws, tune=args.warmup, chains=args.chains,
@@ -151,7 +209,8 @@ def run_numpyro(d, args) -> dict:
     monitoring.register_event_duration_secs_listener(
         lambda event, secs, **kw: spent.append(secs) if event in compile_events else None)
     t = time.perf_counter()
-    mcmc = MCMC(NUTS(numpyro_model(d)), num_warmup=args.warmup, num_samples=args.draws,
+    build = numpyro_model_package_noise if args.noise == "package" else numpyro_model
+    mcmc = MCMC(NUTS(build(d)), num_warmup=args.warmup, num_samples=args.draws,
                 num_chains=args.chains, progress_bar=False)
     mcmc.run(jax.random.key(args.seed))
     samples = jax.block_until_ready(mcmc.get_samples(group_by_chain=True))
@@ -172,6 +231,9 @@ def main(argv=None) -> int:
     ap.add_argument("--warmup", type=int, default=1000)
     ap.add_argument("--draws", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--noise", choices=("plain", "package"), default="plain",
+                    help="plain: one σ on the inertial residual; package: the idealised fit's "
+                         "per-sample noise covariance (DATA.npz 'whiten')")
     args = ap.parse_args(argv)
     if args.system == "numpyro":
         import numpyro

@@ -103,7 +103,7 @@ from cassini_bayes.inference.inertia.fit import (AXES, ROBUST_SITES, InertiaPost
                                                  fit_inertia, robust_sites)
 from cassini_bayes.inference.inertia.knowledge import (InertiaGaussian, inertia_from_idata,
                                                        inertia_from_run, inertia_prior_gaussian)
-from cassini_bayes.inference.inertia.likelihood import momentum_residuals
+from cassini_bayes.inference.inertia.likelihood import momentum_residuals, noise_covariance
 from cassini_bayes.inference.inertia.model import inertia_model, problem_model
 from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_NAMES,
                                                    NOISE_PRIOR_LOG_SD, TORQUE_PRIOR_SD_NM,
@@ -137,6 +137,7 @@ __all__ = [
     "inertia_model",
     "sample_prior",
     "momentum_residuals",
+    "noise_covariance",
     "InertiaPosterior",
     "fit_inertia",
     "ROBUST_SITES",

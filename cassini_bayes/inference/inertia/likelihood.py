@@ -16,7 +16,7 @@ from cassini_bayes.physics.momentum import inertia_matrix
 if TYPE_CHECKING:
     from cassini_bayes.inference.inertia.data import InertiaProblem
 
-__all__ = ["momentum_residuals"]
+__all__ = ["momentum_residuals", "noise_covariance"]
 
 _SYM = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
@@ -43,16 +43,25 @@ def _body_residual(pi, h0, tq, log_sigma, *, omega_t, h_wheels_t, a_t, dt, oneho
     return e, b
 
 
+def _matrix(b):
+    """(N, 3, 3) symmetric matrices from their six components (6, N) in ``_SYM`` order."""
+    return jnp.stack([jnp.stack([b[0], b[3], b[4]], -1), jnp.stack([b[3], b[1], b[5]], -1),
+                      jnp.stack([b[4], b[5], b[2]], -1)], -2)
+
+
 @jax.jit
 def _residuals_jit(pi, h0, tq, log_sigma, data):
     e, b = _body_residual(pi, h0, tq, log_sigma, **data)
     a_t = data["a_t"]
     r = jnp.einsum("jin,jn->ni", a_t, e)  # inertial residual r_t = A_tᵀ e_t, (N, 3)
-    b_mat = jnp.stack([jnp.stack([b[0], b[3], b[4]], -1), jnp.stack([b[3], b[1], b[5]], -1),
-                       jnp.stack([b[4], b[5], b[2]], -1)], -2)  # (N, 3, 3)
-    std = jax.scipy.linalg.solve_triangular(jnp.linalg.cholesky(b_mat), e.T[..., None],
+    std = jax.scipy.linalg.solve_triangular(jnp.linalg.cholesky(_matrix(b)), e.T[..., None],
                                             lower=True)
     return r, std[..., 0]
+
+
+@jax.jit
+def _covariance_jit(pi, h0, tq, log_sigma, data):
+    return _matrix(_body_residual(pi, h0, tq, log_sigma, **data)[1])
 
 
 def momentum_residuals(problem: InertiaProblem, pi, h0, tq, sigma,
@@ -72,3 +81,13 @@ def momentum_residuals(problem: InertiaProblem, pi, h0, tq, sigma,
     r, std = _residuals_jit(jnp.asarray(pi), jnp.asarray(h0), jnp.asarray(tq),
                             jnp.log(jnp.asarray(sigma)), data)
     return np.asarray(r), np.asarray(std)
+
+
+def noise_covariance(problem: InertiaProblem, pi, h0, tq, sigma) -> np.ndarray:
+    """``B_t`` (N, 3, 3), (N m s)², the covariance of the body residual ``e_t`` per sample at given
+    parameters (module docstring of :mod:`cassini_bayes.inference.inertia`). At the GLS mode
+    (``problem.data.theta_star``) and the empirical-Bayes levels (``problem.noise_eb``) it is the
+    ``B̂_t`` that the idealised model's likelihood scales by ``s_f²``. Arguments as
+    :func:`momentum_residuals`."""
+    return np.asarray(_covariance_jit(jnp.asarray(pi), jnp.asarray(h0), jnp.asarray(tq),
+                                      jnp.log(jnp.asarray(sigma)), problem.residual_data))
