@@ -52,7 +52,7 @@ def test_offset_marginal_matches_dense_gaussian():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.gaussian import offset_marginal
+    from cassini_bayes.inference.gaussian import column_statistics, offset_marginal
 
     rng = np.random.default_rng(3)
     n = 6
@@ -67,11 +67,12 @@ def test_offset_marginal_matches_dense_gaussian():
     dense = multivariate_normal(np.zeros(3 * n), cov).logpdf(r[:n].ravel()) \
         + 1.5 * np.log(2 * np.pi * big)
     none = jnp.zeros((n + 2, 3, 0))
+    stats = column_statistics(none, jnp.asarray(mask))
     got = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.asarray(m), jnp.asarray(mask),
-                          none).loglik
+                          none, stats).loglik
     assert float(got) == pytest.approx(dense, abs=1e-4)
     got0, _, _, d0 = offset_marginal(jnp.asarray(r), jnp.asarray(b), jnp.zeros((n + 2, 3)),
-                                     jnp.asarray(mask), none)
+                                     jnp.asarray(mask), none, stats)
     res = r[:n] - r[:n].mean(0)
     closed = (multivariate_normal(np.zeros(3), b).logpdf(res).sum() + 1.5 * np.log(2 * np.pi)
               + 0.5 * np.linalg.slogdet(b)[1] - 1.5 * np.log(n))
@@ -89,6 +90,7 @@ def test_event_likelihood_is_the_density_of_the_rates():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
+    from cassini_bayes.inference.gaussian import column_statistics
     from cassini_bayes.inference.thrust.likelihood import (EventData, _event_loglik,
                                                            _event_residual, _noise_cov)
     from cassini_bayes.physics.impulse import moment_matrix
@@ -106,7 +108,8 @@ def test_event_likelihood_is_the_density_of_the_rates():
     no_pulse = (jnp.zeros(1), jnp.zeros(1, int), jnp.zeros(1), jnp.full(1, n))
     q = moment_matrix(1.2, 1.6, 2.9, 3.0, jnp.zeros(3))
     ev = EventData(jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h), jnp.ones(n), *no_pulse,
-                   jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m))
+                   jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m),
+                   column_statistics(jnp.zeros((n, 3, 0)), jnp.ones(n)))
     st = _event_loglik(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
                        jnp.asarray(log_sigma), ev, jnp.arange(2), q)
     r = np.asarray(_event_residual(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
@@ -128,11 +131,13 @@ def test_nuisance_marginal_matches_dense_gaussian():
     integrated out by :func:`offset_marginal` per event and :func:`nuisance_marginal` over the
     events, equal the dense Gaussian of all samples with covariance
     ``⊕(B_e + m_i m_iᵀ) + D diag(sd²) Dᵀ + offsets`` (flat offsets as N(0, V I), V → ∞, times
-    (2π V)^{3/2} each); and the conditional mean of ``ν`` equals the dense regression's."""
+    (2π V)^{3/2} each); and the conditional mean of ``ν`` equals the dense regression's. Each
+    event carries two padded rows (mask 0), which must drop out."""
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.gaussian import nuisance_marginal, offset_marginal
+    from cassini_bayes.inference.gaussian import (column_statistics, nuisance_marginal,
+                                                  offset_marginal)
 
     rng = np.random.default_rng(4)
     n, n_nu, big = 5, 4, 1e6
@@ -143,9 +148,13 @@ def test_nuisance_marginal_matches_dense_gaussian():
         ev.append(dict(b=a @ a.T + 0.5 * np.eye(3), r=rng.normal(size=(n, 3)) + 4.0 * e,
                        m=rng.normal(size=(n, 3)), d=rng.normal(size=(n, 3, n_nu))))
     total, info, score = 0.0, 0.0, 0.0
+    mask = jnp.asarray(np.r_[np.ones(n), 0.0, 0.0])   # two padded rows, which must drop out
     for x in ev:
-        om = offset_marginal(jnp.asarray(x["r"]), jnp.asarray(x["b"]), jnp.asarray(x["m"]),
-                             jnp.ones(n), jnp.asarray(x["d"]))
+        pad = {k: np.concatenate([x[k], rng.normal(size=(2, *x[k].shape[1:]))])
+               for k in ("r", "m", "d")}
+        om = offset_marginal(jnp.asarray(pad["r"]), jnp.asarray(x["b"]), jnp.asarray(pad["m"]),
+                             mask, jnp.asarray(pad["d"]),
+                             column_statistics(jnp.asarray(pad["d"]), mask))
         total, info, score = total + om.loglik, info + om.info, score + om.score
     ll_nu, mean, _ = nuisance_marginal(info, score, jnp.asarray(sd))
     got = float(total + ll_nu)

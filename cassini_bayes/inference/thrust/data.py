@@ -14,6 +14,7 @@ import numpy as np
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
+from cassini_bayes.inference.gaussian import column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
@@ -244,6 +245,9 @@ _time_tag_columns = jax.jit(jax.vmap(time_tag_columns,
                                      in_axes=(0, 0, 0, 0, 0, None, None, None, None, None)))
 
 
+_column_statistics = jax.jit(jax.vmap(column_statistics))
+
+
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel") -> ThrustProblem:
@@ -289,8 +293,10 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         tuple(jax.device_put(x) for x in tp.median()),
         jax.device_put(np.full(8, float(spacecraft.thrust))), kw["q_matrix"],
         jax.device_put(sd_t))
-    events = EventData(**{f: kw.pop(f) for f in EventData._fields if f != "time_tag_cols"},
-                       time_tag_cols=time_tag_cols)
+    nu_stats = _column_statistics(kw["nu_cols"], kw["mask"])
+    events = EventData(**{f: kw.pop(f) for f in EventData._fields
+                          if f not in ("time_tag_cols", "nu_stats")},
+                       time_tag_cols=time_tag_cols, nu_stats=nu_stats)
     data = ThrustData(events=events, **kw)
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)

@@ -11,7 +11,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from cassini_bayes.inference.gaussian import offset_marginal
+from cassini_bayes.inference.gaussian import ColumnStatistics, offset_marginal
 from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
@@ -38,6 +38,7 @@ class EventData(NamedTuple):
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
     time_tag_cols: jax.Array   # (n, 3) N m s time-tag columns (:func:`time_tag_columns`)
+    nu_stats: ColumnStatistics  # sums of ``nu_cols`` (:func:`~cassini_bayes.inference.gaussian.column_statistics`)
 
 
 def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, tau_rise, tau_fall):
@@ -97,7 +98,7 @@ def _event_loglik(inertia, f8, tau, log_sigma, ev: EventData, slot_offsets, q_ma
     r = _event_residual(inertia, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
                         ev.width, ev.slot, slot_offsets, q_matrix)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov), ev.time_tag_cols,
-                         ev.mask, ev.nu_cols)
+                         ev.mask, ev.nu_cols, ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
     return st._replace(loglik=st.loglik + log_jacobian)
 
@@ -128,8 +129,9 @@ def _residuals_jit(i_m, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_m
     def one(log_sigma, ev):
         r = _event_residual(i_m, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
                             ev.width, ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
+        none = ColumnStatistics(jnp.zeros((3, 3, 0, 0)), jnp.zeros((3, 0)))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov), ev.time_tag_cols,
-                               ev.mask, ev.nu_cols[..., :0]).resid
+                               ev.mask, ev.nu_cols[..., :0], none).resid
 
     return jax.vmap(one)(log_sigma, ev)
 
