@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from cassini_bayes.physics.impulse import (angular_impulse, impulse_from_on_times,
-                                           impulse_from_pulses, impulse_lhs, moment_matrix,
+                                           impulse_from_pulses, impulse_lhs, impulse_lhs_basis,
+                                           moment_matrix,
                                            system_xy, system_xyz, system_z, system_zz,
                                            system_zzz)
 from cassini_bayes.physics.pulse import pulse_impulse
@@ -46,6 +47,23 @@ def test_lhs_vanishes_without_thrust_at_second_order(dt):
         errs.append(np.max(np.abs(v)))
     assert errs[0] < 1e-2  # N m s, against wheel momenta of tens of N m s
     assert 3.5 < errs[0] / errs[1] < 4.5  # second order
+
+
+def test_lhs_basis_is_exact_in_the_inertia():
+    """``V`` is linear in ``I`` (Feldman & Lee Eq 17: ``I Δω`` and ``ΔG``): its basis gives
+    :func:`impulse_lhs` for any inertia to rounding (1e-12 relative of the largest term)."""
+    from cassini_bayes.physics.momentum import inertia_vector
+
+    q0 = rotvec_to_quat_np(np.array([0.2, 0.1, -0.3]))
+    t, q, w = slew_segments(q0, [((1, 1, 0), 0.8, 200.0), ((0, 0, 1), -0.6, 240.0)], 4.0, 40.)
+    _, h = wheels_for_conserved_momentum(t, q, w, I_TRUE, [20.0, -15.0, 30.0],
+                                         CASSINI_WHEEL_AXES, [0.161, 0.160, 0.161])
+    basis = np.asarray(impulse_lhs_basis(t, w, h))
+    for inertia in (I_TRUE, 1.1 * I_TRUE + np.diag([50.0, -20.0, 10.0])):
+        got = basis[0] + np.tensordot(np.asarray(inertia_vector(inertia)), basis[1:], 1)
+        scale = np.max(np.abs(np.asarray(_lhs(t, w, np.zeros((3, 3)), h))))
+        np.testing.assert_allclose(got, np.asarray(_lhs(t, w, inertia, h)), rtol=0,
+                                   atol=1e-12 * scale)
 
 
 def test_on_time_impulse_counts_from_first_row():

@@ -93,7 +93,8 @@ def test_event_likelihood_is_the_density_of_the_rates():
     from cassini_bayes.inference.gaussian import column_statistics
     from cassini_bayes.inference.thrust.likelihood import (EventData, _event_loglik,
                                                            _event_residual, _noise_cov)
-    from cassini_bayes.physics.impulse import moment_matrix
+    from cassini_bayes.physics.impulse import impulse_lhs_basis, moment_matrix
+    from cassini_bayes.physics.momentum import inertia_vector
 
     rng = np.random.default_rng(5)
     n = 7
@@ -107,14 +108,15 @@ def test_event_likelihood_is_the_density_of_the_rates():
     wheel_cov = 0.02 * np.eye(3)
     no_pulse = (jnp.zeros(1), jnp.zeros(1, int), jnp.zeros(1), jnp.full(1, n))
     q = moment_matrix(1.2, 1.6, 2.9, 3.0, jnp.zeros(3))
+    basis = impulse_lhs_basis(jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h))
     ev = EventData(jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h), jnp.ones(n), *no_pulse,
-                   jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m),
+                   jnp.asarray(wheel_cov), jnp.zeros((n, 3, 0)), jnp.asarray(m), basis,
                    column_statistics(jnp.zeros((n, 3, 0)), jnp.ones(n)))
-    st = _event_loglik(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
-                       jnp.asarray(log_sigma), ev, jnp.arange(2), q)
-    r = np.asarray(_event_residual(jnp.asarray(inertia), jnp.full(8, 0.7), (0.005, 0.02, 0.065),
-                                   jnp.asarray(t), jnp.asarray(omega), jnp.asarray(h),
-                                   *no_pulse, jnp.arange(2), q))
+    pi = inertia_vector(jnp.asarray(inertia))
+    st = _event_loglik(pi, jnp.full(8, 0.7), (0.005, 0.02, 0.065), jnp.asarray(log_sigma), ev,
+                       jnp.arange(2), q)
+    r = np.asarray(_event_residual(pi, jnp.full(8, 0.7), (0.005, 0.02, 0.065), basis,
+                                   jnp.asarray(t), *no_pulse, jnp.arange(2), q))
     i_inv = np.linalg.inv(inertia)
     b = np.asarray(_noise_cov(jnp.asarray(inertia), jnp.asarray(log_sigma),
                               jnp.asarray(wheel_cov)))

@@ -70,26 +70,29 @@ def offset_marginal(r, b, m, mask, cols, stats: ColumnStatistics):
     data-only ``gram`` contracted with ``B⁻¹``, 9R² work) less ``Σ_i v_i v_iᵀ/g_i``,
     ``v_i = C_iᵀ u_i`` (nR² instead of 3nR² work; the thrust gradient's largest term).
     """
-    # Products of the n 3×3 blocks are written as broadcasts and sums, not batched einsums,
-    # which XLA on the CPU runs as n tiny GEMMs (measured, gradient of this function for 481
-    # samples, R = 16, 4 chains vectorised: 4.4 ms with einsums, 3.3 ms as written).
+    # Every sum over samples is a product of (n, 3) arrays with 3-vectors or 3×3 matrices: no
+    # (n, 3, 3) array of per-sample precisions is formed (docs/performance.md: the robust thrust
+    # density's value and gradient, 481 samples, R = 19, ~15 % faster than with them).
     b_inv, logdet = inv3_spd(b)
-    u = m @ b_inv
+    u = m @ b_inv                                                     # B⁻¹ m_i (n, 3)
     g = 1.0 + jnp.sum(u * m, -1)
-    prec = (b_inv[None] - u[:, :, None] * u[:, None, :] / g[:, None, None]) * mask[:, None, None]
-    p_inv, p_logdet = inv3_spd(jnp.sum(prec, 0))
-    d = r - (p_inv @ jnp.sum(prec * r[:, None, :], (0, 2)))[None, :]
-    quad = jnp.sum(d[:, :, None] * prec * d[:, None, :], (1, 2))
+    a = mask / g                                                      # 0 on padding
+    ur = jnp.sum(u * r, -1)
+    p_inv, p_logdet = inv3_spd(jnp.sum(mask) * b_inv - (u * a[:, None]).T @ u)   # (Σ P_i)⁻¹
+    beta = p_inv @ (b_inv @ (mask @ r) - u.T @ (a * ur))              # β̂ = (Σ P_i)⁻¹ Σ P_i r_i
+    d = r - beta[None, :]
+    ud = ur - u @ beta                                                # u_i · d_i
+    db = d @ b_inv
+    quad = jnp.sum(db * d, -1) - ud**2 / g                            # d_iᵀ P_i d_i
     ll_i = -0.5 * (quad + logdet + jnp.log(g) + 3.0 * jnp.log(2.0 * jnp.pi))
     ll = jnp.sum(ll_i * mask) + 1.5 * jnp.log(2.0 * jnp.pi) - 0.5 * p_logdet
     v = jnp.sum(cols * u[:, :, None], 1)                              # C_iᵀ u_i (n, R)
-    vg = v * (mask / g)[:, None]
+    vg = v * a[:, None]
     s_bd = b_inv @ stats.total - u.T @ vg                             # Σ P_i C_i (3, R)
     info = (jnp.einsum("ab,abrs->rs", b_inv, stats.gram) - vg.T @ v
             - s_bd.T @ p_inv @ s_bd)
-    w = (d @ b_inv) * mask[:, None]                                   # B⁻¹ d_i, masked rows
-    score = (jnp.sum(cols * w[:, :, None], (0, 1))
-             - vg.T @ jnp.sum(u * d, -1))                             # Σ C_iᵀ P_i d_i
+    w = db * mask[:, None]                                            # B⁻¹ d_i, masked rows
+    score = jnp.sum(cols * w[:, :, None], (0, 1)) - vg.T @ ud         # Σ C_iᵀ P_i d_i
     return OffsetMarginal(ll, info, score, d)
 
 

@@ -27,11 +27,13 @@ the paper says, Y2 with Y4 turns the spacecraft about +Z).
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
 from cassini_bayes.names import THRUSTER_NAMES
+from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.pulse import pulse_impulse_until
 
 __all__ = [
@@ -43,6 +45,7 @@ __all__ = [
     "delta_wheel_momentum",
     "gyroscopic_impulse",
     "impulse_lhs",
+    "impulse_lhs_basis",
     "impulse_from_on_times",
     "impulse_from_pulses",
     "angular_impulse",
@@ -124,6 +127,23 @@ def impulse_lhs(t_s: Array, omega_rad_s: Array, inertia: Array, h_wheels_body: A
     # Feldman & Lee Eq 17 (left side)
     return (i_dw + delta_wheel_momentum(h_wheels_body)
             + gyroscopic_impulse(t_s, omega_rad_s, inertia, h_wheels_body))
+
+
+def impulse_lhs_basis(t_s: Array, omega_rad_s: Array, h_wheels_body: Array) -> Array:
+    """(7, n, 3) N m s arrays with ``V(t_i) = basis[0] + Σ_k π_k basis[1 + k]`` exactly.
+
+    ``V`` (:func:`impulse_lhs`, Feldman & Lee Eq 17 left side) is linear in the inertia: ``I Δω``
+    and ``ΔG = ∫ ω × (I ω + H_RWA) dt`` both are. ``basis[0]`` is ``V`` at ``I = 0`` (the wheels'
+    part), ``basis[1 + k]`` its derivative in ``π_k``, ``π = (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``
+    (kg m², :func:`~cassini_bayes.physics.momentum.inertia_matrix`). A model that samples the
+    inertia computes these once per data set and ``V`` as one small product per density
+    evaluation, instead of the cross products and cumulative sums of ``ΔG``.
+    """
+    w, h = jnp.asarray(omega_rad_s), jnp.asarray(h_wheels_body)
+    v0 = impulse_lhs(t_s, w, jnp.zeros((3, 3), w.dtype), h)
+    per_pi = jax.jacfwd(lambda pi: impulse_lhs(t_s, w, inertia_matrix(pi), jnp.zeros_like(h)))(
+        jnp.zeros(6, w.dtype))                                            # (n, 3, 6)
+    return jnp.concatenate([v0[None], jnp.moveaxis(per_pi, -1, 0)], 0)
 
 
 def impulse_from_on_times(on_times_s: Array, thrust_n=1.0) -> Array:

@@ -22,7 +22,7 @@ from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_defici
 from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_columns
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
-from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.physics.impulse import impulse_lhs_basis, moment_matrix
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import (PulseAtStartWarning, PulseLog, Telemetry,
@@ -246,6 +246,7 @@ _time_tag_columns = jax.jit(jax.vmap(time_tag_columns,
 
 
 _column_statistics = jax.jit(jax.vmap(column_statistics))
+_lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
 
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -293,10 +294,11 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         tuple(jax.device_put(x) for x in tp.median()),
         jax.device_put(np.full(8, float(spacecraft.thrust))), kw["q_matrix"],
         jax.device_put(sd_t))
-    nu_stats = _column_statistics(kw["nu_cols"], kw["mask"])
-    events = EventData(**{f: kw.pop(f) for f in EventData._fields
-                          if f not in ("time_tag_cols", "nu_stats")},
-                       time_tag_cols=time_tag_cols, nu_stats=nu_stats)
+    derived = dict(time_tag_cols=time_tag_cols,
+                   nu_stats=_column_statistics(kw["nu_cols"], kw["mask"]),
+                   lhs_basis=_lhs_basis(kw["t"], kw["omega"], kw["h_wheels"]))
+    events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
+                       **derived)
     data = ThrustData(events=events, **kw)
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)

@@ -12,7 +12,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.inference.gaussian import ColumnStatistics, offset_marginal
-from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
 
@@ -38,6 +37,7 @@ class EventData(NamedTuple):
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
     time_tag_cols: jax.Array   # (n, 3) N m s time-tag columns (:func:`time_tag_columns`)
+    lhs_basis: jax.Array       # (7, n, 3) N m s, V = lhs_basis[0] + Σ π_k lhs_basis[1 + k]
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (:func:`~cassini_bayes.inference.gaussian.column_statistics`)
 
 
@@ -69,16 +69,19 @@ def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, ta
     return jnp.cumsum(grid, 0)
 
 
-def _event_residual(inertia, f8, tau, t, omega, h_wheels, t_on, thruster, width, slot,
-                    slot_offsets, q_matrix):
-    """``r = V(t_i) − Q (F ⊙ j(t_i))`` (n, 3) N m s: Feldman & Lee Eq 17, left minus right."""
-    v = impulse_lhs(t, omega, inertia, h_wheels)                      # Feldman & Lee Eq 17 (left)
+def _event_residual(pi, f8, tau, lhs_basis, t, t_on, thruster, width, slot, slot_offsets,
+                    q_matrix):
+    """``r = V(t_i) − Q (F ⊙ j(t_i))`` (n, 3) N m s: Feldman & Lee Eq 17, left minus right;
+    ``V`` from its basis in the inertia ``pi`` (6,) kg m²
+    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`)."""
+    v = lhs_basis[0] + jnp.tensordot(pi, lhs_basis[1:], 1)           # Feldman & Lee Eq 17 (left)
     j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
     return v - (j * f8[None, :]) @ q_matrix.T                        # Feldman & Lee Eq 17
 
 
-def _event_loglik(inertia, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix):
-    """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``.
+def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix):
+    """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``; ``pi``
+    (6,) kg m² the inertia.
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
@@ -95,8 +98,9 @@ def _event_loglik(inertia, f8, tau, log_sigma, ev: EventData, slot_offsets, q_ma
     together: on a 480-sample event whose true inertia was 3 % above the model's, the sampled
     inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
     """
-    r = _event_residual(inertia, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
-                        ev.width, ev.slot, slot_offsets, q_matrix)
+    inertia = inertia_matrix(pi)
+    r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
+                        ev.slot, slot_offsets, q_matrix)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov), ev.time_tag_cols,
                          ev.mask, ev.nu_cols, ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
@@ -125,10 +129,12 @@ def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_ma
 
 
 @jax.jit
-def _residuals_jit(i_m, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_matrix):
+def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_matrix):
+    i_m = inertia_matrix(pi)
+
     def one(log_sigma, ev):
-        r = _event_residual(i_m, f8, tau, ev.t, ev.omega, ev.h_wheels, ev.t_on, ev.thruster,
-                            ev.width, ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
+        r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
+                            ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
         none = ColumnStatistics(jnp.zeros((3, 3, 0, 0)), jnp.zeros((3, 0)))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov), ev.time_tag_cols,
                                ev.mask, ev.nu_cols[..., :0], none).resid
@@ -146,7 +152,7 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     f8 = np.asarray(thrust, float)[idx]
     pi = np.asarray(kw.inertia_mean) if pi is None else np.asarray(pi, float)
     nu = np.zeros(kw.nu_sd.shape[0]) if nu is None else np.asarray(nu, float)
-    d = _residuals_jit(inertia_matrix(jnp.asarray(pi)), jnp.asarray(f8),
+    d = _residuals_jit(jnp.asarray(pi), jnp.asarray(f8),
                        tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
                        jnp.asarray(nu), kw.events, kw.slot_offsets, kw.q_matrix)
     return np.asarray(d) * np.asarray(kw.events.mask)[..., None]

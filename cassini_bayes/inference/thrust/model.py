@@ -18,7 +18,6 @@ from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpac
 from cassini_bayes.inference.thrust.likelihood import _event_loglik
 from cassini_bayes.inference.thrust.prior import _NOISE_STEP, NOISE_PRIOR_LOG_SD, thrust_names
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
-from cassini_bayes.physics.momentum import inertia_matrix
 
 __all__ = ["thrust_model"]
 
@@ -26,8 +25,7 @@ def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
     _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
     return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
-        inertia_matrix(pi), f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events,
-        kw.slot_offsets, kw.q_matrix)
+        pi, f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events, kw.slot_offsets, kw.q_matrix)
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
