@@ -42,6 +42,7 @@ import warnings
 from collections.abc import Sequence
 from typing import NamedTuple
 
+import jax
 import numpy as np
 
 from cassini_bayes.errors import InputError, UnidentifiableError, arg
@@ -50,6 +51,13 @@ from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
                                      Telemetry, check_pulses_in_span, cumulative_on_times)
+
+# The checks' JAX work as three programs: called eagerly on NumPy arrays, every frames function
+# is a few one-operation programs, each loaded (or compiled) in every process.
+_rotvecs_between = jax.jit(lambda qa, qb: quat_to_rotvec(quat_multiply(qb, quat_conjugate(qa))))
+_dcm = jax.jit(dcm)
+_wheel_momentum_body = jax.jit(wheel_momentum_body)
+
 
 __all__ = [
     "READINGS",
@@ -136,8 +144,8 @@ def _reading(q: np.ndarray, k: int) -> np.ndarray:
     """The quaternion (scalar last, inertial → body) under reading ``k`` of :data:`READINGS`."""
     if k in (1, 3):  # columns hold (q4, q1, q2, q3)
         q = np.roll(q, -1, axis=1)
-    if k in (2, 3):  # body → inertial: the inverse rotation
-        q = np.asarray(quat_conjugate(q))
+    if k in (2, 3):  # body → inertial: the inverse rotation (frames.quat_conjugate)
+        q = q * np.array([-1.0, -1.0, -1.0, 1.0])
     return q
 
 
@@ -150,7 +158,7 @@ def _attitude_noise(q: np.ndarray) -> float:
     """
     if q.shape[0] < 4:
         return 0.0
-    step = np.asarray(quat_to_rotvec(quat_multiply(q[1:], quat_conjugate(q[:-1]))))
+    step = np.asarray(_rotvecs_between(q[:-1], q[1:]))
     d = np.diff(step, axis=0)
     return float(1.4826 * np.median(np.abs(d - np.median(d, axis=0))) / np.sqrt(6.0))
 
@@ -206,7 +214,7 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     steps = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
                                                         * np.diff(t)[:, None], axis=0)])
     g = steps[b_idx] - steps[a_idx]
-    rots = [np.asarray(quat_to_rotvec(quat_multiply(qk[b_idx], quat_conjugate(qk[a_idx]))))
+    rots = [np.asarray(_rotvecs_between(qk[a_idx], qk[b_idx]))
             for qk in (_reading(q, k) for k in range(len(READINGS)))]
     gg = float(np.sum(g * g))
     rr = float(np.sum(rots[0] ** 2))  # the same for every reading (angles are invariant)
@@ -342,7 +350,7 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     keep = np.isin(labels, good)
     if not np.any(keep):
         return None
-    a_t = np.swapaxes(np.asarray(dcm(np.asarray(tel.q, float))), -1, -2)[keep]  # body → inertial
+    a_t = np.swapaxes(np.asarray(_dcm(np.asarray(tel.q, float))), -1, -2)[keep]  # body → inertial
     x = np.einsum("nij,jk,nk->ni", a_t, np.asarray(spacecraft.inertia, float),
                   np.asarray(tel.omega, float)[keep])
     cols = []
@@ -350,8 +358,8 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
         rates = np.stack([np.asarray(tel.wheel_rate(n), float)[keep] for n in known], 1)
         axes = np.stack([spacecraft.wheel(n).axis for n in known])
         js = np.array([spacecraft.wheel(n).inertia for n in known])
-        cols.append(-np.einsum("nij,nj->ni", a_t, np.asarray(wheel_momentum_body(rates, axes,
-                                                                                 js))))
+        cols.append(-np.einsum("nij,nj->ni", a_t,
+                               np.asarray(_wheel_momentum_body(rates, axes, js))))
     if free:
         rho = np.asarray(tel.wheel_rate(free[0]), float)[keep]
         cols += [-rho[:, None] * a_t[:, :, j] for j in range(3)]

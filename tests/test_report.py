@@ -354,3 +354,28 @@ def test_page_helpers_escape_and_link():
     assert "&lt;script&gt;" in page and "<em>ok</em>" in page and "x&lt;" in page
     assert 'href="#one-two"' in page and "cap &lt;i&gt;" in page
     _assert_self_contained(page)
+
+
+@pytest.mark.parametrize("size_in", [(6.5, 3.8), (6.51, 3.803)])
+def test_png_bytes_equals_savefig_at_any_figure_size(size_in):
+    """:func:`figures.png_bytes` renders from the canvas's pixels; the PNG is the one the
+    savefig path gave (same size, same bytes), also when the size in pixels is fractional."""
+    import io
+
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    from cassini_bayes.report import figures
+
+    def draw():
+        fig = Figure(figsize=size_in)
+        fig.subplots().plot(np.sin(np.arange(100) / 7.0))
+        return fig
+
+    buf = io.BytesIO()
+    draw().savefig(buf, format="png", dpi=figures.DPI)
+    buf.seek(0)
+    ref = io.BytesIO()
+    Image.open(buf).convert("RGB").quantize(
+        colors=256, method=Image.Quantize.FASTOCTREE).save(ref, "PNG")
+    assert figures.png_bytes(draw()) == ref.getvalue()
