@@ -18,10 +18,13 @@ the table of an existing file without fitting.
     python benchmarks/coverage_open_world.py --families post_probe pre_soi post_prm \\
         --seeds 20 [--first-seed 0] [--models per_wheel common idealised] [--chains 4]
         [--warmup 500] [--draws 500] [--widen 1.5] [--off drift flex …] [--torque-sd-nm X]
+        [--time-tag-scale X]
         --out open_world.jsonl [--report]
 
-``--off`` switches effects off (``EFFECTS_OFF``) with every other draw unchanged: a campaign
-with ``--off drift`` on the same seeds shows what the drifting torque alone costs. Keep one
+``--time-tag-scale X`` multiplies the drawn time-tag errors by ``X`` (``1/widen``: uniform at
+the model's stated sd). ``--off`` switches effects off (``EFFECTS_OFF``) with every other draw
+unchanged: a campaign with ``--off drift`` on the same seeds shows what the drifting torque
+alone costs. Keep one
 ``--out`` file per setting: resuming does not compare options (each line records its own).
 
 Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``day028``,
@@ -154,6 +157,10 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
                          solved_wheel="RWA4" if kind == "rwa4" else None,
                          torque_sd_nm=BODY_TORQUE_PRIOR_SD_NM)
     ow = without(ow, opts["off"])
+    if opts.get("time_tag_scale", 1.0) != 1.0:   # the drawn time tags scaled, nothing else
+        from dataclasses import replace
+
+        ow = replace(ow, time_tag_error_s=ow.time_tag_error_s * opts["time_tag_scale"])
     scenario = scenario_from_dict(ow.scenario, src=name)
     k_sim, k_fit = jax.random.split(jax.random.key(50_000 * (fam + 1) + seed))
     sim = simulate(k_sim, scenario)
@@ -246,6 +253,9 @@ def main(argv=None) -> None:
     ap.add_argument("--torque-sd-nm", type=float, default=None,
                     help="the fits' stated external-torque prior sd, N m (default: the model "
                     "file's [torque_knowledge] sd_nm); the truth's torques do not change")
+    ap.add_argument("--time-tag-scale", type=float, default=1.0,
+                    help="multiply the drawn time-tag errors by this (1/widen: the stated sd, "
+                    "the law still uniform); every other draw stays the same")
     ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
                     help="switch these open-world effects off (the other draws stay the same)")
     ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
@@ -256,7 +266,8 @@ def main(argv=None) -> None:
         from cassini_bayes.simulate.scenario import scenario_path
 
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
-                                              "off", "torque_sd_nm", "target_accept")}
+                                              "off", "torque_sd_nm", "target_accept",
+                                              "time_tag_scale")}
         done = {(r["family"], r["seed"]) for r in rows}
         t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):
