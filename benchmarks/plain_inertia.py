@@ -73,6 +73,20 @@ def load(path: str) -> dict:
     return d
 
 
+def _pymc_parameters(d: dict):
+    """The shared priors inside a ``pm.Model`` context: the inertia matrix (kg m²), ``H_0``
+    (N m s) and ``T_N`` (N m)."""
+    import pymc as pm
+    import pytensor.tensor as pt
+
+    xx, yy, zz, xy, xz, yz = (pm.Normal(n, mu=m, sigma=s)
+                              for n, m, s in zip(NAMES, d["prior_mean"], d["prior_sd"]))
+    h0 = pm.Normal("H0", 0.0, H0_SD_NMS, shape=3)
+    t_n = 1e-6 * pm.Normal("T_N_uNm", 0.0, TORQUE_SD_UNM, shape=3)
+    inertia = pt.stack([pt.stack([xx, xy, xz]), pt.stack([xy, yy, yz]), pt.stack([xz, yz, zz])])
+    return inertia, h0, t_n
+
+
 def pymc_model(d: dict):
     """The plain PyMC model (module docstring)."""
     import pymc as pm
@@ -80,14 +94,8 @@ def pymc_model(d: dict):
 
     a, omega, dt = (pt.as_tensor(d[k]) for k in ("a", "omega", "dt"))
     with pm.Model() as model:
-        pi = [pm.Normal(n, mu=m, sigma=s) for n, m, s in zip(NAMES, d["prior_mean"],
-                                                              d["prior_sd"])]
-        h0 = pm.Normal("H0", 0.0, H0_SD_NMS, shape=3)
-        t_n = 1e-6 * pm.Normal("T_N_uNm", 0.0, TORQUE_SD_UNM, shape=3)
+        inertia, h0, t_n = _pymc_parameters(d)
         sigma = pm.HalfNormal("sigma", SIGMA_SCALE_NMS)
-        xx, yy, zz, xy, xz, yz = pi
-        inertia = pt.stack([pt.stack([xx, xy, xz]), pt.stack([xy, yy, yz]),
-                            pt.stack([xz, yz, zz])])
         body = pt.dot(omega, inertia)                               # I ω_t, (n, 3)
         inertial = (a * body[:, :, None]).sum(axis=1)               # A_tᵀ I ω_t
         mu = h0[None, :] + dt[:, None] * t_n[None, :] - inertial
@@ -104,19 +112,30 @@ def pymc_model_package_noise(d: dict):
 
     a, omega, dt, w = (pt.as_tensor(d[k]) for k in ("a", "omega", "dt", "whiten"))
     with pm.Model() as model:
-        pi = [pm.Normal(n, mu=m, sigma=s) for n, m, s in zip(NAMES, d["prior_mean"],
-                                                              d["prior_sd"])]
-        h0 = pm.Normal("H0", 0.0, H0_SD_NMS, shape=3)
-        t_n = 1e-6 * pm.Normal("T_N_uNm", 0.0, TORQUE_SD_UNM, shape=3)
+        inertia, h0, t_n = _pymc_parameters(d)
         scale = pm.LogNormal("s", 0.0, 1.0)
-        xx, yy, zz, xy, xz, yz = pi
-        inertia = pt.stack([pt.stack([xx, xy, xz]), pt.stack([xy, yy, yz]),
-                            pt.stack([xz, yz, zz])])
         h_n = h0[None, :] + dt[:, None] * t_n[None, :]              # inertial, (n, 3)
         part = pt.dot(omega, inertia) - (a * h_n[:, None, :]).sum(axis=2)  # I ω_t − A_t H_N
         pm.Normal("e", mu=(w * part[:, None, :]).sum(axis=2), sigma=scale,
                   observed=d["wy"])
     return model
+
+
+def _numpyro_parameters(d: dict):
+    """The shared priors inside a NumPyro model: the inertia matrix (kg m²), ``H_0`` (N m s)
+    and ``T_N`` (N m)."""
+    import jax.numpy as jnp
+    import numpyro
+    import numpyro.distributions as dist
+
+    xx, yy, zz, xy, xz, yz = (numpyro.sample(n, dist.Normal(m, s))
+                              for n, m, s in zip(NAMES, d["prior_mean"], d["prior_sd"]))
+    h0 = numpyro.sample("H0", dist.Normal(0.0, H0_SD_NMS).expand([3]).to_event(1))
+    t_n = 1e-6 * numpyro.sample("T_N_uNm",
+                                dist.Normal(0.0, TORQUE_SD_UNM).expand([3]).to_event(1))
+    inertia = jnp.stack([jnp.stack([xx, xy, xz]), jnp.stack([xy, yy, yz]),
+                         jnp.stack([xz, yz, zz])])
+    return inertia, h0, t_n
 
 
 def numpyro_model(d: dict):
@@ -128,15 +147,8 @@ def numpyro_model(d: dict):
     a, omega, dt, y = (jnp.asarray(d[k]) for k in ("a", "omega", "dt", "y"))
 
     def model():
-        pi = [numpyro.sample(n, dist.Normal(m, s)) for n, m, s in zip(NAMES, d["prior_mean"],
-                                                                       d["prior_sd"])]
-        h0 = numpyro.sample("H0", dist.Normal(0.0, H0_SD_NMS).expand([3]).to_event(1))
-        t_n = 1e-6 * numpyro.sample("T_N_uNm",
-                                    dist.Normal(0.0, TORQUE_SD_UNM).expand([3]).to_event(1))
+        inertia, h0, t_n = _numpyro_parameters(d)
         sigma = numpyro.sample("sigma", dist.HalfNormal(SIGMA_SCALE_NMS))
-        xx, yy, zz, xy, xz, yz = pi
-        inertia = jnp.stack([jnp.stack([xx, xy, xz]), jnp.stack([xy, yy, yz]),
-                             jnp.stack([xz, yz, zz])])
         inertial = jnp.einsum("nji,nj->ni", a, omega @ inertia)
         mu = h0 + dt[:, None] * t_n - inertial
         numpyro.sample("h", dist.Normal(mu, sigma), obs=y)
@@ -153,15 +165,8 @@ def numpyro_model_package_noise(d: dict):
     a, omega, dt, w, wy = (jnp.asarray(d[k]) for k in ("a", "omega", "dt", "whiten", "wy"))
 
     def model():
-        pi = [numpyro.sample(n, dist.Normal(m, s)) for n, m, s in zip(NAMES, d["prior_mean"],
-                                                                       d["prior_sd"])]
-        h0 = numpyro.sample("H0", dist.Normal(0.0, H0_SD_NMS).expand([3]).to_event(1))
-        t_n = 1e-6 * numpyro.sample("T_N_uNm",
-                                    dist.Normal(0.0, TORQUE_SD_UNM).expand([3]).to_event(1))
+        inertia, h0, t_n = _numpyro_parameters(d)
         scale = numpyro.sample("s", dist.LogNormal(0.0, 1.0))
-        xx, yy, zz, xy, xz, yz = pi
-        inertia = jnp.stack([jnp.stack([xx, xy, xz]), jnp.stack([xy, yy, yz]),
-                             jnp.stack([xz, yz, zz])])
         part = omega @ inertia - jnp.einsum("nij,nj->ni", a, h0 + dt[:, None] * t_n)
         numpyro.sample("e", dist.Normal(jnp.einsum("nij,nj->ni", w, part), scale), obs=wy)
 
