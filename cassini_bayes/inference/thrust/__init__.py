@@ -105,8 +105,8 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
   thrusters' torque at ``t_i`` times ``δ`` — noise only on the samples taken during a pulse, which
   carry the timing information of the time constants, so it enters the sample's covariance
-  (:func:`time_tag_columns`, evaluated once at the prior's time constants and the predicted
-  thrust) instead of a parameter. Without it the robust fits of 20 error draws
+  (:func:`time_tag_rates`: the impulse rates evaluated once, at the prior's time constants, and
+  scaled by the sampled thrust) instead of a parameter. Without it the robust fits of 20 error draws
   of ``biasing_day028_real`` (10 ms jitter, flexible mode) covered ``τr`` and ``τf`` in 6 of 20
   90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd), refits
   without the jitter did not (≤ 2.7 sd).
@@ -164,7 +164,7 @@ from cassini_bayes.inference.thrust.coords import (A_LOG_SCALE, C_SCALE_S, long_
 from cassini_bayes.inference.thrust.data import ThrustData, ThrustProblem, prepare_thrust
 from cassini_bayes.inference.thrust.fit import RESIDUAL_DRAWS, ThrustPosterior, fit_thrust
 from cassini_bayes.inference.thrust.likelihood import (impulse_residuals, pulse_increments,
-                                                       time_tag_columns)
+                                                       time_tag_rates)
 from cassini_bayes.inference.thrust.model import thrust_model
 from cassini_bayes.inference.thrust.prior import (CONTRACTION_UNIDENTIFIED, MODES,
                                                   NOISE_PRIOR_LOG_SD, PRIOR_CONFLICT_MASS,
@@ -197,7 +197,7 @@ __all__ = [
     "ThrustData", "ThrustProblem",
     "prepare_thrust",
     "pulse_increments",
-    "time_tag_columns",
+    "time_tag_rates",
     "impulse_residuals",
     "inv3_spd",
     "long_pulse_excess",

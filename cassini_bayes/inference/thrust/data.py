@@ -19,7 +19,7 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
 from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
-from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_columns
+from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_rates
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
 from cassini_bayes.physics.impulse import impulse_lhs_basis, moment_matrix
@@ -241,8 +241,7 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
 
 # every event's time-tag columns, one XLA program (run eagerly, the vmapped forward-mode
 # derivative compiles some seventy one-operation programs)
-_time_tag_columns = jax.jit(jax.vmap(time_tag_columns,
-                                     in_axes=(0, 0, 0, 0, 0, None, None, None, None, None)))
+_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, 0, 0, 0, 0, None, None, None)))
 
 
 _column_statistics = jax.jit(jax.vmap(column_statistics))
@@ -289,12 +288,10 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         f_mu=np.log(spacecraft.thrust), f_index=_thrust_index(mode), inertia_mean=i_mean,
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0))))
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
-    time_tag_cols = _time_tag_columns(
+    time_tag = _time_tag_rates(
         kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-        tuple(jax.device_put(x) for x in tp.median()),
-        jax.device_put(np.full(8, float(spacecraft.thrust))), kw["q_matrix"],
-        jax.device_put(sd_t))
-    derived = dict(time_tag_cols=time_tag_cols,
+        tuple(jax.device_put(x) for x in tp.median()), jax.device_put(sd_t))
+    derived = dict(time_tag_rates=time_tag,
                    nu_stats=_column_statistics(kw["nu_cols"], kw["mask"]),
                    lhs_basis=_lhs_basis(kw["t"], kw["omega"], kw["h_wheels"]))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},

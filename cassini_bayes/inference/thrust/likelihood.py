@@ -18,7 +18,7 @@ from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["EventData", "pulse_increments", "time_tag_columns", "impulse_residuals"]
+__all__ = ["EventData", "pulse_increments", "time_tag_rates", "impulse_residuals"]
 
 
 class EventData(NamedTuple):
@@ -36,7 +36,7 @@ class EventData(NamedTuple):
     slot: jax.Array            # (m,) index of each pulse's first sample (n: padding, dropped)
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
-    time_tag_cols: jax.Array   # (n, 3) N m s time-tag columns (:func:`time_tag_columns`)
+    time_tag_rates: jax.Array  # (n, 8) s, σ_t ∂j/∂t per thruster (:func:`time_tag_rates`)
     lhs_basis: jax.Array       # (7, n, 3) N m s, V = lhs_basis[0] + Σ π_k lhs_basis[1 + k]
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (:func:`~cassini_bayes.inference.gaussian.column_statistics`)
 
@@ -85,7 +85,9 @@ def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix)
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
-    docstring) and the time-tag term ``m_i`` = ``ev.time_tag_cols`` (:func:`time_tag_columns`).
+    docstring) and the time-tag term ``m_i = Q (F ⊙ ev.time_tag_rates_i)`` (:func:`time_tag_rates`),
+    the thrusters' torque at the sample times ``σ_t``: it scales with the sampled ``F``, as the
+    momentum a time-tag error moves does (see :func:`time_tag_rates`).
     The offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
     :func:`nuisance_marginal` over all events.
 
@@ -101,8 +103,9 @@ def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix)
     inertia = inertia_matrix(pi)
     r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
                         ev.slot, slot_offsets, q_matrix)
-    st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov), ev.time_tag_cols,
-                         ev.mask, ev.nu_cols, ev.nu_stats)
+    st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
+                         _time_tag_cols(ev.time_tag_rates, f8, q_matrix), ev.mask, ev.nu_cols,
+                         ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
     return st._replace(loglik=st.loglik + log_jacobian)
 
@@ -114,18 +117,28 @@ def _noise_cov(inertia, log_sigma, wheel_cov):
     return s2[0] * inertia @ inertia + s2[1] * wheel_cov
 
 
-def time_tag_columns(t, t_on, thruster, width, slot, slot_offsets, tau, f8, q_matrix,
-                     time_tag_sd):
-    """(n, 3) N m s: ``σ_t`` times the thrusters' torque at each sample, ``Q (F ⊙ ∂j/∂t)`` —
-    the momentum a time-tag error of sd ``σ_t`` (s) puts between a sample and the impulse
-    predicted for it (module docstring, "Robust model"). ``∂j/∂t`` is exact (forward-mode
-    derivative of :func:`pulse_increments` in the sample times); ``τ`` (3,) s and ``f8`` (8,) N
-    are the prior's median time constants and the predicted thrust: a variance term evaluated
-    once, at the prior, so the sampler sees a fixed covariance (evaluated at each draw it made
-    some fits take tens of minutes)."""
+def time_tag_rates(t, t_on, thruster, width, slot, slot_offsets, tau, time_tag_sd):
+    """(n, 8) s: ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
+    newton at each sample (module docstring, "Robust model"); ``∂j/∂t`` is exact (forward-mode
+    derivative of :func:`pulse_increments` in the sample times) at the time constants ``τ``
+    (3,) s, the prior's medians: evaluated once, so the covariance does not move with ``τ``
+    (evaluated at each draw it made some fits take tens of minutes).
+
+    The likelihood's time-tag column is ``Q (F ⊙ rates)`` at the *sampled* thrust
+    (:func:`_time_tag_cols`). Fixed at the predicted thrust, as it was, it broke the likelihood's
+    invariance under the common scale of ``I``, ``F`` and the wheel inertias that the data cannot
+    see (:func:`_event_loglik`): shrinking all three shrank the residuals a time-tag error leaves
+    but not their stated variance, so time tags wider than stated pulled the scale, and ``F``,
+    down — by 0.19 of ``F``'s sd at 1.5 × the stated spread on ``biasing_day028``
+    (``benchmarks/time_tag_bias.py``), the bias the open-world campaigns measured."""
     _, j_dot = jax.jvp(lambda tt: pulse_increments(tt, t_on, thruster, width, slot,
                                                    slot_offsets, *tau), (t,), (jnp.ones_like(t),))
-    return time_tag_sd * (j_dot * f8[None, :]) @ q_matrix.T
+    return time_tag_sd * j_dot
+
+
+def _time_tag_cols(rates, f8, q_matrix):
+    """(n, 3) N m s: the time-tag column ``Q (F ⊙ rates)`` of each sample at thrust ``f8`` (8,) N."""
+    return (rates * f8[None, :]) @ q_matrix.T
 
 
 @jax.jit
@@ -136,8 +149,9 @@ def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_ma
         r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
                             ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
         none = ColumnStatistics(jnp.zeros((3, 3, 0, 0)), jnp.zeros((3, 0)))
-        return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov), ev.time_tag_cols,
-                               ev.mask, ev.nu_cols[..., :0], none).resid
+        return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov),
+                               _time_tag_cols(ev.time_tag_rates, f8, q_matrix), ev.mask,
+                               ev.nu_cols[..., :0], none).resid
 
     return jax.vmap(one)(log_sigma, ev)
 
