@@ -8,8 +8,17 @@ Simulates the scenario once (no time-tag errors), then for each draw adds errors
 ``±√3 sd`` (the open-world law) to the sample times of: every sample; only the samples within
 50 ms of a pulse's end (command plus width); only the samples within 50 ms before a command.
 Prints the mean change of F's Laplace mode in units of its Laplace sd, with its standard error.
-The mode moves as the posterior mean does (the open-world campaign's paired shift, 0.20 sd at
-15 ms, docs/robust/open_world.md), at the cost of one Laplace step per draw (about a second).
+The mode moves as the posterior mean does, at the cost of one Laplace step per draw (about a
+second).
+
+Measured on ``biasing_day028`` (seed 0, 15 ms, 20 draws; docs/robust/open_world.md): with the
+time-tag term held at the predicted thrust, as it was before 2026-11-24, every sample's errors
+moved F by −0.213 sd (se 0.023) — the open-world campaigns' −0.20 — and the 13 samples at a
+pulse's end carried all of it (−0.214). The term broke the likelihood's invariance under the
+common scale of the inertia, the thrust and the wheels, so time tags wider than stated pulled
+that scale down. Scaled with the sampled thrust, as it is now: −0.025 (0.016), −0.038 (0.014)
+at the pulse ends, −0.038 (0.007) before commands.
+
 Not a test.
 """
 
