@@ -105,11 +105,12 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
   thrusters' torque at ``t_i`` times ``δ`` — noise only on the samples taken during a pulse, which
   carry the timing information of the time constants, so it enters the sample's covariance
-  (:func:`time_tag_rates`: the impulse rates evaluated once, at the prior's time constants, and
-  scaled by the sampled thrust) instead of a parameter. Without it the robust fits of 20 error draws
-  of ``biasing_day028_real`` (10 ms jitter, flexible mode) covered ``τr`` and ``τf`` in 6 of 20
-  90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd), refits
-  without the jitter did not (≤ 2.7 sd).
+  instead of a parameter (:func:`time_tag_rates`: the impulse rates evaluated once, at the
+  prior's time constants, times the sampled thrust, so that it keeps the likelihood's invariance
+  under the common scale of ``I``, ``F`` and the wheels). Without it the robust fits of 20 error
+  draws of ``biasing_day028_real`` (10 ms jitter, flexible mode) covered ``τr`` and ``τf`` in 6
+  of 20 90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd),
+  refits without the jitter did not (≤ 2.7 sd).
 
 ``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
 rather than sampled (as in the robust RWA4 model): per event the offset is removed
