@@ -85,9 +85,9 @@ def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix)
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
-    docstring) and the time-tag term ``m_i = Q (F ⊙ ev.time_tag_rates_i)`` (:func:`time_tag_rates`),
-    the thrusters' torque at the sample times ``σ_t``: it scales with the sampled ``F``, as the
-    momentum a time-tag error moves does (see :func:`time_tag_rates`).
+    docstring) and the time-tag term ``m_i = Q (F ⊙ ev.time_tag_rates_i)``, ``σ_t`` times the
+    thrusters' torque at the sample: it scales with the sampled ``F``, as the momentum that a
+    time-tag error moves does (:func:`time_tag_rates`).
     The offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
     :func:`nuisance_marginal` over all events.
 
