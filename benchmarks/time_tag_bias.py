@@ -49,6 +49,18 @@ def _mode_f(tel, pulses, spacecraft, inertia) -> tuple[float, float]:
     return thrust, float(np.linalg.norm(np.asarray(grad) @ np.asarray(data.tril)))
 
 
+def f_shifts(tel, pulses, spacecraft, inertia, selected, sd_s, draws, rng) -> np.ndarray:
+    """(draws,) changes of F's Laplace mode, in its Laplace sd, when time-tag errors uniform on
+    ``±√3 sd_s`` are added to the times of the ``selected`` samples ((n,) bool)."""
+    f0, sd0 = _mode_f(tel, pulses, spacecraft, inertia)
+    t = np.asarray(tel.t, float)
+    out = []
+    for _ in range(draws):
+        err = rng.uniform(-1.0, 1.0, t.size) * np.sqrt(3.0) * sd_s * selected
+        out.append((_mode_f(replace(tel, t=t + err), pulses, spacecraft, inertia)[0] - f0) / sd0)
+    return np.asarray(out)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scenario", default="biasing_day028")
@@ -85,12 +97,7 @@ def main(argv=None) -> int:
           f"time tags uniform, sd {args.sd_ms:g} ms, {args.draws} draws")
     rng = np.random.default_rng(args.seed)
     for name, sel in groups.items():
-        dz = []
-        for _ in range(args.draws):
-            err = rng.uniform(-1.0, 1.0, t.size) * np.sqrt(3.0) * sd * sel
-            dz.append((_mode_f(replace(tel, t=t + err), pulses, spacecraft, inertia)[0] - f0)
-                      / sd0)
-        dz = np.asarray(dz)
+        dz = f_shifts(tel, pulses, spacecraft, inertia, sel, sd, args.draws, rng)
         print(f"  errors on {name} ({int(sel.sum())} samples): F moves "
               f"{dz.mean():+.3f} sd (se {dz.std(ddof=1) / np.sqrt(dz.size):.3f})", flush=True)
     return 0
