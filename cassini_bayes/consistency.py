@@ -52,9 +52,10 @@ from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
                                      Telemetry, check_pulses_in_span, cumulative_on_times)
 
-# The checks' JAX work as three programs: called eagerly on NumPy arrays, every frames function
+# The checks' JAX work as four programs: called eagerly on NumPy arrays, every frames function
 # is a few one-operation programs, each loaded (or compiled) in every process.
 _rotvecs_between = jax.jit(lambda qa, qb: quat_to_rotvec(quat_multiply(qb, quat_conjugate(qa))))
+_conjugate = jax.jit(quat_conjugate)
 _dcm = jax.jit(dcm)
 _wheel_momentum_body = jax.jit(wheel_momentum_body)
 
@@ -144,8 +145,8 @@ def _reading(q: np.ndarray, k: int) -> np.ndarray:
     """The quaternion (scalar last, inertial → body) under reading ``k`` of :data:`READINGS`."""
     if k in (1, 3):  # columns hold (q4, q1, q2, q3)
         q = np.roll(q, -1, axis=1)
-    if k in (2, 3):  # body → inertial: the inverse rotation (frames.quat_conjugate)
-        q = q * np.array([-1.0, -1.0, -1.0, 1.0])
+    if k in (2, 3):  # body → inertial: the inverse rotation
+        q = np.asarray(_conjugate(q))
     return q
 
 

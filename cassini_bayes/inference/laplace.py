@@ -28,7 +28,6 @@ from functools import lru_cache
 from typing import Any, Callable
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 __all__ = ["laplace"]
