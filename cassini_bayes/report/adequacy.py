@@ -8,7 +8,7 @@ experiments) gets a neutral badge and a section that says so.
 
 from __future__ import annotations
 
-from cassini_bayes.report.html import Section, badge, esc, not_available, paragraph, section, table
+from cassini_bayes.report.html import Section, badge, not_available, paragraph, section, table
 from cassini_bayes.report.tables import fmt
 
 __all__ = ["adequacy_badge", "adequacy_section"]

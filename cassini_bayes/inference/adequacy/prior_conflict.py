@@ -11,7 +11,6 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from cassini_bayes.inference.adequacy.check import PRIOR_CONFLICT_SD, Check, _check, not_applicable
-from cassini_bayes.inference.nuisance import site_prior_sd as nuisance_prior_sd
 
 
 def _elements(da) -> dict[str, np.ndarray]:
