@@ -23,6 +23,10 @@ def request_host_devices(n: int | None = None) -> None:
     """
     import jax
 
+    if n is not None and (isinstance(n, bool) or not isinstance(n, int) or n < 1):
+        from cassini_bayes.errors import InputError
+
+        raise InputError(f"n={n!r}: give a positive number of devices, or None for the default")
     if "xla_force_host_platform_device_count" in os.environ.get("XLA_FLAGS", ""):
         return
     n = max(1, n or max(DEFAULT_CHAINS, os.cpu_count() or 1))

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import os
+from pathlib import Path
 from typing import Iterator
 
 _COMMAND_LINE = contextvars.ContextVar("cassini_bayes_command_line", default=False)
@@ -55,7 +57,7 @@ class InputError(CassiniError, ValueError):
 
     def __init__(self, message: str, *, path: str | None = None):
         message = " ".join(str(message).split())  # always one line
-        if path is not None and not message.startswith(str(path)):
+        if path is not None and not message.startswith(f"{path}:"):  # named once, first
             message = f"{path}: {message}"
         super().__init__(message)
         self.path = path
@@ -77,3 +79,13 @@ class InadequateModelError(NotConvergedError):
     """The fit's adequacy checks failed (the model does not fit its data) and ``--strict`` was
     asked for. A kind of :class:`NotConvergedError` so that every ``--strict`` failure is handled
     alike (exit 3, after the run directory is written)."""
+
+
+def as_path(value: object, what: str) -> Path:
+    """``value`` as a :class:`~pathlib.Path` when it is a non-empty ``str`` or ``os.PathLike``,
+    else an :class:`InputError` saying what was expected (``what``, e.g. ``"a telemetry
+    file"``)."""
+    if isinstance(value, (str, os.PathLike)) and str(value):
+        return Path(value)
+    got = repr(value) if isinstance(value, str) else type(value).__name__
+    raise InputError(f"expected the path of {what}, got {got}")

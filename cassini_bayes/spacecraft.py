@@ -22,7 +22,7 @@ import numpy as np
 
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, as_path
 
 __all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
            "tilted_axis", "load_spacecraft",
@@ -477,7 +477,7 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
 
 def load_spacecraft(path: str | Path) -> Spacecraft:
     """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
-    if Path(path).is_dir():
+    if as_path(path, "a spacecraft model .toml file or a shipped model's name").is_dir():
         raise InputError("is a directory, expected a spacecraft model .toml file", path=str(path))
     p = model_path(str(path))
     d = read_toml(p, "spacecraft model", "models/")

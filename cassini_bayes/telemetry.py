@@ -66,7 +66,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
 __all__ = [
@@ -632,7 +632,7 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     InputError
         One line naming the file, column and/or row, and the fix.
     """
-    p = Path(path)
+    p = as_path(path, "a telemetry file")
     name = str(path)
     expected = "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)"
     if _is_parquet(p):
@@ -825,7 +825,7 @@ def read_pulses(path: str | os.PathLike) -> PulseLog:
     PulseLog
         Sorted by ``t_on``; thruster as indices into ``THRUSTER_NAMES``.
     """
-    p = Path(path)
+    p = as_path(path, "a pulse-log file")
     name = str(path)
     header, cells = _read_table(p, "pulse-log", allow_empty=True)
     idx = _map_header(header, _PULSE_COLS, name, "t_on thruster width")

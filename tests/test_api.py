@@ -142,6 +142,51 @@ def test_library_errors_name_arguments_the_cli_options(inputs):
         cb.fit_rwa4(inputs["rwa4"]["telemetry"], "cassini_pre_soi", method="rwa")
 
 
+def test_wrong_inputs_are_input_errors_naming_the_argument(inputs):
+    """Mistakes of type, shape or range in the public functions' arguments are one-line
+    ``InputError`` s, as from files: never a NumPy, JAX or pathlib error from inside."""
+    import numpy as np
+
+    tel_path = inputs["inertia"]["telemetry"]
+    empty = cb.Telemetry(np.empty(0), np.empty((0, 4)), np.empty((0, 3)), np.empty((0, 4)))
+    tel = cb.read_telemetry(tel_path)
+    short = cb.Telemetry(tel.t[:10], tel.q, tel.omega, tel.wheel_rates)
+    cases = [
+        (lambda: cb.fit_inertia(empty, "cassini_2000_03_15"), r"<telemetry>: only 0 sample"),
+        (lambda: cb.fit_inertia(short, "cassini_2000_03_15"), r"mismatched lengths: 'q'"),
+        (lambda: cb.fit_inertia({"t": [0.0]}, "cassini_2000_03_15"),
+         r"telemetry: give a path, a loaded object or a list of them, not dict"),
+        (lambda: cb.fit_inertia(tel_path, "cassini_2000_03_15", target_accept="x"),
+         r"target_accept: use a number in 0.5 .. 0.999, got 'x'"),
+        (lambda: cb.read_telemetry(42), r"expected the path of a telemetry file, got int"),
+        (lambda: cb.read_telemetry("telemetry"), r"^telemetry: telemetry file not found"),
+        (lambda: cb.load_spacecraft(None), r"expected the path of a spacecraft model"),
+        (lambda: cb.check_telemetry(tel_path, wheel_tol_rpm=-2),
+         r"wheel_tol_rpm: must be a positive number"),
+        (lambda: cb.budget(inertia=42), r"inertia: give a run directory, not int"),
+        (lambda: cb.budget(inertia=str(tel_path.parent), seed=-1), r"seed=-1"),
+        (lambda: cb.fit_health(42, "cassini_post_probe"), r"events: give events.csv files"),
+        (lambda: cb.fit_health([("x", tel_path, tel_path)] * 2, "cassini_post_probe"),
+         r"events date_days: use a number, got 'x'"),
+    ]
+    for call, message in cases:
+        with pytest.raises(InputError, match=message):
+            call()
+
+
+def test_check_and_leak_monitor_take_loaded_objects(inputs):
+    """``check_telemetry`` and ``monitor_leak`` take what the readers return, as the fits do."""
+    files = inputs["thrust"]
+    tel, log = cb.read_telemetry(files["telemetry"]), cb.read_pulses(files["pulses"])
+    sc = cb.load_spacecraft("fsds")
+    by_path = cb.check_telemetry(files["telemetry"], pulses=files["pulses"], spacecraft="fsds")
+    by_object = cb.check_telemetry(tel, pulses=log, spacecraft=sc)
+    assert by_object.quiet == by_path.quiet and by_object.thrusters == by_path.thrusters
+    leak = cb.monitor_leak(tel, sc, pulses=log)
+    assert leak.config["inputs"]["spacecraft"] == {"model": sc.name}
+    assert leak.summary["t_end_s"] == float(tel.t[-1])
+
+
 def test_simulate_wraps_the_command(tmp_path, run_cli):
     """``cb.simulate`` writes what ``cassini-bayes simulate`` writes, byte for byte."""
     from cassini_bayes._paths import SCENARIOS_DIR

@@ -272,8 +272,20 @@ def test_cli_refuses_wheel_rates_in_rad_s(runs, run_cli, tmp_path):
 # Every shipped scenario (slow: one full simulation each)
 
 
+# scenarios whose wheels hold their speed (the attitude held on thrusters): no momentum moves
+# between body and wheels, so the wheels' unit cannot be read from the data
+WHEELS_AT_REST = {"leak_cruise"}
+
+
+def _scenario_names() -> list[str]:
+    """The shipped scenario files; the thruster-health campaign files beside them (a
+    ``[campaign]`` table) are ``simulate-health`` inputs, not scenarios."""
+    return sorted(p.stem for p in SCENARIOS_DIR.glob("*.toml")
+                  if "campaign" not in tomllib.loads(p.read_text()))
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(p.stem for p in SCENARIOS_DIR.glob("*.toml")))
+@pytest.mark.parametrize("name", _scenario_names())
 def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
     r = simulate(jax.random.key(7), load_scenario(name))
     tel, log, sc = r.telemetry, r.pulses, _prior(name)
@@ -282,5 +294,11 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
         for bad in (_scalar_first(tel), _conjugated(tel)):
             with pytest.raises(InputError, match="columns q1..q4: the quaternion looks"):
                 cons.check_attitude_rates(bad)
+    if name in WHEELS_AT_REST:
+        # the balance does not fit (alignment 0.16 on leak_cruise), so the check says nothing
+        fit = cons.wheel_momentum_scale(_wheels_in_rad_s(tel), sc)
+        assert fit is None or fit.alignment < cons.MOMENTUM_ALIGN_MIN
+        cons.check_telemetry_data(_wheels_in_rad_s(tel), sc, log)
+        return
     with pytest.raises(InputError, match="wheel rates look like rad/s"):
         cons.check_telemetry_data(_wheels_in_rad_s(tel), sc, log)

@@ -210,6 +210,17 @@ def test_campaign_file_errors(tmp_path):
         load_campaign(p)
 
 
+def test_scenario_and_campaign_files_are_told_apart():
+    """The campaign files sit beside the scenarios: each loader names the other command."""
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate.health_campaign import load_campaign
+
+    with pytest.raises(InputError, match="campaign file, not a scenario.*simulate-health"):
+        load_scenario("health_control")
+    with pytest.raises(InputError, match="scenario file, not a thruster-health campaign"):
+        load_campaign("slews_post_probe")
+
+
 def test_cli_end_to_end(tmp_path, capsys):
     camp = tmp_path / "tiny.toml"
     camp.write_text(textwrap.dedent(f"""\

@@ -197,3 +197,41 @@ def test_near_boundary_replicates_fit_without_divergences():
     for seed, i in ((11, nearest), (0, 19)):
         margin, n_div, rhat = _adapter_fit(model, seed, i)
         assert n_div == 0 and rhat < 1.05, (seed, i, margin, n_div, rhat)
+
+
+def test_laplace_step_of_a_replicate_with_a_stiff_coordinate(monkeypatch):
+    """Replicate 282 of seed 11 (the smallest-margin truth above): one of its coordinates has
+    posterior sd 1.7e-4, so the Laplace step's first finite-difference Hessian, stepped 1e-4 in
+    the raw coordinates, carried the density's third derivative and swamped the soft block's
+    curvature; the mode was then found far off and the axis refused as undetermined (±34°). With
+    every direction differenced on its own scale (``laplace._rewhiten``) the whitening equals
+    the inverse of ``jax.hessian``'s negative Hessian at the mode (checked by hand: the unit-step
+    code gives sd 0.56 rad on the axis coordinates, this one 0.024)."""
+    from cassini_bayes.analysis.campaign import replicate_keys
+    from cassini_bayes.analysis.sbc_models import ModelSpec, build_model
+
+    seen = {}
+
+    def prepare_only(key, tel, spacecraft, **kw):
+        kw = {k: v for k, v in kw.items() if k in ("method", "pairs", "prior", "robust")}
+        seen["problem"] = rwa4_data.prepare_rwa4(tel, spacecraft, **kw)
+        raise _Prepared
+
+    monkeypatch.setattr(rwa4, "fit_rwa4", prepare_only)
+    model = build_model(ModelSpec.make("rwa4"))
+    split = jax.random.split(replicate_keys(11, np.array([282]))[0], 4)
+    _, arrays = model.simulate_batch(split[None, 0], split[None, 1])
+    with pytest.raises(_Prepared):
+        model.fit(split[2], jax.tree.map(lambda a: a[0], arrays))
+    problem = seen["problem"]
+    assert problem.sd_direction_deg < 3.0
+    density = rwa4_charts._LOG_DENSITY[problem.chart]
+    data = problem.data
+    h = -np.asarray(jax.hessian(density)(jnp.asarray(data.centre), data))
+    tril = np.asarray(data.tril)
+    cov = tril @ tril.T
+    np.testing.assert_allclose(cov @ h, np.eye(h.shape[0]), atol=1e-5)
+
+
+class _Prepared(Exception):
+    """Stops the SBC adapter's fit once its problem is prepared."""

@@ -20,7 +20,7 @@ __all__ = ["BudgetResult", "budget"]
 
 @dataclass(frozen=True)
 class BudgetResult:
-    """The propagated ``budget`` (:class:`~cassini_bayes.analysis.posterior_budgets.Budget`),
+    """The propagated ``budget`` (:class:`~cassini_bayes.analysis.posterior_budgets.PosteriorBudget`),
     its ``summary`` (``summary.json``) and ``config`` (``config.toml``) dicts and the input run
     directories ``runs`` (by kind)."""
 
@@ -70,16 +70,21 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
     import jax
 
     from cassini_bayes.analysis.posterior_budgets import load_posterior, posterior_budget
+    from cassini_bayes.api._inputs import check_seed, number
     from cassini_bayes.rundir import file_record
 
     runs = {"inertia": inertia, "thrust": thrust, "rwa4": rwa4}
+    for k, v in runs.items():
+        if v is not None and not isinstance(v, (str, os.PathLike)):
+            raise InputError(f"{spelled(f'--{k}', k)}: give a run directory, not "
+                             f"{type(v).__name__}")
     given = {k: Path(v) for k, v in runs.items() if v is not None}
     if not given:
         raise InputError("give at least one run directory: "
                          + ", ".join(spelled(f"--{k} RUN", k) for k in runs))
-    if n_draws < 10:
-        raise InputError(f"must be at least 10, got {n_draws}",
-                         path=spelled("--draws", "n_draws"))
+    check_seed(seed)
+    n_draws = number("n_draws", n_draws, lo=10, integer=True,
+                     where=spelled("--draws", "n_draws"))
     post = {k: load_posterior(v, k, option=spelled(f"--{k}", k)) for k, v in given.items()}
     result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)
     summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict()}

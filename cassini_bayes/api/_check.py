@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cassini_bayes.errors import InputError, spelled
+
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
 
 
@@ -112,11 +114,12 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
 
     Parameters
     ----------
-    telemetry : a telemetry CSV/Parquet path.
-    pulses : a pulse-log CSV path, validated and used for the thruster on-times (the
-        telemetry's ``on_*`` columns win when it has them).
-    spacecraft : a model TOML path or a shipped model's name: also check the wheel units by
-        momentum conservation.
+    telemetry : a telemetry CSV/Parquet path or a :class:`~cassini_bayes.telemetry.Telemetry`.
+    pulses : a pulse-log CSV path or a :class:`~cassini_bayes.telemetry.PulseLog`, validated and
+        used for the thruster on-times (the telemetry's ``on_*`` columns win when it has them).
+    spacecraft : a model TOML path, a shipped model's name or a
+        :class:`~cassini_bayes.spacecraft.Spacecraft`: also check the wheel units by momentum
+        conservation.
     min_quiet_s, rate_max_rad_s, wheel_tol_rpm : a quiet period is at least ``min_quiet_s``
         long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
         and no thruster firing (:func:`cassini_bayes.windows.quiet_periods`).
@@ -127,24 +130,29 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     InputError
         The first rule or physics check the file breaks, in one line naming where.
     """
+    from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
     from cassini_bayes.consistency import check_telemetry_data
-    from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseSpanWarning,
-                                         _turn_angle, read_pulses, read_telemetry,
-                                         with_on_times)
+                                         _turn_angle, with_on_times)
     from cassini_bayes.windows import quiet_periods
 
-    tel = read_telemetry(telemetry, check_units=check_units)
-    log = read_pulses(pulses) if pulses is not None else None
-    sc = load_spacecraft(spacecraft) if spacecraft is not None else None
+    for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
+                                    (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
+                                    (wheel_tol_rpm, "--wheel-tol", "wheel_tol_rpm")):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+            raise InputError(f"must be a positive number, got {value!r}",
+                             path=spelled(option, argument))
+    tel = one_telemetry(telemetry, check_units=check_units)
+    log = one_pulse_log(pulses) if pulses is not None else None
+    sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
     attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = []
     source = None if tel.on_times is None and log is None else "on_* columns"
     if log is not None and tel.on_times is not None:
-        notes.append(f"{telemetry} has on_* columns; they are used and {pulses} is only "
+        notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "
                      "validated")
     elif log is not None:
-        source = f"pulse log {pulses}"
+        source = f"pulse log {log.source}"
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PulseSpanWarning)
             tel = with_on_times(tel, log)

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
@@ -73,13 +74,20 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     tuples."""
     if isinstance(events, (str, os.PathLike)):
         events = [events]
+    if not isinstance(events, (list, tuple)):
+        raise InputError(f"{arg('events')}: give events.csv files or folders, or "
+                         f"(date_days, telemetry, pulses) tuples, not {type(events).__name__}")
     out = []
     for item in events:
         if isinstance(item, tuple):
-            if len(item) != 3:
+            if len(item) != 3 or not all(isinstance(x, (str, os.PathLike)) for x in item[1:]):
                 raise InputError(f"{arg('events')}: give (date_days, telemetry, pulses) tuples")
-            out.append((float(item[0]), Path(item[1]), Path(item[2])))
+            out.append((number("events", item[0], where=f"{arg('events')} date_days"),
+                        Path(item[1]), Path(item[2])))
             continue
+        if not isinstance(item, (str, os.PathLike)):
+            raise InputError(f"{arg('events')}: {type(item).__name__} is not an events.csv "
+                             "file, a folder or a (date_days, telemetry, pulses) tuple")
         p = Path(item)
         p = p / "events.csv" if p.is_dir() else p
         if not p.is_file():
@@ -110,12 +118,14 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
 
     Parameters
     ----------
-    events : event list(s) (:func:`read_event_list`).
+    events : event list(s) (:func:`read_event_list`); event dates in days.
     spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, model TOML path or name.
     fraction : the loss asked about: ``P(thrust more than fraction below the first
         calibration)`` at each event date.
     p_change, p_channel, step_sd : the change-point prior
-        (:class:`~cassini_bayes.inference.health.HealthPrior`).
+        (:class:`~cassini_bayes.inference.health.HealthPrior`): the probability of a change in
+        the span, of each channel stepping given a change, and the sd of a step's log thrust
+        ratio (dimensionless).
     tau_sd_frac : per-event variation of the pulse time constants propagated into each event's
         summary (default :data:`~cassini_bayes.inference.health.summary.TAU_SD_FRAC`).
     """
@@ -125,11 +135,10 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
     from cassini_bayes.rundir import file_record
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
+    fraction = number("fraction", fraction)
     if not 0.0 < fraction < 1.0:
         raise InputError(f"{arg('fraction')} must lie strictly between 0 and 1, got {fraction}")
-    tau_sd = TAU_SD_FRAC if tau_sd_frac is None else float(tau_sd_frac)
-    if tau_sd < 0:
-        raise InputError(f"{arg('tau_sd_frac')} must not be negative, got {tau_sd}")
+    tau_sd = TAU_SD_FRAC if tau_sd_frac is None else number("tau_sd_frac", tau_sd_frac, lo=0.0)
     sc, sc_record, _ = spacecraft_input(spacecraft)
     files = read_event_list(events)
     summaries = []

@@ -7,12 +7,15 @@ import os
 from pathlib import Path
 from typing import Sequence
 
+import numpy as np
+
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
-           "choice", "sampler_settings", "check_seed", "shows_progress"]
+           "one_telemetry", "one_pulse_log", "choice", "number", "sampler_settings",
+           "check_seed", "shows_progress"]
 
 WHEEL_ERRORS = ("per_wheel", "common")
 # jax.random.key takes a signed 64-bit seed; the package takes its non-negative half
@@ -70,10 +73,10 @@ def _items(x, name: str) -> list:
         return []
     if _is_path(x) or isinstance(x, (Telemetry, PulseLog)):
         return [x]
-    try:
+    if isinstance(x, (list, tuple)):
         return list(x)
-    except TypeError:
-        raise InputError(f"{arg(name)}: give a path, a loaded object or a list of them") from None
+    raise InputError(f"{arg(name)}: give a path, a loaded object or a list of them, not "
+                     f"{type(x).__name__}")
 
 
 def telemetry_inputs(telemetry, name: str = "telemetry"
@@ -81,7 +84,7 @@ def telemetry_inputs(telemetry, name: str = "telemetry"
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
     :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them."""
     from cassini_bayes.rundir import file_record
-    from cassini_bayes.telemetry import read_telemetry, read_telemetry_many
+    from cassini_bayes.telemetry import read_telemetry, read_telemetry_many, validate_telemetry
 
     items = _items(telemetry, name)
     if not items:
@@ -95,15 +98,41 @@ def telemetry_inputs(telemetry, name: str = "telemetry"
             tels.append(read_telemetry(x))
             records.append(file_record(x))
             paths.append(Path(x))
-        elif isinstance(x, Telemetry):
+        elif isinstance(x, Telemetry):  # checked with the file rules, as a file would be
             record, files = _record(x.source)
-            tels.append(x)
+            tels.append(validate_telemetry(x))
             records.append(record)
             paths += files
         else:
             raise InputError(f"{arg(name)}: {type(x).__name__} is not a telemetry file or "
                              "Telemetry")
     return tels, records, paths
+
+
+def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True) -> Telemetry:
+    """One telemetry argument, a :class:`~cassini_bayes.telemetry.Telemetry` or a file path,
+    read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics)."""
+    from cassini_bayes.telemetry import read_telemetry, validate_telemetry
+
+    if isinstance(telemetry, Telemetry):
+        return validate_telemetry(telemetry, check_units=check_units)
+    if not _is_path(telemetry):
+        raise InputError(f"{arg(name)}: give a telemetry file path or a Telemetry, not "
+                         f"{type(telemetry).__name__}")
+    return read_telemetry(telemetry, check_units=check_units)
+
+
+def one_pulse_log(pulses, name: str = "pulses") -> PulseLog:
+    """One pulse-log argument, a :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path,
+    read or checked with the file rules."""
+    from cassini_bayes.telemetry import read_pulses, validate_pulses
+
+    if isinstance(pulses, PulseLog):
+        return validate_pulses(pulses)
+    if not _is_path(pulses):
+        raise InputError(f"{arg(name)}: give a pulse-log file path or a PulseLog, not "
+                         f"{type(pulses).__name__}")
+    return read_pulses(pulses)
 
 
 def pulse_inputs(pulses, name: str = "pulses") -> tuple[list[PulseLog], list[dict], list[Path]]:
@@ -137,6 +166,24 @@ def choice(name: str, value: str, choices: Sequence[str]) -> str:
     return value
 
 
+def number(name: str, value, *, lo: float | None = None, hi: float | None = None,
+           integer: bool = False, where: str | None = None) -> float | int:
+    """``value`` when it is a real number (an integer with ``integer``) in ``[lo, hi]``, else
+    an InputError naming the argument (``where``: its name as spelled, default
+    :func:`~cassini_bayes.errors.arg`'s)."""
+    kinds = (int,) if integer else (int, float)
+    ok = (not isinstance(value, bool) and isinstance(value, kinds + ((np.integer,) if integer
+                                                                      else (np.number,)))
+          and np.isfinite(value) and (lo is None or value >= lo) and (hi is None or value <= hi))
+    if not ok:
+        want = "an integer" if integer else "a number"
+        rng = (f" in {lo:g} .. {hi:g}" if lo is not None and hi is not None else
+               f" of at least {lo:g}" if lo is not None else
+               f" of at most {hi:g}" if hi is not None else "")
+        raise InputError(f"{where or arg(name)}: use {want}{rng}, got {value!r}")
+    return int(value) if integer else float(value)
+
+
 def check_seed(seed: int) -> int:
     """``seed`` when an integer in ``0 .. 2**63 - 1``, else an InputError."""
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= SEED_MAX:
@@ -153,8 +200,6 @@ def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
     for name, value, lo in (("chains", chains, 1), ("warmup", warmup, 10), ("draws", draws, 10)):
         if isinstance(value, bool) or not isinstance(value, int) or value < lo:
             raise InputError(f"{arg(name, value)}: use an integer of at least {lo}")
-    if not 0.5 <= float(target_accept) <= 0.999:
-        raise InputError(f"{arg('target_accept', target_accept)}: use a probability in "
-                         "0.5 .. 0.999")
+    target_accept = number("target_accept", target_accept, lo=0.5, hi=0.999)
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
-                           target_accept=float(target_accept), progress=bool(progress))
+                           target_accept=target_accept, progress=bool(progress))

@@ -63,9 +63,11 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
 
     Parameters
     ----------
-    telemetry : a telemetry CSV/Parquet path.
-    spacecraft : a spacecraft model TOML path or a shipped model's name.
-    pulses : a pulse-log CSV path (else the telemetry's on-times times the model's thrust).
+    telemetry : a telemetry CSV/Parquet path or a :class:`~cassini_bayes.telemetry.Telemetry`.
+    spacecraft : a spacecraft model TOML path, a shipped model's name or a
+        :class:`~cassini_bayes.spacecraft.Spacecraft`.
+    pulses : a pulse-log CSV path or a :class:`~cassini_bayes.telemetry.PulseLog` (else the
+        telemetry's on-times times the model's thrust).
     prior_leak : prior probability of a leak in the stretch (shared by the eight thrusters).
     p_detect : the alarm level of ``P(leak)`` (and of one thruster's probability, isolation).
     sample_step_s, check_step_s, onset_step_s : spacing of the residual samples used, of the
@@ -73,13 +75,10 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     eta : thruster-to-thruster thrust variation, fraction (Lee Eq 11).
     threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
     """
-    from cassini_bayes._paths import model_path
+    from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
     from cassini_bayes.physics.impulse import THRUSTER_NAMES
-    from cassini_bayes.rundir import file_record
-    from cassini_bayes.spacecraft import load_spacecraft
-    from cassini_bayes.telemetry import read_pulses, read_telemetry
 
     # the Bayesian monitor checks its own settings (leak_posterior); these are Lee's
     for value, option, argument in ((threshold_nms, "--threshold", "threshold_nms"),
@@ -87,9 +86,17 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         _positive(value, option, argument)
     if eta < 0:
         raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))
-    sc = load_spacecraft(spacecraft)
-    tel = read_telemetry(telemetry)
-    log = read_pulses(pulses) if pulses is not None else None
+    sc, sc_record, sc_files = spacecraft_input(spacecraft)
+    tels, tel_records, tel_files = telemetry_inputs(telemetry)
+    if len(tels) != 1:
+        raise InputError(f"got {len(tels)} telemetry inputs; the monitor reads one stretch",
+                         path=spelled("TELEMETRY", "telemetry"))
+    tel = tels[0]
+    logs, log_records, log_files = pulse_inputs(pulses)
+    if len(logs) > 1:
+        raise InputError(f"got {len(logs)} pulse logs; give one",
+                         path=spelled("--pulses", "pulses"))
+    log = logs[0] if logs else None
     inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, onset_step_s=onset_step_s,
@@ -108,12 +115,11 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
     }
     config = {"command": "monitor leak", "version": __version__,
-              "inputs": {"telemetry": file_record(telemetry),
-                         "spacecraft": file_record(model_path(spacecraft)),
-                         **({"pulses": file_record(pulses)} if pulses is not None else {})},
+              "inputs": {"telemetry": tel_records[0], "spacecraft": sc_record,
+                         **({"pulses": log_records[0]} if log_records else {})},
               "settings": {"prior_leak": prior_leak, "p_detect": p_detect,
                            "sample_step_s": sample_step_s,
                            "check_step_s": check_step_s, "onset_step_s": onset_step_s,
                            "eta": eta, "threshold_nms": threshold_nms, "t_limit_h": t_limit_h}}
-    files = (Path(telemetry),) + ((Path(pulses),) if pulses is not None else ())
+    files = tuple(tel_files + log_files + sc_files)
     return LeakResult(post, lee, summary, config, files)

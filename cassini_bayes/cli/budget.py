@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from rich.console import Console
+from cassini_bayes.cli._console import stderr_console
 
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.rundir import check_out
@@ -39,7 +39,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                    "cassini-bayes wrote."),
     ) -> None:
         """Budgets from posteriors: each line a credible interval with its attribution."""
-        console = Console(stderr=True, highlight=False)
+        console = stderr_console()
         t0 = time.perf_counter()
         from cassini_bayes.api import budget
 

@@ -16,7 +16,7 @@ def experiment(
                                           "directory's config.toml to re-run it."),
     out: Path = typer.Option(..., "--out", help="Run directory to write (must not exist)."),
     seed: int = seed_option(None, "Seed of the run's jax.random key (default: the file's "
-                                  "[run] seed, else 0)."),
+                                  "\\[run] seed, else 0)."),
     force: bool = typer.Option(False, "--force", help="Replace --out if it is a run directory "
                                "cassini-bayes wrote."),
     quick: bool = typer.Option(False, "--quick", help="Small settings (for tests and previews)."),
@@ -25,7 +25,7 @@ def experiment(
     import matplotlib
 
     matplotlib.use("Agg")  # headless
-    from rich.console import Console
+    from cassini_bayes.cli._console import stderr_console
 
     from cassini_bayes._paths import text_file
     from cassini_bayes.experiments import load_experiment, run_experiment
@@ -36,7 +36,7 @@ def experiment(
     exp = load_experiment(file)
     if seed is None and exp.seed is not None:
         check_seed(exp.seed, str(file))
-    console = Console(stderr=True)
+    console = stderr_console()
     with console.status(f"running {exp.name} ({exp.kind.name})"):
         rec = run_experiment(exp, out, seed=seed, quick=quick, force=force)
     checks = rec.output.checks

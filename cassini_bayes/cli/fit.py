@@ -24,6 +24,7 @@ from pathlib import Path
 
 import typer
 
+from cassini_bayes.cli._console import stderr_console
 from cassini_bayes.cli._options import seed_option
 
 ORDER = 20
@@ -63,12 +64,6 @@ def sampler_options(chains: int, warmup: int, draws: int, target_accept: float) 
             "progress": sys.stderr.isatty()}
 
 
-def _console():
-    from rich.console import Console
-
-    return Console(stderr=True, highlight=False)
-
-
 def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     """Write the run directory of ``result`` (a :class:`cassini_bayes.FitResult`), report what
     happened, and enforce ``--strict``.
@@ -86,7 +81,7 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
           step(f"writing {out} (posterior.nc, summary.json, config.toml, report.html)")):
         final = result.save(out, force=force)
     summary = result.summary()
-    console = _console()
+    console = stderr_console()
     for line in list(summary.get("warnings", [])) + report_warnings:
         console.print(f"[yellow]warning:[/yellow] {line}")
     d = summary["diagnostics"]
@@ -139,7 +134,7 @@ def fit_inertia_cmd(
                                    help="The papers' idealised model: no gyro bias/scale factor, "
                                         "wheel inertia or axis errors (default: the robust model "
                                         "with those as nuisance parameters, priors from the "
-                                        "spacecraft model's [gyro] and [wheel_knowledge])."),
+                                        "spacecraft model's \\[gyro] and \\[wheel_knowledge])."),
     wheel_errors: str = WHEEL_ERRORS,
     more: list[Path] = typer.Argument(None, hidden=True, help="More telemetry files, as in "
                                       "--telemetry A.csv B.csv."),

@@ -45,8 +45,8 @@ def fit_thrust_cmd(
                                    help="The papers' idealised model: no gyro bias/scale factor, "
                                         "wheel inertia or axis errors, no external torque "
                                         "(default: the robust model with those as nuisance "
-                                        "parameters, priors from the spacecraft model's [gyro] "
-                                        "and [wheel_knowledge])."),
+                                        "parameters, priors from the spacecraft model's \\[gyro] "
+                                        "and \\[wheel_knowledge])."),
     wheel_errors: str = WHEEL_ERRORS,
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 import typer
-from rich.console import Console
+from cassini_bayes.cli._console import stderr_console
 
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.rundir import check_out
@@ -45,7 +45,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         """Thruster health over many biasing events: P(each thruster down) and since when."""
         from cassini_bayes.api._health import fit_health, read_event_list
 
-        console = Console(stderr=True, highlight=False)
+        console = stderr_console()
         files = read_event_list(events)
         check_out(out, force=force, inputs=[f[1] for f in files] + [f[2] for f in files])
         t0 = time.perf_counter()
@@ -72,7 +72,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         """Simulate a thruster-health campaign: one folder per event and events.csv."""
         from cassini_bayes.api._health import simulate_health_campaign
 
-        console = Console(stderr=True, highlight=False)
+        console = stderr_console()
         check_out(out, force=force, inputs=[campaign])
         t0 = time.perf_counter()
         with console.status("simulating the campaign's events (compiling on first use)…"):

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from rich.console import Console
+from cassini_bayes.cli._console import stderr_console
 
 from cassini_bayes.rundir import check_out
 
@@ -49,7 +49,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         t_limit: float = typer.Option(10.0, "--t-limit", help="Lee's T_limit, hours."),
     ) -> None:
         """Posterior probability of a leak per thruster, beside Lee's threshold monitor."""
-        console = Console(stderr=True, highlight=False)
+        console = stderr_console()
         t0 = time.perf_counter()
         from cassini_bayes.api import monitor_leak
 

@@ -25,7 +25,7 @@ def reproduce(
     import matplotlib
 
     matplotlib.use("Agg")  # headless
-    from rich.console import Console
+    from cassini_bayes.cli._console import stderr_console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from cassini_bayes._paths import EXPERIMENTS_DIR
@@ -36,7 +36,7 @@ def reproduce(
     experiments_dir = experiments_dir or EXPERIMENTS_DIR
     check_out(out, force=force, inputs=[experiments_dir])  # before any progress is drawn
     discover_experiments(experiments_dir)
-    console = Console(stderr=True)
+    console = stderr_console()
     columns = (TextColumn("[bold]{task.description}"), BarColumn(),
                TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=False) as progress:

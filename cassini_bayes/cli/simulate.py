@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from rich.console import Console
+from cassini_bayes.cli._console import stderr_console
 
 from cassini_bayes._paths import text_file
 from cassini_bayes.cli._options import check_seed, seed_option
@@ -35,7 +35,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                    "cassini-bayes wrote."),
     ) -> None:
         """Simulate a scenario: telemetry.csv, pulses.csv (if thrusters fire), truth.json."""
-        console = Console(stderr=True, highlight=False)
+        console = stderr_console()
         from cassini_bayes.api import simulate
         from cassini_bayes.simulate import load_scenario
         from cassini_bayes.simulate.scenario import scenario_path

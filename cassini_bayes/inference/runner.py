@@ -1,7 +1,8 @@
 """The MCMC runner shared by every model: NUTS on the CPU, results as ArviZ InferenceData.
 
-A model module (``inertia.py``, and the thrust and RWA4 models) writes a NumPyro model whose data
-arrive as keyword arguments, prepares those arrays once, and calls :func:`run_nuts`. The runner
+A model package (``inference/inertia``, ``inference/thrust``, ``inference/rwa4``) writes a
+NumPyro model whose data arrive as keyword arguments, prepares those arrays once, and calls
+:func:`run_nuts`. The runner
 
 * runs NUTS (NumPyro's ``hmc(algo="NUTS")`` kernel: windowed step-size and dense mass-matrix
   adaptation by default — the inertia entries, momenta and torques are strongly correlated; the

@@ -85,6 +85,9 @@ def load_campaign(path: str | Path) -> Campaign:
     p = scenario_path(str(path))
     d = read_toml(p, "campaign", "experiments/scenarios/")
     src = str(p)
+    if "campaign" not in d and "run" in d:
+        raise InputError("a scenario file, not a thruster-health campaign: simulate it with "
+                         "'cassini-bayes simulate FILE --out DIR'", path=src)
     allowed = {"name", "description", "seed", "event", "campaign", "errors", "degradation"}
     for key in d:
         if key not in allowed:
@@ -98,8 +101,9 @@ def load_campaign(path: str | Path) -> Campaign:
     template = read_toml(scenario_path(str(ev)), "event scenario", "experiments/scenarios/")
     c, e = d["campaign"], d.get("errors", {})
     seed = d.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
-        raise InputError(f"'seed' must be an integer in 0 .. 2^32 - 1, got {seed!r}", path=src)
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise InputError(f"'seed' must be an integer in 0 .. 2**63 - 1 (as --seed), got "
+                         f"{seed!r}", path=src)
     rpm = c.get("wheel_rpm", [300.0, 900.0])
     if not (isinstance(rpm, list) and len(rpm) == 2 and 0 <= rpm[0] <= rpm[1] <= 3000):
         raise InputError("'campaign.wheel_rpm' must be [lo, hi] rpm with 0 <= lo <= hi <= 3000",

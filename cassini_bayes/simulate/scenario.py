@@ -44,7 +44,7 @@ Bounds (docs/limits.md): a run has at most :data:`MAX_STEPS` integration steps a
 :data:`MAX_SAMPLES` telemetry samples; every number is at most :data:`NUMBER_ABS_MAX` in
 magnitude; wheel rates at most ``WHEEL_RPM_MAX``, body and slew rates at most ``OMEGA_ABS_MAX``
 (the telemetry bounds of :mod:`cassini_bayes.telemetry`), thrust and pulse time constants within
-the spacecraft-model ranges of :mod:`cassini_bayes.spacecraft`; ``seed`` in 0 .. 2^32 − 1.
+the spacecraft-model ranges of :mod:`cassini_bayes.spacecraft`; ``seed`` in 0 .. 2**63 − 1.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ import numpy as np
 
 from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR
 from cassini_bayes._toml import is_numbers, read_toml
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
                                       load_spacecraft, tilted_axis)
@@ -456,8 +456,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
                                "rwa_controller", "rcs_controller", "slew", "wheel_ramp",
                                "deadband", "pulse", "noise", "window", "flex_mode", "leak"})
     seed = top.t.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**32:
-        raise top.err("seed", f"must be an integer in 0 .. 2^32 - 1, got {seed!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
+        raise top.err("seed", f"must be an integer in 0 .. 2**63 - 1 (as --seed), got {seed!r}")
     run = top.sub("run", {"duration_s", "dt_s", "sample_period_s", "control"}, required=True)
     duration = run.num("duration_s", positive=True)
     dt = run.num("dt_s", positive=True)
@@ -701,8 +701,11 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
-    if Path(path).is_dir():
+    if as_path(path, "a scenario .toml file or a shipped scenario's name").is_dir():
         raise InputError("is a directory, expected a scenario .toml file", path=str(path))
     p = scenario_path(str(path))
     d = read_toml(p, "scenario", "experiments/scenarios/")
+    if "campaign" in d:
+        raise InputError("a thruster-health campaign file, not a scenario: simulate it with "
+                         "'cassini-bayes simulate-health FILE --out DIR'", path=str(p))
     return scenario_from_dict(d, str(p))

@@ -1,0 +1,12 @@
+"""The Rich console every command reports through."""
+
+from __future__ import annotations
+
+
+def stderr_console():
+    """A Rich console on stderr that never wraps: piped to a file or a CI log, each message and
+    the fit's one-line result stay on one line (Rich otherwise wraps at 80 columns when stderr
+    is not a terminal); a terminal wraps long lines itself."""
+    from rich.console import Console
+
+    return Console(stderr=True, highlight=False, soft_wrap=True)
