@@ -16,7 +16,7 @@ from importlib.resources import files
 from importlib.resources.abc import Traversable
 from pathlib import Path
 
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, as_path
 
 
 def _on_disk(data: Traversable) -> Path:
@@ -54,7 +54,7 @@ def model_path(name: str | os.PathLike) -> Path:
     shipped model of that name under ``models/``; a path with a directory part that does not
     exist is an :class:`InputError` naming it (never a silent fall-back to a shipped model).
     """
-    p = Path(name).expanduser()
+    p = as_path(name, "a spacecraft model .toml file or a shipped model's name").expanduser()
     candidates = [p] if p.suffix == ".toml" else [p, p.with_name(p.name + ".toml")]
     for c in candidates:
         if c.is_dir():

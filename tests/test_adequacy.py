@@ -312,3 +312,22 @@ def test_rwa4_balance_fit_flags_an_inertial_torque_beyond_its_prior():
         stats[label] = balance_fit(post)
     assert stats["clean"].ok and stats["clean"].statistic < 1.0, stats["clean"]
     assert not stats["torque"].ok and stats["torque"].statistic > 6.0, stats["torque"]
+
+
+def test_articulation_cone_flags_an_axis_no_wheel_can_have():
+    """The fitted axis must sit on the wheels' 54.74° cone about +Z: the antipode a flipped
+    wheel-rate sign gives (123.3° from +Z in the CLI audit's file) fails, a degree off passes."""
+    from types import SimpleNamespace
+
+    from cassini_bayes.inference.adequacy.models import articulation_cone
+
+    def post(u):
+        draws = {n: np.full((1, 4), x) for n, x in zip(("u4_x", "u4_y", "u4_z"), u)}
+        return SimpleNamespace(idata=az.from_dict(posterior=draws))
+
+    on_cone = np.array([0.0, np.sqrt(2.0 / 3.0), np.sqrt(1.0 / 3.0)])
+    tilted = np.array([0.0, np.sin(np.radians(55.7)), np.cos(np.radians(55.7))])
+    assert articulation_cone(post(on_cone)).statistic < 1e-6
+    assert articulation_cone(post(tilted)).ok
+    flipped = articulation_cone(post(-on_cone))
+    assert not flipped.ok and flipped.statistic == pytest.approx(180 - 2 * 54.7356, abs=1e-3)

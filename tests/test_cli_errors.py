@@ -302,6 +302,22 @@ def test_report_out_creates_its_folder_and_spares_the_run_files(run, run_cli, tm
     assert not (tmp_path / "a").exists()  # no empty folder left behind
 
 
+def test_report_out_never_overwrites_a_users_file(run, run_cli, tmp_path):
+    """An existing --out file: a user's file is never replaced (not even with --force); a page
+    cassini-bayes wrote is replaced only with --force."""
+    mine = tmp_path / "notes.csv"
+    mine.write_text("t,x\n0,1\n")
+    for extra in ((), ("--force",)):
+        code, _, err = run_cli("report", run, "--out", mine, *extra)
+        _one_error(code, err, 2, "not a page cassini-bayes wrote")
+    assert mine.read_text() == "t,x\n0,1\n"
+    page = tmp_path / "page.html"
+    assert run_cli("report", run, "--out", page)[0] == 0
+    code, _, err = run_cli("report", run, "--out", page)
+    _one_error(code, err, 2, "add --force")
+    assert run_cli("report", run, "--out", page, "--force")[0] == 0
+
+
 # ------------------------------------------------------------------------------ input files
 
 

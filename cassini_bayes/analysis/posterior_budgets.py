@@ -103,6 +103,8 @@ def load_posterior(run_dir, kind: str, *, option: str | None = None) -> Posterio
 
     import arviz as az
 
+    from cassini_bayes.run_kind import run_kind
+
     where = f"{option} {run_dir}" if option else str(run_dir)
     run_dir = Path(run_dir)
     nc = run_dir / "posterior.nc"
@@ -112,6 +114,9 @@ def load_posterior(run_dir, kind: str, *, option: str | None = None) -> Posterio
     if not nc.is_file():
         raise InputError(f"{where}: no posterior.nc there; give the --out directory of "
                          f"{_A_FIT[kind]}")
+    found = run_kind(run_dir)
+    if found not in (None, kind):  # e.g. a thrust run, which carries inertia draws too
+        raise InputError(f"{where}: a {found} fit; give the --out directory of {_A_FIT[kind]}")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

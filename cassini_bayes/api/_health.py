@@ -106,6 +106,12 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
             out.append((day, p.parent / r["telemetry"], p.parent / r["pulses"]))
     if len(out) < 2:
         raise InputError(f"{arg('events')}: {len(out)} event(s); a health fit needs at least 2")
+    seen: dict[Path, float] = {}
+    for day, tel, _ in out:  # each event is independent evidence: a repeat would count twice
+        if tel.resolve() in seen:
+            raise InputError(f"{arg('events')}: the event telemetry {tel} is listed twice (days "
+                             f"{seen[tel.resolve()]:g} and {day:g}); list each event once")
+        seen[tel.resolve()] = day
     return sorted(out, key=lambda e: e[0])
 
 

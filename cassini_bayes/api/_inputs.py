@@ -60,7 +60,7 @@ def spacecraft_input(spacecraft: Spacecraft | PathLike) -> tuple[Spacecraft, dic
 
     if isinstance(spacecraft, Spacecraft):  # no file: config.toml's [spacecraft] holds it all
         return spacecraft, {"model": spacecraft.name}, []
-    if not _is_path(spacecraft):
+    if not _is_path(spacecraft) or not str(spacecraft):
         raise InputError(f"{arg('spacecraft')}: give a Spacecraft, a model .toml path or "
                          "a shipped model's name (e.g. 'cassini_post_probe')")
     path = model_path(spacecraft)
@@ -91,7 +91,8 @@ def telemetry_inputs(telemetry, name: str = "telemetry"
         raise InputError(f"{arg(name)}: give at least one telemetry file or Telemetry")
     if all(_is_path(x) for x in items):  # all files: read together (errors name the file)
         paths = [Path(x) for x in items]
-        return read_telemetry_many(paths), [file_record(p) for p in paths], paths
+        tels = read_telemetry_many(paths)
+        return _once(tels, name), [file_record(p) for p in paths], paths
     tels, records, paths = [], [], []
     for x in items:
         if _is_path(x):
@@ -106,7 +107,25 @@ def telemetry_inputs(telemetry, name: str = "telemetry"
         else:
             raise InputError(f"{arg(name)}: {type(x).__name__} is not a telemetry file or "
                              "Telemetry")
-    return tels, records, paths
+    return _once(tels, name), records, paths
+
+
+def _once(tels: list[Telemetry], name: str) -> list[Telemetry]:
+    """``tels`` when no record is given twice (same times and rates), else an InputError: a
+    fit counts each file as independent evidence, so a repeat would halve the variance of what
+    it measures."""
+    import hashlib
+
+    seen: dict[str, str] = {}
+    for tel in tels:
+        digest = hashlib.sha256(np.ascontiguousarray(tel.t, float).tobytes()
+                                + np.ascontiguousarray(tel.omega, float).tobytes()).hexdigest()
+        if digest in seen:
+            raise InputError(f"{arg(name)}: {tel.source} holds the same samples as "
+                             f"{seen[digest]}; each file counts as independent evidence, so "
+                             "give it once")
+        seen[digest] = tel.source
+    return tels
 
 
 def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True) -> Telemetry:

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = [
+    "GENERATOR",
+    "written_by_package",
     "Raw",
     "Section",
     "section",
@@ -125,6 +127,21 @@ def section(title: str, body: str | Iterable[str], *, id: str | None = None) -> 
     return Section(title=title, body=body, id=id or _slug(title))
 
 
+GENERATOR = '<meta name="generator" content="cassini-bayes">'
+
+
+def written_by_package(path) -> bool:
+    """Whether the file at ``path`` is an HTML page this package wrote (its generator tag, or
+    the ``cassini-bayes`` title of pages written before the tag), so that ``--force`` may
+    replace it."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096).decode("utf-8", "replace")
+    except OSError:
+        return False
+    return GENERATOR in head or "<title>cassini-bayes " in head
+
+
 def html_page(
     title: str,
     sections: Sequence[Section],
@@ -167,7 +184,7 @@ def html_page(
         "<!DOCTYPE html>\n"
         '<html lang="en">\n<head>\n<meta charset="utf-8">\n'
         '<meta name="viewport" content="width=device-width, initial-scale=1">\n'
-        f"<title>{esc(title)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
+        f"{GENERATOR}\n<title>{esc(title)}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n"
         f"<header>\n<h1>{esc(title)}</h1>\n{header}\n{nav_html}\n</header>\n"
         f"{body}\n{foot}\n</body>\n</html>\n"
     )

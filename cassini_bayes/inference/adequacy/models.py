@@ -95,6 +95,28 @@ def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
     return _check("balance_fit", z, threshold, note=f"chi2 {chi2:.3g} on {dof} dof")
 
 
+CONE_OFFSET_MAX_DEG = 10.0  # farthest the fitted axis may sit from the articulation cone
+
+
+def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check:
+    """Is the fitted spin axis where a Cassini wheel can point? Every wheel's axis, RWA4's at
+    any articulation angle, is canted 54.74° from +Z (Brown §I), so the posterior-mean axis's
+    angle from +Z minus 54.74° must be small: a mounting or articulation error is a degree or
+    two, while a wheel-rate sign flipped in the file gives the antipode, 70.5° off the cone
+    (with the uniform prior the fit itself cannot tell). Statistic: that offset, deg."""
+    from cassini_bayes.inference.rwa4 import U4_NAMES
+    from cassini_bayes.inference.rwa4.prior import CONE_ANGLE_DEG
+
+    p = post.idata.posterior
+    u = np.array([float(p[n].mean()) for n in U4_NAMES])
+    polar = float(np.degrees(np.arccos(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0))))
+    offset = abs(polar - CONE_ANGLE_DEG)
+    return _check("articulation_cone", offset, threshold_deg,
+                  note=f"axis {polar:.1f}° from +Z; the wheels' cone is at {CONE_ANGLE_DEG:.2f}°"
+                  + ("; a wheel-rate sign flipped in the file points the axis to the antipode"
+                     if offset > threshold_deg else ""))
+
+
 def rwa4_adequacy(post, sites: Sequence[str]) -> Adequacy:
     """The checks of :func:`~cassini_bayes.inference.rwa4.fit_rwa4`'s result ``post``:
     prior-data conflict and the fit of the window balances (:func:`balance_fit`; the likelihood
@@ -106,4 +128,5 @@ def rwa4_adequacy(post, sites: Sequence[str]) -> Adequacy:
                           "not implemented for the RWA4 model (its nuisance parameters are "
                           "integrated out jointly over the pairs)")
     return Adequacy((prior_data_conflict(post.idata, sites), held, balance_fit(post),
+                     articulation_cone(post),
                      *_residual_checks(post.idata, None, None, "pair", [])))

@@ -321,6 +321,12 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     """
     if not telemetries:
         raise InputError("no telemetry given; pass at least one slew file")
+    for tel in telemetries:  # Feldman & Lee Eq 3: the wheels exchange momentum with the body
+        if not tel.active_wheels():
+            raise InputError("no wheel runs (every rwa column is empty): the inertia is "
+                             "calibrated from the momentum the wheels exchange with the body; "
+                             "give reaction-wheel slew telemetry with the wheel rates",
+                             path=tel.source)
     n_files = len(telemetries)
     setup = _setup(telemetries, spacecraft, torque=torque, robust=robust,
                    wheel_errors=wheel_errors)

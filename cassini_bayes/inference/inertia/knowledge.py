@@ -33,10 +33,17 @@ def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
     """
     import arviz as az
 
+    from cassini_bayes.run_kind import run_kind
+
     path = Path(run_dir) / "posterior.nc"
     if not path.is_file():
         raise InputError(f"{arg('inertia_posterior', run_dir)}: no posterior.nc there; give the "
                          "run directory of an earlier 'cassini-bayes fit inertia'")
+    kind = run_kind(run_dir)
+    if kind not in (None, "inertia"):  # a thrust or RWA4 run may carry inertia draws too
+        raise InputError(f"{arg('inertia_posterior', run_dir)}: a {kind} fit; give the run "
+                         "directory of a 'cassini-bayes fit inertia' (an inertia calibration "
+                         "from slews)")
     try:
         idata = az.from_netcdf(path)
     except Exception as e:  # unreadable netCDF
