@@ -66,6 +66,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cassini_bayes._file_mode import default_file_mode
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
@@ -693,6 +694,7 @@ def _atomic_write(path: Path, force: bool, write) -> None:
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:
+        os.chmod(tmp, default_file_mode())
         write(Path(tmp))
         with open(tmp, "rb+") as f:
             os.fsync(f.fileno())

@@ -235,3 +235,16 @@ def test_a_torque_far_outside_its_prior_is_not_a_leak():
     leak = r + 0.001 * 0.7 * np.maximum(t - 7200.0, 0.0)[:, None] * Q[:, 4][None, :]
     found = leak_posterior(LeakInputs(t, leak, j, Q, np.full(8, 0.7), 15e-6))
     assert found.thruster == "Y1" and 7200.0 < found.detection_time_s < 7800.0
+
+
+def test_monitor_checks_its_inputs_as_check_does(leak_run):
+    """The monitor runs the physics checks of ``cassini-bayes check`` (units by the attitude
+    and the momentum balance where the stretch allows, the pulse log against the ``on_*``
+    columns): a pulse log that is not this stretch's is refused. The CLI audit's pulse log of
+    another event found a leak in Y4 and missed the Z1 leak."""
+    import cassini_bayes as cb
+
+    tel, sc, log = leak_run.telemetry, leak_run.scenario.prior, leak_run.pulses
+    cb.monitor_leak(tel, sc, pulses=log)
+    with pytest.raises(InputError, match="pulse log widths disagree with on_"):
+        cb.monitor_leak(tel, sc, pulses=dataclasses.replace(log, width=log.width * 2.0))

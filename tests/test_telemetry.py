@@ -84,6 +84,22 @@ def test_round_trip_full_precision(tmp_path):
     assert back.source == str(path)
 
 
+def test_written_files_get_the_users_mode(tmp_path):
+    """Atomic writes go through ``mkstemp`` (mode 0600); the file ends with the mode ``open``
+    would give under the umask, as truth.json and the report do."""
+    import os
+
+    old = os.umask(0o022)
+    try:
+        write_telemetry(tmp_path / "a.csv", _slew(10))
+        write_pulses(tmp_path / "p.csv", PulseLog(np.array([1.0]), np.array([0]),
+                                                  np.array([0.1])))
+    finally:
+        os.umask(old)
+    for name in ("a.csv", "p.csv"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o644
+
+
 def test_round_trip_with_on_times_and_pulses(tmp_path):
     tel = _slew(50)
     on = np.zeros((tel.n, 8))

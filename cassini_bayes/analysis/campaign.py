@@ -59,6 +59,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._file_mode import default_file_mode
 from cassini_bayes.analysis.sbc import ranks
 from cassini_bayes.analysis.sbc_models import ModelSpec, SbcModel, build_model
 from cassini_bayes.errors import InputError
@@ -326,12 +327,6 @@ def run_batch(spec: ModelSpec, seed: int, batch_index: int, batch_size: int) -> 
 # ------------------------------------------------------------------------------ checkpoints
 
 
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
 def _batch_path(workdir: Path, b: int) -> Path:
     return workdir / f"batch_{b:06d}.npz"
 
@@ -340,7 +335,7 @@ def _save_batch(workdir: Path, b: int, result: dict[str, Any]) -> None:
     """Write one batch atomically: temporary file in the same directory, then ``os.replace``."""
     fd, tmp = tempfile.mkstemp(prefix=f".batch_{b:06d}.", suffix=".npz.tmp", dir=workdir)
     try:
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private; keep the usual mode
+        os.chmod(tmp, default_file_mode())  # mkstemp makes it private
         with os.fdopen(fd, "wb") as f:
             np.savez(f, **{k: result[k] for k in _FIELDS})
             f.flush()
@@ -400,7 +395,7 @@ def _check_manifest(workdir: Path, manifest: dict[str, Any]) -> None:
         return
     workdir.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=".manifest.", dir=workdir)
-    os.chmod(tmp, 0o666 & ~_umask())
+    os.chmod(tmp, default_file_mode())
     with os.fdopen(fd, "w") as f:
         json.dump(manifest, f, indent=2)
     os.replace(tmp, path)

@@ -136,6 +136,7 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
         summary (default :data:`~cassini_bayes.inference.health.summary.TAU_SD_FRAC`).
     """
     from cassini_bayes.api._inputs import spacecraft_input
+    from cassini_bayes.consistency import check_thrust_data
     from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
     from cassini_bayes.inference.health.summary import TAU_SD_FRAC
     from cassini_bayes.rundir import file_record
@@ -149,8 +150,9 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
     files = read_event_list(events)
     summaries = []
     for day, tel_path, log_path in files:
-        summaries.append(event_summary(read_telemetry(tel_path), read_pulses(log_path), sc,
-                                       tau_sd_frac=tau_sd))
+        tel, log = read_telemetry(tel_path), read_pulses(log_path)
+        check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_* columns
+        summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
     prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,
                         nominal_thrust_n=float(sc.thrust)).check()
     post = health_posterior([f[0] for f in files], np.array([s.log_thrust for s in summaries]),

@@ -76,6 +76,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
     """
     from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
+    from cassini_bayes.consistency import check_telemetry_data
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
     from cassini_bayes.physics.impulse import THRUSTER_NAMES
@@ -97,6 +98,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         raise InputError(f"got {len(logs)} pulse logs; give one",
                          path=spelled("--pulses", "pulses"))
     log = logs[0] if logs else None
+    check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
     inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, onset_step_s=onset_step_s,

@@ -10,3 +10,11 @@ def stderr_console():
     from rich.console import Console
 
     return Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+def escape(text: str) -> str:
+    """``text`` (a path, a name, a message) safe to print through the console: Rich would read
+    ``run[red]1`` as markup and print ``run1``."""
+    from rich.markup import escape as rich_escape
+
+    return rich_escape(text)

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from cassini_bayes.cli._console import stderr_console
+from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.rundir import check_out
@@ -48,5 +48,5 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         res.save(out, force=force)
         s = res.summary
         console.print(f"[green]✓[/green] {len(s['rows'])} budget lines from "
-                      f"{', '.join(s['sources'])} ({time.perf_counter() - t0:.1f} s) → {out}")
+                      f"{escape(', '.join(s['sources']))} ({time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
         typer.echo(str(out / "report.html"))

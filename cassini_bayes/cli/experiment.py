@@ -25,7 +25,7 @@ def experiment(
     import matplotlib
 
     matplotlib.use("Agg")  # headless
-    from cassini_bayes.cli._console import stderr_console
+    from cassini_bayes.cli._console import escape, stderr_console
 
     from cassini_bayes._paths import text_file
     from cassini_bayes.experiments import load_experiment, run_experiment
@@ -42,7 +42,7 @@ def experiment(
     checks = rec.output.checks
     n_fail = sum(c.passed is False for c in checks)
     n_pass = sum(c.passed is True for c in checks)
-    console.print(f"{exp.name}: {n_pass} pass, {n_fail} fail against the papers "
+    console.print(f"{escape(exp.name)}: {n_pass} pass, {n_fail} fail against the papers "
                   f"({rec.elapsed_s:.2f} s)")
     typer.echo(str(rec.path / "report.html"))
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import typer
 
-from cassini_bayes.cli._console import stderr_console
+from cassini_bayes.cli._console import escape, stderr_console
 from cassini_bayes.cli._options import seed_option
 
 ORDER = 20
@@ -83,7 +83,7 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     summary = result.summary()
     console = stderr_console()
     for line in list(summary.get("warnings", [])) + report_warnings:
-        console.print(f"[yellow]warning:[/yellow] {line}")
+        console.print(f"[yellow]warning:[/yellow] {escape(line)}")
     d = summary["diagnostics"]
     status = "[green]converged[/green]" if d["converged"] else "[red]NOT converged[/red]"
     adequacy = summary.get("adequacy")
@@ -92,7 +92,7 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     fit = ("" if adequacy is None else "; [green]adequacy ok[/green]" if not failed
            else f"; [red]ADEQUACY FAILED: {', '.join(failed)}[/red]")
     console.print(f"{summary['kind']}: {status} (max R-hat {d['max_r_hat']:.4f}, min bulk ESS "
-                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> {final}")
+                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> {escape(str(final))}")
     typer.echo(str(final))
     problems = []
     if not d["converged"]:
@@ -103,7 +103,7 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
         if strict:
             problems.append(msg)
         else:
-            console.print(f"[yellow]warning:[/yellow] {msg}")
+            console.print(f"[yellow]warning:[/yellow] {escape(msg)}")
     if failed and strict:
         problems.append(
             f"{final}: the model does not fit the data: adequacy check(s) "

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 import typer
-from cassini_bayes.cli._console import stderr_console
+from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.rundir import check_out
@@ -58,7 +58,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         console.print(f"[green]✓[/green] {s['n_events']} events: P(change) = {s['p_change']:.3f}"
                       f" (90 % date [{lo:.0f}, {hi:.0f}] d), P(Z3 or Z4 > {fraction:.0%} down) "
                       f"= {s['p_down_last']['Z3|Z4']:.3f}, {time.perf_counter() - t0:.1f} s "
-                      f"→ {out}")
+                      f"→ {escape(str(out))}")
 
     @app.command("simulate-health")
     def simulate_health_cmd(
@@ -77,4 +77,5 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         t0 = time.perf_counter()
         with console.status("simulating the campaign's events (compiling on first use)…"):
             path = simulate_health_campaign(str(campaign), out, seed=seed, force=force)
-        console.print(f"[green]✓[/green] {path.name}: {time.perf_counter() - t0:.1f} s → {out}")
+        console.print(f"[green]✓[/green] {escape(path.name)}: {time.perf_counter() - t0:.1f} s "
+                      f"→ {escape(str(out))}")

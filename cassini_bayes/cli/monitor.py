@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from cassini_bayes.cli._console import stderr_console
+from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes.rundir import check_out
 
@@ -66,4 +66,4 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         console.print(f"[green]✓[/green] P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
                       + (f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
                          if lee["thruster"] else "no trigger")
-                      + f" ({time.perf_counter() - t0:.1f} s) → {out}")
+                      + f" ({time.perf_counter() - t0:.1f} s) → {escape(str(out))}")

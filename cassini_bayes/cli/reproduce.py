@@ -25,7 +25,7 @@ def reproduce(
     import matplotlib
 
     matplotlib.use("Agg")  # headless
-    from cassini_bayes.cli._console import stderr_console
+    from cassini_bayes.cli._console import escape, stderr_console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from cassini_bayes._paths import EXPERIMENTS_DIR
@@ -51,19 +51,19 @@ def reproduce(
                 progress.update(task, advance=1, description=f"{message} done")
             elif event == "failed":
                 progress.update(task, advance=1)
-                progress.console.print(f"[red]failed[/red] {message}")
+                progress.console.print(f"[red]failed[/red] {escape(message)}")
 
         result = run_all(out, seed=seed, quick=quick, force=force,
                          experiments_dir=experiments_dir, on_event=on_event)
     for f, reason in result.skipped:
-        console.print(f"skipped {Path(f).name}: {reason}")
+        console.print(f"skipped {escape(Path(f).name)}: {escape(reason)}")
     n_fail = result.checks_failed
     console.print(f"{len(result.statuses)} experiments in {result.elapsed_s:.1f} s; "
                   f"{n_fail} check(s) outside the papers' values or budgets")
     typer.echo(str(result.out / "report.html"))
     if result.failed:
-        console.print(f"[red]error:[/red] experiment(s) failed: {', '.join(result.failed)} "
-                      f"(see {result.out / 'report.html'})")
+        console.print(f"[red]error:[/red] experiment(s) failed: {escape(', '.join(result.failed))} "
+                      f"(see {escape(str(result.out / 'report.html'))})")
         raise typer.Exit(1)
 
 

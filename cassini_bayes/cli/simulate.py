@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 import typer
-from cassini_bayes.cli._console import stderr_console
+from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes._paths import text_file
 from cassini_bayes.cli._options import check_seed, seed_option
@@ -53,5 +53,5 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
             sim = simulate(sc, seed=seed_)
             sim.save(out, force=force)
         n_p = 0 if sim.pulses is None else sim.pulses.t_on.size
-        console.print(f"[green]✓[/green] {sc.name}: {sc.n_samples} samples, {n_p} pulses, "
-                      f"{time.perf_counter() - t0:.1f} s → {out}")
+        console.print(f"[green]✓[/green] {escape(sc.name)}: {sc.n_samples} samples, {n_p} pulses, "
+                      f"{time.perf_counter() - t0:.1f} s → {escape(str(out))}")
