@@ -105,6 +105,17 @@ def test_extending_a_campaign_reuses_its_batches(reference, tmp_path):
     _assert_same(reference, more)
 
 
+def test_a_smaller_resume_keeps_the_finished_batches(reference, tmp_path):
+    """Resuming with fewer replicates than are finished is refused (its work folder, with the
+    batches beyond, would be dropped), and nothing on disk changes."""
+    work = tmp_path / "work"
+    run_campaign(SPEC, N, work, seed=SEED, batch_size=BATCH)
+    before = sorted(p.name for p in work.iterdir())
+    with pytest.raises(InputError, match=f"resume with --replicates {2 * BATCH + 1} or more"):
+        run_campaign(SPEC, BATCH, work, seed=SEED, batch_size=BATCH)
+    assert sorted(p.name for p in work.iterdir()) == before
+
+
 def test_checkpoints_of_another_campaign_are_refused(tmp_path):
     work = tmp_path / "work"
     run_campaign(SPEC, 1, work, seed=SEED, batch_size=BATCH)

@@ -496,6 +496,13 @@ def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike,
     _check_manifest(workdir, _manifest(spec, model, seed, batch_size))
 
     n_batches = math.ceil(n_replicates / batch_size)
+    beyond = sorted(int(p.stem.split("_")[1]) for p in workdir.glob("batch_*.npz")
+                    if p.stem.split("_")[1].isdigit() and int(p.stem.split("_")[1]) >= n_batches)
+    if beyond:  # finished work the smaller campaign would drop with its work folder
+        need = beyond[-1] * batch_size + 1      # the last finished batch then still counts
+        raise InputError(f"{workdir}: holds {len(beyond)} finished batch(es) beyond "
+                         f"--replicates {n_replicates}; resume with --replicates {need} or more "
+                         "to keep them, or start over with --force")
     done = load_checkpoints(workdir, n_batches)
     todo = [b for b in range(n_batches) if b not in done]
     if on_batch is not None and done:
