@@ -9,7 +9,10 @@ What ``--out`` may be (:func:`check_out`, run before any work starts):
 
 - a new path (missing parents are created at the end), or an empty directory;
 - an existing non-empty directory only with ``force``, and only when this package wrote it
-  (:func:`is_package_output`): ``--force`` never deletes a user's folder;
+  (:func:`is_package_output`) and it holds nothing else: ``--force`` never deletes a user's
+  folder, nor a file a user put into a run directory (each run directory lists the files it
+  was written with in :data:`WRITTEN`; directories written before that list existed are
+  replaced whole);
 - never a directory holding (or being) one of the run's own input files, even with ``force``;
 - its nearest existing ancestor must be a directory we can create entries in (tried by creating
   and removing a temporary directory there).
@@ -47,6 +50,25 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from cassini_bayes.errors import InputError, spelled
+
+
+WRITTEN = ".cassini-bayes-files"   # in every run directory: the files it was written with
+
+
+def _written_files(root: Path) -> list[str]:
+    """Every file under ``root`` (relative POSIX paths, sorted), but :data:`WRITTEN`."""
+    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*")
+                  if (p.is_file() or p.is_symlink()) and p.name != WRITTEN)
+
+
+def _foreign_files(root: Path) -> list[str]:
+    """Files in the run directory ``root`` that its :data:`WRITTEN` list does not name (none
+    when it has no list)."""
+    try:
+        listed = set((root / WRITTEN).read_text(encoding="utf-8").splitlines())
+    except (OSError, UnicodeDecodeError):
+        return []
+    return [f for f in _written_files(root) if f not in listed]
 
 
 def _out() -> str:
@@ -142,6 +164,13 @@ def check_out(out: str | os.PathLike, *, force: bool = False,
                                  f"truth.json or results.json written by cassini-bayes); "
                                  f"{_force()} replaces only those: choose another "
                                  f"{_out()}", path=shown)
+            foreign = _foreign_files(final)
+            if foreign:
+                more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+                raise InputError("holds files cassini-bayes did not write "
+                                 f"({', '.join(foreign[:3])}{more}); {_force()} would delete "
+                                 "them: move them out or "
+                                 f"choose another {_out()}", path=shown)
     check_writable(final.parent, shown)
     return final
 
@@ -208,7 +237,10 @@ class RunDir:
         return False
 
     def commit(self) -> None:
-        """Move the finished temporary directory to its final name (atomic swap if it exists)."""
+        """Move the finished temporary directory to its final name (atomic swap if it exists),
+        with the list of its files (:data:`WRITTEN`)."""
+        (self.path / WRITTEN).write_text("".join(f + "\n" for f in _written_files(self.path)),
+                                         encoding="utf-8")
         if self.final.exists() and any(self.final.iterdir()):
             # the old run may have appeared while this one was computed: check again
             check_out(self.final, force=self.force)

@@ -263,7 +263,7 @@ def test_budget_command_end_to_end(runs, tmp_path, run_cli):
     assert code == 0, err
     assert stdout.strip() == str(out / "report.html")
     assert {p.name for p in out.iterdir()} == {"summary.json", "budget.csv", "report.html",
-                                               "config.toml"}
+                                               "config.toml", ".cassini-bayes-files"}
     s = json.loads((out / "summary.json").read_text())
     assert s["command"] == "budget" and s["n_draws"] == 200
     assert set(s["sources"]) == {"inertia", "thrust", "rwa4"}

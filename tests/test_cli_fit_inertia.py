@@ -42,8 +42,9 @@ def run(tmp_path_factory, csv):
 def test_writes_the_run_directory(run, csv):
     code, out = run
     assert code == 0
-    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "posterior.nc",
-                                                     "report.html", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".cassini-bayes-files", "config.toml",
+                                                     "posterior.nc", "report.html",
+                                                     "summary.json"]
     summary = json.loads((out / "summary.json").read_text())
     assert {"kind", "parameters", "baseline", "diagnostics", "seed", "version"} <= set(summary)
     assert summary["kind"] == "inertia" and summary["seed"] == 7

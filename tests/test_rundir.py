@@ -73,7 +73,7 @@ def test_force_replaces_atomically(tmp_path, monkeypatch, swap):
     with RunDir(out, force=True) as rd:
         (rd.path / "new.txt").write_text("new")
         assert (out / "old.txt").exists()  # the old run stays intact until the new one is done
-    assert sorted(p.name for p in out.iterdir()) == ["new.txt"]
+    assert sorted(p.name for p in out.iterdir()) == [".cassini-bayes-files", "new.txt"]
     assert _siblings(out) == ["run"]
 
 
@@ -108,6 +108,29 @@ def test_exchange_swaps_in_one_step(tmp_path):
     if not rundir._exchange(a, b):
         pytest.skip("no renameat2(RENAME_EXCHANGE) here")
     assert [p.name for p in b.iterdir()] == ["new"] and [p.name for p in a.iterdir()] == ["old"]
+
+
+def test_force_never_deletes_a_file_a_user_added(tmp_path):
+    """A run directory lists the files it was written with; ``force`` refuses to replace one
+    that holds anything else (a user's notes), at any depth, and replaces it once they are
+    moved out."""
+    out = tmp_path / "run"
+    with RunDir(out) as rd:
+        (rd.path / "config.toml").write_text('command = "fit inertia"\nversion = "0.1.0"\n')
+        (rd.path / "sub").mkdir()
+        (rd.path / "sub" / "a.csv").write_text("1")
+    assert (out / rundir.WRITTEN).read_text() == "config.toml\nsub/a.csv\n"
+    (out / "sub" / "my_notes.txt").write_text("mine")
+    with pytest.raises(InputError, match=r"did not write \(sub/my_notes.txt\)"):
+        check_out(out, force=True)
+    with pytest.raises(InputError, match="did not write"):
+        with RunDir(out, force=True) as rd:
+            pass
+    assert (out / "sub" / "my_notes.txt").read_text() == "mine"
+    (out / "sub" / "my_notes.txt").unlink()
+    with RunDir(out, force=True) as rd:
+        (rd.path / "config.toml").write_text('command = "fit inertia"\nversion = "0.1.0"\n')
+    assert sorted(p.name for p in out.iterdir()) == [rundir.WRITTEN, "config.toml"]
 
 
 def test_force_refuses_a_users_folder(tmp_path):

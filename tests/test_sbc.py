@@ -246,8 +246,9 @@ def test_cli_writes_the_run_directory(run_cli, tmp_path):
     code, _, stderr = run_cli("sbc", "toy", "--replicates", 20, "--batch", BATCH,
                                    "--out", out, "--seed", 5)
     assert code == 0, stderr
-    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "replicates.npz",
-                                                     "report.html", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".cassini-bayes-files", "config.toml",
+                                                     "replicates.npz", "report.html",
+                                                     "summary.json"]
     s = json.loads((out / "summary.json").read_text())
     assert s["kind"] == "sbc" and s["model"] == "toy" and s["seed"] == 5
     assert s["replicates"] == 20 and s["failures"] == 0 and "non_converged" in s

@@ -114,7 +114,8 @@ def test_cli_simulate_writes_run_atomically(tmp_path, run_cli):
     out = tmp_path / "run"
     code, _, err = run_cli("simulate", p, "--out", out, "--seed", 7)
     assert code == 0, err
-    assert sorted(x.name for x in out.iterdir()) == ["pulses.csv", "telemetry.csv", "truth.json"]
+    assert sorted(x.name for x in out.iterdir()) == [".cassini-bayes-files", "pulses.csv",
+                                                     "telemetry.csv", "truth.json"]
     truth = json.loads((out / "truth.json").read_text())
     assert truth["seed"] == 7 and truth["thrust_n"]["Y2"] == 0.75
     assert truth["inertia_kgm2"]["Ixx"] == 7375.02 and truth["noise"]["gyro_rad_s"] == 1e-6
