@@ -29,7 +29,7 @@ def read_toml(path: Path, what: str, where: str) -> dict[str, Any]:
         raise InputError(f"is {path.stat().st_size} bytes, more than a {what} file can be "
                          f"({MAX_TOML_BYTES} bytes); check the path", path=str(path))
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")   # a byte-order mark is dropped, as in CSV
     except UnicodeDecodeError as e:
         raise InputError(f"is not UTF-8 text (byte {e.start}); save the {what} as UTF-8 TOML",
                          path=str(path)) from None

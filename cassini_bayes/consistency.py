@@ -403,7 +403,7 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     what = (f"momentum is conserved only with the wheel momentum {fit.scale:.3g}x what the "
             f"columns say in rpm with the model {spacecraft.name!r} (alignment "
             f"{fit.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g})")
-    if abs(np.log(fit.scale / RAD_S_FACTOR)) < np.log(2.0):
+    if fit.scale > 0 and abs(np.log(fit.scale / RAD_S_FACTOR)) < np.log(2.0):
         raise InputError(f"columns {cols}: wheel rates look like rad/s, the file format wants "
                          f"rpm; multiply by 60/(2*pi) ({what})", path=tel.source)
     raise InputError(f"columns {cols}: {what}; check that the wheel rates are rpm, the body "

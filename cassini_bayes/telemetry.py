@@ -275,8 +275,7 @@ def _read_table(path: Path, what: str,
             rows = list(itertools.islice((r for r in csv.reader(f) if any(c.strip() for c in r)),
                                          MAX_ROWS + 2))
     except UnicodeDecodeError:
-        raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
-                         path=name) from None
+        raise InputError(_not_text(path, what), path=name) from None
     except csv.Error as e:
         raise InputError(f"malformed CSV ({e}); re-export the file", path=name) from None
     if not rows:
@@ -340,13 +339,26 @@ def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
                 if n > MAX_ROWS:
                     raise _too_many_rows(n, name)
     except UnicodeDecodeError:
-        raise InputError(f"is not a text CSV file; expected a {what} CSV (or .parquet)",
-                         path=name) from None
+        raise InputError(_not_text(path, what), path=name) from None
     except csv.Error as e:
         raise InputError(f"malformed CSV ({e}); re-export the file", path=name) from None
     if n == 0:
         raise InputError(f"{what} file has a header but no data rows", path=name)
     return idx, [np.concatenate(p) for p in parts]
+
+
+def _not_text(path, what: str) -> str:
+    """Why a file is not text: gzip or zip compression named, else a generic message."""
+    try:
+        with open(path, "rb") as f:
+            magic = f.read(4)
+    except OSError:
+        magic = b""
+    if magic[:2] == b"\x1f\x8b":
+        return f"is gzip-compressed; decompress it (gunzip) and give the {what} CSV"
+    if magic == b"PK\x03\x04":
+        return f"is a zip archive; extract the {what} CSV from it"
+    return f"is not a text CSV file; expected a {what} CSV (or .parquet)"
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,
@@ -358,6 +370,11 @@ def _map_header(header: list[str], known: Sequence[str], path: str,
         key = canon.get(h.lower())
         if key is None:
             shown = h if h else f"(blank, position {j + 1})"
+            sep = next((c for c in ";\t|" if len(header) == 1 and c in h), None)
+            if sep is not None:
+                raise InputError(f"the header '{shown[:40]}' is one column split by "
+                                 f"{sep!r}: the file format separates columns with commas; "
+                                 "re-export it as comma-separated CSV", path=path)
             raise InputError(f"unknown column '{shown}'; expected columns are {expected}; "
                              "rename or remove it", path=path)
         if key in out:

@@ -200,3 +200,9 @@ def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
     path = _write(tmp_path, 'kind = "test_tables"\n[[settings.events]]\ndya = 49\n')
     with pytest.raises(InputError, match=r"settings.events\[0\].dya"):
         load_experiment(path)
+
+
+def test_a_fits_config_toml_is_named_as_such():
+    with pytest.raises(InputError, match="config.toml of a 'fit inertia' run, not an experiment"):
+        _core.experiment_from_dict({"command": "fit inertia", "version": "0.1.0", "seed": 0},
+                                   "c.toml")

@@ -8,6 +8,7 @@ file and the column/row, and ``cassini-bayes check`` turns it into ``error: …`
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -454,3 +455,27 @@ def test_on_times_rebased_and_missing_thrusters_zero(tmp_path):
     np.testing.assert_allclose(tel.on_times[:, 5], [0, 0, 0.05, 0.05, 0.05, 0.05, 0.05, 0.05],
                                atol=1e-15)
     np.testing.assert_array_equal(np.delete(tel.on_times, 5, axis=1), 0.0)
+
+
+def test_common_export_mistakes_are_named(tmp_path):
+    """A semicolon- or tab-separated export and a gzip-compressed file get a message saying
+    what to do, not "unknown column" or "not text"."""
+    import gzip
+
+    text = "\n".join(_good_lines())
+    for sep, name in ((";", "semi.csv"), ("\t", "tabs.tsv")):
+        (tmp_path / name).write_text(text.replace(",", sep))
+        with pytest.raises(InputError, match=re.escape(f"split by {sep!r}: ") + ".* commas"):
+            read_telemetry(tmp_path / name)
+    (tmp_path / "t.csv.gz").write_bytes(gzip.compress(text.encode()))
+    with pytest.raises(InputError, match="gzip-compressed; decompress it"):
+        read_telemetry(tmp_path / "t.csv.gz")
+
+
+def test_a_toml_file_with_a_byte_order_mark_loads(tmp_path):
+    from cassini_bayes._paths import MODELS_DIR
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    p = tmp_path / "m.toml"
+    p.write_bytes(b"\xef\xbb\xbf" + (MODELS_DIR / "cassini_post_probe.toml").read_bytes())
+    assert load_spacecraft(p).name == load_spacecraft("cassini_post_probe").name

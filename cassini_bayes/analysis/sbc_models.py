@@ -82,7 +82,7 @@ import jax.numpy as jnp
 from jax import lax
 
 from cassini_bayes._paths import SCENARIOS_DIR
-from cassini_bayes.errors import InputError
+from cassini_bayes.errors import InputError, spelled
 
 __all__ = [
     "SbcFit",
@@ -375,11 +375,14 @@ _TOY_KEYS = {"n_obs", "likelihood_noise_factor", "simulator_noise_factor", "num_
 
 @register("toy")
 def _toy(spec: ModelSpec) -> SbcModel:
-    settings = {**spec.scenario().get("toy", spec.scenario()), **dict(spec.options)}
-    unknown = set(settings) - _TOY_KEYS
-    if unknown:
-        raise InputError(f"unknown toy-model setting(s) {sorted(unknown)}; allowed: "
-                         f"{sorted(_TOY_KEYS)}", path=spec.scenario_source)
+    from_file = spec.scenario().get("toy", spec.scenario())
+    settings = {**from_file, **dict(spec.options)}
+    for where, keys in ((spec.scenario_source, set(from_file)),
+                        (spelled("--set", "options"), set(dict(spec.options)))):
+        unknown = keys - _TOY_KEYS
+        if unknown:
+            raise InputError(f"unknown toy-model setting(s) {sorted(unknown)}; allowed: "
+                             f"{sorted(_TOY_KEYS)}", path=where)
     return toy_model(**settings)
 
 

@@ -139,8 +139,9 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
                                     (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
                                     (wheel_tol_rpm, "--wheel-tol", "wheel_tol_rpm")):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-            raise InputError(f"must be a positive number, got {value!r}",
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not 0 < value < float("inf")):
+            raise InputError(f"must be a positive finite number, got {value!r}",
                              path=spelled(option, argument))
     tel = one_telemetry(telemetry, check_units=check_units)
     log = one_pulse_log(pulses) if pulses is not None else None

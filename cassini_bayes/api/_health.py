@@ -16,7 +16,7 @@ import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes.api._inputs import number
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, spelled
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
            "HEALTH_FRACTION"]
@@ -75,21 +75,24 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     if isinstance(events, (str, os.PathLike)):
         events = [events]
     if not isinstance(events, (list, tuple)):
-        raise InputError(f"{arg('events')}: give events.csv files or folders, or "
+        raise InputError(f"{spelled('EVENTS', 'events')}: give events.csv files or folders, or "
                          f"(date_days, telemetry, pulses) tuples, not {type(events).__name__}")
     out = []
     for item in events:
         if isinstance(item, tuple):
             if len(item) != 3 or not all(isinstance(x, (str, os.PathLike)) for x in item[1:]):
-                raise InputError(f"{arg('events')}: give (date_days, telemetry, pulses) tuples")
-            out.append((number("events", item[0], where=f"{arg('events')} date_days"),
+                raise InputError(f"{spelled('EVENTS', 'events')}: give (date_days, telemetry, pulses) tuples")
+            out.append((number("events", item[0], where=f"{spelled('EVENTS', 'events')} date_days"),
                         Path(item[1]), Path(item[2])))
             continue
         if not isinstance(item, (str, os.PathLike)):
-            raise InputError(f"{arg('events')}: {type(item).__name__} is not an events.csv "
+            raise InputError(f"{spelled('EVENTS', 'events')}: {type(item).__name__} is not an events.csv "
                              "file, a folder or a (date_days, telemetry, pulses) tuple")
         p = Path(item)
         p = p / "events.csv" if p.is_dir() else p
+        if not p.exists() and not Path(item).exists():
+            raise InputError("not found; give an events.csv file or a folder holding one "
+                             "(cassini-bayes simulate-health writes them)", path=str(item))
         if not p.is_file():
             raise InputError("is not an events.csv file or a folder holding one (columns "
                              "date_days, telemetry, pulses)", path=str(item))
@@ -105,11 +108,11 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
                                  "of days", path=str(p)) from None
             out.append((day, p.parent / r["telemetry"], p.parent / r["pulses"]))
     if len(out) < 2:
-        raise InputError(f"{arg('events')}: {len(out)} event(s); a health fit needs at least 2")
+        raise InputError(f"{spelled('EVENTS', 'events')}: {len(out)} event(s); a health fit needs at least 2")
     seen: dict[Path, float] = {}
     for day, tel, _ in out:  # each event is independent evidence: a repeat would count twice
         if tel.resolve() in seen:
-            raise InputError(f"{arg('events')}: the event telemetry {tel} is listed twice (days "
+            raise InputError(f"{spelled('EVENTS', 'events')}: the event telemetry {tel} is listed twice (days "
                              f"{seen[tel.resolve()]:g} and {day:g}); list each event once")
         seen[tel.resolve()] = day
     return sorted(out, key=lambda e: e[0])

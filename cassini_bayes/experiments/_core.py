@@ -379,6 +379,10 @@ def _check_value(key: str, value: Any, default: Any, choices: tuple | None, src:
 def experiment_from_dict(d: Mapping[str, Any], src: str = "<experiment>",
                          name: str | None = None) -> Experiment:
     """Validate an experiment table (the TOML schema as a dict) into an :class:`Experiment`."""
+    if "command" in d and "kind" not in d:
+        raise InputError(f"the config.toml of a '{d['command']}' run, not an experiment file; "
+                         "re-run a fit with its own command and options (config.toml records "
+                         "them), or give an experiments/*.toml file", path=src)
     for key in d:
         if key not in _TOP_KEYS:
             raise InputError(f"unknown key '{key}'; allowed: {', '.join(_TOP_KEYS)}", path=src)
