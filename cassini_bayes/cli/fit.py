@@ -19,6 +19,7 @@ A ``fit`` command parses its options, calls one library function
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -91,19 +92,20 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
               [n for n, c in adequacy["checks"].items() if not c["ok"]])
     fit = ("" if adequacy is None else "; [green]adequacy ok[/green]" if not failed
            else f"; [red]ADEQUACY FAILED: {', '.join(failed)}[/red]")
-    console.print(f"{summary['kind']}: {status} (max R-hat {d['max_r_hat']:.4f}, min bulk ESS "
-                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> {escape(str(final))}")
+    r_hat = (f"{d['max_r_hat']:.4f}" if d["max_r_hat"] is not None
+             and math.isfinite(d["max_r_hat"]) else "undefined (one chain)")
+    console.print(f"{summary['kind']}: {status} (max R-hat {r_hat}, min bulk ESS "
+                  f"{d['min_ess_bulk']:.0f}, {d['divergences']} divergences){fit} -> "
+                  f"{escape(str(final))}")
     typer.echo(str(final))
     problems = []
     if not d["converged"]:
-        msg = (f"{final}: the sampler did not converge (max R-hat {d['max_r_hat']:.4f}, min "
+        msg = (f"{final}: the sampler did not converge (max R-hat {r_hat}, min "
                f"bulk ESS {d['min_ess_bulk']:.0f}, {d['divergences']} divergences); outputs "
                "written with converged = false — run longer (--warmup/--draws), raise "
                "--target-accept if it diverged, or check the data")
-        if strict:
+        if strict:  # (without --strict, summary.json's warnings above said it)
             problems.append(msg)
-        else:
-            console.print(f"[yellow]warning:[/yellow] {escape(msg)}")
     if failed and strict:
         problems.append(
             f"{final}: the model does not fit the data: adequacy check(s) "

@@ -55,6 +55,9 @@ from numpyro.infer.util import constrain_fn, potential_energy
 
 from cassini_bayes._devices import request_host_devices
 from cassini_bayes.inference import progress
+from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
+
+quiet_arviz_shape_warnings()   # one-chain runs: the summary says R-hat is undefined
 
 __all__ = [
     "SamplerSettings",

@@ -79,6 +79,16 @@ def parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, 
     return out
 
 
+def _convergence_warning(d) -> list[str]:
+    """The line saying the sampler did not converge (``[]`` when it did)."""
+    if d.converged:
+        return []
+    r_hat = f"{d.max_r_hat:.4f}" if np.isfinite(d.max_r_hat) else "undefined (one chain)"
+    return [f"the sampler did not converge (max R-hat {r_hat}, min bulk ESS "
+            f"{d.min_ess_bulk:.0f}, {d.divergences} divergences): run longer (more warm-up and "
+            "draws), raise the target acceptance if it diverged, or check the data"]
+
+
 def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[str],
                   diagnostics, baseline: Mapping[str, float] | None, seed: int,
                   nuisance: Sequence[str] = (), warnings: Sequence[str] = (),
@@ -111,7 +121,8 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
         "version": __version__,
         "weakly_identified": weak,
         "nuisance": parameter_stats(idata, nuisance),
-        "warnings": list(warnings) + (adequacy.warnings() if adequacy is not None else []),
+        "warnings": (_convergence_warning(diagnostics) + list(warnings)
+                     + (adequacy.warnings() if adequacy is not None else [])),
     }
     if adequacy is not None:
         out["adequacy"] = _json_ready(adequacy.to_dict())

@@ -98,6 +98,9 @@ def build_report(
     InputError
         ``run_dir`` or its ``posterior.nc`` is missing or unreadable.
     """
+    from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
+
+    quiet_arviz_shape_warnings()
     run = load_run(run_dir)
     out = Path(out) if out is not None else run.run_dir / "report.html"
     return write_atomic(out, render_report(run, display_dir=display_dir))
