@@ -248,3 +248,11 @@ def test_monitor_checks_its_inputs_as_check_does(leak_run):
     cb.monitor_leak(tel, sc, pulses=log)
     with pytest.raises(InputError, match="pulse log widths disagree with on_"):
         cb.monitor_leak(tel, sc, pulses=dataclasses.replace(log, width=log.width * 2.0))
+
+
+def test_a_grid_too_fine_for_memory_is_refused(leak_run):
+    """An onset step of 1 µs over the stretch (the CLI audit's 15.6 GB, killed without a word)
+    is one line naming the option and the smallest step allowed."""
+    with pytest.raises(InputError, match=r"onset_step_s: 1e-06 s makes .* use at least"):
+        leak_posterior(leak_inputs(leak_run.telemetry, leak_run.pulses, leak_run.scenario.prior),
+                       onset_step_s=1e-6)

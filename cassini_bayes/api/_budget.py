@@ -70,7 +70,7 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
     import jax
 
     from cassini_bayes.analysis.posterior_budgets import load_posterior, posterior_budget
-    from cassini_bayes.api._inputs import check_seed, number
+    from cassini_bayes.api._inputs import MAX_DRAWS, check_seed, number
     from cassini_bayes.rundir import file_record
 
     runs = {"inertia": inertia, "thrust": thrust, "rwa4": rwa4}
@@ -83,7 +83,7 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
         raise InputError("give at least one run directory: "
                          + ", ".join(spelled(f"--{k} RUN", k) for k in runs))
     check_seed(seed)
-    n_draws = number("n_draws", n_draws, lo=10, integer=True,
+    n_draws = number("n_draws", n_draws, lo=10, hi=MAX_DRAWS, integer=True,
                      where=spelled("--draws", "n_draws"))
     post = {k: load_posterior(v, k, option=spelled(f"--{k}", k)) for k, v in given.items()}
     result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)

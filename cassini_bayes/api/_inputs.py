@@ -22,6 +22,10 @@ WHEEL_ERRORS = ("per_wheel", "common")
 SEED_MAX = 2**63 - 1
 
 PathLike = str | os.PathLike
+# beyond these a fit runs out of memory or time before it says anything (16 chains already
+# oversubscribe a 16-core machine; 10⁶ draws of a fit take hours)
+MAX_CHAINS = 64
+MAX_DRAWS = 1_000_000
 
 
 def shows_progress(fit):
@@ -216,9 +220,11 @@ def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
     arguments, checked against the ranges the command line accepts."""
     from cassini_bayes.inference.runner import SamplerSettings
 
-    for name, value, lo in (("chains", chains, 1), ("warmup", warmup, 10), ("draws", draws, 10)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < lo:
-            raise InputError(f"{arg(name, value)}: use an integer of at least {lo}")
+    for name, value, lo, hi in (("chains", chains, 1, MAX_CHAINS),
+                                ("warmup", warmup, 10, MAX_DRAWS),
+                                ("draws", draws, 10, MAX_DRAWS)):
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            raise InputError(f"{arg(name, value)}: use an integer in {lo} .. {hi}")
     target_accept = number("target_accept", target_accept, lo=0.5, hi=0.999)
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
                            target_accept=target_accept, progress=bool(progress))

@@ -49,6 +49,7 @@ from pathlib import Path
 import typer
 
 from cassini_bayes._paths import text_file
+from cassini_bayes.api._inputs import MAX_CHAINS, MAX_DRAWS
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.errors import InputError, Interrupted
 from cassini_bayes.rundir import check_out
@@ -162,16 +163,19 @@ def parse_options(items: list[str]) -> dict:
     return out
 
 
-_SAMPLER_MIN = {"num_warmup": 0, "num_draws": 1, "num_chains": 1, "thin": 1}
+_SAMPLER_RANGE = {"num_warmup": (0, MAX_DRAWS), "num_draws": (1, MAX_DRAWS),
+                  "num_chains": (1, MAX_CHAINS), "thin": (1, MAX_DRAWS)}
 
 
 def check_sampler_options(options: dict) -> dict:
     """``options`` after checking the sampler sizes every model takes (``num_warmup >= 0``,
-    ``num_draws``, ``num_chains``, ``thin >= 1`` integers, ``thin <= num_draws``)."""
-    for key, low in _SAMPLER_MIN.items():
+    ``num_draws``, ``num_chains``, ``thin >= 1`` integers, ``thin <= num_draws``, and the
+    fits' upper limits)."""
+    for key, (low, high) in _SAMPLER_RANGE.items():
         v = options.get(key)
-        if v is not None and (isinstance(v, bool) or not isinstance(v, int) or v < low):
-            raise InputError(f"--set {key}={v!r}: must be an integer >= {low}")
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int)
+                              or not low <= v <= high):
+            raise InputError(f"--set {key}={v!r}: must be an integer in {low} .. {high}")
     if options.get("thin", 1) > options.get("num_draws", options.get("thin", 1)):
         raise InputError(f"--set thin={options['thin']} keeps no draw of num_draws="
                          f"{options['num_draws']}; use thin <= num_draws")

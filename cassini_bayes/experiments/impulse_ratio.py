@@ -33,8 +33,8 @@ def impulse_ratio(key, settings, ctx) -> ExperimentOutput:
     ``widths_s`` (pulse widths, s), ``tau_fall_alt_s`` (the paper's alternative fall time, s),
     ``grid_points`` (per axis of the τ_fall × τ_rise grid). Deterministic: ``key`` is unused.
     """
-    if settings["grid_points"] < 2:
-        raise ctx.error("'settings.grid_points' must be at least 2")
+    if not 2 <= settings["grid_points"] <= 1001:   # the grid is grid_points² pulse integrals
+        raise ctx.error("'settings.grid_points' must be in 2 .. 1001")
     if any(w <= 0 for w in settings["widths_s"]):
         raise ctx.error("'settings.widths_s' must be positive pulse widths in seconds")
     pulse = load_spacecraft(settings["spacecraft"]).pulse

@@ -80,6 +80,8 @@ white model, which has no random walk, reads it as a torque change of ~1e-7 N m;
 it uses, the surer it is. Measured on 24 four-hour cruise control stretches, the largest
 ``P(leak)`` (median / 90 % / max) is 0.014 / 0.50 / 1 (one alarm) at 10 s, 0.003 / 0.009 / 0.57
 at 30 s and 0.003 / 0.011 / 0.032 at 60 s (docs/leak.md)."""
+MAX_GRID = 20_000
+"""Most steps of any of the monitor's grids (samples, checks, onsets) over a stretch."""
 _NOISE_FLOOR_NMS = 1e-6
 
 
@@ -91,6 +93,7 @@ class LeakInputs:
     impulse : (n, 8) modelled accumulated thruster impulses ``J`` from the first sample, N s.
     q_matrix : (3, 8) moment matrix, m. thrust_n : (8,) modelled thrust per thruster, N.
     torque_sd_nm : prior sd of the external torque per axis, N m.
+    source : the telemetry it came from, for error messages.
     """
 
     t: np.ndarray
@@ -99,6 +102,7 @@ class LeakInputs:
     q_matrix: np.ndarray
     thrust_n: np.ndarray
     torque_sd_nm: float
+    source: str = "<telemetry>"
 
 
 @dataclass(frozen=True)
@@ -200,7 +204,7 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
     return LeakInputs(np.asarray(tel.t, float), r, j, q, np.full(8, float(spacecraft.thrust)),
-                      spacecraft.knowledge.torque_sd_nm)
+                      spacecraft.knowledge.torque_sd_nm, tel.source)
 
 
 def _noise_sd(r: np.ndarray) -> np.ndarray:
@@ -339,11 +343,16 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
                           ("onset_step_s", "--onset-step", onset_step_s)):
         if not v > 0:
             raise InputError(f"must be positive seconds, got {v}", path=spelled(flag, name))
+        span = float(inp.t[-1] - inp.t[0])
+        if span / v > MAX_GRID:  # the onset grid × checks table grows as the square
+            raise InputError(f"{v:g} s makes {span / v:.3g} steps over the {span:.6g} s "
+                             f"stretch, more than {MAX_GRID}; use at least "
+                             f"{span / MAX_GRID:.3g} s", path=spelled(flag, name))
     raw, inp = inp, _thinned(inp, sample_step_s)
     n = inp.t.size
     if n < 3:
         raise InputError(f"has {n} rows {sample_step_s:g} s apart; the leak monitor needs at "
-                         "least 3", path="telemetry")
+                         "least 3", path=inp.source)
     sums = _Sums(inp, eta, raw)
     t = sums.t
     checks = np.unique(np.r_[np.searchsorted(t, np.arange(check_step_s, t[-1], check_step_s)),
