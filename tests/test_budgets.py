@@ -391,3 +391,17 @@ def test_thrust_sensitivity_to_the_assumed_inertia_is_exact():
     step = np.array([300.0, -200.0, 100.0, 50.0, -40.0, 30.0])
     change = 100 * (thrust(entries + step) - thrust(entries)) / f_true
     assert change == pytest.approx(step @ sens, rel=1e-6)
+
+
+def test_runs_of_different_spacecraft_models_are_flagged(tmp_path):
+    """The budget warns when its runs were fitted with different spacecraft models."""
+    from cassini_bayes.api._budget import _mixed_models
+
+    runs = {}
+    for kind, model in (("inertia", "fsds"), ("thrust", "cassini-post-probe")):
+        runs[kind] = tmp_path / kind
+        runs[kind].mkdir()
+        (runs[kind] / "config.toml").write_text(f'[spacecraft]\nname = "{model}"\n')
+    (warning,) = _mixed_models(runs)
+    assert "inertia: fsds, thrust: cassini-post-probe" in warning
+    assert _mixed_models({"inertia": runs["inertia"]}) == []

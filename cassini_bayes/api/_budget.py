@@ -20,9 +20,10 @@ __all__ = ["BudgetResult", "budget"]
 
 @dataclass(frozen=True)
 class BudgetResult:
-    """The propagated ``budget`` (:class:`~cassini_bayes.analysis.posterior_budgets.PosteriorBudget`),
-    its ``summary`` (``summary.json``) and ``config`` (``config.toml``) dicts and the input run
-    directories ``runs`` (by kind)."""
+    """The propagated ``budget``
+    (:class:`~cassini_bayes.analysis.posterior_budgets.PosteriorBudget`), its ``summary``
+    (``summary.json``) and ``config`` (``config.toml``) dicts and the input run directories
+    ``runs`` (by kind)."""
 
     budget: object
     summary: dict
@@ -56,6 +57,27 @@ class BudgetResult:
         return rd.final
 
 
+def _mixed_models(runs: dict[str, Path]) -> list[str]:
+    """A warning when the runs were fitted with different spacecraft models (their
+    ``config.toml``): their parameters then describe different spacecraft or epochs."""
+    import tomllib
+
+    names = {}
+    for kind, run in runs.items():
+        try:
+            cfg = tomllib.loads((run / "config.toml").read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+            continue
+        name = (cfg.get("spacecraft") or {}).get("name")
+        if isinstance(name, str):
+            names[kind] = name
+    if len(set(names.values())) < 2:
+        return []
+    return ["the runs were fitted with different spacecraft models ("
+            + ", ".join(f"{k}: {v}" for k, v in names.items()) + "): the budget combines "
+            "parameters of different spacecraft or epochs; give runs of one model"]
+
+
 def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).
@@ -87,7 +109,8 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
                      where=spelled("--draws", "n_draws"))
     post = {k: load_posterior(v, k, option=spelled(f"--{k}", k)) for k, v in given.items()}
     result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)
-    summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict()}
+    summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict(),
+               "warnings": _mixed_models(given)}
     config = {"command": "budget", "version": __version__, "seed": seed,
               "inputs": {k: {"run": str(v), "posterior": file_record(v / "posterior.nc")}
                          for k, v in given.items()},

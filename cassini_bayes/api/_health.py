@@ -72,22 +72,23 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     """``(date_days, telemetry, pulses)`` of each event from ``events``: one or more
     ``events.csv`` files or folders holding one, or a list of ``(date_days, telemetry, pulses)``
     tuples."""
+    ev = spelled("EVENTS", "events")
     if isinstance(events, (str, os.PathLike)):
         events = [events]
     if not isinstance(events, (list, tuple)):
-        raise InputError(f"{spelled('EVENTS', 'events')}: give events.csv files or folders, or "
+        raise InputError(f"{ev}: give events.csv files or folders, or "
                          f"(date_days, telemetry, pulses) tuples, not {type(events).__name__}")
     out = []
     for item in events:
         if isinstance(item, tuple):
             if len(item) != 3 or not all(isinstance(x, (str, os.PathLike)) for x in item[1:]):
-                raise InputError(f"{spelled('EVENTS', 'events')}: give (date_days, telemetry, pulses) tuples")
-            out.append((number("events", item[0], where=f"{spelled('EVENTS', 'events')} date_days"),
-                        Path(item[1]), Path(item[2])))
+                raise InputError(f"{ev}: give (date_days, telemetry, pulses) tuples")
+            day = number("events", item[0], where=f"{ev} date_days")
+            out.append((day, Path(item[1]), Path(item[2])))
             continue
         if not isinstance(item, (str, os.PathLike)):
-            raise InputError(f"{spelled('EVENTS', 'events')}: {type(item).__name__} is not an events.csv "
-                             "file, a folder or a (date_days, telemetry, pulses) tuple")
+            raise InputError(f"{ev}: {type(item).__name__} is not an events.csv file, a folder "
+                             "or a (date_days, telemetry, pulses) tuple")
         p = Path(item)
         p = p / "events.csv" if p.is_dir() else p
         if not p.exists() and not Path(item).exists():
@@ -108,11 +109,11 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
                                  "of days", path=str(p)) from None
             out.append((day, p.parent / r["telemetry"], p.parent / r["pulses"]))
     if len(out) < 2:
-        raise InputError(f"{spelled('EVENTS', 'events')}: {len(out)} event(s); a health fit needs at least 2")
+        raise InputError(f"{ev}: {len(out)} event(s); a health fit needs at least 2")
     seen: dict[Path, float] = {}
     for day, tel, _ in out:  # each event is independent evidence: a repeat would count twice
         if tel.resolve() in seen:
-            raise InputError(f"{spelled('EVENTS', 'events')}: the event telemetry {tel} is listed twice (days "
+            raise InputError(f"{ev}: the event telemetry {tel} is listed twice (days "
                              f"{seen[tel.resolve()]:g} and {day:g}); list each event once")
         seen[tel.resolve()] = day
     return sorted(out, key=lambda e: e[0])

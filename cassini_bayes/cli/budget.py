@@ -47,6 +47,9 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         res = budget(inertia=inertia, thrust=thrust, rwa4=rwa4, seed=seed, n_draws=draws)
         res.save(out, force=force)
         s = res.summary
+        for line in s["warnings"]:
+            console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         console.print(f"[green]✓[/green] {len(s['rows'])} budget lines from "
-                      f"{escape(', '.join(s['sources']))} ({time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
+                      f"{escape(', '.join(s['sources']))} ({time.perf_counter() - t0:.1f} s) → "
+                      f"{escape(str(out))}")
         typer.echo(str(out / "report.html"))

@@ -104,7 +104,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         work = work_dir(out)
         check_out(out, force=force, inputs=[scenario] if scenario else [])
         if work.exists():
-            if force:
+            if force or not any(work.glob("batch_*.npz")):  # (no finished batch: nothing to keep)
                 shutil.rmtree(work)
             elif not resume:
                 raise InputError(f"an unfinished campaign for {out} is checkpointed in {work}; "
