@@ -95,6 +95,13 @@ RATE_SCALE_RANGE = (0.5, 2.0)
 """Accepted ratio of the attitude's rotation to the integrated body rate (1 for rad/s)."""
 MIN_SEGMENTS = 5
 """Fewer turning stretches than this: the attitude check is not identifiable and is skipped."""
+STILL_RATES_RAD = 0.2
+"""With the attitude (nearly) still, the body rates may integrate to at most this rotation
+(rad, 11.5°) before the two are called inconsistent: gyro noise and bias stay far below it (a
+1e-6 rad/s bias turns 0.036 rad in ten hours)."""
+STILL_RATIO = 0.1
+"""… "nearly still": the quaternions turn by less than this fraction of that integrated
+rotation."""
 _SEG_NOISE = 20.0      # a turning stretch turns by this many attitude-noise sd …
 _SEG_MIN_RAD = 1e-3    # … and at least this much
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
@@ -227,6 +234,29 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     return AttitudeAgreement(align, scale, len(segs), turn)
 
 
+def _check_still_attitude(tel: Telemetry) -> None:
+    """Where the attitude hardly turns (too little for :func:`attitude_rate_agreement`), the
+    body rates must not integrate to a turn either: refuse a file whose rates show slews of
+    more than :data:`STILL_RATES_RAD` while its quaternions turn by less than
+    :data:`STILL_RATIO` of that (stale or constant attitude columns, rates of another file)."""
+    from cassini_bayes.telemetry import _turn_angle
+
+    q = np.asarray(tel.q, float)
+    t = np.asarray(tel.t, float)
+    w = np.asarray(tel.omega, float)
+    if q.shape[0] < 2:
+        return
+    integral = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
+                                                           * np.diff(t)[:, None], axis=0)])
+    rates_turn = float(np.linalg.norm(integral, axis=1).max())
+    q_turn = float(_turn_angle(q, q[0]).max())
+    if rates_turn > STILL_RATES_RAD and q_turn < STILL_RATIO * rates_turn:
+        raise InputError(f"columns q1..q4 and wx wy wz: the body rates integrate to a turn of "
+                         f"{np.degrees(rates_turn):.3g}° but the quaternions turn by at most "
+                         f"{np.degrees(q_turn):.3g}°: the attitude columns look stale or "
+                         "constant, or the rates belong to another file", path=tel.source)
+
+
 def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
     """Refuse a quaternion convention or body-rate unit that the kinematics contradict.
 
@@ -240,6 +270,7 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
     """
     ag = attitude_rate_agreement(tel)
     if ag is None:
+        _check_still_attitude(tel)
         return None
     src = tel.source
     c = ag.alignment

@@ -302,3 +302,20 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
         return
     with pytest.raises(InputError, match="wheel rates look like rad/s"):
         cons.check_telemetry_data(_wheels_in_rad_s(tel), sc, log)
+
+
+def test_rates_that_turn_under_a_still_attitude_are_refused():
+    """Constant quaternions beside body rates that integrate to 0.5 rad (the CLI audit's stale
+    attitude columns: 52°) are refused; the same file with the rates at gyro-noise level is
+    not (too little turn to judge)."""
+    t = np.arange(0.0, 100.0, 0.5)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (t.size, 1))
+    w = np.zeros((t.size, 3))
+    w[20:120, 0] = 0.01                                   # 0.5 rad about x
+    rates = np.full((t.size, 4), np.nan)
+    tel = Telemetry(t, q, w, rates, source="still.csv")
+    with pytest.raises(InputError, match=r"still.csv: columns q1..q4 and wx wy wz: the body "
+                                         r"rates integrate to a turn of 28.6°"):
+        cons.check_attitude_rates(tel)
+    quiet = Telemetry(t, q, np.full((t.size, 3), 1e-6), rates, source="quiet.csv")
+    assert cons.check_attitude_rates(quiet) is None
