@@ -378,8 +378,22 @@ def test_unreadable_sbc_manifest_is_one_line(tmp_path, run_cli):
     work = tmp_path / ".o.sbc-work"
     work.mkdir()
     (work / "manifest.json").write_text("{ truncated")
+    (work / "batch_000000.npz").write_bytes(b"a finished batch")   # something to keep
     code, _, err = run_cli("sbc", "toy", "-n", 4, "--out", out, "--resume")
     _one_error(code, err, 2, "manifest", "--force")
+
+
+def test_a_work_folder_without_a_finished_batch_is_started_over(tmp_path, run_cli):
+    """A campaign killed before its first batch leaves only its manifest: nothing to keep, so
+    the next run starts over without asking for --resume or --force."""
+    out = tmp_path / "o"
+    work = tmp_path / ".o.sbc-work"
+    work.mkdir()
+    (work / "manifest.json").write_text("{}")
+    code, _, err = run_cli("sbc", "toy", "-n", 4, "--out", out, "--batch", 4,
+                           "--set", "num_warmup=50", "--set", "num_draws=50")
+    assert code == 0, err
+    assert not work.exists() and (out / "summary.json").exists()
 
 
 def test_ctrl_c_swallowed_by_python_is_delivered_again(run, run_cli, monkeypatch):
