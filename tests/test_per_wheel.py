@@ -170,9 +170,14 @@ def _cli_base(tmp_path, sc):
 
 
 def test_cli_bad_wheel_errors_is_one_line(tmp_path, run_cli, sc):
-    code, _, err = run_cli(*_cli_base(tmp_path, sc), "--out", tmp_path / "bad",
-                           "--wheel-errors", "each")
+    base = _cli_base(tmp_path, sc)
+    code, _, err = run_cli(*base, "--out", tmp_path / "bad", "--wheel-errors", "each")
     assert code == 2 and "--wheel-errors" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "bad").exists()
+    # the idealised model has no wheel errors: both given is a contradiction, not a no-op
+    code, _, err = run_cli(*base, "--out", tmp_path / "bad", "--idealised", "--wheel-errors",
+                           "common")
+    assert code == 2 and "the idealised model has no wheel errors" in err
     assert not (tmp_path / "bad").exists()
 
 

@@ -44,15 +44,22 @@ STRICT = typer.Option(False, "--strict", help="Exit non-zero (3) when the sample
 FORCE = typer.Option(False, "--force", help="Replace --out if it is a run directory "
                                              "cassini-bayes wrote (never a user's folder).")
 OUT = typer.Option(..., "--out", help="Run directory to write (atomically).")
-WHEEL_ERRORS = typer.Option("per-wheel", "--wheel-errors",
+WHEEL_ERRORS = typer.Option(None, "--wheel-errors", show_default=False,
                             help="Robust model's wheel spin-inertia errors: per-wheel (one scale "
                                  "per wheel, the default) or common (one scale for all wheels).")
 
 
-def wheel_errors_name(value: str) -> str:
-    """The library's ``wheel_errors`` (``per_wheel``/``common``) of a ``--wheel-errors`` value."""
+def wheel_errors_name(value: str | None, idealised: bool = False) -> str:
+    """The library's ``wheel_errors`` (``per_wheel``/``common``) of a ``--wheel-errors`` value
+    (``None``: not given, ``per_wheel``); refused beside ``--idealised``, whose model has no
+    wheel errors (it was accepted, and recorded, without effect)."""
     from cassini_bayes.errors import InputError
 
+    if value is None:
+        return "per_wheel"
+    if idealised:
+        raise InputError(f"--wheel-errors {value}: the idealised model has no wheel errors; drop "
+                         "one of --wheel-errors and --idealised")
     name = value.replace("-", "_")
     if name not in ("per_wheel", "common"):
         raise InputError(f"--wheel-errors {value!r}: choose per-wheel or common")
@@ -149,7 +156,7 @@ def fit_inertia_cmd(
     telemetry = list(telemetry) + list(more or [])
     check_out(out, force=force, inputs=[*telemetry, model_path(spacecraft)])  # before any work
     result = fit_inertia(telemetry, spacecraft, seed=seed, torque=torque, robust=not idealised,
-                         wheel_errors=wheel_errors_name(wheel_errors),
+                         wheel_errors=wheel_errors_name(wheel_errors, idealised),
                          **sampler_options(chains, warmup, draws, target_accept))
     write_fit_run(result, out, force=force, strict=strict)
 

@@ -73,7 +73,7 @@ def fit_rwa4_cmd(
                for a, b in zip(window_a, window_b)] or None
     result = fit_rwa4(tel, spacecraft, method=method, windows=windows, prior=prior,
                       inertia_posterior=inertia_posterior, seed=seed, robust=not idealised,
-                      wheel_errors=wheel_errors_name(wheel_errors),
+                      wheel_errors=wheel_errors_name(wheel_errors, idealised),
                       **sampler_options(chains, warmup, draws, target_accept))
     write_fit_run(result, out, force=force, strict=strict)
 

@@ -69,7 +69,8 @@ def fit_thrust_cmd(
                                         *([inertia_posterior] if inertia_posterior else [])])
     result = fit_thrust(telemetry, pulses, spacecraft, mode=mode,
                         inertia_posterior=inertia_posterior, fix_inertia=fix_inertia, seed=seed,
-                        robust=not idealised, wheel_errors=wheel_errors_name(wheel_errors),
+                        robust=not idealised,
+                        wheel_errors=wheel_errors_name(wheel_errors, idealised),
                         **sampler_options(chains, warmup, draws, target_accept))
     write_fit_run(result, out, force=force, strict=strict)
 
