@@ -295,8 +295,18 @@ def _toml_clean(x: Any) -> Any:
 
 
 def write_posterior(run_dir: Path, idata) -> Path:
-    """``posterior.nc``: the InferenceData, every group (custom ones such as ``residuals`` too)."""
+    """``posterior.nc``: the InferenceData, every group (custom ones such as ``residuals`` too).
+
+    Refuses first, as a full disk (``ENOSPC``), when the file system has less room than the
+    arrays take plus 16 MiB: the netCDF/HDF5 writer running out of space mid-file printed
+    HDF5 tracebacks and could crash the process (the CLI audit's 300 KiB tmpfs)."""
     p = Path(run_dir) / "posterior.nc"
+    need = sum(int(ds.nbytes) for ds in (idata[g] for g in idata.groups())) + (16 << 20)
+    free = shutil.disk_usage(p.parent).free
+    if free < need:
+        where = p.parent.parent if p.parent.name.startswith(".") else p.parent  # (RunDir's temp)
+        raise OSError(errno.ENOSPC, f"No space left on device: posterior.nc needs about "
+                      f"{need >> 20} MiB, {free >> 20} MiB free", str(where))
     idata.to_netcdf(str(p))
     return p
 

@@ -215,3 +215,21 @@ def test_minimal_report_has_diagnostics():
     html = minimal_report_html({"kind": "inertia", "diagnostics": {"max_r_hat": 1.001},
                                 "parameters": {"Ixx": {"mean": 1.0}}})
     assert html.startswith("<!DOCTYPE html>") and "max_r_hat" in html and "Ixx" in html
+
+
+def test_posterior_too_large_for_the_disk_is_refused_before_writing(tmp_path, monkeypatch):
+    """Less free space than the arrays take: ENOSPC before the netCDF writer starts (which,
+    out of space mid-file, printed HDF5 tracebacks), naming the folder, not RunDir's temp."""
+    import shutil
+    from collections import namedtuple
+
+    idata = az.from_dict(posterior={"x": np.zeros((2, 100))})
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(1 << 30, 1 << 30, 1 << 20))
+    out = tmp_path / "run"
+    with pytest.raises(OSError) as e:
+        with RunDir(out) as rd:
+            write_posterior(rd.path, idata)
+    assert e.value.errno == errno.ENOSPC and e.value.filename == str(tmp_path)
+    assert "needs about 16 MiB, 1 MiB free" in e.value.strerror
+    assert not out.exists() and _siblings(out) == []
