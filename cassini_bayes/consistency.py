@@ -200,6 +200,14 @@ def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
+def _integrated_rates(tel: Telemetry) -> np.ndarray:
+    """(n, 3) rad: the trapezoid integral ``∫ω dt`` of the body rates from the first sample."""
+    t = np.asarray(tel.t, float)
+    w = np.asarray(tel.omega, float)
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
+                                                       * np.diff(t)[:, None], axis=0)])
+
+
 def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     """Compare the quaternions' rotation with the integrated body rates, per reading.
 
@@ -217,10 +225,7 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
         return None
     a_idx = np.array([s[0] for s in segs])
     b_idx = np.array([s[1] for s in segs])
-    t = np.asarray(tel.t, float)
-    w = np.asarray(tel.omega, float)
-    steps = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
-                                                        * np.diff(t)[:, None], axis=0)])
+    steps = _integrated_rates(tel)
     g = steps[b_idx] - steps[a_idx]
     rots = [np.asarray(_rotvecs_between(qk[a_idx], qk[b_idx]))
             for qk in (_reading(q, k) for k in range(len(READINGS)))]
@@ -242,13 +247,9 @@ def _check_still_attitude(tel: Telemetry) -> None:
     from cassini_bayes.telemetry import _turn_angle
 
     q = np.asarray(tel.q, float)
-    t = np.asarray(tel.t, float)
-    w = np.asarray(tel.omega, float)
     if q.shape[0] < 2:
         return
-    integral = np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
-                                                           * np.diff(t)[:, None], axis=0)])
-    rates_turn = float(np.linalg.norm(integral, axis=1).max())
+    rates_turn = float(np.linalg.norm(_integrated_rates(tel), axis=1).max())
     q_turn = float(_turn_angle(q, q[0]).max())
     if rates_turn > STILL_RATES_RAD and q_turn < STILL_RATIO * rates_turn:
         raise InputError(f"columns q1..q4 and wx wy wz: the body rates integrate to a turn of "

@@ -49,6 +49,7 @@ import warnings
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+from cassini_bayes._file_mode import default_dir_mode
 from cassini_bayes.errors import InputError, spelled
 
 
@@ -220,9 +221,7 @@ class RunDir:
             raise InputError(f"cannot create the parent directory: {e.strerror}",
                              path=str(parent)) from None
         self.path = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.tmp-", dir=parent))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(self.path, 0o777 & ~umask)  # mkdtemp makes it private; a run directory is not
+        os.chmod(self.path, default_dir_mode())  # mkdtemp makes it private; a run is not
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:

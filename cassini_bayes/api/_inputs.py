@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import numbers
 import os
 from pathlib import Path
 from typing import Sequence
@@ -194,10 +195,9 @@ def number(name: str, value, *, lo: float | None = None, hi: float | None = None
     """``value`` when it is a real number (an integer with ``integer``) in ``[lo, hi]``, else
     an InputError naming the argument (``where``: its name as spelled, default
     :func:`~cassini_bayes.errors.arg`'s)."""
-    kinds = (int,) if integer else (int, float)
-    ok = (not isinstance(value, bool) and isinstance(value, kinds + ((np.integer,) if integer
-                                                                      else (np.number,)))
-          and np.isfinite(value) and (lo is None or value >= lo) and (hi is None or value <= hi))
+    kind = numbers.Integral if integer else numbers.Real   # NumPy scalars included
+    ok = (not isinstance(value, bool) and isinstance(value, kind) and np.isfinite(value)
+          and (lo is None or value >= lo) and (hi is None or value <= hi))
     if not ok:
         want = "an integer" if integer else "a number"
         rng = (f" in {lo:g} .. {hi:g}" if lo is not None and hi is not None else

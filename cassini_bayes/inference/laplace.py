@@ -99,7 +99,7 @@ def _hessian(grad: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
 
 
 def _rewhiten(hessian: Callable[[np.ndarray, np.ndarray], np.ndarray], x: np.ndarray,
-              tril: np.ndarray) -> np.ndarray | None:
+              tril: np.ndarray, passes: int) -> np.ndarray | None:
     """The whitening at ``x``: :func:`_whitening` of the Hessian taken along ``tril``'s columns,
     then taken again along the new factor's (``None`` where the curvature is not finite).
 
@@ -108,8 +108,9 @@ def _rewhiten(hessian: Callable[[np.ndarray, np.ndarray], np.ndarray], x: np.nda
     sd: the difference then carries the density's third derivative, and along the stiff
     directions it swamps the soft ones' curvature (an RWA4 replicate whose stiffest coordinate
     has sd 1.7e-4: relative error 2e-7 of the largest entry, a soft block of curvature ~1 wrong
-    by ~6). The second pass steps ``1e-4`` of the scales just found."""
-    for _ in range(2):
+    by ~6). The second pass steps ``1e-4`` of the scales just found. (``passes`` 1 for the exact
+    Hessian, which does not depend on the scales.)"""
+    for _ in range(passes):
         h_w = hessian(x, tril)
         if not np.all(np.isfinite(h_w)):
             return None
@@ -117,16 +118,17 @@ def _rewhiten(hessian: Callable[[np.ndarray, np.ndarray], np.ndarray], x: np.nda
     return tril
 
 
-def _newton_rounds(nll: Callable, hessian: Callable, x: np.ndarray,
-                   rounds: int) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Alternate re-whitening and a trust-region Newton solve (module docstring) from ``x``;
-    ``hessian(x, scales)`` gives ``scalesᵀ H scales``. Returns the end point, its whitening and
-    whether the Newton decrement fell below :data:`_DECREMENT_TOL`."""
+def _newton_rounds(nll: Callable, hessian: Callable, x: np.ndarray, rounds: int,
+                   passes: int) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Alternate re-whitening (:func:`_rewhiten`, ``passes``) and a trust-region Newton solve
+    (module docstring) from ``x``; ``hessian(x, scales)`` gives ``scalesᵀ H scales``. Returns the
+    end point, its whitening and whether the Newton decrement fell below
+    :data:`_DECREMENT_TOL`."""
     import scipy.optimize
 
     tril = np.eye(x.size)
     for _ in range(rounds):
-        new = _rewhiten(hessian, x, tril)
+        new = _rewhiten(hessian, x, tril, passes)
         if new is None:
             return x, tril, False
         tril = new
@@ -188,7 +190,7 @@ def laplace(log_density: Callable, theta0, data: Any, *,
     x0 = np.asarray(theta0, float)
     if not np.isfinite(nll(x0)[0]):
         return x0, np.eye(x0.size)
-    x, tril, converged = _newton_rounds(nll, differenced, x0, rounds)
+    x, tril, converged = _newton_rounds(nll, differenced, x0, rounds, passes=2)
     if converged:
         return x, tril
     hess_ = _compiled_hessian(log_density)
@@ -196,7 +198,7 @@ def laplace(log_density: Callable, theta0, data: Any, *,
     def exact(x, scales):
         return scales.T @ np.asarray(hess_(jax.device_put(np.asarray(x, float)), data)) @ scales
 
-    x_e, tril_e, converged_e = _newton_rounds(nll, exact, x0, rounds)
+    x_e, tril_e, converged_e = _newton_rounds(nll, exact, x0, rounds, passes=1)
     if converged_e or nll(x_e)[0] <= nll(x)[0]:
         return x_e, tril_e
     return x, tril

@@ -80,15 +80,23 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
                                        "wheel momentum (docs/adequacy.md)")))
 
 
+def _mean_axis(post) -> np.ndarray:
+    """(3,) the posterior mean of the RWA4 fit's axis components ``u4_x … u4_z``."""
+    from cassini_bayes.inference.rwa4 import U4_NAMES
+
+    p = post.idata.posterior
+    return np.array([float(p[n].mean()) for n in U4_NAMES])
+
+
 def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
     """Does the RWA4 model fit its own window balances? ``χ²`` of the balances at the posterior
     mean (:func:`~cassini_bayes.inference.rwa4.balance_misfit`) as the normal deviate of its
     upper χ² tail probability."""
-    from cassini_bayes.inference.rwa4 import U4_NAMES, balance_misfit
+    from cassini_bayes.inference.rwa4 import balance_misfit
     from cassini_bayes.physics.momentum import INERTIA_NAMES
 
     p = post.idata.posterior
-    u = np.array([float(p[n].mean()) for n in U4_NAMES])
+    u = _mean_axis(post)
     pi = np.array([float(p[n].mean()) for n in INERTIA_NAMES])
     chi2, dof = balance_misfit(post.problem, u, pi)
     z = normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0))   # one-sided tail
@@ -104,11 +112,9 @@ def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check
     angle from +Z minus 54.74° must be small: a mounting or articulation error is a degree or
     two, while a wheel-rate sign flipped in the file gives the antipode, 70.5° off the cone
     (with the uniform prior the fit itself cannot tell). Statistic: that offset, deg."""
-    from cassini_bayes.inference.rwa4 import U4_NAMES
     from cassini_bayes.inference.rwa4.prior import CONE_ANGLE_DEG
 
-    p = post.idata.posterior
-    u = np.array([float(p[n].mean()) for n in U4_NAMES])
+    u = _mean_axis(post)
     polar = float(np.degrees(np.arccos(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0))))
     offset = abs(polar - CONE_ANGLE_DEG)
     return _check("articulation_cone", offset, threshold_deg,
