@@ -15,11 +15,14 @@ likely cause) from relations the data must obey whatever the unit of a column:
    conjugated; both) by their alignment (the cosine between the stacked vectors, 1 for a perfect
    fit, near 0 or negative for a wrong reading) and, for the declared reading, their ratio (the
    body-rate unit: 57.3 for °/s).
-2. **Wheel units vs momentum conservation** (:func:`wheel_momentum_scale`). Between thruster
-   firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` is constant (Feldman & Lee
-   Eqs 2-3). With the model's predicted inertia (known to ±10 %) the balance is fitted with the
-   wheel momentum times a free scale ``κ``: ``κ ≈ 1`` for rpm as the file format wants,
-   ``κ ≈ 60/(2π) = 9.55`` when the wheel columns hold rad/s (the wheel momentum read ×0.105).
+2. **Wheel units, signs and order vs momentum conservation** (:func:`wheel_momentum_scale`).
+   Between thruster firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` is constant
+   (Feldman & Lee Eqs 2-3). With the model's predicted inertia (known to ±10 %) the balance is
+   fitted with the wheel momentum times a free scale ``κ``: ``κ ≈ 1`` for rpm as the file
+   format wants, ``κ ≈ 60/(2π) = 9.55`` when the wheel columns hold rad/s (the wheel momentum
+   read ×0.105). Where slews about several axes separate the wheels, it is fitted again with a free
+   momentum vector per wheel (:class:`WheelAxes`): each must lie along its wheel's axis in the
+   model (a flipped sign gives the opposite direction, swapped columns another wheel's axis).
 3. **Pulse log vs ``on_*`` columns** (:func:`check_pulses_match_on_times`): the cumulative
    on-time the pulse log implies (:func:`cassini_bayes.telemetry.cumulative_on_times`) must match
    the telemetry's own counters.
@@ -64,6 +67,7 @@ __all__ = [
     "READINGS",
     "AttitudeAgreement",
     "MomentumScale",
+    "WheelAxes",
     "attitude_rate_agreement",
     "check_attitude_rates",
     "wheel_momentum_scale",
@@ -114,6 +118,13 @@ RAD_S_FACTOR = 1.0 / RPM_TO_RAD_S
 KAPPA_RANGE = (float(np.sqrt(RPM_TO_RAD_S)), float(1.0 / np.sqrt(RPM_TO_RAD_S)))
 """Accepted wheel-momentum scale ``κ``: the geometric midpoints between 1 (rpm) and 60/(2π)
 (rad/s) or its inverse, 0.324 … 3.09; the ±10 % knowledge of the moments moves ``κ`` by 10 %."""
+AXES_CONDITION_MIN = 0.1
+"""Each wheel's free momentum vector is judged only when the free-axis balance's design is this
+well conditioned (smallest/largest singular value, unit columns): 0.30–0.46 on shipped slews,
+0.02–0.05 on biasing events (their wheels move together)."""
+AXIS_ANGLE_MAX_DEG = 30.0
+"""Largest accepted angle between a wheel's fitted momentum and its axis in the model: a flipped
+sign gives 180°, another wheel's column on Cassini 90° (its wheel axes are orthogonal)."""
 FREE_WHEEL = "RWA4"
 """The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
 
@@ -321,6 +332,42 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
 # 2. Wheel units vs momentum conservation
 
 
+class WheelAxes(NamedTuple):
+    """Fit of the momentum balance with each known wheel's momentum a free body vector ``w_k``.
+
+    Attributes
+    ----------
+    alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
+    conditioning : smallest over largest singular value of the balance's design, its columns
+        scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
+        slew about one axis) and the vectors cannot be told apart; 0.3–0.5 for slews about
+        three axes.
+    vectors : per known wheel, ``w_k / J_k`` (body frame, per rpm-read rad/s): the model's axis
+        ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
+        sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
+    """
+
+    alignment: float
+    conditioning: float
+    vectors: dict[str, np.ndarray]
+
+    @property
+    def judged(self) -> bool:
+        """Whether the vectors are determined well enough to judge each wheel on its own."""
+        return (self.conditioning >= AXES_CONDITION_MIN
+                and self.alignment >= MOMENTUM_ALIGN_MIN)
+
+    def angle_deg(self, name: str, axis) -> float:
+        """Angle between wheel ``name``'s fitted vector and ``axis``, degrees."""
+        w = self.vectors[name]
+        cos = float(w @ np.asarray(axis, float)) / (np.linalg.norm(w) * np.linalg.norm(axis))
+        return float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+    def scale(self, name: str) -> float:
+        """``|w_k| / J_k``: 1 for rpm (within the inertia's ±10 %), 9.55 for rad/s."""
+        return float(np.linalg.norm(self.vectors[name]))
+
+
 class MomentumScale(NamedTuple):
     """Fit of the momentum balance with the wheel momentum scaled by ``κ`` (1 for a correct file).
 
@@ -331,11 +378,14 @@ class MomentumScale(NamedTuple):
         60/(2π) = 9.55 when the wheel columns hold rad/s.
     alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
     stretches : number of stretches between thruster firings used.
+    axes : the same balance with a free momentum vector per known wheel (:class:`WheelAxes`);
+        ``None`` when no known wheel runs or the balance cannot be formed.
     """
 
     scale: float
     alignment: float
     stretches: int
+    axes: WheelAxes | None = None
 
 
 def _quiet_labels(on_times: np.ndarray | None, n: int) -> np.ndarray:
@@ -355,22 +405,19 @@ def _quiet_labels(on_times: np.ndarray | None, n: int) -> np.ndarray:
     return np.where(bad, -1, labels)
 
 
-def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
-                         on_times: np.ndarray | None = None,
-                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
-    """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
+class _Balance(NamedTuple):
+    """The de-meaned momentum balance of :func:`wheel_momentum_scale` (inertial frame)."""
 
-    Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
+    body: np.ndarray                # (n, 3) A(q)ᵀ I_pred ω, each stretch de-meaned
+    known: list[str]                # the known wheels running
+    known_cols: list[np.ndarray]    # per known wheel, (n, 3, 3): −ρ_k A(q)ᵀ e_j, de-meaned
+    free_cols: list[np.ndarray]     # the free wheel's three columns, if it runs
+    stretches: int
 
-        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
 
-    with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias from
-    the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
-    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
-    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
-    removes ``H_s``. ``None`` when no wheel runs, no stretch has three samples, or nothing
-    varies.
-    """
+def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None,
+             free_wheel: str | None) -> _Balance | None:
+    """The balance's pieces per firing-free stretch, or ``None`` (no wheel, no stretch)."""
     names = tel.active_wheels()
     free = [n for n in names if free_wheel is not None and n.upper() == free_wheel.upper()]
     known = [n for n in names if n not in free]
@@ -384,63 +431,157 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     if not np.any(keep):
         return None
     a_t = np.swapaxes(np.asarray(_dcm(np.asarray(tel.q, float))), -1, -2)[keep]  # body → inertial
-    x = np.einsum("nij,jk,nk->ni", a_t, np.asarray(spacecraft.inertia, float),
-                  np.asarray(tel.omega, float)[keep])
-    cols = []
-    if known:
-        rates = np.stack([np.asarray(tel.wheel_rate(n), float)[keep] for n in known], 1)
-        axes = np.stack([spacecraft.wheel(n).axis for n in known])
-        js = np.array([spacecraft.wheel(n).inertia for n in known])
-        cols.append(-np.einsum("nij,nj->ni", a_t,
-                               np.asarray(_wheel_momentum_body(rates, axes, js))))
-    if free:
-        rho = np.asarray(tel.wheel_rate(free[0]), float)[keep]
-        cols += [-rho[:, None] * a_t[:, :, j] for j in range(3)]
+    body = np.einsum("nij,jk,nk->ni", a_t, np.asarray(spacecraft.inertia, float),
+                     np.asarray(tel.omega, float)[keep])
+    known_cols = [-np.asarray(tel.wheel_rate(n), float)[keep][:, None, None] * a_t
+                  for n in known]
+    free_cols = ([-np.asarray(tel.wheel_rate(free[0]), float)[keep][:, None] * a_t[:, :, j]
+                  for j in range(3)] if free else [])
     lab = labels[keep]
     for s in good:
         m = lab == s
-        x[m] -= x[m].mean(0)
-        for c in cols:
-            c[m] -= c[m].mean(0)
-    design = np.stack([c.ravel() for c in cols], 1)
-    target = x.ravel()
-    xx = float(target @ target)
-    if xx <= 0 or np.linalg.matrix_rank(design) < design.shape[1]:
+        for x in [body, *known_cols, *free_cols]:
+            x[m] -= x[m].mean(0)
+    return _Balance(body, known, known_cols, free_cols, len(good))
+
+
+def _solve(design: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """Least squares of the balance: coefficients and alignment, ``None`` if not identifiable."""
+    tt = float(target @ target)
+    if tt <= 0 or np.linalg.matrix_rank(design) < design.shape[1]:
         return None
     theta = np.linalg.lstsq(design, target, rcond=None)[0]
     fitted = design @ theta
-    align = float(target @ fitted / np.sqrt(xx * (fitted @ fitted))) if fitted.any() else 0.0
-    scale = (float(theta[0]) if known
-             else float(np.linalg.norm(theta) / spacecraft.wheel(free[0]).inertia))
-    return MomentumScale(scale, align, len(good))
+    align = float(target @ fitted / np.sqrt(tt * (fitted @ fitted))) if fitted.any() else 0.0
+    return theta, align
+
+
+def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
+    """:class:`WheelAxes` of the balance: one free body vector ``w_k`` per known wheel."""
+    if not bal.known:
+        return None
+    cols = [c[:, :, j] for c in bal.known_cols for j in range(3)] + bal.free_cols
+    design = np.stack([c.ravel() for c in cols], 1)
+    solved = _solve(design, bal.body.ravel())
+    if solved is None:
+        return None
+    theta, align = solved
+    norms = np.linalg.norm(design, axis=0)
+    sv = np.linalg.svd(design / np.where(norms > 0, norms, 1.0), compute_uv=False)
+    js = [spacecraft.wheel(n).inertia for n in bal.known]
+    vectors = {n: theta[3 * k: 3 * k + 3] / js[k] for k, n in enumerate(bal.known)}
+    return WheelAxes(align, float(sv[-1] / sv[0]), vectors)
+
+
+def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
+                         on_times: np.ndarray | None = None,
+                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
+    """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
+
+    Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
+
+        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
+
+    with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
+    from the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
+    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
+    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
+    removes ``H_s``. The same balance with a free vector ``w_k`` for every known wheel in place
+    of ``κ J_k g_k`` is :attr:`MomentumScale.axes`. ``None`` when no wheel runs, no stretch has
+    three samples, or nothing varies.
+    """
+    bal = _balance(tel, spacecraft, on_times, free_wheel)
+    if bal is None:
+        return None
+    cols = list(bal.free_cols)
+    if bal.known:
+        axes = np.stack([spacecraft.wheel(n).axis for n in bal.known])
+        js = np.array([spacecraft.wheel(n).inertia for n in bal.known])
+        momentum = np.einsum("wnij,wj,w->ni", np.stack(bal.known_cols), axes, js)
+        cols.insert(0, momentum)
+    solved = _solve(np.stack([c.ravel() for c in cols], 1), bal.body.ravel())
+    if solved is None:
+        return None
+    theta, align = solved
+    if bal.known:
+        scale = float(theta[0])
+    else:     # the free wheel alone: its momentum's size
+        scale = float(np.linalg.norm(theta) / spacecraft.wheel(free_wheel).inertia)
+    return MomentumScale(scale, align, bal.stretches, _wheel_axes(bal, spacecraft))
+
+
+def _unit_error(cols: str, scale: float, what: str, tel: Telemetry) -> InputError:
+    """The wheel-unit refusal for ``cols`` whose momentum needs ``scale`` × the rpm reading."""
+    if scale > 0 and abs(np.log(scale / RAD_S_FACTOR)) < np.log(2.0):
+        return InputError(f"{cols}: wheel rates look like rad/s, the file format wants rpm; "
+                          f"multiply by 60/(2*pi) ({what})", path=tel.source)
+    return InputError(f"{cols}: {what}; check that the wheel rates are rpm, the body rates "
+                      "rad/s, and that the spacecraft model matches the spacecraft",
+                      path=tel.source)
+
+
+def _axis_error(name: str, axes: WheelAxes, spacecraft: Spacecraft,
+                tel: Telemetry) -> InputError:
+    """The refusal for a wheel whose momentum does not lie along its axis in the model."""
+    col = name.lower()
+    angle = axes.angle_deg(name, spacecraft.wheel(name).axis)
+    head = (f"column {col}: momentum is conserved only with {col}'s momentum {angle:.0f}° from "
+            f"{name}'s axis in the model {spacecraft.name!r} (free-axis balance alignment "
+            f"{axes.alignment:.3f})")
+    if angle > 180.0 - AXIS_ANGLE_MAX_DEG:
+        return InputError(f"{head}: its sign looks flipped; negate the column, or correct the "
+                          "wheel's axis in the spacecraft model", path=tel.source)
+    for other in spacecraft.wheels:
+        if other.name == name:
+            continue
+        off = axes.angle_deg(name, other.axis)
+        if min(off, 180.0 - off) < AXIS_ANGLE_MAX_DEG:
+            flipped = " with the sign flipped" if off > 90.0 else ""
+            return InputError(f"{head}, {min(off, 180.0 - off):.0f}° from {other.name}'s: it "
+                              f"looks like {other.name}'s rates{flipped}; check the column "
+                              "order", path=tel.source)
+    return InputError(f"{head}; check the column order, the wheels' signs and the model's wheel "
+                      "axes", path=tel.source)
 
 
 def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
                       on_times: np.ndarray | None = None) -> MomentumScale | None:
-    """Refuse wheel rates whose unit breaks momentum conservation.
+    """Refuse wheel columns whose unit, sign or order breaks momentum conservation.
 
     When the balance of :func:`wheel_momentum_scale` fits (alignment ≥
     :data:`MOMENTUM_ALIGN_MIN`) yet needs a wheel-momentum scale ``κ`` outside
     :data:`KAPPA_RANGE`, raise :class:`InputError`: ``κ`` near 60/(2π) means the wheel columns
-    hold rad/s. Otherwise (including a balance that does not fit: momentum exchange with unlogged
-    thruster firings, or none at all) say nothing. Returns the fit.
+    hold rad/s. Then, where the free-axis balance (:class:`WheelAxes`) determines each known
+    wheel's momentum on its own (:attr:`WheelAxes.judged`), refuse a wheel whose momentum lies
+    more than :data:`AXIS_ANGLE_MAX_DEG` from its axis in the model (a flipped sign, another
+    wheel's column) or whose scale is outside :data:`KAPPA_RANGE` (that column in rad/s).
+    Otherwise (including a balance that does not fit: momentum exchange with unlogged thruster
+    firings, or none at all) say nothing. Returns the fit.
     """
     fit = wheel_momentum_scale(tel, spacecraft, on_times)
-    if fit is None or fit.alignment < MOMENTUM_ALIGN_MIN:
+    if fit is None:
         return fit
     lo, hi = KAPPA_RANGE
-    if lo <= fit.scale <= hi:
-        return fit
-    cols = " ".join(n.lower() for n in tel.active_wheels())
-    what = (f"momentum is conserved only with the wheel momentum {fit.scale:.3g}x what the "
+    if fit.alignment >= MOMENTUM_ALIGN_MIN and not lo <= fit.scale <= hi:
+        cols = "columns " + " ".join(n.lower() for n in tel.active_wheels())
+        raise _unit_error(cols, fit.scale, (
+            f"momentum is conserved only with the wheel momentum {fit.scale:.3g}x what the "
             f"columns say in rpm with the model {spacecraft.name!r} (alignment "
-            f"{fit.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g})")
-    if fit.scale > 0 and abs(np.log(fit.scale / RAD_S_FACTOR)) < np.log(2.0):
-        raise InputError(f"columns {cols}: wheel rates look like rad/s, the file format wants "
-                         f"rpm; multiply by 60/(2*pi) ({what})", path=tel.source)
-    raise InputError(f"columns {cols}: {what}; check that the wheel rates are rpm, the body "
-                     "rates rad/s, and that the spacecraft model matches the spacecraft",
-                     path=tel.source)
+            f"{fit.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g})"), tel)
+    axes = fit.axes
+    if axes is None or not axes.judged:
+        return fit
+    for name in axes.vectors:
+        if axes.angle_deg(name, spacecraft.wheel(name).axis) > AXIS_ANGLE_MAX_DEG:
+            raise _axis_error(name, axes, spacecraft, tel)
+    for name in axes.vectors:
+        if not lo <= axes.scale(name) <= hi:
+            raise _unit_error(f"column {name.lower()}", axes.scale(name), (
+                f"momentum is conserved only with {name}'s momentum {axes.scale(name):.3g}x "
+                f"what the column says in rpm with the model {spacecraft.name!r} (free-axis "
+                f"balance alignment {axes.alignment:.3f}; rpm gives 1, rad/s "
+                f"{RAD_S_FACTOR:.3g})"), tel)
+    return fit
 
 
 # ---------------------------------------------------------------------------------------------

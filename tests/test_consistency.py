@@ -12,6 +12,10 @@ of them. The statistics and their margins (measured on the full scenario files w
   0.0174–0.0181 for deg/s (accepted 0.5–2);
 * wheel units: the wheel-momentum scale κ is 0.993–1.032 clean and 9.48–9.86 for rad/s columns
   (accepted 0.324–3.09, the geometric midpoints), alignment ≥ 0.962 (needed ≥ 0.9);
+* wheel axes (a free momentum vector per wheel, judged where the design's conditioning is
+  ≥ 0.1: slews 0.30–0.47, biasing events 0.02–0.05): ≤ 2.1° from the model's axes on clean
+  open-world files (benchmarks/wheel_axes_margins.py), 178–180° for a flipped sign, 88–92°
+  for swapped columns on Cassini's orthogonal wheels (threshold 30°);
 * pulse log vs on_*: largest per-sample difference ≤ 0.018 s clean against a slack of one
   pulse (≥ 0.125 s); doubled widths differ by the whole total (seconds);
 * excitation: second/first eigenvalue of Σ ω ωᵀ dt ≥ 0.35 on the shipped slews (post-PRM: X and
@@ -177,6 +181,80 @@ def test_unlogged_firings_skip_the_wheel_check(runs):
     cons.check_wheel_units(bare, sc)
 
 
+def _edit_wheel(tel, name: str, edit):
+    """``tel`` with one wheel's column replaced by ``edit(rates, column index)``."""
+    rates = np.array(tel.wheel_rates, float)
+    edit(rates, tel.wheel_names.index(name))
+    return replace(tel, wheel_rates=rates)
+
+
+def _flipped(tel, name):
+    return _edit_wheel(tel, name, lambda r, i: r.__setitem__((slice(None), i), -r[:, i]))
+
+
+def _swapped(tel, a, b):
+    i, j = tel.wheel_names.index(a), tel.wheel_names.index(b)
+    rates = np.array(tel.wheel_rates, float)
+    rates[:, [i, j]] = rates[:, [j, i]]
+    return replace(tel, wheel_rates=rates)
+
+
+def _one_in_rad_s(tel, name):
+    return _edit_wheel(tel, name, lambda r, i: r.__setitem__((slice(None), i),
+                                                             r[:, i] * RPM_TO_RAD_S))
+
+
+def test_clean_wheel_axes_lie_along_the_model(runs):
+    """Slews about several axes separate the wheels: each free momentum vector lies along its
+    model axis (≤ 2.1° on 320 open-world files against 30°) at scale 1 (within ±10 %)."""
+    tel, log, sc = runs["slews_post_prm"]
+    axes = cons.wheel_momentum_scale(tel, sc).axes
+    assert axes.judged and axes.conditioning > 2 * cons.AXES_CONDITION_MIN
+    for n in axes.vectors:
+        assert axes.angle_deg(n, sc.wheel(n).axis) < 3.0
+        assert 0.9 < axes.scale(n) < 1.1
+
+
+def test_flipped_wheel_sign_refused(runs):
+    tel, log, sc = runs["slews_post_prm"]
+    with pytest.raises(InputError, match=r"column rwa2: momentum is conserved only with rwa2's "
+                                         r"momentum 1[78]\d° from RWA2's axis .*its sign looks "
+                                         r"flipped; negate the column"):
+        cons.check_telemetry_data(_flipped(tel, "RWA2"), sc, log)
+
+
+def test_swapped_wheel_columns_refused(runs):
+    tel, log, sc = runs["slews_post_prm"]
+    with pytest.raises(InputError, match=r"column rwa2: .* 9\d° from RWA2's axis .*, [0-5]° from "
+                                         r"RWA3's: it looks like RWA3's rates; check the column "
+                                         r"order"):
+        cons.check_telemetry_data(_swapped(tel, "RWA2", "RWA3"), sc, log)
+
+
+def test_one_wheel_in_rad_s_refused(runs):
+    """One column in rad/s breaks the common scale's balance (no verdict there); the free-axis
+    balance names the column."""
+    tel, log, sc = runs["slews_post_prm"]
+    with pytest.raises(InputError, match=r"column rwa3: wheel rates look like rad/s"):
+        cons.check_telemetry_data(_one_in_rad_s(tel, "RWA3"), sc, log)
+
+
+def test_wheels_moving_together_are_not_judged(runs):
+    """A biasing event's wheels change together: the free vectors are not separable
+    (conditioning 0.02–0.05), so swapped columns pass, and `check` says they were not checked."""
+    from cassini_bayes.api import check_telemetry
+
+    tel, log, sc = runs["biasing_day028"]
+    bad = _swapped(tel, "RWA1", "RWA2")
+    axes = cons.wheel_momentum_scale(bad, sc, tel.on_times).axes
+    assert axes.conditioning < cons.AXES_CONDITION_MIN and not axes.judged
+    cons.check_telemetry_data(bad, sc, log)
+    line = check_telemetry(bad, pulses=log, spacecraft=sc).physics
+    assert "wheel signs and column order not checked (the wheels' rates move together" in line
+    clean = check_telemetry(*runs["slews_post_prm"][:1], spacecraft=sc).physics
+    assert "each wheel's momentum along its axis in the model (within" in clean
+
+
 # --------------------------------------------------------------------------------------------
 # Pulse log vs on_* columns
 
@@ -302,6 +380,14 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
         return
     with pytest.raises(InputError, match="wheel rates look like rad/s"):
         cons.check_telemetry_data(_wheels_in_rad_s(tel), sc, log)
+    axes = cons.wheel_momentum_scale(tel, sc, tel.on_times).axes
+    if axes is not None and axes.judged:     # slews about several axes: every wheel on its own
+        known = list(axes.vectors)
+        with pytest.raises(InputError, match="its sign looks flipped"):
+            cons.check_telemetry_data(_flipped(tel, known[0]), sc, log)
+        if len(known) > 1:
+            with pytest.raises(InputError, match="check the column order"):
+                cons.check_telemetry_data(_swapped(tel, known[0], known[1]), sc, log)
 
 
 def test_rates_that_turn_under_a_still_attitude_are_refused():

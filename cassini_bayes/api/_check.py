@@ -84,9 +84,9 @@ class TelemetryCheck:
         return text + ")"
 
 
-def _physics_line(attitude, momentum, checked_units: bool) -> str:
+def _physics_line(attitude, momentum, spacecraft) -> str:
     """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
-    from cassini_bayes.consistency import MOMENTUM_ALIGN_MIN
+    from cassini_bayes.consistency import AXES_CONDITION_MIN, MOMENTUM_ALIGN_MIN
     from cassini_bayes.errors import spelled
 
     if attitude is None:
@@ -94,12 +94,25 @@ def _physics_line(attitude, momentum, checked_units: bool) -> str:
     else:
         text = (f"q vs ω consistent (alignment {attitude.alignment[0]:.3f} over "
                 f"{attitude.segments} turning stretches, rate scale {attitude.scale:.3f})")
-    if not checked_units:
+    if spacecraft is None:
         return text + f"; wheel units not checked (give {spelled('--spacecraft', 'spacecraft')})"
+    axes = momentum.axes if momentum is not None else None
+    if axes is not None and axes.judged:
+        worst = max(axes.angle_deg(n, spacecraft.wheel(n).axis) for n in axes.vectors)
+        axes_text = (f"; each wheel's momentum along its axis in the model (within {worst:.1f}°; "
+                     f"scales {min(map(axes.scale, axes.vectors)):.3f}–"
+                     f"{max(map(axes.scale, axes.vectors)):.3f})")
+    elif axes is not None:
+        why = (f"the wheels' rates move together: conditioning {axes.conditioning:.2g}"
+               if axes.conditioning < AXES_CONDITION_MIN
+               else f"the balance does not fit: alignment {axes.alignment:.2f}")
+        axes_text = f"; wheel signs and column order not checked ({why})"
+    else:
+        axes_text = ""
     if momentum is None or momentum.alignment < MOMENTUM_ALIGN_MIN:
-        return text + "; wheel units not checked (no clean momentum exchange)"
+        return text + "; wheel units not checked (no clean momentum exchange)" + axes_text
     return (text + f"; wheel rpm confirmed by momentum conservation (scale {momentum.scale:.3f}, "
-            "rad/s would give 9.55)")
+            "rad/s would give 9.55)" + axes_text)
 
 
 def _pulse_count(on: np.ndarray) -> int:
@@ -184,7 +197,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         max_rate_rad_s=float(np.linalg.norm(tel.omega, axis=1).max()),
         max_turn_rad=float(_turn_angle(tel.q, tel.q[0]).max()),
         attitude=attitude, momentum=momentum,
-        physics=_physics_line(attitude, momentum, sc is not None),
+        physics=_physics_line(attitude, momentum, sc),
         wheels=tuple(wheels), thruster_source=source, thrusters=tuple(thrusters),
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
