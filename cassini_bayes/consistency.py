@@ -576,11 +576,13 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
             raise _axis_error(name, axes, spacecraft, tel)
     for name in axes.vectors:
         if not lo <= axes.scale(name) <= hi:
-            raise _unit_error(f"column {name.lower()}", axes.scale(name), (
-                f"momentum is conserved only with {name}'s momentum {axes.scale(name):.3g}x "
-                f"what the column says in rpm with the model {spacecraft.name!r} (free-axis "
-                f"balance alignment {axes.alignment:.3f}; rpm gives 1, rad/s "
-                f"{RAD_S_FACTOR:.3g})"), tel)
+            scale, j = axes.scale(name), spacecraft.wheel(name).inertia
+            raise _unit_error(f"column {name.lower()}", scale, (
+                f"momentum is conserved only with {name}'s momentum {scale:.3g}x what the "
+                f"column says in rpm with the model {spacecraft.name!r} (free-axis balance "
+                f"alignment {axes.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g}); or "
+                f"the model's {name} spin inertia {j:.4g} kg m^2 is "
+                f"{max(scale, 1 / scale):.3g}x too {'small' if scale > 1 else 'large'}"), tel)
     return fit
 
 

@@ -237,6 +237,12 @@ def test_one_wheel_in_rad_s_refused(runs):
     tel, log, sc = runs["slews_post_prm"]
     with pytest.raises(InputError, match=r"column rwa3: wheel rates look like rad/s"):
         cons.check_telemetry_data(_one_in_rad_s(tel, "RWA3"), sc, log)
+    # the same balance from a model whose RWA3 spin inertia is a tenth: the message says so too
+    wheels = tuple(replace(w, inertia=w.inertia / 10) if w.name == "RWA3" else w
+                   for w in sc.wheels)
+    with pytest.raises(InputError, match=r"column rwa3: .* or the model's RWA3 spin inertia "
+                                         r"0\.01\d* kg m\^2 is \d+(\.\d+)?x too small"):
+        cons.check_telemetry_data(tel, replace(sc, wheels=wheels), log)
 
 
 def test_wheels_moving_together_are_not_judged(runs):
