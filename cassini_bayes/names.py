@@ -7,7 +7,7 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "INERTIA_NOISE_NAMES", "EFFECTS"]
+           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
@@ -26,3 +26,17 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
            "wheel_axes": "wheel_tilt", "body_torque": "T_body",
            "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
 """Robust nuisance effect → its posterior site name."""
+
+
+def unit_of(name: str) -> str | None:
+    """SI unit of a calibration parameter's site (``"kg m^2"``, ``"N"``, ``"s"``, ``"1"`` for
+    the axis components); ``None`` for any other site."""
+    if name in INERTIA_NAMES:
+        return "kg m^2"
+    if name in F_NAMES or name in ("F_Z", "F_Y"):
+        return "N"
+    if name in TAU_NAMES:
+        return "s"
+    if name in U4_NAMES:
+        return "1"
+    return None

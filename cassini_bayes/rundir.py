@@ -51,6 +51,7 @@ from typing import Any, Iterable, Mapping
 
 from cassini_bayes._file_mode import default_dir_mode
 from cassini_bayes.errors import InputError, spelled
+from cassini_bayes.names import unit_of
 
 
 WRITTEN = ".cassini-bayes-files"   # in every run directory: the files it was written with
@@ -306,6 +307,11 @@ def write_posterior(run_dir: Path, idata) -> Path:
         where = p.parent.parent if p.parent.name.startswith(".") else p.parent  # (RunDir's temp)
         raise OSError(errno.ENOSPC, f"No space left on device: posterior.nc needs about "
                       f"{need >> 20} MiB, {free >> 20} MiB free", str(where))
+    for group in ("posterior", "prior"):       # units of the calibration parameters
+        if group in idata.groups():
+            for name, da in idata[group].data_vars.items():
+                if unit_of(str(name)) is not None and "units" not in da.attrs:
+                    da.attrs["units"] = unit_of(str(name))
     idata.to_netcdf(str(p))
     return p
 

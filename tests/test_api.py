@@ -222,3 +222,34 @@ def test_import_is_cheap_and_leaves_jax_devices_alone():
     assert set(cb.__all__) >= {"read_telemetry", "read_pulses", "load_spacecraft", "simulate",
                                "fit_inertia", "fit_thrust", "fit_rwa4", "FitResult"}
     assert callable(cb.simulate)
+
+
+def test_an_inertia_posterior_run_is_recorded_with_its_hash_and_moves_the_baseline(tmp_path):
+    """``inertia_posterior=RUN``: config.toml keeps the run and its posterior.nc's sha256 (a
+    re-run can tell the run was replaced), and the thrust baseline uses the posterior's mean
+    inertia as the RWA4 baseline does (it used the model's prediction)."""
+    import arviz as az
+    import jax
+    import numpy as np
+
+    from cassini_bayes.api._thrust import _inertia_knowledge, thrust_baseline
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
+    from cassini_bayes.rundir import file_record
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    sc = cb.load_spacecraft("cassini_post_probe")
+    mean = 1.02 * np.asarray(inertia_vector(sc.inertia), float)       # 2 % above the model
+    draws = mean + np.random.default_rng(0).normal(0.0, 1.0, (2, 50, 6))
+    run = tmp_path / "inertia_run"
+    run.mkdir()
+    az.from_dict(posterior={n: draws[..., i] for i, n in enumerate(INERTIA_NAMES)}).to_netcdf(
+        str(run / "posterior.nc"))
+    (run / "summary.json").write_text(json.dumps({"kind": "inertia"}))
+    knowledge, entry, paths = _inertia_knowledge(run, False)
+    assert entry["inertia_posterior"] == {"run": str(run.resolve()),
+                                          "posterior": file_record(run / "posterior.nc")}
+    sim = simulate(jax.random.key(0), load_scenario("biasing_day028"))
+    events = [(sim.telemetry, sim.pulses)]
+    f_model = thrust_baseline(events, sc, "mean")[0]["F"]
+    f_post = thrust_baseline(events, sc, "mean", knowledge)[0]["F"]
+    assert f_post != f_model and abs(f_post / f_model - 1) < 0.05

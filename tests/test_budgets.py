@@ -405,3 +405,31 @@ def test_runs_of_different_spacecraft_models_are_flagged(tmp_path):
     (warning,) = _mixed_models(runs)
     assert "inertia: fsds, thrust: cassini-post-probe" in warning
     assert _mixed_models({"inertia": runs["inertia"]}) == []
+
+
+def test_input_runs_that_did_not_converge_or_fit_are_flagged(tmp_path):
+    """A budget inherits its inputs' problems: a run whose summary.json says it did not converge,
+    or failed its adequacy checks, gets a warning (shown in the CLI, summary.json and the
+    report); a clean or unreadable summary gets none."""
+    from cassini_bayes.api._budget import _unreliable_inputs
+
+    summaries = {
+        "thrust": {"diagnostics": {"converged": False, "max_r_hat": 1.0104661,
+                                   "min_ess_bulk": 487.9, "divergences": 0}},
+        "rwa4": {"diagnostics": {"converged": True},
+                 "adequacy": {"ok": False, "checks": {"balance_fit": {"ok": False},
+                                                      "held_out": {"ok": True}}}},
+        "inertia": {"diagnostics": {"converged": True}, "adequacy": {"ok": True}},
+    }
+    runs = {}
+    for kind, summary in summaries.items():
+        runs[kind] = tmp_path / kind
+        runs[kind].mkdir()
+        (runs[kind] / "summary.json").write_text(json.dumps(summary))
+    runs["bad"] = tmp_path / "bad"
+    runs["bad"].mkdir()
+    (runs["bad"] / "summary.json").write_text("{not json")
+    thrust, rwa4 = _unreliable_inputs(runs)
+    assert "thrust run" in thrust and "did not converge (max R-hat 1.0105, min bulk ESS 488, " \
+        "0 divergences)" in thrust
+    assert "rwa4 run" in rwa4 and "failed its adequacy checks (balance_fit)" in rwa4

@@ -280,6 +280,49 @@ def test_rwa4_report_has_axis_plot_and_direction_table(reports):
     assert float(m.group(1)) == pytest.approx(expected, abs=2e-3)
 
 
+def test_rwa4_requirement_is_decided_by_the_posterior(reports):
+    """Brown's ±2° requirement: "yes"/"no" only at posterior probability ≥ 0.95 / ≤ 0.05; the
+    mean axis alone can sit inside while most of the posterior does not (the number audit's
+    RCS fit: mean 1.43° from RWA1, probability 0.26, was called "yes")."""
+    from cassini_bayes.report.build import _requirement_verdict
+
+    _, html = reports["rwa4"]      # 3.1° from RWA1, ±0.4°
+    assert re.search(r"within ±2° of RWA1 \(replacement requirement, Brown §I\)</td><td>no "
+                     r"\(probability 0\.0[0-4]\d\)", html)
+    assert _requirement_verdict(0.26).startswith("undecided (probability 0.260")
+    assert _requirement_verdict(0.96) == "yes (probability 0.960)"
+    assert _requirement_verdict(0.05) == "no (probability 0.050)"
+
+
+def test_diagnostics_judge_what_the_fit_judged(tmp_path):
+    """The report's max R-hat and min ESS cover summary.json's parameters and nuisance, as the
+    fit's verdict does; a sampler coordinate (``z``) is listed, last, but not judged."""
+    import arviz as az
+
+    run = make_run(tmp_path, "inertia", draws=200)
+    idata = az.from_netcdf(str(run / "posterior.nc"))
+    post = idata.posterior
+    stuck = np.repeat(np.arange(4.0)[:, None], post.sizes["draw"], 1)    # chains disagree
+    idata.posterior["z"] = (("chain", "draw"), stuck + 0.01 * np.random.default_rng(1)
+                            .standard_normal(stuck.shape))
+    (run / "posterior.nc").unlink()
+    idata.to_netcdf(str(run / "posterior.nc"))
+    summary = json.loads((run / "summary.json").read_text())
+    summary["nuisance"] = {"sigma_H": summary["parameters"]["Ixx"]}
+    (run / "summary.json").write_text(json.dumps(summary))
+    loaded = load_run(run)
+    diag = diagnostics(loaded, parameter_names(loaded))
+    roles = {r.label: r.role for r in diag.rows}
+    assert roles["Ixx"] == "parameter" and roles["sigma_H"] == "nuisance"
+    assert roles["z"] == "sampler coordinate"
+    judged = [r.judged for r in diag.rows]
+    assert judged == sorted(judged, reverse=True)        # the unjudged rows come last
+    assert diag.max_r_hat == max(r.r_hat for r in diag.rows if r.judged) < 1.05
+    assert max(r.r_hat for r in diag.rows) > 2          # z's R-hat, shown but not judged
+    html = build_report(run).read_text(encoding="utf-8")
+    assert "<td class=\"l\">z</td><td class=\"l\">sampler coordinate</td>" in html
+
+
 def test_cli_report_rebuilds_the_page(tmp_path, run_cli):
     run = make_run(tmp_path, "rwa4", draws=100)
     page = run / "report.html"

@@ -15,23 +15,30 @@ from cassini_bayes.errors import InputError, arg
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
 
-def thrust_baseline(events, spacecraft, mode: str) -> tuple[dict | None, list[str]]:
+def thrust_baseline(events, spacecraft, mode: str,
+                    inertia=None) -> tuple[dict | None, list[str]]:
     """Feldman & Lee's least squares (Eqs 19-23) with the pulse-dynamics correction at the
-    spacecraft model's nominal time constants, all events stacked; ``None`` when unavailable."""
+    spacecraft model's nominal time constants, all events stacked; ``None`` when unavailable.
+    The inertia is the model's prediction, or the mean of ``inertia`` (an inertia posterior's
+    :class:`~cassini_bayes.inference.thrust.InertiaGaussian`) when given, as the RWA4 baseline
+    does."""
     import numpy as np
 
     from cassini_bayes.estimators import thrust as est
     from cassini_bayes.estimators.baseline import wheel_momentum
     from cassini_bayes.physics.impulse import moment_matrix
+    from cassini_bayes.physics.momentum import inertia_matrix
 
     th = spacecraft.thrusters
     q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
     p = spacecraft.pulse
+    i_body = (np.asarray(inertia_matrix(inertia.mean), float) if hasattr(inertia, "mean")
+              else spacecraft.inertia)
     vs, js = [], []
     try:
         for tel, log in events:
             h = wheel_momentum(tel, spacecraft)
-            v, j = est.regression_inputs(tel.t, tel.omega, h, spacecraft.inertia,
+            v, j = est.regression_inputs(tel.t, tel.omega, h, i_body,
                                          pulses=(log.t_on, log.thruster, log.width),
                                          tau=(p.tau_delay, p.tau_rise, p.tau_fall))
             vs.append(v)
@@ -135,8 +142,13 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
     if not isinstance(inertia_posterior, (str, os.PathLike)):
         raise InputError(f"{arg('inertia_posterior')}: give an inertia fit's FitResult or run "
                          "directory")
+    from cassini_bayes.rundir import file_record
+
     path = Path(inertia_posterior)
-    return (inertia_from_run(path), {"inertia_posterior": str(path.resolve())}, [path])
+    knowledge = inertia_from_run(path)     # refuses a folder without an inertia posterior.nc
+    # the run and its posterior's hash: a re-run can tell when the run was replaced since
+    entry = {"run": str(path.resolve()), "posterior": file_record(path / "posterior.nc")}
+    return knowledge, {"inertia_posterior": entry}, [path]
 
 
 @shows_progress
@@ -204,7 +216,7 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
         post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
                              robust=robust, wheel_errors=wheel_errors)
     with step("summaries, baseline and adequacy checks"):
-        baseline, base_warns = thrust_baseline(events, sc, mode)
+        baseline, base_warns = thrust_baseline(events, sc, mode, inertia)
         summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
                                  wheel_errors=wheel_errors, baseline=baseline,
                                  warnings=warns + base_warns)

@@ -66,4 +66,4 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         console.print(f"[green]✓[/green] P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
                       + (f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
                          if lee["thruster"] else "no trigger")
-                      + f" ({time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
+                      + f" (run took {time.perf_counter() - t0:.1f} s) → {escape(str(out))}")

@@ -57,6 +57,7 @@ __all__ = ["build_report", "render_report"]
 MAX_NUISANCE_ROWS = 20
 MAX_RESIDUAL_FIGURES = 3
 RWA1_REQUIREMENT_DEG = 2.0  # Brown (2012) §I: RWA4 must sit within ±2° of the RWA1 axis
+REQUIREMENT_PROB = 0.95     # a requirement is called met (or not) at this posterior probability
 KIND_TITLES = {
     "inertia": "inertia tensor from reaction-wheel slews (momentum model, Feldman & Lee Eqs 2-11)",
     "thrust": "thrust and pulse time constants from wheel-biasing events "
@@ -193,7 +194,7 @@ def _warnings(run: RunData, diag: Diagnostics, rows: list[ParameterRow]) -> list
         w.append(f"{diag.divergences} divergent transitions: the posterior may be biased; "
                  "look at the pair plot for where they sit")
     if np.isfinite(diag.max_r_hat) and diag.max_r_hat > RHAT_MAX:
-        w.append(f"max R-hat {diag.max_r_hat:.3f} > {RHAT_MAX}: chains disagree")
+        w.append(f"max R-hat {diag.max_r_hat:.4f} > {RHAT_MAX}: chains disagree")
     if np.isfinite(diag.min_ess_bulk) and diag.min_ess_bulk < ESS_MIN:
         w.append(f"min bulk ESS {diag.min_ess_bulk:.0f} < {ESS_MIN:g}")
     if diag.bfmi is not None and np.any(diag.bfmi < BFMI_MIN):
@@ -235,7 +236,7 @@ def _diagnostics_section(diag: Diagnostics) -> Section:
             ["min bulk ESS", fmt(diag.min_ess_bulk, 0), f"≥ {ESS_MIN:g}",
              Raw(badge("ok" if _cls_ess(diag.min_ess_bulk) == "good" else "check",
                        _cls_ess(diag.min_ess_bulk) == "good"))],
-            ["min tail ESS", fmt(diag.min_ess_tail, 0), f"≥ {ESS_MIN:g}",
+            ["min tail ESS", fmt(diag.min_ess_tail, 0), f"≥ {ESS_MIN:g} (advisory)",
              Raw(badge("ok" if _cls_ess(diag.min_ess_tail) == "good" else "check",
                        _cls_ess(diag.min_ess_tail) == "good"))],
             ["divergences", div_txt, "0",
@@ -251,7 +252,7 @@ def _diagnostics_section(diag: Diagnostics) -> Section:
     shown = interest + nuisance[:MAX_NUISANCE_ROWS]
 
     def _row(r):
-        return [r.label, "parameter" if r.of_interest else "nuisance", fmt(r.r_hat, 4),
+        return [r.label, r.role, fmt(r.r_hat, 4),
                 fmt(r.ess_bulk, 0), fmt(r.ess_tail, 0), f"{r.mcse_mean:.3g}"]
 
     per_var = table(
@@ -265,12 +266,16 @@ def _diagnostics_section(diag: Diagnostics) -> Section:
     if len(nuisance) > MAX_NUISANCE_ROWS:
         rest = nuisance[MAX_NUISANCE_ROWS:]
         body.append(paragraph(
-            f"{len(rest)} more nuisance components not listed (worst R-hat among them "
+            f"{len(rest)} more components not listed (worst R-hat among them "
             f"{max(r.r_hat for r in rest):.4f}, min bulk ESS {min(r.ess_bulk for r in rest):.0f}).",
             note=True))
     body.append(paragraph(
         "Rank-normalised split R-hat and bulk/tail effective sample sizes (Vehtari et al. 2021) "
-        "and E-BFMI (Betancourt 2016), all computed with ArviZ from posterior.nc.", note=True))
+        "and E-BFMI (Betancourt 2016), all computed with ArviZ from posterior.nc. The extremes "
+        "above, like the fit's verdict, cover the parameters and the nuisance in summary.json; "
+        "a sampler coordinate (the whitened variables the sampler moves) is listed but not "
+        "judged: each parameter is a function of them. Tail ESS is advisory: it is not part of "
+        "the verdict.", note=True))
     return section("Diagnostics", body, id="diagnostics")
 
 
@@ -294,7 +299,9 @@ def _parameters_section(run: RunData, rows: list[ParameterRow]) -> Section:
                       else r.q05 <= r.truth <= r.q95)
             cells += [fmt(r.truth, d), "–" if inside is None else ("yes" if inside else "no")]
             cls += ["", "" if inside is None else ("good" if inside else "warn")]
-        cells += [fmt(r.prior_sd, d + 1) if r.prior_sd is not None else "n/a",
+        prior_sd = ("n/a" if r.prior_sd is None
+                    else fmt(r.prior_sd, decimals_for(r.prior_sd)))  # 2 significant digits
+        cells += [prior_sd,
                   fmt(r.contraction, 3), r.flag or "identified"]
         cls += ["", "warn" if r.flag else "", "warn" if r.flag else "good"]
         if r.contraction is None:
@@ -356,6 +363,16 @@ def _direction(run: RunData) -> tuple[np.ndarray | None, dict[str, float]]:
     return mean, cones
 
 
+def _requirement_verdict(p: float) -> str:
+    """A requirement met with posterior probability ``p``: "yes" at ≥ 0.95, "no" at ≤ 0.05,
+    else undecided (the mean axis alone can sit inside while most of the posterior does not)."""
+    if p >= REQUIREMENT_PROB:
+        return f"yes (probability {p:.3f})"
+    if p <= 1.0 - REQUIREMENT_PROB:
+        return f"no (probability {p:.3f})"
+    return f"undecided (probability {p:.3f}: the data do not settle it)"
+
+
 def _direction_table(run: RunData) -> str:
     mean, cones = _direction(run)
     if mean is None:
@@ -367,15 +384,18 @@ def _direction_table(run: RunData) -> str:
         ["posterior mean direction", "[" + ", ".join(f"{x:.6f}" for x in mean) + "]"],
         ["angle from +Z (articulation cone 54.7356°)", f"{_angle_deg(mean, [0, 0, 1]):.3f}°"],
         ["angle to RWA1 target [0, 0.816497, 0.577350]", f"{to_rwa1:.3f}°"],
-        ["within ±2° of RWA1 (replacement requirement, Brown §I)",
-         "yes" if to_rwa1 <= RWA1_REQUIREMENT_DEG else "no"],
     ]
     draws = _axis_draws(run)
+    requirement = "within ±2° of RWA1 (replacement requirement, Brown §I)"
     if draws is not None:
         u = draws / np.linalg.norm(draws, axis=1, keepdims=True)
         t = figures.RWA1_AXIS / np.linalg.norm(figures.RWA1_AXIS)
         p_req = float(np.mean(np.degrees(np.arccos(np.clip(u @ t, -1, 1))) <= RWA1_REQUIREMENT_DEG))
+        rows.append([requirement, _requirement_verdict(p_req)])
         rows.append(["posterior probability of being within 2° of RWA1", f"{p_req:.3f}"])
+    else:    # no draws: only the mean axis to go by
+        rows.append([requirement + ", by the mean axis",
+                     "yes" if to_rwa1 <= RWA1_REQUIREMENT_DEG else "no"])
     for k in sorted(cones, key=float):
         rows.append([f"{k} % cone radius about the mean", fmt(cones[k], 3) + "°"])
     if base is not None:

@@ -52,7 +52,17 @@ class DiagnosticRow(NamedTuple):
     ess_bulk: float
     ess_tail: float
     mcse_mean: float
-    of_interest: bool  # a calibration parameter (else a nuisance variable)
+    role: str  # "parameter", "nuisance" (both judged by the fit's verdict) or "sampler coordinate"
+
+    @property
+    def of_interest(self) -> bool:
+        """A calibration parameter."""
+        return self.role == "parameter"
+
+    @property
+    def judged(self) -> bool:
+        """In the fit's convergence verdict (``summary.json``'s parameters and nuisance)."""
+        return self.role != "sampler coordinate"
 
 
 @dataclass(frozen=True)
@@ -70,7 +80,10 @@ class Diagnostics:
     bfmi : numpy.ndarray or None
         Energy BFMI per chain (``arviz.bfmi``); ``None`` without ``sample_stats.energy``.
     max_r_hat, min_ess_bulk, min_ess_tail : float
-        Extremes over all components (NaN when not computable, e.g. one chain).
+        Extremes over the components the fit's verdict judges: ``summary.json``'s parameters and
+        nuisance, as the fit computed them (all components for a run without them); NaN when
+        not computable, e.g. one chain. The sampler's own coordinates (whitened ``z``, ``w``)
+        are listed in :attr:`rows` but not judged.
     converged_summary : bool or None
         ``summary.json``'s ``diagnostics.converged`` (the fit's verdict).
     """
@@ -167,6 +180,15 @@ def parameter_names(run: RunData) -> list[str]:
     return names
 
 
+def _judged_names(run: RunData) -> set[str] | None:
+    """Variables in the fit's verdict: ``summary.json``'s parameters and nuisance (base names);
+    ``None`` for a run without a ``nuisance`` entry (then every variable is judged)."""
+    if "nuisance" not in run.summary:
+        return None
+    keys = [*(run.summary.get("parameters") or {}), *(run.summary.get("nuisance") or {})]
+    return {str(k).split("[")[0] for k in keys} or None
+
+
 def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
     """ArviZ diagnostics of every posterior variable (``names``: the parameters of interest)."""
     import arviz as az
@@ -177,6 +199,15 @@ def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
         warnings.simplefilter("ignore")
         table = az.summary(run.idata, kind="diagnostics", round_to="none")
     interest = set(flatten_draws(post, names))
+    judged = _judged_names(run)
+
+    def role(label: str) -> str:
+        if label in interest:
+            return "parameter"
+        if judged is None or label.split("[")[0] in judged:
+            return "nuisance"
+        return "sampler coordinate"
+
     rows = [
         DiagnosticRow(
             str(label),
@@ -184,13 +215,13 @@ def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
             float(r["ess_bulk"]),
             float(r["ess_tail"]),
             float(r["mcse_mean"]),
-            str(label) in interest,
+            role(str(label)),
         )
         for label, r in table.iterrows()
     ]
     first = [r for r in rows if r.of_interest]
-    rest = sorted((r for r in rows if not r.of_interest),  # worst R-hat first, NaN last
-                  key=lambda r: -r.r_hat if np.isfinite(r.r_hat) else np.inf)
+    rest = sorted((r for r in rows if not r.of_interest),  # judged first, worst R-hat, NaN last
+                  key=lambda r: (not r.judged, -r.r_hat if np.isfinite(r.r_hat) else np.inf))
     rows = first + rest
 
     divergences = None
@@ -215,9 +246,9 @@ def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
         draws=draws,
         divergences=divergences,
         bfmi=bfmi,
-        max_r_hat=_ext(max, [r.r_hat for r in rows]),
-        min_ess_bulk=_ext(min, [r.ess_bulk for r in rows]),
-        min_ess_tail=_ext(min, [r.ess_tail for r in rows]),
+        max_r_hat=_ext(max, [r.r_hat for r in rows if r.judged]),
+        min_ess_bulk=_ext(min, [r.ess_bulk for r in rows if r.judged]),
+        min_ess_tail=_ext(min, [r.ess_tail for r in rows if r.judged]),
         converged_summary=None if conv is None else bool(conv),
     )
 

@@ -325,7 +325,9 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
 
     inertia, i_src, i_mean, i_chol = _inertia_prior(inertia, spacecraft)
 
-    # Least-squares baseline (Brown Eq 1 / Eq 3), also the chart's centre.
+    # Least-squares baseline, also the chart's centre: Brown Eq 1 (RCS), or Brown Eq 3 (RWA)
+    # with the body term C I ω kept at the prior-mean inertia (Eq 3 drops it for perfectly
+    # quiescent windows; on rwa4_rwa it moves the axis by 0.009°).
     q = np.asarray(quat_continuous(np.asarray(tel.q, float)))
     omega = np.asarray(tel.omega, float)
     i_pred = np.asarray(inertia_matrix(i_mean))
