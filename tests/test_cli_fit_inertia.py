@@ -68,6 +68,9 @@ def test_writes_the_run_directory(run, csv):
     assert len(cfg["inputs"]["telemetry"][0]["sha256"]) == 64
     assert cfg["sampler"]["target_accept"] == 0.95
     assert cfg["sampler"]["draws"] == 400 and cfg["spacecraft"]["inertia"]["Ixx"] == 8810.8
+    assert cfg["sampler"]["chain_method"] == "auto"     # asked for; and what it became here:
+    assert cfg["sampler"]["chain_method_used"] in ("parallel", "vectorized")
+    assert cfg["sampler"]["cpu_devices"] >= 1
 
     idata = az.from_netcdf(out / "posterior.nc")
     assert {"posterior", "sample_stats", "prior", "observed_data", "residuals"} <= set(

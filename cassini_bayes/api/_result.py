@@ -40,7 +40,14 @@ def collect_warnings() -> Iterator[list[str]]:
 def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping,
                options: Mapping) -> dict:
     """``config.toml`` of a fit: the resolved inputs, options, sampler settings, spacecraft model,
-    seed and package version, enough to re-run it (docs/cli.md, "Run directory")."""
+    seed and package version, enough to re-run it (docs/cli.md, "Run directory"). ``[sampler]``
+    records the chain method asked for (``"auto"``) and the one used with the CPU devices the
+    process had: parallel and vectorized chains agree only to the last bits."""
+    import jax
+
+    from cassini_bayes.inference.runner import choose_chain_method
+
+    used = settings.chain_method or choose_chain_method(settings.chains)
     return {
         "command": command,
         "version": __version__,
@@ -48,6 +55,8 @@ def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping
         "inputs": dict(inputs),
         "options": dict(options),
         "sampler": settings._asdict() | {"chain_method": settings.chain_method or "auto",
+                                          "chain_method_used": used,
+                                          "cpu_devices": jax.local_device_count(),
                                           "progress": False},
         "spacecraft": spacecraft.to_dict(),
         "jax_cache": _jax_cache.stats().to_dict(),  # did this fit load compiled programs?
