@@ -422,3 +422,15 @@ def test_png_bytes_equals_savefig_at_any_figure_size(size_in):
     Image.open(buf).convert("RGB").quantize(
         colors=256, method=Image.Quantize.FASTOCTREE).save(ref, "PNG")
     assert figures.png_bytes(draw()) == ref.getvalue()
+
+
+@pytest.mark.parametrize("command", ["budget", "fit health", "monitor leak"])
+def test_report_of_a_run_without_a_posterior_names_its_command(tmp_path, command):
+    """`report` on a budget, health or leak run (no posterior.nc) says which runs it rebuilds
+    instead of "run `cassini-bayes fit ...`"."""
+    from cassini_bayes.errors import InputError
+
+    (tmp_path / "summary.json").write_text(json.dumps({"command": command}))
+    with pytest.raises(InputError, match=f"a `{command}` run; `report` rebuilds the page of a "
+                                         "`fit inertia`, `fit thrust` or `fit rwa4` run"):
+        load_run(tmp_path)
