@@ -75,6 +75,7 @@ __all__ = [
     "PulseLog",
     "RPM_TO_RAD_S",
     "WHEEL_NAMES",
+    "IDLE_RPM",
     "THRUSTER_NAMES",
     "QUAT_NORM_TOL",
     "OMEGA_MAX",
@@ -101,6 +102,10 @@ __all__ = [
 
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
+IDLE_RPM = 1.0
+"""A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: its momentum,
+0.16 kg m² × 1 rpm = 0.017 N m s rms, is below what a slew exchanges (5–15 N m s) by ~1000×;
+tachometer noise about 0 rpm (±0.3 rpm) is idle, a wheel through zero speed is not."""
 
 
 @dataclass(frozen=True)
@@ -136,10 +141,21 @@ class Telemetry:
         """Rates (rad/s) of one wheel by name."""
         return self.wheel_rates[:, self.wheel_names.index(name.upper())]
 
+    def active_mask(self) -> np.ndarray:
+        """(k,) which wheels carry momentum: finite rates whose root mean square exceeds
+        :data:`IDLE_RPM`. A wheel written as 0 rpm (or within tachometer noise of it) all along
+        is as good as off: its momentum is below the noise, and a wheel the data cannot see must
+        not get a spin-inertia scale of its own (it moved the inertia fit by −2.4 %)."""
+        rates = np.asarray(self.wheel_rates, float)
+        finite = np.isfinite(rates)
+        n = finite.sum(axis=0)
+        ms = np.where(finite, rates, 0.0) ** 2
+        rms = np.sqrt(ms.sum(axis=0) / np.maximum(n, 1))
+        return (n > 0) & (rms > IDLE_RPM * RPM_TO_RAD_S)
+
     def active_wheels(self) -> tuple[str, ...]:
-        """Names of the wheels with any finite rate."""
-        return tuple(n for i, n in enumerate(self.wheel_names)
-                     if np.any(np.isfinite(self.wheel_rates[:, i])))
+        """Names of the wheels that carry momentum (:meth:`active_mask`)."""
+        return tuple(n for n, on in zip(self.wheel_names, self.active_mask()) if on)
 
     def slice(self, t0: float, t1: float) -> "Telemetry":
         """Rows with ``t0 ≤ t ≤ t1``."""

@@ -245,6 +245,26 @@ def test_one_wheel_in_rad_s_refused(runs):
         cons.check_telemetry_data(tel, replace(sc, wheels=wheels), log)
 
 
+def test_an_idle_wheel_written_as_zero_is_as_off(runs):
+    """RWA4 written as 0 rpm (or tachometer noise about 0) instead of left empty: it carries no
+    momentum, so it is not a wheel of the balance. It had entered as a free wheel with all-zero
+    columns, the balance became rank-deficient, and the sign check was skipped (the flight-data
+    audit: a flipped RWA2 then fitted Ixx 235 kg m² with exit 0)."""
+    tel, log, sc = runs["slews_post_prm"]
+    k = tel.wheel_names.index("RWA4")
+    noise = np.random.default_rng(3).normal(0.0, 0.3, tel.n).round(1) * RPM_TO_RAD_S
+    for idle in (np.zeros(tel.n), noise):
+        zero = _edit_wheel(tel, "RWA4", lambda r, i: r.__setitem__((slice(None), i), idle))
+        assert not zero.active_mask()[k] and "RWA4" not in zero.active_wheels()
+        cons.check_telemetry_data(zero, sc, log)
+        with pytest.raises(InputError, match="column rwa2: .* its sign looks flipped"):
+            cons.check_telemetry_data(_flipped(zero, "RWA2"), sc, log)
+    # a wheel through zero speed, and one holding a constant speed, are wheels
+    through = _edit_wheel(tel, "RWA4", lambda r, i: r.__setitem__(
+        (slice(None), i), np.linspace(-50.0, 50.0, tel.n) * RPM_TO_RAD_S))
+    assert through.active_mask()[k]
+
+
 def test_wheels_moving_together_are_not_judged(runs):
     """A biasing event's wheels change together: the free vectors are not separable
     (conditioning 0.02–0.05), so swapped columns pass, and `check` says they were not checked."""

@@ -208,3 +208,17 @@ def test_full_size_default_settings(sc):
     tel = make_slews(jax.random.key(31), sc, dt=0.5)
     res = fit_inertia(jax.random.key(2), [tel], sc, robust=False)
     assert_mixed(res.diagnostics, ess_bulk_min=1000)
+
+
+def test_an_idle_wheel_written_as_zero_changes_nothing(sc, tel):
+    """The robust per-wheel model on slews with RWA4 written as 0 rpm instead of left empty: the
+    same problem (the idle wheel had got a free spin-inertia scale of its own, which moved every
+    moment by −2.4 %, 4 sd, in the flight-data audit)."""
+    import dataclasses
+
+    rates = np.array(tel.wheel_rates, float)
+    rates[:, tel.wheel_names.index("RWA4")] = 0.0
+    zero = dataclasses.replace(tel, wheel_rates=rates)
+    a = prepare_inertia([tel], sc, robust=True)
+    b = prepare_inertia([zero], sc, robust=True)
+    np.testing.assert_array_equal(np.asarray(a.data.theta_star), np.asarray(b.data.theta_star))

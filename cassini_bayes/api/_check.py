@@ -20,7 +20,8 @@ __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
 
 @dataclass(frozen=True)
 class WheelStats:
-    """One wheel: ``on`` (it has data), and its rate's min, max, first and last value, rpm."""
+    """One wheel: ``on`` (it has data), and its rate's min, max, first and last value, rpm;
+    ``idle`` when it has data but its rms rate is at most ``IDLE_RPM`` (treated as off)."""
 
     name: str
     on: bool
@@ -28,6 +29,7 @@ class WheelStats:
     max_rpm: float = float("nan")
     first_rpm: float = float("nan")
     last_rpm: float = float("nan")
+    idle: bool = False
 
 
 @dataclass(frozen=True)
@@ -173,13 +175,14 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         notes += [str(w.message) for w in caught if issubclass(w.category, PulseSpanWarning)]
 
     wheels = []
+    active = tel.active_mask()
     for j, name in enumerate(tel.wheel_names):
         rpm = tel.wheel_rates[:, j] / RPM_TO_RAD_S
         if not np.all(np.isfinite(rpm)):
             wheels.append(WheelStats(name, False))
             continue
         wheels.append(WheelStats(name, True, float(rpm.min()), float(rpm.max()),
-                                 float(rpm[0]), float(rpm[-1])))
+                                 float(rpm[0]), float(rpm[-1]), idle=not active[j]))
     thrusters = []
     if tel.on_times is not None:
         for k, name in enumerate(THRUSTER_NAMES):

@@ -39,7 +39,8 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
         if not w.on:
             wheels.add_row(w.name, "off (no data)", "", "", "")
             continue
-        wheels.add_row(w.name, "on", f"{w.min_rpm:.2f}", f"{w.max_rpm:.2f}",
+        wheels.add_row(w.name, "idle (rms ≤ 1 rpm: as off)" if w.idle else "on",
+                       f"{w.min_rpm:.2f}", f"{w.max_rpm:.2f}",
                        f"{w.first_rpm:.2f} → {w.last_rpm:.2f}")
     console.print(wheels)
 

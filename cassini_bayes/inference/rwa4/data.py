@@ -313,7 +313,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     rates = np.asarray(tel.wheel_rates, float)
     axes = np.stack([spacecraft.wheel(n).axis for n in names])
     js = np.array([spacecraft.wheel(n).inertia for n in names])
-    active = np.any(np.isfinite(rates), axis=0)
+    active = tel.active_mask()
     known = [k for k in range(len(names)) if k != k_u and active[k]]
     masks = [((t >= a[0]) & (t <= a[1]), (t >= b[0]) & (t <= b[1])) for a, b in pairs]
     rho = np.nan_to_num(rates[:, k_u])
