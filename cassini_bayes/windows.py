@@ -8,7 +8,8 @@ and ``cassini-bayes check`` lists them. Everything here is NumPy on the arrays o
 :class:`~cassini_bayes.telemetry.Telemetry` (SI units).
 
 Detection (per sample, then runs of at least ``min_duration_s``): with a centred moving window
-of ``smooth_s`` seconds (converted to samples with the median sample spacing),
+of ``smooth_s`` seconds (converted to samples with the median sample spacing; at least a
+sample's two neighbours, however coarse the sampling),
 
 - ``max |ω| ≤ rate_max`` (rad/s) over the window,
 - ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored),
@@ -73,7 +74,9 @@ def quiet_mask(
     if n < 2:
         return np.zeros(n, dtype=bool)
     dt = float(np.median(np.diff(t)))
-    half = int(round(0.5 * smooth_s / dt)) if dt > 0 else 0
+    # at least the neighbours: at 0.1 Hz half a 10-s window rounds to no sample, and a wheel
+    # spin-up inside a "quiet" window turned the RWA4 axis to its antipode (flight-data audit)
+    half = max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
     rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
     quiet = _moving_max(rate, half) <= rate_max
     rates = np.asarray(tel.wheel_rates, dtype=float)

@@ -62,6 +62,21 @@ def test_quiet_periods_found(series):
     assert slew_windows(found) == [(found[0][1], found[1][0]), (found[1][1], found[2][0])]
 
 
+def test_coarse_sampling_still_sees_a_wheel_ramp():
+    """At 0.1 Hz (10 s steps) half the 10-s window rounds to no sample; every sample is still
+    compared with its neighbours, so the wheel ramps (800 rpm in 100 s) stay out of the quiet
+    periods (they had been swallowed: the RWA4 axis came out at its antipode)."""
+    tel, truth = _series()
+    coarse = tel.slice(0.0, 1300.0)
+    keep = np.arange(0, coarse.n, int(10.0 / DT))
+    coarse = Telemetry(coarse.t[keep], coarse.q[keep], coarse.omega[keep],
+                       coarse.wheel_rates[keep], source="coarse")
+    found = quiet_periods(coarse, min_duration_s=60.0)
+    assert len(found) == 3
+    for (a, b), (ta, tb) in zip(found, truth):
+        assert ta <= a and b <= tb
+
+
 def test_min_duration_and_thresholds(series):
     tel, _ = series
     assert len(quiet_periods(tel, min_duration_s=400.0)) == 1  # only the 500 s middle one
