@@ -122,7 +122,8 @@ def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check
     offset = abs(polar - CONE_ANGLE_DEG)
     return _check("articulation_cone", offset, threshold_deg,
                   note=f"axis {polar:.1f}° from +Z; the wheels' cone is at {CONE_ANGLE_DEG:.2f}°"
-                  + ("; a wheel-rate sign flipped in the file points the axis to the antipode"
+                  + ("; a wheel-rate sign flipped in the file points the axis to the antipode, "
+                     "and windows that hold part of the spin-up turn it (check the windows)"
                      if offset > threshold_deg else ""))
 
 
