@@ -111,6 +111,8 @@ _SEG_MIN_RAD = 1e-3    # … and at least this much
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
 _SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
 
+GAP_FACTOR = 3.0
+"""A time step over this many median steps is a data gap: no turning stretch spans one."""
 MOMENTUM_ALIGN_MIN = 0.9
 """The wheel-unit check judges ``κ`` only when the balance fits this well (alignment)."""
 RAD_S_FACTOR = 1.0 / RPM_TO_RAD_S
@@ -182,15 +184,29 @@ def _attitude_noise(q: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d, axis=0))) / np.sqrt(6.0))
 
 
-def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
+def _gaps_before(t: np.ndarray) -> np.ndarray:
+    """(n,) number of data gaps (steps over :data:`GAP_FACTOR` × the median step) before each
+    sample: a stretch ``(a, b)`` spans a gap when the counts at ``a`` and ``b`` differ."""
+    dt = np.diff(np.asarray(t, float))
+    if dt.size == 0:
+        return np.zeros(len(t), int)
+    gap = dt > GAP_FACTOR * float(np.median(dt))
+    return np.concatenate([[0], np.cumsum(gap)])
+
+
+def _turning_segments(q: np.ndarray, t: np.ndarray | None = None) -> list[tuple[int, int]]:
     """Non-overlapping stretches ``(a, b)`` over which the attitude turns by a set angle.
 
     The angle is ``clip(20 σ_att, 1e-3, 0.05)`` rad (``σ_att`` from :func:`_attitude_noise`),
     reached within :data:`_SEG_MAX_SAMPLES` samples; quiet stretches give none. The rotation angle
     between two quaternions is the same under every reading (``|q_a · q_b|`` is invariant under
-    reordering and conjugation), so the stretches are too.
+    reordering and conjugation), so the stretches are too. Given the times ``t``, no stretch spans
+    a data gap (:func:`_gaps_before`): across a gap the trapezoid ``∫ω dt`` is a straight line
+    through whatever the spacecraft did, and one such stretch had swayed the whole comparison
+    into a "check the rates' unit" refusal.
     """
     n = q.shape[0]
+    gaps = _gaps_before(t) if t is not None else np.zeros(n, int)
     target = float(np.clip(_SEG_NOISE * _attitude_noise(q), _SEG_MIN_RAD, _SEG_MAX_RAD))
     lmax = min(_SEG_MAX_SAMPLES, n - 1)
     reach = np.full(n, -1)
@@ -199,7 +215,7 @@ def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
         sign = np.where(np.sum(q[lag:] * q[:-lag], axis=1) < 0, -1.0, 1.0)[:, None]
         ang = 4.0 * np.arctan2(np.linalg.norm(q[lag:] - sign * q[:-lag], axis=1),
                                np.linalg.norm(q[lag:] + sign * q[:-lag], axis=1))
-        hit = np.flatnonzero(ang >= target)
+        hit = np.flatnonzero((ang >= target) & (gaps[lag:] == gaps[:-lag]))
         reach[hit] = hit + lag
     out, a = [], 0
     while a < n - 1:
@@ -212,11 +228,13 @@ def _turning_segments(q: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _integrated_rates(tel: Telemetry) -> np.ndarray:
-    """(n, 3) rad: the trapezoid integral ``∫ω dt`` of the body rates from the first sample."""
+    """(n, 3) rad: the trapezoid integral ``∫ω dt`` of the body rates from the first sample,
+    nothing added across a data gap (:func:`_gaps_before`: what the rates did there is unknown)."""
     t = np.asarray(tel.t, float)
     w = np.asarray(tel.omega, float)
-    return np.concatenate([np.zeros((1, 3)), np.cumsum(0.5 * (w[1:] + w[:-1])
-                                                       * np.diff(t)[:, None], axis=0)])
+    step = 0.5 * (w[1:] + w[:-1]) * np.diff(t)[:, None]
+    step[np.diff(_gaps_before(t)) > 0] = 0.0
+    return np.concatenate([np.zeros((1, 3)), np.cumsum(step, axis=0)])
 
 
 def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
@@ -231,7 +249,7 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     q = np.asarray(tel.q, float)
     if q.shape[0] < 4:
         return None
-    segs = _turning_segments(q)
+    segs = _turning_segments(q, np.asarray(tel.t, float))
     if len(segs) < MIN_SEGMENTS:
         return None
     a_idx = np.array([s[0] for s in segs])

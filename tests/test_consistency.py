@@ -416,6 +416,25 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
                 cons.check_telemetry_data(_swapped(tel, known[0], known[1]), sc, log)
 
 
+def test_a_data_gap_at_a_slew_start_is_not_a_unit_error(runs):
+    """A 300-s gap in the rows where a slew starts: no turning stretch spans the gap (the
+    trapezoid ∫ω dt across it is a straight line through the slew's start). One such stretch had
+    turned a correct file into "the body rates integrate to 0.444x …; check their unit"
+    (flight-data audit); the file passes, and deg/s rates with the same gap are still refused."""
+    tel, log, sc = runs["slews_post_prm"]
+    rate = np.linalg.norm(tel.omega, axis=1)
+    start = tel.t[np.argmax(rate > 0.2 * rate.max())]
+    keep = (tel.t < start - 60.0) | (tel.t > start + 240.0)
+    gap = replace(tel, t=tel.t[keep], q=tel.q[keep], omega=tel.omega[keep],
+                  wheel_rates=tel.wheel_rates[keep],
+                  on_times=None if tel.on_times is None else tel.on_times[keep])
+    assert np.diff(gap.t).max() >= 300.0 - 1e-9
+    ag = cons.check_attitude_rates(gap)
+    assert ag.alignment[0] > 0.97 and 0.9 < ag.scale < 1.1
+    with pytest.raises(InputError, match="they look like deg/s"):
+        cons.check_attitude_rates(replace(gap, omega=np.degrees(gap.omega)))
+
+
 def test_rates_that_turn_under_a_still_attitude_are_refused():
     """Constant quaternions beside body rates that integrate to 0.5 rad (the CLI audit's stale
     attitude columns: 52°) are refused; the same file with the rates at gyro-noise level is
