@@ -70,6 +70,10 @@ __all__ = [
     "WheelAxes",
     "attitude_rate_agreement",
     "check_attitude_rates",
+    "GyroBias",
+    "GyroBiasWarning",
+    "gyro_bias_estimate",
+    "check_gyro_bias",
     "wheel_momentum_scale",
     "check_wheel_units",
     "check_pulses_match_on_times",
@@ -111,6 +115,12 @@ _SEG_MIN_RAD = 1e-3    # … and at least this much
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
 _SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
 
+GYRO_WINDOW_S = 60.0
+"""Length of the windows of :func:`gyro_bias_estimate`, s."""
+GYRO_WINDOW_TURN_RAD = 2e-3
+"""Windows turning more than this (by ∫ω dt) are left out of the gyro-bias estimate."""
+GYRO_BIAS_Z = 5.0
+"""A gyro bias is reported beyond this many prior sd and this many standard errors."""
 GAP_FACTOR = 3.0
 """A time step over this many median steps is a data gap: no turning stretch spans one."""
 MOMENTUM_ALIGN_MIN = 0.9
@@ -159,6 +169,10 @@ class AttitudeAgreement(NamedTuple):
     scale: float
     segments: int
     turn_rad: float
+
+
+class GyroBiasWarning(UserWarning):
+    """The data show a gyro bias beyond the spacecraft model's ``[gyro]`` knowledge."""
 
 
 def _reading(q: np.ndarray, k: int) -> np.ndarray:
@@ -266,6 +280,79 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     scale = float(np.sum(rots[0] * g)) / gg
     turn = float(np.sum(np.linalg.norm(rots[0], axis=1)))
     return AttitudeAgreement(align, scale, len(segs), turn)
+
+
+class GyroBias(NamedTuple):
+    """Constant gyro bias seen in the data: the body rates' integral against the quaternions'
+    rotation over quiet windows (:func:`gyro_bias_estimate`).
+
+    Attributes
+    ----------
+    bias : (3,) rad/s, body axes: what the rates read above the truth.
+    se : (3,) rad/s, its standard error from the windows' scatter.
+    windows : number of windows used.
+    """
+
+    bias: np.ndarray
+    se: np.ndarray
+    windows: int
+
+
+def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
+    """Least-squares constant gyro bias ``b`` from quiet windows of :data:`GYRO_WINDOW_S`.
+
+    Per gap-free window ``(a, b)`` that turns by less than :data:`GYRO_WINDOW_TURN_RAD` (so the
+    rotation vector and ``∫ω dt`` differ only by the bias, not by non-commuting turns or a
+    rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt + noise`` per body axis (a gyro reading
+    ``ω + b`` integrates ``b Δt`` more than the attitude turns; Brown Eq 2 kinematics). ``None``
+    with fewer than :data:`MIN_SEGMENTS` windows.
+    """
+    t = np.asarray(tel.t, float)
+    q = np.asarray(tel.q, float)
+    if t.size < 4 or t[-1] - t[0] < 2 * GYRO_WINDOW_S:
+        return None
+    edges = np.unique(np.searchsorted(t, np.arange(t[0], t[-1], GYRO_WINDOW_S)))
+    a, b = edges[:-1], edges[1:]
+    gaps = _gaps_before(t)
+    keep = (b > a) & (gaps[a] == gaps[b])
+    a, b = a[keep], b[keep]
+    if a.size < MIN_SEGMENTS:
+        return None
+    g = _integrated_rates(tel)[b] - _integrated_rates(tel)[a]
+    rot = np.asarray(_rotvecs_between(q[a], q[b]))
+    quiet = np.linalg.norm(g, axis=1) < GYRO_WINDOW_TURN_RAD
+    if np.count_nonzero(quiet) < MIN_SEGMENTS:
+        return None
+    d, dt = (g - rot)[quiet], (t[b] - t[a])[quiet]
+    ss = float(dt @ dt)
+    bias = dt @ d / ss
+    resid = d - dt[:, None] * bias
+    se = np.sqrt(np.sum(resid**2, axis=0) / max(dt.size - 1, 1) / ss)
+    return GyroBias(bias, se, int(dt.size))
+
+
+def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
+    """Warn when the data show a gyro bias far beyond the model file's ``[gyro]`` knowledge:
+    on some axis ``|b| > GYRO_BIAS_Z × bias_sd_rad_s`` and ``> GYRO_BIAS_Z × its standard
+    error``. The fits' gyro-bias prior then under-states it, and the RWA4 axis by the RWA method
+    can be wrong by more than its cone with every adequacy check passing (a 2e-5 rad/s bias:
+    0.71° off against a 0.18° cone). Returns the estimate (``None``: not enough quiet windows).
+    """
+    est = gyro_bias_estimate(tel)
+    if est is None:
+        return None
+    sd = spacecraft.knowledge.gyro_bias_sd_rad_s
+    big = (np.abs(est.bias) > GYRO_BIAS_Z * sd) & (np.abs(est.bias) > GYRO_BIAS_Z * est.se)
+    if np.any(big):
+        axes = ", ".join(f"{'xyz'[i]} {est.bias[i]:+.2g}" for i in np.flatnonzero(big))
+        worst = float(np.max(np.abs(est.bias)[big]) / sd)
+        warnings.warn(f"{tel.source}: columns wx wy wz carry a constant gyro bias of about "
+                      f"{axes} rad/s ({worst:.0f}x the [gyro] bias_sd_rad_s = {sd:.2g} of "
+                      f"the model {spacecraft.name!r}, seen over {est.windows} quiet "
+                      f"{GYRO_WINDOW_S:g}-s windows): the fits' gyro prior under-states it; "
+                      "widen bias_sd_rad_s in the spacecraft model, or remove the bias",
+                      GyroBiasWarning, stacklevel=2)
+    return est
 
 
 def _check_still_attitude(tel: Telemetry) -> None:
@@ -747,6 +834,8 @@ def check_telemetry_data(tel: Telemetry, spacecraft: Spacecraft | None = None,
         if on is None:
             on = _derived_on_times(tel, pulses)
     momentum = check_wheel_units(tel, spacecraft, on) if spacecraft is not None else None
+    if spacecraft is not None:
+        check_gyro_bias(tel, spacecraft)
     return attitude, momentum
 
 

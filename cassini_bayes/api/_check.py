@@ -146,7 +146,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         The first rule or physics check the file breaks, in one line naming where.
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
-    from cassini_bayes.consistency import check_telemetry_data
+    from cassini_bayes.consistency import GyroBiasWarning, check_telemetry_data
     from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseSpanWarning,
                                          _turn_angle, with_on_times)
     from cassini_bayes.windows import quiet_periods
@@ -161,8 +161,11 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     tel = one_telemetry(telemetry, check_units=check_units)
     log = one_pulse_log(pulses) if pulses is not None else None
     sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
-    attitude, momentum = check_telemetry_data(tel, sc, log)
-    notes: list[str] = []
+    with warnings.catch_warnings(record=True) as physics_warnings:
+        warnings.simplefilter("always")
+        attitude, momentum = check_telemetry_data(tel, sc, log)
+    notes: list[str] = [str(w.message) for w in physics_warnings
+                        if issubclass(w.category, GyroBiasWarning)]
     source = None if tel.on_times is None and log is None else "on_* columns"
     if log is not None and tel.on_times is not None:
         notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "

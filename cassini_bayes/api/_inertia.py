@@ -95,17 +95,17 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     tels, records, paths = telemetry_inputs(telemetry)
-    with step("checking the data"):
+    with step("checking the data"), collect_warnings() as check_warns:
         check_inertia_data(tels, sc)  # units and conventions by the physics, before sampling
     key = jax.random.key(seed)  # the one place the seed becomes a key
-    with collect_warnings() as warns:
+    with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_inertia(key, tels, sc, torque=torque, robust=robust, settings=settings,
                               wheel_errors=wheel_errors)
     with step("summaries, baseline and adequacy checks"):
         baseline, base_warns = inertia_baseline(tels, sc)
         summary = inertia_summary(post, seed=seed, torque=torque, robust=robust,
                                   wheel_errors=wheel_errors, baseline=baseline,
-                                  warnings=warns + base_warns)
+                                  warnings=list(dict.fromkeys(check_warns + warns + base_warns)))
     config = fit_config("fit inertia", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": records, "spacecraft": sc_record},
                         options={"torque": torque, "idealised": not robust,

@@ -144,10 +144,10 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
         raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
                          f"{len(tels)}")
     tel = tels[0]
-    with step("checking the data"):
+    with step("checking the data"), collect_warnings() as check_warns:
         check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
     key = jax.random.key(seed)  # the one place the seed becomes a key
-    with collect_warnings() as warns:
+    with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
                            inertia=inertia, settings=settings, robust=robust,
                            wheel_errors=wheel_errors)
@@ -157,7 +157,8 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
         warns.append(budget)
     with step("summaries and adequacy checks"):
         summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
-                               wheel_errors=wheel_errors, warnings=warns)
+                               wheel_errors=wheel_errors,
+                               warnings=list(dict.fromkeys(check_warns + warns)))
     pr = post.problem
     config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": records[0], "spacecraft": sc_record,

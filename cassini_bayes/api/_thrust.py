@@ -209,17 +209,17 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
         raise InputError(f"{len(tels)} telemetry but {len(logs)} pulse log(s); give one pulse "
                          "log per telemetry, in the same order")
     events = list(zip(tels, logs))
-    with step("checking the data"):
+    with step("checking the data"), collect_warnings() as check_warns:
         check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
     key = jax.random.key(seed)  # the one place the seed becomes a key
-    with collect_warnings() as warns:
+    with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
                              robust=robust, wheel_errors=wheel_errors)
     with step("summaries, baseline and adequacy checks"):
         baseline, base_warns = thrust_baseline(events, sc, mode, inertia)
         summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
                                  wheel_errors=wheel_errors, baseline=baseline,
-                                 warnings=warns + base_warns)
+                                 warnings=list(dict.fromkeys(check_warns + warns + base_warns)))
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": tel_records, "pulses": log_records,
                                 "spacecraft": sc_record, **inertia_input},

@@ -1,4 +1,5 @@
-"""Margins of the wheel-axes check (``consistency.check_wheel_units``) on open-world data.
+"""Margins of the wheel-axes and gyro-bias checks (``consistency.check_wheel_units``,
+``consistency.check_gyro_bias``) on open-world data.
 
 For every open-world family of ``coverage_open_world.py`` and seeds ``0 … N−1``: draw the
 open-world truth (errors 1.5× wider than the robust priors, per wheel and per axis, a flexible
@@ -10,10 +11,11 @@ common scale ``κ`` and the free-axis fit (:class:`~cassini_bayes.consistency.Wh
 Then the same telemetry damaged, one mistake at a time: each known wheel's sign flipped, each pair
 of known wheels' columns swapped, one wheel's column in rad/s. Prints per family how often the
 free-axis fit is judged (conditioning ≥ ``AXES_CONDITION_MIN``), the largest angle and the scale
-range on clean data (false alarms: clean files refused), and per mistake how often it is refused.
-Not a test: the numbers are in docs/input_checks.md.
+range on clean data (false alarms: clean files refused), and per mistake how often it is refused;
+then the gyro bias the data show against the drawn one and the model's ``[gyro]`` sd, and how often
+a file is warned about it. Not a test: the numbers are in docs/input_checks.md.
 
-    python benchmarks/wheel_axes_margins.py [--seeds 20] [--families post_probe rwa4_rwa …]
+    python benchmarks/input_check_margins.py [--seeds 20] [--families post_probe rwa4_rwa …]
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ def _telemetry(family: str, seed: int):
         from cassini_bayes.consistency import _derived_on_times
 
         on = _derived_on_times(tel, sim.pulses)
-    return tel, on, scenario.prior
+    return tel, on, scenario.prior, ow.record
 
 
 def _damaged(tel, known: list[str]):
@@ -76,7 +78,8 @@ def _damaged(tel, known: list[str]):
 
 
 def main(argv=None) -> None:
-    from cassini_bayes.consistency import (AXES_CONDITION_MIN, FREE_WHEEL, check_wheel_units,
+    from cassini_bayes.consistency import (AXES_CONDITION_MIN, FREE_WHEEL, GyroBiasWarning,
+                                           check_gyro_bias, check_wheel_units,
                                            wheel_momentum_scale)
     from cassini_bayes.errors import InputError
 
@@ -85,14 +88,22 @@ def main(argv=None) -> None:
     ap.add_argument("--families", nargs="+", default=list(FAMILIES))
     a = ap.parse_args(argv)
     print(f"{'family':20s} {'judged':>7s} {'cond (min–max)':>15s} {'max angle':>9s} "
-          f"{'scales':>13s} {'clean refused':>13s} {'flip':>7s} {'swap':>7s} {'rad/s':>7s}")
+          f"{'scales':>13s} {'clean refused':>13s} {'flip':>7s} {'swap':>7s} {'rad/s':>7s} "
+          f"{'gyro |b|/sd':>11s} {'gyro warned':>11s}")
     for family in a.families:
         judged, conds, angles, scales, refused = 0, [], [], [], 0
+        gyro, warned = [], 0
         caught = {"flip": [0, 0], "swap": [0, 0], "rad/s": [0, 0]}
         for seed in range(a.seeds):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                tel, on, sc = _telemetry(family, seed)
+                tel, on, sc, _drawn = _telemetry(family, seed)
+            with warnings.catch_warnings(record=True) as seen:
+                warnings.simplefilter("always")
+                est = check_gyro_bias(tel, sc)
+            warned += any(issubclass(w.category, GyroBiasWarning) for w in seen)
+            if est is not None:
+                gyro.append(float(np.max(np.abs(est.bias))) / sc.knowledge.gyro_bias_sd_rad_s)
             fit = wheel_momentum_scale(tel, sc, on)
             axes = fit.axes if fit is not None else None
             if axes is None:
@@ -118,11 +129,13 @@ def main(argv=None) -> None:
         ang = f"{max(angles):.2f}°" if angles else "–"
         sc_txt = f"{min(scales):.3f}–{max(scales):.3f}" if scales else "–"
         hits = {k: f"{c}/{t}" for k, (c, t) in caught.items()}
+        g_txt = f"{max(gyro):.2f} ({len(gyro)})" if gyro else "–"
         print(f"{family:20s} {judged:>3d}/{n:<3d} {cond:>15s} {ang:>9s} {sc_txt:>13s} "
               f"{refused:>9d}/{n:<3d} {hits['flip']:>7s} {hits['swap']:>7s} "
-              f"{hits['rad/s']:>7s}")
+              f"{hits['rad/s']:>7s} {g_txt:>11s} {warned:>7d}/{n:<3d}")
     print(f"(judged: conditioning ≥ {AXES_CONDITION_MIN}; flip/swap/rad-s: damaged copies "
-          "refused / made)")
+          "refused / made; gyro: the largest estimated |bias| over the model's [gyro] sd, and "
+          "the files with an estimate)")
 
 
 if __name__ == "__main__":
