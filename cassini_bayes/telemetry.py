@@ -624,7 +624,9 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
         x = r[:, j]
         if np.any(np.isnan(x)) and not np.all(np.isnan(x)):
             _fail_nonfinite(x, name.lower(), path, t,
-                            fix="a wheel that is off must be empty in every row; fill the gap")
+                            fix="a wheel that is off must be empty in every row; where it "
+                                "dropped out, remove those rows or split the file there (fit "
+                                "inertia takes several files)")
         if np.any(np.isinf(x)):
             _fail_nonfinite(x, name.lower(), path, t)
         _fail_out_of_range(x / RPM_TO_RAD_S, name.lower(), WHEEL_RPM_MAX, "rpm", path, t,
@@ -844,10 +846,12 @@ def validate_pulses(log: PulseLog) -> PulseLog:
         ov = t[:-1] + w[:-1] > t[1:]
         if np.any(ov):
             i = int(np.argmax(ov))
+            fix = (f"the widths look like milliseconds (median {np.median(width):.4g}): the "
+                   "format wants seconds" if float(np.median(width)) > 2.0
+                   else "merge them into one pulse")
             raise InputError(f"thruster {name}: overlapping pulses — data row {rows[i] + 1} "
                              f"(t_on = {t[i]:.10g} s, width {w[i]:.6g} s) is still on at data row "
-                             f"{rows[i + 1] + 1} (t_on = {t[i + 1]:.10g} s); merge them into one "
-                             "pulse", path=path)
+                             f"{rows[i + 1] + 1} (t_on = {t[i + 1]:.10g} s); {fix}", path=path)
     order = np.argsort(t_on, kind="stable")
     return PulseLog(t_on[order], thr[order], width[order], path)
 

@@ -409,7 +409,11 @@ BAD_PULSES = {
     "non-increasing": (["1.0,Y2,0.05", "3.0,Y4,0.05", "1.0,Y2,0.05"],
                        ["thruster Y2: t_on is not increasing", "data row 3 (t_on = 1 s)"]),
     "overlap": (["1.0,Z1,0.5", "1.2,Z1,0.1"],
-                ["thruster Z1: overlapping pulses", "data row 1", "data row 2 (t_on = 1.2 s)"]),
+                ["thruster Z1: overlapping pulses", "data row 1", "data row 2 (t_on = 1.2 s)",
+                 "merge them into one pulse"]),
+    "widths-in-ms": (["1.0,Z1,125", "1.5,Z1,125"],
+                     ["thruster Z1: overlapping pulses", "the widths look like milliseconds "
+                      "(median 125): the format wants seconds"]),
     "non-numeric": (["1.0,Z1,abc"], ["column 'width', data row 1: 'abc' is not a number"]),
     "missing-column": (None, ["missing column 'width'"]),
 }
@@ -479,3 +483,21 @@ def test_a_toml_file_with_a_byte_order_mark_loads(tmp_path):
     p = tmp_path / "m.toml"
     p.write_bytes(b"\xef\xbb\xbf" + (MODELS_DIR / "cassini_post_probe.toml").read_bytes())
     assert load_spacecraft(p).name == load_spacecraft("cassini_post_probe").name
+
+
+
+def test_a_wheel_dropout_and_a_pulse_log_of_another_time_base_say_what_to_do(tmp_path):
+    """A wheel empty in some rows: remove the rows or split the file (not "fill the gap", which
+    invents data). A pulse log none of whose pulses touches the telemetry's span (an epoch
+    offset between the files): `check` refuses, giving both spans (it had said "none fired")."""
+    from cassini_bayes.api import check_telemetry
+
+    lines = _good_lines()
+    lines[3] = lines[3].rsplit(",", 3)[0] + ",,900,"          # rwa2 empty in one row
+    with pytest.raises(InputError, match="remove those rows or split the file there"):
+        read_telemetry(_csv(tmp_path, "dropout.csv", lines))
+    tel = _csv(tmp_path, "tel.csv", _good_lines())
+    far = _csv(tmp_path, "far.csv", [PULSE_HEADER, "700000001.0,Z1,0.1"])
+    with pytest.raises(InputError, match=r"none of its 1 pulses \(t_on 700000001..700000001 s\) "
+                                         r"falls inside the telemetry span 0..3.5 s"):
+        check_telemetry(tel, pulses=far)

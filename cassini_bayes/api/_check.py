@@ -117,6 +117,18 @@ def _physics_line(attitude, momentum, spacecraft) -> str:
             "rad/s would give 9.55)" + axes_text)
 
 
+def _check_shared_span(tel, log) -> None:
+    """Refuse a pulse log none of whose pulses touches the telemetry's span: the two files use
+    different time bases, or belong to different events (``check`` had said "none fired")."""
+    t0, t1 = float(tel.t[0]), float(tel.t[-1])
+    if np.any((log.t_on <= t1) & (log.t_on + log.width >= t0)):
+        return
+    raise InputError(f"none of its {log.t_on.size} pulses (t_on {log.t_on.min():.10g}.."
+                     f"{log.t_on.max():.10g} s) falls inside the telemetry span {t0:.10g}.."
+                     f"{t1:.10g} s of {tel.source}: the two files use different time bases (an "
+                     "epoch offset?) or belong to different events", path=log.source)
+
+
 def _pulse_count(on: np.ndarray) -> int:
     """Pulses in a cumulative on-time column: the rises of its increments."""
     return int(np.count_nonzero(np.diff((np.diff(on) > 0).astype(int)) == 1) + (on[1] > on[0]))
@@ -161,6 +173,8 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     tel = one_telemetry(telemetry, check_units=check_units)
     log = one_pulse_log(pulses) if pulses is not None else None
     sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
+    if log is not None and log.t_on.size:
+        _check_shared_span(tel, log)
     with warnings.catch_warnings(record=True) as physics_warnings:
         warnings.simplefilter("always")
         attitude, momentum = check_telemetry_data(tel, sc, log)
