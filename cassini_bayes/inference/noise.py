@@ -15,13 +15,12 @@ import numpy as np
 
 from cassini_bayes.telemetry import Telemetry
 
-__all__ = ["RATE_FLOORS", "ATTITUDE_FLOOR", "white_noise_sd", "quantisation_sd", "floored",
+__all__ = ["RATE_FLOORS", "ATTITUDE_FLOOR", "white_noise_sd", "floored",
            "rate_noise_levels"]
 
 RATE_FLOORS = (1e-9, 1e-7)   # rad/s: gyro and wheel-rate levels below these are floored
 ATTITUDE_FLOOR = 1e-9        # rad: attitude level floor
 
-_QUANT_REPEAT = 0.2    # share of exactly repeated samples that marks a rounded signal
 _MAD_TO_SD = 1.4826
 
 
@@ -40,29 +39,7 @@ def white_noise_sd(x: np.ndarray, *, differenced: bool = False) -> float:
     d = d[np.isfinite(d)]
     if d.size == 0:
         return 0.0
-    mad_sd = float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
-    return mad_sd if differenced else max(mad_sd, quantisation_sd(x))
-
-
-def quantisation_sd(x: np.ndarray) -> float:
-    """``q/√12`` when ``x`` (n, ...) is visibly rounded to a grid ``q`` (a tachometer's 1 rpm),
-    else 0: at least :data:`_QUANT_REPEAT` of its steps are exact repeats and its other steps are
-    whole multiples of the smallest one. Rounding then hides the noise from the second
-    differences (mostly exact zeros: their MAD is 0), while the rounding error itself is a
-    uniform error of sd ``q/√12`` (1-rpm tachometers had been read as noise-free, and the inertia
-    fit came out 2.6 sd off with a residual false alarm)."""
-    d = np.abs(np.diff(np.asarray(x, float), axis=0)).ravel()
-    d = d[np.isfinite(d)]
-    if d.size == 0 or np.mean(d == 0.0) < _QUANT_REPEAT:
-        return 0.0
-    steps = d[d > 0]
-    if steps.size == 0:
-        return 0.0
-    q = float(steps.min())
-    ratio = steps / q
-    if np.mean(np.abs(ratio - np.round(ratio)) < 1e-6 * np.maximum(ratio, 1.0)) < 0.95:
-        return 0.0
-    return q / np.sqrt(12.0)
+    return float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
 def floored(levels: Sequence[float], floors: Sequence[float]) -> np.ndarray:
