@@ -55,7 +55,7 @@ def rate_noise_levels(tel: Telemetry) -> np.ndarray:
     1e-7 rad/s so noise-free data stay finite. Only the centre of a wide prior.
     """
     rates = np.asarray(tel.wheel_rates, float)
-    active = tel.active_mask()
+    active = np.any(np.isfinite(rates), axis=0)   # noise: every wheel with data, idle or not
     s_r = white_noise_sd(rates[:, active]) if active.any() else 0.0
     s_w = white_noise_sd(np.asarray(tel.omega, float))
     return floored([s_w, s_r], RATE_FLOORS)
