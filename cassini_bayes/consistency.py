@@ -424,7 +424,9 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
         if 30.0 < ratio < 100.0:
             guess = "they look like deg/s: divide by 57.2958"
         elif 300.0 < ratio < 3000.0:
-            guess = "they look like mrad/s: divide by 1000"
+            step = float(np.median(np.diff(np.asarray(tel.t, float))))
+            guess = ("they look like mrad/s: divide by 1000; or the time column t is in "
+                     f"milliseconds (median step {step:.4g} s): the format wants seconds")
         else:
             guess = "check their unit"
         raise InputError(f"columns wx wy wz: the body rates integrate to {ratio:.3g}x the "

@@ -550,6 +550,9 @@ def _check_omega_units(t: np.ndarray, q: np.ndarray, w: np.ndarray, path: str) -
     ratio = integral / excursion[k]
     if ratio > _RATE_RATIO_MAX:
         guess = "deg/s (divide by 57.2958)" if ratio < 300 else "mrad/s (divide by 1000)"
+        if ratio >= 300:   # the same factor when t is in ms: say so, with the step it implies
+            guess += (f", or the time column t is in milliseconds (median step "
+                      f"{float(np.median(np.diff(t))):.4g} s; the format wants seconds)")
         raise InputError(f"columns wx wy wz: by {_row_ref(k, t)} the body rates integrate to "
                          f"{ratio:.3g}x the rotation the quaternions show ({excursion[k]:.3g} "
                          f"rad); they look like {guess}; body rates must be in rad/s", path=path)

@@ -312,6 +312,16 @@ def _deg_s_lines():
     return lines
 
 
+def _time_in_ms_lines():
+    # the same 0.1 rad turn in rad/s, the time column in milliseconds: ∫ω dt 1000x the turn
+    lines = [HEADER]
+    for i in range(101):
+        a = 0.001 * i
+        lines.append(f"{1000 * i},0,0,{float(np.sin(a / 2))!r},{float(np.cos(a / 2))!r},0,0,"
+                     "0.001,600,-600,600,")
+    return lines
+
+
 BAD_TELEMETRY = {
     # id: (file lines, things the one-line message must contain)
     "missing-column": (lambda: _without_column(_good_lines(), "wy"), ["missing column 'wy'"]),
@@ -340,6 +350,8 @@ BAD_TELEMETRY = {
     "omega-huge": (lambda: _edit(_good_lines(), 3, "wy", "0.5"),
                    ["wx wy wz, data row 3 (t = 1 s)", "|ω| = 0.5", "must be in rad/s"]),
     "omega-deg-s": (_deg_s_lines, ["wx wy wz", "look like deg/s", "57.2958"]),
+    "time-in-ms": (_time_in_ms_lines, ["look like mrad/s (divide by 1000), or the time column t "
+                                       "is in milliseconds (median step 1000 s"]),
     "ragged-row": (lambda: _good_lines()[:3] + [_good_lines()[3] + ",7"] + _good_lines()[4:],
                    ["data row 3 has 13 fields but the header has 12"]),
     "header-only": (lambda: [HEADER], ["header but no data rows"]),
