@@ -134,6 +134,16 @@ AXES_CONDITION_MIN = 0.1
 """Each wheel's free momentum vector is judged only when the free-axis balance's design is this
 well conditioned (smallest/largest singular value, unit columns): 0.30–0.46 on shipped slews,
 0.02–0.05 on biasing events (their wheels move together)."""
+AXES_ALIGN_MIN = 0.99
+"""In a file without thruster firings (no ``on_*`` columns, no pulse log), the free-axis balance
+must fit at least this well where judged: 0.9984–1.0000 on 280 open-world and every shipped slew
+and RWA-method file (Basilisk's slews 0.9999); one tachometer reporting |rpm| through zero 0.962."""
+SWING_MIN_NMS = 1.0
+"""... and only where the body and the wheels exchange at least this much momentum, N m s (a
+slew: 5–15; a quiet file's gyro noise: ~0.01)."""
+UNSIGNED_TOUCH_RPM = 5.0
+"""A wheel that stays on one side of zero yet comes within this (rpm) of it is named as possibly
+unsigned in :func:`_balance_error`."""
 AXIS_ANGLE_MAX_DEG = 30.0
 """Largest accepted angle between a wheel's fitted momentum and its axis in the model: a flipped
 sign gives 180°, another wheel's column on Cassini 90° (its wheel axes are orthogonal)."""
@@ -452,11 +462,14 @@ class WheelAxes(NamedTuple):
     vectors : per known wheel, ``w_k / J_k`` (body frame, per rpm-read rad/s): the model's axis
         ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
         sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
+    swing_nms : largest de-meaned body momentum ``|A(q)ᵀ I_pred ω|``, N m s: how much momentum
+        the wheels and the body exchange (a slew: 5–15; gyro noise alone: ~0.01).
     """
 
     alignment: float
     conditioning: float
     vectors: dict[str, np.ndarray]
+    swing_nms: float = 0.0
 
     @property
     def judged(self) -> bool:
@@ -577,7 +590,8 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     sv = np.linalg.svd(design / np.where(norms > 0, norms, 1.0), compute_uv=False)
     js = [spacecraft.wheel(n).inertia for n in bal.known]
     vectors = {n: theta[3 * k: 3 * k + 3] / js[k] for k, n in enumerate(bal.known)}
-    return WheelAxes(align, float(sv[-1] / sv[0]), vectors)
+    swing = float(np.max(np.linalg.norm(bal.body, axis=1)))
+    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing)
 
 
 def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
@@ -651,6 +665,27 @@ def _axis_error(name: str, axes: WheelAxes, spacecraft: Spacecraft,
                       "axes", path=tel.source)
 
 
+def _balance_error(tel: Telemetry, axes: WheelAxes) -> InputError:
+    """The refusal for a file without thruster firings whose momentum does not balance even with
+    a free axis per wheel; names the wheels that touch zero without crossing it (unsigned)."""
+    unsigned = []
+    for name in axes.vectors:
+        rpm = np.asarray(tel.wheel_rate(name), float) / RPM_TO_RAD_S
+        rpm = rpm[np.isfinite(rpm)]
+        for x in (rpm, -rpm):     # never below zero (or above it), yet reaching it
+            if x.min() >= 0.0 and x.min() < UNSIGNED_TOUCH_RPM < x.max():
+                unsigned.append(f"{name.lower()} stays on one side of 0 rpm yet reaches "
+                                f"{x.min():.2g} rpm")
+    hint = (f" ({'; '.join(unsigned)}: a tachometer that reports speed without direction?)"
+            if unsigned else "")
+    cols = " ".join(n.lower() for n in axes.vectors)
+    return InputError(f"columns {cols}: with no thruster firing in the file, the wheels' momenta "
+                      "do not balance the body's even with a free axis per wheel (alignment "
+                      f"{axes.alignment:.4f}; correct files ≥ 0.998){hint}; check the wheel "
+                      "columns' signs through zero speed and their units, or give the thruster "
+                      "firings (--pulses, or on_* columns) if any fired", path=tel.source)
+
+
 def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
                       on_times: np.ndarray | None = None) -> MomentumScale | None:
     """Refuse wheel columns whose unit, sign or order breaks momentum conservation.
@@ -676,7 +711,12 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
             f"columns say in rpm with the model {spacecraft.name!r} (alignment "
             f"{fit.alignment:.3f}; rpm gives 1, rad/s {RAD_S_FACTOR:.3g})"), tel)
     axes = fit.axes
-    if axes is None or not axes.judged:
+    if axes is None:
+        return fit
+    if (on_times is None and tel.on_times is None and axes.conditioning >= AXES_CONDITION_MIN
+            and axes.swing_nms >= SWING_MIN_NMS and axes.alignment < AXES_ALIGN_MIN):
+        raise _balance_error(tel, axes)
+    if not axes.judged:
         return fit
     for name in axes.vectors:
         if axes.angle_deg(name, spacecraft.wheel(name).axis) > AXIS_ANGLE_MAX_DEG:

@@ -265,6 +265,26 @@ def test_an_idle_wheel_written_as_zero_is_as_off(runs):
     assert through.active_mask()[k]
 
 
+def test_an_unsigned_tachometer_is_refused_in_a_file_without_thrusters(runs):
+    """A wheel reported as |rpm| through a zero crossing stays near its axis (9° in the audit), so
+    the axis check passes; but with no thruster firing the momenta must balance, and the free-axis
+    balance falls from ≥ 0.998 (every correct slew file) to 0.96 (the audit's file: Iyy −29 % fitted
+    with exit 0). Refused, naming the wheel that touches zero without crossing it; a file with
+    thruster firings (on_* columns) is left to the fit."""
+    tel, log, sc = runs["slews_post_prm"]
+    crossing = [n for n in tel.active_wheels()
+                if np.nanmin(tel.wheel_rate(n)) < 0 < np.nanmax(tel.wheel_rate(n))]
+    assert crossing, "the cut slews must take some wheel through zero"
+    name = crossing[0]
+    unsigned = _edit_wheel(tel, name, lambda r, i: r.__setitem__((slice(None), i), np.abs(r[:, i])))
+    axes = cons.wheel_momentum_scale(tel, sc).axes
+    assert tel.on_times is None and axes.alignment >= 0.998 and axes.swing_nms > 5.0
+    with pytest.raises(InputError, match=rf"do not balance the body's even with a free axis per "
+                                         rf"wheel \(alignment 0\.\d+; .*{name.lower()} stays on one "
+                                         r"side of 0 rpm yet reaches"):
+        cons.check_telemetry_data(unsigned, sc, log)
+
+
 def test_wheels_moving_together_are_not_judged(runs):
     """A biasing event's wheels change together: the free vectors are not separable
     (conditioning 0.02–0.05), so swapped columns pass, and `check` says they were not checked."""
