@@ -132,15 +132,16 @@ KAPPA_RANGE = (float(np.sqrt(RPM_TO_RAD_S)), float(1.0 / np.sqrt(RPM_TO_RAD_S)))
 (rad/s) or its inverse, 0.324 … 3.09; the ±10 % knowledge of the moments moves ``κ`` by 10 %."""
 AXES_CONDITION_MIN = 0.1
 """Each wheel's free momentum vector is judged only when the free-axis balance's design is this
-well conditioned (smallest/largest singular value, unit columns): 0.30–0.46 on shipped slews,
-0.02–0.05 on biasing events (their wheels move together)."""
+well conditioned (smallest/largest singular value, unit columns): 0.29–0.47 on slews (shipped and
+open-world), 0.017–0.14 on biasing events (their wheels move together)."""
 AXES_ALIGN_MIN = 0.99
 """In a file without thruster firings (no ``on_*`` columns, no pulse log), the free-axis balance
-must fit at least this well where judged: 0.9984–1.0000 on 280 open-world and every shipped slew
-and RWA-method file (Basilisk's slews 0.9999); one tachometer reporting |rpm| through zero 0.962."""
+must fit at least this well where separable: 0.9984–1.0000 on 160 open-world and every shipped
+slew and RWA-method file (Basilisk's slews 0.9999); one tachometer reporting |rpm| through zero
+0.962."""
 SWING_MIN_NMS = 1.0
-"""... and only where the body and the wheels exchange at least this much momentum, N m s (a
-slew: 5–15; a quiet file's gyro noise: ~0.01)."""
+"""... and only where the body and the wheels exchange at least this much momentum, N m s (the
+shipped slews: 18–22; a quiet file's gyro noise: ~0.01)."""
 UNSIGNED_TOUCH_RPM = 5.0
 """A wheel that stays on one side of zero yet comes within this (rpm) of it is named as possibly
 unsigned in :func:`_balance_error`."""
@@ -328,7 +329,8 @@ def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
     a, b = a[keep], b[keep]
     if a.size < MIN_SEGMENTS:
         return None
-    g = _integrated_rates(tel)[b] - _integrated_rates(tel)[a]
+    integral = _integrated_rates(tel)
+    g = integral[b] - integral[a]
     rot = np.asarray(_rotvecs_between(q[a], q[b]))
     quiet = np.linalg.norm(g, axis=1) < GYRO_WINDOW_TURN_RAD
     if np.count_nonzero(quiet) < MIN_SEGMENTS:
@@ -463,7 +465,7 @@ class WheelAxes(NamedTuple):
         ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
         sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
     swing_nms : largest de-meaned body momentum ``|A(q)ᵀ I_pred ω|``, N m s: how much momentum
-        the wheels and the body exchange (a slew: 5–15; gyro noise alone: ~0.01).
+        the wheels and the body exchange (the shipped slews: 18–22; gyro noise alone: ~0.01).
     """
 
     alignment: float
@@ -696,7 +698,10 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     hold rad/s. Then, where the free-axis balance (:class:`WheelAxes`) determines each known
     wheel's momentum on its own (:attr:`WheelAxes.judged`), refuse a wheel whose momentum lies
     more than :data:`AXIS_ANGLE_MAX_DEG` from its axis in the model (a flipped sign, another
-    wheel's column) or whose scale is outside :data:`KAPPA_RANGE` (that column in rad/s).
+    wheel's column) or whose scale is outside :data:`KAPPA_RANGE` (that column in rad/s). In a
+    file without thruster firings (no ``on_times``, no ``on_*`` columns) where the vectors are
+    separable and the body swings by :data:`SWING_MIN_NMS`, refuse a free-axis balance below
+    :data:`AXES_ALIGN_MIN` (:func:`_balance_error`: unsigned tachometers, mixed units).
     Otherwise (including a balance that does not fit: momentum exchange with unlogged thruster
     firings, or none at all) say nothing. Returns the fit.
     """

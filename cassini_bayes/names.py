@@ -33,7 +33,7 @@ def unit_of(name: str) -> str | None:
     the axis components); ``None`` for any other site."""
     if name in INERTIA_NAMES:
         return "kg m^2"
-    if name in F_NAMES or name in ("F_Z", "F_Y"):
+    if name == "F" or name.startswith("F_"):   # F, F_Z1 … F_Y4, the branch sites F_Z, F_Y
         return "N"
     if name in TAU_NAMES:
         return "s"

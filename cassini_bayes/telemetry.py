@@ -104,7 +104,7 @@ RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
 IDLE_RPM = 1.0
 """A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: its momentum,
-0.16 kg m² × 1 rpm = 0.017 N m s rms, is below what a slew exchanges (5–15 N m s) by ~1000×;
+0.16 kg m² × 1 rpm = 0.017 N m s rms, is ~1000× below what a slew exchanges (18–22 N m s);
 tachometer noise about 0 rpm (±0.3 rpm) is idle, a wheel through zero speed is not."""
 
 

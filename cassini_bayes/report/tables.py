@@ -18,6 +18,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from cassini_bayes import names
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
 from cassini_bayes.report.rundata import RunData, finite_or_none, flatten_draws
 
@@ -142,17 +143,10 @@ def _ge(x: float, lim: float) -> bool:
 
 
 def unit_of(label: str) -> str:
-    """SI unit of a parameter from its docs/design.md §3 name (``""`` when unknown)."""
-    base = label.split("[")[0]
-    if base in INERTIA_NAMES:
-        return "kg m²"
-    if base in F_NAMES or base.startswith("F_") or base == "F":
-        return "N"
-    if base in TAU_NAMES:
-        return "s"
-    if base in U4_NAMES:
-        return "–"
-    return ""
+    """SI unit of a parameter for display, from :func:`cassini_bayes.names.unit_of` of its base
+    name (``""`` when unknown)."""
+    unit = names.unit_of(label.split("[")[0])
+    return {None: "", "kg m^2": "kg m²", "1": "–"}.get(unit, unit)
 
 
 def parameter_names(run: RunData) -> list[str]:
