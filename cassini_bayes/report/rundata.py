@@ -91,7 +91,9 @@ def load_run(run_dir: str | Path) -> RunData:
         raise InputError(f"{run_dir}: run directory not found; pass the --out directory of a fit")
     nc = run_dir / "posterior.nc"
     if not nc.is_file():
-        command = _command_of(run_dir)
+        from cassini_bayes.run_kind import run_command
+
+        command = run_command(run_dir)
         if command is not None and command not in ("fit inertia", "fit thrust", "fit rwa4"):
             raise InputError(f"{run_dir}: a `{command}` run; `report` rebuilds the page of a "
                              "`fit inertia`, `fit thrust` or `fit rwa4` run (run "
@@ -182,18 +184,3 @@ def finite_or_none(x: Any) -> float | None:
     except (TypeError, ValueError):
         return None
     return v if math.isfinite(v) else None
-
-
-def _command_of(run_dir: Path) -> str | None:
-    """The command that wrote ``run_dir`` (its summary.json's or config.toml's ``command``)."""
-    import json
-    import tomllib
-
-    for name, parse in (("summary.json", json.loads), ("config.toml", tomllib.loads)):
-        try:
-            command = parse((run_dir / name).read_text(encoding="utf-8")).get("command")
-        except (OSError, UnicodeDecodeError, ValueError, AttributeError):
-            continue
-        if isinstance(command, str):
-            return command
-    return None
