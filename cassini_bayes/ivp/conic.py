@@ -129,7 +129,7 @@ def solve_universal_anomaly(dt, r0n, sigma0, mu, alpha):
     def expand_cond(c):
         lo, hi, k = c
         f, _ = _kepler(hi, adt, r0n, sg, mu, alpha)
-        return (f < 0) & (k < _EXPAND) & ~elliptic     # an overflow (inf, nan) is past the root
+        return jnp.isfinite(f) & (f < 0) & (k < _EXPAND) & ~elliptic   # overflow: past the root
 
     def expand_body(c):
         lo, hi, k = c
@@ -150,7 +150,7 @@ def solve_universal_anomaly(dt, r0n, sigma0, mu, alpha):
         psi, lo, hi, dx_old, k, _ = c
         f, r = _kepler(psi, adt, r0n, sg, mu, alpha)
         past = (f >= 0) | ~jnp.isfinite(f)     # s_k overflow only far past the root
-        lo = jnp.where(f <= 0, psi, lo)
+        lo = jnp.where((f <= 0) & jnp.isfinite(f), psi, lo)
         hi = jnp.where(past, psi, hi)
         # Newton inside the bracket while its steps at least halve (rtsafe); else bisection,
         # e.g. where Newton would creep down an exponential from its far side
@@ -210,8 +210,10 @@ _propagate = jax.jit(jnp.vectorize(_propagate_one, signature="(3),(3),(),()->(3)
 
 def propagate_conic_unchecked(r0, v0, mu, dt) -> ConicState:
     """:func:`propagate_conic` without the input checks (for use inside ``jit``/``grad``)."""
-    r, v = _propagate(jnp.asarray(r0, float), jnp.asarray(v0, float), jnp.asarray(mu, float),
-                      jnp.asarray(dt, float))
+    r0, v0, mu, dt = (jnp.asarray(x, float) for x in (r0, v0, mu, dt))
+    batch = jnp.broadcast_shapes(r0.shape[:-1], v0.shape[:-1], mu.shape, dt.shape)
+    r, v = _propagate(jnp.broadcast_to(r0, batch + (3,)), jnp.broadcast_to(v0, batch + (3,)),
+                      jnp.broadcast_to(mu, batch), jnp.broadcast_to(dt, batch))
     return ConicState(r, v)
 
 

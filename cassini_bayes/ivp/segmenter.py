@@ -5,9 +5,11 @@ the angle between the fitted and the true vector stays within the requirement (4
 §3.3.2 and Table 2); then its order is lowered to the smallest that still meets the requirement
 on that segment, since a lower order stores fewer coefficients (``3(n+1)+1``).
 
-The angle is checked on ``16(n+1)+1`` points of each candidate segment spaced as ``cos(πk/M)``
-(dense where the Chebyshev error oscillates fastest, near the ends), never at the fitting nodes
-alone; :func:`angular_error` re-checks a fit on any grid.
+The angle is checked on ``M + 1 = 16(n+1)+1`` points of each candidate segment spaced as
+``cos(πk/M)`` (dense where the Chebyshev error oscillates fastest, near the ends), never at the
+fitting nodes alone, against the requirement times ``cos(π/32)`` (0.995): an error shaped like
+``T_{n+1}`` peaks at most that far above its largest sample on this grid.
+:func:`angular_error` re-checks a fit on any grid.
 """
 
 from __future__ import annotations
@@ -52,6 +54,9 @@ def angle_between_vectors(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arctan2(cross, np.sum(a * b, axis=-1))
 
 
+_MARGIN = np.cos(np.pi / (2 * _CHECK_PER_ORDER))
+
+
 def _check_grid(t_s: float, t_f: float, order: int) -> np.ndarray:
     m = _CHECK_PER_ORDER * (order + 1)
     return 0.5 * (t_f + t_s) + 0.5 * (t_f - t_s) * np.cos(np.pi * np.arange(m + 1) / m)
@@ -89,7 +94,7 @@ def fit_chebyshev_segments(f: Callable[[np.ndarray], np.ndarray], t_start_s: flo
 
     def ok(t_s, length, order):
         err, c = _segment_error(f, t_s, t_s + length, order)
-        return err <= requirement_rad, err, c
+        return err <= _MARGIN * requirement_rad, err, c
 
     span = t_end_s - t_start_s
     tiny = 1e-9 * span
