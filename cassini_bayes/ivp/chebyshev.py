@@ -39,6 +39,8 @@ def chebyshev_sum(tau, coeffs, xp=jnp):
     ``xp`` is ``jax.numpy`` (default) or ``numpy``.
     """
     tau = tau[:, None]
+    if coeffs.ndim == 2:
+        coeffs = coeffs[None]
     t_prev, t_cur = xp.ones_like(tau), tau          # Eq 16: T_0 = 1, T_1 = τ
     total = coeffs[..., 0] * t_prev
     n1 = coeffs.shape[-1]
