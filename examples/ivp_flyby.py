@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import cassini_bayes as cb
-from cassini_bayes.ivp import Conic, TreeEntry
+from cassini_bayes.ivp import TreeEntry, fit_conic
 from cassini_bayes.ivp.nbody import GM, Flyby, integrate_flyby
 from cassini_bayes.ivp.segmenter import angle_between_vectors
 from cassini_bayes.ivp.trajectory import Trajectory, write_trajectory
@@ -52,14 +52,16 @@ def main(args):
         print(f"  segment {k + 1}: {(seg['t_end_s'] - seg['t_start_s']) / 3600:8.2f} h, order "
               f"{seg['order']:2d}, {seg['coefficients']} numbers, {seg['max_error_urad']:.1f} µrad")
 
-    # The vector tree of Fig 8 during the flyby: conics (osculating at closest approach) for the
-    # bodies, the segments for the spacecraft.
+    # The vector tree of Fig 8 during the flyby: conics for the bodies (their seven numbers fitted
+    # over the span: Saturn's J2 makes Titan's osculating conic drift off within days), the
+    # segments for the spacecraft.
     entries = [TreeEntry("titan", "spacecraft", fit.fit.segments)]
     for base, head, mu in (("sun", "saturn", GM["sun"] + GM["saturn"] + GM["titan"]),
                            ("sun", "earth", GM["sun"] + GM["earth"]),
                            ("saturn", "titan", GM["saturn"] + GM["titan"])):
         r0, v0 = sol.state(head, 0.0, base)
-        entries.append(TreeEntry(base, head, Conic(r0, v0, mu, 0.0), -half, half))
+        conic = fit_conic(sol.relative(base, head), -half, half, r0=r0, v0=v0, mu=mu, t0_s=0.0)
+        entries.append(TreeEntry(base, head, conic, -half, half))
     tree = cb.VectorTree(entries)
     grid = np.linspace(-half, half, 4001)
     for head in ("earth", "saturn"):
