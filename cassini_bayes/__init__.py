@@ -45,6 +45,7 @@ __all__ = [
     "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
     "InputError", "request_host_devices",
     "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
+    "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
 ]
 
 def _api():

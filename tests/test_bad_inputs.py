@@ -131,11 +131,30 @@ def files(tmp_path_factory) -> dict[str, Path]:
     (d / "forever.toml").write_text(re.sub(r"duration_s\s*=\s*[0-9.e+]+",
                                            "duration_s = 5.0e6", long, count=1))
     f["forever"] = d / "forever.toml"
+    f.update(_trajectories(d))
     user = d / "users_folder"
     user.mkdir()
     (user / "notes.txt").write_text("the user's own file\n")
     f["users_folder"] = user
     return f
+
+
+def _trajectories(d: Path) -> dict[str, Path]:
+    """A circular orbit's trajectory (``ivp fit``) and its corruptions: a NaN, a time that
+    does not increase (a segment with t_f <= t_s), a zero vector."""
+    t = np.arange(0.0, 6000.0, 60.0)
+    w = 2 * np.pi / 6000.0
+    good = d / "orbit.csv"
+    pd.DataFrame({"t": t, "x": 7e6 * np.cos(w * t), "y": 7e6 * np.sin(w * t),
+                  "z": np.zeros_like(t)}).to_csv(good, index=False)
+    out = {"orbit": good}
+    for name, edit in [("orbit_nan", lambda df: df.__setitem__("y", df["y"].where(
+                            df.index != 7, np.nan))),
+                       ("orbit_t_back", lambda df: df.__setitem__("t", df["t"].where(
+                            df.index != 9, df["t"][8]))),
+                       ("orbit_zero", lambda df: df.loc.__setitem__((5, ["x", "y", "z"]), 0.0))]:
+        out[name] = _csv_edit(good, d / f"{name}.csv", edit)
+    return out
 
 
 def _sha(path: Path) -> dict[str, str]:
@@ -208,6 +227,20 @@ CASES = [
      ["director"]),
     ("experiment-a-binary-file", ["experiment", "{binary}", "--out", "{out}"], 2, ["UTF-8"]),
     ("out-under-a-file", [*FIT, "--telemetry", "{good}", "--out", "{good}/run"], 2, []),
+    # the inertial vector propagator (ivp fit)
+    ("ivp-trajectory-nan", ["ivp", "fit", "{orbit_nan}", "--out", "{out}"], 2, ["'y'", "row 8"]),
+    ("ivp-segment-tf-not-after-ts", ["ivp", "fit", "{orbit_t_back}", "--out", "{out}"], 2,
+     ["not strictly increasing"]),
+    ("ivp-zero-position-vector", ["ivp", "fit", "{orbit_zero}", "--out", "{out}"], 2,
+     ["zero vector"]),
+    ("ivp-order-above-12", ["ivp", "fit", "{orbit}", "--out", "{out}", "--max-order", "13"], 2,
+     ["--max-order", "12"]),
+    ("ivp-negative-mu", ["ivp", "fit", "{orbit}", "--out", "{out}", "--mu", "-3.9e14"], 2,
+     ["--mu", "negative"]),
+    ("ivp-requirement-not-positive", ["ivp", "fit", "{orbit}", "--out", "{out}",
+                                      "--requirement-urad", "0"], 2, ["--requirement-urad"]),
+    ("ivp-requirement-nan", ["ivp", "fit", "{orbit}", "--out", "{out}",
+                             "--requirement-urad", "nan"], 2, ["--requirement-urad"]),
     # faults
     ("scenario-of-millions-of-seconds", ["simulate", "{forever}", "--out", "{out}"], 2,
      ["duration_s"]),
@@ -274,6 +307,8 @@ ELSEWHERE = {
     "body rates in deg/s": "test_consistency.py::test_body_rates_in_deg_s_refused",
     "hypothesis fuzz of the readers (telemetry, pulses, spacecraft, scenario)":
         "test_input_bounds.py::test_fuzz_telemetry",
+    "IVP API: negative mu, zero r0, non-finite values, t_f <= t_s, order above 12":
+        "test_ivp_segments.py::test_bad_input_is_one_line",
 }
 
 

@@ -19,7 +19,7 @@ import pytest
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SCRIPTS = ("inertia_from_slews.py", "thrust_with_inertia_posterior.py", "rwa4_axis.py",
-           "sbc_check.py", "leak_monitor.py")
+           "sbc_check.py", "leak_monitor.py", "ivp_flyby.py")
 SAMPLER_OPTIONS = ("--chains", "--warmup", "--draws")   # every script but the leak monitor's
 TINY = ["--chains", "1", "--warmup", "60", "--draws", "60"]
 
@@ -44,8 +44,9 @@ def test_examples_are_listed_in_their_readme():
 @pytest.mark.parametrize("script", SCRIPTS)
 def test_example_help_names_the_sampler_settings(script, monkeypatch, capsys):
     out = run_example(script, ["--help"], monkeypatch, capsys)
-    sampler = () if script == "leak_monitor.py" else SAMPLER_OPTIONS   # no sampling there
-    for option in (*sampler, "--seed", "--out"):
+    sampler = () if script in ("leak_monitor.py", "ivp_flyby.py") else SAMPLER_OPTIONS
+    seed = () if script == "ivp_flyby.py" else ("--seed",)   # deterministic: nothing drawn
+    for option in (*sampler, *seed, "--out"):
         assert option in out
 
 
@@ -118,3 +119,17 @@ def test_rwa4_axis(tmp_path, monkeypatch, capsys):
     cones = summary["direction"]["cone_deg"]
     assert f"90 % {cones['90']:.3f} deg, 95 % {cones['95']:.3f} deg" in out
     assert re.search(r"posterior mean .* [0-9.]+ deg from the truth", out)
+
+
+def test_ivp_flyby_fits_segments_and_points_through_the_tree(tmp_path, monkeypatch, capsys):
+    """Four days around the flyby: segments within 40 µrad at every sample, a conic about Titan
+    far off, and the tree's Earth direction close to the truth (measured 0.3 µrad)."""
+    out = run_example("ivp_flyby.py", ["--days", "4", "--out", tmp_path / "run"], monkeypatch,
+                      capsys)
+    m = re.search(r"largest angle ([\d.]+) µrad at the samples .* one conic about Titan: "
+                  r"([\d.e+]+) µrad", out)
+    assert m and float(m[1]) <= 40.0 and float(m[2]) > 40.0, out
+    earth = re.search(r"target spacecraft → titan → saturn → sun → earth: largest angle to the "
+                      r"truth ([\d.]+) µrad", out)
+    assert earth and float(earth[1]) < 40.0, out
+    assert (tmp_path / "run" / "segments.csv").exists()

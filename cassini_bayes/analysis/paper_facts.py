@@ -193,6 +193,9 @@ def _rows() -> tuple[PaperFact, ...]:
                   "003 Table 2"),
         PaperFact("lee_pointing_rss_z_mrad", "pointing budget RSS, Z (3σ)", 0.23, 2, "mrad",
                   "003 Table 2"),
+        # Lee §3.3: the inertial vector propagator's modelling accuracy
+        PaperFact("ivp_modelling_error_urad", "IVP modelling error (direction of a propagated "
+                  "vector)", 40.0, 0, "µrad", "003 §3.3.2, Table 2", kind="budget"),
     ]
     # Feldman & Lee (2006) Table 2: adjusted thrusts
     for i, day in enumerate(TABLE2["day"]):

@@ -15,6 +15,7 @@ from cassini_bayes._devices import request_host_devices
 from cassini_bayes.api._budget import BudgetResult, budget
 from cassini_bayes.api._check import TelemetryCheck, check_telemetry
 from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
+from cassini_bayes.api._ivp import TrajectoryFit, fit_trajectory
 from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
 from cassini_bayes.api._leak import LeakResult, monitor_leak
 from cassini_bayes.api._result import (FitResult, collect_warnings, fit_config, write_run,
@@ -23,6 +24,7 @@ from cassini_bayes.api._rwa4 import fit_rwa4, rwa4_sensitivity, rwa4_summary
 from cassini_bayes.api._simulation import Simulation, simulate, truth_document
 from cassini_bayes.api._thrust import (fit_thrust, thrust_baseline, thrust_sensitivity,
                                        thrust_summary)
+from cassini_bayes.ivp import VectorTree, fit_chebyshev_segments, propagate_conic
 from cassini_bayes.spacecraft import Spacecraft, load_spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, read_pulses, read_telemetry
 
@@ -34,4 +36,5 @@ __all__ = [
     "write_run_files", "fit_config", "collect_warnings", "truth_document",
     "fit_health", "HealthResult", "simulate_health_campaign", "monitor_leak", "LeakResult",
     "check_telemetry", "TelemetryCheck", "budget", "BudgetResult",
+    "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory", "TrajectoryFit",
 ]
