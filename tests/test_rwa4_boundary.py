@@ -242,7 +242,9 @@ def test_laplace_step_of_hard_replicates(monkeypatch, seed, index, fallback):
     data = problem.data
     h = -np.asarray(jax.hessian(density)(jnp.asarray(data.centre), data))
     tril = np.asarray(data.tril)
-    np.testing.assert_allclose(tril @ tril.T @ h, np.eye(h.shape[0]), atol=1e-5)
+    # to the finite-difference Hessian's rounding, which another instruction set changes
+    # (a stiff coordinate of sd 1.7e-4): a wrong whitening is off by O(1)
+    np.testing.assert_allclose(tril @ tril.T @ h, np.eye(h.shape[0]), atol=1e-3)
 
 
 class _Prepared(Exception):
