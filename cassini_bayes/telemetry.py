@@ -67,6 +67,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes._file_mode import default_file_mode
+from cassini_bayes._paths import input_path, not_utf8
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
@@ -231,16 +232,16 @@ class PulseAtStartWarning(PulseSpanWarning):
     """A pulse is on at the first sample: only what it does after that sample is used."""
 
 
+class PulsesDroppedWarning(PulseSpanWarning):
+    """Pulses of the log act entirely outside the telemetry span: they are left out."""
+
+
 # --------------------------------------------------------------------------------------------
 # Raw tables: header + columns of strings (CSV) or objects (Parquet)
 
 
 def _check_readable(path: Path, what: str) -> None:
-    if not path.exists():
-        raise InputError(f"{what} file not found; check the path", path=str(path))
-    if path.is_dir():
-        raise InputError(f"is a directory, expected a {what} file (CSV or Parquet)",
-                         path=str(path))
+    input_path(path, what, suffix=None)   # the rule of every file argument: exists, not a folder
     if path.stat().st_size == 0:
         raise InputError(f"{what} file is empty; expected a header line and data rows",
                          path=str(path))
@@ -364,17 +365,8 @@ def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
 
 
 def _not_text(path, what: str) -> str:
-    """Why a file is not text: gzip or zip compression named, else a generic message."""
-    try:
-        with open(path, "rb") as f:
-            magic = f.read(4)
-    except OSError:
-        magic = b""
-    if magic[:2] == b"\x1f\x8b":
-        return f"is gzip-compressed; decompress it (gunzip) and give the {what} CSV"
-    if magic == b"PK\x03\x04":
-        return f"is a zip archive; extract the {what} CSV from it"
-    return f"is not a text CSV file; expected a {what} CSV (or .parquet)"
+    """Why a file is not UTF-8 text (:func:`cassini_bayes._paths.not_utf8`)."""
+    return not_utf8(path, f"{what} CSV")
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,

@@ -20,11 +20,13 @@ from pathlib import Path
 import jax
 import pytest
 
-from cassini_bayes._paths import MODELS_DIR, model_path
+from cassini_bayes._paths import EXPERIMENTS_DIR, MODELS_DIR, SCENARIOS_DIR, input_path, \
+    model_path
 from cassini_bayes.errors import InputError
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import write_telemetry
 from test_inference_inertia import make_slews
+from test_report import make_run
 
 SC = "cassini_2000_03_15"
 TINY = ["--chains", "1", "--warmup", "20", "--draws", "20", "--idealised"]
@@ -330,6 +332,34 @@ def test_directory_or_binary_input_is_one_line(tmp_path, run_cli, command):
         _one_error(code, err, 2, word)
     code, _, err = run_cli("sbc", "toy", "-n", 4, "--out", tmp_path / "o", "--scenario", binary)
     _one_error(code, err, 2, "UTF-8")
+
+
+def test_every_file_argument_follows_one_path_rule(tmp_path, monkeypatch):
+    """:func:`cassini_bayes._paths.input_path`: a file that exists (``.toml`` may be left off)
+    wins; only a bare name falls back to the shipped files; a path with a folder part that does
+    not exist is refused, naming the missing folder (the issue-28 hole: ``simulate
+    typo/slews_post_probe.toml`` ran the shipped scenario)."""
+    from cassini_bayes.experiments import load_experiment
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate.health_campaign import load_campaign
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    monkeypatch.chdir(tmp_path)
+    assert scenario_path("slews_post_probe") == SCENARIOS_DIR / "slews_post_probe.toml"
+    assert input_path("inertia_table1", "experiment", EXPERIMENTS_DIR) == \
+        EXPERIMENTS_DIR / "inertia_table1.toml"
+    for load, name in ((load_scenario, "slews_post_probe.toml"),
+                       (load_campaign, "health_control.toml"),
+                       (load_experiment, "inertia_table1.toml"),
+                       (load_spacecraft, "cassini_post_probe.toml")):
+        with pytest.raises(InputError, match=r"typo/.*the folder typo does not exist"):
+            load(f"typo/{name}")
+    with pytest.raises(InputError, match="no shipped scenario of that name.*slews_post_probe,"):
+        scenario_path("slews_post_probee")
+    (tmp_path / "mine.toml").write_text("")
+    assert scenario_path("mine") == Path("mine.toml")   # a file here, .toml left off
+    with pytest.raises(InputError, match="telemetry file not found; check the path$"):
+        input_path("nope.csv", "telemetry", suffix=None)   # no shipped telemetry to fall to
 
 
 def test_spacecraft_path_with_a_missing_folder_is_an_error(tmp_path, csv, run_cli,

@@ -44,6 +44,7 @@ import jax
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, not_utf8
 from cassini_bayes.analysis.paper_facts import fact
 from cassini_bayes.errors import InputError
 
@@ -429,15 +430,14 @@ def load_experiment(path: str | os.PathLike) -> Experiment:
     p = Path(path)
     if p.is_dir() and (p / "config.toml").exists():  # re-run a run directory
         p = p / "config.toml"
-    if not p.exists():
-        raise InputError(f"experiment file not found: {path} (give a path to an experiments/*.toml"
-                         " file)")
+    else:   # a file, or a shipped experiment's bare name
+        p = input_path(path, "experiment", EXPERIMENTS_DIR)
     try:
-        d = tomllib.loads(p.read_text())
+        d = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"not valid TOML: {e}", path=str(p)) from None
     except UnicodeDecodeError:
-        raise InputError("not a text file; expected an experiment TOML", path=str(p)) from None
+        raise InputError(not_utf8(p, "experiment TOML"), path=str(p)) from None
     name = p.parent.name if p.name == "config.toml" else p.stem
     return experiment_from_dict(d, str(p), name=name)
 
