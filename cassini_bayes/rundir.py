@@ -229,6 +229,7 @@ def check_out(out: str | os.PathLike, *, force: bool = False,
     ``inputs`` are the run's input files and directories: ``out`` may not be, or contain, any of
     them, even with ``force``.
     """
+    force = as_flag(force, "force")
     shown = str(out)
     final = Path(out).expanduser().resolve()
     for i in inputs:

@@ -196,6 +196,7 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
     from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
 
     seed = check_seed(seed)
+    robust, fix_inertia = as_flag(robust, "robust"), as_flag(fix_inertia, "fix_inertia")
     mode = choice("mode", mode, MODES)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
