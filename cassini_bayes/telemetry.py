@@ -96,7 +96,9 @@ __all__ = [
     "validate_telemetry",
     "validate_pulses",
     "check_pulses_in_span",
+    "pulses_in_span",
     "PulseAtStartWarning",
+    "PulsesDroppedWarning",
     "cumulative_on_times",
     "with_on_times",
 ]
@@ -899,7 +901,7 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     command (a few fall time constants) for the thrust fit.
 
     - A pulse that acts entirely before the first sample or from the last sample on cannot change
-      the telemetry: it is dropped with a :class:`PulseSpanWarning`.
+      the telemetry: it is dropped with a :class:`PulsesDroppedWarning`.
     - A pulse still on at the last sample is kept with a :class:`PulseSpanWarning`: the data
       see its on-time up to the last sample, which is what :func:`cumulative_on_times` counts.
     - A pulse already acting at the first sample is kept with a :class:`PulseAtStartWarning`
@@ -926,10 +928,24 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     if np.any(outside):
         warnings.warn(f"{log.source}: {int(outside.sum())} of {len(outside)} pulses lie outside "
                       f"the telemetry span {t0:.10g}..{t1:.10g} s of {tel.source} and are ignored",
-                      PulseSpanWarning, stacklevel=2)
+                      PulsesDroppedWarning, stacklevel=2)
         keep = ~outside
         return PulseLog(log.t_on[keep], log.thruster[keep], log.width[keep], log.source)
     return log
+
+
+def pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) -> PulseLog:
+    """:func:`check_pulses_in_span` for a fit: of its notes only those about what the fit does
+    not see are raised — pulses dropped (:class:`PulsesDroppedWarning`) and pulses on at the
+    first sample (:class:`PulseAtStartWarning`); a pulse still on at the last sample is modelled
+    up to it and needs no word (``check`` reports it)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kept = check_pulses_in_span(log, tel, tail_s=tail_s)
+    for w in caught:
+        if w.category is not PulseSpanWarning:
+            warnings.warn(w.message, w.category, stacklevel=2)
+    return kept
 
 
 def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:
