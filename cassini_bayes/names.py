@@ -7,7 +7,7 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of"]
+           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
@@ -40,3 +40,12 @@ def unit_of(name: str) -> str | None:
     if name in U4_NAMES:
         return "1"
     return None
+
+
+
+def a_kind(kind: str) -> str:
+    """A run kind as a message says it, with its article: ``"an inertia"``, ``"a thrust"``,
+    ``"an RWA4"`` (then ``f"{a_kind(k)} fit"``)."""
+    from cassini_bayes.errors import with_article
+
+    return with_article("RWA4" if kind == "rwa4" else str(kind))

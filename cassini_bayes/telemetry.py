@@ -67,6 +67,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes._file_mode import default_file_mode
+from cassini_bayes._paths import input_path, not_utf8
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
@@ -95,7 +96,9 @@ __all__ = [
     "validate_telemetry",
     "validate_pulses",
     "check_pulses_in_span",
+    "pulses_in_span",
     "PulseAtStartWarning",
+    "PulsesDroppedWarning",
     "cumulative_on_times",
     "with_on_times",
 ]
@@ -231,16 +234,16 @@ class PulseAtStartWarning(PulseSpanWarning):
     """A pulse is on at the first sample: only what it does after that sample is used."""
 
 
+class PulsesDroppedWarning(PulseSpanWarning):
+    """Pulses of the log act entirely outside the telemetry span: they are left out."""
+
+
 # --------------------------------------------------------------------------------------------
 # Raw tables: header + columns of strings (CSV) or objects (Parquet)
 
 
 def _check_readable(path: Path, what: str) -> None:
-    if not path.exists():
-        raise InputError(f"{what} file not found; check the path", path=str(path))
-    if path.is_dir():
-        raise InputError(f"is a directory, expected a {what} file (CSV or Parquet)",
-                         path=str(path))
+    input_path(path, what, suffix=None)   # the rule of every file argument: exists, not a folder
     if path.stat().st_size == 0:
         raise InputError(f"{what} file is empty; expected a header line and data rows",
                          path=str(path))
@@ -364,17 +367,8 @@ def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
 
 
 def _not_text(path, what: str) -> str:
-    """Why a file is not text: gzip or zip compression named, else a generic message."""
-    try:
-        with open(path, "rb") as f:
-            magic = f.read(4)
-    except OSError:
-        magic = b""
-    if magic[:2] == b"\x1f\x8b":
-        return f"is gzip-compressed; decompress it (gunzip) and give the {what} CSV"
-    if magic == b"PK\x03\x04":
-        return f"is a zip archive; extract the {what} CSV from it"
-    return f"is not a text CSV file; expected a {what} CSV (or .parquet)"
+    """Why a file is not UTF-8 text (:func:`cassini_bayes._paths.not_utf8`)."""
+    return not_utf8(path, f"{what} CSV")
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,
@@ -907,7 +901,7 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     command (a few fall time constants) for the thrust fit.
 
     - A pulse that acts entirely before the first sample or from the last sample on cannot change
-      the telemetry: it is dropped with a :class:`PulseSpanWarning`.
+      the telemetry: it is dropped with a :class:`PulsesDroppedWarning`.
     - A pulse still on at the last sample is kept with a :class:`PulseSpanWarning`: the data
       see its on-time up to the last sample, which is what :func:`cumulative_on_times` counts.
     - A pulse already acting at the first sample is kept with a :class:`PulseAtStartWarning`
@@ -934,10 +928,24 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     if np.any(outside):
         warnings.warn(f"{log.source}: {int(outside.sum())} of {len(outside)} pulses lie outside "
                       f"the telemetry span {t0:.10g}..{t1:.10g} s of {tel.source} and are ignored",
-                      PulseSpanWarning, stacklevel=2)
+                      PulsesDroppedWarning, stacklevel=2)
         keep = ~outside
         return PulseLog(log.t_on[keep], log.thruster[keep], log.width[keep], log.source)
     return log
+
+
+def pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) -> PulseLog:
+    """:func:`check_pulses_in_span` for a fit: of its notes only those about what the fit does
+    not see are raised — pulses dropped (:class:`PulsesDroppedWarning`) and pulses on at the
+    first sample (:class:`PulseAtStartWarning`); a pulse still on at the last sample is modelled
+    up to it and needs no word (``check`` reports it)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kept = check_pulses_in_span(log, tel, tail_s=tail_s)
+    for w in caught:
+        if w.category is not PulseSpanWarning:
+            warnings.warn(w.message, w.category, stacklevel=2)
+    return kept
 
 
 def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:

@@ -176,7 +176,8 @@ def test_wrong_inputs_are_input_errors_naming_the_argument(inputs):
         (lambda: cb.load_spacecraft(None), r"expected the path of a spacecraft model"),
         (lambda: cb.check_telemetry(tel_path, wheel_tol_rpm=-2),
          r"wheel_tol_rpm: must be a positive finite number"),
-        (lambda: cb.budget(inertia=42), r"inertia: give a run directory, not int"),
+        (lambda: cb.budget(inertia=42), r"inertia: give a FitResult or a run directory, not "
+                                        r"int"),
         (lambda: cb.budget(inertia=str(tel_path.parent), seed=-1), r"seed=-1"),
         (lambda: cb.fit_health(42, "cassini_post_probe"), r"events: give events.csv files"),
         (lambda: cb.fit_health([("x", tel_path, tel_path)] * 2, "cassini_post_probe"),

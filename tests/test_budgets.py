@@ -297,6 +297,42 @@ def test_library_budget_is_what_the_command_writes(runs, tmp_path, run_cli):
         cb.budget(thrust=runs["thrust"], n_draws=3)
 
 
+def _fit_result(run: Path, kind: str, method: str | None = None):
+    """A :class:`~cassini_bayes.api.FitResult` (unsaved) holding ``run``'s draws."""
+    from types import SimpleNamespace
+
+    import arviz as az
+
+    from cassini_bayes.api import FitResult
+
+    config = {"command": f"fit {kind}", "seed": 7, "inputs": {"telemetry": [{"source": "x"}]},
+              "options": {"method": method} if method else {}, "spacecraft": {"name": "m"}}
+    summary = {"kind": kind, "diagnostics": {"converged": True}, "warnings": []}
+    return FitResult(kind, SimpleNamespace(idata=az.from_netcdf(run / "posterior.nc")), None,
+                     None, config, summary)
+
+
+def test_budget_takes_fit_results(runs, tmp_path):
+    """Issue 28: ``fit_thrust`` took an inertia fit's FitResult but ``budget`` refused one;
+    ``budget`` takes FitResults as it takes run directories — the same lines from the same
+    draws — records how to redo them in config.toml, and refuses one of another kind (a thrust
+    fit carries inertia draws too: never taken as the inertia posterior)."""
+    import cassini_bayes as cb
+
+    fits = {k: _fit_result(runs[k], k, "rwa" if k == "rwa4" else None) for k in runs}
+    by_dir = cb.budget(**runs, n_draws=200, seed=3)
+    by_fit = cb.budget(**fits, n_draws=200, seed=3)
+    assert by_fit.summary["rows"] == by_dir.summary["rows"]
+    assert by_fit.config["inputs"]["thrust"] == {"command": "fit thrust", "seed": 7,
+                                                 "inputs": {"telemetry": [{"source": "x"}]}}
+    out = by_fit.save(tmp_path / "b")
+    assert "&lt;fit thrust result, seed 7&gt;" in (out / "report.html").read_text()
+    with pytest.raises(InputError, match=r"^inertia: a thrust fit; give an inertia fit's"):
+        cb.budget(inertia=fits["thrust"])
+    with pytest.raises(InputError, match=r"rwa4: give a FitResult or a run directory, not int"):
+        cb.budget(rwa4=3)
+
+
 @pytest.mark.parametrize("args, words", [
     ((), "give at least one run directory"),
     (("--inertia", "{thrust}"), "--inertia"),

@@ -336,6 +336,54 @@ def test_cli_report_rebuilds_the_page(tmp_path, run_cli):
     _assert_self_contained(html)
 
 
+def test_report_refuses_files_of_different_runs(tmp_path, run_cli):
+    """Issue 28: a thrust run's posterior.nc copied into an inertia run gave exit 0 and an
+    inertia title over thrust variables. ``report`` checks that the run's files belong
+    together — summary.json's kind and parameters against posterior.nc's variables,
+    config.toml's command and sampler against both — and refuses in one line naming the file;
+    nothing is written."""
+    import shutil
+
+    def case(name, edit):
+        run = make_run(tmp_path / name, "inertia", draws=100)
+        edit(run)
+        code, _, err = run_cli("report", run)
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert "different runs" in err and not (run / "report.html").exists()
+        return err
+
+    thrust = make_run(tmp_path / "thrust", "thrust", draws=100)
+    err = case("copied", lambda r: shutil.copy(thrust / "posterior.nc", r / "posterior.nc"))
+    assert "posterior.nc: holds the draws of a thrust fit, but summary.json is an inertia" in err
+
+    def renamed(run):   # summary.json of the same kind, reporting another parameter
+        s = json.loads((run / "summary.json").read_text())
+        s["parameters"]["F"] = s["parameters"].pop("Ixx")
+        s["kind"] = None
+        (run / "summary.json").write_text(json.dumps(s))
+
+    assert "posterior.nc: has no draws of F, which summary.json reports" in case("params",
+                                                                                 renamed)
+
+    def command(run):
+        (run / "config.toml").write_text('command = "fit thrust"\n')
+
+    assert "config.toml: written by 'cassini-bayes fit thrust', but the run is an inertia" in \
+        case("command", command)
+
+    def sampler(run):
+        (run / "config.toml").write_text('command = "fit inertia"\n[sampler]\nchains = 4\n'
+                                         'draws = 1000\n')
+
+    assert "posterior.nc: holds 100 draw(s), but config.toml asked for draws = 1000" in \
+        case("sampler", sampler)
+    # the same files of one run pass
+    run = make_run(tmp_path / "ok", "inertia", draws=100)
+    (run / "config.toml").write_text('command = "fit inertia"\n[sampler]\nchains = 4\n'
+                                     'draws = 100\n')
+    assert run_cli("report", run)[0] == 0
+
+
 def test_cli_report_missing_posterior_is_one_line_exit_2(tmp_path, run_cli):
     code, out, err = run_cli("report", tmp_path)
     assert code == 2

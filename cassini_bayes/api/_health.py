@@ -140,9 +140,10 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
         summary (default :data:`~cassini_bayes.inference.health.summary.TAU_SD_FRAC`).
     """
     from cassini_bayes.api._inputs import spacecraft_input
+    from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_thrust_data
     from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
-    from cassini_bayes.inference.health.summary import TAU_SD_FRAC
+    from cassini_bayes.inference.health.summary import TAU_SD_FRAC, left_out_channels
     from cassini_bayes.rundir import file_record
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
@@ -153,15 +154,17 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
     sc, sc_record, _ = spacecraft_input(spacecraft)
     files = read_event_list(events)
     summaries = []
-    for day, tel_path, log_path in files:
-        tel, log = read_telemetry(tel_path), read_pulses(log_path)
-        check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_* columns
-        summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
+    with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
+        for day, tel_path, log_path in files:
+            tel, log = read_telemetry(tel_path), read_pulses(log_path)
+            check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_*
+            summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
     prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,
                         nominal_thrust_n=float(sc.thrust)).check()
     post = health_posterior([f[0] for f in files], np.array([s.log_thrust for s in summaries]),
                             np.array([np.sqrt(np.diag(s.cov)) for s in summaries]), prior)
     summary = health_summary(post, fraction)
+    summary["warnings"] = warns + left_out_channels(summaries, [f[0] for f in files])
     config = {"command": "fit health", "version": __version__,
               "inputs": {"events": [{"date_days": d, "telemetry": file_record(t),
                                      "pulses": file_record(p)} for d, t, p in files],

@@ -8,6 +8,7 @@ from typing import Sequence
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
                                        shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
+from cassini_bayes.errors import as_flag
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
@@ -91,6 +92,7 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
 
     seed = check_seed(seed)
+    robust, torque = as_flag(robust, "robust"), as_flag(torque, "torque")
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)

@@ -10,7 +10,7 @@ from typing import Sequence
 
 import numpy as np
 
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
@@ -36,7 +36,7 @@ def shows_progress(fit):
     def wrapper(*args, progress: bool = False, **kwargs):
         from cassini_bayes.inference.progress import shown
 
-        with shown(bool(progress)):
+        with shown(as_flag(progress, "progress")):
             return fit(*args, progress=progress, **kwargs)
 
     return wrapper
@@ -138,6 +138,7 @@ def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = Tru
     read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics)."""
     from cassini_bayes.telemetry import read_telemetry, validate_telemetry
 
+    check_units = as_flag(check_units, "check_units")
     if isinstance(telemetry, Telemetry):
         return validate_telemetry(telemetry, check_units=check_units)
     if not _is_path(telemetry):
@@ -227,4 +228,4 @@ def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
             raise InputError(f"{arg(name, value)}: use an integer in {lo} .. {hi}")
     target_accept = number("target_accept", target_accept, lo=0.5, hi=0.999)
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
-                           target_accept=target_accept, progress=bool(progress))
+                           target_accept=target_accept, progress=as_flag(progress, "progress"))

@@ -76,6 +76,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
     """
     from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
+    from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_telemetry_data
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
@@ -98,8 +99,9 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         raise InputError(f"got {len(logs)} pulse logs; give one",
                          path=spelled("--pulses", "pulses"))
     log = logs[0] if logs else None
-    check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
-    inp = leak_inputs(tel, log, sc)
+    with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
+        check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
+        inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, onset_step_s=onset_step_s,
                           p_detect=p_detect)
@@ -115,6 +117,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
                 "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
                 "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta},
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
+        "warnings": warns,
     }
     config = {"command": "monitor leak", "version": __version__,
               "inputs": {"telemetry": tel_records[0], "spacecraft": sc_record,

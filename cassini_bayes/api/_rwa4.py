@@ -8,7 +8,7 @@ from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler
                                        shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, as_flag
 
 TARGET_ACCEPT = 0.95
 """The RWA4 fits' default NUTS target acceptance (the other fits': 0.9). Measured on the 80
@@ -132,6 +132,7 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
 
     seed = check_seed(seed)
+    robust = as_flag(robust, "robust")
     method = choice("method", method, METHODS)
     prior = choice("prior", prior, PRIORS)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)

@@ -10,7 +10,8 @@ from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_i
                                        sampler_settings, shows_progress, spacecraft_input,
                                        telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, as_flag
+from cassini_bayes.names import a_kind
 
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
@@ -133,8 +134,8 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
                          "other; give one")
     if isinstance(inertia_posterior, FitResult):
         if inertia_posterior.kind != "inertia":
-            raise InputError(f"{arg('inertia_posterior')}: a {inertia_posterior.kind} fit; give "
-                             "the result (or run directory) of an inertia fit")
+            raise InputError(f"{arg('inertia_posterior')}: {a_kind(inertia_posterior.kind)} "
+                             "fit; give the result (or run directory) of an inertia fit")
         cfg = inertia_posterior.config
         entry = {"command": cfg["command"], "seed": cfg["seed"], "inputs": cfg["inputs"]}
         return (inertia_from_idata(inertia_posterior.idata, "inertia_posterior"),
@@ -195,6 +196,7 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
     from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
 
     seed = check_seed(seed)
+    robust, fix_inertia = as_flag(robust, "robust"), as_flag(fix_inertia, "fix_inertia")
     mode = choice("mode", mode, MODES)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)

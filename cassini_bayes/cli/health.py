@@ -55,6 +55,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
             res.save(out, force=force)
         s = res.summary
         lo, hi = s["change_date_days"]["interval_90"]
+        for line in s.get("warnings", []):
+            console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         console.print(f"[green]✓[/green] {s['n_events']} events: P(change) = {s['p_change']:.3f}"
                       f" (90 % date [{lo:.0f}, {hi:.0f}] d), P(Z3 or Z4 > {fraction:.0%} down) "
                       f"= {s['p_down_last']['Z3|Z4']:.3f}, {time.perf_counter() - t0:.1f} s "

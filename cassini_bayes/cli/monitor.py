@@ -60,6 +60,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                            threshold_nms=threshold, t_limit_h=t_limit)
         res.save(out, force=force)
         b, lee = res.summary["bayes"], res.summary["lee"]
+        for line in res.summary.get("warnings", []):
+            console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         said = (f"leak in {b['thruster']} at {b['isolation_time_s']:.0f} s"
                 if b["thruster"] else "leak, thruster not isolated" if b["detection_time_s"]
                 else "no leak")

@@ -26,10 +26,8 @@ from cassini_bayes.errors import InputError
 from cassini_bayes.experiments._core import (
     Experiment,
     RunRecord,
-    atomic_dir,
     experiment_from_dict,
     experiment_key,
-    prepare_out_dir,
     registered_kinds,
     run_into,
 )
@@ -120,13 +118,16 @@ def reproduce(out: str | os.PathLike, *, seed: int = 0, quick: bool = False, for
     An experiment that raises is recorded as failed (its one-line error on the page) and the others
     still run.
     """
+    from cassini_bayes.rundir import RunDir
+
     out = Path(out)
-    prepare_out_dir(out, force)
+    run_dir = RunDir(out, force=force, inputs=[experiments_dir])   # a bad out: before any work
     experiments, skipped = discover_experiments(experiments_dir)
     emit = on_event or (lambda *a: None)
     t0 = time.perf_counter()
     statuses = []
-    with atomic_dir(out) as tmp:
+    with run_dir as rd:
+        tmp = rd.path
         n = len(experiments)
         for i, exp in enumerate(experiments):
             emit("start", i, n, exp.name)

@@ -4,7 +4,8 @@
 Only ``posterior.nc`` is required. A missing ``summary.json`` costs the baseline/truth columns (the
 kind is then recognised from the posterior's variable names); a missing ``config.toml`` costs the
 configuration listing. Anything present but unreadable is an
-:class:`~cassini_bayes.errors.InputError`.
+:class:`~cassini_bayes.errors.InputError`, and so are files that belong to different runs
+(:func:`check_same_run`: a page must never put one run's title and numbers over another's draws).
 """
 
 from __future__ import annotations
@@ -20,11 +21,12 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
+from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_kind
 
-__all__ = ["RunData", "load_run", "flatten_draws", "KINDS"]
+__all__ = ["RunData", "load_run", "flatten_draws", "KINDS", "check_same_run"]
 
 KINDS = ("inertia", "thrust", "rwa4")
+_FIT_COMMANDS = {f"fit {k}": k for k in KINDS}
 
 
 @dataclass(frozen=True)
@@ -69,6 +71,41 @@ def _infer_kind(names: set[str]) -> str:
     if set(INERTIA_NAMES) <= names:
         return "inertia"
     return "unknown"
+
+
+def check_same_run(run_dir: Path, idata, summary: dict, config: dict | None) -> None:
+    """Refuse, naming the file, a run directory whose files come from different runs (one copied
+    over from another run): the kind ``summary.json`` records against the draws in
+    ``posterior.nc`` (their variable names) and against the command in ``config.toml``; the
+    parameters ``summary.json`` reports must all be in ``posterior.nc``; and the chains and
+    draws ``config.toml``'s ``[sampler]`` asked for must be the posterior's."""
+    nc, sj, ct = run_dir / "posterior.nc", run_dir / "summary.json", run_dir / "config.toml"
+    redo = "the run directory's files come from different runs: re-run the fit"
+    names = set(idata.posterior.data_vars)
+    drawn = _infer_kind(names)
+    said = summary.get("kind")
+    if said in KINDS and drawn in KINDS and said != drawn:
+        raise InputError(f"{nc}: holds the draws of {a_kind(drawn)} fit, but {sj.name} is "
+                         f"{a_kind(said)} fit's; {redo}")
+    reported = [n for n in (summary.get("parameters") or {}) if n not in names]
+    if reported:
+        raise InputError(f"{nc}: has no draws of {', '.join(reported[:3])}, which {sj.name} "
+                         f"reports; {redo}")
+    if not config:
+        return
+    commanded = _FIT_COMMANDS.get(config.get("command"))
+    kind = said if said in KINDS else drawn
+    if commanded is not None and kind in KINDS and commanded != kind:
+        raise InputError(f"{ct}: written by 'cassini-bayes {config['command']}', but the run is "
+                         f"{a_kind(kind)} fit ({sj.name if said in KINDS else nc.name}); "
+                         f"{redo}")
+    sampler = config.get("sampler") if isinstance(config.get("sampler"), dict) else {}
+    for dim, key in (("chain", "chains"), ("draw", "draws")):
+        asked, got = sampler.get(key), idata.posterior.sizes.get(dim)
+        if isinstance(asked, int) and not isinstance(asked, bool) and got is not None \
+                and asked != got:
+            raise InputError(f"{nc}: holds {got} {dim}(s), but {ct.name} asked for "
+                             f"{key} = {asked}; {redo}")
 
 
 def load_run(run_dir: str | Path) -> RunData:
@@ -125,15 +162,16 @@ def load_run(run_dir: str | Path) -> RunData:
     else:
         notes.append("summary.json not found: baseline and truth columns are empty")
 
-    config_text = None
+    config_text, config = None, None
     ct = run_dir / "config.toml"
     if ct.is_file():
         config_text = ct.read_text(encoding="utf-8", errors="replace")
         try:
-            tomllib.loads(config_text)
+            config = tomllib.loads(config_text)
         except tomllib.TOMLDecodeError as e:
             notes.append(f"config.toml is not valid TOML ({e})")
 
+    check_same_run(run_dir, idata, summary, config)
     kind = summary.get("kind") or _infer_kind(set(idata.posterior.data_vars))
     if kind not in KINDS:
         notes.append(f"unknown run kind {kind!r}: kind-specific sections are skipped")

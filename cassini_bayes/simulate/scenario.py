@@ -49,15 +49,16 @@ the spacecraft-model ranges of :mod:`cassini_bayes.spacecraft`; ``seed`` in 0 ..
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR
+from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR, input_path
 from cassini_bayes._toml import is_numbers, read_toml
-from cassini_bayes.errors import InputError, as_path
+from cassini_bayes.errors import InputError
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
                                       load_spacecraft, tilted_axis)
@@ -279,12 +280,11 @@ def check_size(s: Scenario) -> None:
                          f"{MAX_SAMPLES} samples; split the run (docs/limits.md)", path=s.source)
 
 
-def scenario_path(name: str) -> Path:
-    """Path of a scenario: a file path, or the stem of a file under ``experiments/scenarios/``."""
-    p = Path(name)
-    if p.suffix != ".toml":
-        p = p.with_suffix(".toml")
-    return p if p.is_absolute() or p.exists() else SCENARIOS_DIR / p.name
+def scenario_path(name: str | os.PathLike, what: str = "scenario") -> Path:
+    """Path of a scenario (or campaign): a file, or the bare name of one shipped under
+    ``experiments/scenarios/`` (:func:`cassini_bayes._paths.input_path`, the rule of every file
+    argument)."""
+    return input_path(name, what, SCENARIOS_DIR)
 
 
 class _Reader:
@@ -701,9 +701,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
-    if as_path(path, "a scenario .toml file or a shipped scenario's name").is_dir():
-        raise InputError("is a directory, expected a scenario .toml file", path=str(path))
-    p = scenario_path(str(path))
+    p = scenario_path(path)
     d = read_toml(p, "scenario", "experiments/scenarios/")
     if "campaign" in d:
         raise InputError("a thruster-health campaign file, not a scenario: simulate it with "

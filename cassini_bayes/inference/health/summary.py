@@ -43,8 +43,10 @@ from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.thrust import regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs, moment_matrix
+from cassini_bayes.telemetry import pulses_in_span
 
-__all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "event_summary", "channel_design"]
+__all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "event_summary", "channel_design",
+           "left_out_channels"]
 
 CHANNELS = ("Z1", "Z2", "Z3", "Z4", "Y13", "Y24")
 """The identifiable thrust combinations of one event (Feldman & Lee Eqs 19 and 21)."""
@@ -156,7 +158,15 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
     ``lags``: Newey-West bandwidth in samples (default ``⌈4 (n/100)^{2/9}⌉ · 3``, three times the
     usual rule: the cumulative regression's residuals are long-correlated). ``tau_sd_frac``:
     per-event variation of the time constants propagated into the covariance.
+
+    Pulses acting entirely outside the telemetry are left out with a warning
+    (:func:`~cassini_bayes.telemetry.pulses_in_span`); a channel that fired but is not reported
+    (fewer than ``min_pulses`` pulses, or a thrust estimate that is not positive) is NaN in
+    ``log_thrust`` with a finite ``thrust_n`` (:func:`left_out_channels` says so for a fit).
     """
+    if pulses is not None:
+        p = spacecraft.pulse   # (its thrust is negligible 40 fall times after the command)
+        pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + 40.0 * p.tau_fall)
     if pulses is None or np.asarray(pulses.t_on).size == 0:
         raise InputError("has no thruster pulses; a thrust-health event needs the pulse log of a "
                          "biasing event", path=getattr(tel, "source", "telemetry"))
@@ -202,3 +212,20 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
     cov = np.full((6, 6), np.nan)
     cov[np.ix_(idx[keep], idx[keep])] = c_log[np.ix_(keep, keep)]
     return EventSummary(log_thrust, cov, thrust, n_pulses, rms)
+
+
+def left_out_channels(summaries, dates_days) -> list[str]:
+    """One warning line per channel that fired in some events but is left out of some of them
+    (fewer than ``min_pulses`` pulses, or a thrust estimate that is not positive): those pulses
+    are measured and not used, and a fit must say so (one line per channel, the events named by
+    their dates in days)."""
+    lines = []
+    for k, name in enumerate(CHANNELS):
+        fired = [s.n_pulses[k] > 0 for s in summaries]
+        out = [d for s, d, f in zip(summaries, dates_days, fired) if f and not s.observed[k]]
+        if out:
+            days = ", ".join(f"{d:g}" for d in out[:5]) + (", …" if len(out) > 5 else "")
+            lines.append(f"channel {name} is left out of {len(out)} of the {sum(fired)} events in "
+                         f"which it fired (fewer than {MIN_PULSES} pulses, or a thrust estimate "
+                         f"that is not positive): days {days}")
+    return lines

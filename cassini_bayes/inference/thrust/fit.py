@@ -175,6 +175,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     PulseAtStartWarning
         A pulse acts on the first sample of an event (only its impulse after that sample is
         modelled: the event's free offset absorbs the rest).
+    PulsesDroppedWarning
+        Pulses of a log act entirely outside their event's telemetry and are left out.
     """
     from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
