@@ -52,7 +52,7 @@ from cassini_bayes.errors import InputError, UnidentifiableError, arg
 from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rotvec
 from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
+from cassini_bayes.telemetry import (RPM_TO_RAD_S, PulseLog, PulseSpanWarning,
                                      Telemetry, check_pulses_in_span, cumulative_on_times)
 
 # The checks' JAX work as four programs: called eagerly on NumPy arrays, every frames function
@@ -148,8 +148,6 @@ unsigned in :func:`_balance_error`."""
 AXIS_ANGLE_MAX_DEG = 30.0
 """Largest accepted angle between a wheel's fitted momentum and its axis in the model: a flipped
 sign gives 180°, another wheel's column on Cassini 90° (its wheel axes are orthogonal)."""
-FREE_WHEEL = "RWA4"
-"""The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
 
 EXCITATION_MIN = 1e-3
 """Second-largest over largest eigenvalue of ``Σ ω ωᵀ dt``: below it the slews turn the
@@ -533,15 +531,17 @@ class _Balance(NamedTuple):
     body: np.ndarray                # (n, 3) A(q)ᵀ I_pred ω, each stretch de-meaned
     known: list[str]                # the known wheels running
     known_cols: list[np.ndarray]    # per known wheel, (n, 3, 3): −ρ_k A(q)ᵀ e_j, de-meaned
-    free_cols: list[np.ndarray]     # the free wheel's three columns, if it runs
+    free: list[str]                 # the articulated wheels running
+    free_cols: list[np.ndarray]     # per free wheel, its three columns
     stretches: int
 
 
 def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None,
-             free_wheel: str | None) -> _Balance | None:
+             free_wheels: Sequence[str]) -> _Balance | None:
     """The balance's pieces per firing-free stretch, or ``None`` (no wheel, no stretch)."""
     names = tel.active_wheels()
-    free = [n for n in names if free_wheel is not None and n.upper() == free_wheel.upper()]
+    free_upper = {n.upper() for n in free_wheels}
+    free = [n for n in names if n.upper() in free_upper]
     known = [n for n in names if n not in free]
     if not names:
         return None
@@ -557,14 +557,14 @@ def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None
                      np.asarray(tel.omega, float)[keep])
     known_cols = [-np.asarray(tel.wheel_rate(n), float)[keep][:, None, None] * a_t
                   for n in known]
-    free_cols = ([-np.asarray(tel.wheel_rate(free[0]), float)[keep][:, None] * a_t[:, :, j]
-                  for j in range(3)] if free else [])
+    free_cols = [-np.asarray(tel.wheel_rate(f), float)[keep][:, None] * a_t[:, :, j]
+                 for f in free for j in range(3)]
     lab = labels[keep]
     for s in good:
         m = lab == s
         for x in [body, *known_cols, *free_cols]:
             x[m] -= x[m].mean(0)
-    return _Balance(body, known, known_cols, free_cols, len(good))
+    return _Balance(body, known, known_cols, free, free_cols, len(good))
 
 
 def _solve(design: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -598,7 +598,7 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
 
 def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
                          on_times: np.ndarray | None = None,
-                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
+                         free_wheels: Sequence[str] | None = None) -> MomentumScale | None:
     """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
 
     Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
@@ -606,14 +606,16 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
         ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
 
     with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
-    from the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
-    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
-    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
+    from the model. Each articulated wheel (``free_wheels``, default the model's
+    ``articulated`` wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures,
+    Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other
+    wheel running ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
     removes ``H_s``. The same balance with a free vector ``w_k`` for every known wheel in place
     of ``κ J_k g_k`` is :attr:`MomentumScale.axes`. ``None`` when no wheel runs, no stretch has
     three samples, or nothing varies.
     """
-    bal = _balance(tel, spacecraft, on_times, free_wheel)
+    free_wheels = spacecraft.articulated_wheels if free_wheels is None else free_wheels
+    bal = _balance(tel, spacecraft, on_times, free_wheels)
     if bal is None:
         return None
     cols = list(bal.free_cols)
@@ -628,8 +630,9 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     theta, align = solved
     if bal.known:
         scale = float(theta[0])
-    else:     # the free wheel alone: its momentum's size
-        scale = float(np.linalg.norm(theta) / spacecraft.wheel(free_wheel).inertia)
+    else:     # the free wheels alone: their momenta's sizes
+        scale = float(np.median([np.linalg.norm(theta[3 * k:3 * k + 3])
+                                 / spacecraft.wheel(f).inertia for k, f in enumerate(bal.free)]))
     return MomentumScale(scale, align, bal.stretches, _wheel_axes(bal, spacecraft))
 
 
@@ -761,10 +764,14 @@ def check_pulses_match_on_times(tel: Telemetry, log: PulseLog) -> None:
     """
     if tel.on_times is None:
         return
+    if tuple(log.thruster_names) != tuple(tel.thruster_names):
+        raise InputError(f"its thrusters ({', '.join(log.thruster_names)}) are not the on_* "
+                         f"columns' of {tel.source} ({', '.join(tel.thruster_names)}); read both "
+                         "with the same spacecraft model", path=log.source)
     derived = _derived_on_times(tel, log)
     col_all = np.asarray(tel.on_times, float)
     t = np.asarray(tel.t, float)
-    for k, name in enumerate(THRUSTER_NAMES):
+    for k, name in enumerate(tel.thruster_names):
         col, der = col_all[:, k] - col_all[0, k], derived[:, k]
         widths = log.width[log.thruster == k]
         slack = max(float(widths.max()) if widths.size else 0.0, float(np.diff(col).max())) + 1e-6
