@@ -80,6 +80,7 @@ __all__ = [
     "RPM_TO_RAD_S",
     "WHEEL_NAMES",
     "IDLE_RPM",
+    "IDLE_NOISE_SD",
     "THRUSTER_NAMES",
     "QUAT_NORM_TOL",
     "OMEGA_MAX",
@@ -103,6 +104,8 @@ __all__ = [
     "PulseAtStartWarning",
     "cumulative_on_times",
     "with_on_times",
+    "white_noise_sd",
+    "RATE_NOISE_FLOORS",
 ]
 
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
@@ -112,6 +115,10 @@ IDLE_RPM = 1.0
 """A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: its momentum,
 0.16 kg m² × 1 rpm = 0.017 N m s rms, is ~1000× below what a slew exchanges (18–22 N m s);
 tachometer noise about 0 rpm (±0.3 rpm) is idle, a wheel through zero speed is not."""
+IDLE_NOISE_SD = 3.0
+"""… or whose rms rate is at most this many times its own white noise
+(:func:`white_noise_sd`): a coarse tachometer's noise about 0 rpm (a CubeSat's hall sensors,
+±1 rpm steps) is idle too."""
 
 
 @dataclass(frozen=True)
@@ -151,15 +158,17 @@ class Telemetry:
 
     def active_mask(self) -> np.ndarray:
         """(k,) which wheels carry momentum: finite rates whose root mean square exceeds
-        :data:`IDLE_RPM`. A wheel written as 0 rpm (or within tachometer noise of it) all along
-        is as good as off: its momentum is below the noise, and a wheel the data cannot see must
-        not get a spin-inertia scale of its own (it moved the inertia fit by −2.4 %)."""
+        :data:`IDLE_RPM` and :data:`IDLE_NOISE_SD` times their white noise. A wheel written as
+        0 rpm (or within tachometer noise of it) all along is as good as off: its momentum is
+        below the noise, and a wheel the data cannot see must not get a spin-inertia scale of
+        its own (it moved the inertia fit by −2.4 %)."""
         rates = np.asarray(self.wheel_rates, float)
         finite = np.isfinite(rates)
         n = finite.sum(axis=0)
         ms = np.where(finite, rates, 0.0) ** 2
         rms = np.sqrt(ms.sum(axis=0) / np.maximum(n, 1))
-        return (n > 0) & (rms > IDLE_RPM * RPM_TO_RAD_S)
+        noise = np.array([white_noise_sd(rates[:, j]) for j in range(rates.shape[1])])
+        return (n > 0) & (rms > np.maximum(IDLE_RPM * RPM_TO_RAD_S, IDLE_NOISE_SD * noise))
 
     def active_wheels(self) -> tuple[str, ...]:
         """Names of the wheels that carry momentum (:meth:`active_mask`)."""
@@ -1069,3 +1078,35 @@ def with_on_times(tel: Telemetry, pulses: PulseLog | None) -> Telemetry:
     pulses = check_pulses_in_span(pulses, tel)
     return Telemetry(tel.t, tel.q, tel.omega, tel.wheel_rates, tel.wheel_names,
                      cumulative_on_times(pulses, tel.t), tel.source, pulses.thruster_names)
+
+
+# --------------------------------------------------------------------------------------------
+# Noise
+
+_MAD_TO_SD = 1.4826
+RATE_NOISE_FLOORS = (1e-9, 1e-7)
+"""rad/s: body-rate and wheel-rate noise levels are floored here, so that noise-free synthetic
+data keep finite noise priors and thresholds (the noise priors and the input checks)."""
+
+
+def white_noise_sd(x: np.ndarray, *, differenced: bool = False) -> float:
+    """Robust sd of white noise on a smooth signal ``x`` (n, ...) sampled along axis 0: the MAD
+    of its second differences (all components pooled, non-finite values left out) ÷ √6.
+
+    The one white-noise estimator of the package (noise priors, input checks). For white noise
+    of sd ``σ`` second differences have sd ``√6 σ``; the median absolute deviation (× 1.4826,
+    the normal's MAD-to-sd factor) ignores the few samples where the signal itself bends (a
+    pulse, a wheel ramp, the slew profile).
+
+    ``differenced``: ``x`` already holds the signal's first differences (e.g. attitude
+    increments ``rotvec(q_{t+1} q_t⁻¹)``), so one more difference is taken. 0 when the signal
+    has fewer than four samples or no finite difference.
+    """
+    order = 1 if differenced else 2
+    if x.shape[0] < 2 + order or x.size == 0:
+        return 0.0
+    d = np.diff(x, n=order, axis=0).ravel()
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0
+    return float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
