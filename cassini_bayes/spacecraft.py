@@ -27,11 +27,12 @@ import numpy as np
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError, as_path
+from cassini_bayes.names import THRUSTER_NAMES
 
 __all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
            "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
            "eq16_moment_matrix",
-           "spacecraft_from_dict", "CASSINI_WHEEL_AXES", "CASSINI_THRUSTER_NAMES"]
+           "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
 
 # Feldman & Lee (2006) App. A: RWA → body matrix T; its columns are the spin axes of RWA1-3.
 _S2, _S3, _S6 = np.sqrt(2.0), np.sqrt(3.0), np.sqrt(6.0)
@@ -40,8 +41,6 @@ CASSINI_T = np.array(
 )
 CASSINI_WHEEL_AXES = CASSINI_T.T.copy()  # rows: RWA1, RWA2, RWA3 spin axes (body)
 
-CASSINI_THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
-"""Cassini's eight A-branch RCS thrusters, in the order of Feldman & Lee Eq 16."""
 # Feldman & Lee (2006) Eq 16: Z1..Z4 at [±Lx, ±Ly, Lzz], Y1..Y4 at [±Lx, ±Ly, Lzy]; the Z-facing
 # thrusters push along −Z, Y1, Y2 along −Y and Y3, Y4 along +Y (the directions for which r × F
 # reproduces every entry of Eq 16's moment matrix, so that Y2 with Y4 turns about +Z).
@@ -117,7 +116,7 @@ def eq16_thrusters(lx_m: float, ly_m: float, lzy_m: float, lzz_m: float) -> tupl
     z = np.array([lzz_m] * 4 + [lzy_m] * 4, float)
     pos = np.stack([_EQ16_SIGNS_XY[:, 0] * lx_m, _EQ16_SIGNS_XY[:, 1] * ly_m, z], -1)
     return tuple(Thruster(n, pos[k], _EQ16_DIRECTIONS[k].copy(), None, "A")
-                 for k, n in enumerate(CASSINI_THRUSTER_NAMES))
+                 for k, n in enumerate(THRUSTER_NAMES))
 
 
 def moment_matrix(thrusters: Sequence[Thruster], com_m=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -262,7 +261,7 @@ class Spacecraft:
         """Whether the thrusters are Cassini's eight in the layout of Feldman & Lee Eq 16 (the
         names ``Z1 … Y4`` in order, its directions and position signs, one height per group):
         what the RCS dead-band controller's thruster pairs and the thrust fits assume."""
-        if self.thruster_names != CASSINI_THRUSTER_NAMES:
+        if self.thruster_names != THRUSTER_NAMES:
             return False
         pos = np.stack([s.position for s in self.thrusters])
         dirs = np.stack([s.direction for s in self.thrusters])

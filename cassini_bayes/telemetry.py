@@ -248,23 +248,24 @@ def _names_of(spacecraft) -> tuple[tuple[str, ...], tuple[str, ...], str]:
     """``(wheel names, thruster names, whose)`` of the file layout: the model's, or Cassini's
     (the format's default) when ``spacecraft`` is ``None``."""
     if spacecraft is None:
-        return WHEEL_NAMES, THRUSTER_NAMES, "Cassini's (the default without a spacecraft model)"
+        return (WHEEL_NAMES, THRUSTER_NAMES,
+                "Cassini's layout (the default without a spacecraft model)")
     return (tuple(spacecraft.wheel_names), tuple(spacecraft.thruster_names),
-            f"the spacecraft model {spacecraft.name!r}'s")
+            f"the spacecraft model {spacecraft.name!r}")
 
 
 def _unknown_column(h: str, wheel_names, thruster_names, whose: str,
                     no_model: bool) -> str:
     """Why header ``h`` is unknown, naming the wheels or thrusters ``whose`` layout expects."""
-    give = (" or give the spacecraft model whose wheels and thrusters these are (--spacecraft)"
+    give = (", or give the spacecraft model whose wheels and thrusters these are (--spacecraft)"
             if no_model else "")
     if h.lower().startswith("on_"):
         have = " ".join(_on_cols(thruster_names)) or "none: it has no thrusters"
-        return (f"column '{h}' is the on-time of no thruster of {whose} (on_* columns: {have}); "
-                f"rename or remove it{give}")
+        return (f"column '{h}' is the on-time of no thruster of {whose} (its on_* columns: "
+                f"{have}); rename or remove it{give}")
     wheels = " ".join(n.lower() for n in wheel_names)
     return (f"unknown column '{h}': neither a required column ({' '.join(_REQUIRED)}) nor a "
-            f"wheel of {whose} (wheel columns: {wheels}); rename or remove it{give}")
+            f"wheel column of {whose} ({wheels}); rename or remove it{give}")
 
 
 class PulseSpanWarning(UserWarning):
@@ -956,9 +957,8 @@ def read_pulses(path: str | os.PathLike, *, spacecraft=None) -> PulseLog:
     name = str(path)
     _, names, whose = _names_of(spacecraft)
     if not names:
-        raise InputError(f"a pulse log lists thruster firings, but {whose} layout has no "
-                         "thrusters; give the model of the spacecraft that fired them",
-                         path=name)
+        raise InputError(f"a pulse log lists thruster firings, but {whose} has no thrusters; "
+                         "give the model of the spacecraft that fired them", path=name)
     header, cells = _read_table(p, "pulse-log", allow_empty=True)
     idx = _map_header(header, _PULSE_COLS, name, "t_on thruster width")
     for c in _PULSE_COLS:
@@ -975,7 +975,7 @@ def read_pulses(path: str | os.PathLike, *, spacecraft=None) -> PulseLog:
         key = "" if c is None else str(c).strip().lower()
         if key not in lookup:
             raise InputError(f"column 'thruster', data row {i + 1} (t_on = {t_on[i]:.10g} s): "
-                             f"unknown thruster '{c}'; {whose} thrusters are "
+                             f"unknown thruster '{c}'; the thrusters of {whose} are "
                              f"{' '.join(names)}", path=name)
         thr[i] = lookup[key]
     return validate_pulses(PulseLog(t_on, thr, width, name, names))

@@ -85,7 +85,8 @@ def test_columns_the_model_lacks_name_both(five_wheels, tmp_path):
     with pytest.raises(InputError) as e:      # no model: Cassini's columns
         read_telemetry(path)
     msg = str(e.value)
-    assert "unknown column 'rw1'" in msg and "rwa1 rwa2 rwa3 rwa4" in msg
+    assert "unknown column 'rw1'" in msg and "Cassini's layout" in msg
+    assert "rwa1 rwa2 rwa3 rwa4" in msg
     assert "--spacecraft" in msg and "\n" not in msg
     four = _model(tmp_path, PYRAMID, name="four")
     with pytest.raises(InputError) as e:      # another model: names its wheels
@@ -109,7 +110,8 @@ def test_thrusters_follow_the_model(tmp_path):
     log.write_text("t_on,thruster,width\n0.5,a1,0.1\n1.2,A2,0.2\n")
     assert read_pulses(log, spacecraft=sc).names == ["A1", "A2"]
     log.write_text("t_on,thruster,width\n0.5,Z1,0.1\n")
-    with pytest.raises(InputError, match="unknown thruster 'Z1'.* thrusters are A1 A2"):
+    with pytest.raises(InputError, match="unknown thruster 'Z1'; the thrusters of the spacecraft "
+                                         "model 'thr' are A1 A2"):
         read_pulses(log, spacecraft=sc)
     p.write_text("\n".join(lines).replace("on_A2", "on_B2") + "\n")
     with pytest.raises(InputError, match="'on_B2' is the on-time of no thruster .*on_A1 on_A2"):
@@ -120,7 +122,7 @@ def test_a_model_without_thrusters_refuses_thruster_files(tmp_path):
     sc = load_spacecraft(_model(tmp_path, PYRAMID, name="none"))
     log = tmp_path / "p.csv"
     log.write_text("t_on,thruster,width\n0.5,Z1,0.1\n")
-    with pytest.raises(InputError, match="layout has no thrusters"):
+    with pytest.raises(InputError, match="the spacecraft model 'none' has no thrusters"):
         read_pulses(log, spacecraft=sc)
     p = tmp_path / "t.csv"
     p.write_text("t,q1,q2,q3,q4,wx,wy,wz,rw1,on_Z1\n0,0,0,0,1,0,0,0,800,0\n"
@@ -133,6 +135,20 @@ def test_a_model_without_thrusters_refuses_thruster_files(tmp_path):
     with pytest.raises(InputError, match="fit thrust needs thrusters, but the spacecraft model "
                                          "'none' has none"):
         fit_thrust(p, log, sc)
+
+
+def test_in_memory_telemetry_must_name_the_models_wheels(five_wheels):
+    """A Telemetry with Cassini's default wheel names given to a fit of another spacecraft is
+    refused before any work, naming the wheel and the model's wheels."""
+    from cassini_bayes.api import fit_inertia
+    from cassini_bayes.telemetry import Telemetry
+
+    model, _, run = five_wheels
+    tel = run.telemetry
+    cassini_named = Telemetry(tel.t, tel.q, tel.omega, tel.wheel_rates[:, :4], source="mem")
+    with pytest.raises(InputError, match="wheel RWA1 .* is not a wheel of the spacecraft model "
+                                         "'five', whose wheels are RW1, RW2, RW3, RW4, RWA5"):
+        fit_inertia(cassini_named, model)
 
 
 def test_baseline_on_three_wheels(tmp_path):
