@@ -78,7 +78,7 @@ def _damaged(tel, known: list[str]):
 
 
 def main(argv=None) -> None:
-    from cassini_bayes.consistency import (AXES_CONDITION_MIN, FREE_WHEEL, GyroBiasWarning,
+    from cassini_bayes.consistency import (AXES_CONDITION_MIN, GyroBiasWarning,
                                            check_gyro_bias, check_wheel_units,
                                            wheel_momentum_scale)
     from cassini_bayes.errors import InputError
@@ -117,7 +117,7 @@ def main(argv=None) -> None:
                 check_wheel_units(tel, sc, on)
             except InputError:
                 refused += 1
-            known = [n for n in tel.active_wheels() if n.upper() != FREE_WHEEL]
+            known = [n for n in tel.active_wheels() if n not in sc.articulated_wheels]
             for label, bad in _damaged(tel, known):
                 caught[label][1] += 1
                 try:

@@ -52,8 +52,9 @@ from cassini_bayes.errors import InputError, UnidentifiableError, arg
 from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rotvec
 from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
-                                     Telemetry, check_pulses_in_span, cumulative_on_times)
+from cassini_bayes.telemetry import (RPM_TO_RAD_S, PulseLog, PulseSpanWarning,
+                                     RATE_NOISE_FLOORS, Telemetry, check_pulses_in_span,
+                                     cumulative_on_times, white_noise_sd)
 
 # The checks' JAX work as four programs: called eagerly on NumPy arrays, every frames function
 # is a few one-operation programs, each loaded (or compiled) in every process.
@@ -76,6 +77,7 @@ __all__ = [
     "check_gyro_bias",
     "wheel_momentum_scale",
     "check_wheel_units",
+    "axis_angle_max_deg",
     "check_pulses_match_on_times",
     "inertia_excitation",
     "check_inertia_excitation",
@@ -139,17 +141,21 @@ AXES_ALIGN_MIN = 0.99
 must fit at least this well where separable: 0.9984–1.0000 on 160 open-world and every shipped
 slew and RWA-method file (Basilisk's slews 0.9999); one tachometer reporting |rpm| through zero
 0.962."""
-SWING_MIN_NMS = 1.0
-"""... and only where the body and the wheels exchange at least this much momentum, N m s (the
-shipped slews: 18–22; a quiet file's gyro noise: ~0.01)."""
+SWING_MIN_SNR = 100.0
+"""... and only where the body and the wheels exchange at least this many times the momentum
+noise of one sample (:attr:`WheelAxes.noise_nms`): Cassini's shipped slews swing 18–22 N m s
+against ~0.007 N m s of noise (a quiet file's swing is that noise), the ESPA bus 0.39 N m s
+against 1.4e-4, the 12U CubeSat 9.5e-3 against 2.9e-5. At 100× the balance's misfit from
+noise alone is ~1e-4, far inside :data:`AXES_ALIGN_MIN`."""
 UNSIGNED_TOUCH_RPM = 5.0
 """A wheel that stays on one side of zero yet comes within this (rpm) of it is named as possibly
 unsigned in :func:`_balance_error`."""
 AXIS_ANGLE_MAX_DEG = 30.0
 """Largest accepted angle between a wheel's fitted momentum and its axis in the model: a flipped
-sign gives 180°, another wheel's column on Cassini 90° (its wheel axes are orthogonal)."""
-FREE_WHEEL = "RWA4"
-"""The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
+sign gives 180°, another wheel's column the angle between the two axes (Cassini's fixed wheels
+90°, a pyramid's 70.5°, a CubeSat's skew wheel 54.7° from each body axis). Smaller where the
+model's wheels are closer: half the smallest angle between two of its (non-articulated) wheel
+lines (:func:`axis_angle_max_deg`), so another wheel's column always lies beyond it."""
 
 EXCITATION_MIN = 1e-3
 """Second-largest over largest eigenvalue of ``Σ ω ωᵀ dt``: below it the slews turn the
@@ -312,11 +318,11 @@ class GyroBias(NamedTuple):
 def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
     """Least-squares constant gyro bias ``b`` from quiet windows of :data:`GYRO_WINDOW_S`.
 
-    Per gap-free window ``(a, b)`` that turns by less than :data:`GYRO_WINDOW_TURN_RAD` (so the
-    rotation vector and ``∫ω dt`` differ only by the bias, not by non-commuting turns or a
-    rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt + noise`` per body axis (a gyro reading
-    ``ω + b`` integrates ``b Δt`` more than the attitude turns; Brown Eq 2 kinematics). ``None``
-    with fewer than :data:`MIN_SEGMENTS` windows.
+    Per gap-free window ``(a, b)`` whose attitude turns by less than
+    :data:`GYRO_WINDOW_TURN_RAD` (so the rotation vector and ``∫ω dt`` differ only by the bias,
+    not by non-commuting turns or a rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt +
+    noise`` per body axis (a gyro reading ``ω + b`` integrates ``b Δt`` more than the attitude
+    turns; Brown Eq 2 kinematics). ``None`` with fewer than :data:`MIN_SEGMENTS` windows.
     """
     t = np.asarray(tel.t, float)
     q = np.asarray(tel.q, float)
@@ -332,7 +338,8 @@ def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
     integral = _integrated_rates(tel)
     g = integral[b] - integral[a]
     rot = np.asarray(_rotvecs_between(q[a], q[b]))
-    quiet = np.linalg.norm(g, axis=1) < GYRO_WINDOW_TURN_RAD
+    quiet = np.linalg.norm(rot, axis=1) < GYRO_WINDOW_TURN_RAD   # the attitude's turn: the
+    # rates' own integral carries the bias (a MEMS gyro's 1e-4 rad/s turns 6e-3 rad a minute)
     if np.count_nonzero(quiet) < MIN_SEGMENTS:
         return None
     d, dt = (g - rot)[quiet], (t[b] - t[a])[quiet]
@@ -465,13 +472,19 @@ class WheelAxes(NamedTuple):
         ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
         sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
     swing_nms : largest de-meaned body momentum ``|A(q)ᵀ I_pred ω|``, N m s: how much momentum
-        the wheels and the body exchange (the shipped slews: 18–22; gyro noise alone: ~0.01).
+        the wheels and the body exchange (Cassini's slews: 18–22; gyro noise alone: ~0.01).
+    noise_nms : the momentum noise of one sample, N m s: ``√((λ_max σ_ω)² + Σ_k (J_k σ_k)²)``
+        with ``λ_max`` the predicted inertia's largest moment and ``σ_ω``, ``σ_k`` the white
+        noise of the body rates and of each running wheel's rates
+        (:func:`cassini_bayes.telemetry.white_noise_sd`, floored at
+        :data:`cassini_bayes.telemetry.RATE_NOISE_FLOORS`).
     """
 
     alignment: float
     conditioning: float
     vectors: dict[str, np.ndarray]
     swing_nms: float = 0.0
+    noise_nms: float = 0.0
 
     @property
     def judged(self) -> bool:
@@ -533,15 +546,18 @@ class _Balance(NamedTuple):
     body: np.ndarray                # (n, 3) A(q)ᵀ I_pred ω, each stretch de-meaned
     known: list[str]                # the known wheels running
     known_cols: list[np.ndarray]    # per known wheel, (n, 3, 3): −ρ_k A(q)ᵀ e_j, de-meaned
-    free_cols: list[np.ndarray]     # the free wheel's three columns, if it runs
+    free: list[str]                 # the articulated wheels running
+    free_cols: list[np.ndarray]     # per free wheel, its three columns
     stretches: int
+    noise_nms: float                # momentum noise of one sample (WheelAxes.noise_nms)
 
 
 def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None,
-             free_wheel: str | None) -> _Balance | None:
+             free_wheels: Sequence[str]) -> _Balance | None:
     """The balance's pieces per firing-free stretch, or ``None`` (no wheel, no stretch)."""
     names = tel.active_wheels()
-    free = [n for n in names if free_wheel is not None and n.upper() == free_wheel.upper()]
+    free_upper = {n.upper() for n in free_wheels}
+    free = [n for n in names if n.upper() in free_upper]
     known = [n for n in names if n not in free]
     if not names:
         return None
@@ -557,14 +573,20 @@ def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None
                      np.asarray(tel.omega, float)[keep])
     known_cols = [-np.asarray(tel.wheel_rate(n), float)[keep][:, None, None] * a_t
                   for n in known]
-    free_cols = ([-np.asarray(tel.wheel_rate(free[0]), float)[keep][:, None] * a_t[:, :, j]
-                  for j in range(3)] if free else [])
+    free_cols = [-np.asarray(tel.wheel_rate(f), float)[keep][:, None] * a_t[:, :, j]
+                 for f in free for j in range(3)]
     lab = labels[keep]
     for s in good:
         m = lab == s
         for x in [body, *known_cols, *free_cols]:
             x[m] -= x[m].mean(0)
-    return _Balance(body, known, known_cols, free_cols, len(good))
+    s_w, s_r = RATE_NOISE_FLOORS
+    i_max = float(np.linalg.eigvalsh(np.asarray(spacecraft.inertia, float))[-1])
+    noise = (i_max * max(white_noise_sd(np.asarray(tel.omega, float)[keep]), s_w)) ** 2
+    for n in names:
+        rate = np.asarray(tel.wheel_rate(n), float)[keep]
+        noise += (spacecraft.wheel(n).inertia * max(white_noise_sd(rate), s_r)) ** 2
+    return _Balance(body, known, known_cols, free, free_cols, len(good), float(np.sqrt(noise)))
 
 
 def _solve(design: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -593,12 +615,12 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     js = [spacecraft.wheel(n).inertia for n in bal.known]
     vectors = {n: theta[3 * k: 3 * k + 3] / js[k] for k, n in enumerate(bal.known)}
     swing = float(np.max(np.linalg.norm(bal.body, axis=1)))
-    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing)
+    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing, bal.noise_nms)
 
 
 def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
                          on_times: np.ndarray | None = None,
-                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
+                         free_wheels: Sequence[str] | None = None) -> MomentumScale | None:
     """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
 
     Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
@@ -606,14 +628,16 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
         ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
 
     with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
-    from the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
-    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
-    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
+    from the model. Each articulated wheel (``free_wheels``, default the model's
+    ``articulated`` wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures,
+    Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other
+    wheel running ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
     removes ``H_s``. The same balance with a free vector ``w_k`` for every known wheel in place
     of ``κ J_k g_k`` is :attr:`MomentumScale.axes`. ``None`` when no wheel runs, no stretch has
     three samples, or nothing varies.
     """
-    bal = _balance(tel, spacecraft, on_times, free_wheel)
+    free_wheels = spacecraft.articulated_wheels if free_wheels is None else free_wheels
+    bal = _balance(tel, spacecraft, on_times, free_wheels)
     if bal is None:
         return None
     cols = list(bal.free_cols)
@@ -628,8 +652,9 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     theta, align = solved
     if bal.known:
         scale = float(theta[0])
-    else:     # the free wheel alone: its momentum's size
-        scale = float(np.linalg.norm(theta) / spacecraft.wheel(free_wheel).inertia)
+    else:     # the free wheels alone: their momenta's sizes
+        scale = float(np.median([np.linalg.norm(theta[3 * k:3 * k + 3])
+                                 / spacecraft.wheel(f).inertia for k, f in enumerate(bal.free)]))
     return MomentumScale(scale, align, bal.stretches, _wheel_axes(bal, spacecraft))
 
 
@@ -643,22 +668,33 @@ def _unit_error(cols: str, scale: float, what: str, tel: Telemetry) -> InputErro
                       path=tel.source)
 
 
+def axis_angle_max_deg(spacecraft: Spacecraft) -> float:
+    """Largest accepted angle (degrees) between a wheel's fitted momentum and its model axis:
+    :data:`AXIS_ANGLE_MAX_DEG`, or half the smallest angle between the lines of two of the
+    model's wheels whose axes are trusted (articulated wheels left out) when that is smaller."""
+    axes = [w.axis for w in spacecraft.wheels if not w.articulated]
+    half = [0.5 * float(np.degrees(np.arccos(min(abs(float(a @ b)), 1.0))))
+            for i, a in enumerate(axes) for b in axes[i + 1:]]
+    return min([AXIS_ANGLE_MAX_DEG, *half])
+
+
 def _axis_error(name: str, axes: WheelAxes, spacecraft: Spacecraft,
                 tel: Telemetry) -> InputError:
     """The refusal for a wheel whose momentum does not lie along its axis in the model."""
+    limit = axis_angle_max_deg(spacecraft)
     col = name.lower()
     angle = axes.angle_deg(name, spacecraft.wheel(name).axis)
     head = (f"column {col}: momentum is conserved only with {col}'s momentum {angle:.0f}° from "
             f"{name}'s axis in the model {spacecraft.name!r} (free-axis balance alignment "
             f"{axes.alignment:.3f})")
-    if angle > 180.0 - AXIS_ANGLE_MAX_DEG:
+    if angle > 180.0 - limit:
         return InputError(f"{head}: its sign looks flipped; negate the column, or correct the "
                           "wheel's axis in the spacecraft model", path=tel.source)
     for other in spacecraft.wheels:
         if other.name == name:
             continue
         off = axes.angle_deg(name, other.axis)
-        if min(off, 180.0 - off) < AXIS_ANGLE_MAX_DEG:
+        if min(off, 180.0 - off) < limit:
             flipped = " with the sign flipped" if off > 90.0 else ""
             return InputError(f"{head}, {min(off, 180.0 - off):.0f}° from {other.name}'s: it "
                               f"looks like {other.name}'s rates{flipped}; check the column "
@@ -697,10 +733,11 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     :data:`KAPPA_RANGE`, raise :class:`InputError`: ``κ`` near 60/(2π) means the wheel columns
     hold rad/s. Then, where the free-axis balance (:class:`WheelAxes`) determines each known
     wheel's momentum on its own (:attr:`WheelAxes.judged`), refuse a wheel whose momentum lies
-    more than :data:`AXIS_ANGLE_MAX_DEG` from its axis in the model (a flipped sign, another
+    more than :func:`axis_angle_max_deg` from its axis in the model (a flipped sign, another
     wheel's column) or whose scale is outside :data:`KAPPA_RANGE` (that column in rad/s). In a
     file without thruster firings (no ``on_times``, no ``on_*`` columns) where the vectors are
-    separable and the body swings by :data:`SWING_MIN_NMS`, refuse a free-axis balance below
+    separable and the body swings by :data:`SWING_MIN_SNR` times the momentum noise, refuse a
+    free-axis balance below
     :data:`AXES_ALIGN_MIN` (:func:`_balance_error`: unsigned tachometers, mixed units).
     Otherwise (including a balance that does not fit: momentum exchange with unlogged thruster
     firings, or none at all) say nothing. Returns the fit.
@@ -719,12 +756,14 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     if axes is None:
         return fit
     if (on_times is None and tel.on_times is None and axes.conditioning >= AXES_CONDITION_MIN
-            and axes.swing_nms >= SWING_MIN_NMS and axes.alignment < AXES_ALIGN_MIN):
+            and axes.swing_nms >= SWING_MIN_SNR * axes.noise_nms
+            and axes.alignment < AXES_ALIGN_MIN):
         raise _balance_error(tel, axes)
     if not axes.judged:
         return fit
+    angle_max = axis_angle_max_deg(spacecraft)
     for name in axes.vectors:
-        if axes.angle_deg(name, spacecraft.wheel(name).axis) > AXIS_ANGLE_MAX_DEG:
+        if axes.angle_deg(name, spacecraft.wheel(name).axis) > angle_max:
             raise _axis_error(name, axes, spacecraft, tel)
     for name in axes.vectors:
         if not lo <= axes.scale(name) <= hi:
@@ -761,10 +800,14 @@ def check_pulses_match_on_times(tel: Telemetry, log: PulseLog) -> None:
     """
     if tel.on_times is None:
         return
+    if tuple(log.thruster_names) != tuple(tel.thruster_names):
+        raise InputError(f"its thrusters ({', '.join(log.thruster_names)}) are not the on_* "
+                         f"columns' of {tel.source} ({', '.join(tel.thruster_names)}); read both "
+                         "with the same spacecraft model", path=log.source)
     derived = _derived_on_times(tel, log)
     col_all = np.asarray(tel.on_times, float)
     t = np.asarray(tel.t, float)
-    for k, name in enumerate(THRUSTER_NAMES):
+    for k, name in enumerate(tel.thruster_names):
         col, der = col_all[:, k] - col_all[0, k], derived[:, k]
         widths = log.width[log.thruster == k]
         slack = max(float(widths.max()) if widths.size else 0.0, float(np.diff(col).max())) + 1e-6

@@ -12,7 +12,9 @@ __all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES"
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
 THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
-"""The eight RCS thrusters (Feldman & Lee 2006 Eq 16 order)."""
+"""Cassini's eight A-branch RCS thrusters (Feldman & Lee 2006 Eq 16 order): the expansion of the
+model file's ``[thrusters]`` shorthand, the thrust fit's sites and the default file layout
+without a model (a model file names its own thrusters, docs/model_file.md)."""
 F_NAMES = ("F",) + tuple(f"F_{t}" for t in THRUSTER_NAMES)
 """Thrust sites (N): the mean ``F`` and one per thruster (the branch sites are ``F_Z``, ``F_Y``)."""
 TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")

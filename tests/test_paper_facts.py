@@ -13,7 +13,7 @@ from cassini_bayes.estimators import (CASSINI_T, accelerometer_delta_v, leak_tor
                                       momentum_correction, nongravitational_torque,
                                       ratio_corrected, table1_errors, z_thrust_from_delta_v)
 from cassini_bayes.frames import angle_between, cone_angle_from_z
-from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from cassini_bayes.physics.pulse import impulse_ratio, mix_ratio
 from cassini_bayes.spacecraft import CASSINI_WHEEL_AXES, load_spacecraft
 

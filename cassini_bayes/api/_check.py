@@ -149,8 +149,9 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     pulses : a pulse-log CSV path or a :class:`~cassini_bayes.telemetry.PulseLog`, validated and
         used for the thruster on-times (the telemetry's ``on_*`` columns win when it has them).
     spacecraft : a model TOML path, a shipped model's name or a
-        :class:`~cassini_bayes.spacecraft.Spacecraft`: also check the wheel units by momentum
-        conservation.
+        :class:`~cassini_bayes.spacecraft.Spacecraft`: its wheels and thrusters name the columns
+        (without one, Cassini's: ``rwa1..rwa4``, ``on_Z1..on_Y4``), and the wheel units are
+        checked by momentum conservation.
     min_quiet_s, rate_max_rad_s, wheel_tol_rpm : a quiet period is at least ``min_quiet_s``
         long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
         and no thruster firing (:func:`cassini_bayes.windows.quiet_periods`).
@@ -163,8 +164,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
     from cassini_bayes.consistency import GyroBiasWarning, check_telemetry_data
-    from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseSpanWarning,
-                                         _turn_angle, with_on_times)
+    from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
@@ -174,9 +174,9 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
                 or not 0 < value < float("inf")):
             raise InputError(f"must be a positive finite number, got {value!r}",
                              path=spelled(option, argument))
-    tel = one_telemetry(telemetry, check_units=check_units)
-    log = one_pulse_log(pulses) if pulses is not None else None
     sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
+    tel = one_telemetry(telemetry, check_units=check_units, spacecraft=sc)
+    log = one_pulse_log(pulses, spacecraft=sc) if pulses is not None else None
     if log is not None and log.t_on.size:
         _check_shared_span(tel, log)
     with warnings.catch_warnings(record=True) as physics_warnings:
@@ -206,7 +206,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
                                  float(rpm[0]), float(rpm[-1]), idle=not active[j]))
     thrusters = []
     if tel.on_times is not None:
-        for k, name in enumerate(THRUSTER_NAMES):
+        for k, name in enumerate(tel.thruster_names):
             on = tel.on_times[:, k]
             total = float(on[-1] - on[0])
             if total <= 0:

@@ -152,11 +152,13 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
         raise InputError(f"{arg('fraction')} must lie strictly between 0 and 1, got {fraction}")
     tau_sd = TAU_SD_FRAC if tau_sd_frac is None else number("tau_sd_frac", tau_sd_frac, lo=0.0)
     sc, sc_record, _ = spacecraft_input(spacecraft)
+    sc.require_thrusters("fit health", eq16=True)
     files = read_event_list(events)
     summaries = []
     with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
         for day, tel_path, log_path in files:
-            tel, log = read_telemetry(tel_path), read_pulses(log_path)
+            tel = read_telemetry(tel_path, spacecraft=sc)
+            log = read_pulses(log_path, spacecraft=sc)
             check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_*
             summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
     prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,

@@ -96,7 +96,7 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
-    tels, records, paths = telemetry_inputs(telemetry)
+    tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     with step("checking the data"), collect_warnings() as check_warns:
         check_inertia_data(tels, sc)  # units and conventions by the physics, before sampling
     key = jax.random.key(seed)  # the one place the seed becomes a key

@@ -84,28 +84,33 @@ def _items(x, name: str) -> list:
                      f"{type(x).__name__}")
 
 
-def telemetry_inputs(telemetry, name: str = "telemetry"
+def telemetry_inputs(telemetry, name: str = "telemetry", spacecraft: Spacecraft | None = None
                      ) -> tuple[list[Telemetry], list[dict], list[Path]]:
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
-    :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them."""
+    :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them; files are read
+    with the columns of ``spacecraft``'s wheels and thrusters (Cassini's without one), and a
+    Telemetry must name wheels of it."""
     from cassini_bayes.rundir import file_record
-    from cassini_bayes.telemetry import read_telemetry, read_telemetry_many, validate_telemetry
+    from cassini_bayes.telemetry import (check_model_names, read_telemetry, read_telemetry_many,
+                                         validate_telemetry)
 
     items = _items(telemetry, name)
     if not items:
         raise InputError(f"{arg(name)}: give at least one telemetry file or Telemetry")
     if all(_is_path(x) for x in items):  # all files: read together (errors name the file)
         paths = [Path(x) for x in items]
-        tels = read_telemetry_many(paths)
+        tels = read_telemetry_many(paths, spacecraft=spacecraft)
         return _once(tels, name), [file_record(p) for p in paths], paths
     tels, records, paths = [], [], []
     for x in items:
         if _is_path(x):
-            tels.append(read_telemetry(x))
+            tels.append(read_telemetry(x, spacecraft=spacecraft))
             records.append(file_record(x))
             paths.append(Path(x))
         elif isinstance(x, Telemetry):  # checked with the file rules, as a file would be
             record, files = _record(x.source)
+            if spacecraft is not None:
+                check_model_names(x, spacecraft)
             tels.append(validate_telemetry(x))
             records.append(record)
             paths += files
@@ -133,48 +138,65 @@ def _once(tels: list[Telemetry], name: str) -> list[Telemetry]:
     return tels
 
 
-def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True) -> Telemetry:
+def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True,
+                  spacecraft: Spacecraft | None = None) -> Telemetry:
     """One telemetry argument, a :class:`~cassini_bayes.telemetry.Telemetry` or a file path,
-    read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics)."""
-    from cassini_bayes.telemetry import read_telemetry, validate_telemetry
+    read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics; columns
+    of ``spacecraft``'s wheels and thrusters, Cassini's without one)."""
+    from cassini_bayes.telemetry import check_model_names, read_telemetry, validate_telemetry
 
     check_units = as_flag(check_units, "check_units")
     if isinstance(telemetry, Telemetry):
+        if spacecraft is not None:
+            check_model_names(telemetry, spacecraft)
         return validate_telemetry(telemetry, check_units=check_units)
     if not _is_path(telemetry):
         raise InputError(f"{arg(name)}: give a telemetry file path or a Telemetry, not "
                          f"{type(telemetry).__name__}")
-    return read_telemetry(telemetry, check_units=check_units)
+    return read_telemetry(telemetry, check_units=check_units, spacecraft=spacecraft)
 
 
-def one_pulse_log(pulses, name: str = "pulses") -> PulseLog:
+def _model_pulses(log: PulseLog, spacecraft: Spacecraft | None) -> PulseLog:
+    """``log`` when its thrusters are ``spacecraft``'s (or no model is given), else an
+    InputError naming both."""
+    if spacecraft is not None and tuple(log.thruster_names) != spacecraft.thruster_names:
+        have = ", ".join(spacecraft.thruster_names) or "none"
+        raise InputError(f"its thrusters ({', '.join(log.thruster_names)}) are not those of the "
+                         f"spacecraft model {spacecraft.name!r} ({have})", path=log.source)
+    return log
+
+
+def one_pulse_log(pulses, name: str = "pulses", *,
+                  spacecraft: Spacecraft | None = None) -> PulseLog:
     """One pulse-log argument, a :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path,
-    read or checked with the file rules."""
+    read or checked with the file rules (thrusters of ``spacecraft``; Cassini's without one)."""
     from cassini_bayes.telemetry import read_pulses, validate_pulses
 
     if isinstance(pulses, PulseLog):
-        return validate_pulses(pulses)
+        return validate_pulses(_model_pulses(pulses, spacecraft))
     if not _is_path(pulses):
         raise InputError(f"{arg(name)}: give a pulse-log file path or a PulseLog, not "
                          f"{type(pulses).__name__}")
-    return read_pulses(pulses)
+    return read_pulses(pulses, spacecraft=spacecraft)
 
 
-def pulse_inputs(pulses, name: str = "pulses") -> tuple[list[PulseLog], list[dict], list[Path]]:
+def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = None
+                 ) -> tuple[list[PulseLog], list[dict], list[Path]]:
     """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
-    :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them."""
+    :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them (thrusters of
+    ``spacecraft``; Cassini's without one)."""
     from cassini_bayes.rundir import file_record
     from cassini_bayes.telemetry import read_pulses
 
     logs, records, paths = [], [], []
     for x in _items(pulses, name):
         if _is_path(x):
-            logs.append(read_pulses(x))
+            logs.append(read_pulses(x, spacecraft=spacecraft))
             records.append(file_record(x))
             paths.append(Path(x))
         elif isinstance(x, PulseLog):
             record, files = _record(x.source)
-            logs.append(x)
+            logs.append(_model_pulses(x, spacecraft))
             records.append(record)
             paths += files
         else:

@@ -89,12 +89,13 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     if eta < 0:
         raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))
     sc, sc_record, sc_files = spacecraft_input(spacecraft)
-    tels, tel_records, tel_files = telemetry_inputs(telemetry)
+    sc.require_thrusters("the leak monitor", eq16=True)
+    tels, tel_records, tel_files = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
         raise InputError(f"got {len(tels)} telemetry inputs; the monitor reads one stretch",
                          path=spelled("TELEMETRY", "telemetry"))
     tel = tels[0]
-    logs, log_records, log_files = pulse_inputs(pulses)
+    logs, log_records, log_files = pulse_inputs(pulses, spacecraft=sc)
     if len(logs) > 1:
         raise InputError(f"got {len(logs)} pulse logs; give one",
                          path=spelled("--pulses", "pulses"))

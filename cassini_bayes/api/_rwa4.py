@@ -140,7 +140,7 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     pairs = _window_pairs(windows)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, False)
-    tels, records, paths = telemetry_inputs(telemetry)
+    tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
         raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
                          f"{len(tels)}")

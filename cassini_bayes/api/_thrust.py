@@ -27,11 +27,9 @@ def thrust_baseline(events, spacecraft, mode: str,
 
     from cassini_bayes.estimators import thrust as est
     from cassini_bayes.estimators.baseline import wheel_momentum
-    from cassini_bayes.physics.impulse import moment_matrix
     from cassini_bayes.physics.momentum import inertia_matrix
 
-    th = spacecraft.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = spacecraft.moment_matrix
     p = spacecraft.pulse
     i_body = (np.asarray(inertia_matrix(inertia.mean), float) if hasattr(inertia, "mean")
               else spacecraft.inertia)
@@ -201,9 +199,10 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    sc.require_thrusters("fit thrust", eq16=True)
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, fix_inertia)
-    tels, tel_records, tel_paths = telemetry_inputs(telemetry)
-    logs, log_records, log_paths = pulse_inputs(pulses)
+    tels, tel_records, tel_paths = telemetry_inputs(telemetry, spacecraft=sc)
+    logs, log_records, log_paths = pulse_inputs(pulses, spacecraft=sc)
     if not logs:
         raise InputError(f"fit_thrust needs the pulse log of each event: {arg('pulses')} "
                          "(columns t_on, thruster, width)")

@@ -55,7 +55,7 @@ from scipy.special import log_ndtr, logsumexp
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.leak import ETA, residual_momentum
-from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times, moment_matrix
+from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
@@ -204,8 +204,7 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
         p = spacecraft.pulse
         pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + _TAIL_TAUS * p.tau_fall)
     h = wheel_momentum(tel, spacecraft)
-    th = spacecraft.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = spacecraft.moment_matrix
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
     return LeakInputs(np.asarray(tel.t, float), r, j, q, np.full(8, float(spacecraft.thrust)),

@@ -42,7 +42,7 @@ import numpy as np
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.thrust import regression_inputs
-from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs, moment_matrix
+from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
 from cassini_bayes.telemetry import pulses_in_span
 
 __all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "event_summary", "channel_design",
@@ -170,8 +170,8 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
     if pulses is None or np.asarray(pulses.t_on).size == 0:
         raise InputError("has no thruster pulses; a thrust-health event needs the pulse log of a "
                          "biasing event", path=getattr(tel, "source", "telemetry"))
-    th, p = spacecraft.thrusters, spacecraft.pulse
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    p = spacecraft.pulse
+    q = spacecraft.moment_matrix
     log = (pulses.t_on, pulses.thruster, pulses.width)
     tau = np.array([p.tau_delay, p.tau_rise, p.tau_fall])
     v, j = regression_inputs(tel.t, tel.omega, wheel_momentum(tel, spacecraft),

@@ -151,8 +151,8 @@ def _wheel_arrays(tel: Telemetry, spacecraft: Spacecraft):
     """Rates (n, k) rad/s (NaN→0), axes (k, 3), inertias (k,) of the telemetry's active wheels."""
     names = tel.active_wheels()
     if not names:
-        raise InputError("no wheel has any rate; an RWA slew needs the wheel rates rwa1..rwa4 "
-                         "(rpm)",
+        raise InputError("no wheel has any rate; an RWA slew needs the wheel rates (rpm) of "
+                         f"{' '.join(n.lower() for n in spacecraft.wheel_names)}",
                          path=tel.source)
     cols, axes, js = [], [], []
     for name in names:
@@ -323,7 +323,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         raise InputError("no telemetry given; pass at least one slew file")
     for tel in telemetries:  # Feldman & Lee Eq 3: the wheels exchange momentum with the body
         if not tel.active_wheels():
-            raise InputError("no wheel runs (every rwa column is empty): the inertia is "
+            raise InputError("no wheel runs (every wheel column is empty): the inertia is "
                              "calibrated from the momentum the wheels exchange with the body; "
                              "give reaction-wheel slew telemetry with the wheel rates",
                              path=tel.source)

@@ -21,7 +21,7 @@ from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_defici
 from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_rates
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
-from cassini_bayes.physics.impulse import impulse_lhs_basis, moment_matrix
+from cassini_bayes.physics.impulse import impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
@@ -265,8 +265,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors)
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust)
-    th = spacecraft.thrusters
-    q_mat = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q_mat = spacecraft.moment_matrix
     tp = tau_prior(spacecraft)
     if inertia is not None:
         tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
