@@ -1,0 +1,114 @@
+"""Does the leak monitor's model fit its stretch? Self-checks that need no truth.
+
+The monitor's model (:mod:`cassini_bayes.inference.leak`, Lee Eq 10) explains the residual
+momentum ``R`` of the rows it uses by an offset, a constant external torque, the thrusters'
+fractional thrust errors and, under a leak hypothesis, the leak, plus white noise of the level
+it reads from the data. The checks take the hypothesis most probable at the last check (no leak,
+or a thruster's leak at its posterior mean fraction and onset), integrate the Gaussian nuisance
+parameters as the monitor does (both components of the torque's prior, weighted by their
+evidence) and look at the posterior mean:
+
+* ``residual_fit`` — ``χ² = Σ_i Σ_a e_ia² / σ_a²`` of the residuals against the noise level
+  ``σ_a`` the monitor assumed, on ``3n − p_eff`` degrees of freedom (``p_eff`` the trace of the
+  hat matrix), as the normal deviate of its upper tail. A spacecraft model whose inertia or
+  thruster geometry is wrong leaves the unexplained part of ``I Δω`` and of the pulses in the
+  residual, far above the sensors' noise.
+* ``prior_data_conflict`` — the torque's posterior mean in its prior sd (the mixture's, ``σ_T
+  √(Σ w_c s_c²)``) and each thrust error's in ``η``: the monitor explains a secular misfit by a
+  torque or a thrust error, and one pulled several prior sd says the model file's knowledge
+  (``[torque_knowledge]``, its thrust) is wrong for this stretch.
+* ``residual_autocorrelation`` — the lag-1 autocorrelation of the residual per axis (blocks of
+  at least 64 rows; :func:`~cassini_bayes.inference.adequacy.residual_autocorrelation`): a
+  slow wander the white model does not hold.
+
+Thresholds as the fits' (4, 4 prior sd, 0.5); false-alarm rates and power: docs/leak.md.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+from scipy.special import logsumexp
+
+from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHOLD, Adequacy,
+                                                    _check, normal_deviate)
+from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation
+from cassini_bayes.inference.leak import (OFFSET_SD_NMS, TORQUE_SCALES, LeakInputs,
+                                          LeakPosterior, _thinned)
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
+
+__all__ = ["leak_adequacy", "nuisance_posterior"]
+
+
+def _design(t: np.ndarray, impulse: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(n, 3, 14) the nuisance columns of the monitor: offset ``r_0`` (3), torque ``T`` (3),
+    thrust errors ``δ_j Q[:, j] J_j`` (8) (Lee Eq 10-11)."""
+    n = t.size
+    eye = np.eye(3)
+    return np.concatenate([np.broadcast_to(eye, (n, 3, 3)), t[:, None, None] * eye[None],
+                           q[None, :, :] * impulse[:, None, :]], axis=2)
+
+
+def nuisance_posterior(cols: np.ndarray, y: np.ndarray, noise_sd: np.ndarray,
+                       torque_sd_nm: float, eta: float):
+    """Posterior of the monitor's nuisance parameters given rows ``y`` (n, 3) and design
+    ``cols`` (n, 3, 14): mixed over the torque prior's components by their evidence.
+
+    Returns ``(mean (14,), p_eff)``: the posterior mean and the effective number of parameters
+    (trace of the hat matrix, mixed alike)."""
+    lam = 1.0 / np.asarray(noise_sd, float) ** 2
+    nn = np.einsum("iap,a,iaq->pq", cols, lam, cols)
+    b = np.einsum("iap,a,ia->p", cols, lam, y)
+    means, traces, log_z = [], [], []
+    for (scale, weight) in TORQUE_SCALES:
+        prec = 1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
+                           np.full(3, (scale * max(torque_sd_nm, 1e-12)) ** 2),
+                           np.full(8, max(eta, 1e-12) ** 2)]
+        a = np.diag(prec) + nn
+        m = np.linalg.solve(a, b)
+        means.append(m)
+        traces.append(float(np.trace(np.linalg.solve(a, nn))))
+        log_z.append(np.log(weight) + 0.5 * (np.sum(np.log(prec)) - np.linalg.slogdet(a)[1]
+                                             + b @ m))
+    w = np.exp(np.array(log_z) - logsumexp(log_z))
+    return np.einsum("c,cp->p", w, np.array(means)), float(w @ np.array(traces))
+
+
+def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
+                  sample_step_s: float) -> Adequacy:
+    """The checks of the monitor's run ``post`` over the stretch ``inp`` (module docstring);
+    ``eta`` and ``sample_step_s`` as the monitor ran."""
+    used = _thinned(inp, sample_step_s)
+    t = used.t - used.t[0]
+    y = np.array(used.residual, float)
+    last = post.prob[-1]
+    if np.argmax(last) > 0:      # a leak is the most probable answer: take it out as fitted
+        k = (THRUSTER_NAMES.index(post.thruster) if post.thruster
+             else int(np.argmax(last[1:])))
+        ramp = np.maximum(used.t - post.onset_s, 0.0)
+        y -= post.fraction_mean * used.thrust_n[k] * np.outer(ramp, used.q_matrix[:, k])
+        hyp = f"a leak of {THRUSTER_NAMES[k]} ({100 * post.fraction_mean:.3g} %)"
+    else:
+        hyp = "no leak"
+    cols = _design(t, used.impulse, used.q_matrix)
+    sd = np.asarray(post.noise_sd_nms, float)
+    mean, p_eff = nuisance_posterior(cols, y, sd, used.torque_sd_nm, eta)
+    e = y - np.einsum("iap,p->ia", cols, mean)
+    chi2 = float(np.sum((e / sd[None, :]) ** 2))
+    dof = max(3 * t.size - p_eff, 1.0)
+    fit = _check("residual_fit", normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0)),
+                 Z_THRESHOLD, note=f"chi2 {chi2:.4g} on {dof:.4g} dof under {hyp}; residual rms "
+                 + ", ".join(f"{a} {r:.3g}" for a, r in zip("XYZ", np.sqrt(np.mean(e * e, 0))))
+                 + " N m s against the assumed noise "
+                 + ", ".join(f"{s_:.3g}" for s_ in sd))
+    torque_sd = used.torque_sd_nm * np.sqrt(sum(w * s * s for s, w in TORQUE_SCALES))
+    z = np.r_[np.abs(mean[3:6]) / max(torque_sd, 1e-300), np.abs(mean[6:]) / max(eta, 1e-300)]
+    names = [f"torque[{a}]" for a in "XYZ"] + [f"thrust_error[{n}]" for n in THRUSTER_NAMES]
+    j = int(np.argmax(z))
+    conflict = _check("prior_data_conflict", float(z[j]), PRIOR_CONFLICT_SD, names[j],
+                      f"torque {', '.join(f'{x * 1e6:.3g}' for x in mean[3:6])} µN m (prior sd "
+                      f"{torque_sd * 1e6:.3g}); thrust errors up to "
+                      f"{100 * np.max(np.abs(mean[6:])):.3g} % (prior sd {100 * eta:.3g} %), "
+                      f"under {hyp}")
+    return Adequacy((fit, conflict,
+                     residual_autocorrelation(e, np.zeros(t.size, int), labels=["stretch"])))
