@@ -7,8 +7,10 @@
   inertia. The health model fixes the inertia at the model file's and counts on its error being
   shared by all events (absorbed in each channel's baseline). The statistic is the change of
   each reported channel's thrust between the two fits, less its precision-weighted mean over the
-  events (the shared part), in the event's own sd: ``max_ek |Δ_ek − Δ̄_k| / s_ek``; ``parameter``
-  names the event and channel, and the note gives the moments the events imply.
+  events (the shared part), in the sd the event supports with its own inertia: ``max_ek |Δ_ek −
+  Δ̄_k| / s_ek``; ``parameter`` names the event and channel, and the note gives the moments the
+  events imply. (A wrong inertia also inflates the summary's own sd, by up to 80× on the
+  degradation campaign fitted with the Pre-SOI model, which would hide the shift.)
 * ``held_out`` — the events' consistency with one another: each event's log thrust per channel
   against the exact posterior predictive of the change-point model fitted to the *other* events
   (the step, the baseline, the scatter ``σ_k`` and the event's own sd), as the normal deviate of
@@ -35,7 +37,7 @@ from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHO
 from cassini_bayes.inference.health.changepoint import (SCATTER_GRID, HealthPrior,
                                                         health_posterior)
 from cassini_bayes.inference.health.summary import (CHANNELS, EventSummary, event_design,
-                                                    weighted_fit)
+                                                    newey_west_lags, residual_cov, weighted_fit)
 from cassini_bayes.physics.impulse import impulse_lhs_basis
 
 __all__ = ["InertiaProbe", "inertia_probe", "inertia_conflict", "held_out_events",
@@ -51,47 +53,60 @@ class InertiaProbe(NamedTuple):
     shift : (6,) relative change of each reported channel's thrust, ``(F_model − F_own) /
         F_model``, from the model file's inertia to the event's own principal moments (NaN where
         the channel is not reported).
+    own_sd : (6,) the sd of the event's log thrust with its own moments: the summary's, with its
+        Newey-West part replaced by the own-inertia fit's (the time-constant and wheel terms
+        kept).
     moments : (3,) the event's principal moments relative to the model's, ``I_own / I_model − 1``.
-    moments_sd : (3,) their sd (the plain weighted least-squares sd: a guide, not a test).
+    moments_sd : (3,) their Newey-West sd.
     """
 
     shift: np.ndarray
+    own_sd: np.ndarray
     moments: np.ndarray
     moments_sd: np.ndarray
 
 
-def inertia_probe(tel, pulses, spacecraft, summary: EventSummary) -> InertiaProbe:
+def inertia_probe(tel, pulses, spacecraft, summary: EventSummary, *,
+                  lags: int | None = None) -> InertiaProbe:
     """The event refitted with its principal moments free (:class:`InertiaProbe`), with the
     per-axis weights of the summary's own fit so that only the added columns differ."""
     des = event_design(tel, pulses, spacecraft)
     basis = np.asarray(_basis(np.asarray(tel.t, float), np.asarray(tel.omega, float),
                               np.asarray(wheel_momentum(tel, spacecraft), float)))
     inertia = np.asarray(spacecraft.inertia, float)
-    # V is linear in π (Feldman & Lee Eq 17): π_k ∂V/∂π_k is V's change per unit relative change
-    cols = np.stack([inertia[k, k] * basis[1 + k] for k in range(3)], axis=-1)   # (n, 3, 3)
-    f0, w, _, _, _ = weighted_fit(des.x, des.v)
-    f1, _, a1, _, _ = weighted_fit(np.concatenate([des.x, cols], axis=-1), des.v, w)
+    # π_k ∂V/∂π_k: V's change per unit relative change of moment k (Feldman & Lee Eq 17 is
+    # linear in π). V at the model's inertia carries Σ_k (π_model,k − π_own,k) ∂V/∂π_k beyond
+    # the thrusts, so the fitted coefficient δ_k is 1 − π_own,k / π_model,k
+    x1 = np.concatenate([des.x, np.stack([inertia[k, k] * basis[1 + k] for k in range(3)],
+                                         axis=-1)], axis=-1)
+    lags = newey_west_lags(des.v.shape[0]) if lags is None else int(lags)
+    f0, w_fit, a0, e0, rms = weighted_fit(des.x, des.v)
+    w = 1.0 / np.maximum(rms, 1e-12) ** 2                  # the scores' weights, as the summary
+    f1, _, a1, e1, _ = weighted_fit(x1, des.v, w_fit)
+    nw0 = np.sqrt(np.diag(residual_cov(des.x, e0, w_fit, w, a0, lags)))
+    cov1 = residual_cov(x1, e1, w_fit, w, a1, lags)
+    nw1 = np.sqrt(np.diag(cov1))
     idx = np.flatnonzero(des.fired[:6])
-    shift = np.full(6, np.nan)
+    p = idx.size
     rep = np.isfinite(summary.log_thrust[idx])
-    shift[idx[rep]] = (f0[:idx.size] - f1[:idx.size])[rep] / f0[:idx.size][rep]
-    # V at the model's inertia carries Σ_k (π_model,k − π_own,k) ∂V/∂π_k beyond the thrusts
-    # (V is linear in π), so the fitted coefficient δ_k is 1 − π_own,k / π_model,k
-    n, p = des.v.shape[0], f1.size
-    s2 = np.sum((des.v - np.einsum("tap,p->ta", np.concatenate([des.x, cols], -1), f1)) ** 2
-                * w[None, :]) / max(3 * n - p, 1)
-    sd = np.sqrt(np.diag(np.linalg.inv(a1))[-3:] * s2)
-    return InertiaProbe(shift, -f1[-3:], sd)
+    k = idx[rep]
+    shift, own_sd = np.full(6, np.nan), np.full(6, np.nan)
+    f = np.abs(f0[:p][rep])
+    shift[k] = (f0[:p] - f1[:p])[rep] / f0[:p][rep]
+    s2 = np.diag(summary.cov)[k]
+    own_sd[k] = np.sqrt(np.maximum(s2 - (nw0[:p][rep] / f) ** 2, 0.0) + (nw1[:p][rep] / f) ** 2)
+    return InertiaProbe(shift, own_sd, -f1[-3:], nw1[-3:])
 
 
-def inertia_conflict(probes: Sequence[InertiaProbe], se: np.ndarray, labels: Sequence[str],
+def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
                      threshold: float = PRIOR_CONFLICT_SD) -> Check:
     """``max_ek |Δ_ek − Δ̄_k| / s_ek`` (module docstring): the part of each event's thrust
-    change under its own inertia that the events do not share, in the event's own sd ``se``
-    (N, 6, log units); ``Δ̄_k`` the precision-weighted mean over the events of channel ``k``."""
+    change under its own inertia that the events do not share, in the sd ``s_ek`` of the
+    event's thrust under its own inertia; ``Δ̄_k`` the precision-weighted mean over the events
+    of channel ``k``."""
     name = "inertia_conflict"
     shift = np.array([p.shift for p in probes], float)
-    se = np.asarray(se, float)
+    se = np.array([p.own_sd for p in probes], float)
     ok = np.isfinite(shift) & np.isfinite(se) & (se > 0)
     if not ok.any():
         return not_applicable(name, threshold, "no event reports a channel")
@@ -100,11 +115,12 @@ def inertia_conflict(probes: Sequence[InertiaProbe], se: np.ndarray, labels: Seq
     z = np.where(ok, np.abs(shift - shared[None, :]) / np.where(ok, se, 1.0), -1.0)
     e, k = np.unravel_index(int(np.argmax(z)), z.shape)
     mom = np.array([p.moments for p in probes])
-    msd = np.array([p.moments_sd for p in probes])
-    wm = 1.0 / np.maximum(msd, 1e-12) ** 2
+    wm = 1.0 / np.maximum(np.array([p.moments_sd for p in probes]), 1e-12) ** 2
     pooled = np.sum(wm * mom, axis=0) / np.sum(wm, axis=0)
     note = ("the events' own principal moments differ from the model's by " + ", ".join(
-        f"{n} {100 * x:+.1f} %" for n, x in zip(MOMENT_NAMES, pooled)))
+        f"{n} {100 * x:+.1f} %" for n, x in zip(MOMENT_NAMES, pooled))
+        + f"; {labels[e]} {CHANNELS[k]}: thrust {-100 * shift[e, k]:+.2g} % under its own "
+        f"inertia (events' shared part {-100 * shared[k]:+.2g} %), sd {100 * se[e, k]:.2g} %")
     if z[e, k] > threshold:
         note += ("; the health model takes the model's inertia as exact up to a shared scale: "
                  "give the spacecraft model of the events' epoch (fit inertia calibrates it)")
@@ -171,5 +187,5 @@ def health_adequacy(dates_days, summaries: Sequence[EventSummary],
     """The checks of a health fit (module docstring); ``labels`` name the events."""
     y = np.array([s.log_thrust for s in summaries])
     se = np.array([np.sqrt(np.diag(s.cov)) for s in summaries])
-    return Adequacy((inertia_conflict(probes, se, labels),
+    return Adequacy((inertia_conflict(probes, labels),
                      held_out_events(dates_days, y, se, prior, labels)))

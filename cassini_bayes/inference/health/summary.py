@@ -46,7 +46,7 @@ from cassini_bayes.estimators.thrust import regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs, moment_matrix
 
 __all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "EventDesign", "event_summary",
-           "event_design", "channel_design", "weighted_fit", "newey_west_lags"]
+           "event_design", "channel_design", "weighted_fit", "residual_cov", "newey_west_lags"]
 
 CHANNELS = ("Z1", "Z2", "Z3", "Z4", "Y13", "Y24")
 """The identifiable thrust combinations of one event (Feldman & Lee Eqs 19 and 21)."""
@@ -210,6 +210,18 @@ def weighted_fit(x: np.ndarray, v: np.ndarray, w: np.ndarray | None = None):
     return f, w, a, e, rms
 
 
+def residual_cov(x: np.ndarray, e: np.ndarray, w_fit: np.ndarray, w: np.ndarray, a: np.ndarray,
+                 lags: int) -> np.ndarray:
+    """(p, p) Newey-West covariance of a weighted fit's estimate: design ``x`` (n, 3, p) and
+    residuals ``e`` (n, 3) of the fit with per-axis weights ``w_fit`` and normal matrix ``a``;
+    the scores weighted by ``w`` (the residual levels); scaled by ``n / (n − p)``."""
+    n = e.shape[0]
+    a_inv = np.linalg.inv(a)
+    xw = x * np.sqrt(w_fit)[None, :, None]
+    cov = a_inv @ _newey_west(xw, e * np.sqrt(w)[None, :], lags) @ a_inv
+    return cov * (n / max(n - x.shape[-1], 1))
+
+
 def newey_west_lags(n: int) -> int:
     """The Newey-West bandwidth (samples) of an event of ``n`` samples: ``⌈4 (n/100)^{2/9}⌉ · 3``,
     three times the usual rule (the cumulative regression's residuals are long-correlated)."""
@@ -231,8 +243,7 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
     xw = x * np.sqrt(w_fit)[None, :, None]
     w = 1.0 / np.maximum(rms, 1e-12) ** 2
     a_inv = np.linalg.inv(a)
-    cov_f = a_inv @ _newey_west(xw, e * np.sqrt(w)[None, :], lags) @ a_inv
-    cov_f *= n / max(n - f.size, 1)
+    cov_f = residual_cov(x, e, w_fit, w, a, lags)
     for g in _sensitivities(tel, des.log, spacecraft, des.tau, tau_sd_frac, q, fired, f, xw, w,
                             a_inv):
         cov_f += np.outer(g, g)
