@@ -121,7 +121,8 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
                 "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta},
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
     }
-    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s)
+    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s,
+                             onset_step_s=onset_step_s)
     summary["adequacy"] = adequacy.to_dict()
     summary["warnings"] = adequacy.warnings()
     config = {"command": "monitor leak", "version": __version__,
