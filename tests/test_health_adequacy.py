@@ -109,3 +109,23 @@ def test_inertia_probe_measures_the_moments_and_a_wrong_model_fails(one_event):
     z = np.abs(pw.shift) / pw.own_sd
     z_right = np.abs(pr.shift) / pr.own_sd
     assert np.nanmax(z[:4]) > max(3.0, 10 * np.nanmax(z_right))
+
+
+def test_an_event_without_body_motion_gives_no_probe(tmp_path):
+    """A biasing record whose body rates are exactly zero cannot tell the moments from the
+    thrusts: the probe is NaN (no error), and a verdict of such events only is not applicable."""
+    from cassini_bayes.spacecraft import load_spacecraft
+    from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, cumulative_on_times
+
+    t = np.arange(0.0, 200.0, 0.5)
+    t_on = np.arange(20.0, 180.0, 10.0)
+    log = PulseLog(t_on, np.tile([0, 2], t_on.size // 2), np.full(t_on.size, 0.25))
+    rates = np.full((t.size, 4), np.nan)
+    rates[:, :3] = np.linspace(0.0, 1.0, t.size)[:, None] * np.array([100.0, -200.0, 150.0]) \
+        * RPM_TO_RAD_S
+    tel = Telemetry(t, np.tile([0.0, 0.0, 0.0, 1.0], (t.size, 1)), np.zeros((t.size, 3)), rates,
+                    on_times=cumulative_on_times(log, t))
+    sc = load_spacecraft("cassini_post_probe")
+    pr = inertia_probe(tel, log, sc, event_summary(tel, log, sc))
+    assert np.all(np.isnan(pr.shift)) and np.all(np.isnan(pr.moments))
+    assert inertia_conflict([pr, pr], LABELS).statistic is None

@@ -4,15 +4,15 @@ The monitor's model (:mod:`cassini_bayes.inference.leak`, Lee Eq 10) explains th
 momentum ``R`` of the rows it uses by an offset, a constant external torque, the thrusters'
 fractional thrust errors and, under a leak hypothesis, the leak, plus white noise of the level
 it reads from the data. The checks take the hypothesis most probable at the last check (no leak,
-or a thruster's leak at its posterior mean fraction and onset), integrate the Gaussian nuisance
-parameters as the monitor does (under the component of the torque's prior that the data favour)
-and look at the posterior mean:
+or that thruster's leak with its fraction fitted and its onset refined around the monitor's),
+integrate the Gaussian nuisance parameters as the monitor does (under the component of the
+torque's prior that the data favour) and look at the posterior mean:
 
 * ``residual_fit`` — ``χ² = Σ_i Σ_a e_ia² / σ_a²`` of the residuals against the noise level
   ``σ_a`` the monitor assumed, on ``3n − p_eff`` degrees of freedom (``p_eff`` the trace of the
-  hat matrix), as the normal deviate of its upper tail. A spacecraft model whose inertia or
-  thruster geometry is wrong leaves the unexplained part of ``I Δω`` and of the pulses in the
-  residual, far above the sensors' noise.
+  hat matrix), as the normal deviate of its upper tail: a signal the model has no term for (a
+  torque that changes within the stretch, a step) left in the residual. (A wrong inertia does
+  not show here: its dead-band ``δI Δω`` raises the noise level the monitor reads as well.)
 * ``prior_data_conflict`` — the torque's posterior mean in its prior sd (the mixture's, ``σ_T
   √(Σ w_c s_c²)``) and each thrust error's in ``η``: the monitor explains a secular misfit by a
   torque or a thrust error, and one pulled several prior sd says the model file's knowledge
@@ -114,8 +114,8 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float, sample_st
                            ONSET_SCAN)
         chi = [fit_at(x)[0] for x in grid]
         i = int(np.argmin(chi))
-        res = optimize.minimize_scalar(lambda x: fit_at(x)[0], method="bounded",
-                                       bounds=(grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]),
+        bounds = (grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)])
+        res = optimize.minimize_scalar(lambda x: fit_at(x)[0], method="bounded", bounds=bounds,
                                        options={"xatol": 1e-3})
         best = min((fit_at(x) for x in (grid[i], float(res.x))), key=lambda r: r[0])
         chi2, mean, p_eff, e, onset, frac = best

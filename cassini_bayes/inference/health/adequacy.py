@@ -58,6 +58,9 @@ class InertiaProbe(NamedTuple):
         kept).
     moments : (3,) the event's principal moments relative to the model's, ``I_own / I_model − 1``.
     moments_sd : (3,) their Newey-West sd.
+
+    All NaN when the event's body rates cannot tell the moments from the thrusts (a quiet
+    event: the extended design is rank-deficient).
     """
 
     shift: np.ndarray
@@ -82,6 +85,9 @@ def inertia_probe(tel, pulses, spacecraft, summary: EventSummary, *,
     lags = newey_west_lags(des.v.shape[0]) if lags is None else int(lags)
     f0, w_fit, a0, e0, rms = weighted_fit(des.x, des.v)
     w = 1.0 / np.maximum(rms, 1e-12) ** 2                  # the scores' weights, as the summary
+    if not _separable(x1, w_fit):     # body rates too quiet to tell the moments from thrust
+        nan6, nan3 = np.full(6, np.nan), np.full(3, np.nan)
+        return InertiaProbe(nan6, nan6, nan3, nan3)
     f1, _, a1, e1, _ = weighted_fit(x1, des.v, w_fit)
     nw0 = np.sqrt(np.diag(residual_cov(des.x, e0, w_fit, w, a0, lags)))
     cov1 = residual_cov(x1, e1, w_fit, w, a1, lags)
@@ -96,6 +102,17 @@ def inertia_probe(tel, pulses, spacecraft, summary: EventSummary, *,
     s2 = np.diag(summary.cov)[k]
     own_sd[k] = np.sqrt(np.maximum(s2 - (nw0[:p][rep] / f) ** 2, 0.0) + (nw1[:p][rep] / f) ** 2)
     return InertiaProbe(shift, own_sd, -f1[-3:], nw1[-3:])
+
+
+def _separable(x: np.ndarray, w: np.ndarray, max_cond: float = 1e10) -> bool:
+    """Whether the weighted design ``x`` (n, 3, p) has full rank: the condition number of its
+    correlation-scaled normal matrix below ``max_cond``."""
+    xw = x * np.sqrt(w)[None, :, None]
+    a = np.einsum("tap,taq->pq", xw, xw)
+    d = np.sqrt(np.diag(a))
+    if not np.all(d > 0):
+        return False
+    return bool(np.linalg.cond(a / np.outer(d, d)) < max_cond)
 
 
 def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
@@ -115,8 +132,8 @@ def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
     z = np.where(ok, np.abs(shift - shared[None, :]) / np.where(ok, se, 1.0), -1.0)
     e, k = np.unravel_index(int(np.argmax(z)), z.shape)
     mom = np.array([p.moments for p in probes])
-    wm = 1.0 / np.maximum(np.array([p.moments_sd for p in probes]), 1e-12) ** 2
-    pooled = np.sum(wm * mom, axis=0) / np.sum(wm, axis=0)
+    wm = np.nan_to_num(1.0 / np.maximum(np.array([p.moments_sd for p in probes]), 1e-12) ** 2)
+    pooled = np.sum(wm * np.nan_to_num(mom), axis=0) / np.maximum(np.sum(wm, axis=0), 1e-300)
     note = ("the events' own principal moments differ from the model's by " + ", ".join(
         f"{n} {100 * x:+.1f} %" for n, x in zip(MOMENT_NAMES, pooled))
         + f"; {labels[e]} {CHANNELS[k]}: thrust {-100 * shift[e, k]:+.2g} % under its own "
