@@ -126,7 +126,8 @@ def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
     se = np.array([p.own_sd for p in probes], float)
     ok = np.isfinite(shift) & np.isfinite(se) & (se > 0)
     if not ok.any():
-        return not_applicable(name, threshold, "no event reports a channel")
+        return not_applicable(name, threshold, "no event reports a channel whose body motion "
+                              "tells its principal moments from its thrusts")
     w = np.where(ok, 1.0 / np.where(ok, se, 1.0) ** 2, 0.0)
     shared = np.sum(w * np.where(ok, shift, 0.0), axis=0) / np.maximum(w.sum(axis=0), 1e-300)
     z = np.where(ok, np.abs(shift - shared[None, :]) / np.where(ok, se, 1.0), -1.0)
