@@ -362,6 +362,73 @@ def test_row_limit_refuses_a_huge_file_before_reading_it_all(tmp_path, run_cli, 
     assert "row" in err.lower()
 
 
+# ---- a spacecraft model that contradicts the data: a verdict, not a refusal ----------------
+
+# The files are good and the command runs, but the spacecraft model given does not describe the
+# spacecraft that made them: the run is written (exit 0) with one warning line per failed
+# adequacy check and "ADEQUACY FAILED" on the result line; --strict exits 3 after writing the
+# same run; the model that made the data says "adequacy ok" (also under --strict).
+# (id, argv with {events} and {out}, the check that must fail, the matched model)
+VERDICT_CASES = [
+    # a health campaign simulated from the Post-Probe model, fitted with the Pre-SOI one
+    # (moments 19-32 % high): before the verdict, exit 0 and a "✓" with P(Z3 or Z4 down) 0.41
+    # against 1.000 on the shipped degradation campaign
+    ("health-spacecraft-model-of-another-epoch",
+     ["fit", "health", "{events}", "--spacecraft", "cassini_pre_soi", "--out", "{out}"],
+     "inertia_conflict", "cassini_post_probe"),
+]
+
+
+@pytest.fixture(scope="module")
+def health_events(tmp_path_factory) -> Path:
+    """A small degradation campaign (8 events of 60 s over 120 days, Z3/Z4 −7 % on day 60),
+    simulated from the Post-Probe model: ~5 s, and each fit ~3 s after compilation. Measured on
+    it: inertia_conflict 0.38 with the Post-Probe model, 11.9 with the Pre-SOI one (threshold 4;
+    seeds 0-3 of this campaign: 0.38-1.65 and 10.3-11.9)."""
+    from cassini_bayes.api import simulate_health_campaign
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    d = tmp_path_factory.mktemp("health")
+    (d / "event.toml").write_text(scenario_path("health_event").read_text().replace(
+        "duration_s = 120.0", "duration_s = 60.0"))
+    (d / "campaign.toml").write_text(
+        f'name = "small"\nseed = 3\nevent = "{(d / "event.toml").as_posix()}"\n'
+        "[campaign]\nn_events = 8\nspan_days = 120.0\n"
+        '[degradation]\nthrusters = ["Z3", "Z4"]\nfraction = 0.07\nday = 60.0\n')
+    return simulate_health_campaign(str(d / "campaign.toml"), d / "events")
+
+
+@pytest.mark.parametrize("case, argv, check, matched", VERDICT_CASES,
+                         ids=[c[0] for c in VERDICT_CASES])
+def test_model_contradicting_the_data_warns_and_strict_fails(health_events, run_cli, tmp_path,
+                                                             case, argv, check, matched):
+    import json
+
+    def args(out, *extra, model=None):
+        a = [x.format(events=health_events, out=out) for x in argv]
+        if model is not None:
+            a[a.index("--spacecraft") + 1] = model
+        return [*a, *extra]
+
+    before = _sha(health_events)
+    code, _, err = run_cli(*args(tmp_path / "warned"))
+    assert code == 0 and "Traceback" not in err, err
+    summary = json.loads((tmp_path / "warned" / "summary.json").read_text())
+    failed = [n for n, c in summary["adequacy"]["checks"].items() if not c["ok"]]
+    assert check in failed and summary["warnings"]
+    lines = err.strip().splitlines()
+    assert len(lines) == len(failed) + 1, err          # a warning per failed check, the result
+    assert all(ln.startswith("warning:") for ln in lines[:-1]) and check in lines[0]
+    assert "ADEQUACY FAILED" in lines[-1]
+    assert "ADEQUACY FAILED" in (tmp_path / "warned" / "report.html").read_text()
+    code, _, err = run_cli(*args(tmp_path / "strict", "--strict"))
+    assert code == 3 and (tmp_path / "strict" / "summary.json").is_file(), err
+    assert err.strip().splitlines()[-1].startswith("error:") and "Traceback" not in err
+    code, _, err = run_cli(*args(tmp_path / "matched", "--strict", model=matched))
+    assert code == 0 and "adequacy ok" in err and "warning" not in err, err
+    assert _sha(health_events) == before
+
+
 # ---- cases tested beside their fixtures ----------------------------------------------------
 
 ELSEWHERE = {

@@ -32,19 +32,18 @@ class BudgetResult:
     runs: dict
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``summary.json``, ``config.toml``, ``budget.csv`` and ``report.html`` into
-        ``out`` atomically; returns it. ``force`` replaces only a directory cassini-bayes
-        wrote."""
+        """Write ``summary.json`` (with the ``adequacy`` verdict of
+        :func:`~cassini_bayes.analysis.budget_adequacy.budget_adequacy`), ``config.toml``,
+        ``budget.csv`` and ``report.html`` into ``out`` atomically; returns it. ``force``
+        replaces only a directory cassini-bayes wrote."""
         from cassini_bayes.analysis.posterior_budgets import budget_csv, budget_table
-        from cassini_bayes.report.html import (bullet_list, html_page, paragraph, section,
-                                               table)
+        from cassini_bayes.report.adequacy import adequacy_section, verdict_header
+        from cassini_bayes.report.html import html_page, paragraph, section, table
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
         columns, rows = budget_table(self.budget)
-        warns = self.summary.get("warnings") or []
-        header = (f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>'
-                  if warns else "")
         page = html_page("Budgets from posteriors", [
+            adequacy_section(self.summary, _BUDGET_NOTE),
             section("Budget lines", [
                 paragraph("Each line propagated from the posterior draws of the runs below: "
                           "median and 90 % credible interval, beside the paper's number; lines "
@@ -54,7 +53,7 @@ class BudgetResult:
                           "docs/budgets.md.", note=True),
                 table(list(columns), [list(r) for r in rows], left=3)]),
             section("Inputs", paragraph("; ".join(f"{k}: {v}" for k, v in self.runs.items())))],
-            header=header)
+            header=verdict_header(self.summary))
         inputs = [r for r in self.runs.values() if isinstance(r, Path)]
         with RunDir(out, force=force, inputs=inputs) as rd:
             write_summary(rd.path, self.summary)
@@ -64,66 +63,11 @@ class BudgetResult:
         return rd.final
 
 
-def _run_record(run, name: str) -> dict | None:
-    """A budget input's ``summary.json`` or ``config.toml`` (``name``) as a dict: a
-    :class:`~cassini_bayes.api.FitResult`'s own, else read from its run directory (``None``
-    when missing or unreadable)."""
-    import json
-    import tomllib
-
-    if not isinstance(run, Path):
-        return run.summary() if name == "summary.json" else run.config
-    try:
-        text = (run / name).read_text(encoding="utf-8")
-        record = json.loads(text) if name.endswith(".json") else tomllib.loads(text)
-    except (OSError, UnicodeDecodeError, ValueError):
-        return None
-    return record if isinstance(record, dict) else None
-
-
-def _mixed_models(runs: dict) -> list[str]:
-    """A warning when the runs were fitted with different spacecraft models (their
-    ``config.toml``): their parameters then describe different spacecraft or epochs."""
-    names = {}
-    for kind, run in runs.items():
-        cfg = _run_record(run, "config.toml")
-        if cfg is None:
-            continue
-        name = (cfg.get("spacecraft") or {}).get("name")
-        if isinstance(name, str):
-            names[kind] = name
-    if len(set(names.values())) < 2:
-        return []
-    return ["the runs were fitted with different spacecraft models ("
-            + ", ".join(f"{k}: {v}" for k, v in names.items()) + "): the budget combines "
-            "parameters of different spacecraft or epochs; give runs of one model"]
-
-
-def _unreliable_inputs(runs: dict) -> list[str]:
-    """A warning per input run whose own ``summary.json`` says it did not converge or failed its
-    adequacy checks: the budget inherits what is wrong with its draws."""
-    out = []
-    for kind, run in runs.items():
-        summary = _run_record(run, "summary.json")
-        if summary is None:
-            continue
-        diag = summary.get("diagnostics") or {}
-        if diag.get("converged") is False:
-            def num(key: str, spec: str) -> str:
-                x = diag.get(key)
-                return format(x, spec) if isinstance(x, (int, float)) else "?"
-
-            out.append(f"the {kind} run {run} did not converge (max R-hat "
-                       f"{num('max_r_hat', '.4f')}, min bulk ESS {num('min_ess_bulk', '.0f')}, "
-                       f"{num('divergences', 'd')} divergences): its lines rest on draws that "
-                       "may not represent its posterior; re-fit it with more draws")
-        adequacy = summary.get("adequacy") or {}
-        if adequacy.get("ok") is False:
-            failed = [k for k, c in (adequacy.get("checks") or {}).items()
-                      if isinstance(c, dict) and c.get("ok") is False]
-            out.append(f"the {kind} run {run} failed its adequacy checks ({', '.join(failed)}): "
-                       "its model may not fit its data")
-    return out
+_BUDGET_NOTE = ("Are the input runs fit to be combined? input_convergence and input_adequacy "
+                "count the runs whose own summary.json says they did not converge or failed "
+                "their adequacy checks; spacecraft_models counts the models they were fitted "
+                "with; shared_inertia compares the inertia of every run that sampled it (one "
+                "spacecraft, one inertia). docs/budgets.md.")
 
 
 def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
@@ -139,6 +83,7 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
     """
     import jax
 
+    from cassini_bayes.analysis.budget_adequacy import budget_adequacy
     from cassini_bayes.analysis.posterior_budgets import (load_posterior, posterior_budget,
                                                           posterior_from_idata)
     from cassini_bayes.api._inputs import MAX_DRAWS, check_seed, number
@@ -171,8 +116,9 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
                                      (v.config.get("options") or {}).get("method")))
             for k, v in given.items()}
     result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)
+    adequacy = budget_adequacy(given)
     summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict(),
-               "warnings": _mixed_models(given) + _unreliable_inputs(given)}
+               "adequacy": adequacy.to_dict(), "warnings": adequacy.warnings()}
     config = {"command": "budget", "version": __version__, "seed": seed,
               "inputs": {k: ({"run": str(v), "posterior": file_record(v / "posterior.nc")}
                              if isinstance(v, Path) else  # an unsaved fit: how to redo it

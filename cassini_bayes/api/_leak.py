@@ -33,10 +33,12 @@ class LeakResult:
     files: tuple
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``summary.json``, ``config.toml`` and ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) into ``out`` atomically; returns it. ``force``
-        replaces only a directory cassini-bayes wrote."""
+        """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
+        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the adequacy verdict, both
+        monitors' answers) into ``out`` atomically; returns it. ``force`` replaces only a
+        directory cassini-bayes wrote."""
         from cassini_bayes.inference.leak import HYPOTHESES
+        from cassini_bayes.report.leak import leak_page
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
@@ -45,6 +47,8 @@ class LeakResult:
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
                        header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
+            (rd.path / "report.html").write_text(leak_page(self.summary, self.files),
+                                                 encoding="utf-8")
         return rd.final
 
 
@@ -80,6 +84,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     from cassini_bayes.consistency import check_telemetry_data
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
+    from cassini_bayes.inference.leak_adequacy import leak_adequacy
     from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
     # the Bayesian monitor checks its own settings (leak_posterior); these are Lee's
@@ -120,6 +125,10 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
         "warnings": warns,
     }
+    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s,
+                             onset_step_s=onset_step_s)
+    summary["adequacy"] = adequacy.to_dict()
+    summary["warnings"] = adequacy.warnings()
     config = {"command": "monitor leak", "version": __version__,
               "inputs": {"telemetry": tel_records[0], "spacecraft": sc_record,
                          **({"pulses": log_records[0]} if log_records else {})},

@@ -11,12 +11,24 @@ from __future__ import annotations
 from cassini_bayes.report.html import Section, badge, not_available, paragraph, section, table
 from cassini_bayes.report.tables import fmt
 
-__all__ = ["adequacy_badge", "adequacy_section"]
+__all__ = ["adequacy_badge", "adequacy_section", "verdict_header"]
 
 _LABELS = {"prior_data_conflict": "prior–data conflict (prior sd)",
            "held_out": "held-out prediction (normal deviate)",
            "residual_autocorrelation": "residual lag-1 autocorrelation |ρ̂₁|",
-           "residual_regression": "residuals vs regressors (normal deviate)"}
+           "residual_regression": "residuals vs regressors (normal deviate)",
+           "inertia_conflict": "events' thrust under their own inertia (event sd)",
+           "residual_fit": "residuals vs the assumed noise (normal deviate)",
+           "input_convergence": "input runs that did not converge",
+           "input_adequacy": "input runs that failed their adequacy checks",
+           "spacecraft_models": "spacecraft models among the input runs",
+           "shared_inertia": "input runs' inertia agreement (normal deviate)"}
+_FIT_NOTE = ("Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
+             "far from its prior, a telemetry file the others do not predict, or residuals with "
+             "structure in time or along the model's regressors mean the model leaves something "
+             "out, and this run's intervals are not to be trusted as they stand. Each check fails "
+             "when its statistic exceeds the threshold; the false-alarm rates measured on "
+             "correctly specified simulations are in docs/adequacy.md.")
 
 
 def _block(summary) -> dict | None:
@@ -40,8 +52,9 @@ def adequacy_badge(summary) -> str:
                  not failed)
 
 
-def adequacy_section(summary) -> Section:
-    """The "Model adequacy" section: one row per check."""
+def adequacy_section(summary, note: str = _FIT_NOTE) -> Section:
+    """The "Model adequacy" section: one row per check, and ``note`` (what the checks mean and
+    where their false-alarm rates are; a fit's by default)."""
     block = _block(summary)
     if block is None:
         return section("Model adequacy", not_available(
@@ -57,12 +70,16 @@ def adequacy_section(summary) -> Section:
     body = [
         table(["check", "statistic", "threshold", "verdict", "where / note"], rows, left=1,
               classes=[[*c[:4], "l"] for c in classes]),
-        paragraph(
-            "Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
-            "far from its prior, a telemetry file the others do not predict, or residuals with "
-            "structure in time or along the model's regressors mean the model leaves something "
-            "out, and this run's intervals are not to be trusted as they stand. Each check fails "
-            "when its statistic exceeds the threshold; the false-alarm rates measured on "
-            "correctly specified simulations are in docs/adequacy.md.", note=True),
+        paragraph(note, note=True),
     ]
     return section("Model adequacy", body, id="adequacy")
+
+
+def verdict_header(summary) -> str:
+    """The header of a page with a verdict: the adequacy badge and the summary's warnings."""
+    from cassini_bayes.report.html import bullet_list
+
+    warns = summary.get("warnings") or [] if isinstance(summary, dict) else []
+    return (f"<p>{adequacy_badge(summary)}</p>"
+            + (f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>'
+               if warns else ""))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["plot_health"]
+__all__ = ["plot_health", "health_page"]
 
 
 def plot_health(post, fraction: float = 0.05, n_grid: int = 300) -> Figure:
@@ -44,3 +44,40 @@ def plot_health(post, fraction: float = 0.05, n_grid: int = 300) -> Figure:
                  f"[{lo:.0f}, {hi:.0f}] d (given a change)", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+HEALTH_NOTE = ("Self-checks of the health fit that need no truth. inertia_conflict: each event "
+               "refitted with its own principal moments; the change of each channel's thrust "
+               "that the events do not share, in the event's own sd (the health model takes the "
+               "spacecraft model's inertia as exact up to a scale shared by all events). "
+               "held_out: each event's thrust against the change-point posterior of the other "
+               "events. Thresholds and the false-alarm rates measured on correctly specified "
+               "campaigns: docs/health.md.")
+
+
+def health_page(summary: dict, png: bytes, files) -> str:
+    """``report.html`` of a health fit: the adequacy badge and section, the figure of
+    :func:`plot_health` (``png``), the channels at the last event and the events read
+    (``files``: (date, telemetry, pulses) each)."""
+    from cassini_bayes.report.adequacy import adequacy_section, verdict_header
+    from cassini_bayes.report.html import figure, html_page, section, table
+    from cassini_bayes.report.tables import fmt
+
+    rows = [[name, c["n_events"], fmt(c["p_down_last"], 3), fmt(c["ratio_last_mean"], 4),
+             f"[{fmt(c['ratio_last_90'][0], 4)}, {fmt(c['ratio_last_90'][1], 4)}]",
+             fmt(c["p_step_given_change"], 3)] for name, c in summary["channels"].items()]
+    lo, hi = summary["change_date_days"]["interval_90"]
+    frac = summary["fraction"]
+    return html_page("Thruster health", [
+        adequacy_section(summary, HEALTH_NOTE),
+        section("Thrust over time", figure(png, "Thrust relative to the first calibration: "
+                                           "posterior median, 50 % and 90 % bands; dots are "
+                                           "the events' estimates")),
+        section("Channels at the last event", [
+            table(["channel", "events", f"P(> {frac:.0%} down)", "thrust ratio, mean",
+                   "90 % interval", "P(step | change)"], rows),
+            f"<p>P(change) = {fmt(summary['p_change'], 3)}; change date 90 % interval "
+            f"[{lo:.0f}, {hi:.0f}] d (given a change).</p>"]),
+        section("Events", table(["date, d", "telemetry", "pulses"],
+                                [[f"{d:g}", str(t), str(p)] for d, t, p in files], left=3))],
+        header=verdict_header(summary))
