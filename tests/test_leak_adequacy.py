@@ -14,7 +14,7 @@ import numpy as np
 from cassini_bayes.estimators.leak import leak_torque
 from cassini_bayes.inference.leak import LeakInputs, leak_posterior
 from cassini_bayes.inference.leak_adequacy import leak_adequacy
-from cassini_bayes.physics.impulse import moment_matrix
+from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 
 Q = np.asarray(moment_matrix(1.234, 1.580, 2.880, 3.019))
 F_N, TORQUE_SD, ETA = 0.7, 15e-6, 0.05

@@ -80,7 +80,8 @@ def test_bad_model_files_give_one_line_errors(tmp_path, edit, needle):
 
 
 def test_missing_model_names_what_to_do():
-    with pytest.raises(InputError, match="models/"):
+    with pytest.raises(InputError, match="no shipped spacecraft model of that name "
+                                         r"\(shipped: cassini_2000_03_15"):
         load_spacecraft("no_such_model")
 
 

@@ -128,7 +128,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s,
                              onset_step_s=onset_step_s)
     summary["adequacy"] = adequacy.to_dict()
-    summary["warnings"] = adequacy.warnings()
+    summary["warnings"] = warns + adequacy.warnings()
     config = {"command": "monitor leak", "version": __version__,
               "inputs": {"telemetry": tel_records[0], "spacecraft": sc_record,
                          **({"pulses": log_records[0]} if log_records else {})},
