@@ -56,7 +56,7 @@ def adequacy_section(summary) -> Section:
         classes.append(["", "", "", "good" if c.get("ok") else "bad", ""])
     body = [
         table(["check", "statistic", "threshold", "verdict", "where / note"], rows, left=1,
-              classes=[[*c[:4], "l"] for c in classes]),
+              classes=[[*c[:4], "w"] for c in classes]),
         paragraph(
             "Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
             "far from its prior, a telemetry file the others do not predict, or residuals with "
