@@ -35,26 +35,11 @@ class BudgetResult:
         """Write ``summary.json``, ``config.toml``, ``budget.csv`` and ``report.html`` into
         ``out`` atomically; returns it. ``force`` replaces only a directory cassini-bayes
         wrote."""
-        from cassini_bayes.analysis.posterior_budgets import budget_csv, budget_table
-        from cassini_bayes.report.html import (bullet_list, html_page, paragraph, section,
-                                               table)
+        from cassini_bayes.analysis.posterior_budgets import budget_csv
+        from cassini_bayes.report.budget import budget_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-        columns, rows = budget_table(self.budget)
-        warns = self.summary.get("warnings") or []
-        header = (f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>'
-                  if warns else "")
-        page = html_page("Budgets from posteriors", [
-            section("Budget lines", [
-                paragraph("Each line propagated from the posterior draws of the runs below: "
-                          "median and 90 % credible interval, beside the paper's number; lines "
-                          "without a calibrated input keep the paper's value. Attribution: the "
-                          "share of the line's posterior variance each parameter causes when it "
-                          "alone varies (the others at their posterior medians); "
-                          "docs/budgets.md.", note=True),
-                table(list(columns), [list(r) for r in rows], left=3)]),
-            section("Inputs", paragraph("; ".join(f"{k}: {v}" for k, v in self.runs.items())))],
-            header=header)
+        page = budget_report_html(self)
         inputs = [r for r in self.runs.values() if isinstance(r, Path)]
         with RunDir(out, force=force, inputs=inputs) as rd:
             write_summary(rd.path, self.summary)

@@ -42,7 +42,8 @@ class HealthResult:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
         sd, ``P(down)`` per channel), ``thrust_bands.csv`` (relative thrust quantiles per channel
-        on a date grid) and ``health.png`` into ``out`` atomically; returns it."""
+        on a date grid), ``health.png`` and ``report.html`` (the answer first, self-contained)
+        into ``out`` atomically; returns it."""
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
         with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
@@ -51,10 +52,11 @@ class HealthResult:
             _write_csv(rd.path / "health.csv", *health_table(self))
             _write_csv(rd.path / "thrust_bands.csv", *band_table(self.posterior))
             try:
-                from cassini_bayes.report.health import plot_health
+                from cassini_bayes.report.health import health_report_html, plot_health
 
                 plot_health(self.posterior, self.fraction).savefig(rd.path / "health.png",
                                                                   dpi=110)
+                (rd.path / "report.html").write_text(health_report_html(self), encoding="utf-8")
             except ImportError:  # matplotlib missing: the numbers are written regardless
                 pass
         return rd.final

@@ -33,9 +33,10 @@ class LeakResult:
     files: tuple
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``summary.json``, ``config.toml`` and ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) into ``out`` atomically; returns it. ``force``
-        replaces only a directory cassini-bayes wrote."""
+        """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
+        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the answer first,
+        self-contained) into ``out`` atomically; returns it. ``force`` replaces only a
+        directory cassini-bayes wrote."""
         from cassini_bayes.inference.leak import HYPOTHESES
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
@@ -45,6 +46,12 @@ class LeakResult:
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
                        header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
+            try:
+                from cassini_bayes.report.leak import leak_report_html
+
+                (rd.path / "report.html").write_text(leak_report_html(self), encoding="utf-8")
+            except ImportError:  # matplotlib missing: the numbers are written regardless
+                pass
         return rd.final
 
 
