@@ -20,7 +20,7 @@ import xarray as xr
 
 from cassini_bayes.report import build_report, html_page, section, table
 from cassini_bayes.report.html import Raw, figure
-from cassini_bayes.report.rundata import load_run
+from cassini_bayes.report.rundata import flatten_draws, load_run
 from cassini_bayes.report.tables import diagnostics, parameter_names, parameter_rows
 from pages import first_table
 
@@ -582,8 +582,7 @@ def _report_figures(run_dir):
     run = load_run(run_dir)
     names = parameter_names(run)
     rows = parameter_rows(run, names, diagnostics(run, names))
-    post = {k: v for k, v in __import__("cassini_bayes.report.rundata", fromlist=["x"])
-            .flatten_draws(run.posterior, names).items()}
+    post = flatten_draws(run.posterior, names)
     out = {"trace and rank": figures.trace_rank_figure(post, {r.label: r.unit for r in rows}),
            "residuals": figures.residuals_figure(run.groups["residuals"], var="residual",
                                                  ylabel="residual (N m s)")}

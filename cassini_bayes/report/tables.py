@@ -242,6 +242,12 @@ def _arviz_stats(draws: dict[str, np.ndarray]) -> dict[str, tuple[float, float, 
     return out
 
 
+def _nan(x) -> float:
+    """A summary.json number, NaN for ``null``."""
+    v = finite_or_none(x)
+    return float("nan") if v is None else v
+
+
 def energy_bfmi(energy: np.ndarray) -> np.ndarray:
     """E-BFMI per chain of a (chain, draw) energy array (Betancourt 2016; ArviZ's formula)."""
     e = np.asarray(energy, float)
@@ -270,10 +276,9 @@ def diagnostics(run: RunData, param_names: list[str]) -> Diagnostics:
             continue
         for label, x in flatten_draws(post, [name]).items():
             s = stats.get(label)
-            if isinstance(s, dict) and finite_or_none(s.get("r_hat")) is not None:
-                rows.append(DiagnosticRow(label, float(s["r_hat"]),
-                                          float(s.get("ess_bulk") or np.nan),
-                                          float(s.get("ess_tail") or np.nan), role,
+            if isinstance(s, dict) and "r_hat" in s:      # (null: undefined, e.g. one chain)
+                rows.append(DiagnosticRow(label, _nan(s.get("r_hat")), _nan(s.get("ess_bulk")),
+                                          _nan(s.get("ess_tail")), role,
                                           finite_or_none(s.get("mean")),
                                           finite_or_none(s.get("sd")),
                                           finite_or_none(s.get("contraction"))))
