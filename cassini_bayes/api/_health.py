@@ -42,15 +42,14 @@ class HealthResult:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
         sd, ``P(down)`` per channel), ``thrust_bands.csv`` (relative thrust quantiles per channel
-        on a date grid), ``health.png`` and ``report.html`` (the adequacy verdict, the figure,
-        the channels) into ``out`` atomically; returns it."""
+        on a date grid), ``health.png`` and ``report.html`` (the answer first, the adequacy
+        verdict, self-contained) into ``out`` atomically; returns it."""
+        from cassini_bayes.report.figures import png_bytes
+        from cassini_bayes.report.health import health_report_html, plot_health
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-        from cassini_bayes.report.figures import png_bytes
-        from cassini_bayes.report.health import health_page, plot_health
-
         png = png_bytes(plot_health(self.posterior, self.fraction), dpi=110)
-        page = health_page(self.summary, png, self.files)
+        page = health_report_html(self, png)
         with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)

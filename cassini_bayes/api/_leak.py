@@ -34,21 +34,21 @@ class LeakResult:
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the adequacy verdict, both
-        monitors' answers) into ``out`` atomically; returns it. ``force`` replaces only a
-        directory cassini-bayes wrote."""
+        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the answer first, the
+        adequacy verdict, self-contained) into ``out`` atomically; returns it. ``force``
+        replaces only a directory cassini-bayes wrote."""
         from cassini_bayes.inference.leak import HYPOTHESES
-        from cassini_bayes.report.leak import leak_page
+        from cassini_bayes.report.leak import leak_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
+        page = leak_report_html(self)
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
                        header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
-            (rd.path / "report.html").write_text(leak_page(self.summary, self.files),
-                                                 encoding="utf-8")
+            (rd.path / "report.html").write_text(page, encoding="utf-8")
         return rd.final
 
 
