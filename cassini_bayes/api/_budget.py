@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.names import a_kind
 
@@ -50,6 +51,7 @@ class BudgetResult:
         return rd.final
 
 
+@jax_entry
 def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
@@ -138,6 +139,7 @@ def _pulse_count(on: np.ndarray) -> int:
     return int(np.count_nonzero(np.diff((np.diff(on) > 0).astype(int)) == 1) + (on[1] > on[0]))
 
 
+@jax_entry
 def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: float = 60.0,
                     rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
                     check_units: bool = True) -> TelemetryCheck:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
 
@@ -119,6 +120,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     return sorted(out, key=lambda e: e[0])
 
 
+@jax_entry
 def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
                p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
@@ -265,6 +267,7 @@ def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str],
 _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
+@jax_entry
 def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
                              force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 __all__ = ["LeakResult", "monitor_leak"]
@@ -58,6 +59,7 @@ def _positive(value: float, option: str, argument: str) -> float:
     return value
 
 
+@jax_entry
 def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
                  check_step_s: float = 60.0, onset_step_s: float = 20.0, eta: float = 0.05,

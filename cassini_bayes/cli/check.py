@@ -10,9 +10,9 @@ stderr and exit 2 (raised as ``InputError``, printed by :func:`cassini_bayes.cli
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
@@ -29,7 +29,7 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
     console.print(f"  time       {t[0]:.10g} to {t[-1]:.10g} s ({t[-1] - t[0]:.6g} s)")
     console.print(f"  sampling   {c.sampling()}")
     console.print(f"  body rate  max |ω| {c.max_rate_rad_s * 1e3:.4g} mrad/s; attitude turns up "
-                  f"to {np.degrees(c.max_turn_rad):.4g}° from the first row")
+                  f"to {math.degrees(c.max_turn_rad):.4g}° from the first row")
     console.print("  physics    " + c.physics)
 
     wheels = Table(title="Reaction wheels", title_justify="left")
