@@ -104,7 +104,7 @@ def run_one(case: str, rows: int, seed: int, settings, save: Path | None = None)
         save.mkdir(parents=True, exist_ok=True)
         np.savez(save / f"{case}_{rows}_{seed}.npz",
                  residual_std=post.idata["residuals"]["residual_std"].values,
-                 omega=pb.omega, h_wheels=pb.h_wheels, t=pb.t, file=pb.file_idx)
+                 omega=pb.omega, h_wheels=pb.h_wheels, t=pb.t, file_idx=pb.file_idx)
     return out
 
 
