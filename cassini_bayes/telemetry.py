@@ -98,6 +98,7 @@ __all__ = [
     "PulseAtStartWarning",
     "cumulative_on_times",
     "with_on_times",
+    "white_noise_sd",
 ]
 
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
@@ -556,6 +557,30 @@ def _check_omega_units(t: np.ndarray, q: np.ndarray, w: np.ndarray, path: str) -
         raise InputError(f"columns wx wy wz: by {_row_ref(k, t)} the body rates integrate to "
                          f"{ratio:.3g}x the rotation the quaternions show ({excursion[k]:.3g} "
                          f"rad); they look like {guess}; body rates must be in rad/s", path=path)
+
+
+_MAD_TO_SD = 1.4826
+
+
+def white_noise_sd(x: np.ndarray, *, differenced: bool = False) -> float:
+    """Robust sd of white noise on a smooth signal ``x`` (n, ...) sampled along axis 0: the MAD
+    of its second differences (all components pooled, non-finite values left out) × 1.4826 (the
+    normal's MAD-to-sd factor) ÷ √6. The package's one white-noise estimator: second differences
+    of white noise of sd ``σ`` have sd ``√6 σ``, and the median ignores the few samples where the
+    signal itself bends (a pulse, a wheel ramp, the slew profile).
+
+    ``differenced``: ``x`` already holds the signal's first differences (e.g. attitude
+    increments ``rotvec(q_{t+1} q_t⁻¹)``), so one more difference is taken. 0 when the signal
+    has fewer than four samples or no finite difference.
+    """
+    order = 1 if differenced else 2
+    if x.shape[0] < 2 + order or x.size == 0:
+        return 0.0
+    d = np.diff(x, n=order, axis=0).ravel()
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0
+    return float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
 def _check_wheel_units(col: str, rpm: np.ndarray, path: str) -> None:
