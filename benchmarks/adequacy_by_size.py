@@ -25,8 +25,9 @@ file to resume). ``--docs`` writes the table, with this command line and the com
 the markers in docs/adequacy.md.
 
     python benchmarks/adequacy_by_size.py --seeds 20 --cases clean --json by_size.json
-    python benchmarks/adequacy_by_size.py --seeds 3 --cases clean2 sign tach \\
-        --json by_size.json --docs
+    python benchmarks/adequacy_by_size.py --seeds 3 --cases sign tach clean2 \\
+        --json misfit.json
+    python benchmarks/adequacy_by_size.py --seeds 0 --json by_size.json --also misfit.json --docs
 """
 
 from __future__ import annotations
@@ -175,6 +176,8 @@ def main(argv=None) -> None:
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--json", type=Path, default=None, help="results, saved after every fit; "
                     "an existing file is resumed")
+    ap.add_argument("--also", nargs="+", type=Path, default=[],
+                    help="results of other runs (their --json) to add to the table")
     ap.add_argument("--docs", action="store_true", help="write the table into docs/adequacy.md")
     ap.add_argument("--save-residuals", type=Path, default=None,
                     help="folder for each fit's residuals and regressors (.npz)")
@@ -186,6 +189,10 @@ def main(argv=None) -> None:
                                chain_method="vectorized")
     saved = json.loads(args.json.read_text()) if args.json and args.json.exists() else {}
     results = saved.get("results", {})
+    command = "python benchmarks/adequacy_by_size.py " + " ".join(
+        argv if argv is not None else sys.argv[1:])
+    runs = saved.get("runs", [])
+    this_run = {"command": command, "commit": _commit()}
     t0 = time.perf_counter()
     for case in args.cases:
         for rows in args.sizes:
@@ -200,17 +207,27 @@ def main(argv=None) -> None:
                     for k, c in r["checks"].items())
                 print(f"{case:6s} {r['rows']:6d} rows seed {seed:2d} ok {int(r['ok'])}  {stats}"
                       f"  ({r['seconds']:.0f} s; {time.perf_counter() - t0:.0f} s)", flush=True)
+                if this_run not in runs:
+                    runs.append(this_run)
                 if args.json is not None:
-                    write_atomic(args.json, json.dumps({"results": results}, indent=1) + "\n")
-    text = table(results)
+                    write_atomic(args.json, json.dumps({"runs": runs, "results": results},
+                                                       indent=1) + "\n")
+    merged = {case: {rows: dict(seeds) for rows, seeds in by_rows.items()}
+              for case, by_rows in results.items()}
+    for other in args.also:
+        more = json.loads(other.read_text())
+        runs = runs + [r for r in more.get("runs", []) if r not in runs]
+        for case, by_rows in more["results"].items():
+            for rows, seeds in by_rows.items():
+                merged.setdefault(case, {}).setdefault(rows, {}).update(seeds)
+    text = table(merged)
     print(text)
     if args.docs:
-        command = "python benchmarks/adequacy_by_size.py " + " ".join(
-            a for a in (argv if argv is not None else sys.argv[1:]))
-        write_docs(f"Measured with `{command}` (and the runs resumed from its `--json`), at "
-                   f"commit {_commit()}; sampler {args.chains} chains × {args.warmup} warm-up × "
-                   f"{args.draws} draws; each cell: fits failing the check out of fits "
-                   "(median, largest statistic).\n\n" + text)
+        made = "; ".join(f"`{r['command']}` at commit {r['commit']}" for r in runs)
+        write_docs(f"Measured by {made} (sampler {args.chains} chains × {args.warmup} warm-up × "
+                   f"{args.draws} draws); table written by `{command}` at commit {_commit()}. "
+                   "Each cell: fits failing the check out of fits (median, largest statistic)."
+                   "\n\n" + text)
 
 
 if __name__ == "__main__":
