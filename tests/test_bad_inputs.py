@@ -283,7 +283,7 @@ def test_a_large_clean_file_passes_the_adequacy_checks(tmp_path, run_cli):
     code, out, err = run_cli("fit", "inertia", "--telemetry", path, "--spacecraft",
                              "cassini_post_probe", "--chains", "1", "--warmup", "100",
                              "--draws", "100", "--out", tmp_path / "run")
-    assert code == 0 and "adequacy ok" in out, (out, err)
+    assert code == 0 and "adequacy ok" in out + err, (out, err)
     checks = json.loads((tmp_path / "run" / "summary.json").read_text())["adequacy"]["checks"]
     assert checks["residual_regression"]["statistic"] < 4.0
 
