@@ -122,7 +122,8 @@ def _commit() -> str:
 
 def table(results: dict) -> str:
     """Markdown table: per case and size, each check's failures (median and largest statistic)
-    and the fits failing any check, with the binomial 95 % bound ``3/n`` when none does."""
+    and the fits failing any check, with the binomial 95 % bound ``3/n`` when none of ten or
+    more does."""
     import numpy as np
 
     from adequacy_false_alarms import rates
@@ -149,7 +150,7 @@ def table(results: dict) -> str:
                 cells.append(f"{k}/{n} ({np.median(st):.2g}, {max(st):.2g})")
             r_any = rates(res)["any"]
             k_any = sum(not r["ok"] for r in res)
-            bound = f" (≤ {r_any['upper95']:.2f} at 95 %)" if k_any == 0 else ""
+            bound = f" (≤ {r_any['upper95']:.2f} at 95 %)" if k_any == 0 and n >= 10 else ""
             lines.append(f"| `{case}` | {res[0]['rows']} | {n} | " + " | ".join(cells)
                          + f" | **{k_any}/{n}**{bound} |")
     return "\n".join(lines)
