@@ -26,7 +26,11 @@ likely cause) from relations the data must obey whatever the unit of a column:
 3. **Pulse log vs ``on_*`` columns** (:func:`check_pulses_match_on_times`): the cumulative
    on-time the pulse log implies (:func:`cassini_bayes.telemetry.cumulative_on_times`) must match
    the telemetry's own counters.
-4. **Identifiability for the fit asked for** (:func:`check_inertia_excitation`,
+4. **Quantised rates** (:func:`check_rate_quantisation`, a warning): a body-rate or wheel-rate
+   column whose values lie on a lattice ``q k`` with a quantum ``q`` far above the noise
+   measured in the column and not small against the column's excursion; its rounding error is
+   then no noise the fits model but an error that repeats while the rate holds its value.
+5. **Identifiability for the fit asked for** (:func:`check_inertia_excitation`,
    :func:`check_rwa4_method`): an inertia fit needs rotation about more than one body axis; the
    RWA method of the RWA4 calibration needs the wheels that carry the slews (Brown Eq 3).
 
@@ -75,6 +79,11 @@ __all__ = [
     "GyroBiasWarning",
     "gyro_bias_estimate",
     "check_gyro_bias",
+    "RateQuantum",
+    "QuantisedRatesWarning",
+    "rate_quantum",
+    "quantised_rates",
+    "check_rate_quantisation",
     "wheel_momentum_scale",
     "check_wheel_units",
     "axis_angle_max_deg",
@@ -123,6 +132,19 @@ GYRO_WINDOW_TURN_RAD = 2e-3
 """Windows turning more than this (by ∫ω dt) are left out of the gyro-bias estimate."""
 GYRO_BIAS_Z = 5.0
 """A gyro bias is reported beyond this many prior sd and this many standard errors."""
+QUANTUM_LATTICE_TOL = 1e-3
+"""Values lie on a lattice of spacing ``q`` when every difference between two distinct values is
+a whole multiple of ``q`` to within this fraction of ``q`` (text round trips and the rpm → rad/s
+conversion leave ~1e-12)."""
+QUANTUM_NOISE_RATIO = 4.0
+"""A rate column's quantum is not hidden in its noise when it is at least this many times the
+white-noise sd measured in the column: noise of sd ≥ 0.4 q before the rounding dithers the
+quantiser and measures 0.61 q (second differences of ±1, ±2 quanta); below about q/3 it
+measures 0 (second differences mostly zero), so the ratio is 1.65 or infinite."""
+QUANTUM_EXCURSION_MIN = 5e-4
+"""... and it is large against the signal when it is at least this fraction of the column's
+excursion (its 0.5–99.5 percentile range): undithered quanta from about this fraction on moved
+an inertia fit by two posterior sd (docs/input_checks.md)."""
 GAP_FACTOR = 3.0
 """A time step over this many median steps is a data gap: no turning stretch spans one."""
 MOMENTUM_ALIGN_MIN = 0.9
@@ -372,6 +394,89 @@ def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
                       "widen bias_sd_rad_s in the spacecraft model, or remove the bias",
                       GyroBiasWarning, stacklevel=2)
     return est
+
+
+class QuantisedRatesWarning(UserWarning):
+    """Body or wheel rates quantised coarsely against their noise and their excursion."""
+
+
+class RateQuantum(NamedTuple):
+    """A rate column on a lattice: ``column`` (``wx`` … ``rwa4``), its ``quantum``, the white-noise
+    sd measured in it (``noise``) and its ``excursion`` (0.5–99.5 percentile range, the whole
+    range where that is 0), all rad/s;
+    ``large``: the quantum is at least :data:`QUANTUM_NOISE_RATIO` × the noise and
+    :data:`QUANTUM_EXCURSION_MIN` × the excursion."""
+
+    column: str
+    quantum: float
+    noise: float
+    excursion: float
+
+    @property
+    def large(self) -> bool:
+        return (self.quantum >= QUANTUM_NOISE_RATIO * self.noise
+                and self.quantum >= QUANTUM_EXCURSION_MIN * self.excursion)
+
+    def text(self) -> str:
+        """``rwa1 1 rpm (its measured noise 0, 0.088 % of its excursion)``: the quantum in the
+        column's file unit, the noise measured in it in quanta, the quantum against the
+        excursion."""
+        unit, scale = (("rpm", 1.0 / RPM_TO_RAD_S) if self.column.startswith("rwa")
+                       else ("rad/s", 1.0))
+        return (f"{self.column} {self.quantum * scale:.3g} {unit} (its measured noise "
+                f"{self.noise / self.quantum:.2g} quanta, {100 * self.quantum / self.excursion:.2g}"
+                " % of its excursion)")
+
+
+def rate_quantum(x: np.ndarray) -> float | None:
+    """The spacing ``q`` of the lattice the finite values of ``x`` lie on: the smallest gap
+    between distinct values, when every gap is a whole multiple of it (to
+    :data:`QUANTUM_LATTICE_TOL`); ``None`` when the values are not on a lattice or all equal."""
+    u = np.unique(np.asarray(x, float)[np.isfinite(x)])
+    if u.size < 2:
+        return None
+    gaps = np.diff(u)
+    q = float(gaps.min())
+    k = gaps / q
+    return q if float(np.max(np.abs(k - np.round(k)))) <= QUANTUM_LATTICE_TOL else None
+
+
+def quantised_rates(tel: Telemetry) -> tuple[RateQuantum, ...]:
+    """Every body-rate column and every active wheel's column (rad/s) that lies on a lattice."""
+    cols = [(name, np.asarray(tel.omega[:, i], float)) for i, name in enumerate(("wx", "wy", "wz"))]
+    cols += [(name.lower(), np.asarray(tel.wheel_rate(name), float))
+             for name in tel.active_wheels()]
+    out = []
+    for name, x in cols:
+        q = rate_quantum(x)
+        if q is None:
+            continue
+        finite = x[np.isfinite(x)]
+        lo, hi = np.percentile(finite, [0.5, 99.5])
+        excursion = float(hi - lo) if hi > lo else float(np.ptp(finite))
+        out.append(RateQuantum(name, q, white_noise_sd(x), excursion))
+    return tuple(out)
+
+
+def check_rate_quantisation(tel: Telemetry) -> tuple[RateQuantum, ...]:
+    """Warn (:class:`QuantisedRatesWarning`) when a rate column is quantised coarsely: its
+    quantum is at least :data:`QUANTUM_NOISE_RATIO` × the noise measured in it (the rounding is
+    not dithered by noise, so its error repeats while the rate holds its value instead of being
+    the white noise the fits model) and at least :data:`QUANTUM_EXCURSION_MIN` × its excursion
+    (large against the signal). A warning, not a refusal: the file holds no finer rates, and the
+    fits' estimates move by up to several posterior sd (docs/input_checks.md). Returns every
+    quantised column."""
+    found = quantised_rates(tel)
+    large = [r for r in found if r.large]
+    if large:
+        warnings.warn(f"{tel.source}: rates on a coarse lattice: "
+                      + "; ".join(r.text() for r in large)
+                      + ": with no noise to dither the rounding, its error repeats while a rate "
+                      "holds its value, which the fits do not model, so their estimates can move "
+                      "by several posterior sd; give the rates at finer resolution if there are "
+                      "any",
+                      QuantisedRatesWarning, stacklevel=2)
+    return found
 
 
 def _check_still_attitude(tel: Telemetry) -> None:
@@ -912,12 +1017,14 @@ def check_telemetry_data(tel: Telemetry, spacecraft: Spacecraft | None = None,
                          pulses: PulseLog | None = None
                          ) -> tuple[AttitudeAgreement | None, MomentumScale | None]:
     """Every physics check one telemetry file (and its pulse log) allows: attitude vs rates,
-    pulse log vs ``on_*`` columns, and with a spacecraft model the wheel units.
+    quantised rates (a warning), pulse log vs ``on_*`` columns, and with a spacecraft model the
+    wheel units and the gyro bias (a warning).
 
     Returns the attitude agreement and the momentum fit (``None`` where not identifiable or,
     for the momentum, without a spacecraft model), for a summary.
     """
     attitude = check_attitude_rates(tel)
+    check_rate_quantisation(tel)
     on = tel.on_times
     if pulses is not None:
         check_pulses_match_on_times(tel, pulses)

@@ -53,7 +53,8 @@ class TelemetryCheck:
     columns"``, ``"pulse log FILE"`` or ``None`` when there is neither) and ``thrusters`` (those
     that fired); ``quiet`` the quiet periods ``(t0, t1)`` s and the rules that made them
     (``min_quiet_s``, ``rate_max_rad_s``, ``wheel_tol_rpm``); ``n_pulses`` of the pulse log
-    (``None`` without one); ``notes`` warnings to show.
+    (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
+    (:func:`cassini_bayes.consistency.quantised_rates`).
     """
 
     t: np.ndarray
@@ -71,6 +72,7 @@ class TelemetryCheck:
     wheel_tol_rpm: float
     n_pulses: int | None
     notes: tuple[str, ...]
+    quanta: tuple = ()
 
     @property
     def n(self) -> int:
@@ -165,7 +167,8 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         The first rule or physics check the file breaks, in one line naming where.
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
-    from cassini_bayes.consistency import GyroBiasWarning, check_telemetry_data
+    from cassini_bayes.consistency import (GyroBiasWarning, QuantisedRatesWarning,
+                                           check_telemetry_data, quantised_rates)
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
@@ -185,7 +188,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         warnings.simplefilter("always")
         attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = [str(w.message) for w in physics_warnings
-                        if issubclass(w.category, GyroBiasWarning)]
+                        if issubclass(w.category, (GyroBiasWarning, QuantisedRatesWarning))]
     source = None if tel.on_times is None and log is None else "on_* columns"
     if log is not None and tel.on_times is not None:
         notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "
@@ -227,4 +230,5 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         wheels=tuple(wheels), thruster_source=source, thrusters=tuple(thrusters),
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
-        n_pulses=None if log is None else len(log.t_on), notes=tuple(notes))
+        n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
+        quanta=quantised_rates(tel))

@@ -31,6 +31,8 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
     console.print(f"  body rate  max |ω| {c.max_rate_rad_s * 1e3:.4g} mrad/s; attitude turns up "
                   f"to {math.degrees(c.max_turn_rad):.4g}° from the first row")
     console.print("  physics    " + c.physics)
+    if c.quanta:
+        console.print("  quantised  " + escape("; ".join(r.text() for r in c.quanta)))
 
     wheels = Table(title="Reaction wheels", title_justify="left")
     for col in ("wheel", "status", "min rpm", "max rpm", "first → last rpm"):
