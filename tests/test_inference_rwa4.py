@@ -204,9 +204,9 @@ def test_rcs_chart_has_no_wall_toward_the_physical_boundary():
 def test_rcs_slow_spinup_fits_without_divergences():
     """A slow spin-up from tiny residual rates at the API's default sampler settings (4 × 1000
     + 1000, target acceptance 0.95): 0 divergences, converged, the axis within Brown's 3° and
-    inside the 90 % cone. The earlier chart diverged once in these 4000 draws (the fit key 1:
-    the benchmark ``rcs_slow_spinup.py``'s family before the fix, docs/robust/README.md "RWA4
-    RCS chart", diverged on 3 of 40 such fits); the current one diverged on none of 100."""
+    inside the 90 % cone. The earlier chart diverged once in these 4000 draws (fit key 1); on
+    100 such fits (``benchmarks/rcs_slow_spinup.py``, docs/robust/README.md "RWA4 RCS chart")
+    it diverged on 6, the current chart on none, so a false failure is rare (< 1 in 100)."""
     from cassini_bayes.inference.rwa4 import fit_rwa4
     from cassini_bayes.inference.runner import SamplerSettings
 
