@@ -58,8 +58,8 @@ Priors
   ``m`` the smallest eigenvalue of the second moment ``½ tr(I) 1 − I`` (positive exactly for
   positive-definite tensors obeying the triangle inequalities), ``s`` half its value at the
   prior mean. The factor is 0 for unphysical tensors, 1 − 3e-4 at the mean, 0.63 half-way to
-  the boundary: a stated softening of the truncation near the boundary, which NUTS needs (see
-  "Sampler coordinates").
+  the boundary: a stated softening of the truncation near the boundary, which NUTS needed
+  while the RCS chart kept the boundary at a finite distance (``docs/robust/README.md``).
 
 Sampler coordinates
 -------------------

@@ -318,7 +318,7 @@ def _chart(kw: dict, method: str, data: dict, inertia: InertiaGaussian, i_mean: 
     if arrays is not None:
         chart = "rcs"
         kw.update({k: jnp.asarray(v) for k, v in arrays.items()})
-        theta0[2] = np.log(np.linalg.norm(bal[0]))           # |z| at the prior mean
+        # θ = 0: δ = 0 and |z| = 1, the data's values; x at the prior mean (its direction)
     return chart, theta0
 
 

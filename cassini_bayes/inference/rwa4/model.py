@@ -45,6 +45,7 @@ def _physical_rwa(theta, kw):
 
 _KNEE = 0.5          # the RCS chart's radial map is the identity up to this fraction of the way
 _BOX_DIM = 5         # to the nearest wall of the physical region of (s, ω)
+_Q_MAX = 12.0        # beyond, 1 − tanh(q) < 1e-10 would not resolve the wall: density 0 there
 
 
 def _radial(y, kw):
@@ -55,13 +56,20 @@ def _radial(y, kw):
     centre ``c`` to the wall along the ray (:func:`~cassini_bayes.inference.rwa4.data._rcs_chart`:
     the region is convex and ``A(c + C y) = L_c (1 + Σ_k y_k W_k) L_cᵀ``), ``φ(f) = f`` up to
     ``_KNEE``, then ``_KNEE + (1 − _KNEE) tanh((f − _KNEE)/(1 − _KNEE))`` (twice differentiable,
-    → 1 at infinity). A radial map's Jacobian is ``(φ(f)/f)^(n−1) φ'(f)``.
+    → 1 at infinity). A radial map's Jacobian is ``(φ(f)/f)^(n−1) φ'(f)``. Where ``tanh`` no
+    longer resolves the wall (``_Q_MAX``, ~100 log-units below the knee) the density is 0.
     """
-    f = jnp.linalg.eigvalsh(-jnp.einsum("k,kab->ab", y, kw.rcs_walls))[-1]
-    over = f > _KNEE
+    def fraction(y):
+        return jnp.linalg.eigvalsh(-jnp.einsum("k,kab->ab", y, kw.rcs_walls))[-1]
+
+    # the branch from an undifferentiated value: at y = 0 the eigenvalues are degenerate and
+    # their derivatives not finite; where the map is the identity f is evaluated elsewhere
+    over = jax.lax.stop_gradient(fraction(y)) > _KNEE
+    f = fraction(jnp.where(over, y, jnp.eye(_BOX_DIM)[0]))
     q = jnp.where(over, (f - _KNEE) / (1.0 - _KNEE), 0.0)
     ratio = jnp.where(over, (_KNEE + (1.0 - _KNEE) * jnp.tanh(q)) / jnp.where(over, f, 1.0), 1.0)
-    log_sech2 = -2.0 * (q + jnp.log1p(jnp.exp(-2.0 * q)) - jnp.log(2.0))
+    log_sech2 = jnp.where(q < _Q_MAX, -2.0 * (q + jnp.log1p(jnp.exp(-2.0 * q)) - jnp.log(2.0)),
+                          -jnp.inf)
     x = kw.rcs_centre + kw.rcs_scale @ (y * ratio)
     return x, (_BOX_DIM - 1) * jnp.log(ratio) + log_sech2
 
