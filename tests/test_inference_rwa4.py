@@ -227,3 +227,23 @@ def test_rwa_method_recovers_axis_within_1_deg_cone_prior():
                     settings=_settings())
     assert len(post.problem.pairs) >= 3
     _check(post, sc.truth.wheel("RWA4").axis, 1.0)
+
+
+def test_firing_between_time_a_and_time_b_is_refused():
+    """Brown §III: no thruster fires from the start of Time A to the end of Time B. A spin-up
+    slow enough (torque 0.0035 N m) that the dead-band controller fires from 1482 s: windows
+    each quiet, the pair not (A before the ramp, B after the firings), and the fit refuses it,
+    naming the first firing."""
+    import tomllib
+
+    from cassini_bayes._paths import SCENARIOS_DIR
+    from cassini_bayes.simulate import scenario_from_dict, simulate
+
+    d = tomllib.loads((SCENARIOS_DIR / "rwa4_rcs_slow.toml").read_text())
+    d["truth"]["rwa4_axis"], d["initial"]["rates_rad_s"] = list(SLOW_AXIS), list(SLOW_RATES)
+    d["wheel_ramp"][0]["torque_nm"] = 0.0035
+    sc = scenario_from_dict(d, "rwa4_rcs_slow[firing]")
+    r = simulate(jax.random.key(1), sc)
+    with pytest.raises(InputError, match=r"thrusters fire at [\d.]+ s, between Time A"):
+        prepare_rwa4(r.telemetry, sc.prior, method="rcs",
+                     pairs=[((0.0, 400.0), (1700.0, 1790.0))])
