@@ -72,9 +72,12 @@ def run_family(seeds, log=print) -> list[dict]:
     import jax
     import numpy as np
 
+    from cassini_bayes import setup_jax
     from cassini_bayes.api import fit_rwa4
     from cassini_bayes.inference.sphere import angles_deg
     from cassini_bayes.simulate import scenario_from_dict, simulate
+
+    setup_jax()
 
     out = []
     t0 = time.perf_counter()
@@ -107,12 +110,14 @@ def run_posterior(draws: int, log=print) -> dict:
     import jax
     import numpy as np
 
-    from cassini_bayes.inference.rwa4 import fit_rwa4
+    from cassini_bayes import setup_jax
     from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.inference.rwa4 import fit_rwa4
     from cassini_bayes.inference.sphere import CONE_LEVELS, angles_deg, mean_direction
     from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
     from cassini_bayes.simulate import scenario_from_dict, simulate
 
+    setup_jax()
     settings = SamplerSettings(chains=4, warmup=1000, draws=draws, target_accept=0.95)
     out = {}
     for name, prior in SHIPPED_RCS:

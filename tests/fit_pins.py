@@ -63,9 +63,11 @@ def write_inputs(model: str, folder: Path) -> dict[str, Path]:
     """Simulate the model's scenario into ``folder``: ``{"telemetry": csv, "pulses": csv?}``."""
     import jax
 
+    from cassini_bayes import setup_jax
     from cassini_bayes.simulate import load_scenario, simulate
     from cassini_bayes.telemetry import write_pulses, write_telemetry
 
+    setup_jax()
     scenario, sim_key = RECIPES[model][:2]
     r = simulate(jax.random.key(sim_key), load_scenario(scenario))
     folder.mkdir(parents=True, exist_ok=True)

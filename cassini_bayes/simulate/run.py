@@ -39,6 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from cassini_bayes._devices import require_x64
 from cassini_bayes.physics import dynamics
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse_until
@@ -454,6 +455,7 @@ def _prepared(s: Scenario):
 def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = None,
                     noise: NoiseParams | None = None) -> SimArrays:
     """One run as raw arrays (compiled once per scenario shape); ``truth``: the file's."""
+    require_x64("simulate")
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
     plan, carr = _prepared(scenario)
@@ -477,6 +479,7 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     -------
     :class:`SimArrays` with a leading batch axis.
     """
+    require_x64("simulate")
     batched = truth is not None
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
