@@ -145,7 +145,6 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
     import jax
     import numpy as np
 
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
     from cassini_bayes.inference.runner import SamplerSettings
     from cassini_bayes.simulate import scenario_from_dict, simulate
     from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
@@ -154,8 +153,7 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
     fam = list(FAMILIES).index(family)
     ow = draw_open_world(name, np.random.default_rng([seed, fam]), widen=opts["widen"],
                          draw_inertia=kind != "inertia",
-                         solved_wheel="RWA4" if kind == "rwa4" else None,
-                         torque_sd_nm=BODY_TORQUE_PRIOR_SD_NM)
+                         solved_wheel="RWA4" if kind == "rwa4" else None)
     ow = without(ow, opts["off"])
     if opts.get("time_tag_scale", 1.0) != 1.0:   # the drawn time tags scaled, nothing else
         from dataclasses import replace

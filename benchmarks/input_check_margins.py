@@ -37,7 +37,6 @@ def _telemetry(family: str, seed: int):
     """The open-world telemetry of (family, seed) and its nominal spacecraft model."""
     import jax
 
-    from cassini_bayes.inference.nuisance import BODY_TORQUE_PRIOR_SD_NM
     from cassini_bayes.simulate import scenario_from_dict, simulate
     from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world
 
@@ -45,8 +44,7 @@ def _telemetry(family: str, seed: int):
     fam = list(FAMILIES).index(family)
     ow = draw_open_world(name, np.random.default_rng([seed, fam]), widen=1.5,
                          draw_inertia=kind != "inertia",
-                         solved_wheel="RWA4" if kind == "rwa4" else None,
-                         torque_sd_nm=BODY_TORQUE_PRIOR_SD_NM)
+                         solved_wheel="RWA4" if kind == "rwa4" else None)
     scenario = scenario_from_dict(ow.scenario, src=name)
     sim = simulate(jax.random.key(50_000 * (fam + 1) + seed), scenario)
     tel = apply_time_tags(sim.telemetry, ow)

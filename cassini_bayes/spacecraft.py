@@ -30,6 +30,7 @@ from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
 
 __all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
+           "WHEEL_SPEED_NOMINAL_RPM",
            "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
            "eq16_moment_matrix",
            "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
@@ -52,6 +53,11 @@ _UNIT_TOL = 1e-6
 COM_SD_DEFAULT_FRAC = 0.01
 """Default ``[center_of_mass] sd_m``: this fraction of the largest thruster position's length
 (Cassini: 3.6 cm of its 3.6 m arm), the centre of mass's knowledge scaled to the spacecraft."""
+WHEEL_SPEED_NOMINAL_RPM = 2000.0
+"""A wheel's top speed where its ``[[wheel]]`` entry gives no ``max_speed_rpm``, rpm, for
+:attr:`Spacecraft.momentum_capacity_nms` (Cassini's RWAs: 34 N m s at 0.16 kg m², Brown §I).
+A speed, not a size: wheels of any spacecraft run to 10³–10⁴ rpm, so the capacity scales with
+the wheels' spin inertia."""
 
 
 def wheel_tilt_basis(axis) -> np.ndarray:
@@ -234,6 +240,15 @@ class Spacecraft:
     @property
     def wheel_names(self) -> tuple[str, ...]:
         return tuple(w.name for w in self.wheels)
+
+    @property
+    def momentum_capacity_nms(self) -> float:
+        """The most angular momentum the wheels can hold together, N m s: ``Σ_k J_k ρ_max,k``
+        with ``ρ_max,k`` each wheel's ``max_speed_rpm`` (:data:`WHEEL_SPEED_NOMINAL_RPM` where
+        the model file gives none). The spacecraft's own momentum scale."""
+        top = np.array([w.max_speed_rpm if np.isfinite(w.max_speed_rpm)
+                        else WHEEL_SPEED_NOMINAL_RPM for w in self.wheels])
+        return float(np.sum(self.wheel_inertias * top) * 2.0 * np.pi / 60.0)
 
     @property
     def articulated_wheels(self) -> tuple[str, ...]:
