@@ -142,25 +142,38 @@ def test_check_gives_the_same_verdicts(pair):
         _close(xb.vectors[name], xa.vectors[name], f"{name}'s momentum per rad/s / J", 1e-5)
 
 
-def test_check_refuses_the_same_corrupted_file(pair):
-    """A tachometer that reports |rpm| through zero speed: the free-axis momentum balance (judged
-    where the body swings by 100 × the momentum noise) refuses it at both scales, in the same
-    words and numbers."""
+def _damaged(tel) -> dict:
+    """Damaged copies of ``tel`` that the free-axis momentum balance refuses: the first wheel's
+    tachometer halving its scale mid-record, and (where a wheel crosses zero) one reporting
+    |rpm| without direction."""
     from dataclasses import replace
 
+    rates = np.array(tel.wheel_rates)
+    halved = rates.copy()
+    halved[tel.t > 0.5 * (tel.t[0] + tel.t[-1]), 0] *= 0.5
+    out = {"scale halves": replace(tel, wheel_rates=halved)}
+    crossing = [j for j in range(rates.shape[1])
+                if np.any(rates[:, j] < 0) and np.any(rates[:, j] > 0)]
+    if crossing:
+        unsigned = rates.copy()
+        unsigned[:, crossing[0]] = np.abs(unsigned[:, crossing[0]])
+        out["unsigned"] = replace(tel, wheel_rates=unsigned)
+    return out
+
+
+def test_check_refuses_the_same_damaged_files(pair):
+    """The free-axis balance is judged where the body swings by 100 × the momentum noise: both
+    scales refuse the same damaged files in the same words and numbers."""
     from cassini_bayes.errors import InputError
 
-    messages = []
+    messages: dict[float, dict[str, str]] = {}
     for scale in (1.0, pair["s"]):
-        tel = pair[scale]["tel"]
-        rates = np.array(tel.wheel_rates)
-        crossing = [j for j in range(rates.shape[1])
-                    if np.any(rates[:, j] < 0) and np.any(rates[:, j] > 0)]
-        rates[:, crossing[0]] = np.abs(rates[:, crossing[0]])
-        with pytest.raises(InputError, match="do not balance the body's") as err:
-            cb.check_telemetry(replace(tel, wheel_rates=rates), spacecraft=str(pair[scale]["path"]))
-        messages.append(str(err.value))
-    assert messages[1] == messages[0]
+        messages[scale] = {}
+        for what, tel in _damaged(pair[scale]["tel"]).items():
+            with pytest.raises(InputError, match="do not balance the body's") as err:
+                cb.check_telemetry(tel, spacecraft=str(pair[scale]["path"]))
+            messages[scale][what] = str(err.value)
+    assert messages[pair["s"]] == messages[1.0]
 
 
 def test_the_priors_scale(pair):
