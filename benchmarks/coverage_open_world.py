@@ -43,7 +43,7 @@ import warnings
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from coverage_robust_inertia import MOMENT_BUDGET, PRODUCT_BUDGET  # noqa: E402
+from coverage_robust_inertia import MOMENT_BUDGET  # noqa: E402
 from coverage_robust_rwa4 import BUDGET_DEG  # noqa: E402
 
 from cassini_bayes.simulate.open_world import EFFECTS_OFF  # noqa: E402
@@ -132,7 +132,7 @@ def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
     q05, q95 = np.where(edge, 0.0, q05), np.where(edge, q90, q95)
     if kind == "inertia":
         budget = bool(np.all(np.abs(err[:3]) <= MOMENT_BUDGET * truth[:3])
-                      and np.all(np.abs(err[3:]) <= PRODUCT_BUDGET))
+                      and np.all(np.abs(err[3:]) <= scenario.prior.poi_uncertainty))
     else:
         budget = bool(abs(err[0]) <= THRUST_BUDGET * truth[0])
     return {"entries": names, "hit": ((q05 <= truth) & (truth <= q95)).tolist(),
