@@ -240,8 +240,9 @@ def _mc(mcse: float) -> dict:
 
 
 def _ess_rule() -> dict:
-    return {"compare": "coarse", "ratio": 5.0,
-            "why": "ESS of 300 draws; a sampler that stops mixing gives ESS < 10"}
+    return {"compare": "coarse", "ratio": 10.0,
+            "why": "ESS of 300 draws varies 7x between seeds (thrust's noise scales: 41 "
+                   "against 298); a sampler that stops mixing gives ESS < 10"}
 
 
 def _same_shape(value, rule):
