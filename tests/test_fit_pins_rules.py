@@ -8,7 +8,6 @@ import copy
 import json
 
 import pytest
-
 from fit_pins import PINS, assert_within_tolerance
 
 PINNED = json.loads(PINS.read_text())
