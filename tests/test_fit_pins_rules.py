@@ -40,10 +40,10 @@ def test_a_mean_moved_by_a_posterior_sd_fails(model):
         assert rules[name]["mean"]["atol"] < p["sd"], name
         with pytest.raises(AssertionError, match=rf"parameters\.{name}\.mean"):
             assert_within_tolerance(PINNED[model], _moved(model, ("parameters", name, "mean"),
-                                                          lambda v: v + p["sd"]), model)
+                                                          lambda v, d=p["sd"]: v + d), model)
         half = 0.5 * rules[name]["mean"]["atol"]
         assert_within_tolerance(PINNED[model], _moved(model, ("parameters", name, "mean"),
-                                                      lambda v: v + half), model)
+                                                      lambda v, d=half: v + d), model)
 
 
 @pytest.mark.parametrize("model", MODELS)
