@@ -29,7 +29,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from cassini_bayes.analysis.mass_property import inertia_matrix, rcs_axis_error_rad
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 
 __all__ = [
@@ -50,7 +49,9 @@ _MOMENTS = INERTIA_NAMES[:3]
 def inertia_of(values) -> np.ndarray:
     """(..., 3, 3) tensor from (..., 6) entries ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``, kg m²."""
     v = np.asarray(values, float)
-    return np.asarray(inertia_matrix(v[..., :3], v[..., 3:]))
+    xx, yy, zz, xy, xz, yz = np.moveaxis(v, -1, 0)
+    return np.stack([np.stack([xx, xy, xz], -1), np.stack([xy, yy, yz], -1),
+                     np.stack([xz, yz, zz], -1)], -2)
 
 
 def _stack(d, names) -> np.ndarray:
@@ -119,6 +120,10 @@ def rcs_mass_property_deg(d, inertia_estimate, axis=None) -> np.ndarray:
     """Brown (2012) §III.B: extra RCS-method axis error (deg) when the calibration uses the
     estimated inertia ``inertia_estimate`` (6,) kg m² and the truth is the draw (``Ixx … Iyz``);
     the true axis is ``d["u4"]`` when the draws carry it, else the fixed ``axis`` (3,)."""
+    from cassini_bayes._devices import setup_jax
+    from cassini_bayes.analysis.mass_property import rcs_axis_error_rad
+
+    setup_jax()   # imported here: a report of another kind needs no JAX
     i_true = inertia_of(_stack(d, INERTIA_NAMES))
     u = _unit(d["u4"]) if "u4" in d else np.broadcast_to(_unit(axis), (i_true.shape[0], 3))
     err = rcs_axis_error_rad(i_true, inertia_of(inertia_estimate), u)

@@ -65,6 +65,10 @@ def _version(value: bool) -> None:
         raise typer.Exit()
 
 
+_WITHOUT_JAX = frozenset({"report"})
+"""Commands that read files and draw figures only: JAX's import (about 1 s) is not paid."""
+
+
 @app.callback()
 def _root(
     ctx: typer.Context,
@@ -77,13 +81,15 @@ def _root(
                                  help="At the end, print on stderr what the run did with the "
                                       "compilation cache (hits, misses)."),
 ) -> None:
-    """Bayesian in-flight calibration of Cassini: inertia tensor, thrusters, RWA4 spin axis."""
+    """Bayesian in-flight calibration of a spacecraft: inertia tensor, thrusters, wheel axes."""
     if jax_cache is not None:
         os.environ[_jax_cache.ENV] = jax_cache  # worker processes (sbc --executor dask) follow
         _jax_cache.enable(jax_cache)
     # 64-bit, the cache, one CPU device per core (at least 4) so that the chains run in
-    # parallel: before the command runs, hence before anything starts JAX's backend
-    setup_jax()
+    # parallel: before the command runs, hence before anything starts JAX's backend; a
+    # command that computes nothing with JAX does not import it
+    if ctx.invoked_subcommand not in _WITHOUT_JAX:
+        setup_jax()
     if verbose:
         ctx.call_on_close(lambda: print(_jax_cache.stats().line(), file=sys.stderr))
 
