@@ -10,7 +10,8 @@ Parts (each seed simulates fresh data; the statistic of every check is recorded)
   computes, from in-memory summaries.
 * ``leak`` — ``leak_cruise`` stretches of ``--hours`` (thrusts and body torque drawn from the
   monitor's own priors as in ``benchmarks/leak_detection.py``), half without a leak and half with
-  a 10 % leak of a random thruster, monitored with both models.
+  a 10 % leak of a random thruster, monitored with both models; a second table sets the
+  monitor's answers against the truth (thruster, the fraction's 90 % interval, CPU time).
 * ``budget`` — ``shared_inertia`` of an inertia fit and a thrust fit (robust models, small
   sampler settings): clean = ``slews_post_probe_real`` and ``biasing_day028_real`` (both
   Post-Probe truths), both fitted with ``cassini_post_probe``; epochs mixed = the slews of
@@ -70,12 +71,17 @@ def _health(seed: int, campaign: str, n_events: int) -> dict:
 
 def _leak(seed: int, hours: float, n: int, onset_step_s: float, check_step_s: float
           ) -> list[dict]:
-    """[{model: {check: statistic}, "leak": bool}] of ``n`` stretches."""
+    """[{model: {check: statistic, monitor's answer}, "leak": bool, "truth": {…}}] of ``n``
+    stretches. The monitor's answer: the thruster it isolated (``None``: none), its last
+    probability, the fraction's mean, sd and 90 % interval (``mean ± 1.645 sd`` where the
+    monitor reports no interval), the onset and the monitor's CPU seconds; the truth's fraction
+    is in each model's thrust (the leak is 10 % of the true thrust)."""
     import jax
 
     from leak_detection import _truths
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
     from cassini_bayes.inference.leak_adequacy import leak_adequacy
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.simulate import load_scenario, pulse_log, simulate_batch
     from cassini_bayes.simulate.scenario import Leak
     from cassini_bayes.spacecraft import load_spacecraft
@@ -89,8 +95,9 @@ def _leak(seed: int, hours: float, n: int, onset_step_s: float, check_step_s: fl
                                                 float(rng.uniform(600.0, 3600.0)))
                                 if leak else None)
         b = n // 2
+        truths = _truths(s, rng, b)
         arr = simulate_batch(jax.random.split(jax.random.PRNGKey(seed + 7 * leak), b), s,
-                             _truths(s, rng, b))
+                             truths)
         arr = jax.tree_util.tree_map(np.asarray, arr)
         for i in range(b):
             a = jax.tree_util.tree_map(lambda x: x[i], arr)
@@ -98,15 +105,61 @@ def _leak(seed: int, hours: float, n: int, onset_step_s: float, check_step_s: fl
                             wheel_rates=a.wheel_rates_meas, wheel_names=s.wheel_names,
                             on_times=a.on_times, source=f"<{s.name}>")
             row = {"leak": leak}
+            if leak:
+                row["truth"] = {"thruster": THRUSTER_NAMES[s.leak.thruster],
+                                "onset_s": s.leak.t_start_s,
+                                "thrust_n": float(np.asarray(truths.thrust_n)[i,
+                                                                              s.leak.thruster])}
             for model in MODELS:
-                inp = leak_inputs(tel, pulse_log(a, s), load_spacecraft(model))
+                sc = load_spacecraft(model)
+                inp = leak_inputs(tel, pulse_log(a, s), sc)
+                cpu = time.process_time()
                 post = leak_posterior(inp, onset_step_s=onset_step_s, check_step_s=check_step_s)
+                cpu = time.process_time() - cpu
                 ad = leak_adequacy(inp, post, eta=0.05, sample_step_s=60.0,
                                    onset_step_s=onset_step_s)
                 row[model] = {c.name: c.statistic for c in ad.checks}
-                row[model]["p_leak"] = float(post.p_leak[-1])
+                interval = getattr(post, "fraction_interval", None) or (
+                    post.fraction_mean - 1.645 * post.fraction_sd,
+                    post.fraction_mean + 1.645 * post.fraction_sd)
+                row[model].update(
+                    p_leak=float(post.p_leak[-1]), thruster=post.thruster,
+                    p_thruster=float(post.prob[-1][1:].max()),
+                    detection_time_s=post.detection_time_s,
+                    fraction_mean=post.fraction_mean, fraction_sd=post.fraction_sd,
+                    fraction_interval=[float(x) for x in interval], onset_s=post.onset_s,
+                    cpu_s=cpu)
+                if leak:
+                    row[model]["fraction_truth"] = (s.leak.fraction * row["truth"]["thrust_n"]
+                                                    / float(sc.thrust))
             out.append(row)
     return out
+
+
+def _answers(rows: list[dict]) -> str:
+    """Markdown: per case and model, the monitor's answers against the truth."""
+    lines = ["| case | model | n | alarms | right thruster | wrong thruster | none isolated "
+             "| 90 % interval covers | fraction error median / max (% of thrust) "
+             "| monitor CPU s median / max |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for leak in (False, True):
+        for model in MODELS:
+            sel = [r for r in rows if r["leak"] == leak]
+            ans = [r[model] for r in sel]
+            cpu = np.array([a["cpu_s"] for a in ans])
+            alarms = sum(a["detection_time_s"] is not None for a in ans)
+            if leak:
+                right = sum(a["thruster"] == r["truth"]["thruster"] for r, a in zip(sel, ans))
+                none = sum(a["thruster"] is None for a in ans)
+                cover = sum(a["fraction_interval"][0] <= a["fraction_truth"]
+                            <= a["fraction_interval"][1] for a in ans)
+                err = 100 * np.abs([a["fraction_mean"] - a["fraction_truth"] for a in ans])
+                cells = (f"{right}/{len(ans)} | {len(ans) - right - none} | {none} | "
+                         f"{cover}/{len(ans)} | {np.median(err):.3g} / {err.max():.3g}")
+            else:
+                cells = "– | – | – | – | –"
+            lines.append(f"| {'10 % leak' if leak else 'no leak'} | {model} | {len(ans)} | "
+                         f"{alarms} | {cells} | {np.median(cpu):.2f} / {cpu.max():.2f} |")
+    return "\n".join(lines)
 
 
 def _budget(seed: int, settings: dict) -> dict:
@@ -193,6 +246,7 @@ def main() -> None:
                      f"{args.onset_step:g} s, seeds {seeds.start}-{seeds.stop - 1}", rows,
                      {"residual_fit": Z_THRESHOLD, "prior_data_conflict": PRIOR_CONFLICT_SD,
                       "residual_autocorrelation": AUTOCORR_MAX}))
+        print("\n" + _answers(raw["stretches"]))
     else:
         from cassini_bayes.inference.adequacy import Z_THRESHOLD
 
