@@ -23,7 +23,7 @@ Prints one Markdown table per part (rate of each check's failure, median and lar
 statistic). Not a test; the tables go to docs/health.md, docs/leak.md and docs/budgets.md.
 
     python benchmarks/verdict_false_alarms.py health --seeds 10 [--events 32]
-    python benchmarks/verdict_false_alarms.py leak --seeds 12 [--hours 4] [--onset-step 20]
+    python benchmarks/verdict_false_alarms.py leak --seeds 12 [--hours 4] [--check-step 60]
     python benchmarks/verdict_false_alarms.py budget --seeds 4
 """
 
@@ -69,8 +69,7 @@ def _health(seed: int, campaign: str, n_events: int) -> dict:
     return out
 
 
-def _leak(seed: int, hours: float, n: int, onset_step_s: float, check_step_s: float
-          ) -> list[dict]:
+def _leak(seed: int, hours: float, n: int, check_step_s: float) -> list[dict]:
     """[{model: {check: statistic, monitor's answer}, "leak": bool, "truth": {…}}] of ``n``
     stretches. The monitor's answer: the thruster it isolated (``None``: none), its last
     probability, the fraction's mean, sd and 90 % interval (``mean ± 1.645 sd`` where the
@@ -114,10 +113,9 @@ def _leak(seed: int, hours: float, n: int, onset_step_s: float, check_step_s: fl
                 sc = load_spacecraft(model)
                 inp = leak_inputs(tel, pulse_log(a, s), sc)
                 cpu = time.process_time()
-                post = leak_posterior(inp, onset_step_s=onset_step_s, check_step_s=check_step_s)
+                post = leak_posterior(inp, check_step_s=check_step_s)
                 cpu = time.process_time() - cpu
-                ad = leak_adequacy(inp, post, eta=0.05, sample_step_s=60.0,
-                                   onset_step_s=onset_step_s)
+                ad = leak_adequacy(inp, post, eta=0.05, sample_step_s=60.0)
                 row[model] = {c.name: c.statistic for c in ad.checks}
                 interval = getattr(post, "fraction_interval", None) or (
                     post.fraction_mean - 1.645 * post.fraction_sd,
@@ -209,8 +207,6 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--events", type=int, default=32, help="health: events per campaign")
     ap.add_argument("--hours", type=float, default=4.0, help="leak: hours per stretch")
-    ap.add_argument("--onset-step", type=float, default=20.0,
-                    help="leak: the monitor's onset grid, s (its default 20)")
     ap.add_argument("--check-step", type=float, default=60.0,
                     help="leak: seconds between the monitor's checks (the verdict reads the "
                          "last)")
@@ -236,14 +232,14 @@ def main() -> None:
 
         rows = {}
         for seed in seeds:
-            for r in _leak(seed, args.hours, 2, args.onset_step, args.check_step):
+            for r in _leak(seed, args.hours, 2, args.check_step):
                 raw.setdefault("stretches", []).append({"seed": seed, **r})
                 for model in MODELS:
                     rows.setdefault(f"{'10 % leak' if r['leak'] else 'no leak'}, {model}",
                                     []).append(r[model])
             print(f"seed {seed}: {time.time() - t0:.0f} s", file=sys.stderr, flush=True)
-        print(_table(f"leak monitor, {args.hours:g} h stretches, onset grid "
-                     f"{args.onset_step:g} s, seeds {seeds.start}-{seeds.stop - 1}", rows,
+        print(_table(f"leak monitor, {args.hours:g} h stretches, seeds {seeds.start}-"
+                     f"{seeds.stop - 1}", rows,
                      {"residual_fit": Z_THRESHOLD, "prior_data_conflict": PRIOR_CONFLICT_SD,
                       "residual_autocorrelation": AUTOCORR_MAX}))
         print("\n" + _answers(raw["stretches"]))
