@@ -268,4 +268,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     main()

@@ -114,9 +114,12 @@ def files(tmp_path_factory) -> dict[str, Path]:
         df["rwa4"] = 300.0
         df[wheels] = np.nan
 
+    def quantised(df):      # body rates rounded to 1 mrad/s (issue 28: Ixx 6 sd off, exit 0)
+        df[["wx", "wy", "wz"]] = np.round(df[["wx", "wy", "wz"]] / 1e-3) * 1e-3
+
     for name, edit in [("rad_s", rad_s), ("scalar_first", scalar_first),
                        ("conjugated", conjugated), ("huge_wheel", huge),
-                       ("rwa4_only", rwa4_only)]:
+                       ("rwa4_only", rwa4_only), ("quantised", quantised)]:
         f[name] = _csv_edit(good, d / f"{name}.csv", edit)
     f["one_axis"] = _one_axis(d / "one_axis.csv")
     f["bias"], f["pulses_ok"], f["pulses_double"], f["pulses_beyond"] = _biasing(d)
@@ -348,6 +351,62 @@ def test_api_catalogue(files, tmp_path, case, call, message):
         call(files, tmp_path / "out")
     assert "\n" not in str(e.value)
     assert not (tmp_path / "out").exists()
+
+
+# Cases handled with a warning: (id, argv as above, words the warning must hold). Exit 0, the
+# warning printed (``check``: stdout; a fit: stderr) and, for a fit, in summary.json's warnings;
+# no traceback, no input changed.
+WARNED = [
+    ("quantised-body-rates-check", ["check", "{quantised}"],
+     ["rates on a coarse lattice", "wx 0.001 rad/s"]),
+    ("quantised-body-rates-fit", [*FIT, "--telemetry", "{quantised}", "--out", "{out}"],
+     ["rates on a coarse lattice", "wx 0.001 rad/s"]),
+]
+
+
+@pytest.mark.parametrize("case, argv, words", WARNED, ids=[c[0] for c in WARNED])
+def test_warned(files, run_cli, tmp_path, case, argv, words):
+    import json
+
+    args = [a.format(out=tmp_path / "out", **files) for a in argv]
+    inputs = [Path(a) for a in args if Path(a).exists()]
+    before = {k: v for p in inputs for k, v in _sha(p).items()}
+    code, out, err = run_cli(*args)
+    assert code == 0 and "Traceback" not in err, err
+    for w in words:
+        assert w in out + err, (w, out, err)
+    summary = tmp_path / "out" / "summary.json"
+    if "--out" in argv:
+        warned = json.loads(summary.read_text())["warnings"]
+        assert any(all(w in line for w in words) for line in warned), warned
+    assert {k: v for p in inputs for k, v in _sha(p).items()} == before
+
+
+@pytest.mark.slow
+def test_a_large_clean_file_passes_the_adequacy_checks(tmp_path, run_cli):
+    """Issue 28: a clean 200 000-row file of the package's own simulator (the Post-Probe slews
+    for 19 990 s sampled at 0.1 s: 199 901 rows) had failed ``fit inertia`` with
+    ``residual_regression`` 27.8 > 4, the regression statistic growing with the number of
+    samples (docs/adequacy.md, "The number of samples"). Now the verdict is ok; 20 such files
+    gave no false alarm (docs/adequacy.md). One fit, a few minutes."""
+    import json
+    import tomllib
+
+    from cassini_bayes._paths import SCENARIOS_DIR
+    from cassini_bayes.simulate import scenario_from_dict, simulate
+
+    d = tomllib.loads((SCENARIOS_DIR / "slews_post_probe.toml").read_text())
+    d["run"].update(duration_s=19_990.0, dt_s=0.1, sample_period_s=0.1)
+    tel = simulate(jax.random.key(28), scenario_from_dict(d, "long")).telemetry
+    assert tel.n == 199_901
+    path = tmp_path / "long.csv"
+    write_telemetry(path, tel)
+    code, out, err = run_cli("fit", "inertia", "--telemetry", path, "--spacecraft",
+                             "cassini_post_probe", "--chains", "1", "--warmup", "100",
+                             "--draws", "100", "--out", tmp_path / "run")
+    assert code == 0 and "adequacy ok" in out + err, (out, err)
+    checks = json.loads((tmp_path / "run" / "summary.json").read_text())["adequacy"]["checks"]
+    assert checks["residual_regression"]["statistic"] < 4.0
 
 
 def test_row_limit_refuses_a_huge_file_before_reading_it_all(tmp_path, run_cli, monkeypatch):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 from pathlib import Path
 
 import jax
@@ -30,6 +31,7 @@ from cassini_bayes.analysis.posterior_budgets import (
 from cassini_bayes.analysis.propagation import credible_interval, propagate
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
+from pages import first_table
 
 Z90 = 1.6448536269514722  # standard-normal 95th percentile
 EST = np.asarray(TABLE1["post_probe"]["est"], float)
@@ -273,6 +275,14 @@ def test_budget_command_end_to_end(runs, tmp_path, run_cli):
     assert {"inertia", "thrust", "rwa4 (rwa)", "rwa4 mass properties"} <= budgets
     page = (out / "report.html").read_text()
     assert "root-sum-square" in page and "1.18 mrad" in page
+    # a pass/fail column against the papers' budgets; shares as percentages
+    headers, rows = first_table(page)
+    assert "verdict" in headers and "variance share, each parameter alone" in headers
+    judged = {r[1].split("posterior:")[0].strip(): r[headers.index("verdict")] for r in rows
+              if r[headers.index("verdict")] in ("pass", "FAIL")}
+    assert {"thrust knowledge", "RWA4 axis knowledge"} <= set(judged)
+    shares = [r[headers.index("variance share, each parameter alone")] for r in rows]
+    assert any(re.search(r"\bF 100 %", x) for x in shares)
     # an existing --out is refused, --force replaces it
     code, _, err = run_cli("budget", "--thrust", runs["thrust"], "--out", out)
     assert code == 2 and "--force" in err

@@ -24,6 +24,7 @@ from cassini_bayes.cli import main
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.health import CHANNELS, HealthPrior, event_summary, health_posterior
 from cassini_bayes.inference.health.changepoint import SCATTER_GRID
+from pages import first_table
 
 Z3_Z4 = [2, 3]
 
@@ -278,8 +279,14 @@ def test_cli_end_to_end(tmp_path, capsys):
     s = json.loads((out / "summary.json").read_text())
     assert s["n_events"] == 5 and set(s["channels"]) == set(CHANNELS)
     assert 0.0 <= s["p_down_last"]["Z3|Z4"] <= 1.0
-    for name in ("health.csv", "thrust_bands.csv", "config.toml", "health.png"):
+    for name in ("health.csv", "thrust_bands.csv", "config.toml", "health.png", "report.html"):
         assert (out / name).is_file()
+    # the page opens with the answer: a row per channel, its unit, P(down) and the verdict
+    headers, rows = first_table((out / "report.html").read_text())
+    assert headers[:2] == ["channel", "unit"] and headers[-1] == "verdict"
+    assert "P(more than 5% down)" in headers and "model file (N)" in headers
+    assert [r[0] for r in rows] == list(CHANNELS)
+    assert {r[-1] for r in rows} <= {"healthy", "DOWN", "undecided"}
     header = (out / "health.csv").read_text().splitlines()[0]
     assert "p_down_Z3_or_Z4" in header and "Y1," not in header
     # a second run into the same folder needs --force, and then works

@@ -24,6 +24,7 @@ from cassini_bayes.estimators.leak import leak_torque, residual_momentum, thresh
 from cassini_bayes.inference.leak import HYPOTHESES, LeakInputs, leak_inputs, leak_posterior
 from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from cassini_bayes.simulate import scenario_from_dict, simulate
+from pages import first_table
 
 Q = np.asarray(moment_matrix(1.234, 1.580, 2.880, 3.019))
 ONSET_S = 200.0
@@ -217,6 +218,13 @@ def test_cli_monitor_leak_end_to_end(leak_run, tmp_path, capsys):
     assert s["bayes"]["detection_time_s"] < s["lee"]["detection_time_s"]
     rows = (out / "probabilities.csv").read_text().splitlines()
     assert rows[0].startswith("t_s,p_none,p_Z1") and len(rows) == 1 + 14
+    # report.html opens with the answer: both monitors side by side, Lee's requirement judged
+    headers, table = first_table((out / "report.html").read_text())
+    assert headers == ["quantity", "unit", "Bayesian monitor (posterior)",
+                       "Lee's threshold monitor (paper)", "requirement", "verdict"]
+    by = {r[0]: r for r in table}
+    assert by["leaking thruster"][2].startswith("Z1") and by["leaking thruster"][3] == "Z1"
+    assert by["isolation time"][1] == "s" and by["isolation time"][-1] in ("pass", "FAIL")
     truth = json.loads((tmp_path / "sim" / "truth.json").read_text())
     assert truth["leak"]["thruster"] == "Z1" and truth["leak"]["torque_nm"][2] == 0.0
     # a second run is refused without --force, replaces with it

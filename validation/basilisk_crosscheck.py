@@ -724,4 +724,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
+    cassini_bayes.setup_jax()  # 64-bit, the compilation cache: this script uses modules directly
     main()

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.names import a_kind
 
@@ -34,26 +35,13 @@ class BudgetResult:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json`` (with the ``adequacy`` verdict of
         :func:`~cassini_bayes.analysis.budget_adequacy.budget_adequacy`), ``config.toml``,
-        ``budget.csv`` and ``report.html`` into ``out`` atomically; returns it. ``force``
-        replaces only a directory cassini-bayes wrote."""
-        from cassini_bayes.analysis.posterior_budgets import budget_csv, budget_table
-        from cassini_bayes.report.adequacy import adequacy_section, verdict_header
-        from cassini_bayes.report.html import html_page, paragraph, section, table
+        ``budget.csv`` and ``report.html`` (the answer first, the adequacy verdict) into ``out``
+        atomically; returns it. ``force`` replaces only a directory cassini-bayes wrote."""
+        from cassini_bayes.analysis.posterior_budgets import budget_csv
+        from cassini_bayes.report.budget import budget_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-        columns, rows = budget_table(self.budget)
-        page = html_page("Budgets from posteriors", [
-            adequacy_section(self.summary, _BUDGET_NOTE),
-            section("Budget lines", [
-                paragraph("Each line propagated from the posterior draws of the runs below: "
-                          "median and 90 % credible interval, beside the paper's number; lines "
-                          "without a calibrated input keep the paper's value. Attribution: the "
-                          "share of the line's posterior variance each parameter causes when it "
-                          "alone varies (the others at their posterior medians); "
-                          "docs/budgets.md.", note=True),
-                table(list(columns), [list(r) for r in rows], left=3)]),
-            section("Inputs", paragraph("; ".join(f"{k}: {v}" for k, v in self.runs.items())))],
-            header=verdict_header(self.summary))
+        page = budget_report_html(self)
         inputs = [r for r in self.runs.values() if isinstance(r, Path)]
         with RunDir(out, force=force, inputs=inputs) as rd:
             write_summary(rd.path, self.summary)
@@ -63,13 +51,7 @@ class BudgetResult:
         return rd.final
 
 
-_BUDGET_NOTE = ("Are the input runs fit to be combined? input_convergence and input_adequacy "
-                "count the runs whose own summary.json says they did not converge or failed "
-                "their adequacy checks; spacecraft_models counts the models they were fitted "
-                "with; shared_inertia compares the inertia of every run that sampled it (one "
-                "spacecraft, one inertia). docs/budgets.md.")
-
-
+@jax_entry
 def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).

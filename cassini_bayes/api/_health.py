@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
 
@@ -42,15 +43,14 @@ class HealthResult:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
         sd, ``P(down)`` per channel), ``thrust_bands.csv`` (relative thrust quantiles per channel
-        on a date grid), ``health.png`` and ``report.html`` (the adequacy verdict, the figure,
-        the channels) into ``out`` atomically; returns it."""
+        on a date grid), ``health.png`` and ``report.html`` (the answer first, the adequacy
+        verdict, self-contained) into ``out`` atomically; returns it."""
+        from cassini_bayes.report.figures import png_bytes
+        from cassini_bayes.report.health import health_report_html, plot_health
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-        from cassini_bayes.report.figures import png_bytes
-        from cassini_bayes.report.health import health_page, plot_health
-
         png = png_bytes(plot_health(self.posterior, self.fraction), dpi=110)
-        page = health_page(self.summary, png, self.files)
+        page = health_report_html(self, png)
         with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)
@@ -120,6 +120,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     return sorted(out, key=lambda e: e[0])
 
 
+@jax_entry
 def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
                p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
@@ -266,6 +267,7 @@ def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str],
 _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
+@jax_entry
 def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
                              force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.

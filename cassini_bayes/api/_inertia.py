@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
                                        shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
@@ -55,6 +56,7 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
     return summary
 
 
+@jax_entry
 @shows_progress
 def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,

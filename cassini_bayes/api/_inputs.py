@@ -10,6 +10,7 @@ from typing import Sequence
 
 import numpy as np
 
+from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS, SEED_MAX
 from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
@@ -19,14 +20,8 @@ __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "
            "check_seed", "shows_progress"]
 
 WHEEL_ERRORS = ("per_wheel", "common")
-# jax.random.key takes a signed 64-bit seed; the package takes its non-negative half
-SEED_MAX = 2**63 - 1
 
 PathLike = str | os.PathLike
-# beyond these a fit runs out of memory or time before it says anything (16 chains already
-# oversubscribe a 16-core machine; 10⁶ draws of a fit take hours)
-MAX_CHAINS = 64
-MAX_DRAWS = 1_000_000
 
 
 def shows_progress(fit):
@@ -240,7 +235,9 @@ def check_seed(seed: int) -> int:
 def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
                      progress: bool = False):
     """:class:`~cassini_bayes.inference.runner.SamplerSettings` from the fit functions'
-    arguments, checked against the ranges the command line accepts."""
+    arguments, checked against the ranges the command line accepts; warns (once) when the
+    chains must run vectorised because JAX started before the fit could ask for devices."""
+    from cassini_bayes._devices import warn_if_vectorised
     from cassini_bayes.inference.runner import SamplerSettings
 
     for name, value, lo, hi in (("chains", chains, 1, MAX_CHAINS),
@@ -249,5 +246,6 @@ def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
         if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
             raise InputError(f"{arg(name, value)}: use an integer in {lo} .. {hi}")
     target_accept = number("target_accept", target_accept, lo=0.5, hi=0.999)
+    warn_if_vectorised(chains)
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
                            target_accept=target_accept, progress=as_flag(progress, "progress"))

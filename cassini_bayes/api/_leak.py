@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 __all__ = ["LeakResult", "monitor_leak"]
@@ -34,21 +35,21 @@ class LeakResult:
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the adequacy verdict, both
-        monitors' answers) into ``out`` atomically; returns it. ``force`` replaces only a
-        directory cassini-bayes wrote."""
+        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the answer first, the
+        adequacy verdict, self-contained) into ``out`` atomically; returns it. ``force``
+        replaces only a directory cassini-bayes wrote."""
         from cassini_bayes.inference.leak import HYPOTHESES
-        from cassini_bayes.report.leak import leak_page
+        from cassini_bayes.report.leak import leak_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
+        page = leak_report_html(self)
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
                        header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
-            (rd.path / "report.html").write_text(leak_page(self.summary, self.files),
-                                                 encoding="utf-8")
+            (rd.path / "report.html").write_text(page, encoding="utf-8")
         return rd.final
 
 
@@ -58,6 +59,7 @@ def _positive(value: float, option: str, argument: str) -> float:
     return value
 
 
+@jax_entry
 def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
                  check_step_s: float = 60.0, eta: float = 0.05,

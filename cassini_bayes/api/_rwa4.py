@@ -4,16 +4,15 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
                                        shows_progress, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
 from cassini_bayes.errors import InputError, arg, as_flag
 
-TARGET_ACCEPT = 0.95
-"""The RWA4 fits' default NUTS target acceptance (the other fits': 0.9). Measured on the 80
-open-world fits at the defaults (docs/robust/open_world.md): 0.9 left one divergent transition
-(``rwa4_rcs`` seed 25), 0.95 none, with the same coverage, errors and R-hat ≤ 1.005."""
+TARGET_ACCEPT = RWA4_TARGET_ACCEPT  # 0.95, the other fits' 0.9 (cassini_bayes.api._limits)
 
 RCS_BUDGET_DEG = 3.0
 """Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
@@ -94,6 +93,7 @@ def _window_pairs(windows) -> list | None:
     return pairs
 
 
+@jax_entry
 @shows_progress
 def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
              inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.estimators.leak import leak_torque
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 from cassini_bayes.simulate import Scenario, SimResult, quiet_windows
@@ -143,6 +144,7 @@ class Simulation:
         return rd.final
 
 
+@jax_entry
 def simulate(scenario: Scenario | str | os.PathLike, *, seed: int | None = None) -> Simulation:
     """Simulate a scenario: the telemetry, pulse log and truth ``cassini-bayes simulate`` writes.
 

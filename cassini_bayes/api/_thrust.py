@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_inputs,
                                        sampler_settings, shows_progress, spacecraft_input,
                                        telemetry_inputs)
@@ -150,6 +151,7 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
     return knowledge, {"inertia_posterior": entry}, [path]
 
 
+@jax_entry
 @shows_progress
 def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
                inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,

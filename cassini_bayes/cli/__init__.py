@@ -6,7 +6,8 @@ modules are discovered here, so adding a command never edits this file. ``groups
 
 Global options, given before the command (docs/cli.md): ``--jax-cache DIR|off`` moves or switches
 off the compilation cache (:mod:`cassini_bayes._jax_cache`); ``--verbose`` prints its hits and
-misses at the end.
+misses at the end. Before any command runs, :func:`cassini_bayes.setup_jax` sets JAX up (64-bit,
+the cache, one CPU device per core); ``--help``, ``--version`` and usage errors import no JAX.
 
 One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
 usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``).
@@ -42,12 +43,8 @@ import warnings
 import typer
 
 from cassini_bayes import __version__, _jax_cache
-from cassini_bayes._devices import request_host_devices
+from cassini_bayes._devices import setup_jax
 from cassini_bayes.errors import InputError, Interrupted, NotConvergedError, command_line
-
-# one JAX CPU device per core and at least 4, so that the chains run in parallel: at start-up,
-# before anything starts the backend (the library never does this on import)
-request_host_devices()
 
 app = typer.Typer(
     name="cassini-bayes",
@@ -84,6 +81,9 @@ def _root(
     if jax_cache is not None:
         os.environ[_jax_cache.ENV] = jax_cache  # worker processes (sbc --executor dask) follow
         _jax_cache.enable(jax_cache)
+    # 64-bit, the cache, one CPU device per core (at least 4) so that the chains run in
+    # parallel: before the command runs, hence before anything starts JAX's backend
+    setup_jax()
     if verbose:
         ctx.call_on_close(lambda: print(_jax_cache.stats().line(), file=sys.stderr))
 

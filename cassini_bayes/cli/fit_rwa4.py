@@ -11,7 +11,7 @@ from pathlib import Path
 
 import typer
 
-from cassini_bayes.api._rwa4 import TARGET_ACCEPT as RWA4_TARGET_ACCEPT
+from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
                                    WHEEL_ERRORS, sampler_options, wheel_errors_name,
                                    write_fit_run)

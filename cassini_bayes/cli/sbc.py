@@ -49,7 +49,7 @@ from pathlib import Path
 import typer
 
 from cassini_bayes._paths import text_file
-from cassini_bayes.api._inputs import MAX_CHAINS, MAX_DRAWS
+from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.errors import InputError, Interrupted
 from cassini_bayes.rundir import check_out

@@ -42,6 +42,7 @@ import jax
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, not_utf8
 from cassini_bayes.analysis.paper_facts import fact
 from cassini_bayes.errors import InputError
@@ -542,6 +543,7 @@ def run_into(exp: Experiment, workdir: Path, *, seed: int = 0, quick: bool = Fal
     return RunRecord(exp, workdir, output, settings, seed, quick, elapsed)
 
 
+@jax_entry
 def run_experiment(exp: Experiment | str | os.PathLike, out: str | os.PathLike, *,
                    seed: int | None = None, quick: bool = False, force: bool = False,
                    progress: Callable[[float, str], None] | None = None) -> RunRecord:

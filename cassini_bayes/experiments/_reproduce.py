@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.analysis.paper_facts import PAPER_FACTS
 from cassini_bayes.errors import InputError
@@ -100,6 +101,7 @@ def discover_experiments(directory: str | os.PathLike = EXPERIMENTS_DIR,
 Event = Callable[[str, int, int, str], None]
 
 
+@jax_entry
 def reproduce(out: str | os.PathLike, *, seed: int = 0, quick: bool = False, force: bool = False,
               experiments_dir: str | os.PathLike = EXPERIMENTS_DIR,
               on_event: Event | None = None) -> ReproduceResult:

@@ -1,7 +1,7 @@
-"""The noise levels every calibration centres its noise prior on, from the one robust white-noise
-estimator of the package (:func:`cassini_bayes.telemetry.white_noise_sd`, also used by the input
-checks). Each caller floors the levels (:func:`floored`) so that noise-free synthetic data stay
-finite.
+"""The noise levels every calibration centres its noise prior on, from the one robust
+white-noise estimator of the package, :func:`cassini_bayes.telemetry.white_noise_sd` (in the
+pure layer, so that the input checks use it too). Each caller floors the levels
+(:func:`floored`) so that noise-free synthetic data stay finite.
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""Report pieces: the fit's adequacy verdict (summary ``adequacy``): a header badge, a section.
+"""Report pieces: a run's adequacy verdict (summary ``adequacy``): a header badge, a section.
 
-Reads the block every ``fit`` writes into ``summary.json``
-(:mod:`cassini_bayes.inference.adequacy`): ``{"ok": b, "checks": {NAME: {"statistic",
-"threshold", "ok", "parameter"?, "note"?}}}``. A run without the block (older runs, ``sbc``,
-experiments) gets a neutral badge and a section that says so.
+Reads the block every ``fit`` (and ``fit health``, ``monitor leak``, ``budget``) writes into
+``summary.json`` (:mod:`cassini_bayes.inference.adequacy`): ``{"ok": b, "checks": {NAME:
+{"statistic", "threshold", "ok", "parameter"?, "note"?}}}``. A run without the block (older
+runs, ``sbc``, experiments) gets a neutral badge and a section that says so.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 from cassini_bayes.report.html import Section, badge, not_available, paragraph, section, table
 from cassini_bayes.report.tables import fmt
 
-__all__ = ["adequacy_badge", "adequacy_section", "verdict_header"]
+__all__ = ["adequacy_badge", "adequacy_section"]
 
 _LABELS = {"prior_data_conflict": "prior–data conflict (prior sd)",
            "held_out": "held-out prediction (normal deviate)",
@@ -69,17 +69,7 @@ def adequacy_section(summary, note: str = _FIT_NOTE) -> Section:
         classes.append(["", "", "", "good" if c.get("ok") else "bad", ""])
     body = [
         table(["check", "statistic", "threshold", "verdict", "where / note"], rows, left=1,
-              classes=[[*c[:4], "l"] for c in classes]),
+              classes=[[*c[:4], "w"] for c in classes]),
         paragraph(note, note=True),
     ]
     return section("Model adequacy", body, id="adequacy")
-
-
-def verdict_header(summary) -> str:
-    """The header of a page with a verdict: the adequacy badge and the summary's warnings."""
-    from cassini_bayes.report.html import bullet_list
-
-    warns = summary.get("warnings") or [] if isinstance(summary, dict) else []
-    return (f"<p>{adequacy_badge(summary)}</p>"
-            + (f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>'
-               if warns else ""))
