@@ -54,6 +54,7 @@ a leak only through the thruster that fights it, and only at the cost of a ~100 
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -241,6 +242,36 @@ def _cum(a: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, axis=0)])
 
 
+@dataclass(frozen=True)
+class _Rule:
+    """The onset quadrature: a cell whose integrand varies by less than ``easy_nats`` over at
+    most ``easy_span`` in ``w`` takes Gauss-Legendre with ``easy_nodes`` nodes; any other is
+    split at its peak or trough, each side at the points ``levels`` nats below its top, each
+    piece mapped by ``w = w_top ± δ sinh y`` (``δ`` the e-folding length at the piece's top) and
+    cut into parts of at most ``part_w`` in ``w`` and ``part_y`` in ``y``, each with
+    ``part_nodes`` Gauss-Legendre nodes. Cells whose upper bound is ``prune_nats`` below their
+    thruster's evidence are dropped. A finer rule is for measuring this one's error
+    (benchmarks/leak_quadrature.py, docs/leak.md)."""
+
+    easy_nats: float = 0.3
+    easy_span: float = 2.0
+    easy_nodes: int = 4
+    levels: tuple[float, ...] = (1.0, 4.0, 12.0, 40.0)
+    part_w: float = 0.5
+    part_y: float = 1.0
+    part_nodes: int = 5
+    prune_nats: float = 40.0
+
+
+_RULE = _Rule()
+
+
+@functools.cache
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights on [−1, 1]."""
+    return np.polynomial.legendre.leggauss(n)
+
+
 class _Sums:
     """Prefix sums of a stretch for the closed-form evidence at any check."""
 
@@ -274,8 +305,9 @@ class _Sums:
         raw = self.raw_y[:np.searchsorted(self.raw_t, self.t[c] + self.raw_t[0], "right")]
         return np.maximum(_noise_sd(self.y[:c + 1]), _noise_sd(raw))
 
-    def check(self, c: int) -> "_Check":
-        """The evidence of every thruster's leak with the data rows 0..c (module docstring)."""
+    def check(self, c: int, rule: _Rule = _RULE) -> _Check:
+        """The evidence of every thruster's leak with the data rows 0..c (module docstring), its
+        onset integrated by ``rule``."""
         e, t = c + 1, self.t
         lam = 1.0 / self.noise_sd(c) ** 2               # (3,) noise precision per axis
         cell = np.arange(1, c + 1)                      # onset in [t_{l-1}, t_l): rows l..c
@@ -315,22 +347,12 @@ class _Sums:
         log_z0 = self.log_w + np.array(log_z0)
         return _Check(t_ref=tr, width=tr - t[cell - 1], t_c=float(t[c]),
                       log_prior=log_z0 - logsumexp(log_z0), a_pp=a_pp, a_po=a_po,
-                      a_oo=np.maximum(a_oo, 1e-300), z_p=z_p, z_o=z_o)
+                      a_oo=np.maximum(a_oo, 1e-300), z_p=z_p, z_o=z_o, rule=rule)
 
 
 # The onset integral of one cell is ∫ exp(log_g(w)) dw over w ∈ [asinh r₀, asinh r₁]; log_g
 # is unimodal in the angle θ = atan(sinh w) + atan2(g, b) (its peak at θ = 0, its trough at ±π).
-# A cell whose integrand varies by less than _EASY_NATS over at most _EASY_SPAN takes
-# Gauss-Legendre with _EASY_NODES nodes; any other is split at its peak or trough, each side at
-# the points _LEVELS nats below its top, each piece mapped by w = w_top ± δ sinh y (δ the
-# e-folding length at the piece's top) and cut into parts of at most _PART_W in w and _PART_Y in
-# y, each with _PART_NODES Gauss-Legendre nodes. Cells whose upper bound is _PRUNE_NATS below
-# their thruster's evidence are dropped. Accuracy measured against adaptive quadrature:
-# docs/leak.md.
-_EASY_NATS, _EASY_SPAN, _EASY_NODES = 0.3, 2.0, 4
-_LEVELS = (1.0, 4.0, 12.0, 40.0)
-_PART_W, _PART_Y, _PART_NODES = 0.5, 1.0, 5
-_PRUNE_NATS = 40.0
+# The rule and its settings: _Rule (above).
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
@@ -369,10 +391,11 @@ def _h_inverse(h, start):
     return b
 
 
-def _pieces(b, g, r0, r1):
-    """Bounds (…, 2 × len(_LEVELS)) of the pieces of each cell: the two monotone sides of its
-    peak or trough, each cut where ``log_g`` has fallen _LEVELS nats below the side's top. Returns
-    ``(top, end)``: each piece's end with the larger ``log_g`` and its other end (``w``)."""
+def _pieces(b, g, r0, r1, levels):
+    """Bounds (…, 2 × len(levels)) of the pieces of each cell: the two monotone sides of its
+    peak or trough, each cut where ``log_g`` has fallen ``levels`` nats below the side's top.
+    Returns ``(top, end)``: each piece's end with the larger ``log_g`` and its other end
+    (``w``)."""
     rho, phi = np.hypot(b, g), np.arctan2(g, b)
     w0, w1 = np.arcsinh(r0), np.arcsinh(r1)
     th0, th1 = np.arctan(r0) + phi, np.arctan(r1) + phi
@@ -393,7 +416,7 @@ def _pieces(b, g, r0, r1):
         odd = np.mod(k, 2.0) == 1.0
         bt = rho * np.cos(th_top)
         bound = w_top
-        for level in _LEVELS:
+        for level in levels:
             reached = e_end < e_top - level
             bt = np.where(reached, bt, 0.0)
             bt[reached] = _h_inverse(e_top[reached] + 0.5 * rho[reached] ** 2 - level,
@@ -409,20 +432,16 @@ def _pieces(b, g, r0, r1):
     return np.stack(tops, axis=-1), np.stack(ends, axis=-1)
 
 
-_GL_EASY = np.polynomial.legendre.leggauss(_EASY_NODES)
-_GL_PART = np.polynomial.legendre.leggauss(_PART_NODES)
-
-
-def _nodes(b, g, r0, r1, easy):
+def _nodes(b, g, r0, r1, easy, rule):
     """Quadrature of ``∫ exp(log_g(w)) dw`` over ``[asinh r0, asinh r1]`` for flat arrays of
     cells: ``(cell, w, log_weight)`` with each cell's nodes contiguous."""
     ie, ih = np.flatnonzero(easy), np.flatnonzero(~easy)
-    x, wt = _GL_EASY
+    x, wt = _gauss_legendre(rule.easy_nodes)
     w0, w1 = np.arcsinh(r0[ie]), np.arcsinh(r1[ie])
     half = 0.5 * (w1 - w0)[:, None]
     w_easy = (0.5 * (w0 + w1))[:, None] + half * x
     lw_easy = _log_g(w_easy, b[ie, None], g[ie, None]) + np.log(half * wt)
-    top, end = _pieces(b[ih], g[ih], r0[ih], r1[ih])
+    top, end = _pieces(b[ih], g[ih], r0[ih], r1[ih], rule.levels)
     cell = np.repeat(ih, top.shape[-1])
     top, end = top.ravel(), end.ravel()
     length = np.abs(end - top)
@@ -430,19 +449,19 @@ def _nodes(b, g, r0, r1, easy):
     delta = np.maximum(np.minimum(length, 1.0 / np.maximum(np.abs(_dlog_g(top, bp, gp)),
                                                            1e-300)), 1e-300)
     y_max = np.arcsinh(length / delta)
-    parts = np.where(length > 0, np.maximum(np.ceil(length / _PART_W),
-                                            np.ceil(y_max / _PART_Y)), 0).astype(int)
+    parts = np.where(length > 0, np.maximum(np.ceil(length / rule.part_w),
+                                            np.ceil(y_max / rule.part_y)), 0).astype(int)
     piece = np.repeat(np.arange(top.size), parts)
     step = (y_max / np.maximum(parts, 1))[piece]
     first = (np.arange(piece.size) - np.repeat(np.cumsum(parts) - parts, parts)) * step
-    x, wt = _GL_PART
+    x, wt = _gauss_legendre(rule.part_nodes)
     y = first[:, None] + 0.5 * step[:, None] * (x + 1.0)
     d = delta[piece, None]
     w_hard = top[piece, None] + np.sign(end - top)[piece, None] * d * np.sinh(y)
     cell = cell[piece]
     lw_hard = (_log_g(w_hard, b[cell, None], g[cell, None])
                + np.log(0.5 * step[:, None] * wt * d * np.cosh(y)))
-    return (np.r_[np.repeat(ie, _EASY_NODES), np.repeat(cell, _PART_NODES)],
+    return (np.r_[np.repeat(ie, rule.easy_nodes), np.repeat(cell, rule.part_nodes)],
             np.r_[w_easy.ravel(), w_hard.ravel()], np.r_[lw_easy.ravel(), lw_hard.ravel()])
 
 
@@ -465,7 +484,7 @@ class _Check:
     torque component and fraction scale (axes ``(cells, 8, torques, scales)``), the Gram terms of
     the leak's columns ``P = F Q[:, k] (t − t_ref)₊`` and ``O = F Q[:, k] 1(t ≥ t_ref)`` and their
     scores, nuisances integrated; ``log_prior`` the torque components' posterior weights under
-    no leak."""
+    no leak; ``rule`` the onset quadrature."""
 
     t_ref: np.ndarray
     width: np.ndarray
@@ -476,6 +495,7 @@ class _Check:
     a_oo: np.ndarray
     z_p: np.ndarray
     z_o: np.ndarray
+    rule: _Rule = _RULE
 
     def __post_init__(self):
         s = FRACTION_SCALES
@@ -497,10 +517,10 @@ class _Check:
                                                       -np.inf))
         low = np.minimum(np.minimum(e0, e1), np.where(inside & (self.b < 0), log_ndtr(-rho),
                                                       np.inf))
-        self.easy = (top - low <= _EASY_NATS) & (w1 - w0 <= _EASY_SPAN)
+        self.easy = (top - low <= self.rule.easy_nats) & (w1 - w0 <= self.rule.easy_span)
         upper = self.const + top + np.log(np.maximum(w1 - w0, 1e-300))
         # every easy cell, and per thruster the hard cell of largest bound, exactly; then the
-        # hard cells within _PRUNE_NATS of that thruster's evidence
+        # hard cells within rule.prune_nats of that thruster's evidence
         self.log_bf = np.full(self.const.shape, -np.inf)
         hard = np.moveaxis(np.where(self.easy, -np.inf, upper), 1, 0).reshape(8, -1)
         first = np.zeros(hard.shape, bool)
@@ -508,7 +528,8 @@ class _Check:
         first[np.arange(8), top_k] = np.isfinite(hard[np.arange(8), top_k])
         first = np.moveaxis(first.reshape(np.moveaxis(upper, 1, 0).shape), 0, 1)
         self._integrate(self.easy | first)
-        bound = logsumexp(self.log_bf, axis=(0, 2, 3)) - _PRUNE_NATS - np.log(upper.size)
+        bound = (logsumexp(self.log_bf, axis=(0, 2, 3)) - self.rule.prune_nats
+                 - np.log(upper.size))
         keep = ~self.easy & ~first & (upper >= bound[None, :, None, None])
         self._integrate(keep)
 
@@ -521,7 +542,7 @@ class _Check:
         """Quadrature nodes ``(i, w, log_weight)`` of the flat entries ``idx`` (``i`` indexes
         ``idx``; each entry's nodes contiguous)."""
         f = (lambda a: np.broadcast_to(a, self.const.shape).ravel()[idx])
-        return _nodes(f(self.b), f(self.g), f(self.r0), f(self.r1), f(self.easy))
+        return _nodes(f(self.b), f(self.g), f(self.r0), f(self.r1), f(self.easy), self.rule)
 
     def log_evidence(self) -> np.ndarray:
         """(8,) log Bayes factor of each thruster's leak against none (onset uniform over the
@@ -557,7 +578,8 @@ class _Check:
             d = max(self.t_ref[l] - t_s, 0.0)
             f = (lambda a: np.broadcast_to(a, self.const.shape)[l, k].ravel())
             r = f(self.scale) * (d + f(self.shift))
-            i, _, lw = _nodes(f(self.b), f(self.g), r, f(self.r1), np.zeros(r.size, bool))
+            i, _, lw = _nodes(f(self.b), f(self.g), r, f(self.r1), np.zeros(r.size, bool),
+                              self.rule)
             parts.append(logsumexp(f(self.const) + _segment_logsumexp(i, lw, r.size)))
         return float(np.exp(logsumexp(parts) - total)) if parts else 0.0
 
@@ -592,13 +614,13 @@ def _thinned(inp: LeakInputs, step_s: float) -> LeakInputs:
 
 def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ETA,
                    sample_step_s: float = SAMPLE_STEP_S, check_step_s: float = 60.0,
-                   p_detect: float = 0.99) -> LeakPosterior:
+                   p_detect: float = 0.99, _rule: _Rule = _RULE) -> LeakPosterior:
     """Run the Bayesian monitor over a stretch, as it would run on board: the residual taken
     every ``sample_step_s`` (:data:`SAMPLE_STEP_S`); a check every ``check_step_s`` (and at the
     last sample) sees only the data up to it, the onset uniform over that part of the stretch;
     ``prior_leak``: prior probability of a leak in the stretch. Detection: the first check with
     ``P(leak) ≥ p_detect``; isolation: the first with one thruster's ``P ≥ p_detect`` (that
-    thruster is the answer)."""
+    thruster is the answer). ``_rule``: the onset quadrature (a finer one measures its error)."""
     for name, flag, v in (("prior_leak", "--prior-leak", prior_leak),
                           ("p_detect", "--p-detect", p_detect)):
         if not 0.0 < v < 1.0:
@@ -625,7 +647,7 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
     checks = checks[checks >= 2]
     prob, det, iso = [], None, None
     for i, c in enumerate(checks):
-        ev = sums.check(c)
+        ev = sums.check(c, _rule)
         log_post = np.r_[np.log1p(-prior_leak), np.log(prior_leak / 8.0) + ev.log_evidence()]
         prob.append(np.exp(log_post - logsumexp(log_post)))
         if det is None and 1.0 - prob[-1][0] >= p_detect:
