@@ -69,27 +69,21 @@ def _health(seed: int, campaign: str, n_events: int) -> dict:
     return out
 
 
-def _leak(seed: int, hours: float, n: int, check_step_s: float, true_inertia: bool = False
-          ) -> list[dict]:
-    """[{model: {check: statistic, monitor's answer}, "leak": bool, "truth": {…}}] of ``n``
-    stretches (``true_inertia``: each model's inertia replaced by the simulation's). The monitor's answer: the thruster it isolated (``None``: none), its last
-    probability, the fraction's mean, sd and 90 % interval (``mean ± 1.645 sd`` where the
-    monitor reports no interval), the onset and the monitor's CPU seconds; the truth's fraction
-    is in each model's thrust (the leak is 10 % of the true thrust)."""
+def leak_stretches(seed: int, hours: float, n: int):
+    """Yield ``(leak, scenario, true thrusts (8,) N, telemetry, pulse log)`` for the ``n``
+    ``leak_cruise`` stretches of ``hours`` of one seed: ``n/2`` without a leak, then ``n/2`` with
+    a 10 % leak of a random thruster from a random onset in [600, 3600] s; thrusts and body
+    torque drawn from the monitor's own priors (``leak_detection.py``). Shared with
+    ``leak_quadrature.py`` so both see the same draws."""
     import jax
 
     from leak_detection import _truths
-    from cassini_bayes.inference.leak import leak_inputs, leak_posterior
-    from cassini_bayes.inference.leak_adequacy import leak_adequacy
-    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.simulate import load_scenario, pulse_log, simulate_batch
     from cassini_bayes.simulate.scenario import Leak
-    from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import Telemetry
 
     rng = np.random.default_rng(seed)
     base = dataclasses.replace(load_scenario("leak_cruise"), duration_s=hours * 3600.0)
-    out = []
     for leak in (False, True):
         s = dataclasses.replace(base, leak=Leak(int(rng.integers(8)), 0.1,
                                                 float(rng.uniform(600.0, 3600.0)))
@@ -100,40 +94,57 @@ def _leak(seed: int, hours: float, n: int, check_step_s: float, true_inertia: bo
                              truths)
         arr = jax.tree_util.tree_map(np.asarray, arr)
         for i in range(b):
-            a = jax.tree_util.tree_map(lambda x: x[i], arr)
+            a = jax.tree_util.tree_map(lambda x, i=i: x[i], arr)
             tel = Telemetry(t=a.t_meas, q=a.q_meas, omega=a.omega_meas,
                             wheel_rates=a.wheel_rates_meas, wheel_names=s.wheel_names,
                             on_times=a.on_times, source=f"<{s.name}>")
-            row = {"leak": leak}
+            yield leak, s, np.asarray(truths.thrust_n)[i], tel, pulse_log(a, s)
+
+
+def _leak(seed: int, hours: float, n: int, check_step_s: float, true_inertia: bool = False
+          ) -> list[dict]:
+    """[{model: {check: statistic, monitor's answer}, "leak": bool, "truth": {…}}] of the ``n``
+    stretches of :func:`leak_stretches` (``true_inertia``: each model's inertia replaced by the
+    simulation's). The monitor's answer: the thruster it isolated (``None``: none), its last
+    probability, the fraction's mean, sd and 90 % interval (``mean ± 1.645 sd`` where the
+    monitor reports no interval), the onset and the monitor's CPU seconds; the truth's fraction
+    is in each model's thrust (the leak is 10 % of the true thrust)."""
+    from cassini_bayes.inference.leak import leak_inputs, leak_posterior
+    from cassini_bayes.inference.leak_adequacy import leak_adequacy
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    out = []
+    for leak, s, thrust_n, tel, pulses in leak_stretches(seed, hours, n):
+        row = {"leak": leak}
+        if leak:
+            row["truth"] = {"thruster": THRUSTER_NAMES[s.leak.thruster],
+                            "onset_s": s.leak.t_start_s,
+                            "thrust_n": float(thrust_n[s.leak.thruster])}
+        for model in MODELS:
+            sc = load_spacecraft(model)
+            if true_inertia:
+                sc = dataclasses.replace(sc, inertia=np.asarray(s.truth.inertia))
+            inp = leak_inputs(tel, pulses, sc)
+            cpu = time.process_time()
+            post = leak_posterior(inp, check_step_s=check_step_s)
+            cpu = time.process_time() - cpu
+            ad = leak_adequacy(inp, post, eta=0.05, sample_step_s=60.0)
+            row[model] = {c.name: c.statistic for c in ad.checks}
+            interval = getattr(post, "fraction_interval", None) or (
+                post.fraction_mean - 1.645 * post.fraction_sd,
+                post.fraction_mean + 1.645 * post.fraction_sd)
+            row[model].update(
+                p_leak=float(post.p_leak[-1]), thruster=post.thruster,
+                p_thruster=float(post.prob[-1][1:].max()),
+                detection_time_s=post.detection_time_s,
+                fraction_mean=post.fraction_mean, fraction_sd=post.fraction_sd,
+                fraction_interval=[float(x) for x in interval], onset_s=post.onset_s,
+                cpu_s=cpu)
             if leak:
-                row["truth"] = {"thruster": THRUSTER_NAMES[s.leak.thruster],
-                                "onset_s": s.leak.t_start_s,
-                                "thrust_n": float(np.asarray(truths.thrust_n)[i,
-                                                                              s.leak.thruster])}
-            for model in MODELS:
-                sc = load_spacecraft(model)
-                if true_inertia:
-                    sc = dataclasses.replace(sc, inertia=np.asarray(s.truth.inertia))
-                inp = leak_inputs(tel, pulse_log(a, s), sc)
-                cpu = time.process_time()
-                post = leak_posterior(inp, check_step_s=check_step_s)
-                cpu = time.process_time() - cpu
-                ad = leak_adequacy(inp, post, eta=0.05, sample_step_s=60.0)
-                row[model] = {c.name: c.statistic for c in ad.checks}
-                interval = getattr(post, "fraction_interval", None) or (
-                    post.fraction_mean - 1.645 * post.fraction_sd,
-                    post.fraction_mean + 1.645 * post.fraction_sd)
-                row[model].update(
-                    p_leak=float(post.p_leak[-1]), thruster=post.thruster,
-                    p_thruster=float(post.prob[-1][1:].max()),
-                    detection_time_s=post.detection_time_s,
-                    fraction_mean=post.fraction_mean, fraction_sd=post.fraction_sd,
-                    fraction_interval=[float(x) for x in interval], onset_s=post.onset_s,
-                    cpu_s=cpu)
-                if leak:
-                    row[model]["fraction_truth"] = (s.leak.fraction * row["truth"]["thrust_n"]
-                                                    / float(sc.thrust))
-            out.append(row)
+                row[model]["fraction_truth"] = (s.leak.fraction * row["truth"]["thrust_n"]
+                                                / float(sc.thrust))
+        out.append(row)
     return out
 
 
