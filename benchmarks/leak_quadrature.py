@@ -64,16 +64,19 @@ def _grid_module(commit: str):
     src = subprocess.run(["git", "-C", str(ROOT), "show",
                           f"{commit}:cassini_bayes/inference/leak.py"],
                          check=True, capture_output=True, text=True).stdout
-    path = Path(tempfile.mkdtemp()) / f"_leak_{commit}.py"
-    path.write_text(src)
-    spec = importlib.util.spec_from_file_location(path.stem, path)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[path.stem] = mod
-    spec.loader.exec_module(mod)
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / f"_leak_{commit}.py"
+        path.write_text(src)
+        spec = importlib.util.spec_from_file_location(path.stem, path)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[path.stem] = mod          # dataclasses look their module up while executing
+        spec.loader.exec_module(mod)
     return mod
 
 
 def accuracy(seeds) -> None:
+    """Print, per stretch, the monitor's differences from the :func:`_fine` rule (module
+    docstring) and the largest of each over all stretches."""
     from cassini_bayes.inference.leak import leak_posterior
 
     fine = _fine()
@@ -105,6 +108,8 @@ def accuracy(seeds) -> None:
 
 
 def cost(seeds, grid_from: str | None) -> None:
+    """Print the median and range of CPU seconds per stretch of each monitor and check step,
+    with a leak and without."""
     from cassini_bayes.inference import leak
 
     monitors = {"continuous onset (this code)": lambda inp, cs: leak.leak_posterior(
