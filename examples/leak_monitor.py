@@ -9,8 +9,8 @@ reaches a threshold (50 N m s in cruise): a 10 % leak is caught in minutes, a 0.
 
 The Bayesian monitor (docs/leak.md) asks instead, every minute, how probable each hypothesis
 ``none, Z1 … Y4`` is given the residual so far: the offset, an external torque and every
-thruster's thrust error are integrated out exactly, the onset is marginalised over a grid, and
-it alarms when ``P(leak)`` reaches 0.99.
+thruster's thrust error are integrated out exactly, so are the leak's continuous onset and its
+fraction, and it alarms when ``P(leak)`` reaches 0.99.
 
 This example simulates the shipped cruise scenario (``leak_cruise``: attitude held by the RCS
 dead-band controller, wheels spinning) with a leak of your choice, runs both monitors with

@@ -41,8 +41,7 @@ def _stretch(seed: int, *, thrust_error=None, extra=None, leak=None) -> LeakInpu
 
 def _checks(inp: LeakInputs) -> dict:
     post = leak_posterior(inp, check_step_s=600.0)
-    return {c.name: c for c in leak_adequacy(inp, post, eta=ETA, sample_step_s=60.0,
-                                             onset_step_s=20.0).checks}
+    return {c.name: c for c in leak_adequacy(inp, post, eta=ETA, sample_step_s=60.0).checks}
 
 
 def test_clean_stretches_and_a_modelled_leak_pass():

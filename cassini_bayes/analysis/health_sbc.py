@@ -11,11 +11,11 @@ simulates the model's own data, and ranks the truth under the exact posterior:
   sentinel after the last event when there is none; ties broken at random);
 * :func:`leak_sbc` — the Bayesian leak monitor of :mod:`cassini_bayes.inference.leak` on
   synthetic residuals drawn from its own model (offset, torque, thrust errors, white noise, a
-  leak of a thruster drawn uniformly with the half-normal-mixture fraction and an onset on the
-  monitor's grid). The monitor gives closed-form posteriors, not draws: the rank of the truth is
-  ``⌊u (L + 1)⌋`` with ``u`` the posterior CDF at the truth (randomised on the onset grid's
-  atoms), uniform on ``0..L`` exactly when ``u`` is uniform — for the leak fraction and the onset
-  *given the true thruster*; and a calibration table of ``P(leak)``.
+  leak of a thruster drawn uniformly with the half-normal-mixture fraction and an onset uniform
+  over the stretch). The monitor gives closed-form posteriors, not draws: the rank of the truth
+  is ``⌊u (L + 1)⌋`` with ``u`` the posterior CDF at the truth, uniform on ``0..L`` exactly when
+  ``u`` is uniform — for the leak fraction and the onset *given the true thruster*; and a
+  calibration table of ``P(leak)``.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import jax
 import numpy as np
-from scipy.special import log_ndtr, logsumexp
+from scipy.special import log_ndtr
 
 from cassini_bayes.analysis.sbc import SbcResult, ranks, sbc_result
 
@@ -122,15 +122,13 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
     f_n, torque_sd = float(sc.thrust), sc.knowledge.torque_sd_nm
     rng = np.random.default_rng([seed, 2])
     n = int(round(hours * 3600.0 / SAMPLE_STEP_S)) + 1
-    onset_step = 20.0
     u_f, u_on, prob, truth = [], [], [], []
     for _ in range(n_replicates):
         t, j = _leak_design(rng, n, SAMPLE_STEP_S, f_n, pulses_per_sample)
-        grid = np.arange(0.0, t[-1], onset_step)
         is_leak = rng.uniform() < prior_leak
         k = int(rng.integers(0, 8))
         frac = abs(rng.normal(0.0, FRACTION_SCALES[rng.integers(0, FRACTION_SCALES.size)]))
-        onset = grid[rng.integers(0, grid.size)]
+        onset = rng.uniform(0.0, t[-1])
         scales, weights = zip(*TORQUE_SCALES)
         t_sd = torque_sd * scales[rng.choice(len(scales), p=weights)]
         r = (rng.normal(0.0, OFFSET_SD_NMS, 3)[None, :]
@@ -140,23 +138,18 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
         if is_leak:
             r = r + frac * f_n * np.maximum(t - onset, 0.0)[:, None] * q[:, k][None, :]
         inp = LeakInputs(t, r, j, q, np.full(8, f_n), torque_sd)
-        post = leak_posterior(inp, prior_leak=prior_leak, check_step_s=t[-1] + 1.0,
-                              onset_step_s=onset_step)
+        post = leak_posterior(inp, prior_leak=prior_leak, check_step_s=t[-1] + 1.0)
         prob.append(post.prob[-1])
         truth.append(1 + k if is_leak else 0)
         if not is_leak:
             continue
         # the true thruster's posterior of (onset, fraction) given all the data
-        log_bf, m, prec = _Sums(inp, ETA, inp).evidence(n - 1, grid[grid < t[-1]])
-        lw = log_bf[:, k] - logsumexp(log_bf[:, k])                # (G, S)
-        w = np.exp(lw)
-        sd = 1.0 / np.sqrt(prec[:, k])
-        lo = np.exp(log_ndtr(-m[:, k] / sd))                       # P(N < 0) of each component
-        cdf = (np.exp(log_ndtr((frac - m[:, k]) / sd)) - lo) / np.maximum(1.0 - lo, 1e-300)
+        ev = _Sums(inp, ETA, inp).check(n - 1)
+        w, _, m, sd = ev.mixture(k)
+        # P(f ≤ frac) of each node's normal cut at 0: 1 − Φ((m − frac)/sd) / Φ(m/sd)
+        cdf = -np.expm1(log_ndtr((m - frac) / sd) - log_ndtr(m / sd))
         u_f.append(float(np.sum(w * np.clip(cdf, 0.0, 1.0))))
-        w_on = w.sum(axis=1)
-        g = int(np.searchsorted(grid, onset))
-        u_on.append(float(w_on[:g].sum() + rng.uniform() * w_on[g]))
+        u_on.append(ev.onset_cdf(k, onset))
     u = np.column_stack([u_f, u_on])
     rank = np.minimum(np.floor(u * (n_draws + 1)), n_draws).astype(int)
     return LeakSbc(sbc_result(LEAK_NAMES, rank, n_draws), np.array(prob), np.array(truth))

@@ -62,7 +62,7 @@ def _positive(value: float, option: str, argument: str) -> float:
 @jax_entry
 def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
-                 check_step_s: float = 60.0, onset_step_s: float = 20.0, eta: float = 0.05,
+                 check_step_s: float = 60.0, eta: float = 0.05,
                  threshold_nms: float = 50.0, t_limit_h: float = 10.0) -> LeakResult:
     """Posterior probability of a leak per thruster over one telemetry stretch, beside Lee's
     threshold monitor.
@@ -76,8 +76,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         telemetry's on-times times the model's thrust).
     prior_leak : prior probability of a leak in the stretch (shared by the eight thrusters).
     p_detect : the alarm level of ``P(leak)`` (and of one thruster's probability, isolation).
-    sample_step_s, check_step_s, onset_step_s : spacing of the residual samples used, of the
-        checks and of the onset grid, s.
+    sample_step_s, check_step_s : spacing of the residual samples used and of the checks, s.
     eta : thruster-to-thruster thrust variation, fraction (Lee Eq 11).
     threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
     """
@@ -111,8 +110,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
         inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
-                          check_step_s=check_step_s, onset_step_s=onset_step_s,
-                          p_detect=p_detect)
+                          check_step_s=check_step_s, p_detect=p_detect)
     lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix, r_t_nms=threshold_nms,
                             t_limit_s=t_limit_h * 3600.0, eta=eta)
     summary = {
@@ -127,8 +125,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
         "warnings": warns,
     }
-    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s,
-                             onset_step_s=onset_step_s)
+    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s)
     summary["adequacy"] = adequacy.to_dict()
     summary["warnings"] = warns + adequacy.warnings()
     config = {"command": "monitor leak", "version": __version__,
@@ -136,7 +133,7 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
                          **({"pulses": log_records[0]} if log_records else {})},
               "settings": {"prior_leak": prior_leak, "p_detect": p_detect,
                            "sample_step_s": sample_step_s,
-                           "check_step_s": check_step_s, "onset_step_s": onset_step_s,
+                           "check_step_s": check_step_s,
                            "eta": eta, "threshold_nms": threshold_nms, "t_limit_h": t_limit_h}}
     files = tuple(tel_files + log_files + sc_files)
     return LeakResult(post, lee, summary, config, files)

@@ -45,8 +45,6 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         sample_step: float = typer.Option(60.0, "--sample-step",
                                           help="Spacing of the residual samples used, s."),
         check_step: float = typer.Option(60.0, "--check-step", help="Seconds between checks."),
-        onset_step: float = typer.Option(20.0, "--onset-step",
-                                         help="Onset grid spacing, s."),
         eta: float = typer.Option(0.05, "--eta", help="Thruster-to-thruster variation "
                                   "(fraction, Lee Eq 11)."),
         threshold: float = typer.Option(50.0, "--threshold", help="Lee's R_T, N m s."),
@@ -61,7 +59,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         check_out(out, force=force, inputs=[telemetry] + ([pulses] if pulses else []))
         res = monitor_leak(telemetry, spacecraft, pulses=pulses, prior_leak=prior_leak,
                            p_detect=p_detect, sample_step_s=sample_step,
-                           check_step_s=check_step, onset_step_s=onset_step, eta=eta,
+                           check_step_s=check_step, eta=eta,
                            threshold_nms=threshold, t_limit_h=t_limit)
         res.save(out, force=force)
         b, lee = res.summary["bayes"], res.summary["lee"]

@@ -76,20 +76,19 @@ def nuisance_posterior(cols: np.ndarray, y: np.ndarray, noise_sd: np.ndarray,
 
 
 ONSET_SCAN = 161
-"""Onsets tried around the monitor's, over ± two onset-grid steps (the check fits the model's
-continuous onset; the monitor's grid would leave a step of the grid error × the leak torque)."""
+"""Onsets tried around the monitor's posterior mean, over ± two sample steps (the check fits
+the onset that suits its own fit of the fraction, which a posterior mean need not be)."""
 
 
-def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float, sample_step_s: float,
-                  onset_step_s: float) -> Adequacy:
+def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
+                  sample_step_s: float) -> Adequacy:
     """The checks of the monitor's run ``post`` over the stretch ``inp`` (module docstring);
-    ``eta``, ``sample_step_s`` and ``onset_step_s`` as the monitor ran.
+    ``eta`` and ``sample_step_s`` as the monitor ran.
 
     Under a leak hypothesis the leak's fraction is fitted with the nuisance parameters (a
-    Gaussian of sd 1, i.e. 100 % of the thrust) and its onset scanned over ± two onset-grid
-    steps around the monitor's posterior mean: the check judges the model, not the grid (a 10 %
-    leak whose onset falls 10 s from the 20 s grid's points leaves 2 N m s in the residual,
-    some 200 times the noise; the monitor's own fraction is then off too, see the note)."""
+    Gaussian of sd 1, i.e. 100 % of the thrust) and its onset scanned over ± two sample steps
+    around the monitor's posterior mean and refined: the check judges the model at its best
+    fit, which the note sets beside the monitor's estimate."""
     used = _thinned(inp, sample_step_s)
     t = used.t - used.t[0]
     y = np.asarray(used.residual, float)
@@ -108,9 +107,9 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float, sample_st
             e = y - np.einsum("iap,p->ia", c2, m)
             return float(np.sum((e / sd[None, :]) ** 2)), m[:14], p_eff, e, onset, m[14]
 
-        # the onset: a scan over ± two grid steps, then the best point refined within its
+        # the onset: a scan over ± two sample steps, then the best point refined within its
         # neighbours (the χ² is smooth in the onset between the rows)
-        grid = np.linspace(post.onset_s - 2 * onset_step_s, post.onset_s + 2 * onset_step_s,
+        grid = np.linspace(post.onset_s - 2 * sample_step_s, post.onset_s + 2 * sample_step_s,
                            ONSET_SCAN)
         chi = [fit_at(x)[0] for x in grid]
         i = int(np.argmin(chi))
