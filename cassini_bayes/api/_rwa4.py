@@ -6,15 +6,8 @@ from __future__ import annotations
 from typing import Sequence
 
 from cassini_bayes._devices import jax_entry
-from cassini_bayes.api._inputs import (
-    WHEEL_ERRORS,
-    check_seed,
-    choice,
-    sampler_settings,
-    shows_progress,
-    spacecraft_input,
-    telemetry_inputs,
-)
+from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
+                                       shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
@@ -190,8 +183,7 @@ def _fit_axis(command: str, telemetry, spacecraft, *, wheel: str, method: str, w
 
     from cassini_bayes.consistency import check_rwa4_data
     from cassini_bayes.inference.progress import step
-    from cassini_bayes.inference.rwa4 import METHODS, PRIORS
-    from cassini_bayes.inference.rwa4 import fit_rwa4 as sample_rwa4
+    from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
     from cassini_bayes.inference.rwa4.data import check_cone_prior
 
     seed = check_seed(seed)

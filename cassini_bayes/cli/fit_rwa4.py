@@ -10,17 +10,9 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.cli.fit import CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP, WHEEL_ERRORS
-from cassini_bayes.cli.fit_wheel_axis import (
-    IDEALISED,
-    INERTIA_POSTERIOR,
-    METHOD,
-    PRIOR,
-    SPACECRAFT,
-    TARGET_ACCEPT,
-    WINDOW_A,
-    WINDOW_B,
-    run_axis_fit,
-)
+from cassini_bayes.cli.fit_wheel_axis import (IDEALISED, INERTIA_POSTERIOR, METHOD, PRIOR,
+                                              SPACECRAFT, TARGET_ACCEPT, WINDOW_A, WINDOW_B,
+                                              run_axis_fit)
 
 ORDER = 22
 

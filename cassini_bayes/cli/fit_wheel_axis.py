@@ -14,19 +14,9 @@ from pathlib import Path
 import typer
 
 from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
-from cassini_bayes.cli.fit import (
-    CHAINS,
-    DRAWS,
-    FORCE,
-    OUT,
-    SEED,
-    STRICT,
-    WARMUP,
-    WHEEL_ERRORS,
-    sampler_options,
-    wheel_errors_name,
-    write_fit_run,
-)
+from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
+                                   WHEEL_ERRORS, sampler_options, wheel_errors_name,
+                                   write_fit_run)
 
 ORDER = 23
 

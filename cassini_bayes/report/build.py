@@ -172,7 +172,10 @@ def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow],
     seed = run.summary.get("seed", cfg.get("seed", "–"))
     version = run.summary.get("version", cfg.get("version", "–"))
     src = "fit" if diag.converged_summary is not None else "recomputed"
-    meta = (f"{run.kind} — {KIND_TITLES.get(run.kind, 'unknown kind')} · {shown} · seed {seed} · "
+    title = KIND_TITLES.get(run.kind, "unknown kind")
+    if run.kind == "rwa4" and _wheel(run).get("name") not in (None, "RWA4"):
+        title = f"{_wheel(run)['name']} spin axis (Brown 2012's method)"
+    meta = (f"{run.kind} — {title} · {shown} · seed {seed} · "
             f"cassini-bayes {version} · {diag.chains} chains × {diag.draws} draws")
     badges = (f"{verdict_badges(run.summary, converged=diag.converged, checks=checks)}"
               f' <span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
