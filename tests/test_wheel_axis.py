@@ -188,3 +188,16 @@ def test_fit_rwa4_is_wheel_axis_rwa4(tmp_path, run_cli):
     assert_same(numbers(a), numbers(b))
     assert a["wheel"]["reference"]["name"] == "RWA1"
     assert a["adequacy"]["checks"]["articulation_cone"]["statistic"] is not None
+
+
+def test_budget_refuses_another_wheels_axis_fit(tmp_path):
+    """Lee's pointing budget has Cassini's RWA4 axis line: a spin-axis run of another wheel is
+    refused in one line before anything is read."""
+    import cassini_bayes as cb
+
+    run = tmp_path / "rw2"
+    run.mkdir()
+    (run / "summary.json").write_text(json.dumps(
+        {"kind": "rwa4", "wheel": {"name": "RW2", "cone": None, "reference": None}}))
+    with pytest.raises(InputError, match="rwa4: a spin-axis fit of RW2.*give an RWA4 fit"):
+        cb.budget(rwa4=run)

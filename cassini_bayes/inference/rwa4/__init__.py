@@ -1,4 +1,5 @@
-"""RWA4 spin-axis posterior on the sphere (Brown 2012 §III.B, §III.C, made Bayesian).
+"""A wheel's spin-axis posterior on the sphere (Brown 2012 §III.B, §III.C, made Bayesian): any
+wheel of the spacecraft model, Cassini's RWA4 by default (the package keeps Brown's name).
 
 Model
 -----
