@@ -9,7 +9,8 @@ and measured errors at the defaults of 0.130° and 0.004° (the small CubeSat fi
 are fixed, so each test is deterministic on one machine, and another CPU's last bits move the mean
 by Monte Carlo error (~0.01°), far inside the margin. A deliberately wrong model fails it: RW2's
 rates with their sign flipped (a tachometer counting the other way) put the axis 179.99° from the
-truth (measured once, 2 × 300 draws).
+truth (measured once, 2 × 300 draws, the input checks bypassed); through the API or the command
+line the input checks refuse such a file first (tested below).
 """
 
 from __future__ import annotations
@@ -101,6 +102,25 @@ def test_wheel_axis_refusals_are_one_line(run_cli, bus_csv, tmp_path):
     _one_line(code, err)
     assert "two telemetry files" in err
     assert not out.exists()
+
+
+def test_flipped_tachometer_of_a_fixed_wheel_is_refused(tmp_path, run_cli):
+    """The calibrated wheel's rates negated (a tachometer counting the other way): the fit's
+    own answer would be the antipode (179.99° off, measured), which no adequacy check can tell
+    without a cone; the input checks keep the fixed wheel's model axis and refuse the file."""
+    import dataclasses
+
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    tel = simulate(jax.random.key(1), load_scenario("wheel_axis_cubesat_12u")).telemetry
+    rates = np.array(tel.wheel_rates)
+    rates[:, tel.wheel_names.index("RWS")] *= -1.0
+    csv = tmp_path / "flipped.csv"
+    write_telemetry(csv, dataclasses.replace(tel, wheel_rates=rates))
+    code, _, err = run_cli("fit", "wheel-axis", str(csv), "--spacecraft", CUBESAT, "--wheel",
+                           "RWS", "--method", "rwa", "--out", tmp_path / "run")
+    _one_line(code, err)
+    assert "column rws" in err and "sign looks flipped" in err
 
 
 def test_api_refuses_the_cone_prior_without_a_cone(bus_csv):

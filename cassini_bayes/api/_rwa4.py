@@ -203,9 +203,10 @@ def _fit_axis(command: str, telemetry, spacecraft, *, wheel: str, method: str, w
                          f"got {len(tels)}")
     tel = tels[0]
     with step("checking the data"), collect_warnings() as check_warns:
-        # units, conventions, method vs data, by the physics; the calibrated wheel's axis is
-        # the unknown, so the checks take it as free (as an articulated wheel's)
-        check_rwa4_data(tel, _axis_free(sc, wheel), method, wheel=wheel)
+        # units, conventions, method vs data, by the physics; a fixed wheel's model axis is
+        # good to a mounting error, well inside the checks' 30°-scale tolerance, so they keep it
+        # and refuse a flipped tachometer sign (an articulated wheel's is taken as free)
+        check_rwa4_data(tel, sc, method, wheel=wheel)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
@@ -243,12 +244,3 @@ def _model_wheel(sc, wheel) -> str:
         raise InputError(f"{arg('wheel', wheel, cli_quote=True)}: the spacecraft model "
                          f"{sc.name!r} has no such wheel; it has {', '.join(sc.wheel_names)}")
     return names[wheel.upper()]
-
-
-def _axis_free(sc, wheel: str):
-    """``sc`` with ``wheel`` marked articulated: the input checks then take its axis as
-    unknown, which is what the calibration estimates."""
-    from dataclasses import replace
-
-    return replace(sc, wheels=tuple(replace(w, articulated=True) if w.name == wheel else w
-                                    for w in sc.wheels))
