@@ -543,7 +543,8 @@ def test_report_of_a_run_without_a_posterior_names_its_command(tmp_path, command
 
     (tmp_path / "summary.json").write_text(json.dumps({"command": command}))
     with pytest.raises(InputError, match=f"a `{command}` run; `report` rebuilds the page of a "
-                                         "`fit inertia`, `fit thrust` or `fit rwa4` run"):
+                                         "`fit inertia`, `fit thrust`, `fit wheel-axis` or "
+                                         "`fit rwa4` run"):
         load_run(tmp_path)
 
 
