@@ -223,3 +223,23 @@ def test_budget_refuses_another_wheels_axis_fit(tmp_path):
         {"kind": "rwa4", "wheel": {"name": "RW2", "cone": None, "reference": None}}))
     with pytest.raises(InputError, match="rwa4: a spin-axis fit of RW2.*give an RWA4 fit"):
         cb.budget(rwa4=run)
+
+
+def test_sky_plot_draws_any_cone_and_reference():
+    """The sky plot's cone and target come from the model (the summary's ``wheel`` block): a
+    cone about +X, a reference wheel named in the legend, or neither."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from cassini_bayes.report import figures
+
+    rng = np.random.default_rng(0)
+    mean = np.array([0.5, 0.5, np.sqrt(0.5)])
+    draws = mean + 0.005 * rng.standard_normal((400, 3))
+    fig = figures.axis_sky_figure(draws, mean=mean, cone=(np.array([1.0, 0.0, 0.0]), 60.0),
+                                  target=("RW1", np.array([0.577, 0.577, 0.577])))
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert "articulation cone (60.00° from +X)" in labels and "RW1 target" in labels
+    bare = figures.axis_sky_figure(draws, mean=mean, cone=None, target=None)
+    labels = bare.axes[0].get_legend_handles_labels()[1]
+    assert not any("cone" in x or "target" in x for x in labels)
