@@ -32,7 +32,7 @@ __version__ = "0.1.0"
 __all__ = [
     "__version__",
     "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
-    "fit_inertia", "fit_thrust", "fit_rwa4",
+    "fit_inertia", "fit_thrust", "fit_rwa4", "fit_wheel_axis",
     "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
     "InputError", "setup_jax", "request_host_devices",
     "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",

@@ -1092,8 +1092,9 @@ def check_thrust_data(events: Sequence[tuple[Telemetry, PulseLog]],
         check_telemetry_data(tel, spacecraft, log)
 
 
-def check_rwa4_data(tel: Telemetry, spacecraft: Spacecraft, method: str) -> None:
-    """Checks before ``fit rwa4``: attitude, rates and wheel units, and that ``method`` suits
-    how the data were controlled."""
+def check_rwa4_data(tel: Telemetry, spacecraft: Spacecraft, method: str,
+                    wheel: str = "RWA4") -> None:
+    """Checks before ``fit wheel-axis`` (``fit rwa4``: ``wheel`` RWA4): attitude, rates and
+    wheel units, and that ``method`` suits how the data were controlled."""
     check_telemetry_data(tel, spacecraft)
-    check_rwa4_method(tel, method)
+    check_rwa4_method(tel, method, wheel)

@@ -29,7 +29,7 @@ from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
 
-__all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
+__all__ = ["Wheel", "WheelCone", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
            "WHEEL_SPEED_NOMINAL_RPM",
            "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
            "eq16_moment_matrix",
@@ -82,6 +82,17 @@ def tilted_axis(axis, tilt_rad) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class WheelCone:
+    """The cone a wheel's spin axis lies on at any articulation angle: ``angle_deg`` from the
+    unit ``axis`` (body axes), known to ``sd_deg`` (1 sd, the mechanical cant tolerance).
+    Cassini's RWA4: 54.7356° from +Z (Brown §I)."""
+
+    axis: np.ndarray
+    angle_deg: float
+    sd_deg: float = 1.0
+
+
+@dataclass(frozen=True)
 class Wheel:
     """A reaction wheel: ``axis`` unit vector in body axes, ``inertia`` kg m² about it.
 
@@ -89,7 +100,11 @@ class Wheel:
     ``[wheel_knowledge] inertia_sd_frac`` for it; ``None`` when the file does not give one.
     ``max_speed_rpm``, ``max_torque_nm``: the simulator's limits on its rate and motor torque
     (``inf`` when the file gives none). ``articulated``: its axis can be moved in flight (Cassini's
-    RWA4, Brown §I), so the input checks take the model's axis as unknown.
+    RWA4, Brown §I), so the input checks take the model's axis as unknown. ``cone``: the
+    articulation cone its axis lies on (the wheel-axis fit's ``cone`` prior and its adequacy
+    check; ``None``: none known). ``reference``, ``reference_tol_deg``: the wheel whose axis
+    this one must match and how closely (Cassini's RWA4 replacing RWA1 within ±2°, Brown §I),
+    reported by the wheel-axis fit; ``None`` when the file gives none.
     """
 
     name: str
@@ -99,6 +114,9 @@ class Wheel:
     max_speed_rpm: float = float("inf")
     max_torque_nm: float = float("inf")
     articulated: bool = False
+    cone: WheelCone | None = None
+    reference: str | None = None
+    reference_tol_deg: float | None = None
 
 
 @dataclass(frozen=True)
@@ -351,7 +369,12 @@ class Spacecraft:
             **({} if w.inertia_sd_frac is None else {"inertia_sd_frac": w.inertia_sd_frac}),
             **({} if np.isinf(w.max_speed_rpm) else {"max_speed_rpm": w.max_speed_rpm}),
             **({} if np.isinf(w.max_torque_nm) else {"max_torque_nm": w.max_torque_nm}),
-            **({"articulated": True} if w.articulated else {})}
+            **({"articulated": True} if w.articulated else {}),
+            **({} if w.cone is None else {"cone_axis": [float(x) for x in w.cone.axis],
+                                          "cone_deg": w.cone.angle_deg,
+                                          "cone_sd_deg": w.cone.sd_deg}),
+            **({} if w.reference is None else {"reference": w.reference,
+                                               "reference_tol_deg": w.reference_tol_deg})}
         thrusters = self._thrusters_dict()
         return {
             "name": self.name,
@@ -405,7 +428,8 @@ _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
 _TORQUE_KNOWLEDGE_KEYS = {"sd_nm": "torque_sd_nm", "rate_sd_nm_per_h": "torque_rate_sd_nm_per_h"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac", "max_speed_rpm", "max_torque_nm",
-               "articulated"}
+               "articulated", "cone_axis", "cone_deg", "cone_sd_deg", "reference",
+               "reference_tol_deg"}
 _EQ16_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
 _THRUSTER_ENTRY_KEYS = {"name", "position", "direction", "F", "branch"}
 _COM_KEYS = {"offset_m", "sd_m"}
@@ -669,9 +693,43 @@ def _wheels(d: dict[str, Any], src: str) -> tuple[Wheel, ...]:
         art = w.get("articulated", False)
         if not isinstance(art, bool):
             raise InputError(f"'{where}articulated' must be true or false, got {art!r}", path=src)
-        wheels.append(Wheel(name, axis, j, sd, speed, torque, art))
+        wheels.append(Wheel(name, axis, j, sd, speed, torque, art, _cone(w, where, name, src),
+                            *_reference(w, where, name, src)))
     _unique([w.name for w in wheels], "wheel", src)
+    names = {w.name for w in wheels}
+    for i, w in enumerate(wheels):
+        if w.reference is not None and (w.reference not in names or w.reference == w.name):
+            raise InputError(f"'wheel[{i}].reference' = {w.reference!r} must name another wheel "
+                             f"of the model ({', '.join(sorted(names - {w.name}))})", path=src)
     return tuple(wheels)
+
+
+def _cone(w: dict, where: str, name: str, src: str) -> WheelCone | None:
+    """The wheel's articulation cone (``cone_axis``, ``cone_deg``, optional ``cone_sd_deg``), or
+    ``None`` when the entry gives none; the axis and the angle come together."""
+    given = [k for k in ("cone_axis", "cone_deg", "cone_sd_deg") if k in w]
+    if not given:
+        return None
+    if "cone_axis" not in w or "cone_deg" not in w:
+        missing = "cone_axis" if "cone_axis" not in w else "cone_deg"
+        raise InputError(f"'{where}{given[0]}' needs '{where}{missing}' too (wheel {name}: the "
+                         "articulation cone is an axis and an angle from it)", path=src)
+    axis = _unit(w["cone_axis"], where + "cone_axis", f"wheel {name}", src)
+    angle = _number(w, "cone_deg", where, src, lo=0.0, hi=180.0, unit="deg")
+    sd = _number(w, "cone_sd_deg", where, src, 1.0, lo=0.0, hi=30.0, unit="deg")
+    return WheelCone(axis, angle, sd)
+
+
+def _reference(w: dict, where: str, name: str, src: str) -> tuple[str | None, float | None]:
+    """The wheel's reference wheel and tolerance (deg), or ``(None, None)``; both or neither."""
+    if "reference" not in w and "reference_tol_deg" not in w:
+        return None, None
+    if "reference" not in w or "reference_tol_deg" not in w:
+        missing = "reference" if "reference" not in w else "reference_tol_deg"
+        raise InputError(f"wheel {name}: '{where}reference' and '{where}reference_tol_deg' come "
+                         f"together; add '{where}{missing}'", path=src)
+    ref = _string(w, "reference", where, src).upper()
+    return ref, _number(w, "reference_tol_deg", where, src, lo=0.0, hi=180.0, unit="deg")
 
 
 def _thrusters(d: dict[str, Any], src: str

@@ -376,10 +376,14 @@ def test_articulation_cone_flags_an_axis_no_wheel_can_have():
     from types import SimpleNamespace
 
     from cassini_bayes.inference.adequacy.models import articulation_cone
+    from cassini_bayes.spacecraft import load_spacecraft
 
-    def post(u):
+    cone = load_spacecraft("cassini_pre_soi").wheel("RWA4").cone
+
+    def post(u, cone=cone):
         draws = {n: np.full((1, 4), x) for n, x in zip(("u4_x", "u4_y", "u4_z"), u)}
-        return SimpleNamespace(idata=az.from_dict(posterior=draws))
+        return SimpleNamespace(idata=az.from_dict(posterior=draws),
+                               problem=SimpleNamespace(cone=cone, wheel="RWA4"))
 
     on_cone = np.array([0.0, np.sqrt(2.0 / 3.0), np.sqrt(1.0 / 3.0)])
     tilted = np.array([0.0, np.sin(np.radians(55.7)), np.cos(np.radians(55.7))])
@@ -387,3 +391,6 @@ def test_articulation_cone_flags_an_axis_no_wheel_can_have():
     assert articulation_cone(post(tilted)).ok
     flipped = articulation_cone(post(-on_cone))
     assert not flipped.ok and flipped.statistic == pytest.approx(180 - 2 * 54.7356, abs=1e-3)
+    # a wheel whose model gives no cone: nothing to check (the flipped axis is not judged)
+    none = articulation_cone(post(-on_cone, cone=None))
+    assert none.ok and none.statistic is None and "no articulation cone" in none.note

@@ -20,7 +20,7 @@ import pytest
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SCRIPTS = ("inertia_from_slews.py", "inertia_espa_bus.py", "inertia_cubesat.py",
            "thrust_with_inertia_posterior.py", "rwa4_axis.py", "sbc_check.py", "leak_monitor.py",
-           "ivp_flyby.py")
+           "ivp_flyby.py", "wheel_axis_espa_bus.py")
 SAMPLER_OPTIONS = ("--chains", "--warmup", "--draws")   # every script but the leak monitor's
 TINY = ["--chains", "1", "--warmup", "60", "--draws", "60"]
 
@@ -141,6 +141,16 @@ def test_rwa4_axis(tmp_path, monkeypatch, capsys):
     assert summary["kind"] == "rwa4"
     cones = summary["direction"]["cone_deg"]
     assert f"90 % {cones['90']:.3f} deg, 95 % {cones['95']:.3f} deg" in out
+    assert re.search(r"posterior mean .* [0-9.]+ deg from the truth", out)
+
+
+@pytest.mark.slow
+def test_wheel_axis_espa_bus(tmp_path, monkeypatch, capsys):
+    run = tmp_path / "run"
+    out = run_example("wheel_axis_espa_bus.py", [*TINY, "--out", run], monkeypatch, capsys)
+    summary = _saved_run(out, run)
+    assert summary["kind"] == "rwa4" and summary["wheel"]["name"] == "RW2"
+    assert re.search(r"model file .* 1\.000 deg from the truth", out), out
     assert re.search(r"posterior mean .* [0-9.]+ deg from the truth", out)
 
 

@@ -354,7 +354,7 @@ def test_rwa4_requirement_is_decided_by_the_posterior(reports):
     from cassini_bayes.report.build import _requirement_verdict
 
     _, html = reports["rwa4"]      # 3.1° from RWA1, ±0.4°
-    assert re.search(r"within ±2° of RWA1 \(replacement requirement, Brown §I\)</td><td>no "
+    assert re.search(r"within ±2° of RWA1 \(reference wheel, spacecraft model\)</td><td>no "
                      r"\(probability 0\.0[0-4]\d\)", html)
     assert _requirement_verdict(0.26).startswith("undecided (probability 0.260")
     assert _requirement_verdict(0.96) == "yes (probability 0.960)"
@@ -543,7 +543,8 @@ def test_report_of_a_run_without_a_posterior_names_its_command(tmp_path, command
 
     (tmp_path / "summary.json").write_text(json.dumps({"command": command}))
     with pytest.raises(InputError, match=f"a `{command}` run; `report` rebuilds the page of a "
-                                         "`fit inertia`, `fit thrust` or `fit rwa4` run"):
+                                         "`fit inertia`, `fit thrust`, `fit wheel-axis` or "
+                                         "`fit rwa4` run"):
         load_run(tmp_path)
 
 

@@ -81,7 +81,7 @@ def test_sbc_truths_and_posterior_prior_group_use_the_same_sampler():
     ip = inertia_prior(load_spacecraft("models/cassini_pre_soi.toml"))
     for seed in range(5):
         key = jax.random.key(seed)
-        _, pi = _draw_rwa4_truth(key, ip.mean, ip.sd, cone=False)
+        _, pi = _draw_rwa4_truth(key, ip.mean, ip.sd, cone=None)
         expected = rwa4.sample_inertia_prior(jax.random.split(key)[1], ip.mean,
                                              np.diag(ip.sd**2), 1)[0]
         np.testing.assert_array_equal(pi, expected)

@@ -645,27 +645,26 @@ _RWA4_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "prior", "rank_in
               "rwa4_inertia_factor"}
 
 
-def _draw_rwa4_truth(key, mean, sd, cone: bool):
+def _draw_rwa4_truth(key, mean, sd, cone):
     """One draw of ``u4`` (3,) and ``π`` (6,) from the RWA4 fit's prior (NumPy, by rejection).
 
     Same distribution as :func:`cassini_bayes.inference.rwa4.sample_rwa4_prior`: ``u4`` uniform
-    on the sphere (a normalised standard normal), times the articulation-cone factor when
-    ``cone`` (rejection); ``π`` from ``Normal(mean, diag sd²)`` times the model's smooth
+    on the sphere (a normalised standard normal), times the articulation-cone factor of
+    ``cone`` (the prior model's :class:`~cassini_bayes.spacecraft.WheelCone`; ``None``: none)
+    by rejection; ``π`` from ``Normal(mean, diag sd²)`` times the model's smooth
     physical factor, by the model's own sampler
     (:func:`~cassini_bayes.inference.rwa4.sample_inertia_prior`).
     """
     import numpy as np
 
-    from cassini_bayes.inference.rwa4 import CONE_ANGLE_DEG, CONE_SD_DEG, sample_inertia_prior
+    from cassini_bayes.inference.rwa4 import cone_log_factor, sample_inertia_prior
 
     k_u, k_i = jax.random.split(key)
     for r in range(10_000):
         k_x, k_a = jax.random.split(jax.random.fold_in(k_u, r))
         x = np.asarray(jax.random.normal(k_x, (3,)))
         u = x / np.linalg.norm(x)
-        theta = np.degrees(np.arccos(np.clip(u[2], -1.0, 1.0)))
-        if not cone or float(jax.random.uniform(k_a)) < np.exp(
-                -0.5 * ((theta - CONE_ANGLE_DEG) / CONE_SD_DEG) ** 2):
+        if cone is None or float(jax.random.uniform(k_a)) < np.exp(cone_log_factor(u, cone)):
             break
     return u, sample_inertia_prior(k_i, mean, np.diag(np.asarray(sd, float) ** 2), 1)[0]
 
@@ -716,7 +715,10 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     names = tuple(U4_NAMES) + (tuple(INERTIA_NAMES) if opts["rank_inertia"] else ())
     spacecraft = scenario.prior
     ip = inertia_prior(spacecraft)
-    cone = opts["prior"] == "cone"
+    cone = spacecraft.wheel("RWA4").cone if opts["prior"] == "cone" else None
+    if opts["prior"] == "cone" and cone is None:
+        raise InputError("rwa4 SBC option prior='cone': the prior model gives RWA4 no "
+                         "articulation cone ('cone_axis', 'cone_deg')", path=spec.scenario_source)
     base = truth_params(scenario)
     factor = np.ones(len(scenario.wheel_names))
     factor[k4] = float(opts["rwa4_inertia_factor"])

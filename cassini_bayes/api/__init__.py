@@ -1,8 +1,8 @@
 """The public Python API, re-exported by :mod:`cassini_bayes` (docs/api.md).
 
 Read inputs (:func:`read_telemetry`, :func:`read_pulses`, :func:`load_spacecraft`), make
-synthetic ones (:func:`simulate`), and fit what ``cassini-bayes fit inertia|thrust|rwa4`` fits
-(:func:`fit_inertia`, :func:`fit_thrust`, :func:`fit_rwa4`): each returns a :class:`FitResult`
+synthetic ones (:func:`simulate`), and fit what ``cassini-bayes fit inertia|thrust|wheel-axis|rwa4`` fits
+(:func:`fit_inertia`, :func:`fit_thrust`, :func:`fit_wheel_axis`, :func:`fit_rwa4`): each returns a :class:`FitResult`
 whose ``summary()`` is the run's ``summary.json`` and whose ``save(dir)`` writes the run
 directory the command writes. The command line is a thin layer over these functions.
 
@@ -26,7 +26,8 @@ _HOMES = {
     "cassini_bayes.api._leak": ["LeakResult", "monitor_leak"],
     "cassini_bayes.api._result": ["FitResult", "collect_warnings", "fit_config", "write_run",
                                   "write_run_files"],
-    "cassini_bayes.api._rwa4": ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"],
+    "cassini_bayes.api._rwa4": ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity",
+                                "rwa4_summary"],
     "cassini_bayes.api._simulation": ["Simulation", "simulate", "truth_document"],
     "cassini_bayes.api._thrust": ["fit_thrust", "thrust_baseline", "thrust_sensitivity",
                                   "thrust_summary"],
@@ -37,7 +38,7 @@ _HOME = {name: module for module, names in _HOMES.items() for name in names}
 
 __all__ = [
     "read_telemetry", "read_pulses", "load_spacecraft", "simulate", "fit_inertia", "fit_thrust",
-    "fit_rwa4", "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
+    "fit_rwa4", "fit_wheel_axis", "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
     "request_host_devices", "setup_jax", "inertia_baseline", "inertia_summary", "thrust_baseline",
     "thrust_sensitivity", "thrust_summary", "rwa4_sensitivity", "rwa4_summary", "write_run",
     "write_run_files", "fit_config", "collect_warnings", "truth_document",

@@ -52,6 +52,25 @@ class BudgetResult:
 
 
 @jax_entry
+def _axis_wheel(run) -> str:
+    """The wheel a spin-axis fit (a FitResult or a run directory) calibrated: its summary's
+    ``wheel`` block; RWA4 for a summary written before the block existed (or none to read)."""
+    import json
+
+    from cassini_bayes.api._result import FitResult
+
+    if isinstance(run, FitResult):
+        summary = run.summary()
+    else:
+        path = Path(run) / "summary.json"
+        try:
+            summary = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
+        except (OSError, ValueError):
+            summary = {}     # load_posterior's own checks name what is wrong with the run
+    wheel = summary.get("wheel") if isinstance(summary, dict) else None
+    return str(wheel.get("name") or "RWA4") if isinstance(wheel, dict) else "RWA4"
+
+
 def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).
@@ -87,6 +106,10 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
         else:
             raise InputError(f"{spelled(f'--{k}', k)}: give a FitResult or a run directory, "
                              f"not {type(v).__name__}")
+    if "rwa4" in given and _axis_wheel(given["rwa4"]) != "RWA4":
+        raise InputError(f"{spelled('--rwa4', 'rwa4')}: a spin-axis fit of "
+                         f"{_axis_wheel(given['rwa4'])}; the budget's axis line is Cassini's "
+                         "RWA4 (Lee's pointing budget): give an RWA4 fit")
     if not given:
         raise InputError("give at least one run directory: "
                          + ", ".join(spelled(f"--{k} RUN", k) for k in runs))

@@ -1,4 +1,5 @@
-"""The RWA4 spin axis on the sphere: :func:`fit_rwa4` and its summary."""
+"""A wheel's spin axis on the sphere: :func:`fit_wheel_axis` (any wheel of the model),
+:func:`fit_rwa4` (Cassini's name for its RWA4) and their summary."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ RCS_BUDGET_DEG = 3.0
 """Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
 mass properties), with a flight-calibrated inertia."""
 
-__all__ = ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"]
+__all__ = ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity", "rwa4_summary", "wheel_block"]
 
 
 def rwa4_sensitivity(post) -> dict:
@@ -40,12 +41,29 @@ def rwa4_sensitivity(post) -> dict:
             for effect, shift in axis_sensitivity(post.problem).items()}
 
 
+def wheel_block(post, spacecraft=None) -> dict:
+    """``summary.json``'s ``wheel``: the calibrated wheel's ``name``, its articulation ``cone``
+    (``{"axis", "deg", "sd_deg"}``, ``None`` when the model gives none) and its ``reference``
+    wheel (``{"name", "axis", "tol_deg"}`` from ``spacecraft``'s entry; ``None`` without one),
+    which the report judges the axis against."""
+    pr = post.problem
+    cone = None if pr.cone is None else {"axis": [float(x) for x in pr.cone.axis],
+                                         "deg": pr.cone.angle_deg, "sd_deg": pr.cone.sd_deg}
+    w = None if spacecraft is None else spacecraft.wheel(pr.wheel)
+    ref = None if w is None or w.reference is None else {
+        "name": w.reference, "axis": [float(x) for x in spacecraft.wheel(w.reference).axis],
+        "tol_deg": w.reference_tol_deg}
+    return {"name": pr.wheel, "cone": cone, "reference": ref}
+
+
 def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, wheel_errors: str,
-                 baseline: dict | None = None, warnings: Sequence[str] = ()) -> dict:
-    """``summary.json`` of an RWA4 posterior (``Rwa4Posterior``): parameters ``u4_*``, the
-    baseline (default Brown's least squares of the prepared problem), diagnostics, adequacy,
-    ``direction``, ``method``, ``prior``, ``windows``, ``model``, ``wheel_errors`` and
-    ``sensitivity``."""
+                 baseline: dict | None = None, warnings: Sequence[str] = (),
+                 spacecraft=None) -> dict:
+    """``summary.json`` of a spin-axis posterior (``Rwa4Posterior``, any wheel): parameters
+    ``u4_*`` (the calibrated wheel's axis, whatever its name), the baseline (default Brown's
+    least squares of the prepared problem), diagnostics, adequacy, ``direction``, ``method``,
+    ``prior``, ``windows``, ``model``, ``wheel_errors``, ``sensitivity`` and ``wheel``
+    (:func:`wheel_block`; its reference wheel from ``spacecraft``, the model)."""
     from cassini_bayes.inference.adequacy import rwa4_adequacy
     from cassini_bayes.inference.rwa4 import U4_NAMES
     from cassini_bayes.inference.summary import build_summary
@@ -66,6 +84,7 @@ def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, whee
     summary["model"] = "robust" if robust else "idealised"
     summary["wheel_errors"] = wheel_errors if robust else None
     summary["sensitivity"] = rwa4_sensitivity(post)
+    summary["wheel"] = wheel_block(post, spacecraft)
     return summary
 
 
@@ -95,23 +114,28 @@ def _window_pairs(windows) -> list | None:
 
 @jax_entry
 @shows_progress
-def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
-             inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
-             draws: int = 1000, target_accept: float = TARGET_ACCEPT, robust: bool = True,
-             wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
-    """Posterior of the RWA4 spin axis, the inertia uncertainty sampled jointly; what
-    ``cassini-bayes fit rwa4`` computes.
+def fit_wheel_axis(telemetry, spacecraft, *, wheel: str, method: str, windows=None,
+                   prior: str = "uniform", inertia_posterior=None, seed: int = 0,
+                   chains: int = 4, warmup: int = 1000, draws: int = 1000,
+                   target_accept: float = TARGET_ACCEPT, robust: bool = True,
+                   wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+    """Posterior of any wheel's spin axis, the inertia uncertainty sampled jointly; what
+    ``cassini-bayes fit wheel-axis`` computes (Brown 2012 §III, for any spacecraft model).
 
     Parameters
     ----------
     telemetry : the calibration telemetry: a :class:`~cassini_bayes.telemetry.Telemetry` or a
         CSV path.
     spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, a model TOML path or a shipped
-        model's name.
-    method : ``"rcs"`` (Brown Eq 1, RCS-controlled drift) or ``"rwa"`` (Brown Eq 3, RWA slews).
+        model's name. The calibrated wheel's axis in it is not used (that axis is the unknown);
+        the other wheels' axes and every spin inertia are.
+    wheel : the wheel whose axis is calibrated, one of the model's (case-insensitive).
+    method : ``"rcs"`` (Brown Eq 1, RCS-controlled drift across a spin change of ``wheel``) or
+        ``"rwa"`` (Brown Eq 3, slew pairs carried by the other wheels).
     windows : ``[((A0, A1), (B0, B1)), …]``: Time A and Time B windows in seconds, one pair (RCS)
         or one per slew pair (RWA); detected from the quiet periods when ``None``.
-    prior : ``"uniform"`` on the sphere or ``"cone"`` (articulation cone, 54.7356° from +Z).
+    prior : ``"uniform"`` on the sphere or ``"cone"``: the wheel's articulation cone, which the
+        model's ``[[wheel]]`` entry must give (``cone_axis``, ``cone_deg``; docs/model_file.md).
     inertia_posterior : an inertia fit (its :class:`FitResult` or run directory): its posterior
         becomes the inertia prior (default: the model's knowledge requirements).
     seed, chains, warmup, draws, progress : as :func:`fit_inertia`.
@@ -122,14 +146,45 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     Returns
     -------
     FitResult
-        ``kind = "rwa4"``; parameters ``u4_x, u4_y, u4_z`` (unit vector, body axes); the
-        summary's ``direction`` holds the mean direction and its 50/90/95 % cones (deg).
+        ``kind = "rwa4"`` (the spin-axis fit, Brown's name); parameters ``u4_x, u4_y, u4_z``: the
+        calibrated wheel's unit axis in body axes, whatever its name; the summary's
+        ``direction`` holds the mean direction and its 50/90/95 % cones (deg), its ``wheel``
+        names the wheel, its cone and reference wheel (:func:`wheel_block`).
     """
+    return _fit_axis("fit wheel-axis", telemetry, spacecraft, wheel=wheel, method=method,
+                     windows=windows, prior=prior, inertia_posterior=inertia_posterior,
+                     seed=seed, chains=chains, warmup=warmup, draws=draws,
+                     target_accept=target_accept, robust=robust, wheel_errors=wheel_errors,
+                     progress=progress)
+
+
+@jax_entry
+@shows_progress
+def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
+             inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
+             draws: int = 1000, target_accept: float = TARGET_ACCEPT, robust: bool = True,
+             wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+    """Cassini's RWA4 spin axis: :func:`fit_wheel_axis` with ``wheel="RWA4"`` (the same
+    numbers); what ``cassini-bayes fit rwa4`` computes. Parameters and result as there."""
+    return _fit_axis("fit rwa4", telemetry, spacecraft, wheel="RWA4", method=method,
+                     windows=windows, prior=prior, inertia_posterior=inertia_posterior,
+                     seed=seed, chains=chains, warmup=warmup, draws=draws,
+                     target_accept=target_accept, robust=robust, wheel_errors=wheel_errors,
+                     progress=progress)
+
+
+def _fit_axis(command: str, telemetry, spacecraft, *, wheel: str, method: str, windows,
+              prior: str, inertia_posterior, seed: int, chains: int, warmup: int, draws: int,
+              target_accept: float, robust: bool, wheel_errors: str,
+              progress: bool) -> FitResult:
+    """The spin-axis fit behind :func:`fit_wheel_axis` and :func:`fit_rwa4` (``command``, the
+    one config.toml records)."""
     import jax
 
     from cassini_bayes.consistency import check_rwa4_data
     from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
+    from cassini_bayes.inference.rwa4.data import check_cone_prior
 
     seed = check_seed(seed)
     robust = as_flag(robust, "robust")
@@ -139,32 +194,37 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     pairs = _window_pairs(windows)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    wheel = _model_wheel(sc, wheel)
+    check_cone_prior(sc, wheel, prior)     # before any data is read
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, False)
     tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
-        raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
-                         f"{len(tels)}")
+        raise InputError(f"{arg('telemetry')}: the spin-axis calibration takes one telemetry, "
+                         f"got {len(tels)}")
     tel = tels[0]
     with step("checking the data"), collect_warnings() as check_warns:
-        check_rwa4_data(tel, sc, method)  # units, conventions, method vs data, by the physics
+        # units, conventions, method vs data, by the physics; a fixed wheel's model axis is
+        # good to a mounting error, well inside the checks' 30°-scale tolerance, so they keep it
+        # and refuse a flipped tachometer sign (an articulated wheel's is taken as free)
+        check_rwa4_data(tel, sc, method, wheel=wheel)
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_rwa4(key, tel, sc, method=method, pairs=pairs, prior=prior,
                            inertia=inertia, settings=settings, robust=robust,
-                           wheel_errors=wheel_errors)
+                           wheel_errors=wheel_errors, wheel=wheel)
     budget = rcs_budget_warning(method, inertia_posterior is not None,
                                 post.direction["cone_deg"]["95"])
     if budget:
         warns.append(budget)
     with step("summaries and adequacy checks"):
         summary = rwa4_summary(post, seed=seed, method=method, prior=prior, robust=robust,
-                               wheel_errors=wheel_errors,
+                               wheel_errors=wheel_errors, spacecraft=sc,
                                warnings=list(dict.fromkeys(check_warns + warns)))
     pr = post.problem
-    config = fit_config("fit rwa4", seed=seed, spacecraft=sc, settings=settings,
+    config = fit_config(command, seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": records[0], "spacecraft": sc_record,
                                 **inertia_input},
-                        options={"method": method, "prior": prior,
+                        options={"wheel": wheel, "method": method, "prior": prior,
                                  "model": "robust" if robust else "idealised",
                                  "wheel_errors": wheel_errors,
                                  "window_a": [f"{a[0]:.10g}:{a[1]:.10g}" for a, _ in pr.pairs],
@@ -172,3 +232,15 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
                                  "windows_detected": pairs is None})
     return FitResult("rwa4", post, summary["baseline"], summary["sensitivity"], config, summary,
                      (*paths, *sc_paths, *inertia_paths))
+
+
+def _model_wheel(sc, wheel) -> str:
+    """The model's spelling of ``wheel``; a one-line InputError naming the model's wheels."""
+    if not isinstance(wheel, str) or not wheel:
+        raise InputError(f"{arg('wheel')}: name the wheel whose axis is calibrated, one of "
+                         f"{', '.join(sc.wheel_names)}")
+    names = {n.upper(): n for n in sc.wheel_names}
+    if wheel.upper() not in names:
+        raise InputError(f"{arg('wheel', wheel, cli_quote=True)}: the spacecraft model "
+                         f"{sc.name!r} has no such wheel; it has {', '.join(sc.wheel_names)}")
+    return names[wheel.upper()]

@@ -141,7 +141,8 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
                 summary = rwa4_summary(post, seed=seed, method=method, prior=settings["prior"],
                                        robust=settings["model"] == "robust",
                                        wheel_errors="per_wheel", warnings=fit_warnings,
-                                       baseline=dict(zip(U4_NAMES, ls.tolist())))
+                                       baseline=dict(zip(U4_NAMES, ls.tolist())),
+                                       spacecraft=scenario.prior)
                 write_fit_run(ctx.workdir / sub, posterior=post, summary=summary, telemetry=tel,
                               config={"command": f"experiment {label} (run {i})",
                                       "scenario": scenario.name,

@@ -58,7 +58,12 @@ from cassini_bayes.report.tables import (
 __all__ = ["build_report", "render_report", "verdict_badges", "answer_table"]
 
 MAX_RESIDUAL_FIGURES = 1
-RWA1_REQUIREMENT_DEG = 2.0  # Brown (2012) §I: RWA4 must sit within ±2° of the RWA1 axis
+# Brown (2012) §I: RWA4 must sit within ±2° of the RWA1 axis. What a summary.json written before
+# the wheel-axis fit named its wheel (no ``wheel`` block) was: an RWA4 fit on Cassini's cone.
+_CASSINI_RWA4 = {"name": "RWA4",
+                 "cone": {"axis": [0.0, 0.0, 1.0], "deg": figures.ARTICULATION_CONE_DEG},
+                 "reference": {"name": "RWA1", "axis": figures.RWA1_AXIS.tolist(),
+                               "tol_deg": 2.0}}
 REQUIREMENT_PROB = 0.95     # a requirement is called met (or not) at this posterior probability
 KIND_TITLES = {
     "inertia": "inertia tensor from reaction-wheel slews (momentum model, Feldman & Lee Eqs 2-11)",
@@ -167,7 +172,10 @@ def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow],
     seed = run.summary.get("seed", cfg.get("seed", "–"))
     version = run.summary.get("version", cfg.get("version", "–"))
     src = "fit" if diag.converged_summary is not None else "recomputed"
-    meta = (f"{run.kind} — {KIND_TITLES.get(run.kind, 'unknown kind')} · {shown} · seed {seed} · "
+    title = KIND_TITLES.get(run.kind, "unknown kind")
+    if run.kind == "rwa4" and _wheel(run).get("name") not in (None, "RWA4"):
+        title = f"{_wheel(run)['name']} spin axis (Brown 2012's method)"
+    meta = (f"{run.kind} — {title} · {shown} · seed {seed} · "
             f"cassini-bayes {version} · {diag.chains} chains × {diag.draws} draws")
     badges = (f"{verdict_badges(run.summary, converged=diag.converged, checks=checks)}"
               f' <span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
@@ -336,29 +344,49 @@ def _requirement_verdict(p: float) -> str:
     return f"undecided (probability {p:.3f}: the data do not settle it)"
 
 
+def _wheel(run: RunData) -> dict:
+    """summary.json's ``wheel`` block (name, articulation cone, reference wheel; each may be
+    ``None``); Cassini's RWA4 for a summary written before the block existed."""
+    w = run.summary.get("wheel")
+    return w if isinstance(w, dict) else _CASSINI_RWA4
+
+
+def _vec_text(v) -> str:
+    return "[" + ", ".join("0" if x == 0 else f"{x:.6f}" for x in np.asarray(v, float)) + "]"
+
+
 def _direction_table(run: RunData) -> str:
     mean, cones = _direction(run)
+    wheel = _wheel(run)
+    name = wheel.get("name") or "the wheel"
     if mean is None:
-        return not_available("RWA4 direction (no u4 draws and no direction in summary.json)")
+        return not_available(f"{name} direction (no u4 draws and no direction in summary.json)")
     truth = _axis_vec(run.summary.get("truth"))
     base = _axis_vec(run.summary.get("baseline"))
-    to_rwa1 = _angle_deg(mean, figures.RWA1_AXIS)
-    rows = [
-        ["posterior mean direction", "[" + ", ".join(f"{x:.6f}" for x in mean) + "]"],
-        ["angle from +Z (articulation cone 54.7356°)", f"{_angle_deg(mean, [0, 0, 1]):.3f}°"],
-        ["angle to RWA1 target [0, 0.816497, 0.577350]", f"{to_rwa1:.3f}°"],
-    ]
-    draws = _axis_draws(run)
-    requirement = "within ±2° of RWA1 (replacement requirement, Brown §I)"
-    if draws is not None:
-        u = draws / np.linalg.norm(draws, axis=1, keepdims=True)
-        t = figures.RWA1_AXIS / np.linalg.norm(figures.RWA1_AXIS)
-        p_req = float(np.mean(np.degrees(np.arccos(np.clip(u @ t, -1, 1))) <= RWA1_REQUIREMENT_DEG))
-        rows.append([requirement, _requirement_verdict(p_req)])
-        rows.append(["posterior probability of being within 2° of RWA1", f"{p_req:.3f}"])
-    else:    # no draws: only the mean axis to go by
-        rows.append([requirement + ", by the mean axis",
-                     "yes" if to_rwa1 <= RWA1_REQUIREMENT_DEG else "no"])
+    rows = [["calibrated wheel", str(name)],
+            ["posterior mean direction", "[" + ", ".join(f"{x:.6f}" for x in mean) + "]"]]
+    cone, ref = wheel.get("cone"), wheel.get("reference")
+    if cone:
+        axis = np.asarray(cone["axis"], float)
+        label = "+Z" if np.allclose(axis, [0, 0, 1]) else _vec_text(axis)
+        rows.append([f"angle from {label} (articulation cone {cone['deg']:.4f}°)",
+                     f"{_angle_deg(mean, axis):.3f}°"])
+    if ref:
+        target, tol = np.asarray(ref["axis"], float), float(ref["tol_deg"])
+        to_ref = _angle_deg(mean, target)
+        rows.append([f"angle to {ref['name']} target {_vec_text(target)}",
+                     f"{to_ref:.3f}°"])
+        requirement = f"within ±{tol:g}° of {ref['name']} (reference wheel, spacecraft model)"
+        draws = _axis_draws(run)
+        if draws is not None:
+            u = draws / np.linalg.norm(draws, axis=1, keepdims=True)
+            t = target / np.linalg.norm(target)
+            p_req = float(np.mean(np.degrees(np.arccos(np.clip(u @ t, -1, 1))) <= tol))
+            rows.append([requirement, _requirement_verdict(p_req)])
+            rows.append([f"posterior probability of being within {tol:g}° of {ref['name']}",
+                         f"{p_req:.3f}"])
+        else:    # no draws: only the mean axis to go by
+            rows.append([requirement + ", by the mean axis", "yes" if to_ref <= tol else "no"])
     for k in sorted(cones, key=float):
         rows.append([f"{k} % cone radius about the mean", fmt(cones[k], 3) + "°"])
     if base is not None:
@@ -382,11 +410,19 @@ def _axis_figure(run: RunData, fig) -> str:
         return not_available("spin-axis sky plot (no u4_x, u4_y, u4_z draws in the posterior)")
     truth = _axis_vec(run.summary.get("truth"))
     base = _axis_vec(run.summary.get("baseline"))
+    wheel = _wheel(run)
+    cone, ref = wheel.get("cone"), wheel.get("reference")
+    shown = " and ".join(x for x, have in (("the articulation cone", cone),
+                                            (f"the {ref['name']} target axis" if ref else "",
+                                             ref)) if have)
     return fig("spin-axis sky plot",
-               lambda: figures.axis_sky_figure(draws, mean=mean, cones_deg=cones, truth=truth,
-                                               baseline=base),
-               "RWA4 spin-axis posterior. Left: body azimuth/elevation of the draws, the "
-               "articulation cone and the RWA1 target axis. Middle: azimuthal-equidistant view "
+               lambda: figures.axis_sky_figure(
+                   draws, mean=mean, cones_deg=cones, truth=truth, baseline=base,
+                   target=(ref["name"], np.asarray(ref["axis"], float)) if ref else None,
+                   cone=(np.asarray(cone["axis"], float), float(cone["deg"])) if cone else None),
+               f"{wheel.get('name') or 'Wheel'} spin-axis posterior. Left: body "
+               f"azimuth/elevation of the draws{', ' + shown if shown else ''}. Middle: "
+               "azimuthal-equidistant view "
                "about the posterior mean at the budgets' scale, the dotted circles true 1°, 2° "
                "and 3° cones (the papers' ±1° RWA-method and 3° RCS-method budgets). Right: the "
                "same view at the posterior's own scale, the solid circles the posterior "

@@ -424,6 +424,15 @@ def _cone_panel(ax, xy, marks, cones, lim, rings, title, m, east, north) -> None
     tidy_ticks(ax, x=5, y=5)
 
 
+def _vec_label(v: np.ndarray) -> str:
+    """``+Z`` for a body axis (either sign), else the vector."""
+    for k, c in enumerate("XYZ"):
+        for sign, mark in ((1.0, "+"), (-1.0, "−")):
+            if np.allclose(v, sign * np.eye(3)[k], atol=1e-9):
+                return mark + c
+    return "[" + ", ".join(f"{x:.3g}" for x in v) + "]"
+
+
 def axis_sky_figure(
     draws: np.ndarray,
     *,
@@ -431,12 +440,15 @@ def axis_sky_figure(
     cones_deg: Mapping[str, float] | None = None,
     truth: np.ndarray | None = None,
     baseline: np.ndarray | None = None,
-    target: np.ndarray = RWA1_AXIS,
+    target: tuple[str, np.ndarray] | None = ("RWA1", RWA1_AXIS),
+    cone: tuple[np.ndarray, float] | None = (np.eye(3)[2], ARTICULATION_CONE_DEG),
 ) -> Figure:
-    """RWA4 spin-axis posterior in three views.
+    """A wheel's spin-axis posterior in three views.
 
     Left: azimuth ``atan2(y, x)`` and elevation ``asin(z)`` of the draws in body axes, with the
-    articulation cone (54.7356° from +Z, Brown §I) and the RWA1 target axis. Middle: the draws in
+    wheel's articulation ``cone`` (its axis and angle, deg, from the model file; Cassini's RWA4:
+    54.7356° from +Z, Brown §I) and its reference wheel's axis ``target`` (name, axis; RWA1 for
+    RWA4), each when known. Middle: the draws in
     an azimuthal-equidistant projection about the posterior mean direction, so circles are true
     cones, at the papers' budgets' scale: 1°, 2°, 3° (dotted). Right: the same at the posterior's
     own scale, with the posterior 50/90/95 % cones (solid) and the least-squares axis and truth;
@@ -467,16 +479,25 @@ def axis_sky_figure(
         return p
 
     ae = _ae(draws)
-    marks = [("RWA1 target", target, "*", "#e67e22")]
+    target_label = None if target is None else f"{target[0]} target"
+    marks = [] if target is None else [(target_label, np.asarray(target[1], float), "*",
+                                        "#e67e22")]
     if truth is not None:
         marks.append(("truth", truth, "x", TRUTH_COLOR))
     if baseline is not None:
         marks.append(("least squares", baseline, "+", BASE_COLOR))
     pts = np.concatenate([ae] + [_ae(v) for _, v, _, _ in marks])
     half = max(10.0, 1.2 * float(np.max(np.abs(pts - ae_m))))
-    az_grid = np.linspace(ae_m[0] - half, ae_m[0] + half, 200)
-    ax_g.plot(az_grid, np.full_like(az_grid, 90.0 - ARTICULATION_CONE_DEG), color="#888888",
-              linewidth=1, linestyle=":", label="articulation cone (54.74° from +Z)")
+    if cone is not None:
+        c_axis, c_deg = _unit(np.asarray(cone[0], float)), float(cone[1])
+        e1, e2 = _tangent_basis(c_axis)
+        phi = np.linspace(0.0, 2.0 * np.pi, 721)[:, None]
+        ring = _ae(np.cos(np.radians(c_deg)) * c_axis + np.sin(np.radians(c_deg))
+                   * (np.cos(phi) * e1 + np.sin(phi) * e2))
+        jump = np.flatnonzero(np.abs(np.diff(ring[:, 0])) > 180.0) + 1   # the azimuth wraps
+        ring = np.insert(ring, jump, np.nan, axis=0)
+        ax_g.plot(ring[:, 0], ring[:, 1], color="#888888", linewidth=1, linestyle=":",
+                  label=f"articulation cone ({c_deg:.2f}° from {_vec_label(c_axis)})")
     ax_g.scatter(ae[:, 0], ae[:, 1], s=4, color=POST_COLOR, alpha=0.5, label="posterior draws")
     for name, v, mk, col in marks:
         p = _ae(v)[0]
@@ -496,7 +517,7 @@ def axis_sky_figure(
                 "at the budgets' scale: 1°, 2°, 3° cones", m, east, north)
     zoom = 1.15 * max([spread] + [float(r) for r in (cones_deg or {}).values()
                                   if r is not None and np.isfinite(r)])
-    _cone_panel(ax_z, xy, [mk for mk in marks if mk[0] != "RWA1 target"], cones_deg, zoom,
+    _cone_panel(ax_z, xy, [mk for mk in marks if mk[0] != target_label], cones_deg, zoom,
                 [r for r in (1.0, 2.0, 3.0) if r <= zoom], "at the posterior's scale", m, east,
                 north)
     return fig

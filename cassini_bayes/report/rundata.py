@@ -269,9 +269,10 @@ def load_run(run_dir: str | Path) -> RunData:
         from cassini_bayes.run_kind import run_command
 
         command = run_command(run_dir)
-        if command is not None and command not in ("fit inertia", "fit thrust", "fit rwa4"):
+        if command is not None and command not in ("fit inertia", "fit thrust", "fit rwa4",
+                                                   "fit wheel-axis"):
             raise InputError(f"{run_dir}: a `{command}` run; `report` rebuilds the page of a "
-                             "`fit inertia`, `fit thrust` or `fit rwa4` run (run "
+                             "`fit inertia`, `fit thrust`, `fit wheel-axis` or `fit rwa4` run (run "
                              f"`{command}` again for its own files)")
         raise InputError(
             f"{nc}: not found; a run directory must hold posterior.nc (run `cassini-bayes fit ...` "

@@ -111,19 +111,36 @@ def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
 CONE_OFFSET_MAX_DEG = 10.0  # farthest the fitted axis may sit from the articulation cone
 
 
-def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check:
-    """Is the fitted spin axis where a Cassini wheel can point? Every wheel's axis, RWA4's at
-    any articulation angle, is canted 54.74° from +Z (Brown §I), so the posterior-mean axis's
-    angle from +Z minus 54.74° must be small: a mounting or articulation error is a degree or
-    two, while a wheel-rate sign flipped in the file gives the antipode, 70.5° off the cone
-    (with the uniform prior the fit itself cannot tell). Statistic: that offset, deg."""
-    from cassini_bayes.inference.rwa4.prior import CONE_ANGLE_DEG
+def _axis_label(axis: np.ndarray) -> str:
+    """``+Z`` for a body axis (either sign), else the vector."""
+    for k, c in enumerate("XYZ"):
+        for sign, mark in ((1.0, "+"), (-1.0, "−")):
+            if np.allclose(axis, sign * np.eye(3)[k], atol=1e-12):
+                return mark + c
+    return "[" + ", ".join(f"{x:.4g}" for x in axis) + "]"
 
+
+def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check:
+    """Is the fitted spin axis where the wheel can point? A wheel whose model entry gives an
+    articulation cone (``post.problem.cone``; Cassini's RWA4: 54.74° from +Z at any
+    articulation angle, Brown §I) must sit near it: the posterior-mean axis's angle from the
+    cone's axis minus the cone's angle must be small. A mounting or articulation error is a
+    degree or two, while a wheel-rate sign flipped in the file gives the antipode, 70.5° off
+    Cassini's cone (with the uniform prior the fit itself cannot tell). Statistic: that offset,
+    deg. Not applicable when the model gives the wheel no cone: nothing says where it may point.
+    """
+    problem = post.problem
+    if problem.cone is None:
+        return not_applicable("articulation_cone", threshold_deg,
+                              f"the spacecraft model gives {problem.wheel} no articulation cone "
+                              "(its [[wheel]] 'cone_axis', 'cone_deg')")
     u = _mean_axis(post)
-    polar = float(np.degrees(np.arccos(np.clip(u[2] / np.linalg.norm(u), -1.0, 1.0))))
-    offset = abs(polar - CONE_ANGLE_DEG)
+    cos = float(np.clip(u @ problem.cone.axis / np.linalg.norm(u), -1.0, 1.0))
+    polar = float(np.degrees(np.arccos(cos)))
+    offset = abs(polar - problem.cone.angle_deg)
     return _check("articulation_cone", offset, threshold_deg,
-                  note=f"axis {polar:.1f}° from +Z; the wheels' cone is at {CONE_ANGLE_DEG:.2f}°"
+                  note=f"axis {polar:.1f}° from {_axis_label(problem.cone.axis)}; the wheels' "
+                  f"cone is at {problem.cone.angle_deg:.2f}°"
                   + ("; a wheel-rate sign flipped in the file points the axis to the antipode, "
                      "and windows that hold part of the spin-up turn it (check the windows)"
                      if offset > threshold_deg else ""))

@@ -1,4 +1,5 @@
-"""RWA4 spin-axis posterior on the sphere (Brown 2012 §III.B, §III.C, made Bayesian).
+"""A wheel's spin-axis posterior on the sphere (Brown 2012 §III.B, §III.C, made Bayesian): any
+wheel of the spacecraft model, Cassini's RWA4 by default (the package keeps Brown's name).
 
 Model
 -----
@@ -45,10 +46,15 @@ shift. ``robust=False`` is Brown's idealised model.
 
 Priors
 ------
-* ``u4``: uniform on the sphere, or concentrated on the articulation cone (angle from +Z within
-  ``Normal(54.7356°, 1°)``, any articulation angle): a factor
-  ``−½ ((θ_z(u4) − 54.7356°)/1°)²``. 1° is the mechanical cant tolerance we assume; the 1/8 s
-  articulation-command resolution (≈ 1.5°, Brown §I) moves the azimuth, not the cant.
+* ``u4`` (the solved wheel's axis, whatever its name): uniform on the sphere, or concentrated
+  on the wheel's articulation cone when the spacecraft model gives one (``[[wheel]]``
+  ``cone_axis``, ``cone_deg``, ``cone_sd_deg``; :class:`~cassini_bayes.spacecraft.WheelCone`):
+  angle ``θ`` from the cone's axis within ``Normal(cone_deg, cone_sd_deg)``, any articulation
+  angle, a factor ``−½ ((θ(u4) − cone_deg)/cone_sd_deg)²``
+  (:func:`~cassini_bayes.inference.rwa4.prior.cone_log_factor`). Cassini's RWA4: 54.7356° from
+  +Z, 1° (the mechanical cant tolerance we assume; the 1/8 s articulation-command resolution,
+  ≈ 1.5°, Brown §I, moves the azimuth, not the cant). A model without a cone for the wheel
+  allows the uniform prior only.
 * Inertia: the spacecraft model's predicted tensor with its knowledge requirements as 1σ (the
   prior of :mod:`cassini_bayes.inference.inertia`), or a Gaussian (an inertia run's posterior);
   sampled jointly, so the mass-property error is part of the posterior (Brown's Monte Carlo
@@ -108,8 +114,8 @@ from cassini_bayes.inference.rwa4.data import (MAX_SD_DIRECTION_DEG, METHODS, Rw
 from cassini_bayes.inference.rwa4.fit import Rwa4Posterior, axis_sensitivity, fit_rwa4
 from cassini_bayes.inference.rwa4.likelihood import balance_misfit
 from cassini_bayes.inference.rwa4.model import rwa4_model
-from cassini_bayes.inference.rwa4.prior import (CONE_ANGLE_DEG, CONE_SD_DEG, PRIORS,
-                                                sample_inertia_prior, sample_rwa4_prior)
+from cassini_bayes.inference.rwa4.prior import (PRIORS, cone_log_factor, sample_inertia_prior,
+                                                sample_rwa4_prior)
 from cassini_bayes.inference.rwa4.windows import MIN_SPIN_CHANGE_RPM, WHEEL, detect_windows
 from cassini_bayes.names import U4_NAMES
 
@@ -117,8 +123,7 @@ __all__ = [
     "U4_NAMES",
     "METHODS",
     "PRIORS",
-    "CONE_ANGLE_DEG",
-    "CONE_SD_DEG",
+    "cone_log_factor",
     "MIN_SPIN_CHANGE_RPM",
     "MAX_SD_DIRECTION_DEG",
     "WHEEL",

@@ -20,15 +20,15 @@ from cassini_bayes.inference.noise import (ATTITUDE_FLOOR, RATE_FLOORS, floored,
                                            white_noise_sd)
 from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
 from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL
-from cassini_bayes.inference.rwa4.prior import (CONE_ANGLE_DEG, CONE_SD_DEG, PRIORS,
-                                                _margin_scale)
+from cassini_bayes.inference.rwa4.prior import PRIORS, _margin_scale
 from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
                                                   _check_windows, _wheel_name, detect_windows)
 from cassini_bayes.physics.momentum import inertia_matrix, regressor
-from cassini_bayes.spacecraft import Spacecraft
+from cassini_bayes.spacecraft import Spacecraft, WheelCone
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 
-__all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Data", "Rwa4Problem", "prepare_rwa4"]
+__all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Data", "Rwa4Problem", "check_cone_prior",
+           "prepare_rwa4"]
 
 METHODS = ("rcs", "rwa")
 MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
@@ -52,7 +52,8 @@ class Rwa4Data(NamedTuple):
     pi_mean, pi_chol : the inertia prior's mean (6,) kg m² and Cholesky factor (6, 6).
     log_noise_hat : (3,) log noise levels (rad/s, rad/s, rad).
     margin_scale : the physical-inertia factor's scale (:func:`_margin_scale`).
-    cone_weight, cone_angle, cone_sd : the articulation-cone prior (weight 0 or 1; rad).
+    cone_weight, cone_axis, cone_angle, cone_sd : the articulation-cone prior (weight 0 or 1;
+        the cone's unit axis; rad).
     lp_centre, lp_tril : the RWA chart's log-Cholesky inertia coordinates.
     rcs_apex, rcs_pi, rcs_centre, rcs_scale, rcs_walls : the RCS chart
         (:func:`_rcs_chart`; ``None`` in the RWA chart).
@@ -77,6 +78,7 @@ class Rwa4Data(NamedTuple):
     log_noise_hat: object
     margin_scale: object
     cone_weight: object
+    cone_axis: object
     cone_angle: object
     cone_sd: object
     lp_centre: object
@@ -97,6 +99,8 @@ class Rwa4Problem(NamedTuple):
     ----------
     data : :class:`Rwa4Data`, the arrays of :func:`rwa4_model`.
     method : ``"rcs"`` or ``"rwa"``; prior : ``"uniform"`` or ``"cone"``.
+    cone : the solved wheel's articulation cone from the spacecraft model (``None``: the model
+        gives none; the ``cone`` prior and the articulation-cone check then do not apply).
     pairs : the ``(Time A, Time B)`` windows (s) used, one pair per group.
     inertia : the Gaussian inertia prior (mean (6,), cov (6, 6), kg m²).
     inertia_source : ``"spacecraft"`` or ``"posterior"``.
@@ -115,6 +119,7 @@ class Rwa4Problem(NamedTuple):
     data: Rwa4Data
     method: str
     prior: str
+    cone: WheelCone | None
     pairs: tuple[tuple[Window, Window], ...]
     inertia: InertiaGaussian
     inertia_source: str
@@ -333,6 +338,18 @@ def _sd_direction_deg(chart: str, centre, tril, kw: Rwa4Data) -> float:
     return float(np.degrees(np.sqrt(np.linalg.eigvalsh(jac @ jac.T)[-1])))
 
 
+def check_cone_prior(spacecraft: Spacecraft, wheel: str, prior: str) -> WheelCone | None:
+    """The wheel's articulation cone from the model (``None``: none); a one-line InputError when
+    ``prior`` is ``"cone"`` and the model gives the wheel none."""
+    cone = spacecraft.wheel(wheel).cone
+    if prior == "cone" and cone is None:
+        raise InputError(f"{arg('prior', 'cone', cli_quote=True)}: the spacecraft model "
+                         f"{spacecraft.name!r} gives no articulation cone for {wheel}; add "
+                         "'cone_axis' and 'cone_deg' to its [[wheel]] entry "
+                         "(docs/model_file.md) or use the uniform prior")
+    return cone
+
+
 def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                  pairs: Sequence[tuple[Window, Window]] | None = None, prior: str = "uniform",
                  inertia: InertiaGaussian | None = None, wheel: str = WHEEL,
@@ -346,7 +363,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         inertia prior.
     method : ``"rcs"`` (Brown Eq 1) or ``"rwa"`` (Brown Eq 3).
     pairs : ``[(A, B), …]`` windows in s; detected (:func:`detect_windows`) when ``None``.
-    prior : ``"uniform"`` or ``"cone"``.
+    prior : ``"uniform"`` or ``"cone"`` (the wheel's articulation cone, which the spacecraft
+        model's ``[[wheel]]`` entry must give: ``cone_axis``, ``cone_deg``).
     inertia : Gaussian inertia prior; default the spacecraft model's knowledge requirements.
     wheel : the wheel whose axis is solved for (default RWA4; Brown's flight test: RWA1).
     robust : integrate out the nuisance effects of the module docstring ("Robust model"), with
@@ -357,7 +375,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     Raises
     ------
     InputError
-        Unknown method/prior/wheel, no rates of the wheel, windows outside the data or
+        Unknown method/prior/wheel, the cone prior for a wheel without a cone, no rates of the
+        wheel, windows outside the data or
         overlapping, thrusters firing inside a window, no spin change (RCS), data that cannot
         determine the axis.
     """
@@ -368,6 +387,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         raise InputError(f"{arg('prior', prior, cli_quote=True)}: choose one of "
                          f"{', '.join(PRIORS)}")
     wheel = _wheel_name(tel, wheel)
+    cone = check_cone_prior(spacecraft, wheel, prior)
     pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
         [tuple(p) for p in pairs]
     pairs = _check_windows(tel, pairs, method)
@@ -415,8 +435,9 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
               log_noise_hat=jnp.asarray(np.log(noise)),
               margin_scale=_margin_scale(i_mean),
               cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
-              cone_angle=jnp.asarray(np.radians(CONE_ANGLE_DEG)),
-              cone_sd=jnp.asarray(np.radians(CONE_SD_DEG)))
+              cone_axis=jnp.asarray(np.eye(3)[2] if cone is None else cone.axis),
+              cone_angle=jnp.asarray(np.radians(0.0 if cone is None else cone.angle_deg)),
+              cone_sd=jnp.asarray(np.radians(1.0 if cone is None else cone.sd_deg)))
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
     kw = Rwa4Data(**kw)
     centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
@@ -428,7 +449,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                          path=tel.source)
     kw = kw._replace(centre=jnp.asarray(centre), tril=jnp.asarray(tril))
     return Rwa4Problem(
-        data=kw, method=method, prior=prior, pairs=tuple(pairs), inertia=inertia,
+        data=kw, method=method, prior=prior, cone=cone, pairs=tuple(pairs), inertia=inertia,
         inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
         noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
         nuisance=nuisance, robust=robust)

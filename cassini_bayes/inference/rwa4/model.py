@@ -106,7 +106,7 @@ def _log_density_with(physical, theta, kw):
     # Gaussian inertia prior (physical truncation in the chart's Jacobian term); uniform u on
     # the sphere (chart Jacobian), times the articulation-cone factor when chosen
     log_prior = -0.5 * jnp.sum(xi**2) + log_jac
-    angle = jnp.arccos(jnp.clip(u[2], -1.0, 1.0))
+    angle = jnp.arccos(jnp.clip(u @ kw.cone_axis, -1.0, 1.0))
     log_prior += -0.5 * kw.cone_weight * ((angle - kw.cone_angle) / kw.cone_sd) ** 2
     data = {k: getattr(kw, k) for k in _DATA_KEYS}
     return log_prior + _loglik(u, pi, kw.log_noise_hat, **data)

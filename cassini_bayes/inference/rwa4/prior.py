@@ -1,6 +1,6 @@
-"""The RWA4 model's prior: the axis (uniform on the sphere or on the articulation cone) and the
-inertia (Gaussian times the smooth physical factor), and draws from it
-(:mod:`cassini_bayes.inference.rwa4`, "Priors").
+"""The spin-axis model's prior: the axis (uniform on the sphere or on the wheel's articulation
+cone from the model file) and the inertia (Gaussian times the smooth physical factor), and draws
+from it (:mod:`cassini_bayes.inference.rwa4`, "Priors").
 """
 
 from __future__ import annotations
@@ -14,16 +14,14 @@ import numpy as np
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
+from cassini_bayes.spacecraft import WheelCone
 
 if TYPE_CHECKING:
     from cassini_bayes.inference.rwa4.data import Rwa4Problem
 
-__all__ = ["PRIORS", "CONE_ANGLE_DEG", "CONE_SD_DEG", "sample_inertia_prior",
-           "sample_rwa4_prior"]
+__all__ = ["PRIORS", "cone_log_factor", "sample_inertia_prior", "sample_rwa4_prior"]
 
 PRIORS = ("uniform", "cone")
-CONE_ANGLE_DEG = float(np.degrees(np.arccos(1.0 / np.sqrt(3.0))))   # 54.7356°, Brown §I
-CONE_SD_DEG = 1.0
 _MARGIN_FRACTION = 2.0       # physical-factor scale s = (prior mean's margin) / this
 _FACTOR_POWER = 3            # the physical factor is 1 − exp(−(m/s)^this)
 
@@ -59,16 +57,24 @@ def _log_physical_factor(pi, scale):
     return jnp.where(m > 0, jnp.log(-jnp.expm1(-(safe / scale) ** _FACTOR_POWER)), -jnp.inf)
 
 
-def _sample_u4(key, n: int, cone: bool) -> np.ndarray:
+def cone_log_factor(u, cone: WheelCone):
+    """``−½ ((θ − θ_c)/σ_c)²``, ``θ`` the angle (deg) of the unit axis ``u`` (…, 3) from the
+    cone's axis: the articulation-cone prior's factor on the sphere (any articulation angle; the
+    module docstring of :mod:`cassini_bayes.inference.rwa4`)."""
+    theta = np.degrees(np.arccos(np.clip(np.asarray(u, float) @ cone.axis, -1.0, 1.0)))
+    return -0.5 * ((theta - cone.angle_deg) / cone.sd_deg) ** 2
+
+
+def _sample_u4(key, n: int, cone: WheelCone | None) -> np.ndarray:
+    """``n`` unit axes uniform on the sphere, times the cone factor by rejection when ``cone``."""
     out, have, r = [], 0, 0
     while have < n:
         x = np.asarray(jax.random.normal(jax.random.fold_in(key, r), (max(4 * n, 1000), 3)))
         u = x / np.linalg.norm(x, axis=1, keepdims=True)
-        if cone:
+        if cone is not None:
             keep = np.asarray(jax.random.uniform(jax.random.fold_in(key, 10_000 + r),
                                                  (u.shape[0],)))
-            th = np.degrees(np.arccos(np.clip(u[:, 2], -1, 1)))
-            u = u[keep < np.exp(-0.5 * ((th - CONE_ANGLE_DEG) / CONE_SD_DEG) ** 2)]
+            u = u[keep < np.exp(cone_log_factor(u, cone))]
         out.append(u)
         have += u.shape[0]
         r += 1
@@ -103,7 +109,7 @@ def sample_inertia_prior(key, mean, cov, n: int) -> np.ndarray:
 def sample_rwa4_prior(key, problem: Rwa4Problem, n: int) -> dict[str, np.ndarray]:
     """``n`` draws of ``u4`` and the inertia entries from the stated prior."""
     k_u, k_i = jax.random.split(key)
-    u = _sample_u4(k_u, n, problem.prior == "cone")
+    u = _sample_u4(k_u, n, problem.cone if problem.prior == "cone" else None)
     out = {name: u[:, i] for i, name in enumerate(U4_NAMES)}
     pi = sample_inertia_prior(k_i, problem.inertia.mean, problem.inertia.cov, n)
     out.update({name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)})

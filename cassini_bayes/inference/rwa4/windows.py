@@ -59,8 +59,8 @@ def detect_windows(tel: Telemetry, method: str,
     quiet = quiet_periods(tel)
     if len(quiet) < 2:
         raise InputError(f"found {len(quiet)} quiet period(s) (≥ 60 s, |ω| ≤ 1 mrad/s, wheels "
-                         "steady, no thruster firing); the RWA4 calibration needs a Time A and a "
-                         "Time B: give them with " + _WINDOWS_HINT(),
+                         "steady, no thruster firing); the spin-axis calibration needs a Time A "
+                         "and a Time B: give them with " + _WINDOWS_HINT(),
                          path=tel.source)
     if method == "rcs":
         rpm = np.array([_median_rpm(tel, w, wheel) for w in quiet])
