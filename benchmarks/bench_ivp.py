@@ -87,6 +87,9 @@ def main(args) -> None:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--n", type=int, default=100_000, help="vectors per batch")
     p.add_argument("--repeats", type=int, default=7)

@@ -83,4 +83,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     main()

@@ -124,4 +124,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     sys.exit(main())

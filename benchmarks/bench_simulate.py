@@ -46,6 +46,9 @@ def main(args) -> None:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenario", default="slews_post_probe")
     p.add_argument("--batch", type=int, default=1000)

@@ -32,7 +32,7 @@ import numpy as np
 
 from cassini_bayes.estimators.leak import threshold_monitor
 from cassini_bayes.inference.leak import leak_inputs, leak_posterior
-from cassini_bayes.physics.impulse import THRUSTER_NAMES, moment_matrix
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.simulate import load_scenario, pulse_log, simulate_batch, truth_params
 from cassini_bayes.simulate.scenario import Leak
 from cassini_bayes.telemetry import Telemetry
@@ -91,8 +91,8 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     base = load_scenario("leak_cruise")
     base = dataclasses.replace(base, duration_s=args.hours * 3600.0)
-    th, f_n = base.prior.thrusters, base.prior.thrust
-    arms = np.max(np.abs(np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))), axis=0)
+    f_n = base.prior.thrust
+    arms = np.max(np.abs(base.prior.moment_matrix), axis=0)
     sizes = {"requirement 0.005 N m": lambda k: REQUIREMENT_NM / (f_n * arms[k]),
              "10 % of thrust": lambda k: 0.1, "0.1 % of thrust": lambda k: 0.001}
     if args.sizes is not None:
@@ -149,4 +149,7 @@ def _report(rows, controls, hours) -> str:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     main()

@@ -71,9 +71,6 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
 
-    from cassini_bayes._devices import request_host_devices
-
-    request_host_devices()
     import jax
 
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
@@ -106,4 +103,7 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
+    from cassini_bayes import setup_jax
+
+    setup_jax()  # 64-bit, the compilation cache, CPU devices: this script uses modules directly
     raise SystemExit(main())

@@ -8,33 +8,24 @@ The public API (docs/api.md)::
 
     import cassini_bayes as cb
     fit = cb.fit_inertia(cb.read_telemetry("slew.csv"), cb.load_spacecraft("cassini_post_probe"),
-                         seed=0, chains=2, warmup=300, draws=300)
+                         seed=0, chains=4, warmup=300, draws=500)
     fit.summary()["parameters"]["Izz"]      # the summary.json of `cassini-bayes fit inertia`
     fit.save("runs/inertia")                # its run directory
 
-The names below are imported on first use, so ``import cassini_bayes`` stays cheap and leaves
-JAX's devices alone (:func:`request_host_devices` asks for one CPU device per chain; call it
-before any JAX computation to run the chains in parallel, as the command line does).
-
-The package computes in 64-bit: the conservation checks and least-squares recoveries it promises
-(1e-9, 1e-8 relative) are beyond float32, so importing it turns on ``jax_enable_x64``.
-
-Importing it also turns on JAX's persistent compilation cache (a later process loads the compiled
-programs instead of compiling them again): in ``~/.cache/cassini-bayes/jax`` (or
-``$XDG_CACHE_HOME/cassini-bayes/jax``), moved or switched off with the environment variable
-``CASSINI_BAYES_JAX_CACHE=DIR|off`` (:mod:`cassini_bayes._jax_cache`, docs/performance.md).
+The names below are imported on first use, so ``import cassini_bayes`` stays cheap (no JAX, no
+NumPyro, no ArviZ) and changes no JAX setting. The functions that compute set JAX up on entry
+(:func:`setup_jax`): 64-bit, because the conservation checks and least-squares recoveries the
+package promises (1e-9, 1e-8 relative) are beyond float32; JAX's persistent compilation cache
+(``~/.cache/cassini-bayes/jax``, moved or switched off with ``CASSINI_BAYES_JAX_CACHE=DIR|off``,
+:mod:`cassini_bayes._jax_cache`); and, before JAX's backend starts, one CPU device per core (at
+least 4) so that the chains of a fit run in parallel, as the command line's do. A script that
+uses the package's modules directly calls ``cassini_bayes.setup_jax()`` once after its imports
+(docs/api.md, "JAX settings").
 """
 
 import sys
 import types
 import importlib
-
-import jax
-
-from cassini_bayes import _jax_cache
-
-jax.config.update("jax_enable_x64", True)
-_jax_cache.enable()  # before any JAX array exists
 
 __version__ = "0.1.0"
 
@@ -43,7 +34,7 @@ __all__ = [
     "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
     "fit_inertia", "fit_thrust", "fit_rwa4",
     "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
-    "InputError", "request_host_devices",
+    "InputError", "setup_jax", "request_host_devices",
     "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
 ]

@@ -11,12 +11,13 @@ Where the cache lives, first match wins:
    exports it as the environment variable below so that worker processes follow);
 2. the environment variable ``CASSINI_BAYES_JAX_CACHE`` = ``DIR`` or ``off``;
 3. a folder already set through JAX itself (``JAX_COMPILATION_CACHE_DIR`` or
-   ``jax.config.update("jax_compilation_cache_dir", ...)`` before importing cassini_bayes);
+   ``jax.config.update("jax_compilation_cache_dir", ...)`` before cassini_bayes first computes);
 4. ``$XDG_CACHE_HOME/cassini-bayes/jax``, else ``~/.cache/cassini-bayes/jax``.
 
-Importing :mod:`cassini_bayes` calls :func:`enable` once (before any JAX array exists), so the
-library and the CLI alike use the cache; a library user switches it off with
-``CASSINI_BAYES_JAX_CACHE=off`` in the environment before the import, or moves it with
+:func:`cassini_bayes.setup_jax`, which every entry point calls before it computes (the command
+line, the API functions that compute, the experiments, SBC), calls :func:`enable_once`, so the
+library and the CLI alike use the cache; importing the package does not. A library user switches
+it off with ``CASSINI_BAYES_JAX_CACHE=off`` in the environment, or moves it with
 ``enable("/some/dir")`` before the first fit. Every program is kept
 (``jax_persistent_cache_min_compile_time_secs = 0``, ``jax_persistent_cache_min_entry_size_bytes
 = -1``: no size floor, and JAX may not raise it); programs that call back into Python (the
@@ -41,10 +42,8 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
-import jax
-from jax import monitoring
-
-__all__ = ["ENV", "OFF", "CacheStats", "default_dir", "resolve", "enable", "stats"]
+__all__ = ["ENV", "OFF", "CacheStats", "default_dir", "resolve", "enable", "enable_once",
+           "stats"]
 
 ENV = "CASSINI_BAYES_JAX_CACHE"
 OFF = "off"
@@ -120,6 +119,7 @@ def enable(setting: str | os.PathLike | None = None) -> Path | None:
     use the new folder). JAX creates the folder when it first writes to it; one that cannot be
     created or written gives one warning and no cache.
     """
+    import jax
     from jax.experimental.compilation_cache import compilation_cache as cc
 
     with _lock:
@@ -146,6 +146,14 @@ def enable(setting: str | os.PathLike | None = None) -> Path | None:
             cc.reset_cache()  # JAX decides once per process whether (and where) to cache
         _state["dir"] = path
     return path
+
+
+def enable_once() -> Path | None:
+    """:func:`enable` with the default setting, unless this process has set the cache up already
+    (through either function): what :func:`cassini_bayes.setup_jax` calls."""
+    with _lock:
+        done = _state["listening"]
+    return _state["dir"] if done else enable()
 
 
 def _unusable(path: Path) -> str | None:
@@ -206,6 +214,7 @@ def _on_miss(key: str) -> None:
                       "mismatch, and say so only in log lines): every run recompiles; switched "
                       f"off for this run — set {ENV}=off (or --jax-cache off) to silence this",
                       stacklevel=2)
+        import jax
         from jax.experimental.compilation_cache import compilation_cache as cc
 
         jax.config.update("jax_enable_compilation_cache", False)
@@ -216,6 +225,8 @@ def _listen() -> None:
     """Register the event listener and the miss filter once per process."""
     if _state["listening"]:
         return
+    from jax import monitoring
+
     _state["listening"] = True
     monitoring.register_event_listener(_on_event)
     logger = logging.getLogger("jax._src.compiler")

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from cassini_bayes.errors import InputError
+from cassini_bayes._paths import not_utf8
+from cassini_bayes.errors import InputError, with_article
 
 MAX_TOML_BYTES = 1_000_000
 """Largest accepted model or scenario file (1 MB; the shipped ones are under 10 kB)."""
@@ -24,15 +25,14 @@ def read_toml(path: Path, what: str, where: str) -> dict[str, Any]:
         raise InputError(f"{what} not found: {path} (give a path to a .toml file or a name "
                          f"from {where})")
     if not path.is_file():
-        raise InputError(f"is not a file, expected a {what} .toml file", path=str(path))
+        raise InputError(f"is not a file, expected {with_article(what)} .toml file", path=str(path))
     if path.stat().st_size > MAX_TOML_BYTES:
-        raise InputError(f"is {path.stat().st_size} bytes, more than a {what} file can be "
-                         f"({MAX_TOML_BYTES} bytes); check the path", path=str(path))
+        raise InputError(f"is {path.stat().st_size} bytes, more than {with_article(what)} file "
+                         f"can be ({MAX_TOML_BYTES} bytes); check the path", path=str(path))
     try:
         text = path.read_text(encoding="utf-8-sig")   # a byte-order mark is dropped, as in CSV
-    except UnicodeDecodeError as e:
-        raise InputError(f"is not UTF-8 text (byte {e.start}); save the {what} as UTF-8 TOML",
-                         path=str(path)) from None
+    except UnicodeDecodeError:
+        raise InputError(not_utf8(path, f"{what} TOML"), path=str(path)) from None
     except OSError as e:
         raise InputError(f"cannot be read ({e.strerror}); check the path and its permissions",
                          path=str(path)) from None

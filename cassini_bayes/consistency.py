@@ -16,8 +16,8 @@ likely cause) from relations the data must obey whatever the unit of a column:
    fit, near 0 or negative for a wrong reading) and, for the declared reading, their ratio (the
    body-rate unit: 57.3 for °/s).
 2. **Wheel units, signs and order vs momentum conservation** (:func:`wheel_momentum_scale`).
-   Between thruster firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` is constant
-   (Feldman & Lee Eqs 2-3). With the model's predicted inertia (known to ±10 %) the balance is
+   Between thruster firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` changes only
+   by the external torque's impulse (Feldman & Lee Eqs 2-3; a constant torque is fitted). With the model's predicted inertia (known to ±10 %) the balance is
    fitted with the wheel momentum times a free scale ``κ``: ``κ ≈ 1`` for rpm as the file
    format wants, ``κ ≈ 60/(2π) = 9.55`` when the wheel columns hold rad/s (the wheel momentum
    read ×0.105). Where slews about several axes separate the wheels, it is fitted again with a free
@@ -26,7 +26,11 @@ likely cause) from relations the data must obey whatever the unit of a column:
 3. **Pulse log vs ``on_*`` columns** (:func:`check_pulses_match_on_times`): the cumulative
    on-time the pulse log implies (:func:`cassini_bayes.telemetry.cumulative_on_times`) must match
    the telemetry's own counters.
-4. **Identifiability for the fit asked for** (:func:`check_inertia_excitation`,
+4. **Quantised rates** (:func:`check_rate_quantisation`, a warning): a body-rate or wheel-rate
+   column whose values lie on a lattice ``q k`` with a quantum ``q`` far above the noise
+   measured in the column and not small against the column's excursion; its rounding error is
+   then no noise the fits model but an error that repeats while the rate holds its value.
+5. **Identifiability for the fit asked for** (:func:`check_inertia_excitation`,
    :func:`check_rwa4_method`): an inertia fit needs rotation about more than one body axis; the
    RWA method of the RWA4 calibration needs the wheels that carry the slews (Brown Eq 3).
 
@@ -52,8 +56,9 @@ from cassini_bayes.errors import InputError, UnidentifiableError, arg
 from cassini_bayes.frames import dcm, quat_conjugate, quat_multiply, quat_to_rotvec
 from cassini_bayes.physics.momentum import INERTIA_NAMES, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseLog, PulseSpanWarning,
-                                     Telemetry, check_pulses_in_span, cumulative_on_times)
+from cassini_bayes.telemetry import (RPM_TO_RAD_S, PulseLog, PulseSpanWarning,
+                                     RATE_NOISE_FLOORS, Telemetry, check_pulses_in_span,
+                                     cumulative_on_times, white_noise_sd)
 
 # The checks' JAX work as four programs: called eagerly on NumPy arrays, every frames function
 # is a few one-operation programs, each loaded (or compiled) in every process.
@@ -74,8 +79,14 @@ __all__ = [
     "GyroBiasWarning",
     "gyro_bias_estimate",
     "check_gyro_bias",
+    "RateQuantum",
+    "QuantisedRatesWarning",
+    "rate_quantum",
+    "quantised_rates",
+    "check_rate_quantisation",
     "wheel_momentum_scale",
     "check_wheel_units",
+    "axis_angle_max_deg",
     "check_pulses_match_on_times",
     "inertia_excitation",
     "check_inertia_excitation",
@@ -115,12 +126,28 @@ _SEG_MIN_RAD = 1e-3    # … and at least this much
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
 _SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
 
-GYRO_WINDOW_S = 60.0
-"""Length of the windows of :func:`gyro_bias_estimate`, s."""
+GYRO_WINDOW_MIN_SAMPLES = 4
+"""Shortest window of :func:`gyro_bias_estimate`, samples; longer ones double from it."""
+GYRO_MIN_WINDOWS = 8
+"""Fewest quiet windows of one length that :func:`gyro_bias_estimate` uses (the standard error
+comes from their scatter)."""
 GYRO_WINDOW_TURN_RAD = 2e-3
-"""Windows turning more than this (by ∫ω dt) are left out of the gyro-bias estimate."""
+"""Windows whose attitude turns more than this (rad) are left out of the gyro-bias estimate."""
 GYRO_BIAS_Z = 5.0
 """A gyro bias is reported beyond this many prior sd and this many standard errors."""
+QUANTUM_LATTICE_TOL = 1e-3
+"""Values lie on a lattice of spacing ``q`` when every difference between two distinct values is
+a whole multiple of ``q`` to within this fraction of ``q`` (text round trips and the rpm → rad/s
+conversion leave ~1e-12)."""
+QUANTUM_NOISE_RATIO = 4.0
+"""A rate column's quantum is not hidden in its noise when it is at least this many times the
+white-noise sd measured in the column: noise of sd ≥ 0.4 q before the rounding dithers the
+quantiser and measures 0.61 q (second differences of ±1, ±2 quanta); below about q/3 it
+measures 0 (second differences mostly zero), so the ratio is 1.65 or infinite."""
+QUANTUM_EXCURSION_MIN = 5e-4
+"""... and it is large against the signal when it is at least this fraction of the column's
+excursion (its 0.5–99.5 percentile range): undithered quanta from about this fraction on moved
+an inertia fit by two posterior sd (docs/input_checks.md)."""
 GAP_FACTOR = 3.0
 """A time step over this many median steps is a data gap: no turning stretch spans one."""
 MOMENTUM_ALIGN_MIN = 0.9
@@ -139,17 +166,21 @@ AXES_ALIGN_MIN = 0.99
 must fit at least this well where separable: 0.9984–1.0000 on 160 open-world and every shipped
 slew and RWA-method file (Basilisk's slews 0.9999); one tachometer reporting |rpm| through zero
 0.962."""
-SWING_MIN_NMS = 1.0
-"""... and only where the body and the wheels exchange at least this much momentum, N m s (the
-shipped slews: 18–22; a quiet file's gyro noise: ~0.01)."""
+SWING_MIN_SNR = 100.0
+"""... and only where the body and the wheels exchange at least this many times the momentum
+noise of one sample (:attr:`WheelAxes.noise_nms`): Cassini's shipped slews swing 18–22 N m s
+against ~0.007 N m s of noise (a quiet file's swing is that noise), the ESPA bus 0.39 N m s
+against 1.4e-4, the 12U CubeSat 9.5e-3 against 2.9e-5. At 100× the balance's misfit from
+noise alone is ~1e-4, far inside :data:`AXES_ALIGN_MIN`."""
 UNSIGNED_TOUCH_RPM = 5.0
 """A wheel that stays on one side of zero yet comes within this (rpm) of it is named as possibly
 unsigned in :func:`_balance_error`."""
 AXIS_ANGLE_MAX_DEG = 30.0
 """Largest accepted angle between a wheel's fitted momentum and its axis in the model: a flipped
-sign gives 180°, another wheel's column on Cassini 90° (its wheel axes are orthogonal)."""
-FREE_WHEEL = "RWA4"
-"""The articulated wheel: its axis is not trusted to the model (Brown §III), it enters free."""
+sign gives 180°, another wheel's column the angle between the two axes (Cassini's fixed wheels
+90°, a pyramid's 70.5°, a CubeSat's skew wheel 54.7° from each body axis). Smaller where the
+model's wheels are closer: half the smallest angle between two of its (non-articulated) wheel
+lines (:func:`axis_angle_max_deg`), so another wheel's column always lies beyond it."""
 
 EXCITATION_MIN = 1e-3
 """Second-largest over largest eigenvalue of ``Σ ω ωᵀ dt``: below it the slews turn the
@@ -157,7 +188,12 @@ spacecraft about one axis only."""
 RWA_METHOD_MIN_KNOWN = 2
 """The RWA method (Brown Eq 3) needs this many running wheels besides the one solved for."""
 CONTROL_WHEEL_RPM = 10.0
-"""A wheel whose rate changes by more than this over the record takes part in the control."""
+"""A wheel whose rate changes by more than this (rpm) over the record takes part in the control
+(a rate: a wheel sized to its spacecraft exchanges hundreds of rpm in a slew, whatever the size)
+…"""
+CONTROL_NOISE_SD = 10.0
+"""… and by more than this many times its own white noise (the range of white noise over
+thousands of samples is ~8 sd: a CubeSat's 1-rpm hall sensors)."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -302,45 +338,67 @@ class GyroBias(NamedTuple):
     bias : (3,) rad/s, body axes: what the rates read above the truth.
     se : (3,) rad/s, its standard error from the windows' scatter.
     windows : number of windows used.
+    window_s : their length, s.
     """
 
     bias: np.ndarray
     se: np.ndarray
     windows: int
+    window_s: float = 0.0
+
+
+def _quiet_windows(t: np.ndarray, q: np.ndarray, gaps: np.ndarray,
+                   length_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Consecutive gap-free windows ``(a, b)`` of ``length_s`` whose attitude turns by less than
+    :data:`GYRO_WINDOW_TURN_RAD` (sample indices)."""
+    edges = np.unique(np.searchsorted(t, np.arange(t[0], t[-1], length_s)))
+    a, b = edges[:-1], edges[1:]
+    keep = (b > a) & (gaps[a] == gaps[b])
+    a, b = a[keep], b[keep]
+    sign = np.where(np.sum(q[a] * q[b], axis=1) < 0, -1.0, 1.0)[:, None]
+    turn = 4.0 * np.arctan2(np.linalg.norm(q[b] - sign * q[a], axis=1),
+                            np.linalg.norm(q[b] + sign * q[a], axis=1))
+    quiet = turn < GYRO_WINDOW_TURN_RAD
+    return a[quiet], b[quiet]
 
 
 def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
-    """Least-squares constant gyro bias ``b`` from quiet windows of :data:`GYRO_WINDOW_S`.
+    """Least-squares constant gyro bias ``b`` from windows where the attitude hardly turns.
 
-    Per gap-free window ``(a, b)`` that turns by less than :data:`GYRO_WINDOW_TURN_RAD` (so the
-    rotation vector and ``∫ω dt`` differ only by the bias, not by non-commuting turns or a
-    rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt + noise`` per body axis (a gyro reading
-    ``ω + b`` integrates ``b Δt`` more than the attitude turns; Brown Eq 2 kinematics). ``None``
-    with fewer than :data:`MIN_SEGMENTS` windows.
+    Per gap-free window ``(a, b)`` whose attitude turns by less than
+    :data:`GYRO_WINDOW_TURN_RAD` (so the rotation vector and ``∫ω dt`` differ only by the bias,
+    not by non-commuting turns or a rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt +
+    noise`` per body axis (a gyro reading ``ω + b`` integrates ``b Δt`` more than the attitude
+    turns; Brown Eq 2 kinematics). The window length is the file's own: from
+    :data:`GYRO_WINDOW_MIN_SAMPLES` median sample steps, doubling, the length whose quiet windows
+    (at least :data:`GYRO_MIN_WINDOWS` of them) give the most precise estimate, ``N L²`` largest
+    (the attitude noise of each window's ends is fixed, the bias grows with ``L``): long rests
+    give long windows, a CubeSat's one-minute rests shorter ones. ``None`` when no length has
+    :data:`GYRO_MIN_WINDOWS` quiet windows.
     """
     t = np.asarray(tel.t, float)
     q = np.asarray(tel.q, float)
-    if t.size < 4 or t[-1] - t[0] < 2 * GYRO_WINDOW_S:
+    if t.size < 4:
         return None
-    edges = np.unique(np.searchsorted(t, np.arange(t[0], t[-1], GYRO_WINDOW_S)))
-    a, b = edges[:-1], edges[1:]
     gaps = _gaps_before(t)
-    keep = (b > a) & (gaps[a] == gaps[b])
-    a, b = a[keep], b[keep]
-    if a.size < MIN_SEGMENTS:
+    length = GYRO_WINDOW_MIN_SAMPLES * float(np.median(np.diff(t)))
+    best, best_score = None, 0.0
+    while GYRO_MIN_WINDOWS * length <= t[-1] - t[0]:
+        a, b = _quiet_windows(t, q, gaps, length)
+        if a.size >= GYRO_MIN_WINDOWS and a.size * length**2 > best_score:
+            best, best_score = (a, b, length), a.size * length**2
+        length *= 2.0
+    if best is None:
         return None
+    a, b, length = best
     integral = _integrated_rates(tel)
-    g = integral[b] - integral[a]
-    rot = np.asarray(_rotvecs_between(q[a], q[b]))
-    quiet = np.linalg.norm(g, axis=1) < GYRO_WINDOW_TURN_RAD
-    if np.count_nonzero(quiet) < MIN_SEGMENTS:
-        return None
-    d, dt = (g - rot)[quiet], (t[b] - t[a])[quiet]
+    d = integral[b] - integral[a] - np.asarray(_rotvecs_between(q[a], q[b]))
+    dt = t[b] - t[a]
     ss = float(dt @ dt)
     bias = dt @ d / ss
     resid = d - dt[:, None] * bias
     se = np.sqrt(np.sum(resid**2, axis=0) / max(dt.size - 1, 1) / ss)
-    return GyroBias(bias, se, int(dt.size))
+    return GyroBias(bias, se, int(dt.size), length)
 
 
 def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
@@ -361,10 +419,93 @@ def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
         warnings.warn(f"{tel.source}: columns wx wy wz carry a constant gyro bias of about "
                       f"{axes} rad/s ({worst:.0f}x the [gyro] bias_sd_rad_s = {sd:.2g} of "
                       f"the model {spacecraft.name!r}, seen over {est.windows} quiet "
-                      f"{GYRO_WINDOW_S:g}-s windows): the fits' gyro prior under-states it; "
+                      f"{est.window_s:.3g}-s windows): the fits' gyro prior under-states it; "
                       "widen bias_sd_rad_s in the spacecraft model, or remove the bias",
                       GyroBiasWarning, stacklevel=2)
     return est
+
+
+class QuantisedRatesWarning(UserWarning):
+    """Body or wheel rates quantised coarsely against their noise and their excursion."""
+
+
+class RateQuantum(NamedTuple):
+    """A rate column on a lattice: ``column`` (``wx`` … ``rwa4``), its ``quantum``, the white-noise
+    sd measured in it (``noise``) and its ``excursion`` (0.5–99.5 percentile range, the whole
+    range where that is 0), all rad/s;
+    ``large``: the quantum is at least :data:`QUANTUM_NOISE_RATIO` × the noise and
+    :data:`QUANTUM_EXCURSION_MIN` × the excursion."""
+
+    column: str
+    quantum: float
+    noise: float
+    excursion: float
+
+    @property
+    def large(self) -> bool:
+        return (self.quantum >= QUANTUM_NOISE_RATIO * self.noise
+                and self.quantum >= QUANTUM_EXCURSION_MIN * self.excursion)
+
+    def text(self) -> str:
+        """``rwa1 1 rpm (its measured noise 0, 0.088 % of its excursion)``: the quantum in the
+        column's file unit, the noise measured in it in quanta, the quantum against the
+        excursion."""
+        unit, scale = (("rpm", 1.0 / RPM_TO_RAD_S) if self.column.startswith("rwa")
+                       else ("rad/s", 1.0))
+        return (f"{self.column} {self.quantum * scale:.3g} {unit} (its measured noise "
+                f"{self.noise / self.quantum:.2g} quanta, {100 * self.quantum / self.excursion:.2g}"
+                " % of its excursion)")
+
+
+def rate_quantum(x: np.ndarray) -> float | None:
+    """The spacing ``q`` of the lattice the finite values of ``x`` lie on: the smallest gap
+    between distinct values, when every gap is a whole multiple of it (to
+    :data:`QUANTUM_LATTICE_TOL`); ``None`` when the values are not on a lattice or all equal."""
+    u = np.unique(np.asarray(x, float)[np.isfinite(x)])
+    if u.size < 2:
+        return None
+    gaps = np.diff(u)
+    q = float(gaps.min())
+    k = gaps / q
+    return q if float(np.max(np.abs(k - np.round(k)))) <= QUANTUM_LATTICE_TOL else None
+
+
+def quantised_rates(tel: Telemetry) -> tuple[RateQuantum, ...]:
+    """Every body-rate column and every active wheel's column (rad/s) that lies on a lattice."""
+    cols = [(name, np.asarray(tel.omega[:, i], float)) for i, name in enumerate(("wx", "wy", "wz"))]
+    cols += [(name.lower(), np.asarray(tel.wheel_rate(name), float))
+             for name in tel.active_wheels()]
+    out = []
+    for name, x in cols:
+        q = rate_quantum(x)
+        if q is None:
+            continue
+        finite = x[np.isfinite(x)]
+        lo, hi = np.percentile(finite, [0.5, 99.5])
+        excursion = float(hi - lo) if hi > lo else float(np.ptp(finite))
+        out.append(RateQuantum(name, q, white_noise_sd(x), excursion))
+    return tuple(out)
+
+
+def check_rate_quantisation(tel: Telemetry) -> tuple[RateQuantum, ...]:
+    """Warn (:class:`QuantisedRatesWarning`) when a rate column is quantised coarsely: its
+    quantum is at least :data:`QUANTUM_NOISE_RATIO` × the noise measured in it (the rounding is
+    not dithered by noise, so its error repeats while the rate holds its value instead of being
+    the white noise the fits model) and at least :data:`QUANTUM_EXCURSION_MIN` × its excursion
+    (large against the signal). A warning, not a refusal: the file holds no finer rates, and the
+    fits' estimates move by up to several posterior sd (docs/input_checks.md). Returns every
+    quantised column."""
+    found = quantised_rates(tel)
+    large = [r for r in found if r.large]
+    if large:
+        warnings.warn(f"{tel.source}: rates on a coarse lattice: "
+                      + "; ".join(r.text() for r in large)
+                      + ": with no noise to dither the rounding, its error repeats while a rate "
+                      "holds its value, which the fits do not model, so their estimates can move "
+                      "by several posterior sd; give the rates at finer resolution if there are "
+                      "any",
+                      QuantisedRatesWarning, stacklevel=2)
+    return found
 
 
 def _check_still_attitude(tel: Telemetry) -> None:
@@ -457,21 +598,27 @@ class WheelAxes(NamedTuple):
     Attributes
     ----------
     alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
-    conditioning : smallest over largest singular value of the balance's design, its columns
-        scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
+    conditioning : smallest over largest singular value of the balance's design (the wheels'
+        columns and the external torque's), its columns scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
         slew about one axis) and the vectors cannot be told apart; 0.3–0.5 for slews about
         three axes.
     vectors : per known wheel, ``w_k / J_k`` (body frame, per rpm-read rad/s): the model's axis
         ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
         sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
     swing_nms : largest de-meaned body momentum ``|A(q)ᵀ I_pred ω|``, N m s: how much momentum
-        the wheels and the body exchange (the shipped slews: 18–22; gyro noise alone: ~0.01).
+        the wheels and the body exchange (Cassini's slews: 18–22; gyro noise alone: ~0.01).
+    noise_nms : the momentum noise of one sample, N m s: ``√((λ_max σ_ω)² + Σ_k (J_k σ_k)²)``
+        with ``λ_max`` the predicted inertia's largest moment and ``σ_ω``, ``σ_k`` the white
+        noise of the body rates and of each running wheel's rates
+        (:func:`cassini_bayes.telemetry.white_noise_sd`, floored at
+        :data:`cassini_bayes.telemetry.RATE_NOISE_FLOORS`).
     """
 
     alignment: float
     conditioning: float
     vectors: dict[str, np.ndarray]
     swing_nms: float = 0.0
+    noise_nms: float = 0.0
 
     @property
     def judged(self) -> bool:
@@ -533,15 +680,19 @@ class _Balance(NamedTuple):
     body: np.ndarray                # (n, 3) A(q)ᵀ I_pred ω, each stretch de-meaned
     known: list[str]                # the known wheels running
     known_cols: list[np.ndarray]    # per known wheel, (n, 3, 3): −ρ_k A(q)ᵀ e_j, de-meaned
-    free_cols: list[np.ndarray]     # the free wheel's three columns, if it runs
+    free: list[str]                 # the articulated wheels running
+    free_cols: list[np.ndarray]     # per free wheel, its three columns
+    torque_cols: list[np.ndarray]   # a constant inertial torque's three columns: (t − t̄_s) e_j
     stretches: int
+    noise_nms: float                # momentum noise of one sample (WheelAxes.noise_nms)
 
 
 def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None,
-             free_wheel: str | None) -> _Balance | None:
+             free_wheels: Sequence[str]) -> _Balance | None:
     """The balance's pieces per firing-free stretch, or ``None`` (no wheel, no stretch)."""
     names = tel.active_wheels()
-    free = [n for n in names if free_wheel is not None and n.upper() == free_wheel.upper()]
+    free_upper = {n.upper() for n in free_wheels}
+    free = [n for n in names if n.upper() in free_upper]
     known = [n for n in names if n not in free]
     if not names:
         return None
@@ -557,14 +708,23 @@ def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None
                      np.asarray(tel.omega, float)[keep])
     known_cols = [-np.asarray(tel.wheel_rate(n), float)[keep][:, None, None] * a_t
                   for n in known]
-    free_cols = ([-np.asarray(tel.wheel_rate(free[0]), float)[keep][:, None] * a_t[:, :, j]
-                  for j in range(3)] if free else [])
+    free_cols = [-np.asarray(tel.wheel_rate(f), float)[keep][:, None] * a_t[:, :, j]
+                 for f in free for j in range(3)]
+    t_keep = np.asarray(tel.t, float)[keep] - float(tel.t[0])
+    torque_cols = [t_keep[:, None] * np.eye(3)[j] for j in range(3)]
     lab = labels[keep]
     for s in good:
         m = lab == s
-        for x in [body, *known_cols, *free_cols]:
+        for x in [body, *known_cols, *free_cols, *torque_cols]:
             x[m] -= x[m].mean(0)
-    return _Balance(body, known, known_cols, free_cols, len(good))
+    s_w, s_r = RATE_NOISE_FLOORS
+    i_max = float(np.linalg.eigvalsh(np.asarray(spacecraft.inertia, float))[-1])
+    noise = (i_max * max(white_noise_sd(np.asarray(tel.omega, float)[keep]), s_w)) ** 2
+    for n in names:
+        rate = np.asarray(tel.wheel_rate(n), float)[keep]
+        noise += (spacecraft.wheel(n).inertia * max(white_noise_sd(rate), s_r)) ** 2
+    return _Balance(body, known, known_cols, free, free_cols, torque_cols, len(good),
+                    float(np.sqrt(noise)))
 
 
 def _solve(design: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -583,6 +743,7 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     if not bal.known:
         return None
     cols = [c[:, :, j] for c in bal.known_cols for j in range(3)] + bal.free_cols
+    cols += bal.torque_cols
     design = np.stack([c.ravel() for c in cols], 1)
     solved = _solve(design, bal.body.ravel())
     if solved is None:
@@ -593,30 +754,34 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     js = [spacecraft.wheel(n).inertia for n in bal.known]
     vectors = {n: theta[3 * k: 3 * k + 3] / js[k] for k, n in enumerate(bal.known)}
     swing = float(np.max(np.linalg.norm(bal.body, axis=1)))
-    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing)
+    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing, bal.noise_nms)
 
 
 def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
                          on_times: np.ndarray | None = None,
-                         free_wheel: str | None = FREE_WHEEL) -> MomentumScale | None:
+                         free_wheels: Sequence[str] | None = None) -> MomentumScale | None:
     """Least-squares wheel-momentum scale ``κ`` of the momentum balance (Feldman & Lee Eqs 2-3).
 
     Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
 
-        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
+        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s + T t``
 
     with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
-    from the model. The articulated wheel ``free_wheel`` (RWA4, whose axis is what the RWA4
-    calibration measures, Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for
-    rpm data); with no other wheel running ``κ = |w| / J_f``. Subtracting each stretch's mean
+    from the model, and ``T`` a constant inertial external torque over the whole file (its
+    impulse over a long record is a sizeable part of what a small spacecraft's slews exchange:
+    the ESPA bus's 2e-5 N m over 22 minutes against 0.38 N m s). Each articulated wheel (``free_wheels``, default the model's
+    ``articulated`` wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures,
+    Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other
+    wheel running ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
     removes ``H_s``. The same balance with a free vector ``w_k`` for every known wheel in place
     of ``κ J_k g_k`` is :attr:`MomentumScale.axes`. ``None`` when no wheel runs, no stretch has
     three samples, or nothing varies.
     """
-    bal = _balance(tel, spacecraft, on_times, free_wheel)
+    free_wheels = spacecraft.articulated_wheels if free_wheels is None else free_wheels
+    bal = _balance(tel, spacecraft, on_times, free_wheels)
     if bal is None:
         return None
-    cols = list(bal.free_cols)
+    cols = list(bal.free_cols) + bal.torque_cols
     if bal.known:
         axes = np.stack([spacecraft.wheel(n).axis for n in bal.known])
         js = np.array([spacecraft.wheel(n).inertia for n in bal.known])
@@ -628,8 +793,9 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     theta, align = solved
     if bal.known:
         scale = float(theta[0])
-    else:     # the free wheel alone: its momentum's size
-        scale = float(np.linalg.norm(theta) / spacecraft.wheel(free_wheel).inertia)
+    else:     # the free wheels alone: their momenta's sizes
+        scale = float(np.median([np.linalg.norm(theta[3 * k:3 * k + 3])
+                                 / spacecraft.wheel(f).inertia for k, f in enumerate(bal.free)]))
     return MomentumScale(scale, align, bal.stretches, _wheel_axes(bal, spacecraft))
 
 
@@ -643,22 +809,33 @@ def _unit_error(cols: str, scale: float, what: str, tel: Telemetry) -> InputErro
                       path=tel.source)
 
 
+def axis_angle_max_deg(spacecraft: Spacecraft) -> float:
+    """Largest accepted angle (degrees) between a wheel's fitted momentum and its model axis:
+    :data:`AXIS_ANGLE_MAX_DEG`, or half the smallest angle between the lines of two of the
+    model's wheels whose axes are trusted (articulated wheels left out) when that is smaller."""
+    axes = [w.axis for w in spacecraft.wheels if not w.articulated]
+    half = [0.5 * float(np.degrees(np.arccos(min(abs(float(a @ b)), 1.0))))
+            for i, a in enumerate(axes) for b in axes[i + 1:]]
+    return min([AXIS_ANGLE_MAX_DEG, *half])
+
+
 def _axis_error(name: str, axes: WheelAxes, spacecraft: Spacecraft,
                 tel: Telemetry) -> InputError:
     """The refusal for a wheel whose momentum does not lie along its axis in the model."""
+    limit = axis_angle_max_deg(spacecraft)
     col = name.lower()
     angle = axes.angle_deg(name, spacecraft.wheel(name).axis)
     head = (f"column {col}: momentum is conserved only with {col}'s momentum {angle:.0f}° from "
             f"{name}'s axis in the model {spacecraft.name!r} (free-axis balance alignment "
             f"{axes.alignment:.3f})")
-    if angle > 180.0 - AXIS_ANGLE_MAX_DEG:
+    if angle > 180.0 - limit:
         return InputError(f"{head}: its sign looks flipped; negate the column, or correct the "
                           "wheel's axis in the spacecraft model", path=tel.source)
     for other in spacecraft.wheels:
         if other.name == name:
             continue
         off = axes.angle_deg(name, other.axis)
-        if min(off, 180.0 - off) < AXIS_ANGLE_MAX_DEG:
+        if min(off, 180.0 - off) < limit:
             flipped = " with the sign flipped" if off > 90.0 else ""
             return InputError(f"{head}, {min(off, 180.0 - off):.0f}° from {other.name}'s: it "
                               f"looks like {other.name}'s rates{flipped}; check the column "
@@ -697,10 +874,11 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     :data:`KAPPA_RANGE`, raise :class:`InputError`: ``κ`` near 60/(2π) means the wheel columns
     hold rad/s. Then, where the free-axis balance (:class:`WheelAxes`) determines each known
     wheel's momentum on its own (:attr:`WheelAxes.judged`), refuse a wheel whose momentum lies
-    more than :data:`AXIS_ANGLE_MAX_DEG` from its axis in the model (a flipped sign, another
+    more than :func:`axis_angle_max_deg` from its axis in the model (a flipped sign, another
     wheel's column) or whose scale is outside :data:`KAPPA_RANGE` (that column in rad/s). In a
     file without thruster firings (no ``on_times``, no ``on_*`` columns) where the vectors are
-    separable and the body swings by :data:`SWING_MIN_NMS`, refuse a free-axis balance below
+    separable and the body swings by :data:`SWING_MIN_SNR` times the momentum noise, refuse a
+    free-axis balance below
     :data:`AXES_ALIGN_MIN` (:func:`_balance_error`: unsigned tachometers, mixed units).
     Otherwise (including a balance that does not fit: momentum exchange with unlogged thruster
     firings, or none at all) say nothing. Returns the fit.
@@ -719,12 +897,14 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
     if axes is None:
         return fit
     if (on_times is None and tel.on_times is None and axes.conditioning >= AXES_CONDITION_MIN
-            and axes.swing_nms >= SWING_MIN_NMS and axes.alignment < AXES_ALIGN_MIN):
+            and axes.swing_nms >= SWING_MIN_SNR * axes.noise_nms
+            and axes.alignment < AXES_ALIGN_MIN):
         raise _balance_error(tel, axes)
     if not axes.judged:
         return fit
+    angle_max = axis_angle_max_deg(spacecraft)
     for name in axes.vectors:
-        if axes.angle_deg(name, spacecraft.wheel(name).axis) > AXIS_ANGLE_MAX_DEG:
+        if axes.angle_deg(name, spacecraft.wheel(name).axis) > angle_max:
             raise _axis_error(name, axes, spacecraft, tel)
     for name in axes.vectors:
         if not lo <= axes.scale(name) <= hi:
@@ -761,10 +941,14 @@ def check_pulses_match_on_times(tel: Telemetry, log: PulseLog) -> None:
     """
     if tel.on_times is None:
         return
+    if tuple(log.thruster_names) != tuple(tel.thruster_names):
+        raise InputError(f"its thrusters ({', '.join(log.thruster_names)}) are not the on_* "
+                         f"columns' of {tel.source} ({', '.join(tel.thruster_names)}); read both "
+                         "with the same spacecraft model", path=log.source)
     derived = _derived_on_times(tel, log)
     col_all = np.asarray(tel.on_times, float)
     t = np.asarray(tel.t, float)
-    for k, name in enumerate(THRUSTER_NAMES):
+    for k, name in enumerate(tel.thruster_names):
         col, der = col_all[:, k] - col_all[0, k], derived[:, k]
         widths = log.width[log.thruster == k]
         slack = max(float(widths.max()) if widths.size else 0.0, float(np.diff(col).max())) + 1e-6
@@ -837,7 +1021,8 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
       pairs (RCS-controlled drift).
     * ``rcs`` (Brown Eq 1): under RCS control the body drift takes up the wheel's momentum and
       the thrusters hold the attitude. When at least :data:`RWA_METHOD_MIN_KNOWN` other wheels
-      run and change by more than :data:`CONTROL_WHEEL_RPM` while no thruster fires (``on_*``
+      run and change by more than :data:`CONTROL_WHEEL_RPM` (and :data:`CONTROL_NOISE_SD` ×
+      their white noise) while no thruster fires (``on_*``
       columns flat or absent), the wheels carry the attitude control: RWA-controlled data.
     """
     others = [n for n in tel.active_wheels() if n.upper() != wheel.upper()]
@@ -851,7 +1036,10 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
         return
     fired = tel.on_times is not None and bool(np.any(np.diff(tel.on_times, axis=0) > 0))
     span = {n: float(np.ptp(tel.wheel_rate(n))) / RPM_TO_RAD_S for n in others}
-    varying = [n for n, v in span.items() if v > CONTROL_WHEEL_RPM]
+    noise = {n: white_noise_sd(np.asarray(tel.wheel_rate(n), float)) / RPM_TO_RAD_S
+             for n in others}
+    varying = [n for n, v in span.items()
+               if v > max(CONTROL_WHEEL_RPM, CONTROL_NOISE_SD * noise[n])]
     if not fired and len(varying) >= RWA_METHOD_MIN_KNOWN:
         spans = ", ".join(f"{n} {span[n]:.0f} rpm" for n in varying)
         raise InputError(f"{arg('method', 'rcs')} needs RCS-controlled data (Brown Eq 1: the "
@@ -869,12 +1057,14 @@ def check_telemetry_data(tel: Telemetry, spacecraft: Spacecraft | None = None,
                          pulses: PulseLog | None = None
                          ) -> tuple[AttitudeAgreement | None, MomentumScale | None]:
     """Every physics check one telemetry file (and its pulse log) allows: attitude vs rates,
-    pulse log vs ``on_*`` columns, and with a spacecraft model the wheel units.
+    quantised rates (a warning), pulse log vs ``on_*`` columns, and with a spacecraft model the
+    wheel units and the gyro bias (a warning).
 
     Returns the attitude agreement and the momentum fit (``None`` where not identifiable or,
     for the momentum, without a spacecraft model), for a summary.
     """
     attitude = check_attitude_rates(tel)
+    check_rate_quantisation(tel)
     on = tel.on_times
     if pulses is not None:
         check_pulses_match_on_times(tel, pulses)

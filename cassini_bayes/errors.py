@@ -48,6 +48,16 @@ def arg(name: str, value: object = _NO_VALUE, *, cli_quote: bool = False) -> str
     return name if value is _NO_VALUE else f"{name}={value!r}"
 
 
+def with_article(phrase: str) -> str:
+    """``phrase`` after ``a`` or ``an`` as it is spoken: ``an inertia``, ``a thrust``, ``an event
+    scenario``, ``an RWA4`` (an initialism is read letter by letter: ``an`` before A E F H I L M N
+    O R S X)."""
+    word = phrase.split(" ", 1)[0]
+    initialism = len(word) > 1 and word[:2].isupper()
+    an = word[:1] in ("AEFHILMNORSX" if initialism else "aeiouAEIOU")
+    return f"{'an' if an else 'a'} {phrase}"
+
+
 class CassiniError(Exception):
     """Base class of the package's own errors."""
 
@@ -89,3 +99,12 @@ def as_path(value: object, what: str) -> Path:
         return Path(value)
     got = repr(value) if isinstance(value, str) else type(value).__name__
     raise InputError(f"expected the path of {what}, got {got}")
+
+
+def as_flag(value: object, name: str) -> bool:
+    """``value`` when it is a bool (NumPy's included), else an :class:`InputError` naming the
+    argument ``name``: a string such as ``"no"`` is truthy and would silently pick the other
+    branch."""
+    if isinstance(value, bool) or type(value).__name__ == "bool_":
+        return bool(value)
+    raise InputError(f"{arg(name, value)}: use True or False")

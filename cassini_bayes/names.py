@@ -7,12 +7,14 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of"]
+           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
 THRUSTER_NAMES = ("Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4")
-"""The eight RCS thrusters (Feldman & Lee 2006 Eq 16 order)."""
+"""Cassini's eight A-branch RCS thrusters (Feldman & Lee 2006 Eq 16 order): the expansion of the
+model file's ``[thrusters]`` shorthand, the thrust fit's sites and the default file layout
+without a model (a model file names its own thrusters, docs/model_file.md)."""
 F_NAMES = ("F",) + tuple(f"F_{t}" for t in THRUSTER_NAMES)
 """Thrust sites (N): the mean ``F`` and one per thruster (the branch sites are ``F_Z``, ``F_Y``)."""
 TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
@@ -40,3 +42,12 @@ def unit_of(name: str) -> str | None:
     if name in U4_NAMES:
         return "1"
     return None
+
+
+
+def a_kind(kind: str) -> str:
+    """A run kind as a message says it, with its article: ``"an inertia"``, ``"a thrust"``,
+    ``"an RWA4"`` (then ``f"{a_kind(k)} fit"``)."""
+    from cassini_bayes.errors import with_article
+
+    return with_article("RWA4" if kind == "rwa4" else str(kind))

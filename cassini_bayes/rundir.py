@@ -22,6 +22,12 @@ Replacing an old run (``force``) swaps the two directories with one atomic
 old or the new run under ``NAME``; elsewhere the old run is renamed aside just before the new one
 is renamed in. The old run is deleted last.
 
+A process killed outright (SIGKILL, a power cut) cannot remove its temporary directory. Each one
+holds a note of its writer (:data:`TEMP_MARK`: host, process id and start time), and every
+:class:`RunDir` first removes the temporary directories in its parent whose writer on this host
+has ended (:func:`sweep_stale`); a directory without the note, or written from another host or by
+a process still running, is never touched.
+
 Usage::
 
     check_out(out, force=force, inputs=[telemetry_csv, model_toml])  # before any work
@@ -36,6 +42,7 @@ Usage::
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import errno
 import hashlib
@@ -43,6 +50,7 @@ import json
 import math
 import os
 import shutil
+import socket
 import tempfile
 import tomllib
 import warnings
@@ -50,17 +58,93 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from cassini_bayes._file_mode import default_dir_mode
-from cassini_bayes.errors import InputError, spelled
+from cassini_bayes.errors import InputError, as_flag, spelled
 from cassini_bayes.names import unit_of
 
 
 WRITTEN = ".cassini-bayes-files"   # in every run directory: the files it was written with
+TEMP_MARK = ".cassini-bayes-writer"  # in a temporary run directory while it is written: by whom
 
 
 def _written_files(root: Path) -> list[str]:
-    """Every file under ``root`` (relative POSIX paths, sorted), but :data:`WRITTEN`."""
+    """Every file under ``root`` (relative POSIX paths, sorted), but :data:`WRITTEN` and
+    :data:`TEMP_MARK`."""
     return sorted(p.relative_to(root).as_posix() for p in root.rglob("*")
-                  if (p.is_file() or p.is_symlink()) and p.name != WRITTEN)
+                  if (p.is_file() or p.is_symlink()) and p.name not in (WRITTEN, TEMP_MARK))
+
+
+def _process_start(pid: int) -> str | None:
+    """When process ``pid`` started, as ``"BOOT_ID:TICKS"`` (Linux ``/proc``), or None where the
+    system does not say: with the process id it names one process, even after the id is
+    reused."""
+    try:
+        ticks = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
+        boot = Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except (OSError, IndexError):
+        return None
+    return f"{boot}:{ticks}"
+
+
+def _mark(tmp: Path) -> None:
+    """Note in the temporary directory ``tmp`` which process writes it (:func:`sweep_stale`)."""
+    (tmp / TEMP_MARK).write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
+                                             "started": _process_start(os.getpid())}) + "\n")
+
+
+def _writer_ended(tmp: Path) -> bool:
+    """Whether the process noted in ``tmp``'s :data:`TEMP_MARK` has ended: on this host, its id
+    is gone or now names a process that started at another time. False when there is no note,
+    it is unreadable, or it is another host's (nothing tells whether that process runs)."""
+    try:
+        mark = json.loads((tmp / TEMP_MARK).read_text(encoding="utf-8"))
+        host, pid, started = mark["host"], mark["pid"], mark["started"]
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError):
+        return False
+    if host != socket.gethostname() or not isinstance(pid, int) or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError):
+        return False   # (another user's process, running)
+    now = _process_start(pid)
+    return started is not None and now is not None and now != started
+
+
+def _discard(tmp: Path) -> None:
+    """Remove a temporary directory, its :data:`TEMP_MARK` last (a kill half-way leaves a
+    directory that the next :func:`sweep_stale` still recognises); errors are ignored."""
+    try:
+        entries = [p for p in tmp.iterdir() if p.name != TEMP_MARK]
+    except OSError:
+        entries = []
+    for p in entries:
+        if p.is_dir() and not p.is_symlink():
+            shutil.rmtree(p, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                p.unlink()
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
+def sweep_stale(parent: Path) -> list[Path]:
+    """Remove the temporary run directories (``.NAME.tmp-…``) in ``parent`` whose writer has
+    ended without cleaning up (killed by SIGKILL, a crash of the machine); returns them. Only
+    directories this package made (their :data:`TEMP_MARK`) and whose process on this host is
+    gone (:func:`_writer_ended`) are removed."""
+    removed = []
+    try:
+        entries = [p for p in Path(parent).iterdir()
+                   if p.name.startswith(".") and ".tmp-" in p.name and p.is_dir()
+                   and not p.is_symlink()]
+    except OSError:
+        return removed
+    for p in entries:
+        if _writer_ended(p):
+            _discard(p)
+            removed.append(p)
+    return removed
 
 
 def _foreign_files(root: Path) -> list[str]:
@@ -83,7 +167,7 @@ def _force() -> str:
 
 __all__ = ["RunDir", "check_out", "check_writable", "is_package_output", "file_record",
            "write_posterior", "write_summary", "write_config", "write_report",
-           "minimal_report_html"]
+           "minimal_report_html", "sweep_stale"]
 
 
 def _read_toml(path: Path) -> dict | None:
@@ -145,6 +229,7 @@ def check_out(out: str | os.PathLike, *, force: bool = False,
     ``inputs`` are the run's input files and directories: ``out`` may not be, or contain, any of
     them, even with ``force``.
     """
+    force = as_flag(force, "force")
     shown = str(out)
     final = Path(out).expanduser().resolve()
     for i in inputs:
@@ -221,18 +306,24 @@ class RunDir:
         except OSError as e:
             raise InputError(f"cannot create the parent directory: {e.strerror}",
                              path=str(parent)) from None
+        sweep_stale(parent)   # what killed runs left here
         self.path = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.tmp-", dir=parent))
-        os.chmod(self.path, default_dir_mode())  # mkdtemp makes it private; a run is not
+        try:
+            _mark(self.path)
+            os.chmod(self.path, default_dir_mode())  # mkdtemp makes it private; a run is not
+        except BaseException:
+            shutil.rmtree(self.path, ignore_errors=True)
+            raise
         return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         if exc_type is not None:
-            shutil.rmtree(self.path, ignore_errors=True)
+            _discard(self.path)
             return False
         try:
             self.commit()
         except BaseException:
-            shutil.rmtree(self.path, ignore_errors=True)
+            _discard(self.path)
             raise
         return False
 
@@ -244,8 +335,10 @@ class RunDir:
         if self.final.exists() and any(self.final.iterdir()):
             # the old run may have appeared while this one was computed: check again
             check_out(self.final, force=self.force)
+            (self.path / TEMP_MARK).unlink()
             if _exchange(self.path, self.final):
-                shutil.rmtree(self.path, ignore_errors=True)  # now holds the old run
+                _mark(self.path)               # now holds the old run, to be deleted
+                _discard(self.path)
                 return
             old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-",
                                         dir=self.final.parent))
@@ -258,6 +351,7 @@ class RunDir:
                 raise
             shutil.rmtree(old, ignore_errors=True)
             return
+        (self.path / TEMP_MARK).unlink()
         os.replace(self.path, self.final)  # new, or an empty directory
 
 

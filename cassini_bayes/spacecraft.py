@@ -1,31 +1,38 @@
 """Spacecraft model objects, loaded and validated from the TOML files under ``models/``.
 
-A model file (docs/design.md §4.3) holds the *predicted* mass properties and the hardware geometry a
-calibration needs. Required sections: ``[inertia]``, at least one ``[[wheel]]``, ``[thrusters]``.
-Optional sections: ``[mass]``, ``[pulse]`` (thruster time constants, their manufacturer
-ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall priors),
-``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of the
-sensors and wheels, the priors of the robust models' nuisance parameters; :class:`Knowledge`).
+A model file (docs/model_file.md) describes any spacecraft: the *predicted* mass properties and
+the hardware geometry a calibration needs. Required: ``[inertia]`` and at least one ``[[wheel]]``.
+Thrusters are ``[[thruster]]`` entries (name, position, direction, optional ``F`` and ``branch``)
+or Cassini's ``[thrusters]`` shorthand (the lever arms of Feldman & Lee Eq 16, expanded to its
+eight entries); a spacecraft without thrusters has neither, nor ``[thrust]`` or ``[pulse]``.
+Optional sections: ``[mass]``, ``[center_of_mass]``, ``[pulse]`` (thruster time constants, their
+manufacturer ranges and ``tau_log_sd_min``, the smallest log sd of the thrust fit's rise and fall
+priors), ``[thrust]`` (predicted force), ``[gyro]`` and ``[wheel_knowledge]`` (the knowledge of
+the sensors and wheels, the priors of the robust models' nuisance parameters; :class:`Knowledge`).
 Unknown keys are errors, so a typo never goes unnoticed.
 
-Units: kg m² for inertias, m for lengths, s for time constants, N for thrust. Wheel axes are unit
-vectors in body axes (the columns of Feldman & Lee's ``T``, App. A).
+Units: kg m² for inertias, m for lengths, s for time constants, N for thrust, rpm and N m for the
+optional wheel limits. Wheel axes and thrust directions are unit vectors in body axes.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError, as_path
+from cassini_bayes.names import THRUSTER_NAMES
 
-__all__ = ["Wheel", "Thrusters", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
-           "tilted_axis", "load_spacecraft",
+__all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
+           "WHEEL_SPEED_NOMINAL_RPM",
+           "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
+           "eq16_moment_matrix",
            "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
 
 # Feldman & Lee (2006) App. A: RWA → body matrix T; its columns are the spin axes of RWA1-3.
@@ -35,7 +42,22 @@ CASSINI_T = np.array(
 )
 CASSINI_WHEEL_AXES = CASSINI_T.T.copy()  # rows: RWA1, RWA2, RWA3 spin axes (body)
 
+# Feldman & Lee (2006) Eq 16: Z1..Z4 at [±Lx, ±Ly, Lzz], Y1..Y4 at [±Lx, ±Ly, Lzy]; the Z-facing
+# thrusters push along −Z, Y1, Y2 along −Y and Y3, Y4 along +Y (the directions for which r × F
+# reproduces every entry of Eq 16's moment matrix, so that Y2 with Y4 turns about +Z).
+_EQ16_SIGNS_XY = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
+_EQ16_DIRECTIONS = np.array([[0, 0, -1]] * 4 + [[0, -1, 0], [0, -1, 0], [0, 1, 0], [0, 1, 0]],
+                            dtype=float)
+
 _UNIT_TOL = 1e-6
+COM_SD_DEFAULT_FRAC = 0.01
+"""Default ``[center_of_mass] sd_m``: this fraction of the largest thruster position's length
+(Cassini: 3.6 cm of its 3.6 m arm), the centre of mass's knowledge scaled to the spacecraft."""
+WHEEL_SPEED_NOMINAL_RPM = 2000.0
+"""A wheel's top speed where its ``[[wheel]]`` entry gives no ``max_speed_rpm``, rpm, for
+:attr:`Spacecraft.momentum_capacity_nms` (Cassini's RWAs: 34 N m s at 0.16 kg m², Brown §I).
+A speed, not a size: wheels of any spacecraft run to 10³–10⁴ rpm, so the capacity scales with
+the wheels' spin inertia."""
 
 
 def wheel_tilt_basis(axis) -> np.ndarray:
@@ -65,23 +87,59 @@ class Wheel:
 
     ``inertia_sd_frac``: this wheel's spin-inertia knowledge (one sd, a fraction), overriding
     ``[wheel_knowledge] inertia_sd_frac`` for it; ``None`` when the file does not give one.
+    ``max_speed_rpm``, ``max_torque_nm``: the simulator's limits on its rate and motor torque
+    (``inf`` when the file gives none). ``articulated``: its axis can be moved in flight (Cassini's
+    RWA4, Brown §I), so the input checks take the model's axis as unknown.
     """
 
     name: str
     axis: np.ndarray
     inertia: float
     inertia_sd_frac: float | None = None
+    max_speed_rpm: float = float("inf")
+    max_torque_nm: float = float("inf")
+    articulated: bool = False
 
 
 @dataclass(frozen=True)
-class Thrusters:
-    """Thruster geometry of Feldman & Lee Eq 16 (m) and the centre of mass ``com`` (m)."""
+class Thruster:
+    """A thruster: ``position`` (3,) m in body axes from the predicted centre of mass,
+    ``direction`` (3,) the unit vector of its force on the spacecraft; ``thrust_n`` its nominal
+    steady thrust (N; ``None``: the model's ``[thrust] F``) and ``branch`` its redundancy branch
+    (``""`` when none is named)."""
 
-    Lx: float = 1.234
-    Ly: float = 1.580
-    Lzy: float = 2.880
-    Lzz: float = 3.019
-    com: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    name: str
+    position: np.ndarray
+    direction: np.ndarray
+    thrust_n: float | None = None
+    branch: str = ""
+
+
+def eq16_thrusters(lx_m: float, ly_m: float, lzy_m: float, lzz_m: float) -> tuple[Thruster, ...]:
+    """Cassini's eight thrusters ``Z1 … Y4`` from the lever arms of Feldman & Lee Eq 16 (m):
+    ``Z1..Z4`` at ``[±Lx, ±Ly, Lzz]`` pushing along −Z, ``Y1..Y4`` at ``[±Lx, ±Ly, Lzy]``
+    pushing along −Y (``Y1, Y2``) and +Y (``Y3, Y4``); branch A."""
+    z = np.array([lzz_m] * 4 + [lzy_m] * 4, float)
+    pos = np.stack([_EQ16_SIGNS_XY[:, 0] * lx_m, _EQ16_SIGNS_XY[:, 1] * ly_m, z], -1)
+    return tuple(Thruster(n, pos[k], _EQ16_DIRECTIONS[k].copy(), None, "A")
+                 for k, n in enumerate(THRUSTER_NAMES))
+
+
+def moment_matrix(thrusters: Sequence[Thruster], com_m=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(3, m) torque per newton of each thruster, N m / N: column ``s`` is ``(r_s − e) × d_s``
+    with ``e`` the centre of mass (m) in the frame of the positions (Feldman & Lee Eq 16)."""
+    if not thrusters:
+        return np.zeros((3, 0))
+    pos = np.stack([s.position for s in thrusters])
+    dirs = np.stack([s.direction for s in thrusters])
+    # Feldman & Lee Eq 16: Q = [(r_s - e) x d_s]_s
+    return np.cross(pos - np.asarray(com_m, float)[None, :], dirs).T
+
+
+def eq16_moment_matrix(lx_m: float, ly_m: float, lzy_m: float, lzz_m: float,
+                       com_m=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(3, 8) moment matrix of Feldman & Lee Eq 16 from its lever arms and centre of mass (m)."""
+    return moment_matrix(eq16_thrusters(lx_m, ly_m, lzy_m, lzz_m), com_m)
 
 
 @dataclass(frozen=True)
@@ -143,8 +201,14 @@ class Spacecraft:
     moi_uncertainty : fractional knowledge requirement on the moments (0.10 = ±10 %).
     poi_uncertainty : knowledge requirement on the products, kg m².
     wheels : the reaction wheels, in file order.
-    thrust : predicted steady thrust per thruster, N.
+    thrusters : the thrusters, in file order (empty for a spacecraft without thrusters).
+    thrust : predicted steady thrust per thruster, N (NaN without thrusters).
     mass : spacecraft mass, kg (NaN when not given).
+    com_m : (3,) centre of mass relative to the origin of the thruster positions, m (Feldman &
+        Lee Eq 16's ``[eX, eY, eZ]``; zero when the positions are from the centre of mass).
+    com_sd_m : knowledge of the centre of mass, one sd per axis, m.
+    eq16 : ``(Lx, Ly, Lzy, Lzz)`` m when the thrusters came from Cassini's ``[thrusters]``
+        shorthand (written back in that form), else ``None``.
     """
 
     name: str
@@ -152,13 +216,16 @@ class Spacecraft:
     moi_uncertainty: float
     poi_uncertainty: float
     wheels: tuple[Wheel, ...]
-    thrusters: Thrusters
+    thrusters: tuple[Thruster, ...] = ()
     pulse: PulseConstants = field(default_factory=PulseConstants)
     thrust: float = 0.75
     mass: float = float("nan")
     description: str = ""
     source: str = ""
     knowledge: Knowledge = field(default_factory=Knowledge)
+    com_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    com_sd_m: float = 0.0
+    eq16: tuple[float, float, float, float] | None = None
 
     @property
     def wheel_axes(self) -> np.ndarray:
@@ -174,12 +241,73 @@ class Spacecraft:
     def wheel_names(self) -> tuple[str, ...]:
         return tuple(w.name for w in self.wheels)
 
+    @property
+    def momentum_capacity_nms(self) -> float:
+        """The most angular momentum the wheels can hold together, N m s: ``Σ_k J_k ρ_max,k``
+        with ``ρ_max,k`` each wheel's ``max_speed_rpm`` (:data:`WHEEL_SPEED_NOMINAL_RPM` where
+        the model file gives none). The spacecraft's own momentum scale."""
+        return _capacity_nms(self.wheels)
+
+    @property
+    def articulated_wheels(self) -> tuple[str, ...]:
+        """Names of the wheels whose axis can move in flight (``articulated = true``)."""
+        return tuple(w.name for w in self.wheels if w.articulated)
+
+    @property
+    def thruster_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.thrusters)
+
+    @property
+    def moment_matrix(self) -> np.ndarray:
+        """(3, m) torque per newton of each thruster, N m / N: column ``s`` is
+        ``(r_s − e) × d_s`` (Feldman & Lee Eq 16), ``e`` = :attr:`com_m`."""
+        return moment_matrix(self.thrusters, self.com_m)
+
+    @property
+    def thrust_per_thruster(self) -> np.ndarray:
+        """(m,) nominal steady thrust of each thruster, N: its own ``F`` or the model's."""
+        return np.array([self.thrust if s.thrust_n is None else s.thrust_n
+                         for s in self.thrusters], float)
+
+    @property
+    def eq16_layout(self) -> bool:
+        """Whether the thrusters are Cassini's eight in the layout of Feldman & Lee Eq 16 (the
+        names ``Z1 … Y4`` in order, its directions and position signs, one height per group):
+        what the RCS dead-band controller's thruster pairs and the thrust fits assume."""
+        if self.thruster_names != THRUSTER_NAMES:
+            return False
+        pos = np.stack([s.position for s in self.thrusters])
+        dirs = np.stack([s.direction for s in self.thrusters])
+        return bool(np.array_equal(dirs, _EQ16_DIRECTIONS)
+                    and np.array_equal(np.sign(pos[:, :2]), _EQ16_SIGNS_XY)
+                    and np.all(np.abs(pos[:, :2]) == np.abs(pos[:1, :2]))
+                    and np.all(pos[:4, 2] == pos[0, 2]) and np.all(pos[4:, 2] == pos[4, 2]))
+
+    def require_thrusters(self, what: str, *, eq16: bool = False) -> None:
+        """Raise :class:`InputError` unless the model has thrusters (``eq16``: Cassini's eight
+        in the layout of Eq 16, :attr:`eq16_layout`), naming ``what`` needs them."""
+        if not self.thrusters:
+            raise InputError(f"{what} needs thrusters, but the spacecraft model {self.name!r} has "
+                             "none; give a model with [[thruster]] entries")
+        if eq16 and not self.eq16_layout:
+            raise InputError(f"{what} supports Cassini's eight thrusters in the layout of "
+                             f"Feldman & Lee Eq 16 (Z1..Y4) only; the spacecraft model "
+                             f"{self.name!r} has {', '.join(self.thruster_names)}")
+
     def wheel(self, name: str) -> Wheel:
         for w in self.wheels:
             if w.name.upper() == name.upper():
                 return w
         raise InputError(f"spacecraft model {self.name!r} has no wheel {name!r}; "
                          f"it has {', '.join(self.wheel_names)}")
+
+    def thruster(self, name: str) -> Thruster:
+        for s in self.thrusters:
+            if s.name.upper() == name.upper():
+                return s
+        have = ", ".join(self.thruster_names) or "no thrusters"
+        raise InputError(f"spacecraft model {self.name!r} has no thruster {name!r}; it has "
+                         f"{have}")
 
     def with_inertia(self, inertia) -> "Spacecraft":
         return replace(self, inertia=np.asarray(inertia, float))
@@ -190,9 +318,41 @@ class Spacecraft:
                        for w in self.wheels)
         return replace(self, wheels=wheels)
 
+    def _thrusters_dict(self) -> dict[str, Any]:
+        """The thrusters as the model file writes them: Cassini's ``[thrusters]`` shorthand
+        when they are its expansion, else ``[[thruster]]`` entries and ``[center_of_mass]``."""
+        com = [float(x) for x in self.com_m]
+        out: dict[str, Any] = {}
+        shorthand = (self.eq16 is not None
+                     and all(a.name == b.name and np.array_equal(a.position, b.position)
+                             and np.array_equal(a.direction, b.direction)
+                             and a.thrust_n is None and a.branch == b.branch
+                             for a, b in zip(self.thrusters, eq16_thrusters(*self.eq16)))
+                     and len(self.thrusters) == 8)
+        if shorthand:
+            lx, ly, lzy, lzz = self.eq16
+            out["thrusters"] = {"Lx": lx, "Ly": ly, "Lzy": lzy, "Lzz": lzz, "com": com}
+            if self.com_sd_m != _default_com_sd(self.thrusters):
+                out["center_of_mass"] = {"sd_m": self.com_sd_m}
+            return out
+        if self.thrusters:
+            out["thruster"] = [{"name": s.name, "position": [float(x) for x in s.position],
+                                "direction": [float(x) for x in s.direction],
+                                **({} if s.thrust_n is None else {"F": s.thrust_n}),
+                                **({"branch": s.branch} if s.branch else {})}
+                               for s in self.thrusters]
+            out["center_of_mass"] = {"offset_m": com, "sd_m": self.com_sd_m}
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         """The TOML schema as a plain dict (for ``config.toml`` and ``truth.json``)."""
         i = self.inertia
+        wheel_extra = lambda w: {  # noqa: E731 - the optional keys a wheel has
+            **({} if w.inertia_sd_frac is None else {"inertia_sd_frac": w.inertia_sd_frac}),
+            **({} if np.isinf(w.max_speed_rpm) else {"max_speed_rpm": w.max_speed_rpm}),
+            **({} if np.isinf(w.max_torque_nm) else {"max_torque_nm": w.max_torque_nm}),
+            **({"articulated": True} if w.articulated else {})}
+        thrusters = self._thrusters_dict()
         return {
             "name": self.name,
             "description": self.description,
@@ -202,15 +362,11 @@ class Spacecraft:
                         "moi_uncertainty": self.moi_uncertainty,
                         "poi_uncertainty": self.poi_uncertainty},
             "wheel": [{"name": w.name, "axis": [float(x) for x in w.axis],
-                       "inertia": float(w.inertia),
-                       **({} if w.inertia_sd_frac is None
-                          else {"inertia_sd_frac": w.inertia_sd_frac})} for w in self.wheels],
-            "thrusters": {"Lx": self.thrusters.Lx, "Ly": self.thrusters.Ly,
-                          "Lzy": self.thrusters.Lzy, "Lzz": self.thrusters.Lzz,
-                          "com": [float(x) for x in self.thrusters.com]},
-            "pulse": {k: (list(v) if isinstance(v, tuple) else v)
-                      for k, v in self.pulse.__dict__.items()},
-            "thrust": {"F": self.thrust},
+                       "inertia": float(w.inertia), **wheel_extra(w)} for w in self.wheels],
+            **thrusters,
+            **({"pulse": {k: (list(v) if isinstance(v, tuple) else v)
+                          for k, v in self.pulse.__dict__.items()},
+                "thrust": {"F": self.thrust}} if self.thrusters else {}),
             **({"mass": {"kg": self.mass}} if np.isfinite(self.mass) else {}),
             "gyro": {"bias_sd_rad_s": self.knowledge.gyro_bias_sd_rad_s,
                      "scale_factor_sd": self.knowledge.gyro_scale_factor_sd},
@@ -224,8 +380,23 @@ class Spacecraft:
         }
 
 
-_TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "pulse", "thrust",
-             "mass", "gyro", "wheel_knowledge", "telemetry_knowledge", "torque_knowledge"}
+def _capacity_nms(wheels: Sequence[Wheel]) -> float:
+    """:attr:`Spacecraft.momentum_capacity_nms` of ``wheels``, N m s."""
+    return float(sum(w.inertia * (w.max_speed_rpm if np.isfinite(w.max_speed_rpm)
+                                  else WHEEL_SPEED_NOMINAL_RPM) for w in wheels)
+                 * 2.0 * np.pi / 60.0)
+
+
+def _default_com_sd(thrusters: Sequence[Thruster]) -> float:
+    """:data:`COM_SD_DEFAULT_FRAC` of the largest thruster position's length, m (0 without)."""
+    if not thrusters:
+        return 0.0
+    return COM_SD_DEFAULT_FRAC * float(max(np.linalg.norm(s.position) for s in thrusters))
+
+
+_TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "thruster",
+             "center_of_mass", "pulse", "thrust", "mass", "gyro", "wheel_knowledge",
+             "telemetry_knowledge", "torque_knowledge"}
 _GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
 _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "common_inertia_sd_frac": "wheel_common_inertia_sd_frac",
@@ -233,8 +404,13 @@ _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
 _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
 _TORQUE_KNOWLEDGE_KEYS = {"sd_nm": "torque_sd_nm", "rate_sd_nm_per_h": "torque_rate_sd_nm_per_h"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
-_WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac"}
-_THRUSTER_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
+_WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac", "max_speed_rpm", "max_torque_nm",
+               "articulated"}
+_EQ16_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
+_THRUSTER_ENTRY_KEYS = {"name", "position", "direction", "F", "branch"}
+_COM_KEYS = {"offset_m", "sd_m"}
+_NAME_PATTERN = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
+_RESERVED_COLUMNS = {"t", "q1", "q2", "q3", "q4", "wx", "wy", "wz"}
 _PULSE_KEYS = set(PulseConstants.__dataclass_fields__)
 
 
@@ -255,8 +431,19 @@ TAU_MAX = 10.0
 """Largest pulse time constant or range end, s (Cassini's are tens of ms)."""
 TAU_LOG_SD_MAX = 2.0
 """Largest ``pulse.tau_log_sd_min`` (a factor e^±4 at ±2σ; wider says nothing)."""
+POI_DEFAULT_FRAC = 0.01
+"""Default ``inertia.poi_uncertainty``: this fraction of the largest predicted moment, kg m²
+(Cassini's files state ±75 kg m², 0.85 % of its 8800 kg m²)."""
 MASS_MAX = 1e7
 """Largest mass, kg (Cassini 5.7 t fuelled; the ISS 4.2e5 kg)."""
+WHEEL_SPEED_MAX_RPM = 1e5
+"""Largest ``wheel.max_speed_rpm`` (CubeSat wheels run to ~1e4 rpm, Cassini's to ~2000)."""
+WHEEL_TORQUE_MAX_NM = 100.0
+"""Largest ``wheel.max_torque_nm`` (CubeSat wheels give ~1e-3 N m, large CMGs ~1e2)."""
+TORQUE_HOLD_MIN_S = 60.0
+"""``[torque_knowledge] sd_nm`` (and ``rate_sd_nm_per_h``) are at most the wheels' momentum
+capacity over this time, N m: a torque that would fill the wheels within a minute is no
+disturbance of a wheel-controlled spacecraft, but a unit error (µN m written as N m)."""
 
 
 def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
@@ -369,11 +556,90 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     check_physical_inertia(inertia, "[inertia]", src)
     moi = _number(ti, "moi_uncertainty", "inertia.", src, 0.10)
-    poi = _number(ti, "poi_uncertainty", "inertia.", src, 75.0, lo=0.0, hi=INERTIA_MAX,
-                  unit="kg m^2")
+    poi = _number(ti, "poi_uncertainty", "inertia.", src, POI_DEFAULT_FRAC * max(xx, yy, zz),
+                  lo=0.0, hi=INERTIA_MAX, unit="kg m^2")
     if not 0 < moi < 1:
         raise InputError(f"'inertia.moi_uncertainty' is a fraction in (0, 1), got {moi}", path=src)
 
+    wheels = _wheels(d, src)
+    thrusters, eq16, com = _thrusters(d, src)
+    com_t = _table(d, "center_of_mass", src)
+    _check_keys(com_t, _COM_KEYS, "center_of_mass.", src)
+    if "offset_m" in com_t:
+        if eq16 is not None:
+            raise InputError("give the centre of mass once: '[thrusters] com' (Eq 16 shorthand) "
+                             "or 'center_of_mass.offset_m', not both", path=src)
+        com = _vector(com_t["offset_m"], "center_of_mass.offset_m", src)
+    com_sd = _number(com_t, "sd_m", "center_of_mass.", src, _default_com_sd(thrusters), lo=0.0,
+                     hi=LENGTH_MAX, unit="m", open_lo=False)
+
+    tp = _table(d, "pulse", src)
+    thrust_t = _table(d, "thrust", src)
+    if not thrusters:
+        for key, table in (("pulse", tp), ("thrust", thrust_t)):
+            if key in d:
+                raise InputError(f"[{key}] describes thrusters, but the model has none (no "
+                                 "[[thruster]] entries); remove it or add the thrusters",
+                                 path=src)
+    _check_keys(tp, _PULSE_KEYS, "pulse.", src)
+    base = PulseConstants()
+    kw = {}
+    for k in ("tau_delay", "tau_rise", "tau_fall"):
+        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
+        rk = k + "_range"
+        kw[rk] = _pair(tp, rk, "pulse.", src, getattr(base, rk), TAU_MAX)
+    kw["tau_log_sd_min"] = _number(tp, "tau_log_sd_min", "pulse.", src, base.tau_log_sd_min,
+                                   lo=0.0, hi=TAU_LOG_SD_MAX)
+    _check_keys(thrust_t, {"F"}, "thrust.", src)
+    thrust = _nominal_thrust(thrust_t, thrusters, eq16, src)
+    mass_t = _table(d, "mass", src)
+    _check_keys(mass_t, {"kg"}, "mass.", src)
+    mass = (_number(mass_t, "kg", "mass.", src, lo=0.0, hi=MASS_MAX, unit="kg") if mass_t
+            else float("nan"))
+    return Spacecraft(
+        name=_string(d, "name", "", src, Path(src).stem), inertia=inertia, moi_uncertainty=moi,
+        poi_uncertainty=poi, wheels=wheels, thrusters=thrusters, pulse=PulseConstants(**kw),
+        thrust=thrust, mass=mass, description=_string(d, "description", "", src, ""),
+        source=_string(d, "source", "", src, ""),
+        knowledge=_knowledge(d, src, _capacity_nms(wheels)),
+        com_m=com, com_sd_m=com_sd, eq16=eq16,
+    )
+
+
+def _column_name(name: str, where: str, what: str, src: str) -> str:
+    """``name`` when it can name a telemetry column (a letter, then letters, digits or ``_``;
+    not a required column), else an InputError naming the entry."""
+    if not _NAME_PATTERN.match(name) or name.lower() in _RESERVED_COLUMNS:
+        raise InputError(f"'{where}name' = {name!r}: a {what} name becomes a telemetry column, so "
+                         "it must start with a letter and hold only letters, digits and '_', "
+                         f"and not be one of {' '.join(sorted(_RESERVED_COLUMNS))}", path=src)
+    return name
+
+
+def _unique(names: Sequence[str], what: str, src: str) -> None:
+    """Raise naming the first name given twice (case-insensitive: column headers are)."""
+    seen: dict[str, int] = {}
+    for i, n in enumerate(names):
+        if n.upper() in seen:
+            raise InputError(f"two {what}s are named {n!r} ({what}[{seen[n.upper()]}] and "
+                             f"{what}[{i}]); each {what} needs its own name", path=src)
+        seen[n.upper()] = i
+
+
+def _unit(value, key: str, label: str, src: str) -> np.ndarray:
+    """A unit 3-vector (within 1e-6), else an InputError naming ``key`` and ``label``."""
+    v = _vector(value, key, src)
+    norm = float(np.linalg.norm(v))
+    if norm == 0:
+        raise InputError(f"'{key}' of {label} is zero; it must be a unit vector", path=src)
+    if abs(norm - 1) > _UNIT_TOL:
+        raise InputError(f"'{key}' of {label} must be a unit vector (|v| = {norm:.6f}); "
+                         "normalise it", path=src)
+    return v / norm
+
+
+def _wheels(d: dict[str, Any], src: str) -> tuple[Wheel, ...]:
+    """The ``[[wheel]]`` entries, checked (unique names, unit axes, limits)."""
     wheels_raw = d.get("wheel", [])
     if not isinstance(wheels_raw, list) or not all(isinstance(w, dict) for w in wheels_raw):
         raise InputError("'wheel' must be an array of tables, one [[wheel]] section per wheel",
@@ -384,13 +650,10 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
     for i, w in enumerate(wheels_raw):
         where = f"wheel[{i}]."
         _check_keys(w, _WHEEL_KEYS, where, src)
-        name = _string(w, "name", where, src)
+        name = _column_name(_string(w, "name", where, src), where, "wheel", src).upper()
         if "axis" not in w:
             raise InputError(f"missing required key '{where}axis'", path=src)
-        axis = _vector(w["axis"], where + "axis", src)
-        if abs(np.linalg.norm(axis) - 1) > _UNIT_TOL:
-            raise InputError(f"'{where}axis' must be a unit vector (|axis| = "
-                             f"{np.linalg.norm(axis):.6f}); normalise it", path=src)
+        axis = _unit(w["axis"], where + "axis", f"wheel {name}", src)
         j = _number(w, "inertia", where, src, lo=WHEEL_INERTIA_RANGE[0],
                     hi=WHEEL_INERTIA_RANGE[1], unit="kg m^2", open_lo=False)
         sd = None
@@ -399,45 +662,74 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
             if not 0 <= sd < 0.5:
                 raise InputError(f"'{where}inertia_sd_frac' is a fraction in [0, 0.5) (0.005 = "
                                  f"0.5 %), got {sd}", path=src)
-        wheels.append(Wheel(name.upper(), axis / np.linalg.norm(axis), j, sd))
-    names = [w.name for w in wheels]
-    if len(set(names)) != len(names):
-        raise InputError(f"wheel names must be unique, got {names}", path=src)
-
-    tt = _table(d, "thrusters", src, required=True)
-    _check_keys(tt, _THRUSTER_KEYS, "thrusters.", src)
-    thr = Thrusters(*(_number(tt, k, "thrusters.", src, lo=0.0, hi=LENGTH_MAX, unit="m")
-                      for k in ("Lx", "Ly", "Lzy", "Lzz")),
-                    com=_vector(tt.get("com", [0.0, 0.0, 0.0]), "thrusters.com", src))
-
-    tp = _table(d, "pulse", src)
-    _check_keys(tp, _PULSE_KEYS, "pulse.", src)
-    base = PulseConstants()
-    kw = {}
-    for k in ("tau_delay", "tau_rise", "tau_fall"):
-        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
-        rk = k + "_range"
-        kw[rk] = _pair(tp, rk, "pulse.", src, getattr(base, rk), TAU_MAX)
-    kw["tau_log_sd_min"] = _number(tp, "tau_log_sd_min", "pulse.", src, base.tau_log_sd_min,
-                                   lo=0.0, hi=TAU_LOG_SD_MAX)
-    thrust_t = _table(d, "thrust", src)
-    _check_keys(thrust_t, {"F"}, "thrust.", src)
-    thrust = _number(thrust_t, "F", "thrust.", src, 0.75, lo=0.0, hi=THRUST_MAX, unit="N")
-    mass_t = _table(d, "mass", src)
-    _check_keys(mass_t, {"kg"}, "mass.", src)
-    mass = (_number(mass_t, "kg", "mass.", src, lo=0.0, hi=MASS_MAX, unit="kg") if mass_t
-            else float("nan"))
-    return Spacecraft(
-        name=_string(d, "name", "", src, Path(src).stem), inertia=inertia, moi_uncertainty=moi,
-        poi_uncertainty=poi, wheels=tuple(wheels), thrusters=thr, pulse=PulseConstants(**kw),
-        thrust=thrust, mass=mass, description=_string(d, "description", "", src, ""),
-        source=_string(d, "source", "", src, ""), knowledge=_knowledge(d, src),
-    )
+        speed = _number(w, "max_speed_rpm", where, src, np.inf, lo=0.0, hi=WHEEL_SPEED_MAX_RPM,
+                        unit="rpm") if "max_speed_rpm" in w else float("inf")
+        torque = _number(w, "max_torque_nm", where, src, np.inf, lo=0.0, hi=WHEEL_TORQUE_MAX_NM,
+                         unit="N m") if "max_torque_nm" in w else float("inf")
+        art = w.get("articulated", False)
+        if not isinstance(art, bool):
+            raise InputError(f"'{where}articulated' must be true or false, got {art!r}", path=src)
+        wheels.append(Wheel(name, axis, j, sd, speed, torque, art))
+    _unique([w.name for w in wheels], "wheel", src)
+    return tuple(wheels)
 
 
-def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
-    """The optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections (one
-    sd each, ≥ 0)."""
+def _thrusters(d: dict[str, Any], src: str
+               ) -> tuple[tuple[Thruster, ...], tuple[float, float, float, float] | None,
+                          np.ndarray]:
+    """``(thrusters, Eq 16 lever arms or None, centre of mass (3,) m)`` from ``[[thruster]]``
+    entries or Cassini's ``[thrusters]`` shorthand (none: a spacecraft without thrusters)."""
+    if "thrusters" in d and "thruster" in d:
+        raise InputError("give the thrusters once: [[thruster]] entries or the [thrusters] "
+                         "shorthand of Feldman & Lee Eq 16, not both", path=src)
+    if "thrusters" in d:
+        tt = _table(d, "thrusters", src)
+        _check_keys(tt, _EQ16_KEYS, "thrusters.", src)
+        arms = tuple(_number(tt, k, "thrusters.", src, lo=0.0, hi=LENGTH_MAX, unit="m")
+                     for k in ("Lx", "Ly", "Lzy", "Lzz"))
+        com = _vector(tt.get("com", [0.0, 0.0, 0.0]), "thrusters.com", src)
+        return eq16_thrusters(*arms), arms, com
+    raw = d.get("thruster", [])
+    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
+        raise InputError("'thruster' must be an array of tables, one [[thruster]] section per "
+                         "thruster", path=src)
+    out = []
+    for i, x in enumerate(raw):
+        where = f"thruster[{i}]."
+        _check_keys(x, _THRUSTER_ENTRY_KEYS, where, src)
+        name = _column_name(_string(x, "name", where, src), where, "thruster", src)
+        for key in ("position", "direction"):
+            if key not in x:
+                raise InputError(f"missing required key '{where}{key}' (thruster {name})",
+                                 path=src)
+        pos = _vector(x["position"], where + "position", src)
+        direction = _unit(x["direction"], where + "direction", f"thruster {name}", src)
+        f = (_number(x, "F", where, src, lo=0.0, hi=THRUST_MAX, unit="N") if "F" in x
+             else None)
+        out.append(Thruster(name, pos, direction, f, _string(x, "branch", where, src, "")))
+    _unique([s.name for s in out], "thruster", src)
+    return tuple(out), None, np.zeros(3)
+
+
+def _nominal_thrust(table: dict, thrusters: Sequence[Thruster], eq16, src: str) -> float:
+    """The model's nominal thrust per thruster, N: ``[thrust] F``; without it Cassini's 0.75 N for
+    the Eq 16 shorthand, the mean of the per-thruster ``F`` for ``[[thruster]]`` entries (each
+    must then have one); NaN without thrusters."""
+    if not thrusters:
+        return float("nan")
+    if "F" in table or eq16 is not None:
+        return _number(table, "F", "thrust.", src, 0.75, lo=0.0, hi=THRUST_MAX, unit="N")
+    missing = [s.name for s in thrusters if s.thrust_n is None]
+    if missing:
+        raise InputError(f"thruster {missing[0]} has no thrust: give 'F' (N) in its [[thruster]] "
+                         "entry or the model's [thrust] F", path=src)
+    return float(np.mean([s.thrust_n for s in thrusters]))
+
+
+def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
+    """The optional ``[gyro]``, ``[wheel_knowledge]``, ``[telemetry_knowledge]`` and
+    ``[torque_knowledge]`` sections (one sd each, ≥ 0); the torques at most the wheels'
+    momentum ``capacity_nms`` over :data:`TORQUE_HOLD_MIN_S`."""
     base = Knowledge()
     kw = {}
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
@@ -455,10 +747,13 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
         if kw[_WHEEL_KNOWLEDGE_KEYS[key]] >= 0.5:
             raise InputError(f"'wheel_knowledge.{key}' is a fraction (0.005 = 0.5 %), got "
                              f"{kw[_WHEEL_KNOWLEDGE_KEYS[key]]}", path=src)
+    hold = capacity_nms / TORQUE_HOLD_MIN_S
+    given = _table(d, "torque_knowledge", src)
     for key in ("sd_nm", "rate_sd_nm_per_h"):
-        if kw[_TORQUE_KNOWLEDGE_KEYS[key]] > 1e-2:
+        if key in given and kw[_TORQUE_KNOWLEDGE_KEYS[key]] > hold:
             raise InputError(f"'torque_knowledge.{key}' is a small external torque in N m "
-                             f"(<= 0.01; Cassini's is ~1.5e-5), got "
+                             f"(at most {hold:.3g}, what fills the wheels' {capacity_nms:.3g} "
+                             f"N m s in a minute; Cassini's is ~1.5e-5), got "
                              f"{kw[_TORQUE_KNOWLEDGE_KEYS[key]]}", path=src)
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "

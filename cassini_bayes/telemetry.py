@@ -6,10 +6,13 @@ and/or the data row (1-based, header not counted, with its ``t``) and what to do
 
 Validation rules and their tolerances
 -------------------------------------
-- Columns: ``t q1 q2 q3 q4 wx wy wz`` required; ``rwa1 … rwa4`` (rpm) optional — absent or
-  entirely empty means the wheel is off (NaN inside); ``on_Z1 … on_Y4`` (s) optional — when any is
-  present, a thruster without a column never fired. Header names are matched case-insensitively;
-  an unknown or duplicate column is an error (a typo must not silently drop data).
+- Columns: ``t q1 q2 q3 q4 wx wy wz`` required; one column per wheel of the spacecraft model,
+  named as the wheel in lower case (rpm, optional — absent or entirely empty means the wheel is
+  off, NaN inside); ``on_<thruster>`` per thruster of the model (s, optional — when any is
+  present, a thruster without a column never fired). Without a model the names are Cassini's
+  (``rwa1 … rwa4``, ``on_Z1 … on_Y4``; docs/model_file.md). Header names are matched
+  case-insensitively; an unknown or duplicate column is an error (a typo must not silently drop
+  data), and a column for a wheel or thruster the model lacks names the model's.
 - Values: numbers only; a required cell that is empty, NaN or infinite is an error; a wheel column
   that is empty in some rows but not in others is an error.
 - Time: strictly increasing (a duplicate or a step back is an error naming both rows).
@@ -43,7 +46,8 @@ Validation rules and their tolerances
   the body rate integrated up to the first row where the quaternions have turned by
   ``min(0.1 rad, largest turn)`` must not exceed that angle by more than ten times (°/s gives
   57×, mrad/s 1000×; rate noise adds only a random walk, far below ten times the angle).
-- Pulse logs: thruster names ``Z1 … Y4`` (case-insensitive); ``0 < width ≤ PULSE_WIDTH_MAX``;
+- Pulse logs: thruster names of the model (Cassini's ``Z1 … Y4`` without one; case-insensitive);
+  ``0 < width ≤ PULSE_WIDTH_MAX``;
   ``t_on`` strictly increasing per thruster and no pulse starting before the previous pulse of
   the same thruster has ended. A header-only pulse log is valid (no pulses). Against a telemetry
   (:func:`check_pulses_in_span`): a pulse entirely outside the telemetry span cannot affect it
@@ -67,8 +71,9 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes._file_mode import default_file_mode
+from cassini_bayes._paths import input_path, not_utf8
 from cassini_bayes.errors import InputError, as_path
-from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.names import THRUSTER_NAMES
 
 __all__ = [
     "Telemetry",
@@ -76,6 +81,7 @@ __all__ = [
     "RPM_TO_RAD_S",
     "WHEEL_NAMES",
     "IDLE_RPM",
+    "IDLE_NOISE_SD",
     "THRUSTER_NAMES",
     "QUAT_NORM_TOL",
     "OMEGA_MAX",
@@ -95,17 +101,27 @@ __all__ = [
     "validate_telemetry",
     "validate_pulses",
     "check_pulses_in_span",
+    "pulses_in_span",
+    "check_model_names",
     "PulseAtStartWarning",
+    "PulsesDroppedWarning",
     "cumulative_on_times",
     "with_on_times",
+    "white_noise_sd",
+    "RATE_NOISE_FLOORS",
 ]
 
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
+"""Cassini's wheels: the telemetry's wheel columns ``rwa1 … rwa4`` when no model names others."""
 IDLE_RPM = 1.0
 """A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: its momentum,
 0.16 kg m² × 1 rpm = 0.017 N m s rms, is ~1000× below what a slew exchanges (18–22 N m s);
 tachometer noise about 0 rpm (±0.3 rpm) is idle, a wheel through zero speed is not."""
+IDLE_NOISE_SD = 3.0
+"""… or whose rms rate is at most this many times its own white noise
+(:func:`white_noise_sd`): a coarse tachometer's noise about 0 rpm (a CubeSat's hall sensors,
+±1 rpm steps) is idle too."""
 
 
 @dataclass(frozen=True)
@@ -120,9 +136,10 @@ class Telemetry:
     wheel_rates : (n, k) wheel spin rates about their own axes relative to the body, rad/s;
         a column of NaN is a wheel that is off.
     wheel_names : the k wheel names, matching the spacecraft model's wheels (``RWA1`` …).
-    on_times : (n, 8) cumulative thruster on-times since the first row, s, in the order
-        ``Z1 … Y4``; ``None`` when the file had none.
+    on_times : (n, m) cumulative thruster on-times since the first row, s, in the order of
+        ``thruster_names``; ``None`` when the file had none.
     source : where the data came from (a file name), for error messages.
+    thruster_names : the m thrusters of ``on_times`` (the model's; Cassini's ``Z1 … Y4``).
     """
 
     t: np.ndarray
@@ -132,6 +149,7 @@ class Telemetry:
     wheel_names: tuple[str, ...] = WHEEL_NAMES
     on_times: np.ndarray | None = None
     source: str = "<telemetry>"
+    thruster_names: tuple[str, ...] = THRUSTER_NAMES
 
     @property
     def n(self) -> int:
@@ -143,15 +161,17 @@ class Telemetry:
 
     def active_mask(self) -> np.ndarray:
         """(k,) which wheels carry momentum: finite rates whose root mean square exceeds
-        :data:`IDLE_RPM`. A wheel written as 0 rpm (or within tachometer noise of it) all along
-        is as good as off: its momentum is below the noise, and a wheel the data cannot see must
-        not get a spin-inertia scale of its own (it moved the inertia fit by −2.4 %)."""
+        :data:`IDLE_RPM` and :data:`IDLE_NOISE_SD` times their white noise. A wheel written as
+        0 rpm (or within tachometer noise of it) all along is as good as off: its momentum is
+        below the noise, and a wheel the data cannot see must not get a spin-inertia scale of
+        its own (it moved the inertia fit by −2.4 %)."""
         rates = np.asarray(self.wheel_rates, float)
         finite = np.isfinite(rates)
         n = finite.sum(axis=0)
         ms = np.where(finite, rates, 0.0) ** 2
         rms = np.sqrt(ms.sum(axis=0) / np.maximum(n, 1))
-        return (n > 0) & (rms > IDLE_RPM * RPM_TO_RAD_S)
+        noise = np.array([white_noise_sd(rates[:, j]) for j in range(rates.shape[1])])
+        return (n > 0) & (rms > np.maximum(IDLE_RPM * RPM_TO_RAD_S, IDLE_NOISE_SD * noise))
 
     def active_wheels(self) -> tuple[str, ...]:
         """Names of the wheels that carry momentum (:meth:`active_mask`)."""
@@ -162,7 +182,7 @@ class Telemetry:
         m = (self.t >= t0) & (self.t <= t1)
         return Telemetry(self.t[m], self.q[m], self.omega[m], self.wheel_rates[m],
                          self.wheel_names, None if self.on_times is None else self.on_times[m],
-                         self.source)
+                         self.source, self.thruster_names)
 
 
 @dataclass(frozen=True)
@@ -171,19 +191,21 @@ class PulseLog:
 
     Attributes
     ----------
-    t_on : (m,) command times, s.
-    thruster : (m,) thruster indices 0..7 into ``THRUSTER_NAMES`` (``Z1 … Y4``).
-    width : (m,) commanded on-times, s.
+    t_on : (p,) command times, s.
+    thruster : (p,) thruster indices into ``thruster_names``.
+    width : (p,) commanded on-times, s.
+    thruster_names : the spacecraft model's thrusters (Cassini's ``Z1 … Y4`` by default).
     """
 
     t_on: np.ndarray
     thruster: np.ndarray
     width: np.ndarray
     source: str = field(default="<pulses>")
+    thruster_names: tuple[str, ...] = THRUSTER_NAMES
 
     @property
     def names(self) -> list[str]:
-        return [THRUSTER_NAMES[i] for i in self.thruster]
+        return [self.thruster_names[i] for i in self.thruster]
 
 
 # --------------------------------------------------------------------------------------------
@@ -216,11 +238,37 @@ _MIN_SWEEP_RAD = 0.01  # the ratio test needs the attitude to move at least this
 
 _Q_COLS = ("q1", "q2", "q3", "q4")
 _W_COLS = ("wx", "wy", "wz")
-_RWA_COLS = tuple(n.lower() for n in WHEEL_NAMES)
-_ON_COLS = tuple(f"on_{n}" for n in THRUSTER_NAMES)
 _REQUIRED = ("t",) + _Q_COLS + _W_COLS
-_KNOWN = _REQUIRED + _RWA_COLS + _ON_COLS
 _PULSE_COLS = ("t_on", "thruster", "width")
+
+
+def _on_cols(thruster_names: Sequence[str]) -> tuple[str, ...]:
+    """The on-time columns ``on_<name>`` of the thrusters."""
+    return tuple(f"on_{n}" for n in thruster_names)
+
+
+def _names_of(spacecraft) -> tuple[tuple[str, ...], tuple[str, ...], str]:
+    """``(wheel names, thruster names, whose)`` of the file layout: the model's, or Cassini's
+    (the format's default) when ``spacecraft`` is ``None``."""
+    if spacecraft is None:
+        return (WHEEL_NAMES, THRUSTER_NAMES,
+                "Cassini's layout (the default without a spacecraft model)")
+    return (tuple(spacecraft.wheel_names), tuple(spacecraft.thruster_names),
+            f"the spacecraft model {spacecraft.name!r}")
+
+
+def _unknown_column(h: str, wheel_names, thruster_names, whose: str,
+                    no_model: bool) -> str:
+    """Why header ``h`` is unknown, naming the wheels or thrusters ``whose`` layout expects."""
+    give = (", or give the spacecraft model whose wheels and thrusters these are (--spacecraft)"
+            if no_model else "")
+    if h.lower().startswith("on_"):
+        have = " ".join(_on_cols(thruster_names)) or "none: it has no thrusters"
+        return (f"column '{h}' is the on-time of no thruster of {whose} (its on_* columns: "
+                f"{have}); rename or remove it{give}")
+    wheels = " ".join(n.lower() for n in wheel_names)
+    return (f"unknown column '{h}': neither a required column ({' '.join(_REQUIRED)}) nor a "
+            f"wheel column of {whose} ({wheels}); rename or remove it{give}")
 
 
 class PulseSpanWarning(UserWarning):
@@ -231,16 +279,16 @@ class PulseAtStartWarning(PulseSpanWarning):
     """A pulse is on at the first sample: only what it does after that sample is used."""
 
 
+class PulsesDroppedWarning(PulseSpanWarning):
+    """Pulses of the log act entirely outside the telemetry span: they are left out."""
+
+
 # --------------------------------------------------------------------------------------------
 # Raw tables: header + columns of strings (CSV) or objects (Parquet)
 
 
 def _check_readable(path: Path, what: str) -> None:
-    if not path.exists():
-        raise InputError(f"{what} file not found; check the path", path=str(path))
-    if path.is_dir():
-        raise InputError(f"is a directory, expected a {what} file (CSV or Parquet)",
-                         path=str(path))
+    input_path(path, what, suffix=None)   # the rule of every file argument: exists, not a folder
     if path.stat().st_size == 0:
         raise InputError(f"{what} file is empty; expected a header line and data rows",
                          path=str(path))
@@ -317,8 +365,8 @@ def _too_many_rows(n: int, path: str, what: str = "telemetry") -> InputError:
                       "one file per slew (docs/limits.md)", path=path)
 
 
-def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
-                      expected: str) -> tuple[dict[str, int], list[np.ndarray]]:
+def _read_numeric_csv(path: Path, what: str, known: Sequence[str], expected: str,
+                      unknown=None) -> tuple[dict[str, int], list[np.ndarray]]:
     """Header map and one float64 column per header name, parsed in chunks of rows.
 
     Equivalent to :func:`_read_table` then :func:`_to_float` on every column (same errors, same
@@ -335,7 +383,7 @@ def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
                 raise InputError(f"{what} file is empty; expected a header line and data rows",
                                  path=name)
             header = [c.strip() for c in first]
-            idx = _map_header(header, known, name, expected)
+            idx = _map_header(header, known, name, expected, unknown)
             canon = {j: c for c, j in idx.items()}
             parts: list[list[np.ndarray]] = [[] for _ in header]
             n = 0
@@ -364,22 +412,14 @@ def _read_numeric_csv(path: Path, what: str, known: Sequence[str],
 
 
 def _not_text(path, what: str) -> str:
-    """Why a file is not text: gzip or zip compression named, else a generic message."""
-    try:
-        with open(path, "rb") as f:
-            magic = f.read(4)
-    except OSError:
-        magic = b""
-    if magic[:2] == b"\x1f\x8b":
-        return f"is gzip-compressed; decompress it (gunzip) and give the {what} CSV"
-    if magic == b"PK\x03\x04":
-        return f"is a zip archive; extract the {what} CSV from it"
-    return f"is not a text CSV file; expected a {what} CSV (or .parquet)"
+    """Why a file is not UTF-8 text (:func:`cassini_bayes._paths.not_utf8`)."""
+    return not_utf8(path, f"{what} CSV")
 
 
 def _map_header(header: list[str], known: Sequence[str], path: str,
-                expected: str) -> dict[str, int]:
-    """Canonical column name → index; unknown and duplicate names are errors."""
+                expected: str, unknown=None) -> dict[str, int]:
+    """Canonical column name → index; unknown and duplicate names are errors (``unknown``:
+    the message for an unknown name, a function of it)."""
     canon = {k.lower(): k for k in known}
     out: dict[str, int] = {}
     for j, h in enumerate(header):
@@ -391,6 +431,8 @@ def _map_header(header: list[str], known: Sequence[str], path: str,
                 raise InputError(f"the header '{shown[:40]}' is one column split by "
                                  f"{sep!r}: the file format separates columns with commas; "
                                  "re-export it as comma-separated CSV", path=path)
+            if unknown is not None and h:
+                raise InputError(unknown(h), path=path)
             raise InputError(f"unknown column '{shown}'; expected columns are {expected}; "
                              "rename or remove it", path=path)
         if key in out:
@@ -607,7 +649,7 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
     expect = {"t": (t, (n,)), "q": (q, (n, 4)), "omega": (w, (n, 3)),
               "wheel_rates": (r, (n, len(tel.wheel_names)))}
     if on is not None:
-        expect["on_times"] = (on, (n, len(THRUSTER_NAMES)))
+        expect["on_times"] = (on, (n, len(tel.thruster_names)))
     for name, (x, shape) in expect.items():
         if n < 0 or x.shape != shape:
             raise InputError(f"mismatched lengths: '{name}' has shape {x.shape}, expected {shape} "
@@ -637,28 +679,33 @@ def validate_telemetry(tel: Telemetry, *, check_units: bool = True) -> Telemetry
         if check_units:
             _check_wheel_units(name.lower(), x / RPM_TO_RAD_S, path)
     if on is not None:
-        for k, c in enumerate(_ON_COLS):
+        on_cols = _on_cols(tel.thruster_names)
+        for k, c in enumerate(on_cols):
             _fail_nonfinite(on[:, k], c, path, t)
             _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", path, t, "317 years")
-        _check_on_times(on, t, _ON_COLS, path)
+        _check_on_times(on, t, on_cols, path)
     q = _check_quaternions(q, t, path)
     if check_units:
         _check_omega_units(t, q, w, path)
-    return Telemetry(t, q, w, r, tuple(tel.wheel_names), on, path)
+    return Telemetry(t, q, w, r, tuple(tel.wheel_names), on, path, tuple(tel.thruster_names))
 
 
 # --------------------------------------------------------------------------------------------
 # Telemetry files
 
 
-def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Telemetry:
+def read_telemetry(path: str | os.PathLike, *, check_units: bool = True,
+                   spacecraft=None) -> Telemetry:
     """Read and validate a telemetry file (CSV, or Parquet where pyarrow is installed).
 
     Parameters
     ----------
     path : the file; columns as docs/design.md §4.1 (``t`` s, ``q1..q4``, ``wx wy wz`` rad/s,
-        ``rwa1..rwa4`` rpm, optional ``on_Z1..on_Y4`` s).
+        one column per wheel in rpm, optional ``on_<thruster>`` s).
     check_units : run the rad/s-vs-rpm and rad/s-vs-°/s heuristics (see the module docstring).
+    spacecraft : the :class:`~cassini_bayes.spacecraft.Spacecraft` whose wheels and thrusters
+        name the columns (their names in lower case, ``on_<name>``); ``None``: Cassini's
+        (``rwa1..rwa4``, ``on_Z1..on_Y4``).
 
     Returns
     -------
@@ -673,18 +720,28 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     """
     p = as_path(path, "a telemetry file")
     name = str(path)
-    expected = "t q1 q2 q3 q4 wx wy wz rwa1..rwa4 (rpm) on_Z1..on_Y4 (s)"
+    wheel_names, thruster_names, whose = _names_of(spacecraft)
+    rwa_cols = tuple(n.lower() for n in wheel_names)
+    on_cols = _on_cols(thruster_names)
+    known = _REQUIRED + rwa_cols + on_cols
+    expected = (f"{' '.join(_REQUIRED)} {' '.join(rwa_cols)} (rpm) {' '.join(on_cols)} (s)"
+                if on_cols else f"{' '.join(_REQUIRED)} {' '.join(rwa_cols)} (rpm)")
+
+    def unknown(h: str) -> str:
+        return _unknown_column(h, wheel_names, thruster_names, whose, spacecraft is None)
+
     if _is_parquet(p):
         header, cells = _read_table(p, "telemetry")
-        idx = _map_header(header, _KNOWN, name, expected)
+        idx = _map_header(header, known, name, expected, unknown)
         canon = {j: c for c, j in idx.items()}
         values = [_to_float(cells[j], canon[j], name) for j in range(len(header))]
     else:
-        idx, values = _read_numeric_csv(p, "telemetry", _KNOWN, expected)
+        idx, values = _read_numeric_csv(p, "telemetry", known, expected, unknown)
     for c in _REQUIRED:
         if c not in idx:
             raise InputError(f"missing column '{c}'; a telemetry file needs "
-                             f"{' '.join(_REQUIRED)} (and rwa1..rwa4 in rpm)", path=name)
+                             f"{' '.join(_REQUIRED)} (and {' '.join(rwa_cols)} in rpm)",
+                             path=name)
     cols = {c: values[j] for c, j in idx.items()}
     t = cols["t"]
     _fail_nonfinite(t, "t", name, None, fix="every row needs a time")
@@ -692,27 +749,47 @@ def read_telemetry(path: str | os.PathLike, *, check_units: bool = True) -> Tele
     n = len(t)
     q = np.stack([cols[c] for c in _Q_COLS], axis=1)
     w = np.stack([cols[c] for c in _W_COLS], axis=1)
-    rpm = np.stack([cols.get(c, np.full(n, np.nan)) for c in _RWA_COLS], axis=1)
+    rpm = np.stack([cols.get(c, np.full(n, np.nan)) for c in rwa_cols], axis=1)
     on = None
-    if any(c in cols for c in _ON_COLS):
-        on = np.stack([cols.get(c, np.zeros(n)) for c in _ON_COLS], axis=1)
-        for k, c in enumerate(_ON_COLS):
+    if any(c in cols for c in on_cols):
+        on = np.stack([cols.get(c, np.zeros(n)) for c in on_cols], axis=1)
+        for k, c in enumerate(on_cols):
             _fail_nonfinite(on[:, k], c, name, t)
             _fail_out_of_range(on[:, k], c, TIME_ABS_MAX, "s", name, t, "317 years")
         on = on - on[0]
-    tel = Telemetry(t, q, w, rpm * RPM_TO_RAD_S, WHEEL_NAMES, on, name)
+    tel = Telemetry(t, q, w, rpm * RPM_TO_RAD_S, wheel_names, on, name, thruster_names)
     return validate_telemetry(tel, check_units=check_units)
 
 
-def read_telemetry_many(paths: Iterable[str | os.PathLike], *,
-                        check_units: bool = True) -> list[Telemetry]:
-    """Read several telemetry files (e.g. one per slew); errors name the offending file."""
+def check_model_names(tel: Telemetry, spacecraft) -> Telemetry:
+    """``tel`` when its wheels are wheels of ``spacecraft`` (a wheel of the model without data
+    is off) and its on-times, if any, belong to the model's thrusters; else an InputError naming
+    both. Files read with the model pass by construction; this is for in-memory telemetry."""
+    model = {n.upper() for n in spacecraft.wheel_names}
+    stray = [n for n in tel.wheel_names if n.upper() not in model]
+    if stray:
+        raise InputError(f"wheel {stray[0]} (column {stray[0].lower()}) is not a wheel of the "
+                         f"spacecraft model {spacecraft.name!r}, whose wheels are "
+                         f"{', '.join(spacecraft.wheel_names)}; give the model of this "
+                         "spacecraft", path=tel.source)
+    if tel.on_times is not None and tuple(tel.thruster_names) != tuple(spacecraft.thruster_names):
+        have = ", ".join(spacecraft.thruster_names) or "none"
+        raise InputError(f"the on-time columns are of thrusters {', '.join(tel.thruster_names)}"
+                         f", but the spacecraft model {spacecraft.name!r} has {have}; give the "
+                         "model of this spacecraft", path=tel.source)
+    return tel
+
+
+def read_telemetry_many(paths: Iterable[str | os.PathLike], *, check_units: bool = True,
+                        spacecraft=None) -> list[Telemetry]:
+    """Read several telemetry files (e.g. one per slew; columns named by ``spacecraft`` as in
+    :func:`read_telemetry`); errors name the offending file."""
     paths = list(paths)
     if not paths:
         raise InputError("no telemetry files given; pass at least one CSV")
     out, total = [], 0
     for p in paths:
-        out.append(read_telemetry(p, check_units=check_units))
+        out.append(read_telemetry(p, check_units=check_units, spacecraft=spacecraft))
         total += out[-1].n
         if total > MAX_ROWS:
             raise InputError(f"the files up to this one hold {total} rows together, more than "
@@ -800,7 +877,7 @@ def write_telemetry(path: str | os.PathLike, tel: Telemetry, *, force: bool = Fa
         cols[name.lower()] = rates[:, j] / RPM_TO_RAD_S
     if tel.on_times is not None:
         on = np.asarray(tel.on_times, dtype=float)
-        for k, c in enumerate(_ON_COLS):
+        for k, c in enumerate(_on_cols(tel.thruster_names)):
             cols[c] = on[:, k]
     _write_frame(p, cols, force)
 
@@ -821,9 +898,11 @@ def validate_pulses(log: PulseLog) -> PulseLog:
     if not (t_on.ndim == thr.ndim == width.ndim == 1 and len(t_on) == len(thr) == len(width)):
         raise InputError(f"mismatched lengths: t_on {t_on.shape}, thruster {thr.shape}, width "
                          f"{width.shape}; one entry per pulse", path=path)
+    names = tuple(log.thruster_names)
     if thr.size and (not np.issubdtype(thr.dtype, np.integer)
-                     or thr.min() < 0 or thr.max() >= len(THRUSTER_NAMES)):
-        raise InputError("thruster indices must be integers 0..7 (Z1..Y4)", path=path)
+                     or thr.min() < 0 or thr.max() >= len(names)):
+        raise InputError(f"thruster indices must be integers 0..{len(names) - 1} "
+                         f"({', '.join(names) or 'the model has no thrusters'})", path=path)
     thr = thr.astype(int)
     _fail_nonfinite(t_on, "t_on", path, None)
     _fail_nonfinite(width, "width", path, None)
@@ -834,7 +913,7 @@ def validate_pulses(log: PulseLog) -> PulseLog:
         i = int(np.argmax(width <= 0))
         raise InputError(f"column 'width', data row {i + 1} (t_on = {t_on[i]:.10g} s): width "
                          f"{width[i]:.6g} s must be positive; drop the row", path=path)
-    for k, name in enumerate(THRUSTER_NAMES):
+    for k, name in enumerate(names):
         rows = np.flatnonzero(thr == k)
         if rows.size < 2:
             continue
@@ -856,46 +935,50 @@ def validate_pulses(log: PulseLog) -> PulseLog:
                              f"(t_on = {t[i]:.10g} s, width {w[i]:.6g} s) is still on at data row "
                              f"{rows[i + 1] + 1} (t_on = {t[i + 1]:.10g} s); {fix}", path=path)
     order = np.argsort(t_on, kind="stable")
-    return PulseLog(t_on[order], thr[order], width[order], path)
+    return PulseLog(t_on[order], thr[order], width[order], path, names)
 
 
-def read_pulses(path: str | os.PathLike) -> PulseLog:
-    """Read and validate a pulse log: columns ``t_on`` (s), ``thruster`` (Z1..Y4), ``width`` (s).
+def read_pulses(path: str | os.PathLike, *, spacecraft=None) -> PulseLog:
+    """Read and validate a pulse log: columns ``t_on`` (s), ``thruster`` (a thruster of
+    ``spacecraft``; Cassini's ``Z1..Y4`` when ``None``), ``width`` (s).
 
     Returns
     -------
     PulseLog
-        Sorted by ``t_on``; thruster as indices into ``THRUSTER_NAMES``.
+        Sorted by ``t_on``; thruster as indices into its ``thruster_names``.
     """
     p = as_path(path, "a pulse-log file")
     name = str(path)
+    _, names, whose = _names_of(spacecraft)
+    if not names:
+        raise InputError(f"a pulse log lists thruster firings, but {whose} has no thrusters; "
+                         "give the model of the spacecraft that fired them", path=name)
     header, cells = _read_table(p, "pulse-log", allow_empty=True)
     idx = _map_header(header, _PULSE_COLS, name, "t_on thruster width")
     for c in _PULSE_COLS:
         if c not in idx:
             raise InputError(f"missing column '{c}'; a pulse log needs t_on (s), thruster "
-                             "(Z1..Y4), width (s)", path=name)
+                             f"({' '.join(names)}), width (s)", path=name)
     t_on = _to_float(cells[idx["t_on"]], "t_on", name)
     width = _to_float(cells[idx["width"]], "width", name)
     _fail_nonfinite(t_on, "t_on", name, None, fix="every pulse needs a command time")
     _fail_nonfinite(width, "width", name, None, fix="every pulse needs a width in seconds")
-    lookup = {n.lower(): k for k, n in enumerate(THRUSTER_NAMES)}
+    lookup = {n.lower(): k for k, n in enumerate(names)}
     thr = np.empty(len(t_on), dtype=int)
     for i, c in enumerate(cells[idx["thruster"]]):
         key = "" if c is None else str(c).strip().lower()
         if key not in lookup:
             raise InputError(f"column 'thruster', data row {i + 1} (t_on = {t_on[i]:.10g} s): "
-                             f"unknown thruster '{c}'; expected one of "
-                             f"{' '.join(THRUSTER_NAMES)}", path=name)
+                             f"unknown thruster '{c}'; the thrusters of {whose} are "
+                             f"{' '.join(names)}", path=name)
         thr[i] = lookup[key]
-    return validate_pulses(PulseLog(t_on, thr, width, name))
+    return validate_pulses(PulseLog(t_on, thr, width, name, names))
 
 
 def write_pulses(path: str | os.PathLike, log: PulseLog, *, force: bool = False) -> None:
     """Write a pulse log (``t_on``, ``thruster`` name, ``width``) atomically, full precision."""
     log = validate_pulses(log)
-    cols = {"t_on": log.t_on, "thruster": [THRUSTER_NAMES[i] for i in log.thruster],
-            "width": log.width}
+    cols = {"t_on": log.t_on, "thruster": log.names, "width": log.width}
     _write_frame(Path(path), cols, force)
 
 
@@ -907,7 +990,7 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     command (a few fall time constants) for the thrust fit.
 
     - A pulse that acts entirely before the first sample or from the last sample on cannot change
-      the telemetry: it is dropped with a :class:`PulseSpanWarning`.
+      the telemetry: it is dropped with a :class:`PulsesDroppedWarning`.
     - A pulse still on at the last sample is kept with a :class:`PulseSpanWarning`: the data
       see its on-time up to the last sample, which is what :func:`cumulative_on_times` counts.
     - A pulse already acting at the first sample is kept with a :class:`PulseAtStartWarning`
@@ -920,7 +1003,7 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     end = log.t_on + log.width
     at_start = (log.t_on < t0) & (end + tail_s > t0)
     for i in np.flatnonzero(at_start):
-        warnings.warn(f"{log.source}: pulse of {THRUSTER_NAMES[log.thruster[i]]} at t_on = "
+        warnings.warn(f"{log.source}: pulse of {log.thruster_names[log.thruster[i]]} at t_on = "
                       f"{log.t_on[i]:.10g} s (width {log.width[i]:.6g} s) is "
                       f"{'on' if end[i] > t0 else 'still decaying'} at the first telemetry "
                       f"sample t = {t0:.10g} s of {tel.source}; only what it does after that "
@@ -934,10 +1017,25 @@ def check_pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) 
     if np.any(outside):
         warnings.warn(f"{log.source}: {int(outside.sum())} of {len(outside)} pulses lie outside "
                       f"the telemetry span {t0:.10g}..{t1:.10g} s of {tel.source} and are ignored",
-                      PulseSpanWarning, stacklevel=2)
+                      PulsesDroppedWarning, stacklevel=2)
         keep = ~outside
-        return PulseLog(log.t_on[keep], log.thruster[keep], log.width[keep], log.source)
+        return PulseLog(log.t_on[keep], log.thruster[keep], log.width[keep], log.source,
+                        log.thruster_names)
     return log
+
+
+def pulses_in_span(log: PulseLog, tel: Telemetry, *, tail_s: float = 0.0) -> PulseLog:
+    """:func:`check_pulses_in_span` for a fit: of its notes only those about what the fit does
+    not see are raised — pulses dropped (:class:`PulsesDroppedWarning`) and pulses on at the
+    first sample (:class:`PulseAtStartWarning`); a pulse still on at the last sample is modelled
+    up to it and needs no word (``check`` reports it)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        kept = check_pulses_in_span(log, tel, tail_s=tail_s)
+    for w in caught:
+        if w.category is not PulseSpanWarning:
+            warnings.warn(w.message, w.category, stacklevel=2)
+    return kept
 
 
 def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:
@@ -953,12 +1051,13 @@ def cumulative_on_times(pulses: PulseLog, t: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (n, 8) on-times in s, columns ``Z1 … Y4``.
+    (n, m) on-times in s, one column per thruster of ``pulses.thruster_names``.
     """
     pulses = validate_pulses(pulses)
     t = np.asarray(t, dtype=float)
-    out = np.zeros((t.shape[0], len(THRUSTER_NAMES)))
-    for k in range(len(THRUSTER_NAMES)):
+    m = len(pulses.thruster_names)
+    out = np.zeros((t.shape[0], m))
+    for k in range(m):
         m = pulses.thruster == k
         if not np.any(m):
             continue
@@ -980,6 +1079,42 @@ def with_on_times(tel: Telemetry, pulses: PulseLog | None) -> Telemetry:
     """
     if tel.on_times is not None or pulses is None:
         return tel
+    if tuple(pulses.thruster_names) != tuple(tel.thruster_names):
+        raise InputError(f"its thrusters ({', '.join(pulses.thruster_names)}) are not those of "
+                         f"the telemetry {tel.source} ({', '.join(tel.thruster_names) or 'none'})"
+                         "; read both with the same spacecraft model", path=pulses.source)
     pulses = check_pulses_in_span(pulses, tel)
     return Telemetry(tel.t, tel.q, tel.omega, tel.wheel_rates, tel.wheel_names,
-                     cumulative_on_times(pulses, tel.t), tel.source)
+                     cumulative_on_times(pulses, tel.t), tel.source, pulses.thruster_names)
+
+
+# --------------------------------------------------------------------------------------------
+# Noise
+
+_MAD_TO_SD = 1.4826
+RATE_NOISE_FLOORS = (1e-9, 1e-7)
+"""rad/s: body-rate and wheel-rate noise levels are floored here, so that noise-free synthetic
+data keep finite noise priors and thresholds (the noise priors and the input checks)."""
+
+
+def white_noise_sd(x: np.ndarray, *, differenced: bool = False) -> float:
+    """Robust sd of white noise on a smooth signal ``x`` (n, ...) sampled along axis 0: the MAD
+    of its second differences (all components pooled, non-finite values left out) ÷ √6.
+
+    The one white-noise estimator of the package (noise priors, input checks). For white noise
+    of sd ``σ`` second differences have sd ``√6 σ``; the median absolute deviation (× 1.4826,
+    the normal's MAD-to-sd factor) ignores the few samples where the signal itself bends (a
+    pulse, a wheel ramp, the slew profile).
+
+    ``differenced``: ``x`` already holds the signal's first differences (e.g. attitude
+    increments ``rotvec(q_{t+1} q_t⁻¹)``), so one more difference is taken. 0 when the signal
+    has fewer than four samples or no finite difference.
+    """
+    order = 1 if differenced else 2
+    if x.shape[0] < 2 + order or x.size == 0:
+        return 0.0
+    d = np.diff(x, n=order, axis=0).ravel()
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return 0.0
+    return float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))

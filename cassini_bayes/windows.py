@@ -15,6 +15,10 @@ sample's two neighbours, however coarse the sampling),
 - ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored),
 - no cumulative thruster on-time grows within the window (when the telemetry has on-times).
 
+Both tolerances are at least :data:`QUIET_NOISE_SD` times the white noise of the file's own
+body rates and of each wheel's rates (:func:`cassini_bayes.telemetry.white_noise_sd`): a MEMS
+gyro or a CubeSat's 1-rpm hall sensors are quiet at rest however coarse their noise.
+
 The window makes a single noisy sample or a thruster pulse exclude its neighbourhood too, so a
 quiet period never starts in the middle of a wheel ramp or a pulse's thrust tail.
 """
@@ -28,12 +32,17 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
+from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry, white_noise_sd
 
 __all__ = ["quiet_mask", "quiet_periods", "slew_windows", "split_slews", "parse_window",
            "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
+
+QUIET_NOISE_SD = 8.0
+"""The quiet tolerances are at least this many white-noise sds of the file's own rates: the range
+of a window's worth of white noise (10-40 samples) is ~4 sd, beyond 8 sd less than once in 10⁵
+windows (7.4 sd at 1e-4 for 41 samples)."""
 
 
 def _moving_range(x: np.ndarray, half: int) -> np.ndarray:
@@ -64,9 +73,11 @@ def quiet_mask(
     Parameters
     ----------
     tel : the telemetry.
-    rate_max : largest body-rate magnitude of a quiet sample, rad/s. The default 1 mrad/s admits
-        Brown's RCS-method drift (~0.3 mrad/s) and excludes slews in progress.
-    wheel_tol_rpm : largest change of any running wheel's rate within the window, rpm.
+    rate_max : largest body-rate magnitude of a quiet sample, rad/s (at least
+        :data:`QUIET_NOISE_SD` × the rates' white noise). The default 1 mrad/s admits Brown's
+        RCS-method drift (~0.3 mrad/s) and excludes slews in progress.
+    wheel_tol_rpm : largest change of any running wheel's rate within the window, rpm (at least
+        :data:`QUIET_NOISE_SD` × that wheel's white noise).
     smooth_s : width of the centred moving window, s.
     """
     t = np.asarray(tel.t, dtype=float)
@@ -77,13 +88,16 @@ def quiet_mask(
     # at least the neighbours: at 0.1 Hz half a 10-s window rounds to no sample, and a wheel
     # spin-up inside a "quiet" window turned the RWA4 axis to its antipode (flight-data audit)
     half = max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
-    rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
-    quiet = _moving_max(rate, half) <= rate_max
+    omega = np.asarray(tel.omega, dtype=float)
+    rate = np.linalg.norm(omega, axis=1)
+    quiet = _moving_max(rate, half) <= max(rate_max, QUIET_NOISE_SD * white_noise_sd(omega))
     rates = np.asarray(tel.wheel_rates, dtype=float)
     running = np.all(np.isfinite(rates), axis=0)
     if np.any(running):
         spread_rpm = _moving_range(rates[:, running], half) / RPM_TO_RAD_S
-        quiet &= np.all(spread_rpm <= wheel_tol_rpm, axis=1)
+        noise_rpm = np.array([white_noise_sd(rates[:, j]) for j in np.flatnonzero(running)])
+        tol = np.maximum(wheel_tol_rpm, QUIET_NOISE_SD * noise_rpm / RPM_TO_RAD_S)
+        quiet &= np.all(spread_rpm <= tol, axis=1)
     if tel.on_times is not None:
         # a sample is loud when on-time grows into or out of it, or anywhere in its window
         growth = np.zeros(n, dtype=bool)

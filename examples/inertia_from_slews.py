@@ -75,7 +75,4 @@ if __name__ == "__main__":
     parser.add_argument("--draws", type=int, default=1000, help="kept draws per chain")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noise and the sampler")
     parser.add_argument("--out", default="runs/inertia_from_slews", help="run directory to write")
-    args = parser.parse_args()
-    # one CPU device per chain so the chains run in parallel, as the command line does
-    cb.request_host_devices()
-    main(args)
+    main(parser.parse_args())

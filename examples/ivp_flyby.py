@@ -89,4 +89,7 @@ if __name__ == "__main__":
     parser.add_argument("--requirement-urad", type=float, default=40.0,
                         help="largest angle between fitted and true vector, µrad")
     parser.add_argument("--out", default="runs/example_ivp_flyby", help="run directory")
+    # 64-bit JAX and the compilation cache: the public functions set them up themselves, but
+    # this example also calls the package's modules directly
+    cb.setup_jax()
     main(parser.parse_args())

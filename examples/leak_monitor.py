@@ -74,4 +74,7 @@ if __name__ == "__main__":
     parser.add_argument("--hours", type=float, default=1.0, help="length of the stretch, h")
     parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise")
     parser.add_argument("--out", default="runs/example_leak_monitor", help="run directory")
+    # 64-bit JAX and the compilation cache: the public functions set them up themselves, but
+    # this example also calls the package's modules directly
+    cb.setup_jax()
     main(parser.parse_args())

@@ -84,6 +84,4 @@ if __name__ == "__main__":
     parser.add_argument("--draws", type=int, default=1000, help="kept draws per chain")
     parser.add_argument("--seed", type=int, default=0, help="seed of the noise and the sampler")
     parser.add_argument("--out", default="runs/rwa4_axis", help="run directory to write")
-    args = parser.parse_args()
-    cb.request_host_devices()  # one CPU device per chain, as the command line does
-    main(args)
+    main(parser.parse_args())

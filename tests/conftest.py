@@ -1,4 +1,5 @@
-"""Test configuration: 64-bit JAX, strict rank promotion, fixed keys, CLI runner."""
+"""Test configuration: JAX set up as the package does (64-bit, the cache), strict rank promotion,
+fixed keys, CLI runner."""
 
 from __future__ import annotations
 
@@ -8,14 +9,16 @@ os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
 os.environ.setdefault("MPLBACKEND", "Agg")
 # Persistent compilation cache: test workers (pytest -n), the CLI subprocesses they start and
 # reruns share compiled programs, which dominate the suite's run time on a 2-core machine. Set
-# before cassini_bayes is imported (it enables the cache), and never the user's own cache folder.
+# before cassini_bayes.setup_jax() (it enables the cache), and never the user's own cache folder.
 os.environ["CASSINI_BAYES_JAX_CACHE"] = os.path.abspath(
     os.path.join(os.path.dirname(__file__), os.pardir, ".pytest_cache", "jax"))
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
 
-import cassini_bayes  # noqa: E402,F401  (turns on x64)
+import cassini_bayes  # noqa: E402
+
+cassini_bayes.setup_jax()  # 64-bit and the cache above, as every entry point of the package
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
 

@@ -176,7 +176,8 @@ def test_wrong_inputs_are_input_errors_naming_the_argument(inputs):
         (lambda: cb.load_spacecraft(None), r"expected the path of a spacecraft model"),
         (lambda: cb.check_telemetry(tel_path, wheel_tol_rpm=-2),
          r"wheel_tol_rpm: must be a positive finite number"),
-        (lambda: cb.budget(inertia=42), r"inertia: give a run directory, not int"),
+        (lambda: cb.budget(inertia=42), r"inertia: give a FitResult or a run directory, not "
+                                        r"int"),
         (lambda: cb.budget(inertia=str(tel_path.parent), seed=-1), r"seed=-1"),
         (lambda: cb.fit_health(42, "cassini_post_probe"), r"events: give events.csv files"),
         (lambda: cb.fit_health([("x", tel_path, tel_path)] * 2, "cassini_post_probe"),
@@ -214,21 +215,107 @@ def test_simulate_wraps_the_command(tmp_path, run_cli):
         assert (out / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
 
 
-def test_import_is_cheap_and_leaves_jax_devices_alone():
-    """``import cassini_bayes`` (and touching the public names) imports no NumPyro/ArviZ and does
-    not ask JAX for host devices; the names are the documented ones."""
-    code = ("import os; os.environ.pop('XLA_FLAGS', None)\n"
-            "import sys, cassini_bayes as cb\n"
-            "assert 'numpyro' not in sys.modules and 'arviz' not in sys.modules\n"
+def _python(code: str, xla_flags: str | None = None) -> str:
+    """stdout of ``python -c code`` in a fresh process, ``XLA_FLAGS`` as given (default unset)."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
+    if xla_flags is not None:
+        env["XLA_FLAGS"] = xla_flags
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, check=True).stdout
+
+
+def test_import_is_cheap_and_leaves_jax_alone():
+    """``import cassini_bayes`` imports no JAX, and with the public names touched no NumPyro or
+    ArviZ; neither changes a JAX setting (64-bit, the compilation cache, host devices): the
+    functions that compute do (:func:`cassini_bayes.setup_jax`). The names are the documented
+    ones."""
+    code = ("import sys, cassini_bayes as cb\n"
+            "assert 'jax' not in sys.modules and 'numpy' not in sys.modules\n"
             "cb.fit_inertia, cb.fit_thrust, cb.fit_rwa4, cb.simulate, cb.FitResult\n"
-            "import jax; print(jax.local_device_count(), sorted(cb.__all__))")
-    env = {k: v for k, v in __import__("os").environ.items() if k != "XLA_FLAGS"}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         env=env, check=True).stdout.split(maxsplit=1)
-    assert out[0] == "1"
+            "cb.propagate_conic, cb.VectorTree, cb.setup_jax\n"
+            "assert 'numpyro' not in sys.modules and 'arviz' not in sys.modules\n"
+            "import jax\n"
+            "print(jax.config.jax_enable_x64, jax.config.jax_compilation_cache_dir,\n"
+            "      jax.local_device_count(), sorted(cb.__all__))")
+    out = _python(code).split(maxsplit=3)
+    assert out[:3] == ["False", "None", "1"]
     assert set(cb.__all__) >= {"read_telemetry", "read_pulses", "load_spacecraft", "simulate",
                                "fit_inertia", "fit_thrust", "fit_rwa4", "FitResult"}
     assert callable(cb.simulate)
+
+
+HEAVY = ("jax", "numpy", "numpyro", "arviz", "xarray", "matplotlib", "scipy")
+
+
+def test_the_command_line_and_a_fit_up_to_its_sampler_import_nothing_heavy():
+    """``import cassini_bayes.cli`` (every command registered: what ``--help`` costs) imports none
+    of JAX, NumPy, NumPyro, ArviZ, xarray, matplotlib, SciPy; a fit's modules up to the sampler
+    (the API function, the model, the runner, the progress display) import no ArviZ or
+    matplotlib: they come when the posterior exists."""
+    code = ("import sys\n"
+            "import cassini_bayes.cli\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))\n"
+            "from cassini_bayes.api import fit_inertia, fit_thrust, fit_rwa4\n"
+            "import cassini_bayes.inference.progress, cassini_bayes.inference.runner\n"
+            "import cassini_bayes.inference.inertia, cassini_bayes.inference.thrust\n"
+            "import cassini_bayes.inference.rwa4\n"
+            "print(sorted(m for m in ('arviz', 'xarray', 'matplotlib') if m in sys.modules))")
+    cli, fit = _python(code).splitlines()
+    assert cli == "[]"
+    assert fit == "[]"
+
+
+_FIT_MISSING_FILE = ("import warnings, cassini_bayes as cb\n"
+                     "with warnings.catch_warnings(record=True) as w:\n"
+                     "    warnings.simplefilter('always')\n"
+                     "    try:\n"
+                     "        cb.fit_inertia('no_such_file.csv', 'cassini_post_probe', chains=4)\n"
+                     "    except cb.InputError:\n"
+                     "        pass\n"
+                     "said = [x for x in w if 'request_host_devices' in str(x.message)]\n"
+                     "print(len(said), said[0].filename if said else '-')\n")
+
+
+def test_a_fit_asks_for_one_cpu_device_per_chain_before_jax_starts():
+    """A fit function called before any JAX computation asks for the command line's devices (one
+    per core, at least 4), so its chains run in parallel; a later fit needs no new request."""
+    out = _python(_FIT_MISSING_FILE + _FIT_MISSING_FILE.replace("import warnings, cassini_bayes "
+                                                                "as cb\n", "")
+                  + "import jax; print(jax.local_device_count())").split()
+    assert out[:4] == ["0", "-", "0", "-"]
+    assert int(out[4]) >= 4
+
+
+def test_setup_jax_is_what_every_entry_point_calls_and_sampling_refuses_32_bit():
+    """The sampler refuses to run in 32-bit (a script that skipped :func:`cassini_bayes.setup_jax`),
+    naming the call; a public function that computes (here the conic propagator) makes it."""
+    code = ("import os, jax, cassini_bayes as cb\n"
+            "os.environ['CASSINI_BAYES_JAX_CACHE'] = 'off'\n"
+            "from cassini_bayes.inference.runner import SamplerSettings, run_nuts\n"
+            "import numpyro, numpyro.distributions as dist\n"
+            "model = lambda: numpyro.sample('x', dist.Normal(0.0, 1.0))\n"
+            "try:\n"
+            "    run_nuts(jax.random.key(0), model, model_kwargs={}, prior_draws=0,\n"
+            "             settings=SamplerSettings(chains=1, warmup=10, draws=10))\n"
+            "except RuntimeError as e:\n"
+            "    print('refused' if 'cassini_bayes.setup_jax()' in str(e) else e)\n"
+            "r, v = cb.propagate_conic([7e6, 0.0, 0.0], [0.0, 7.5e3, 0.0], 3.986e14, 60.0)\n"
+            "print(jax.config.jax_enable_x64, r.dtype)\n")
+    assert _python(code).split() == ["refused", "True", "float64"]
+
+
+def test_a_fit_after_jax_started_warns_once_what_to_call():
+    """When the caller ran JAX code first (one CPU device), the fit cannot ask for more: one
+    warning, at the caller's line, names ``request_host_devices``; the next fit is silent. Chosen
+    devices (``XLA_FLAGS``) are the caller's choice: no warning."""
+    start = "import jax.numpy as jnp; float(jnp.ones(2).sum())\n"
+    twice = _FIT_MISSING_FILE + _FIT_MISSING_FILE.replace("import warnings, cassini_bayes as cb\n",
+                                                          "")
+    assert _python(start + twice).split() == ["1", "<string>", "0", "-"]
+    assert _python(start + twice, "--xla_force_host_platform_device_count=2").split() == \
+        ["0", "-", "0", "-"]
 
 
 def test_an_inertia_posterior_run_is_recorded_with_its_hash_and_moves_the_baseline(tmp_path):

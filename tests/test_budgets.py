@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 from pathlib import Path
 
 import jax
@@ -30,6 +31,7 @@ from cassini_bayes.analysis.posterior_budgets import (
 from cassini_bayes.analysis.propagation import credible_interval, propagate
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
+from pages import first_table
 
 Z90 = 1.6448536269514722  # standard-normal 95th percentile
 EST = np.asarray(TABLE1["post_probe"]["est"], float)
@@ -266,17 +268,49 @@ def test_budget_command_end_to_end(runs, tmp_path, run_cli):
                                                "config.toml", ".cassini-bayes-files"}
     s = json.loads((out / "summary.json").read_text())
     assert s["command"] == "budget" and s["n_draws"] == 200
+    assert set(s["adequacy"]["checks"]) == {"input_convergence", "input_adequacy",
+                                            "spacecraft_models", "shared_inertia"}
     assert set(s["sources"]) == {"inertia", "thrust", "rwa4"}
     budgets = {r["budget"] for r in s["rows"] if r["interval"]}
     assert {"inertia", "thrust", "rwa4 (rwa)", "rwa4 mass properties"} <= budgets
     page = (out / "report.html").read_text()
     assert "root-sum-square" in page and "1.18 mrad" in page
+    # a pass/fail column against the papers' budgets; shares as percentages
+    headers, rows = first_table(page)
+    assert "verdict" in headers and "variance share, each parameter alone" in headers
+    judged = {r[1].split("posterior:")[0].strip(): r[headers.index("verdict")] for r in rows
+              if r[headers.index("verdict")] in ("pass", "FAIL")}
+    assert {"thrust knowledge", "RWA4 axis knowledge"} <= set(judged)
+    shares = [r[headers.index("variance share, each parameter alone")] for r in rows]
+    assert any(re.search(r"\bF 100 %", x) for x in shares)
     # an existing --out is refused, --force replaces it
     code, _, err = run_cli("budget", "--thrust", runs["thrust"], "--out", out)
     assert code == 2 and "--force" in err
     code, _, err = run_cli("budget", "--thrust", runs["thrust"], "--out", out, "--force")
     assert code == 0, err
     assert set(json.loads((out / "summary.json").read_text())["sources"]) == {"thrust"}
+
+
+def test_budget_verdict_warns_and_strict_exits_3(runs, tmp_path, run_cli):
+    """An input run that did not converge fails the budget's verdict: a warning and
+    ``ADEQUACY FAILED`` on the result line, exit 0; with ``--strict`` exit 3 after writing."""
+    import shutil
+
+    bad = tmp_path / "thrust_unconverged"
+    shutil.copytree(runs["thrust"], bad)
+    (bad / "summary.json").write_text(json.dumps({"kind": "thrust", "diagnostics": {
+        "converged": False, "max_r_hat": 1.2, "min_ess_bulk": 40.0, "divergences": 3}}))
+    code, _, err = run_cli("budget", "--thrust", bad, "--out", tmp_path / "b1", "--draws", 200)
+    assert code == 0 and "ADEQUACY FAILED: input_convergence" in err and "warning:" in err, err
+    s = json.loads((tmp_path / "b1" / "summary.json").read_text())
+    assert s["adequacy"]["ok"] is False and s["warnings"]
+    assert "ADEQUACY FAILED" in (tmp_path / "b1" / "report.html").read_text()
+    code, _, err = run_cli("budget", "--thrust", bad, "--out", tmp_path / "b2", "--draws", 200,
+                           "--strict")
+    assert code == 3 and (tmp_path / "b2" / "summary.json").is_file(), err
+    code, _, err = run_cli("budget", "--thrust", runs["thrust"], "--out", tmp_path / "b3",
+                           "--draws", 200, "--strict")
+    assert code == 0 and "adequacy ok" in err, err
 
 
 def test_library_budget_is_what_the_command_writes(runs, tmp_path, run_cli):
@@ -295,6 +329,42 @@ def test_library_budget_is_what_the_command_writes(runs, tmp_path, run_cli):
     assert cli == api
     with pytest.raises(InputError, match="n_draws"):
         cb.budget(thrust=runs["thrust"], n_draws=3)
+
+
+def _fit_result(run: Path, kind: str, method: str | None = None):
+    """A :class:`~cassini_bayes.api.FitResult` (unsaved) holding ``run``'s draws."""
+    from types import SimpleNamespace
+
+    import arviz as az
+
+    from cassini_bayes.api import FitResult
+
+    config = {"command": f"fit {kind}", "seed": 7, "inputs": {"telemetry": [{"source": "x"}]},
+              "options": {"method": method} if method else {}, "spacecraft": {"name": "m"}}
+    summary = {"kind": kind, "diagnostics": {"converged": True}, "warnings": []}
+    return FitResult(kind, SimpleNamespace(idata=az.from_netcdf(run / "posterior.nc")), None,
+                     None, config, summary)
+
+
+def test_budget_takes_fit_results(runs, tmp_path):
+    """Issue 28: ``fit_thrust`` took an inertia fit's FitResult but ``budget`` refused one;
+    ``budget`` takes FitResults as it takes run directories — the same lines from the same
+    draws — records how to redo them in config.toml, and refuses one of another kind (a thrust
+    fit carries inertia draws too: never taken as the inertia posterior)."""
+    import cassini_bayes as cb
+
+    fits = {k: _fit_result(runs[k], k, "rwa" if k == "rwa4" else None) for k in runs}
+    by_dir = cb.budget(**runs, n_draws=200, seed=3)
+    by_fit = cb.budget(**fits, n_draws=200, seed=3)
+    assert by_fit.summary["rows"] == by_dir.summary["rows"]
+    assert by_fit.config["inputs"]["thrust"] == {"command": "fit thrust", "seed": 7,
+                                                 "inputs": {"telemetry": [{"source": "x"}]}}
+    out = by_fit.save(tmp_path / "b")
+    assert "&lt;fit thrust result, seed 7&gt;" in (out / "report.html").read_text()
+    with pytest.raises(InputError, match=r"^inertia: a thrust fit; give an inertia fit's"):
+        cb.budget(inertia=fits["thrust"])
+    with pytest.raises(InputError, match=r"rwa4: give a FitResult or a run directory, not int"):
+        cb.budget(rwa4=3)
 
 
 @pytest.mark.parametrize("args, words", [
@@ -393,25 +463,27 @@ def test_thrust_sensitivity_to_the_assumed_inertia_is_exact():
     assert change == pytest.approx(step @ sens, rel=1e-6)
 
 
-def test_runs_of_different_spacecraft_models_are_flagged(tmp_path):
-    """The budget warns when its runs were fitted with different spacecraft models."""
-    from cassini_bayes.api._budget import _mixed_models
+def test_runs_of_different_spacecraft_models_fail_the_verdict(tmp_path):
+    """The budget's verdict fails (spacecraft_models) when its runs were fitted with different
+    spacecraft models, and names them."""
+    from cassini_bayes.analysis.budget_adequacy import run_models, spacecraft_models
 
     runs = {}
     for kind, model in (("inertia", "fsds"), ("thrust", "cassini-post-probe")):
         runs[kind] = tmp_path / kind
         runs[kind].mkdir()
         (runs[kind] / "config.toml").write_text(f'[spacecraft]\nname = "{model}"\n')
-    (warning,) = _mixed_models(runs)
-    assert "inertia: fsds, thrust: cassini-post-probe" in warning
-    assert _mixed_models({"inertia": runs["inertia"]}) == []
+    c = spacecraft_models(run_models(runs))
+    assert not c.ok and c.statistic == 2 and "inertia: fsds, thrust: cassini-post-probe" in c.note
+    assert spacecraft_models(run_models({"inertia": runs["inertia"]})).ok
 
 
-def test_input_runs_that_did_not_converge_or_fit_are_flagged(tmp_path):
+def test_input_runs_that_did_not_converge_or_fit_fail_the_verdict(tmp_path):
     """A budget inherits its inputs' problems: a run whose summary.json says it did not converge,
-    or failed its adequacy checks, gets a warning (shown in the CLI, summary.json and the
-    report); a clean or unreadable summary gets none."""
-    from cassini_bayes.api._budget import _unreliable_inputs
+    or failed its adequacy checks, fails input_convergence or input_adequacy (a warning in the
+    CLI, summary.json and the report); a clean or unreadable summary counts for nothing."""
+    from cassini_bayes.analysis.budget_adequacy import (input_adequacy, input_convergence,
+                                                        run_summaries)
 
     summaries = {
         "thrust": {"diagnostics": {"converged": False, "max_r_hat": 1.0104661,
@@ -429,7 +501,31 @@ def test_input_runs_that_did_not_converge_or_fit_are_flagged(tmp_path):
     runs["bad"] = tmp_path / "bad"
     runs["bad"].mkdir()
     (runs["bad"] / "summary.json").write_text("{not json")
-    thrust, rwa4 = _unreliable_inputs(runs)
-    assert "thrust run" in thrust and "did not converge (max R-hat 1.0105, min bulk ESS 488, " \
-        "0 divergences)" in thrust
-    assert "rwa4 run" in rwa4 and "failed its adequacy checks (balance_fit)" in rwa4
+    read = run_summaries(runs)
+    conv, adeq = input_convergence(read, runs), input_adequacy(read, runs)
+    assert (conv.statistic, conv.ok, conv.parameter) == (1.0, False, "thrust")
+    assert "did not converge (max R-hat 1.0105, min bulk ESS 488, 0 divergences)" in conv.note
+    assert (adeq.statistic, adeq.ok, adeq.parameter) == (1.0, False, "rwa4")
+    assert "failed its adequacy checks (balance_fit)" in adeq.note
+    assert "no adequacy verdict in the thrust, bad run(s)" in adeq.note
+    del runs["thrust"], runs["rwa4"]
+    read = run_summaries(runs)
+    assert input_convergence(read, runs).ok and input_adequacy(read, runs).ok
+
+
+def test_runs_that_disagree_on_the_inertia_fail_shared_inertia():
+    """shared_inertia: two runs' inertia draws from one law pass (fixed key: z 0.0 here); a
+    shift of 6 combined sd in Iyy fails it and is named; one run is not applicable. Under the
+    null the statistic exceeds 4 with probability 6e-5 (Bonferroni over the 6 entries)."""
+    from cassini_bayes.analysis.budget_adequacy import shared_inertia
+
+    rng = np.random.default_rng(4)
+    mean = np.array([7400.0, 6170.0, 3730.0, -130.0, -12.0, 147.0])
+    sd = np.array([8.0, 7.0, 5.0, 3.0, 3.0, 3.0])
+    a = mean + sd * rng.standard_normal((4000, 6))
+    b = mean + 2 * sd * rng.standard_normal((4000, 6))
+    assert shared_inertia({"inertia": a, "thrust": b}).ok
+    shifted = b + np.array([0.0, 6 * np.hypot(7.0, 14.0), 0, 0, 0, 0])
+    c = shared_inertia({"inertia": a, "thrust": shifted})
+    assert not c.ok and c.statistic > 4.0 and c.parameter.startswith("Iyy")
+    assert shared_inertia({"inertia": a}).statistic is None

@@ -249,10 +249,10 @@ def test_campaign_fit_is_the_runners_sampler():
     chains, _ = campaign._vmapped_fit(model.fit, model.parameter_names)(
         keys, jax.tree.map(lambda a: jnp.stack([a, 2.0 * a]), data))
     alone = model.fit(jax.random.split(keys[0], 4)[2], data)
-    # measured: 2e-8 relative at most (vmapped over the batch, the loop's reductions round
-    # differently); 1e-6 leaves room for another CPU without hiding a different draw
+    # the same trajectory to rounding, amplified along the chain (more on another instruction
+    # set, docs/performance.md); another draw would differ by the posterior sd, ~0.07 here
     np.testing.assert_allclose(np.asarray(chains[0, 0]), np.asarray(alone.draws["alpha"]),
-                               rtol=1e-6, atol=1e-9)
+                               rtol=1e-3, atol=1e-5)
 
 
 def test_thinning_and_effective_sample_size_are_recorded(reference):

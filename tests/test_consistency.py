@@ -496,3 +496,61 @@ def test_rates_that_turn_under_a_still_attitude_are_refused():
         cons.check_attitude_rates(tel)
     quiet = Telemetry(t, q, np.full((t.size, 3), 1e-6), rates, source="quiet.csv")
     assert cons.check_attitude_rates(quiet) is None
+
+
+def test_quantised_rates_are_found_and_coarse_ones_reported(runs):
+    """A rate column on a lattice ``q k`` is found with its quantum; it is reported when the
+    noise measured in it is below q/4 (undithered: the rounding error repeats while the rate
+    holds its value) and q is at least 5e-4 of its excursion. The simulator's 0.1-rpm
+    tachometers, dithered by 0.05 rpm of noise (measured noise 0.61 quanta, ≤ 0.05 % of the
+    excursion), are found on every family and not reported; body rates rounded to 1 mrad/s (the
+    fuzz's file: Ixx 6 sd low with exit 0) are, by ``check`` too; so are wheel rates rounded to
+    1 rpm (0.06–0.09 % of a slew's excursion; they moved Iyz by 2.2–2.4 posterior sd)."""
+    import warnings
+
+    from cassini_bayes.api import check_telemetry
+
+    for name, (tel, _, _) in runs.items():
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", cons.QuantisedRatesWarning)
+            found = cons.check_rate_quantisation(tel)
+        assert [r.column for r in found] == [n.lower() for n in tel.active_wheels()], name
+        for r in found:
+            assert abs(r.quantum / RPM_TO_RAD_S - 0.1) < 1e-9 and not r.large, (name, r)
+            assert r.noise > r.quantum / cons.QUANTUM_NOISE_RATIO, (name, r)
+    tel, log, sc = runs["slews_post_prm"]
+    body = replace(tel, omega=np.round(tel.omega / 1e-3) * 1e-3)
+    with pytest.warns(cons.QuantisedRatesWarning,
+                      match=r"slews_post_prm.csv: rates on a coarse lattice: wx 0.001 rad/s "
+                            r"\(its measured noise 0 quanta, \d+ % of its excursion\); wy "):
+        found = cons.check_rate_quantisation(body)
+    assert [r.column for r in found if r.large] == ["wx", "wy"]   # wz (8 µrad/s) rounds to 0
+    c = check_telemetry(body, spacecraft=sc)
+    assert any("rates on a coarse lattice" in n for n in c.notes)
+    assert {r.column for r in c.quanta} == {"wx", "wy", "rwa1", "rwa2", "rwa3"}
+    wheels = replace(tel, wheel_rates=np.round(tel.wheel_rates / RPM_TO_RAD_S) * RPM_TO_RAD_S)
+    with pytest.warns(cons.QuantisedRatesWarning, match=r"rwa1 1 rpm \(its measured noise 0 "):
+        cons.check_rate_quantisation(wheels)
+    # not reported: 1 rpm dithered by 0.5 rpm of noise before the rounding, and 0.3 rpm, below
+    # 5e-4 of these slews' excursion (it moved the inertia by ≤ 0.6 posterior sd)
+    rpm = tel.wheel_rates / RPM_TO_RAD_S
+    dithered = np.round(rpm + np.random.default_rng(2).normal(0.0, 0.5, rpm.shape))
+    for rounded in (dithered, np.round(rpm / 0.3) * 0.3):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", cons.QuantisedRatesWarning)
+            found = cons.check_rate_quantisation(replace(tel, wheel_rates=rounded * RPM_TO_RAD_S))
+        assert found and not any(r.large for r in found)
+
+
+def test_rate_quantum_of_a_lattice():
+    """The lattice spacing survives an offset, gaps between occupied levels and the rpm → rad/s
+    conversion; two levels are a lattice; continuous values and a constant have none."""
+    rng = np.random.default_rng(4)
+    k = np.r_[0, 1, 2, 4, 7, rng.integers(-50, 50, 200)]
+    assert cons.rate_quantum((0.25 + 3.0 * k) * RPM_TO_RAD_S) == pytest.approx(
+        3.0 * RPM_TO_RAD_S, rel=1e-9)
+    assert cons.rate_quantum(1e-3 * k) == pytest.approx(1e-3, rel=1e-9)
+    assert cons.rate_quantum(rng.normal(size=1000)) is None
+    assert cons.rate_quantum(np.full(50, 0.3)) is None
+    assert cons.rate_quantum(np.r_[np.zeros(10), 0.3 * np.ones(10)]) == pytest.approx(0.3)
+    assert cons.rate_quantum(np.r_[1e-3 * k, np.nan]) == pytest.approx(1e-3, rel=1e-9)

@@ -18,8 +18,9 @@ from pathlib import Path
 import pytest
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-SCRIPTS = ("inertia_from_slews.py", "thrust_with_inertia_posterior.py", "rwa4_axis.py",
-           "sbc_check.py", "leak_monitor.py", "ivp_flyby.py")
+SCRIPTS = ("inertia_from_slews.py", "inertia_espa_bus.py", "inertia_cubesat.py",
+           "thrust_with_inertia_posterior.py", "rwa4_axis.py", "sbc_check.py", "leak_monitor.py",
+           "ivp_flyby.py")
 SAMPLER_OPTIONS = ("--chains", "--warmup", "--draws")   # every script but the leak monitor's
 TINY = ["--chains", "1", "--warmup", "60", "--draws", "60"]
 
@@ -96,6 +97,28 @@ def test_inertia_from_slews(tmp_path, monkeypatch, capsys):
     for name in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"):
         mean = summary["parameters"][name]["mean"]
         assert re.search(rf"^{name} .* {mean:.1f} ", out, re.M), out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script, decimals, wheels, line", [
+    ("inertia_espa_bus.py", 3, ["RW1", "RW2", "RW3", "RW4"],
+     "espa-bus: wheels RW1, RW2, RW3, RW4 (telemetry columns rw1 rw2 rw3 rw4), 8 thrusters"),
+    ("inertia_cubesat.py", 5, ["RWX", "RWY", "RWZ", "RWS"],
+     "cubesat-12u: wheels RWX, RWY, RWZ, RWS, no thrusters")])
+def test_inertia_of_other_spacecraft(script, decimals, wheels, line, tmp_path, monkeypatch,
+                                     capsys):
+    import arviz as az
+
+    run = tmp_path / "run"
+    out = run_example(script, [*TINY, "--out", run], monkeypatch, capsys)
+    summary = _saved_run(out, run)
+    assert summary["kind"] == "inertia" and line in out
+    for name in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"):
+        mean = summary["parameters"][name]["mean"]
+        assert re.search(rf"^{name} .* {mean:.{decimals}f} ", out, re.M), out
+    # the per-wheel nuisance parameters carry the model's wheel names
+    post = az.from_netcdf(run / "posterior.nc").posterior
+    assert post["wheel_scale"].coords["wheel"].values.tolist() == wheels
 
 
 @pytest.mark.slow

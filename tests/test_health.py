@@ -24,6 +24,7 @@ from cassini_bayes.cli import main
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.health import CHANNELS, HealthPrior, event_summary, health_posterior
 from cassini_bayes.inference.health.changepoint import SCATTER_GRID
+from pages import first_table
 
 Z3_Z4 = [2, 3]
 
@@ -177,6 +178,36 @@ def test_y_pair_split_is_not_reported(split_event):
     assert np.allclose(sm.thrust_n[:4][z_ok], 0.699, rtol=0.02)
 
 
+def test_left_out_pulses_and_channels_are_warnings(split_event):
+    """Issue 28: every input a fit leaves out is a warning. Pulses acting entirely outside an
+    event's telemetry are dropped with a PulsesDroppedWarning (the summary is the one without
+    them); a channel that fired but is not reported (too few pulses, or a thrust estimate that is
+    not positive) is one line per channel of ``fit health``'s summary.json warnings."""
+    from cassini_bayes.inference.health.summary import EventSummary, left_out_channels
+    from cassini_bayes.telemetry import PulseLog, PulsesDroppedWarning
+
+    sim, _ = split_event
+    p, end = sim.pulses, float(sim.telemetry.t[-1])
+    beyond = PulseLog(np.r_[p.t_on, end + 10.0, end + 20.0], np.r_[p.thruster, 0, 0],
+                      np.r_[p.width, 0.25, 0.25], "pulses.csv")
+    with pytest.warns(PulsesDroppedWarning, match="pulses.csv: 2 of .* outside"):
+        sm = event_summary(sim.telemetry, beyond, sim.prior)
+    np.testing.assert_array_equal(sm.n_pulses, event_summary(sim.telemetry, p,
+                                                             sim.prior).n_pulses)
+
+    def summary(n_z1, f_z1):
+        y = np.full(6, np.log(0.7))
+        y[0] = np.log(f_z1) if n_z1 >= 3 and f_z1 > 0 else np.nan
+        return EventSummary(y, np.eye(6), np.r_[f_z1, np.full(5, 0.7)],
+                            np.r_[n_z1, np.full(5, 4)], np.ones(3))
+
+    events = [summary(4, 0.7), summary(2, 0.7), summary(5, -0.1), summary(0, np.nan)]
+    lines = left_out_channels(events, [0.0, 10.0, 20.0, 30.0])
+    assert lines == ["channel Z1 is left out of 2 of the 3 events in which it fired (fewer "
+                     "than 3 pulses, or a thrust estimate that is not positive): days 10, 20"]
+    assert left_out_channels(events[:1], [0.0]) == []
+
+
 # --- campaign files, simulator and CLI ---------------------------------------------------------
 
 
@@ -248,8 +279,14 @@ def test_cli_end_to_end(tmp_path, capsys):
     s = json.loads((out / "summary.json").read_text())
     assert s["n_events"] == 5 and set(s["channels"]) == set(CHANNELS)
     assert 0.0 <= s["p_down_last"]["Z3|Z4"] <= 1.0
-    for name in ("health.csv", "thrust_bands.csv", "config.toml", "health.png"):
+    for name in ("health.csv", "thrust_bands.csv", "config.toml", "health.png", "report.html"):
         assert (out / name).is_file()
+    # the page opens with the answer: a row per channel, its unit, P(down) and the verdict
+    headers, rows = first_table((out / "report.html").read_text())
+    assert headers[:2] == ["channel", "unit"] and headers[-1] == "verdict"
+    assert "P(more than 5% down)" in headers and "model file (N)" in headers
+    assert [r[0] for r in rows] == list(CHANNELS)
+    assert {r[-1] for r in rows} <= {"healthy", "DOWN", "undecided"}
     header = (out / "health.csv").read_text().splitlines()[0]
     assert "p_down_Z3_or_Z4" in header and "Y1," not in header
     # a second run into the same folder needs --force, and then works

@@ -9,11 +9,11 @@ import pytest
 
 from cassini_bayes.physics.impulse import (angular_impulse, impulse_from_on_times,
                                            impulse_from_pulses, impulse_lhs, impulse_lhs_basis,
-                                           moment_matrix,
                                            system_xy, system_xyz, system_z, system_zz,
                                            system_zzz)
 from cassini_bayes.physics.pulse import pulse_impulse
 from cassini_bayes.spacecraft import CASSINI_WHEEL_AXES
+from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from kinematics import rotvec_to_quat_np, slew_segments, wheels_for_conserved_momentum
 
 LX, LY, LZY, LZZ = 1.234, 1.580, 2.880, 3.019

@@ -135,7 +135,7 @@ def test_event_likelihood_is_the_density_of_the_rates():
 
     from cassini_bayes.inference.thrust.likelihood import (_event_loglik, _event_residual,
                                                            _noise_cov)
-    from cassini_bayes.physics.impulse import moment_matrix
+    from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
     from cassini_bayes.physics.momentum import inertia_vector
 
     rng = np.random.default_rng(5)
@@ -173,7 +173,7 @@ def test_event_likelihood_is_invariant_under_the_common_scale():
     ``F`` on ``biasing_day028``, ``benchmarks/time_tag_bias.py``); the check below shows this
     test fails for such a term."""
     from cassini_bayes.inference.thrust.likelihood import _event_loglik
-    from cassini_bayes.physics.impulse import moment_matrix
+    from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
     from cassini_bayes.physics.momentum import inertia_vector
 
     rng = np.random.default_rng(6)
@@ -414,13 +414,35 @@ def _quiet_telemetry(n=60):
     return Telemetry(t, q, w, rates, source="quiet.csv")
 
 
+def test_pulses_outside_the_telemetry_are_dropped_with_a_warning(monkeypatch):
+    """Issue 28: a pulse log reaching past its telemetry had three pulses dropped in silence
+    (``check`` said so, the fit and its summary.json did not): every pulse left out is a
+    PulsesDroppedWarning, which the fit functions put in summary.json's warnings; a pulse
+    still on at the last sample is modelled and needs no warning."""
+    import cassini_bayes.inference.thrust.data as thrust_data
+    from cassini_bayes.telemetry import PulseSpanWarning, PulsesDroppedWarning
+
+    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
+    sc = load_spacecraft("models/fsds.toml")
+    tel = _quiet_telemetry()                      # t = 0 … 59 s
+    log = PulseLog(np.array([5.0, 58.875, 61.0, 70.0, 80.0]), np.array([0, 1, 2, 2, 2]),
+                   np.full(5, 0.25), "p.csv")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        prob = prepare_thrust([(tel, log)], sc, robust=False)
+    spans = [w for w in caught if issubclass(w.category, PulseSpanWarning)]
+    assert [w.category for w in spans] == [PulsesDroppedWarning]
+    assert "p.csv: 3 of 5 pulses lie outside the telemetry span 0..59 s" in str(spans[0].message)
+    assert prob.n_pulses[0] == 2
+
+
 def test_bad_inputs_are_input_errors():
     sc = load_spacecraft("models/fsds.toml")
     tel = _quiet_telemetry()
     with pytest.raises(InputError, match="pulse log"):
         prepare_thrust([(tel, None)], sc)
     outside = PulseLog(np.array([500.0]), np.array([5]), np.array([0.125]), "p.csv")
-    with pytest.raises(InputError, match="no pulse"):
+    with pytest.raises(InputError, match="no pulse"), pytest.warns(UserWarning, match="1 of 1"):
         prepare_thrust([(tel, outside)], sc)
     with pytest.raises(InputError, match="no biasing event"):
         prepare_thrust([], sc)

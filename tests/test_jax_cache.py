@@ -49,6 +49,7 @@ _SMALL_PROGRAMS = """
 import json
 import cassini_bayes, jax, jax.numpy as jnp
 from cassini_bayes import _jax_cache
+cassini_bayes.setup_jax()
 x = jnp.linspace(0.0, 1.0, 12).reshape(3, 4)
 out = [float(jax.jit(lambda a: jnp.sin(a) @ a.T)(x).sum()), float(jax.jit(jnp.cumsum)(x).sum())]
 print(json.dumps({"out": out, "stats": _jax_cache.stats().to_dict()}))
@@ -60,6 +61,7 @@ _SMALL_FIT = """
 import sys
 import cassini_bayes, jax, numpy as np, numpyro, numpyro.distributions as dist
 from cassini_bayes import _jax_cache
+cassini_bayes.setup_jax()
 from cassini_bayes.inference.runner import SamplerSettings, run_nuts
 
 def model(*, y):

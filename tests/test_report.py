@@ -20,25 +20,28 @@ import xarray as xr
 
 from cassini_bayes.report import build_report, html_page, section, table
 from cassini_bayes.report.html import Raw, figure
-from cassini_bayes.report.rundata import load_run
+from cassini_bayes.report.rundata import flatten_draws, load_run
 from cassini_bayes.report.tables import diagnostics, parameter_names, parameter_rows
+from pages import first_table
 
 INERTIA = {"Ixx": 7403.0, "Iyy": 6174.0, "Izz": 3727.0, "Ixy": -129.0, "Ixz": -12.0, "Iyz": 147.0}
 THRUSTERS = ["Z1", "Z2", "Z3", "Z4", "Y1", "Y2", "Y3", "Y4"]
 TAUS = {"tau_delay": 0.005, "tau_rise": 0.020, "tau_fall": 0.065}
 RWA1 = np.array([0.0, 0.816497, 0.577350])
 
-# Expected section ids per kind (report/build.py)
-COMMON = ["adequacy", "diagnostics", "parameters", "trace", "rank", "prior-posterior", "residuals",
-          "energy", "configuration"]
+# Expected section ids per kind (report/build.py), the answer first
+COMMON = ["answer", "adequacy", "residuals", "diagnostics", "configuration"]
 SECTIONS = {
-    "inertia": COMMON + ["pair"],
-    "thrust": COMMON + ["pair"],
-    "rwa4": COMMON + ["axis"],
+    "inertia": COMMON,
+    "thrust": COMMON + ["pulses"],
+    "rwa4": COMMON,
 }
-# trace, rank, prior-vs-posterior, residuals, energy + pair (inertia/thrust) or sky (rwa4)
-# (inertia: two residual figures, the momentum residual and the whitened one)
-N_FIGURES = {"inertia": 7, "thrust": 6, "rwa4": 6}
+# the answer figure (rwa4: the sky plot), the residuals, trace and rank; thrust: per-pulse impulses
+N_FIGURES = {"inertia": 3, "thrust": 4, "rwa4": 3}
+# the answer table's columns (issue 31): every fit report's first table
+ANSWER_COLUMNS = ["quantity", "unit", "posterior mean", "sd", "90 % interval",
+                  "model file (prior mean)", "prior sd", "least squares (papers)",
+                  "papers' budget", "verdict"]
 
 
 # The fits' adequacy block (cassini_bayes.inference.adequacy): one failed check for inertia.
@@ -96,7 +99,8 @@ def make_run(root: Path, kind: str, *, draws: int = 200, prior: bool = True,
         file_idx = np.repeat([0, 1], [450, 300])
         res = 0.002 * rng.standard_normal((t.size, 3))
         extra_groups["constant_data"] = xr.Dataset(
-            {"prior_sd": ("param", [prior_spec[k][1] for k in INERTIA])},
+            {"prior_sd": ("param", [prior_spec[k][1] for k in INERTIA]),
+             "prior_mean": ("param", [prior_spec[k][0] for k in INERTIA])},
             coords={"param": list(INERTIA)})
     elif kind == "thrust":
         post_spec = {f"F_{s}": (0.74, 0.02) for s in THRUSTERS[:4]}
@@ -111,6 +115,19 @@ def make_run(root: Path, kind: str, *, draws: int = 200, prior: bool = True,
         baseline = {f"F_{s}": 0.73 for s in THRUSTERS}
         t = np.sort(rng.uniform(0, 600, 40))
         res = 1e-3 * rng.standard_normal((t.size, 3))
+        # the fit's per-pulse impulses (cassini_bayes.inference.thrust.pulses), N m s
+        on = rng.choice([0.125, 0.25, 0.5], 30)
+        pred = 0.75 * 3.0 * on * 1.3
+        q = pred[:, None] * (1.0 + 0.01 * np.array([-1.645, 0.0, 1.645]))
+        extra_groups["pulse_impulses"] = xr.Dataset(
+            {"t": ("group", np.sort(rng.uniform(0, 600, 30))),
+             "event": ("group", np.zeros(30, int)),
+             "thrusters": ("group", np.array(["Y1+Y3"] * 30)),
+             "n_pulses": ("group", np.full(30, 2)), "on_time": ("group", on),
+             "measured": ("group", pred + 0.005 * rng.standard_normal(30)),
+             "measured_sd": ("group", np.full(30, 0.005)),
+             "predicted": (("group", "quantile"), q)},
+            coords={"quantile": [0.05, 0.5, 0.95]})
     elif kind == "rwa4":
         u_true = np.array([0.05, 0.80, 0.597])
         u_true /= np.linalg.norm(u_true)
@@ -227,6 +244,56 @@ def test_report_is_self_contained_with_every_section(reports, kind):
     assert len(html.encode()) < 3_000_000
 
 
+@pytest.mark.parametrize("kind", ["inertia", "thrust", "rwa4"])
+def test_the_first_table_is_the_answer(reports, kind):
+    """Issue 31: a fit's report opens with the answer — the first table holds every calibrated
+    quantity with its unit, posterior mean, sd and 90 % interval, the model file's prediction
+    and prior sd, the papers' least squares and budget with pass/fail — and the verdicts sit
+    above it as badges; the per-variable diagnostics of the nuisance are folded away."""
+    run, html = reports[kind]
+    headers, rows = first_table(html)
+    assert all(c in headers for c in ANSWER_COLUMNS), headers
+    assert html.index('<section id="answer">') < html.index('<section id="diagnostics">')
+    assert html.index("CONVERGED") < html.index("<table")
+    summary = json.loads((run / "summary.json").read_text())
+    by_name = {r[0]: dict(zip(headers, r)) for r in rows}
+    assert set(summary["parameters"]) <= set(by_name)
+    for name, st in summary["parameters"].items():
+        row = by_name[name]
+        # shown with two significant digits of the sd
+        assert float(row["posterior mean"]) == pytest.approx(st["mean"], abs=0.05 * st["sd"])
+        assert row["unit"] in ("kg m²", "N", "s", "–")
+    per_variable = html.split('<section id="diagnostics">', 1)[1]
+    assert "<details><summary>Per-variable diagnostics" in per_variable
+    if kind == "inertia":     # the model file's prediction and the budgets of the moments
+        assert float(by_name["Ixx"]["model file (prior mean)"]) == 7403.0
+        assert by_name["Ixx"]["papers' budget"] == "±1 % (000 §VI)"
+        assert by_name["Ixx"]["verdict"] in ("pass", "FAIL")
+        assert by_name["Ixy"]["papers' budget"] == "–"
+        assert any(k.startswith("worst moment") for k in by_name)
+    if kind == "thrust":      # a thrust (N) has the ±10 % budget, a time constant none
+        assert by_name["F_Z1"]["papers' budget"].startswith("±10 %")
+        assert by_name["tau_fall"]["papers' budget"] == "–"
+    if kind == "rwa4":        # the axis's knowledge against Brown's budget; no model value
+        assert by_name["u4_x"]["model file (prior mean)"] == "–"
+        assert any(k.startswith("spin-axis error") for k in by_name)
+
+
+def test_answer_budget_verdicts_follow_the_95th_percentile():
+    """A moment passes the ±1 % budget when 95 % of its draws lie within 1 % of its mean
+    (Feldman & Lee Eq 12 with the draw as the truth); a thrust the ±10 % one likewise."""
+    from cassini_bayes.report.tables import budget_check
+
+    rng = np.random.default_rng(0)
+    tight = 7400.0 + 7400.0 * 0.004 * rng.standard_normal(4000)   # 95 % within ~0.8 %
+    wide = 7400.0 + 7400.0 * 0.008 * rng.standard_normal(4000)    # 95 % within ~1.6 %
+    assert budget_check("Ixx", tight).passed and not budget_check("Ixx", wide).passed
+    assert budget_check("Ixx", wide).error_q95 == pytest.approx(1.96 * 0.8, rel=0.1)
+    assert budget_check("Ixy", wide) is None and budget_check("tau_rise", wide) is None
+    thrust = 0.7 + 0.7 * 0.06 * rng.standard_normal(4000)        # 95 % within ~12 %
+    assert budget_check("F", thrust).bound == "±10 %" and not budget_check("F", thrust).passed
+
+
 def test_inertia_report_tables(reports):
     run, html = reports["inertia"]
     for name in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "H0[x]", "sigma_H"):
@@ -243,11 +310,11 @@ def test_inertia_report_tables(reports):
     assert rows["Ixx"].contraction == pytest.approx(1 - (8 / 740.3) ** 2, abs=1e-3)
     assert rows["Ixx"].flag == "" and rows["Ixx"].unit == "kg m²"
     assert rows["Ixx"].baseline == INERTIA["Ixx"] + 1.0 and rows["Ixx"].truth == INERTIA["Ixx"]
-    assert "Whitened body residual of the momentum model" in html
+    assert "Posterior-mean residual of the momentum model" in html
     # without prior draws, the prior sd stated in constant_data still gives the contraction
-    idata = loaded.idata.copy()
-    del idata["prior"]
-    no_prior = dataclasses.replace(loaded, idata=idata)
+    groups = dict(loaded.groups)
+    del groups["prior"]
+    no_prior = dataclasses.replace(loaded, groups=groups)
     rows = {r.label: r for r in parameter_rows(no_prior, names, diag)}
     assert rows["Ixx"].prior_sd == pytest.approx(740.3)
     assert rows["Ixx"].contraction == pytest.approx(1 - (8 / 740.3) ** 2, abs=1e-3)
@@ -314,13 +381,10 @@ def test_diagnostics_judge_what_the_fit_judged(tmp_path):
     diag = diagnostics(loaded, parameter_names(loaded))
     roles = {r.label: r.role for r in diag.rows}
     assert roles["Ixx"] == "parameter" and roles["sigma_H"] == "nuisance"
-    assert roles["z"] == "sampler coordinate"
-    judged = [r.judged for r in diag.rows]
-    assert judged == sorted(judged, reverse=True)        # the unjudged rows come last
-    assert diag.max_r_hat == max(r.r_hat for r in diag.rows if r.judged) < 1.05
-    assert max(r.r_hat for r in diag.rows) > 2          # z's R-hat, shown but not judged
+    assert "z" not in roles and diag.sampler == {"z": 1, "H0": 3}   # listed, not judged
+    assert diag.max_r_hat == max(r.r_hat for r in diag.rows) < 1.05
     html = build_report(run).read_text(encoding="utf-8")
-    assert "<td class=\"l\">z</td><td class=\"l\">sampler coordinate</td>" in html
+    assert "Sampler coordinates, not judged" in html and "z (1)" in html
 
 
 def test_cli_report_rebuilds_the_page(tmp_path, run_cli):
@@ -334,6 +398,54 @@ def test_cli_report_rebuilds_the_page(tmp_path, run_cli):
     assert out.strip() == str(page.resolve())
     assert not list(run.glob(".report.html.*"))  # no temporary file left behind
     _assert_self_contained(html)
+
+
+def test_report_refuses_files_of_different_runs(tmp_path, run_cli):
+    """Issue 28: a thrust run's posterior.nc copied into an inertia run gave exit 0 and an
+    inertia title over thrust variables. ``report`` checks that the run's files belong
+    together — summary.json's kind and parameters against posterior.nc's variables,
+    config.toml's command and sampler against both — and refuses in one line naming the file;
+    nothing is written."""
+    import shutil
+
+    def case(name, edit):
+        run = make_run(tmp_path / name, "inertia", draws=100)
+        edit(run)
+        code, _, err = run_cli("report", run)
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert "different runs" in err and not (run / "report.html").exists()
+        return err
+
+    thrust = make_run(tmp_path / "thrust", "thrust", draws=100)
+    err = case("copied", lambda r: shutil.copy(thrust / "posterior.nc", r / "posterior.nc"))
+    assert "posterior.nc: holds the draws of a thrust fit, but summary.json is an inertia" in err
+
+    def renamed(run):   # summary.json of the same kind, reporting another parameter
+        s = json.loads((run / "summary.json").read_text())
+        s["parameters"]["F"] = s["parameters"].pop("Ixx")
+        s["kind"] = None
+        (run / "summary.json").write_text(json.dumps(s))
+
+    assert "posterior.nc: has no draws of F, which summary.json reports" in case("params",
+                                                                                 renamed)
+
+    def command(run):
+        (run / "config.toml").write_text('command = "fit thrust"\n')
+
+    assert "config.toml: written by 'cassini-bayes fit thrust', but the run is an inertia" in \
+        case("command", command)
+
+    def sampler(run):
+        (run / "config.toml").write_text('command = "fit inertia"\n[sampler]\nchains = 4\n'
+                                         'draws = 1000\n')
+
+    assert "posterior.nc: holds 100 draw(s), but config.toml asked for draws = 1000" in \
+        case("sampler", sampler)
+    # the same files of one run pass
+    run = make_run(tmp_path / "ok", "inertia", draws=100)
+    (run / "config.toml").write_text('command = "fit inertia"\n[sampler]\nchains = 4\n'
+                                     'draws = 100\n')
+    assert run_cli("report", run)[0] == 0
 
 
 def test_cli_report_missing_posterior_is_one_line_exit_2(tmp_path, run_cli):
@@ -355,9 +467,8 @@ def test_report_without_prior_residuals_or_energy(tmp_path):
     assert "/runs/final" in html and str(run) not in html
     _assert_self_contained(html)
     assert set(SECTIONS["rwa4"]) <= _section_ids(html)
-    assert "Not available: prior draws" in html
     assert "Not available: model residuals" in html
-    assert "Not available: energy plot" in html
+    assert re.search(r"energy BFMI \(per chain\)</td><td>–</td>", html)
     assert "Not available: config.toml" in html
     assert "unknown (no prior)" in html
     assert "could not be drawn" not in html
@@ -434,3 +545,148 @@ def test_report_of_a_run_without_a_posterior_names_its_command(tmp_path, command
     with pytest.raises(InputError, match=f"a `{command}` run; `report` rebuilds the page of a "
                                          "`fit inertia`, `fit thrust` or `fit rwa4` run"):
         load_run(tmp_path)
+
+
+# ---------------------------------------------------------------------------- figures (issue 31)
+
+
+def _axes_problems(fig) -> list[str]:
+    """Axes of ``fig`` without a unit in their label, and tick labels that overlap (drawn)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    out = []
+    for ax in fig.axes:
+        if not ax.get_visible() or not ax.axison:
+            continue
+        for name, axis, label in (("x", ax.xaxis, ax.get_xlabel()),
+                                  ("y", ax.yaxis, ax.get_ylabel())):
+            boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels()
+                     if t.get_visible() and t.get_text()]
+            shared = not boxes and name == "x"     # stacked panels: the bottom one is labelled
+            if not shared and not re.search(r"\([^()]+\)\s*$", label):
+                out.append(f"{ax.get_title()!r}: {name} label {label!r} has no unit")
+            for i, a in enumerate(boxes):
+                for b in boxes[i + 1:]:
+                    if a.overlaps(b):
+                        out.append(f"{ax.get_title()!r}: {name} tick labels overlap")
+    return out
+
+
+def _report_figures(run_dir):
+    """Every figure a fit report of ``run_dir`` draws, built as the report builds them."""
+    from cassini_bayes.report import build, figures
+
+    run = load_run(run_dir)
+    names = parameter_names(run)
+    rows = parameter_rows(run, names, diagnostics(run, names))
+    post = flatten_draws(run.posterior, names)
+    out = {"trace and rank": figures.trace_rank_figure(post, {r.label: r.unit for r in rows}),
+           "residuals": figures.residuals_figure(run.groups["residuals"], var="residual",
+                                                 ylabel="residual (N m s)")}
+    if run.kind == "rwa4":
+        mean, cones = build._direction(run)
+        out["sky"] = figures.axis_sky_figure(build._axis_draws(run), mean=mean, cones_deg=cones,
+                                             truth=build._axis_vec(run.summary["truth"]),
+                                             baseline=build._axis_vec(run.summary["baseline"]))
+    else:
+        out["answer"] = figures.answer_figure(
+            [figures.Panel(r.label, r.unit, post[r.label], r.baseline, r.truth, r.prior_mean)
+             for r in rows])
+    if run.kind == "thrust":
+        out["pulses"] = figures.pulse_impulse_figure(run.groups["pulse_impulses"])
+    return out
+
+
+@pytest.mark.parametrize("kind", ["inertia", "thrust", "rwa4"])
+def test_every_figure_axis_has_a_unit_and_no_tick_labels_overlap(reports, kind):
+    """Issue 31: trace, rank, pair and energy plots carried no units and the pair plot's tick
+    labels overlapped ("75006000"). Every axis of every figure of a fit report is labelled
+    "name (unit)" and its tick labels are apart; checked on the drawn figures. The check can
+    fail: an axis without a unit and crowded ticks are caught."""
+    for name, fig in _report_figures(reports[kind][0]).items():
+        assert _axes_problems(fig) == [], name
+    from matplotlib.figure import Figure
+
+    bad = Figure(figsize=(1.5, 1.5))
+    ax = bad.subplots()
+    ax.plot([75000.0, 76000.0], [0, 1])
+    ax.set_xticks(np.linspace(75000, 76000, 12))
+    ax.set_xlabel("Ixx")
+    problems = _axes_problems(bad)
+    assert any("no unit" in p for p in problems) and any("overlap" in p for p in problems)
+
+
+def test_health_and_leak_figures_have_units():
+    """The health and leak reports' figures, on posteriors built from known numbers."""
+    from cassini_bayes.estimators.leak import ThresholdResult
+    from cassini_bayes.inference.health import HealthPrior, health_posterior
+    from cassini_bayes.inference.leak import HYPOTHESES, LeakPosterior
+    from cassini_bayes.report.health import plot_health
+    from cassini_bayes.report.leak import leak_figure
+
+    rng = np.random.default_rng(0)
+    dates = np.linspace(0.0, 700.0, 12)
+    y = np.log(0.7) + 0.01 * rng.standard_normal((12, 6))
+    y[7:, 2] += np.log(0.93)                                   # Z3 down 7 % after day 400
+    post = health_posterior(dates, y, np.full((12, 6), 0.01), HealthPrior())
+    assert _axes_problems(plot_health(post, 0.05)) == []
+    t = np.arange(60.0, 1860.0, 60.0)
+    prob = np.zeros((t.size, len(HYPOTHESES)))
+    prob[:, 0] = np.where(t < 600, 1.0, 0.0)
+    prob[:, 1] = 1.0 - prob[:, 0]
+    leak = LeakPosterior(t, prob, 0.99, 660.0, 660.0, "Z1", 0.1, 0.002, np.array([-0.1, 0.08, 0.0]),
+                         600.0, np.full(3, 1e-3))
+    lee = ThresholdResult(1100.0, 0, 0, (1100.0,), ())
+    assert _axes_problems(leak_figure(leak, lee, HYPOTHESES)) == []
+
+
+def test_a_complete_run_is_reported_without_arviz(tmp_path):
+    """The report reads posterior.nc with h5py and takes the sampler diagnostics from
+    summary.json: ArviZ (more CPU to import than the whole page) and xarray are not imported
+    when summary.json covers every judged variable (docs/performance.md)."""
+    import subprocess
+    import sys
+
+    run = make_run(tmp_path, "inertia", draws=200)
+    s = json.loads((run / "summary.json").read_text())
+    stats = _stats(np.zeros(10) + np.arange(10.0))
+    s["nuisance"] = {k: stats for k in ("sigma_H", "H0[x]", "H0[y]", "H0[z]")}
+    (run / "summary.json").write_text(json.dumps(s))
+    code = ("import sys; from cassini_bayes.report import build_report; "
+            f"build_report({str(run)!r}); "
+            "print(sorted(m for m in ('arviz', 'xarray', 'pandas') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    assert out.stdout.strip() == "[]", out.stderr
+    html = (run / "report.html").read_text()
+    assert "computed here with ArviZ" not in html
+    # a run whose summary.json lacks a judged variable gets it from ArviZ, and says so
+    del s["nuisance"]["H0[x]"]       # H0 judged (its other components are there)
+    (run / "summary.json").write_text(json.dumps(s))
+    assert "computed here with ArviZ for 1 components" in build_report(run).read_text()
+
+
+def test_read_groups_matches_arviz(tmp_path):
+    """The h5py reader gives ArviZ's arrays, dimensions and coordinates."""
+    import arviz as az
+
+    from cassini_bayes.report.rundata import read_groups
+
+    run = make_run(tmp_path, "thrust", draws=50)
+    ours = read_groups(run / "posterior.nc", skip=())
+    idata = az.from_netcdf(str(run / "posterior.nc"))
+    for group in idata.groups():
+        ds = idata[group]
+        assert set(ds.data_vars) == set(ours[group].vars), group
+        for name, da in ds.data_vars.items():
+            var = ours[group][name]
+            assert var.dims == da.dims
+            if da.dtype.kind in "fib":
+                np.testing.assert_array_equal(var.values, da.values)
+        for dim in ds.dims:
+            if dim in ds.coords:
+                assert ours[group].labels(dim) == [x.item() if hasattr(x, "item") else x
+                                                   for x in ds.coords[dim].values], dim

@@ -233,3 +233,58 @@ def test_posterior_too_large_for_the_disk_is_refused_before_writing(tmp_path, mo
     assert e.value.errno == errno.ENOSPC and e.value.filename == str(tmp_path)
     assert "needs about 16 MiB, 1 MiB free" in e.value.strerror
     assert not out.exists() and _siblings(out) == []
+
+
+def _temporary(parent, name, mark):
+    """A temporary run directory as a killed writer leaves it (``mark``: its writer note, or
+    None for none)."""
+    d = parent / f".{name}.tmp-x1y2z3"
+    (d / "figures").mkdir(parents=True)
+    (d / "posterior.nc").write_bytes(b"\0" * 1000)
+    (d / "figures" / "trace.png").write_bytes(b"png")
+    if mark is not None:
+        (d / rundir.TEMP_MARK).write_text(json.dumps(mark))
+    return d
+
+
+def test_stale_temporary_directories_of_ended_writers_are_removed(tmp_path):
+    """SIGKILL leaves ``.NAME.tmp-…`` behind (no handler can run). The next run directory
+    written beside it removes those whose writer on this host has ended — and never one
+    without the package's note, one of another host, or one whose writer still runs."""
+    import socket
+    import subprocess
+    import sys
+
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    alive = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    host = socket.gethostname()
+    try:
+        stale = _temporary(tmp_path, "a", {"host": host, "pid": ended.pid, "started": None})
+        running = _temporary(tmp_path, "b", {"host": host, "pid": alive.pid,
+                                             "started": rundir._process_start(alive.pid)})
+        reused = _temporary(tmp_path, "c", {"host": host, "pid": alive.pid,
+                                            "started": "another-boot:1"})  # its id, reused
+        elsewhere = _temporary(tmp_path, "d", {"host": host + "-other", "pid": ended.pid,
+                                               "started": None})
+        unmarked = _temporary(tmp_path, "e", None)
+        with RunDir(tmp_path / "run") as rd:
+            (rd.path / "config.toml").write_text('command = "fit inertia"\nversion = "0"\n')
+            assert json.loads((rd.path / rundir.TEMP_MARK).read_text())["pid"] == os.getpid()
+        assert not stale.exists()
+        assert running.exists() and elsewhere.exists() and unmarked.exists()
+        assert (not reused.exists()) == (rundir._process_start(alive.pid) is not None)
+    finally:
+        alive.kill()
+        alive.wait()
+    # the finished run holds no writer note, and does not list one
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == [".cassini-bayes-files",
+                                                                   "config.toml"]
+    assert (tmp_path / "run" / ".cassini-bayes-files").read_text() == "config.toml\n"
+    # nor does a run that replaced another with force
+    with RunDir(tmp_path / "run", force=True) as rd:
+        (rd.path / "config.toml").write_text('command = "fit inertia"\nversion = "1"\n')
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == [".cassini-bayes-files",
+                                                                   "config.toml"]
+    assert "version = \"1\"" in (tmp_path / "run" / "config.toml").read_text()
+    assert not list(tmp_path.glob(".run.*"))

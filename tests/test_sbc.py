@@ -17,6 +17,7 @@ from scipy import stats
 from cassini_bayes.analysis import sbc
 from cassini_bayes.analysis.campaign import run_campaign
 from cassini_bayes.analysis.sbc_models import ModelSpec
+from pages import first_table
 
 BATCH = 16  # the same batch size in every test: one compiled sampler for the whole session
 
@@ -258,6 +259,9 @@ def test_cli_writes_the_run_directory(run_cli, tmp_path):
         assert set(p["coverage"]) == {"50", "80", "90", "95"}
     html = (out / "report.html").read_text()
     assert html.count("data:image/png;base64,") == 2 and "http://" not in html
+    headers, rows = first_table(html)      # the answer first: calibrated or not, per parameter
+    assert headers[:2] == ["parameter", "unit"] and headers[-1] == "verdict"
+    assert "90 % interval coverage" in headers and {r[0] for r in rows} == set(s["parameters"])
     assert not any(p.name.startswith(".") for p in tmp_path.iterdir())  # work dir cleaned up
 
     code, _, stderr = run_cli("sbc", "toy", "--replicates", 20, "--out", out)

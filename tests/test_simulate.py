@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from cassini_bayes.estimators import fit_axis_rcs, fit_thrust_baseline
-from cassini_bayes.physics.impulse import THRUSTER_NAMES, moment_matrix
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from cassini_bayes.physics.momentum import inertial_momentum, wheel_momentum_body
 from cassini_bayes.physics.pulse import mix_ratio, pulse_impulse
 from cassini_bayes.simulate import (load_scenario, scenario_from_dict, simulate, simulate_batch,
@@ -93,8 +94,7 @@ def test_momentum_change_equals_thruster_impulse(pulses_run):
     imp = np.asarray(a.impulse_inertial)
     assert np.max(np.linalg.norm(dh - imp, axis=1)) <= 1e-6 * np.linalg.norm(imp[-1])
     # body-axis impulse is Q (Eq 16) times the per-thruster impulses
-    th = pulses_run.scenario.truth.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = pulses_run.scenario.truth.moment_matrix
     np.testing.assert_allclose(np.asarray(a.impulse_body)[-1],
                                q @ np.asarray(a.thruster_impulse)[-1], rtol=1e-12)
 

@@ -80,9 +80,27 @@ def test_coarse_sampling_still_sees_a_wheel_ramp():
 def test_min_duration_and_thresholds(series):
     tel, _ = series
     assert len(quiet_periods(tel, min_duration_s=400.0)) == 1  # only the 500 s middle one
-    assert quiet_periods(tel, min_duration_s=60.0, wheel_tol_rpm=0.01) == []  # noise > tol
+    # tolerances below the file's own noise (0.2 rpm, 1e-5 rad/s) are raised to 8 sd of it
+    found = quiet_periods(tel, min_duration_s=60.0)
+    assert quiet_periods(tel, min_duration_s=60.0, wheel_tol_rpm=0.01) == found
+    assert quiet_periods(tel, min_duration_s=60.0, rate_max=1e-6) == found
     everything = quiet_periods(tel, min_duration_s=60.0, rate_max=1.0, wheel_tol_rpm=1e4)
     assert everything == [(0.0, 1300.0)]
+
+
+def test_coarse_sensors_are_quiet_at_rest():
+    """A CubeSat's MEMS gyro (3e-4 rad/s) and 1-rpm hall sensors (2 rpm noise, whole-rpm steps)
+    at rest: the tolerances rise to 8 sd of the file's own noise, so the three rests are found
+    and the slews are not."""
+    tel, truth = _series()
+    rng = np.random.default_rng(3)
+    rates = np.round(tel.wheel_rates / RPM_TO_RAD_S + rng.normal(0, 2.0, tel.wheel_rates.shape))
+    coarse = Telemetry(tel.t, tel.q, tel.omega + rng.normal(0, 3e-4, tel.omega.shape),
+                       rates * RPM_TO_RAD_S, source="coarse")
+    found = quiet_periods(coarse, min_duration_s=60.0)
+    assert len(found) == 3
+    for (a, b), (ta, tb) in zip(found, truth):
+        assert ta <= a and b <= tb
 
 
 def test_thruster_pulse_breaks_a_quiet_period(series):

@@ -42,8 +42,7 @@ from Basilisk.utilities import SimulationBaseClass, macros, simIncludeRW
 
 import cassini_bayes
 from cassini_bayes.frames import dcm
-from cassini_bayes.physics.impulse import (THRUSTER_NAMES, moment_matrix, thruster_directions,
-                                           thruster_positions)
+from cassini_bayes.physics.impulse import THRUSTER_NAMES
 from cassini_bayes.physics.pulse import pulse_impulse
 from cassini_bayes.spacecraft import load_spacecraft
 
@@ -448,10 +447,8 @@ def single_pulse_check(model, widths=(0.125, 0.5), steps=(0.005, 0.001)):
 
 
 def thruster_configs(model):
-    th = model.thrusters
-    pos = np.asarray(thruster_positions(th.Lx, th.Ly, th.Lzy, th.Lzz))
-    pos = pos - np.asarray(model.thrusters.com)[None, :]
-    dirs = np.asarray(thruster_directions())
+    pos = np.stack([s.position for s in model.thrusters]) - np.asarray(model.com_m)[None, :]
+    dirs = np.stack([s.direction for s in model.thrusters])
     on, off = ramp_tables()
     cfgs = []
     for p, d in zip(pos, dirs):
@@ -494,8 +491,7 @@ def run_bias(model, out: Path, seed: int):
     names = ["RWA1", "RWA2", "RWA3"]
     targets = np.array([-794.0, -870.0, -296.0]) / RPM
     wheels = [(n, model.wheel(n).axis, model.wheel(n).inertia * WHEEL_SCALE[n], 0.0) for n in names]
-    tcfg = model.thrusters
-    qm = np.asarray(moment_matrix(tcfg.Lx, tcfg.Ly, tcfg.Lzy, tcfg.Lzz, tcfg.com))
+    qm = model.moment_matrix
     pairs = thruster_pairs(qm)
     duration, dt_ctrl, dt_dyn, dt_tel = 420.0, 0.125, 0.005, 1.0
     sigma0 = rbk.EP2MRP([0.9273618495495703, 0.1, -0.2, 0.3])
@@ -728,4 +724,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
+    cassini_bayes.setup_jax()  # 64-bit, the compilation cache: this script uses modules directly
     main()

@@ -59,6 +59,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes._file_mode import default_file_mode
 from cassini_bayes.analysis.sbc import ranks
 from cassini_bayes.analysis.sbc_models import ModelSpec, SbcModel, build_model
@@ -292,6 +293,7 @@ def _min_ess(chains: np.ndarray) -> np.ndarray:
     return ess.min(axis=1)
 
 
+@jax_entry
 def run_batch(spec: ModelSpec, seed: int, batch_index: int, batch_size: int) -> dict[str, Any]:
     """Simulate, fit and rank replicates ``batch_index·B … (batch_index+1)·B − 1``.
 
@@ -446,6 +448,7 @@ def _dask_executor(client, spec, seed, batch_size, todo: Sequence[int]):
             fut.cancel()
 
 
+@jax_entry
 def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike, *,
                  seed: int = 0, batch_size: int = 16, executor: str = "local",
                  scheduler: str | None = None, n_workers: int | None = None,

@@ -115,12 +115,10 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
     from cassini_bayes.estimators.leak import ETA
     from cassini_bayes.inference.leak import (FRACTION_SCALES, OFFSET_SD_NMS, SAMPLE_STEP_S,
                                               TORQUE_SCALES, LeakInputs, _Sums, leak_posterior)
-    from cassini_bayes.physics.impulse import moment_matrix
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")
-    th = sc.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = sc.moment_matrix
     f_n, torque_sd = float(sc.thrust), sc.knowledge.torque_sd_nm
     rng = np.random.default_rng([seed, 2])
     n = int(round(hours * 3600.0 / SAMPLE_STEP_S)) + 1

@@ -29,7 +29,7 @@ from cassini_bayes.analysis.mass_property import RWA1_PHI_RAD, axis_on_cone
 from cassini_bayes.analysis.paper_facts import LEE_POINTING_TABLE2, TABLE1, fact
 from cassini_bayes.analysis.propagation import LineInterval, propagate
 from cassini_bayes.errors import InputError
-from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
+from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_kind
 
 __all__ = ["Posterior", "load_posterior", "posterior_from_idata", "BudgetRow", "budget_table",
            "budget_csv", "TABLE_COLUMNS",
@@ -65,9 +65,6 @@ class Posterior(NamedTuple):
         return est
 
 
-_A_FIT = {"inertia": "an inertia fit", "thrust": "a thrust fit", "rwa4": "an RWA4 fit"}
-
-
 def posterior_from_idata(idata, kind: str, source: str, method: str | None = None) -> Posterior:
     """The :class:`Posterior` of ``kind`` from an InferenceData (``source`` names it in errors)."""
     if kind not in KINDS:
@@ -78,7 +75,7 @@ def posterior_from_idata(idata, kind: str, source: str, method: str | None = Non
     missing = [n for n in need if n not in names]
     if missing:
         raise InputError(f"{source}: no {kind} draws ({', '.join(missing)} missing); give the run "
-                         f"directory of {_A_FIT[kind]}")
+                         f"directory of {a_kind(kind)} fit")
     keep = {"inertia": INERTIA_NAMES, "thrust": ("F",) + TAU_NAMES, "rwa4": U4_NAMES}[kind]
     draws = {n: np.asarray(post[n].values, float).reshape(-1) for n in keep if n in names}
     if kind == "rwa4":
@@ -110,13 +107,14 @@ def load_posterior(run_dir, kind: str, *, option: str | None = None) -> Posterio
     nc = run_dir / "posterior.nc"
     if not run_dir.is_dir():
         raise InputError(f"{where}: run directory not found; give the --out directory of "
-                         f"{_A_FIT[kind]}")
+                         f"{a_kind(kind)} fit")
     if not nc.is_file():
         raise InputError(f"{where}: no posterior.nc there; give the --out directory of "
-                         f"{_A_FIT[kind]}")
+                         f"{a_kind(kind)} fit")
     found = run_kind(run_dir)
     if found not in (None, kind):  # e.g. a thrust run, which carries inertia draws too
-        raise InputError(f"{where}: a {found} fit; give the --out directory of {_A_FIT[kind]}")
+        raise InputError(f"{where}: {a_kind(found)} fit; give the --out directory of "
+                         f"{a_kind(kind)} fit")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -238,7 +236,8 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
     post = {"inertia": inertia, "thrust": thrust, "rwa4": rwa4}
     for name, p in post.items():
         if p is not None and p.kind != name:
-            raise InputError(f"{p.source}: a {p.kind} posterior given as the {name} posterior")
+            raise InputError(f"{p.source}: {a_kind(p.kind)} posterior given as the {name} "
+                             "posterior")
     d_i = _resample(k_i, inertia.draws, n_draws) if inertia else None
     d_t = _resample(k_t, thrust.draws, n_draws) if thrust else None
     d_r = _resample(k_r, rwa4.draws, n_draws) if rwa4 else None
@@ -275,7 +274,8 @@ def posterior_budget(key, *, inertia: Posterior | None = None, thrust: Posterior
     axis_hat = rwa4.estimate()["u4"] if rwa4 else np.asarray(axis_on_cone(RWA1_PHI_RAD))
     for i, p in enumerate(((rwa4,) if rwa4 else ()) + tuple(extra_axes)):
         if p.kind != "rwa4":
-            raise InputError(f"{p.source}: a {p.kind} posterior given as an RWA4 posterior")
+            raise InputError(f"{p.source}: {a_kind(p.kind)} posterior given as an RWA4 "
+                             "posterior")
         fid = "rwa4_rwa_expected_deg" if p.method == "rwa" else "rwa4_rcs_total_deg"
         d = d_r if i == 0 else _resample(jax.random.fold_in(k_r, i), p.draws, n_draws)
         add(f"rwa4 ({p.method or 'method not recorded'})", "RWA4 axis knowledge", "deg", fid,

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
@@ -49,10 +50,13 @@ class TelemetryCheck:
     the first attitude; ``attitude`` and ``momentum`` the physics checks' results
     (:func:`cassini_bayes.consistency.check_telemetry_data`; ``None`` where not made) and
     ``physics`` what they established, in words; ``wheels``; ``thruster_source`` (``"on_*
-    columns"``, ``"pulse log FILE"`` or ``None`` when there is neither) and ``thrusters`` (those
-    that fired); ``quiet`` the quiet periods ``(t0, t1)`` s and the rules that made them
+    columns"``, ``"pulse log FILE"`` or ``None`` when there is neither), ``thrusters`` (those
+    that fired) and ``model_thrusters`` (the names the spacecraft model has, Cassini's without
+    one; empty for a spacecraft without thrusters); ``quiet`` the quiet periods ``(t0, t1)`` s
+    and the rules that made them
     (``min_quiet_s``, ``rate_max_rad_s``, ``wheel_tol_rpm``); ``n_pulses`` of the pulse log
-    (``None`` without one); ``notes`` warnings to show.
+    (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
+    (:func:`cassini_bayes.consistency.quantised_rates`).
     """
 
     t: np.ndarray
@@ -70,6 +74,8 @@ class TelemetryCheck:
     wheel_tol_rpm: float
     n_pulses: int | None
     notes: tuple[str, ...]
+    quanta: tuple = ()
+    model_thrusters: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:
@@ -138,6 +144,7 @@ def _pulse_count(on: np.ndarray) -> int:
     return int(np.count_nonzero(np.diff((np.diff(on) > 0).astype(int)) == 1) + (on[1] > on[0]))
 
 
+@jax_entry
 def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: float = 60.0,
                     rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
                     check_units: bool = True) -> TelemetryCheck:
@@ -149,8 +156,9 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
     pulses : a pulse-log CSV path or a :class:`~cassini_bayes.telemetry.PulseLog`, validated and
         used for the thruster on-times (the telemetry's ``on_*`` columns win when it has them).
     spacecraft : a model TOML path, a shipped model's name or a
-        :class:`~cassini_bayes.spacecraft.Spacecraft`: also check the wheel units by momentum
-        conservation.
+        :class:`~cassini_bayes.spacecraft.Spacecraft`: its wheels and thrusters name the columns
+        (without one, Cassini's: ``rwa1..rwa4``, ``on_Z1..on_Y4``), and the wheel units are
+        checked by momentum conservation.
     min_quiet_s, rate_max_rad_s, wheel_tol_rpm : a quiet period is at least ``min_quiet_s``
         long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
         and no thruster firing (:func:`cassini_bayes.windows.quiet_periods`).
@@ -162,9 +170,9 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         The first rule or physics check the file breaks, in one line naming where.
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
-    from cassini_bayes.consistency import GyroBiasWarning, check_telemetry_data
-    from cassini_bayes.telemetry import (RPM_TO_RAD_S, THRUSTER_NAMES, PulseSpanWarning,
-                                         _turn_angle, with_on_times)
+    from cassini_bayes.consistency import (GyroBiasWarning, QuantisedRatesWarning,
+                                           check_telemetry_data, quantised_rates)
+    from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
@@ -174,16 +182,16 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
                 or not 0 < value < float("inf")):
             raise InputError(f"must be a positive finite number, got {value!r}",
                              path=spelled(option, argument))
-    tel = one_telemetry(telemetry, check_units=check_units)
-    log = one_pulse_log(pulses) if pulses is not None else None
     sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
+    tel = one_telemetry(telemetry, check_units=check_units, spacecraft=sc)
+    log = one_pulse_log(pulses, spacecraft=sc) if pulses is not None else None
     if log is not None and log.t_on.size:
         _check_shared_span(tel, log)
     with warnings.catch_warnings(record=True) as physics_warnings:
         warnings.simplefilter("always")
         attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = [str(w.message) for w in physics_warnings
-                        if issubclass(w.category, GyroBiasWarning)]
+                        if issubclass(w.category, (GyroBiasWarning, QuantisedRatesWarning))]
     source = None if tel.on_times is None and log is None else "on_* columns"
     if log is not None and tel.on_times is not None:
         notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "
@@ -206,7 +214,7 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
                                  float(rpm[0]), float(rpm[-1]), idle=not active[j]))
     thrusters = []
     if tel.on_times is not None:
-        for k, name in enumerate(THRUSTER_NAMES):
+        for k, name in enumerate(tel.thruster_names):
             on = tel.on_times[:, k]
             total = float(on[-1] - on[0])
             if total <= 0:
@@ -225,4 +233,5 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         wheels=tuple(wheels), thruster_source=source, thrusters=tuple(thrusters),
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
-        n_pulses=None if log is None else len(log.t_on), notes=tuple(notes))
+        n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
+        quanta=quantised_rates(tel), model_thrusters=tuple(tel.thruster_names))

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
 
@@ -42,21 +43,21 @@ class HealthResult:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
         sd, ``P(down)`` per channel), ``thrust_bands.csv`` (relative thrust quantiles per channel
-        on a date grid) and ``health.png`` into ``out`` atomically; returns it."""
+        on a date grid), ``health.png`` and ``report.html`` (the answer first, the adequacy
+        verdict, self-contained) into ``out`` atomically; returns it."""
+        from cassini_bayes.report.figures import png_bytes
+        from cassini_bayes.report.health import health_report_html, plot_health
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
+        png = png_bytes(plot_health(self.posterior, self.fraction), dpi=110)
+        page = health_report_html(self, png)
         with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)
             _write_csv(rd.path / "health.csv", *health_table(self))
             _write_csv(rd.path / "thrust_bands.csv", *band_table(self.posterior))
-            try:
-                from cassini_bayes.report.health import plot_health
-
-                plot_health(self.posterior, self.fraction).savefig(rd.path / "health.png",
-                                                                  dpi=110)
-            except ImportError:  # matplotlib missing: the numbers are written regardless
-                pass
+            (rd.path / "health.png").write_bytes(png)
+            (rd.path / "report.html").write_text(page, encoding="utf-8")
         return rd.final
 
 
@@ -119,6 +120,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
     return sorted(out, key=lambda e: e[0])
 
 
+@jax_entry
 def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
                p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
@@ -140,9 +142,11 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
         summary (default :data:`~cassini_bayes.inference.health.summary.TAU_SD_FRAC`).
     """
     from cassini_bayes.api._inputs import spacecraft_input
+    from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_thrust_data
     from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
-    from cassini_bayes.inference.health.summary import TAU_SD_FRAC
+    from cassini_bayes.inference.health.adequacy import health_adequacy, inertia_probe
+    from cassini_bayes.inference.health.summary import TAU_SD_FRAC, left_out_channels
     from cassini_bayes.rundir import file_record
     from cassini_bayes.telemetry import read_pulses, read_telemetry
 
@@ -151,17 +155,25 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
         raise InputError(f"{arg('fraction')} must lie strictly between 0 and 1, got {fraction}")
     tau_sd = TAU_SD_FRAC if tau_sd_frac is None else number("tau_sd_frac", tau_sd_frac, lo=0.0)
     sc, sc_record, _ = spacecraft_input(spacecraft)
+    sc.require_thrusters("fit health", eq16=True)
     files = read_event_list(events)
-    summaries = []
-    for day, tel_path, log_path in files:
-        tel, log = read_telemetry(tel_path), read_pulses(log_path)
-        check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_* columns
-        summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
+    summaries, probes = [], []
+    with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
+        for day, tel_path, log_path in files:
+            tel = read_telemetry(tel_path, spacecraft=sc)
+            log = read_pulses(log_path, spacecraft=sc)
+            check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_*
+            summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
+            probes.append(inertia_probe(tel, log, sc, summaries[-1]))
     prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,
                         nominal_thrust_n=float(sc.thrust)).check()
     post = health_posterior([f[0] for f in files], np.array([s.log_thrust for s in summaries]),
                             np.array([np.sqrt(np.diag(s.cov)) for s in summaries]), prior)
-    summary = health_summary(post, fraction)
+    adequacy = health_adequacy([f[0] for f in files], summaries, probes, prior,
+                               [_event_label(d, t) for d, t, _ in files])
+    summary = health_summary(post, fraction, adequacy)
+    summary["warnings"] = (warns + left_out_channels(summaries, [f[0] for f in files])
+                           + summary.get("warnings", []))
     config = {"command": "fit health", "version": __version__,
               "inputs": {"events": [{"date_days": d, "telemetry": file_record(t),
                                      "pulses": file_record(p)} for d, t, p in files],
@@ -171,9 +183,17 @@ def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
     return HealthResult(post, tuple(summaries), tuple(files), fraction, summary, config)
 
 
-def health_summary(post, fraction: float) -> dict:
-    """``summary.json`` of a health fit: the change probability and date, and per channel the
-    step and ``P(down by more than fraction)`` at the last event."""
+def _event_label(day: float, telemetry: Path) -> str:
+    """An event as the adequacy checks name it: its folder (or file) and date."""
+    name = telemetry.parent.name if telemetry.name == "telemetry.csv" else telemetry.name
+    return f"{name} (day {day:g})"
+
+
+def health_summary(post, fraction: float, adequacy=None) -> dict:
+    """``summary.json`` of a health fit: the change probability and date, per channel the step
+    and ``P(down by more than fraction)`` at the last event, and the ``adequacy`` verdict
+    (:func:`~cassini_bayes.inference.health.adequacy.health_adequacy`) with a warning per
+    failed check."""
     from cassini_bayes.inference.health import CHANNELS
 
     lo, hi = post.change_date_interval(0.9)
@@ -206,6 +226,8 @@ def health_summary(post, fraction: float) -> dict:
                    "Eq 21); the split within a pair is not identifiable and not reported",
         "prior": {"p_change": post.prior.p_change, "p_channel": post.prior.p_channel,
                   "step_sd": post.prior.step_sd, "baseline_sd": post.prior.baseline_sd},
+        **({} if adequacy is None else {"adequacy": adequacy.to_dict(),
+                                        "warnings": adequacy.warnings()}),
     }
 
 
@@ -245,6 +267,7 @@ def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str],
 _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
+@jax_entry
 def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
                              force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.

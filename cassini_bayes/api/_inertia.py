@@ -5,9 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
                                        shows_progress, spacecraft_input, telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
+from cassini_bayes.errors import as_flag
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
@@ -54,6 +56,7 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
     return summary
 
 
+@jax_entry
 @shows_progress
 def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
@@ -91,10 +94,11 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
 
     seed = check_seed(seed)
+    robust, torque = as_flag(robust, "robust"), as_flag(torque, "torque")
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
-    tels, records, paths = telemetry_inputs(telemetry)
+    tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     with step("checking the data"), collect_warnings() as check_warns:
         check_inertia_data(tels, sc)  # units and conventions by the physics, before sampling
     key = jax.random.key(seed)  # the one place the seed becomes a key

@@ -10,7 +10,8 @@ from typing import Sequence
 
 import numpy as np
 
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS, SEED_MAX
+from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
@@ -19,14 +20,8 @@ __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "
            "check_seed", "shows_progress"]
 
 WHEEL_ERRORS = ("per_wheel", "common")
-# jax.random.key takes a signed 64-bit seed; the package takes its non-negative half
-SEED_MAX = 2**63 - 1
 
 PathLike = str | os.PathLike
-# beyond these a fit runs out of memory or time before it says anything (16 chains already
-# oversubscribe a 16-core machine; 10⁶ draws of a fit take hours)
-MAX_CHAINS = 64
-MAX_DRAWS = 1_000_000
 
 
 def shows_progress(fit):
@@ -36,7 +31,7 @@ def shows_progress(fit):
     def wrapper(*args, progress: bool = False, **kwargs):
         from cassini_bayes.inference.progress import shown
 
-        with shown(bool(progress)):
+        with shown(as_flag(progress, "progress")):
             return fit(*args, progress=progress, **kwargs)
 
     return wrapper
@@ -84,28 +79,33 @@ def _items(x, name: str) -> list:
                      f"{type(x).__name__}")
 
 
-def telemetry_inputs(telemetry, name: str = "telemetry"
+def telemetry_inputs(telemetry, name: str = "telemetry", spacecraft: Spacecraft | None = None
                      ) -> tuple[list[Telemetry], list[dict], list[Path]]:
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
-    :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them."""
+    :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them; files are read
+    with the columns of ``spacecraft``'s wheels and thrusters (Cassini's without one), and a
+    Telemetry must name wheels of it."""
     from cassini_bayes.rundir import file_record
-    from cassini_bayes.telemetry import read_telemetry, read_telemetry_many, validate_telemetry
+    from cassini_bayes.telemetry import (check_model_names, read_telemetry, read_telemetry_many,
+                                         validate_telemetry)
 
     items = _items(telemetry, name)
     if not items:
         raise InputError(f"{arg(name)}: give at least one telemetry file or Telemetry")
     if all(_is_path(x) for x in items):  # all files: read together (errors name the file)
         paths = [Path(x) for x in items]
-        tels = read_telemetry_many(paths)
+        tels = read_telemetry_many(paths, spacecraft=spacecraft)
         return _once(tels, name), [file_record(p) for p in paths], paths
     tels, records, paths = [], [], []
     for x in items:
         if _is_path(x):
-            tels.append(read_telemetry(x))
+            tels.append(read_telemetry(x, spacecraft=spacecraft))
             records.append(file_record(x))
             paths.append(Path(x))
         elif isinstance(x, Telemetry):  # checked with the file rules, as a file would be
             record, files = _record(x.source)
+            if spacecraft is not None:
+                check_model_names(x, spacecraft)
             tels.append(validate_telemetry(x))
             records.append(record)
             paths += files
@@ -133,47 +133,65 @@ def _once(tels: list[Telemetry], name: str) -> list[Telemetry]:
     return tels
 
 
-def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True) -> Telemetry:
+def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True,
+                  spacecraft: Spacecraft | None = None) -> Telemetry:
     """One telemetry argument, a :class:`~cassini_bayes.telemetry.Telemetry` or a file path,
-    read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics)."""
-    from cassini_bayes.telemetry import read_telemetry, validate_telemetry
+    read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics; columns
+    of ``spacecraft``'s wheels and thrusters, Cassini's without one)."""
+    from cassini_bayes.telemetry import check_model_names, read_telemetry, validate_telemetry
 
+    check_units = as_flag(check_units, "check_units")
     if isinstance(telemetry, Telemetry):
+        if spacecraft is not None:
+            check_model_names(telemetry, spacecraft)
         return validate_telemetry(telemetry, check_units=check_units)
     if not _is_path(telemetry):
         raise InputError(f"{arg(name)}: give a telemetry file path or a Telemetry, not "
                          f"{type(telemetry).__name__}")
-    return read_telemetry(telemetry, check_units=check_units)
+    return read_telemetry(telemetry, check_units=check_units, spacecraft=spacecraft)
 
 
-def one_pulse_log(pulses, name: str = "pulses") -> PulseLog:
+def _model_pulses(log: PulseLog, spacecraft: Spacecraft | None) -> PulseLog:
+    """``log`` when its thrusters are ``spacecraft``'s (or no model is given), else an
+    InputError naming both."""
+    if spacecraft is not None and tuple(log.thruster_names) != spacecraft.thruster_names:
+        have = ", ".join(spacecraft.thruster_names) or "none"
+        raise InputError(f"its thrusters ({', '.join(log.thruster_names)}) are not those of the "
+                         f"spacecraft model {spacecraft.name!r} ({have})", path=log.source)
+    return log
+
+
+def one_pulse_log(pulses, name: str = "pulses", *,
+                  spacecraft: Spacecraft | None = None) -> PulseLog:
     """One pulse-log argument, a :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path,
-    read or checked with the file rules."""
+    read or checked with the file rules (thrusters of ``spacecraft``; Cassini's without one)."""
     from cassini_bayes.telemetry import read_pulses, validate_pulses
 
     if isinstance(pulses, PulseLog):
-        return validate_pulses(pulses)
+        return validate_pulses(_model_pulses(pulses, spacecraft))
     if not _is_path(pulses):
         raise InputError(f"{arg(name)}: give a pulse-log file path or a PulseLog, not "
                          f"{type(pulses).__name__}")
-    return read_pulses(pulses)
+    return read_pulses(pulses, spacecraft=spacecraft)
 
 
-def pulse_inputs(pulses, name: str = "pulses") -> tuple[list[PulseLog], list[dict], list[Path]]:
+def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = None
+                 ) -> tuple[list[PulseLog], list[dict], list[Path]]:
     """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
-    :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them."""
+    :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them (thrusters of
+    ``spacecraft``; Cassini's without one)."""
     from cassini_bayes.rundir import file_record
     from cassini_bayes.telemetry import read_pulses
 
     logs, records, paths = [], [], []
     for x in _items(pulses, name):
         if _is_path(x):
-            logs.append(read_pulses(x))
+            logs.append(read_pulses(x, spacecraft=spacecraft))
             records.append(file_record(x))
             paths.append(Path(x))
         elif isinstance(x, PulseLog):
             record, files = _record(x.source)
-            logs.append(x)
+            logs.append(_model_pulses(x, spacecraft))
             records.append(record)
             paths += files
         else:
@@ -217,7 +235,9 @@ def check_seed(seed: int) -> int:
 def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
                      progress: bool = False):
     """:class:`~cassini_bayes.inference.runner.SamplerSettings` from the fit functions'
-    arguments, checked against the ranges the command line accepts."""
+    arguments, checked against the ranges the command line accepts; warns (once) when the
+    chains must run vectorised because JAX started before the fit could ask for devices."""
+    from cassini_bayes._devices import warn_if_vectorised
     from cassini_bayes.inference.runner import SamplerSettings
 
     for name, value, lo, hi in (("chains", chains, 1, MAX_CHAINS),
@@ -226,5 +246,6 @@ def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
         if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
             raise InputError(f"{arg(name, value)}: use an integer in {lo} .. {hi}")
     target_accept = number("target_accept", target_accept, lo=0.5, hi=0.999)
+    warn_if_vectorised(chains)
     return SamplerSettings(chains=chains, warmup=warmup, draws=draws,
-                           target_accept=target_accept, progress=bool(progress))
+                           target_accept=target_accept, progress=as_flag(progress, "progress"))

@@ -1,9 +1,10 @@
 """Chebyshev segments for a trajectory file: :func:`fit_trajectory`, what ``cassini-bayes ivp
 fit`` runs (docs/ivp.md).
 
-The conic propagator, the segmenter and the vector tree themselves are re-exported from
+The conic propagator, the segmenter and the vector tree themselves come from
 :mod:`cassini_bayes.ivp` (``cb.propagate_conic``, ``cb.fit_chebyshev_segments``,
-``cb.VectorTree``).
+``cb.VectorTree``), here set to compute in 64-bit (:func:`cassini_bayes.setup_jax`) when called
+or built, as every public function that computes is.
 """
 
 from __future__ import annotations
@@ -15,9 +16,23 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes import ivp
+from cassini_bayes._devices import jax_entry, setup_jax
 from cassini_bayes.errors import InputError, spelled
 
-__all__ = ["TrajectoryFit", "fit_trajectory"]
+__all__ = ["TrajectoryFit", "fit_trajectory", "propagate_conic", "fit_chebyshev_segments",
+           "VectorTree"]
+
+propagate_conic = jax_entry(ivp.propagate_conic)
+fit_chebyshev_segments = jax_entry(ivp.fit_chebyshev_segments)
+
+
+class VectorTree(ivp.VectorTree):
+    __doc__ = ivp.VectorTree.__doc__
+
+    def __init__(self, entries) -> None:
+        setup_jax()
+        super().__init__(entries)
 
 _DENSE_PER_SEGMENT = 400   # report grid points per segment (besides the file's samples)
 
@@ -88,6 +103,7 @@ class TrajectoryFit:
         return interpolant(self.trajectory)
 
 
+@jax_entry
 def fit_trajectory(trajectory, *, requirement_urad: float = 40.0, max_order: int = 12,
                    mu: float | None = None) -> TrajectoryFit:
     """Chebyshev segments of a trajectory whose direction stays within ``requirement_urad`` of

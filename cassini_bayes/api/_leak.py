@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 __all__ = ["LeakResult", "monitor_leak"]
@@ -33,18 +34,22 @@ class LeakResult:
     files: tuple
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``summary.json``, ``config.toml`` and ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) into ``out`` atomically; returns it. ``force``
+        """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
+        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the answer first, the
+        adequacy verdict, self-contained) into ``out`` atomically; returns it. ``force``
         replaces only a directory cassini-bayes wrote."""
         from cassini_bayes.inference.leak import HYPOTHESES
+        from cassini_bayes.report.leak import leak_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
+        page = leak_report_html(self)
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
             write_summary(rd.path, self.summary)
             write_config(rd.path, self.config)
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
                        header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
+            (rd.path / "report.html").write_text(page, encoding="utf-8")
         return rd.final
 
 
@@ -54,6 +59,7 @@ def _positive(value: float, option: str, argument: str) -> float:
     return value
 
 
+@jax_entry
 def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
                  check_step_s: float = 60.0, onset_step_s: float = 20.0, eta: float = 0.05,
@@ -76,9 +82,11 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
     """
     from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
+    from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_telemetry_data
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
+    from cassini_bayes.inference.leak_adequacy import leak_adequacy
     from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
     # the Bayesian monitor checks its own settings (leak_posterior); these are Lee's
@@ -88,18 +96,20 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
     if eta < 0:
         raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))
     sc, sc_record, sc_files = spacecraft_input(spacecraft)
-    tels, tel_records, tel_files = telemetry_inputs(telemetry)
+    sc.require_thrusters("the leak monitor", eq16=True)
+    tels, tel_records, tel_files = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
         raise InputError(f"got {len(tels)} telemetry inputs; the monitor reads one stretch",
                          path=spelled("TELEMETRY", "telemetry"))
     tel = tels[0]
-    logs, log_records, log_files = pulse_inputs(pulses)
+    logs, log_records, log_files = pulse_inputs(pulses, spacecraft=sc)
     if len(logs) > 1:
         raise InputError(f"got {len(logs)} pulse logs; give one",
                          path=spelled("--pulses", "pulses"))
     log = logs[0] if logs else None
-    check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
-    inp = leak_inputs(tel, log, sc)
+    with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
+        check_telemetry_data(tel, sc, log)   # units, conventions, pulse log vs on_* (as `check`)
+        inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, onset_step_s=onset_step_s,
                           p_detect=p_detect)
@@ -115,7 +125,12 @@ def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01
                 "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
                 "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta},
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
+        "warnings": warns,
     }
+    adequacy = leak_adequacy(inp, post, eta=eta, sample_step_s=sample_step_s,
+                             onset_step_s=onset_step_s)
+    summary["adequacy"] = adequacy.to_dict()
+    summary["warnings"] = warns + adequacy.warnings()
     config = {"command": "monitor leak", "version": __version__,
               "inputs": {"telemetry": tel_records[0], "spacecraft": sc_record,
                          **({"pulses": log_records[0]} if log_records else {})},

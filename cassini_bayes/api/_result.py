@@ -122,6 +122,10 @@ class FitResult:
     _summary: dict = field(repr=False)
     _inputs: tuple[Path, ...] = field(default=(), repr=False)
 
+    def __str__(self) -> str:
+        """How a message names an unsaved fit: ``<fit inertia result, seed 0>``."""
+        return f"<{self.config.get('command', self.kind)} result, seed {self.config.get('seed')}>"
+
     @property
     def idata(self):
         """The ArviZ InferenceData (``posterior``, ``sample_stats``, ``prior``,

@@ -4,16 +4,15 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
                                        shows_progress, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, as_flag
 
-TARGET_ACCEPT = 0.95
-"""The RWA4 fits' default NUTS target acceptance (the other fits': 0.9). Measured on the 80
-open-world fits at the defaults (docs/robust/open_world.md): 0.9 left one divergent transition
-(``rwa4_rcs`` seed 25), 0.95 none, with the same coverage, errors and R-hat ≤ 1.005."""
+TARGET_ACCEPT = RWA4_TARGET_ACCEPT  # 0.95, the other fits' 0.9 (cassini_bayes.api._limits)
 
 RCS_BUDGET_DEG = 3.0
 """Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
@@ -94,6 +93,7 @@ def _window_pairs(windows) -> list | None:
     return pairs
 
 
+@jax_entry
 @shows_progress
 def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
              inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
@@ -132,6 +132,7 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
 
     seed = check_seed(seed)
+    robust = as_flag(robust, "robust")
     method = choice("method", method, METHODS)
     prior = choice("prior", prior, PRIORS)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
@@ -139,7 +140,7 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
     pairs = _window_pairs(windows)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, False)
-    tels, records, paths = telemetry_inputs(telemetry)
+    tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
         raise InputError(f"{arg('telemetry')}: the RWA4 calibration takes one telemetry, got "
                          f"{len(tels)}")

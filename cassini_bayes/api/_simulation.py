@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.estimators.leak import leak_torque
-from cassini_bayes.physics.impulse import THRUSTER_NAMES, moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 from cassini_bayes.simulate import Scenario, SimResult, quiet_windows
 from cassini_bayes.spacecraft import Spacecraft
@@ -51,7 +51,7 @@ def truth_document(result: SimResult, seed: int) -> dict:
         "rwa4_axis": ([float(x) for x in s.truth.wheel("RWA4").axis]
                       if "RWA4" in s.wheel_names else None),
         "believed_axes": [list(a) for a in s.rwa.believed_axes],
-        "thrust_n": dict(zip(THRUSTER_NAMES, map(float, np.asarray(p.thrust_n)))),
+        "thrust_n": dict(zip(s.truth.thruster_names, map(float, np.asarray(p.thrust_n)))),
         "tau_delay_s": float(p.tau_s[0]),
         "tau_rise_s": float(p.tau_s[1]),
         "tau_fall_s": float(p.tau_s[2]),
@@ -74,7 +74,7 @@ def truth_document(result: SimResult, seed: int) -> dict:
         "quiet_windows": windows,
         "h_inertial_start_nms": [float(x) for x in h[0]],
         "h_inertial_end_nms": [float(x) for x in h[-1]],
-        "thruster_impulse_ns": dict(zip(THRUSTER_NAMES,
+        "thruster_impulse_ns": dict(zip(s.truth.thruster_names,
                                         map(float, np.asarray(a.thruster_impulse)[-1]))),
         "momentum_balance_rel_error": drift,
         "max_pointing_error_rad": float(np.max(np.linalg.norm(a.pointing_error, axis=1))),
@@ -88,10 +88,9 @@ def _leak_document(result: SimResult) -> dict | None:
     s, lk = result.scenario, result.scenario.leak
     if lk is None:
         return None
-    th = s.truth.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = s.truth.moment_matrix
     thrust = float(np.asarray(result.params.thrust_n)[lk.thruster])
-    return {"thruster": THRUSTER_NAMES[lk.thruster], "fraction": lk.fraction,
+    return {"thruster": s.truth.thruster_names[lk.thruster], "fraction": lk.fraction,
             "t_start_s": lk.t_start_s, "thrust_n": thrust,
             "torque_nm": [float(x) for x in leak_torque(q, lk.thruster, lk.fraction, thrust)]}
 
@@ -145,6 +144,7 @@ class Simulation:
         return rd.final
 
 
+@jax_entry
 def simulate(scenario: Scenario | str | os.PathLike, *, seed: int | None = None) -> Simulation:
     """Simulate a scenario: the telemetry, pulse log and truth ``cassini-bayes simulate`` writes.
 

@@ -6,11 +6,13 @@ import os
 from pathlib import Path
 from typing import Sequence
 
+from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_inputs,
                                        sampler_settings, shows_progress, spacecraft_input,
                                        telemetry_inputs)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
-from cassini_bayes.errors import InputError, arg
+from cassini_bayes.errors import InputError, arg, as_flag
+from cassini_bayes.names import a_kind
 
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
@@ -26,11 +28,9 @@ def thrust_baseline(events, spacecraft, mode: str,
 
     from cassini_bayes.estimators import thrust as est
     from cassini_bayes.estimators.baseline import wheel_momentum
-    from cassini_bayes.physics.impulse import moment_matrix
     from cassini_bayes.physics.momentum import inertia_matrix
 
-    th = spacecraft.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = spacecraft.moment_matrix
     p = spacecraft.pulse
     i_body = (np.asarray(inertia_matrix(inertia.mean), float) if hasattr(inertia, "mean")
               else spacecraft.inertia)
@@ -133,8 +133,8 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
                          "other; give one")
     if isinstance(inertia_posterior, FitResult):
         if inertia_posterior.kind != "inertia":
-            raise InputError(f"{arg('inertia_posterior')}: a {inertia_posterior.kind} fit; give "
-                             "the result (or run directory) of an inertia fit")
+            raise InputError(f"{arg('inertia_posterior')}: {a_kind(inertia_posterior.kind)} "
+                             "fit; give the result (or run directory) of an inertia fit")
         cfg = inertia_posterior.config
         entry = {"command": cfg["command"], "seed": cfg["seed"], "inputs": cfg["inputs"]}
         return (inertia_from_idata(inertia_posterior.idata, "inertia_posterior"),
@@ -151,6 +151,7 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
     return knowledge, {"inertia_posterior": entry}, [path]
 
 
+@jax_entry
 @shows_progress
 def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
                inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,
@@ -195,13 +196,15 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
     from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
 
     seed = check_seed(seed)
+    robust, fix_inertia = as_flag(robust, "robust"), as_flag(fix_inertia, "fix_inertia")
     mode = choice("mode", mode, MODES)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
+    sc.require_thrusters("fit thrust", eq16=True)
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, fix_inertia)
-    tels, tel_records, tel_paths = telemetry_inputs(telemetry)
-    logs, log_records, log_paths = pulse_inputs(pulses)
+    tels, tel_records, tel_paths = telemetry_inputs(telemetry, spacecraft=sc)
+    logs, log_records, log_paths = pulse_inputs(pulses, spacecraft=sc)
     if not logs:
         raise InputError(f"fit_thrust needs the pulse log of each event: {arg('pulses')} "
                          "(columns t_on, thruster, width)")

@@ -6,7 +6,8 @@ modules are discovered here, so adding a command never edits this file. ``groups
 
 Global options, given before the command (docs/cli.md): ``--jax-cache DIR|off`` moves or switches
 off the compilation cache (:mod:`cassini_bayes._jax_cache`); ``--verbose`` prints its hits and
-misses at the end.
+misses at the end. Before any command runs, :func:`cassini_bayes.setup_jax` sets JAX up (64-bit,
+the cache, one CPU device per core); ``--help``, ``--version`` and usage errors import no JAX.
 
 One error path (:func:`main`; docs/cli.md lists the exit codes): whatever goes wrong is at most a
 usage line and one ``error:`` line on stderr, never a traceback (unless ``CASSINI_BAYES_DEBUG=1``).
@@ -18,7 +19,8 @@ options (``--method rcs``) rather than Python arguments (``method='rcs'``):
 - 3 a run that did not converge under ``--strict`` (its outputs are written);
 - 1 an operating-system error (full disk, no permission: the line names the path) or an internal
   error (a bug: the line says how to see the traceback);
-- 130 interrupted (Ctrl-C): nothing half-written is left under the output's name.
+- 130 interrupted (Ctrl-C), 143 terminated (SIGTERM, handled as Ctrl-C): nothing half-written
+  is left under the output's name, nor a temporary directory beside it.
 
 The usage errors come from Click, which recent typer releases vendor as ``typer._click`` and older
 ones took from the ``click`` package: they are recognised by class name, so any typer release
@@ -41,12 +43,8 @@ import warnings
 import typer
 
 from cassini_bayes import __version__, _jax_cache
-from cassini_bayes._devices import request_host_devices
+from cassini_bayes._devices import setup_jax
 from cassini_bayes.errors import InputError, Interrupted, NotConvergedError, command_line
-
-# one JAX CPU device per core and at least 4, so that the chains run in parallel: at start-up,
-# before anything starts the backend (the library never does this on import)
-request_host_devices()
 
 app = typer.Typer(
     name="cassini-bayes",
@@ -83,6 +81,9 @@ def _root(
     if jax_cache is not None:
         os.environ[_jax_cache.ENV] = jax_cache  # worker processes (sbc --executor dask) follow
         _jax_cache.enable(jax_cache)
+    # 64-bit, the cache, one CPU device per core (at least 4) so that the chains run in
+    # parallel: before the command runs, hence before anything starts JAX's backend
+    setup_jax()
     if verbose:
         ctx.call_on_close(lambda: print(_jax_cache.stats().line(), file=sys.stderr))
 
@@ -125,9 +126,37 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     print(f"warning: {' '.join(str(message).split())}", file=file or sys.stderr)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where Ctrl-C raises KeyboardInterrupt: every clean-up that Ctrl-C runs
+    (temporary run directories, SBC checkpoints) runs for it too."""
+
+
+_SIGNAL_EXIT = {signal.SIGINT: (130, "interrupted"), signal.SIGTERM: (143, "terminated")}
+
+
+@contextlib.contextmanager
+def _sigterm_as_ctrl_c(received: list[int]):
+    """Inside the block SIGTERM raises :class:`Terminated` (Python's default ends the process at
+    once, leaving a half-written temporary run directory); ``received`` gets the signal, so the
+    exit status says which one stopped the run (docs/cli.md: 143 = 128 + SIGTERM)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield   # (signal handlers can only be set from the main thread)
+        return
+
+    def handler(signum, frame) -> None:
+        received.append(signum)
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 @contextlib.contextmanager
 def _ctrl_c_never_lost():
-    """Deliver Ctrl-C again when Python swallowed it.
+    """Deliver Ctrl-C (or SIGTERM) again when Python swallowed it.
 
     A KeyboardInterrupt raised while a garbage-collector callback (JAX registers one) or a
     ``__del__`` runs cannot propagate: Python reports it as "Exception ignored" and the run goes
@@ -138,7 +167,9 @@ def _ctrl_c_never_lost():
 
     def hook(unraisable) -> None:
         if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
-            timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+            again = signal.SIGTERM if issubclass(unraisable.exc_type, Terminated) else \
+                signal.SIGINT
+            timer = threading.Timer(0.05, os.kill, (os.getpid(), again))
             timer.daemon = True
             timer.start()
             return
@@ -190,8 +221,18 @@ def main(argv: list[str] | None = None) -> int:
     if not args:  # the help, as a usage error (Click >= 8.2 does so for groups too)
         main(["--help"])
         return 2
+    received: list[int] = []
+
+    def stopped(what: str = "") -> int:
+        """The exit status and line of a run stopped by Ctrl-C (130) or SIGTERM (143)."""
+        code, word = _SIGNAL_EXIT[signal.SIGTERM if signal.SIGTERM in received
+                                  else signal.SIGINT]
+        _err(f"{word}: {what}" if what else word)
+        return code
+
     try:
-        with warnings.catch_warnings(), _ctrl_c_never_lost(), command_line():
+        with (warnings.catch_warnings(), _sigterm_as_ctrl_c(received), _ctrl_c_never_lost(),
+              command_line()):
             warnings.showwarning = _show_warning
             rv = app(args=args, prog_name="cassini-bayes", standalone_mode=False)
     except InputError as e:
@@ -201,11 +242,9 @@ def main(argv: list[str] | None = None) -> int:
         _err(f"error: {e}")
         return 3
     except Interrupted as e:
-        _err(f"interrupted: {e}")
-        return 130
+        return stopped(str(e))
     except KeyboardInterrupt:
-        _err("interrupted")
-        return 130
+        return stopped()
     except OSError as e:
         return _os_error(e)
     except SystemExit as e:  # Click's own exit on a closed pipe
@@ -216,8 +255,7 @@ def main(argv: list[str] | None = None) -> int:
             return int(getattr(e, "exit_code", 0) or 0)
         if kind == "Abort":  # older Click turns Ctrl-C (and end of input) into Abort
             if isinstance(e.__context__, KeyboardInterrupt):
-                _err("interrupted")
-                return 130
+                return stopped()
             _err("error: aborted")
             return 1
         if kind == "NoArgsIsHelpError":  # a group given no command: its help (rich prints it)
@@ -238,24 +276,24 @@ def main(argv: list[str] | None = None) -> int:
         _err(f"(a bug in cassini-bayes: rerun with {_DEBUG_ENV}=1 for the traceback)")
         return 1
     if rv == 130:  # recent typer turns Ctrl-C into a returned 130 (no command returns 130)
-        _err("interrupted")
-        return 130
+        return stopped()
     return rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
 
 
 def entry() -> None:
     """The console script: :func:`main` on ``sys.argv``, then end the process.
 
-    After an interrupt the process ends with ``os._exit(130)`` once stdout and stderr are
-    flushed: JAX's threads can still be running then, and the interpreter's normal shutdown can
-    crash (segfault) under them. Everything the run writes is already cleaned up by then.
+    After an interrupt (Ctrl-C or SIGTERM) the process ends with ``os._exit(130)`` (``143``)
+    once stdout and stderr are flushed: JAX's threads can still be running then, and the
+    interpreter's normal shutdown can crash (segfault) under them. Everything the run writes is
+    already cleaned up by then.
     """
     code = main()
-    if code == 130:
+    if code in (130, 143):
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(Exception):
                 stream.flush()
-        os._exit(130)
+        os._exit(code)
     sys.exit(code)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from cassini_bayes.api._inputs import SEED_MAX
+from cassini_bayes.api._limits import SEED_MAX
 
 
 def seed_option(default: int | None, help: str) -> typer.models.OptionInfo:

@@ -3,7 +3,8 @@
 Runs :func:`cassini_bayes.api.budget`: budgets whose inputs are posteriors, the draws of the given
 fits' ``posterior.nc`` propagated through each budget line, every line a credible interval with
 its attribution to the calibrated parameters, beside the papers' numbers (docs/budgets.md).
-Writes, atomically, ``DIR/summary.json``,
+Writes, atomically, ``DIR/summary.json`` (with the ``adequacy`` verdict on the input runs;
+``--strict`` exits 3 when it failed),
 ``DIR/budget.csv``, ``DIR/report.html`` and ``DIR/config.toml``. Any of the three runs may be left
 out; at least one is needed.
 """
@@ -17,6 +18,8 @@ import typer
 from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes.cli._options import seed_option
+from cassini_bayes.cli._verdict import (STRICT_ADEQUACY, enforce_adequacy, failed_checks,
+                                        verdict_text)
 from cassini_bayes.rundir import check_out
 
 ORDER = 45
@@ -37,6 +40,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         seed: int = seed_option(0, "Seed of the resampling of the runs' draws."),
         force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
                                    "cassini-bayes wrote."),
+        strict: bool = STRICT_ADEQUACY,
     ) -> None:
         """Budgets from posteriors: each line a credible interval with its attribution."""
         console = stderr_console()
@@ -49,7 +53,11 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         s = res.summary
         for line in s["warnings"]:
             console.print(f"[yellow]warning:[/yellow] {escape(line)}")
-        console.print(f"[green]✓[/green] {len(s['rows'])} budget lines from "
-                      f"{escape(', '.join(s['sources']))} ({time.perf_counter() - t0:.1f} s) → "
-                      f"{escape(str(out))}")
+        mark = "[green]✓[/green]" if not failed_checks(s) else "[red]✗[/red]"
+        console.print(f"{mark} {len(s['rows'])} budget lines from "
+                      f"{escape(', '.join(s['sources']))}{verdict_text(s)} "
+                      f"({time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
         typer.echo(str(out / "report.html"))
+        enforce_adequacy(s, out, strict=strict, what="the input runs are not fit to be "
+                         "combined", hint="re-fit the runs named, or give runs of one "
+                         "spacecraft model and epoch")

@@ -10,9 +10,9 @@ stderr and exit 2 (raised as ``InputError``, printed by :func:`cassini_bayes.cli
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
@@ -29,8 +29,10 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
     console.print(f"  time       {t[0]:.10g} to {t[-1]:.10g} s ({t[-1] - t[0]:.6g} s)")
     console.print(f"  sampling   {c.sampling()}")
     console.print(f"  body rate  max |ω| {c.max_rate_rad_s * 1e3:.4g} mrad/s; attitude turns up "
-                  f"to {np.degrees(c.max_turn_rad):.4g}° from the first row")
+                  f"to {math.degrees(c.max_turn_rad):.4g}° from the first row")
     console.print("  physics    " + c.physics)
+    if c.quanta:
+        console.print("  quantised  " + escape("; ".join(r.text() for r in c.quanta)))
 
     wheels = Table(title="Reaction wheels", title_justify="left")
     for col in ("wheel", "status", "min rpm", "max rpm", "first → last rpm"):
@@ -39,12 +41,14 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
         if not w.on:
             wheels.add_row(w.name, "off (no data)", "", "", "")
             continue
-        wheels.add_row(w.name, "idle (rms ≤ 1 rpm: as off)" if w.idle else "on",
+        wheels.add_row(w.name, "idle (rms at its noise or ≤ 1 rpm: as off)" if w.idle else "on",
                        f"{w.min_rpm:.2f}", f"{w.max_rpm:.2f}",
                        f"{w.first_rpm:.2f} → {w.last_rpm:.2f}")
     console.print(wheels)
 
-    if c.thruster_source is None:
+    if c.thruster_source is None and not c.model_thrusters:
+        console.print("Thrusters: none in the spacecraft model")
+    elif c.thruster_source is None:
         console.print("Thrusters: no on_* columns and no pulse log (thrust fits need --pulses)")
     elif c.thrusters:
         thr = Table(title=f"Thrusters (from {escape(c.thruster_source)})", title_justify="left")

@@ -12,8 +12,9 @@ ORDER = 50
 
 
 def experiment(
-    file: Path = typer.Argument(..., help="Experiment file (experiments/NAME.toml), or a run "
-                                          "directory's config.toml to re-run it."),
+    file: Path = typer.Argument(..., help="Experiment file (experiments/NAME.toml, or a shipped "
+                                          "experiment's bare NAME), or a run directory's "
+                                          "config.toml to re-run it."),
     out: Path = typer.Option(..., "--out", help="Run directory to write (must not exist)."),
     seed: int = seed_option(None, "Seed of the run's jax.random key (default: the file's "
                                   "\\[run] seed, else 0)."),
@@ -27,11 +28,12 @@ def experiment(
     matplotlib.use("Agg")  # headless
     from cassini_bayes.cli._console import escape, stderr_console
 
-    from cassini_bayes._paths import text_file
+    from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, text_file
     from cassini_bayes.experiments import load_experiment, run_experiment
     from cassini_bayes.rundir import check_out
 
-    text_file(file, "experiment")  # a directory or a binary file: one line
+    file = input_path(file, "experiment", EXPERIMENTS_DIR)  # or a shipped one's bare name
+    text_file(file, "experiment")  # a binary file: one line
     check_out(out, force=force, inputs=[file])
     exp = load_experiment(file)
     if seed is None and exp.seed is not None:

@@ -81,6 +81,7 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     directory is complete.
     """
     from cassini_bayes.api import collect_warnings
+    from cassini_bayes.cli._verdict import failed_checks, verdict_text
     from cassini_bayes.errors import InadequateModelError, NotConvergedError
 
     from cassini_bayes.inference.progress import shown, step
@@ -94,11 +95,8 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
         console.print(f"[yellow]warning:[/yellow] {escape(line)}")
     d = summary["diagnostics"]
     status = "[green]converged[/green]" if d["converged"] else "[red]NOT converged[/red]"
-    adequacy = summary.get("adequacy")
-    failed = ([] if adequacy is None else
-              [n for n, c in adequacy["checks"].items() if not c["ok"]])
-    fit = ("" if adequacy is None else "; [green]adequacy ok[/green]" if not failed
-           else f"; [red]ADEQUACY FAILED: {', '.join(failed)}[/red]")
+    failed = failed_checks(summary) or []
+    fit = verdict_text(summary)
     r_hat = (f"{d['max_r_hat']:.4f}" if d["max_r_hat"] is not None
              and math.isfinite(d["max_r_hat"]) else "undefined (one chain)")
     console.print(f"{summary['kind']}: {status} (max R-hat {r_hat}, min bulk ESS "

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import typer
 
-from cassini_bayes.api._rwa4 import TARGET_ACCEPT as RWA4_TARGET_ACCEPT
+from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.cli.fit import (CHAINS, DRAWS, FORCE, OUT, SEED, STRICT, WARMUP,
                                    WHEEL_ERRORS, sampler_options, wheel_errors_name,
                                    write_fit_run)
@@ -54,6 +54,7 @@ def fit_rwa4_cmd(
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS
     from cassini_bayes.rundir import check_out
+    from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_telemetry
     from cassini_bayes.windows import parse_window
 
@@ -67,7 +68,8 @@ def fit_rwa4_cmd(
                          "in pairs (Time A, Time B), paired in order")
     check_out(out, force=force, inputs=[telemetry, model_path(spacecraft),
                                         *([inertia_posterior] if inertia_posterior else [])])
-    tel = read_telemetry(telemetry)  # the windows' open ends (":600") need its time span
+    # the windows' open ends (":600") need its time span; its columns are the model's wheels
+    tel = read_telemetry(telemetry, spacecraft=load_spacecraft(spacecraft))
     windows = [(parse_window(a, tel.t, option="window-a"),
                 parse_window(b, tel.t, option="window-b"))
                for a, b in zip(window_a, window_b)] or None

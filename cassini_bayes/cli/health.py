@@ -3,7 +3,8 @@
 
 ``fit health`` pools many wheel-biasing events into the exact change-point posterior of each
 thrust channel (:func:`cassini_bayes.api.fit_health`; docs/health.md) and writes, atomically,
-``DIR/summary.json`` (change probability and date, per channel ``P(down)`` at the last event),
+``DIR/summary.json`` (change probability and date, per channel ``P(down)`` at the last event,
+the ``adequacy`` verdict), ``DIR/report.html``,
 ``DIR/health.csv`` (per event), ``DIR/thrust_bands.csv``, ``DIR/health.png`` and
 ``DIR/config.toml``. EVENTS are ``events.csv`` files (columns ``date_days, telemetry, pulses``)
 or folders holding one. ``simulate-health`` writes such a folder from a campaign TOML.
@@ -18,6 +19,8 @@ import typer
 from cassini_bayes.cli._console import escape, stderr_console
 
 from cassini_bayes.cli._options import seed_option
+from cassini_bayes.cli._verdict import (STRICT_ADEQUACY, enforce_adequacy, failed_checks,
+                                        verdict_text)
 from cassini_bayes.rundir import check_out
 
 ORDER = 45
@@ -41,6 +44,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                         help="Prior probability that a channel steps at it."),
         step_sd: float = typer.Option(0.1, "--step-sd", min=1e-6, max=2.0,
                                       help="Prior sd of a step (log ratio)."),
+        strict: bool = STRICT_ADEQUACY,
     ) -> None:
         """Thruster health over many biasing events: P(each thruster down) and since when."""
         from cassini_bayes.api._health import fit_health, read_event_list
@@ -54,11 +58,17 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                              p_channel=p_channel, step_sd=step_sd)
             res.save(out, force=force)
         s = res.summary
+        for line in s.get("warnings", []):
+            console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         lo, hi = s["change_date_days"]["interval_90"]
-        console.print(f"[green]✓[/green] {s['n_events']} events: P(change) = {s['p_change']:.3f}"
+        mark = "[green]✓[/green]" if not failed_checks(s) else "[red]✗[/red]"
+        console.print(f"{mark} {s['n_events']} events: P(change) = {s['p_change']:.3f}"
                       f" (90 % date [{lo:.0f}, {hi:.0f}] d), P(Z3 or Z4 > {fraction:.0%} down) "
-                      f"= {s['p_down_last']['Z3|Z4']:.3f}, {time.perf_counter() - t0:.1f} s "
-                      f"→ {escape(str(out))}")
+                      f"= {s['p_down_last']['Z3|Z4']:.3f}{verdict_text(s)}, "
+                      f"{time.perf_counter() - t0:.1f} s → {escape(str(out))}")
+        enforce_adequacy(s, out, strict=strict, what="the spacecraft model does not fit the "
+                         "events", hint="check the spacecraft model's epoch (its inertia) and "
+                         "the event named")
 
     @app.command("simulate-health")
     def simulate_health_cmd(

@@ -4,8 +4,10 @@ Runs :func:`cassini_bayes.api.monitor_leak` (the Bayesian thruster-leak monitor 
 threshold monitor over one telemetry stretch) and writes, atomically, ``DIR/summary.json`` (the
 posterior probability of each hypothesis ``none, Z1 … Y4`` at the last sample, the detection time and
 thruster of both monitors, the leak fraction and torque), ``DIR/probabilities.csv`` (the
-probabilities at every check) and ``DIR/config.toml`` (inputs with their SHA-256, settings,
-version). docs/leak.md describes the model.
+probabilities at every check), ``DIR/report.html`` (the adequacy verdict and both monitors)
+and ``DIR/config.toml`` (inputs with their SHA-256, settings, version); ``summary.json`` carries
+the ``adequacy`` verdict and ``--strict`` exits 3 when it failed. docs/leak.md describes the
+model.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from pathlib import Path
 import typer
 from cassini_bayes.cli._console import escape, stderr_console
 
+from cassini_bayes.cli._verdict import (STRICT_ADEQUACY, enforce_adequacy, failed_checks,
+                                        verdict_text)
 from cassini_bayes.rundir import check_out
 
 ORDER = 60
@@ -47,6 +51,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                   "(fraction, Lee Eq 11)."),
         threshold: float = typer.Option(50.0, "--threshold", help="Lee's R_T, N m s."),
         t_limit: float = typer.Option(10.0, "--t-limit", help="Lee's T_limit, hours."),
+        strict: bool = STRICT_ADEQUACY,
     ) -> None:
         """Posterior probability of a leak per thruster, beside Lee's threshold monitor."""
         console = stderr_console()
@@ -60,10 +65,17 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                            threshold_nms=threshold, t_limit_h=t_limit)
         res.save(out, force=force)
         b, lee = res.summary["bayes"], res.summary["lee"]
+        for line in res.summary.get("warnings", []):
+            console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         said = (f"leak in {b['thruster']} at {b['isolation_time_s']:.0f} s"
                 if b["thruster"] else "leak, thruster not isolated" if b["detection_time_s"]
                 else "no leak")
-        console.print(f"[green]✓[/green] P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
+        mark = "[green]✓[/green]" if not failed_checks(res.summary) else "[red]✗[/red]"
+        console.print(f"{mark} P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
                       + (f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
                          if lee["thruster"] else "no trigger")
-                      + f" (run took {time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
+                      + f"{verdict_text(res.summary)} (run took "
+                      f"{time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
+        enforce_adequacy(res.summary, out, strict=strict, what="the monitor's model does not "
+                         "fit the stretch", hint="check the spacecraft model (its inertia, "
+                         "thrust and torque knowledge) and the pulse log")

@@ -49,7 +49,7 @@ from pathlib import Path
 import typer
 
 from cassini_bayes._paths import text_file
-from cassini_bayes.api._inputs import MAX_CHAINS, MAX_DRAWS
+from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS
 from cassini_bayes.cli._options import seed_option
 from cassini_bayes.errors import InputError, Interrupted
 from cassini_bayes.rundir import check_out
@@ -99,6 +99,10 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                              f"{', '.join(registered_models())}")
         if not 0 < alpha < 1:
             raise InputError(f"--alpha must be between 0 and 1, got {alpha}")
+        if scenario is not None:   # a file, or a shipped scenario's bare name
+            from cassini_bayes.simulate.scenario import scenario_path
+
+            scenario = scenario_path(scenario)
         scenario_text = None if scenario is None else text_file(scenario, "scenario")
         out = Path(out)
         work = work_dir(out)

@@ -40,9 +40,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         from cassini_bayes.simulate import load_scenario
         from cassini_bayes.simulate.scenario import scenario_path
 
-        if not scenario.exists() and scenario_path(str(scenario)).is_file():
-            scenario = scenario_path(str(scenario))  # a shipped scenario's name
-        text_file(scenario, "scenario")  # a directory or a binary file: one line
+        scenario = scenario_path(scenario)  # a file, or a shipped scenario's bare name
+        text_file(scenario, "scenario")  # a binary file: one line
         check_out(out, force=force, inputs=[scenario])
 
         sc = load_scenario(scenario)

@@ -18,7 +18,6 @@ from cassini_bayes.estimators import inertia as _inertia
 from cassini_bayes.estimators import rwa4 as _rwa4
 from cassini_bayes.estimators import thrust as _thrust
 from cassini_bayes.estimators.lstsq import solve_lstsq
-from cassini_bayes.physics.impulse import moment_matrix
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_matrix
 
 __all__ = ["wheel_geometry", "wheel_momentum", "fit_inertia_baseline", "fit_thrust_baseline",
@@ -30,9 +29,20 @@ THRUST_GROUPINGS = {"z": _thrust.fit_z_thrusters, "y": _thrust.fit_y_thrusters,
 
 
 def wheel_geometry(tel, spacecraft):
-    """``(axes (k, 3), inertias (k,))`` of the telemetry's wheels, in its column order."""
-    ws = [spacecraft.wheel(name) for name in tel.wheel_names]
-    return np.stack([w.axis for w in ws]), np.array([w.inertia for w in ws])
+    """``(axes (k, 3), inertias (k,))`` of the telemetry's wheels, in its column order, from
+    the model; a wheel without data (off) that the model lacks gets zeros (it carries no
+    momentum), one with data is an InputError naming the model's wheels."""
+    model = {n.upper() for n in spacecraft.wheel_names}
+    axes, js = [], []
+    for k, name in enumerate(tel.wheel_names):
+        if name.upper() not in model and np.all(np.isnan(tel.wheel_rates[:, k])):
+            axes.append(np.zeros(3))
+            js.append(0.0)
+            continue
+        w = spacecraft.wheel(name)
+        axes.append(w.axis)
+        js.append(w.inertia)
+    return np.stack(axes), np.array(js)
 
 
 def wheel_momentum(tel, spacecraft) -> np.ndarray:
@@ -107,8 +117,7 @@ def fit_thrust_baseline(tel, spacecraft, pulses=None, grouping: str = "mean",
     if grouping not in THRUST_GROUPINGS:
         raise InputError(f"unknown thrust grouping {grouping!r}; use one of "
                          f"{', '.join(THRUST_GROUPINGS)}")
-    th = spacecraft.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, tuple(th.com)))
+    q = spacecraft.moment_matrix
     i_m = spacecraft.inertia if inertia is None else np.asarray(inertia, float)
     pl = None if pulses is None else (pulses.t_on, pulses.thruster, pulses.width)
     v, j = _thrust.regression_inputs(tel.t, tel.omega, wheel_momentum(tel, spacecraft), i_m,

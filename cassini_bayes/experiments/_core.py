@@ -30,8 +30,6 @@ import json
 import math
 import os
 import pkgutil
-import shutil
-import tempfile
 import time
 import tomllib
 import zlib
@@ -44,6 +42,8 @@ import jax
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
+from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, not_utf8
 from cassini_bayes.analysis.paper_facts import fact
 from cassini_bayes.errors import InputError
 
@@ -68,8 +68,6 @@ __all__ = [
     "run_into",
     "write_run",
     "experiment_key",
-    "prepare_out_dir",
-    "atomic_dir",
 ]
 
 
@@ -429,15 +427,14 @@ def load_experiment(path: str | os.PathLike) -> Experiment:
     p = Path(path)
     if p.is_dir() and (p / "config.toml").exists():  # re-run a run directory
         p = p / "config.toml"
-    if not p.exists():
-        raise InputError(f"experiment file not found: {path} (give a path to an experiments/*.toml"
-                         " file)")
+    else:   # a file, or a shipped experiment's bare name
+        p = input_path(path, "experiment", EXPERIMENTS_DIR)
     try:
-        d = tomllib.loads(p.read_text())
+        d = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"not valid TOML: {e}", path=str(p)) from None
     except UnicodeDecodeError:
-        raise InputError("not a text file; expected an experiment TOML", path=str(p)) from None
+        raise InputError(not_utf8(p, "experiment TOML"), path=str(p)) from None
     name = p.parent.name if p.name == "config.toml" else p.stem
     return experiment_from_dict(d, str(p), name=name)
 
@@ -467,47 +464,6 @@ class RunRecord:
     seed: int
     quick: bool
     elapsed_s: float
-
-
-def prepare_out_dir(out: Path, force: bool) -> None:
-    """Refuse an existing ``out`` unless ``force``; make sure its parent exists."""
-    out = Path(out)
-    if out.exists() and not force:
-        raise InputError(f"output directory {out} already exists; choose another --out or pass "
-                         "--force to replace it")
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out} exists and is not a directory")
-    out.parent.mkdir(parents=True, exist_ok=True)
-
-
-class atomic_dir:
-    """Context manager: a temporary directory beside ``target``, renamed onto it on success.
-
-    On an exception the temporary directory is removed and ``target`` is left as it was; an
-    existing ``target`` is replaced only once the new one is complete.
-    """
-
-    def __init__(self, target: str | os.PathLike):
-        self.target = Path(target)
-
-    def __enter__(self) -> Path:
-        self.target.parent.mkdir(parents=True, exist_ok=True)
-        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.", suffix=".tmp",
-                                         dir=self.target.parent))
-        return self.tmp
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is not None:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-            return
-        os.chmod(self.tmp, 0o755)
-        old = None
-        if self.target.exists():
-            old = self.target.with_name(f".{self.target.name}.old-{os.getpid()}")
-            os.replace(self.target, old)
-        os.replace(self.tmp, self.target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
 
 
 def _json_float(x: Any) -> Any:
@@ -587,6 +543,7 @@ def run_into(exp: Experiment, workdir: Path, *, seed: int = 0, quick: bool = Fal
     return RunRecord(exp, workdir, output, settings, seed, quick, elapsed)
 
 
+@jax_entry
 def run_experiment(exp: Experiment | str | os.PathLike, out: str | os.PathLike, *,
                    seed: int | None = None, quick: bool = False, force: bool = False,
                    progress: Callable[[float, str], None] | None = None) -> RunRecord:
@@ -603,9 +560,10 @@ def run_experiment(exp: Experiment | str | os.PathLike, out: str | os.PathLike, 
     """
     if not isinstance(exp, Experiment):
         exp = load_experiment(exp)
+    from cassini_bayes.rundir import RunDir
+
     out = Path(out)
-    prepare_out_dir(out, force)
     seed = seed if seed is not None else (exp.seed if exp.seed is not None else 0)
-    with atomic_dir(out) as tmp:
-        record = run_into(exp, tmp, seed=seed, quick=quick, progress=progress)
+    with RunDir(out, force=force) as rd:     # (refuses a bad out before any work)
+        record = run_into(exp, rd.path, seed=seed, quick=quick, progress=progress)
     return RunRecord(exp, out, record.output, record.settings, seed, quick, record.elapsed_s)

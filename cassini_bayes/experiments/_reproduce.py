@@ -20,16 +20,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.analysis.paper_facts import PAPER_FACTS
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments._core import (
     Experiment,
     RunRecord,
-    atomic_dir,
     experiment_from_dict,
     experiment_key,
-    prepare_out_dir,
     registered_kinds,
     run_into,
 )
@@ -102,6 +101,7 @@ def discover_experiments(directory: str | os.PathLike = EXPERIMENTS_DIR,
 Event = Callable[[str, int, int, str], None]
 
 
+@jax_entry
 def reproduce(out: str | os.PathLike, *, seed: int = 0, quick: bool = False, force: bool = False,
               experiments_dir: str | os.PathLike = EXPERIMENTS_DIR,
               on_event: Event | None = None) -> ReproduceResult:
@@ -120,13 +120,16 @@ def reproduce(out: str | os.PathLike, *, seed: int = 0, quick: bool = False, for
     An experiment that raises is recorded as failed (its one-line error on the page) and the others
     still run.
     """
+    from cassini_bayes.rundir import RunDir
+
     out = Path(out)
-    prepare_out_dir(out, force)
+    run_dir = RunDir(out, force=force, inputs=[experiments_dir])   # a bad out: before any work
     experiments, skipped = discover_experiments(experiments_dir)
     emit = on_event or (lambda *a: None)
     t0 = time.perf_counter()
     statuses = []
-    with atomic_dir(out) as tmp:
+    with run_dir as rd:
+        tmp = rd.path
         n = len(experiments)
         for i, exp in enumerate(experiments):
             emit("start", i, n, exp.name)

@@ -55,10 +55,10 @@ from scipy.special import log_ndtr, logsumexp
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.leak import ETA, residual_momentum
-from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times, moment_matrix
+from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import PulseLog, Telemetry
+from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
 
 __all__ = ["LeakInputs", "LeakPosterior", "leak_inputs", "leak_posterior", "HYPOTHESES",
            "FRACTION_SCALES", "OFFSET_SD_NMS", "SAMPLE_STEP_S", "TORQUE_SCALES"]
@@ -197,10 +197,14 @@ _TAIL_TAUS = 40.0
 
 
 def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft) -> LeakInputs:
-    """Residual momentum (Lee Eq 10) and modelled impulses of a telemetry stretch."""
+    """Residual momentum (Lee Eq 10) and modelled impulses of a telemetry stretch; pulses of the
+    log that act entirely outside the stretch are left out with a warning
+    (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    if pulses is not None:
+        p = spacecraft.pulse
+        pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + _TAIL_TAUS * p.tau_fall)
     h = wheel_momentum(tel, spacecraft)
-    th = spacecraft.thrusters
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q = spacecraft.moment_matrix
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
     return LeakInputs(np.asarray(tel.t, float), r, j, q, np.full(8, float(spacecraft.thrust)),

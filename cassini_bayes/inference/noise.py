@@ -1,9 +1,6 @@
-"""The one robust white-noise estimator of the package (every calibration centres its noise
-prior on it).
-
-For white noise of sd ``σ`` on a smooth signal, second differences have sd ``√6 σ``; the median
-absolute deviation (× 1.4826, the normal's MAD-to-sd factor) ignores the few samples where the
-signal itself bends (a pulse, a wheel ramp, the slew profile). Each caller floors the levels
+"""The noise levels every calibration centres its noise prior on, from the one robust
+white-noise estimator of the package, :func:`cassini_bayes.telemetry.white_noise_sd` (in the
+pure layer, so that the input checks use it too). Each caller floors the levels
 (:func:`floored`) so that noise-free synthetic data stay finite.
 """
 
@@ -13,33 +10,13 @@ from typing import Sequence
 
 import numpy as np
 
-from cassini_bayes.telemetry import Telemetry
+from cassini_bayes.telemetry import RATE_NOISE_FLOORS, Telemetry, white_noise_sd
 
 __all__ = ["RATE_FLOORS", "ATTITUDE_FLOOR", "white_noise_sd", "floored",
            "rate_noise_levels"]
 
-RATE_FLOORS = (1e-9, 1e-7)   # rad/s: gyro and wheel-rate levels below these are floored
+RATE_FLOORS = RATE_NOISE_FLOORS   # rad/s: gyro and wheel-rate levels below these are floored
 ATTITUDE_FLOOR = 1e-9        # rad: attitude level floor
-
-_MAD_TO_SD = 1.4826
-
-
-def white_noise_sd(x: np.ndarray, *, differenced: bool = False) -> float:
-    """Robust sd of white noise on a smooth signal ``x`` (n, ...) sampled along axis 0: the MAD
-    of its second differences (all components pooled, non-finite values left out) ÷ √6.
-
-    ``differenced``: ``x`` already holds the signal's first differences (e.g. attitude
-    increments ``rotvec(q_{t+1} q_t⁻¹)``), so one more difference is taken. 0 when the signal
-    has fewer than four samples or no finite difference.
-    """
-    order = 1 if differenced else 2
-    if x.shape[0] < 2 + order or x.size == 0:
-        return 0.0
-    d = np.diff(x, n=order, axis=0).ravel()
-    d = d[np.isfinite(d)]
-    if d.size == 0:
-        return 0.0
-    return float(_MAD_TO_SD * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
 def floored(levels: Sequence[float], floors: Sequence[float]) -> np.ndarray:

@@ -15,10 +15,11 @@ NumPyro model whose data arrive as keyword arguments, prepares those arrays once
   a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
-  the deepest tree). The CLI asks JAX for one CPU device per core, and at least 4 (the default
-  chains; more threads than cores still beats lock-step), before the backend starts
-  (``jax_num_cpu_devices``); measured with benchmarks/bench_inertia.py on the 2-core machine,
-  4 × 2000 iterations: 1.8 s parallel vs 3.1 s vectorized (loaded machine),
+  the deepest tree). The command line and the fit functions ask JAX for one CPU device per
+  core, and at least 4 (the default chains; more threads than cores still beats lock-step),
+  before the backend starts (``jax_num_cpu_devices``, :func:`cassini_bayes.setup_jax`);
+  measured with benchmarks/bench_inertia.py on the 2-core machine, 4 × 2000 iterations: 1.8 s
+  parallel vs 3.1 s vectorized (loaded machine),
 * shows a rich progress bar when asked, as a step of :mod:`cassini_bayes.inference.progress`:
   the loop runs in about ten calls of one program (:func:`_build_sampler`), so the bar needs no
   callback inside the compiled code and the same programs, all kept by the persistent
@@ -41,9 +42,8 @@ divergences from ``sample_stats.diverging``. ``converged`` means ``max R-hat ≤
 from __future__ import annotations
 
 from functools import partial
-from typing import Callable, Mapping, NamedTuple, Sequence
+from typing import TYPE_CHECKING, Callable, Mapping, NamedTuple, Sequence
 
-import arviz as az
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -53,11 +53,12 @@ from numpyro.infer import Predictive
 from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
 
-from cassini_bayes._devices import request_host_devices
+from cassini_bayes._devices import request_host_devices, require_x64
 from cassini_bayes.inference import progress
 from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
 
-quiet_arviz_shape_warnings()   # one-chain runs: the summary says R-hat is undefined
+if TYPE_CHECKING:
+    import arviz
 
 __all__ = [
     "SamplerSettings",
@@ -286,6 +287,7 @@ def _start(key, chains: int, shapes: tuple):
 
 
 def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
+    require_x64("NUTS")  # every sampler is built here, the SBC campaigns' included
     key = (model, s.chains, s.warmup, s.draws, s.dense_mass, float(s.target_accept),
            s.max_tree_depth, method)
     fn = _SAMPLER_CACHE.get(key)
@@ -294,12 +296,22 @@ def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
     return fn
 
 
+def _arviz():
+    """ArviZ, imported when a posterior exists (its import, matplotlib included, is most of a
+    command's start-up), its shape-validation log line silenced (one-chain runs: the summary
+    says R-hat is undefined)."""
+    import arviz
+
+    quiet_arviz_shape_warnings()
+    return arviz
+
+
 def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
              settings: SamplerSettings = SamplerSettings(),
              coords: Mapping[str, Sequence] | None = None,
              dims: Mapping[str, Sequence[str]] | None = None,
              prior: Callable[[object, int], Mapping[str, np.ndarray]] | None = None,
-             prior_draws: int = 500) -> az.InferenceData:
+             prior_draws: int = 500) -> arviz.InferenceData:
     """Run NUTS on ``model(**model_kwargs)``; return InferenceData with posterior and prior.
 
     Parameters
@@ -345,6 +357,7 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
         samples, stats = _run_chains(fn, s, keys, init_z, kwargs)
     posterior = {k: np.asarray(v) for k, v in samples.items()}
     sample_stats = {k: np.asarray(v) for k, v in stats.items()}
+    az = _arviz()
     idata = az.from_dict(posterior=posterior, sample_stats=sample_stats,
                          coords=dict(coords or {}),
                          dims={k: v for k, v in (dims or {}).items() if k in posterior})
@@ -387,9 +400,10 @@ def _flat_min(ds) -> float:
     return float(np.min(np.where(np.isfinite(v), v, -np.inf)))
 
 
-def diagnostics(idata: az.InferenceData, var_names: Sequence[str] | None = None, *,
+def diagnostics(idata: arviz.InferenceData, var_names: Sequence[str] | None = None, *,
                 r_hat_max: float = R_HAT_MAX, ess_bulk_min: float = ESS_BULK_MIN) -> Diagnostics:
     """R-hat, bulk/tail ESS (ArviZ) and divergences over ``var_names`` (default: all)."""
+    az = _arviz()
     names = list(var_names) if var_names is not None else None
     rhat = az.rhat(idata, var_names=names)
     ess_b = az.ess(idata, var_names=names, method="bulk")

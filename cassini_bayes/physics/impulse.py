@@ -16,20 +16,17 @@ are built by :func:`system_xy`, :func:`system_z`, :func:`system_zz`, :func:`syst
 Everything here is pure JAX (jit/vmap/grad friendly): the NumPyro thrust model calls
 :func:`impulse_from_pulses` with traced time constants.
 
-Thruster geometry:
-
-Thrusters are ordered ``Z1 Z2 Z3 Z4 Y1 Y2 Y3 Y4`` (A-branch, docs/design.md §3). Their locations are
-those listed with Eq 16: ``Z1..Z4`` at ``[±Lx, ±Ly, Lzz]`` and ``Y1..Y4`` at ``[±Lx, ±Ly, Lzy]``.
-The Z-facing thrusters push along −Z, ``Y1, Y2`` along −Y and ``Y3, Y4`` along +Y: these are the
-directions for which ``r × F`` reproduces every entry of the moment matrix of Eq 16 (so that, as
-the paper says, Y2 with Y4 turns the spacecraft about +Z).
+Thruster geometry: ``Q`` (3, m) comes from the spacecraft model
+(:attr:`cassini_bayes.spacecraft.Spacecraft.moment_matrix`, column ``s`` = ``(r_s − e) × d_s``);
+Cassini's eight thrusters ``Z1 … Y4`` are the expansion of Eq 16's lever arms
+(:func:`cassini_bayes.spacecraft.eq16_thrusters`). The regressions of Eqs 19-22 assume that
+layout (``Z1..Z4`` first, then ``Y1..Y4``); everything else takes any number of thrusters.
 """
 
 from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax import Array
 
 from cassini_bayes.names import THRUSTER_NAMES
@@ -38,9 +35,6 @@ from cassini_bayes.physics.pulse import pulse_impulse_until
 
 __all__ = [
     "THRUSTER_NAMES",
-    "thruster_positions",
-    "thruster_directions",
-    "moment_matrix",
     "delta_omega",
     "delta_wheel_momentum",
     "gyroscopic_impulse",
@@ -57,36 +51,9 @@ __all__ = [
 ]
 
 
-_SIGNS_XY = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
-_DIRECTIONS = np.array(
-    [[0, 0, -1]] * 4 + [[0, -1, 0], [0, -1, 0], [0, 1, 0], [0, 1, 0]], dtype=float
-)
-
-
-def thruster_positions(lx_m, ly_m, lzy_m, lzz_m) -> Array:
-    """Thruster locations (8, 3) in metres, as listed with Feldman & Lee Eq 16."""
-    z = jnp.concatenate([jnp.full((4,), lzz_m), jnp.full((4,), lzy_m)])
-    return jnp.stack([_SIGNS_XY[:, 0] * lx_m, _SIGNS_XY[:, 1] * ly_m, z], -1)
-
-
-def thruster_directions() -> Array:
-    """Unit thrust directions (8, 3) in body axes (see the module docstring)."""
-    return jnp.asarray(_DIRECTIONS)
-
-
-def moment_matrix(lx_m, ly_m, lzy_m, lzz_m, com_m=(0.0, 0.0, 0.0)) -> Array:
-    """Moment matrix ``Q`` (3, 8), N m per newton of thrust, Feldman & Lee Eq 16.
-
-    Column ``s`` is ``(r_s − e) × d_s`` with ``e = [eX, eY, eZ]`` the centre of mass (m).
-    """
-    r = thruster_positions(lx_m, ly_m, lzy_m, lzz_m) - jnp.asarray(com_m)[None, :]
-    # Feldman & Lee Eq 16: Q = [(r_s - e) x d_s]_s
-    return jnp.cross(r, _DIRECTIONS).T
-
-
-def _per_thruster(thrust_n) -> Array:
-    """Thrust (N) as a (1, 8) row: a scalar applies to all eight thrusters."""
-    return jnp.broadcast_to(jnp.asarray(thrust_n, dtype=float), (8,))[None, :]
+def _per_thruster(thrust_n, m: int) -> Array:
+    """Thrust (N) as a (1, m) row: a scalar applies to all ``m`` thrusters."""
+    return jnp.broadcast_to(jnp.asarray(thrust_n, dtype=float), (m,))[None, :]
 
 
 def delta_omega(omega_rad_s: Array) -> Array:
@@ -147,37 +114,41 @@ def impulse_lhs_basis(t_s: Array, omega_rad_s: Array, h_wheels_body: Array) -> A
 
 
 def impulse_from_on_times(on_times_s: Array, thrust_n=1.0) -> Array:
-    """Accumulated impulse ``J_s = F_s Δτ_s`` (N s), (n, 8); Feldman & Lee Eq 17's assumption.
+    """Accumulated impulse ``J_s = F_s Δτ_s`` (N s), (n, m); Feldman & Lee Eq 17's assumption.
 
-    ``on_times_s`` (n, 8) cumulative on-times (s), counted from the first row (the first row is
-    subtracted, so any offset is harmless); ``thrust_n`` scalar or (8,) steady thrust (N). With
+    ``on_times_s`` (n, m) cumulative on-times (s), counted from the first row (the first row is
+    subtracted, so any offset is harmless); ``thrust_n`` scalar or (m,) steady thrust (N). With
     the default ``thrust_n = 1`` the result is the per-newton impulse ``Δτ`` (s).
     """
     tau = jnp.asarray(on_times_s)
-    # Feldman & Lee Eq 17: int T_PMS dt = Q [F_1 dtau_1, ..., F_8 dtau_8]
-    return (tau - tau[:1]) * _per_thruster(thrust_n)
+    # Feldman & Lee Eq 17: int T_PMS dt = Q [F_1 dtau_1, ..., F_m dtau_m]
+    return (tau - tau[:1]) * _per_thruster(thrust_n, tau.shape[-1])
 
 
 def impulse_from_pulses(t_s: Array, t_on_s: Array, thruster: Array, width_s: Array,
-                        tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0) -> Array:
-    """Accumulated actual impulse per thruster from a pulse log (N s), (n, 8).
+                        tau_delay_s, tau_rise_s, tau_fall_s, thrust_n=1.0,
+                        n_thrusters: int = 8) -> Array:
+    """Accumulated actual impulse per thruster from a pulse log (N s), (n, m).
 
-    Each pulse ``p`` (command time ``t_on_s[p]``, thruster index ``thruster[p]`` in ``0..7``,
+    Each pulse ``p`` (command time ``t_on_s[p]``, thruster index ``thruster[p]`` in
+    ``0..n_thrusters − 1``,
     commanded width ``width_s[p]``) contributes
     :func:`~cassini_bayes.physics.pulse.pulse_impulse_until` ``(t − t_on, width, τd, τr, τf)``,
     the impulse it has actually delivered by time ``t`` (pulse response of Feldman & Lee §V, the
     correction the paper applies to Eq 17 through the ratio ``R``). The result is counted from
     the first telemetry time ``t_s[0]``, like ``Δω`` and ``ΔH_RWA``. Time constants in s may be
-    traced (differentiable); ``thrust_n`` scalar or (8,) N (default 1: per-newton impulse, s).
+    traced (differentiable); ``thrust_n`` scalar or (m,) N (default 1: per-newton impulse, s);
+    ``m = n_thrusters`` (Cassini's eight by default).
     Memory is ``O(n × pulses)``.
     """
     t = jnp.asarray(t_s)
     dt = t[:, None] - jnp.asarray(t_on_s)[None, :]
     w = jnp.asarray(width_s)[None, :]
     per_pulse = pulse_impulse_until(dt, w, tau_delay_s, tau_rise_s, tau_fall_s)
-    one_hot = (jnp.asarray(thruster)[:, None] == jnp.arange(8)[None, :]).astype(per_pulse.dtype)
+    one_hot = (jnp.asarray(thruster)[:, None]
+               == jnp.arange(n_thrusters)[None, :]).astype(per_pulse.dtype)
     j = per_pulse @ one_hot
-    return (j - j[:1]) * _per_thruster(thrust_n)
+    return (j - j[:1]) * _per_thruster(thrust_n, n_thrusters)
 
 
 def angular_impulse(q_matrix: Array, impulse_ns: Array) -> Array:

@@ -1,9 +1,9 @@
-"""Report pieces: the fit's adequacy verdict (summary ``adequacy``): a header badge, a section.
+"""Report pieces: a run's adequacy verdict (summary ``adequacy``): a header badge, a section.
 
-Reads the block every ``fit`` writes into ``summary.json``
-(:mod:`cassini_bayes.inference.adequacy`): ``{"ok": b, "checks": {NAME: {"statistic",
-"threshold", "ok", "parameter"?, "note"?}}}``. A run without the block (older runs, ``sbc``,
-experiments) gets a neutral badge and a section that says so.
+Reads the block every ``fit`` (and ``fit health``, ``monitor leak``, ``budget``) writes into
+``summary.json`` (:mod:`cassini_bayes.inference.adequacy`): ``{"ok": b, "checks": {NAME:
+{"statistic", "threshold", "ok", "parameter"?, "note"?}}}``. A run without the block (older
+runs, ``sbc``, experiments) gets a neutral badge and a section that says so.
 """
 
 from __future__ import annotations
@@ -16,7 +16,19 @@ __all__ = ["adequacy_badge", "adequacy_section"]
 _LABELS = {"prior_data_conflict": "prior–data conflict (prior sd)",
            "held_out": "held-out prediction (normal deviate)",
            "residual_autocorrelation": "residual lag-1 autocorrelation |ρ̂₁|",
-           "residual_regression": "residuals vs regressors (normal deviate)"}
+           "residual_regression": "residuals vs regressors (normal deviate)",
+           "inertia_conflict": "events' thrust under their own inertia (event sd)",
+           "residual_fit": "residuals vs the assumed noise (normal deviate)",
+           "input_convergence": "input runs that did not converge",
+           "input_adequacy": "input runs that failed their adequacy checks",
+           "spacecraft_models": "spacecraft models among the input runs",
+           "shared_inertia": "input runs' inertia agreement (normal deviate)"}
+_FIT_NOTE = ("Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
+             "far from its prior, a telemetry file the others do not predict, or residuals with "
+             "structure in time or along the model's regressors mean the model leaves something "
+             "out, and this run's intervals are not to be trusted as they stand. Each check fails "
+             "when its statistic exceeds the threshold; the false-alarm rates measured on "
+             "correctly specified simulations are in docs/adequacy.md.")
 
 
 def _block(summary) -> dict | None:
@@ -40,8 +52,9 @@ def adequacy_badge(summary) -> str:
                  not failed)
 
 
-def adequacy_section(summary) -> Section:
-    """The "Model adequacy" section: one row per check."""
+def adequacy_section(summary, note: str = _FIT_NOTE) -> Section:
+    """The "Model adequacy" section: one row per check, and ``note`` (what the checks mean and
+    where their false-alarm rates are; a fit's by default)."""
     block = _block(summary)
     if block is None:
         return section("Model adequacy", not_available(
@@ -56,13 +69,7 @@ def adequacy_section(summary) -> Section:
         classes.append(["", "", "", "good" if c.get("ok") else "bad", ""])
     body = [
         table(["check", "statistic", "threshold", "verdict", "where / note"], rows, left=1,
-              classes=[[*c[:4], "l"] for c in classes]),
-        paragraph(
-            "Self-checks of the fit that need no truth: a nuisance or physical parameter pulled "
-            "far from its prior, a telemetry file the others do not predict, or residuals with "
-            "structure in time or along the model's regressors mean the model leaves something "
-            "out, and this run's intervals are not to be trusted as they stand. Each check fails "
-            "when its statistic exceeds the threshold; the false-alarm rates measured on "
-            "correctly specified simulations are in docs/adequacy.md.", note=True),
+              classes=[[*c[:4], "w"] for c in classes]),
+        paragraph(note, note=True),
     ]
     return section("Model adequacy", body, id="adequacy")

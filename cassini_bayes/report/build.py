@@ -1,36 +1,37 @@
-"""Assemble a run directory's ``report.html`` (docs/design.md §4.4) from its files.
+"""Assemble a fit run directory's ``report.html`` (docs/design.md §4.4) from its files.
 
-The page, top to bottom: header (kind, directory, seed, version, convergence and adequacy badges,
-warnings); model adequacy (the fit's self-checks); sampler diagnostics; parameter table (with
-baseline, truth, prior sd, contraction and the weak-identification flag); trace, rank,
-prior-vs-posterior and pair plots; model residuals against time; for RWA4 the spin-axis sky plot;
-the energy plot; the resolved configuration. A section whose data the run lacks says so instead
-of disappearing, so every report has the same outline.
+The page opens with the answer: the verdicts as badges (converged, adequate, within the papers'
+budgets), then the answer table — each calibrated quantity with its unit, posterior mean, sd and
+90 % interval, the model file's prediction and the prior sd, the papers' least squares, the
+papers' budget with pass/fail — and one figure of the posteriors at their own scale beside the
+least-squares values (for RWA4 the spin-axis table and sky plot). Below: per-pulse impulses
+(thrust), model adequacy, residuals, sensitivity, the sampler diagnostics (trace and rank plots of
+the calibrated parameters, their posterior correlations; the per-variable table of the nuisance
+folded away) and the configuration. A section whose data the run lacks says so instead of
+disappearing, so every report of a kind has the same outline.
 """
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from cassini_bayes import __version__
-from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
+from cassini_bayes.names import U4_NAMES
 from cassini_bayes.report import figures
 from cassini_bayes.report.adequacy import adequacy_badge, adequacy_section
 from cassini_bayes.report.html import (
     Raw,
     Section,
     badge,
-    bullet_list,
     details,
     esc,
     figure,
     html_page,
-    meta_list,
     not_available,
+    page_header,
     paragraph,
     preformatted,
     section,
@@ -42,9 +43,11 @@ from cassini_bayes.report.tables import (
     BFMI_MIN,
     ESS_MIN,
     RHAT_MAX,
+    BudgetCheck,
     Diagnostics,
     ParameterRow,
     decimals_for,
+    derived_rows,
     diagnostics,
     fmt,
     lookup,
@@ -52,10 +55,9 @@ from cassini_bayes.report.tables import (
     parameter_rows,
 )
 
-__all__ = ["build_report", "render_report"]
+__all__ = ["build_report", "render_report", "verdict_badges", "answer_table"]
 
-MAX_NUISANCE_ROWS = 20
-MAX_RESIDUAL_FIGURES = 3
+MAX_RESIDUAL_FIGURES = 1
 RWA1_REQUIREMENT_DEG = 2.0  # Brown (2012) §I: RWA4 must sit within ±2° of the RWA1 axis
 REQUIREMENT_PROB = 0.95     # a requirement is called met (or not) at this posterior probability
 KIND_TITLES = {
@@ -65,8 +67,8 @@ KIND_TITLES = {
     "rwa4": "RWA4 spin axis (Brown 2012)",
 }
 RESIDUAL_LABELS = {
-    "inertia": "momentum residual (N m s)",
-    "thrust": "impulse residual (N m s)",
+    "inertia": "residual (N m s)",
+    "thrust": "residual (N m s)",
     "rwa4": "residual",
 }
 
@@ -77,7 +79,7 @@ def build_report(
     out: str | Path | None = None,
     display_dir: str | Path | None = None,
 ) -> Path:
-    """Write the self-contained diagnostic report of a run directory.
+    """Write the self-contained report of a fit's run directory.
 
     Parameters
     ----------
@@ -99,9 +101,6 @@ def build_report(
     InputError
         ``run_dir`` or its ``posterior.nc`` is missing or unreadable.
     """
-    from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
-
-    quiet_arviz_shape_warnings()
     run = load_run(run_dir)
     out = Path(out) if out is not None else run.run_dir / "report.html"
     return write_atomic(out, render_report(run, display_dir=display_dir))
@@ -113,38 +112,30 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
     names = parameter_names(run)
     diag = diagnostics(run, names)
     rows = parameter_rows(run, names, diag)
+    derived = derived_rows(run)
     problems: list[str] = []  # figures that could not be drawn
 
-    def fig(title: str, draw: Callable[[], bytes], caption: str) -> str:
+    def fig(title: str, draw: Callable[[], object], caption: str) -> str:
         try:
-            return figure(draw(), caption, alt=title)
+            return figure(figures.png_bytes(draw()), caption, alt=title)
         except Exception as e:  # a figure must never cost the whole report
             problems.append(f"{title} could not be drawn ({type(e).__name__}: {e})")
             return not_available(f"{title} could not be drawn ({type(e).__name__}: {e})")
 
-    sections = [
-        adequacy_section(run.summary),
-        _diagnostics_section(diag),
-        _parameters_section(run, rows),
-        _trace_section(run, names, fig),
-        _rank_section(run, names, fig),
-        _prior_posterior_section(run, names, rows, fig),
-    ]
-    if run.kind in ("inertia", "thrust"):
-        sections.append(_pair_section(run, fig))
-    sections.append(_residuals_section(run, fig))
+    sections = [_answer_section(run, names, rows, derived, fig)]
+    if run.kind == "thrust":
+        sections.append(_pulses_section(run, fig))
+    sections += [adequacy_section(run.summary), _residuals_section(run, fig)]
     from cassini_bayes.report.sensitivity import sensitivity_section
     sections += [s for s in [sensitivity_section(run.summary)] if s is not None]
-    if run.kind == "rwa4":
-        sections.append(_axis_section(run, fig))
-    sections.append(_energy_section(run, diag, fig))
-    sections.append(_config_section(run))
+    sections += [_diagnostics_section(run, names, diag, rows, fig), _config_section(run)]
 
-    header = _header(run, diag, rows, problems, shown)
+    checks = [r.budget for r in rows if r.budget] + [b for *_, b in derived if b]
+    header = _header(run, diag, rows, checks, problems, shown)
     title = f"cassini-bayes {run.kind} run — {shown.name}"
     footer = (f"Built by cassini-bayes {esc(__version__)} from {esc(shown / 'posterior.nc')}."
-              " Diagnostics computed with ArviZ from the full posterior; plots may show thinned"
-              " draws.")
+              " Posterior summaries from the full posterior; the sampler diagnostics are the "
+              "fit's (ArviZ, summary.json); plots may show thinned draws.")
     return html_page(title, sections, header=header, footer=footer)
 
 
@@ -152,47 +143,43 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
 # header
 
 
-def _config(run: RunData) -> dict:
-    if not run.config_text:
-        return {}
-    try:
-        return tomllib.loads(run.config_text)
-    except tomllib.TOMLDecodeError:
-        return {}
+def verdict_badges(summary: dict, *, converged: bool | None = None,
+                   checks: list[BudgetCheck] | None = None) -> str:
+    """The verdict badges that open every report: converged (a sampled fit), adequate (from
+    ``summary["adequacy"]``: a fit always, any other run when it has the block), within the
+    papers' budgets (``checks``)."""
+    out = []
+    if converged is not None:
+        out.append(badge("CONVERGED" if converged else "NOT CONVERGED", converged))
+    if converged is not None or isinstance(summary.get("adequacy"), dict):
+        out.append(adequacy_badge(summary))
+    if checks:
+        failed = [c for c in checks if not c.passed]
+        out.append(badge("WITHIN THE PAPERS' BUDGETS" if not failed else
+                         f"OUTSIDE THE PAPERS' BUDGETS ({len(failed)} of {len(checks)})",
+                         not failed))
+    return " ".join(out)
 
 
-def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow], problems: list[str],
-            shown: Path) -> str:
-    cfg = _config(run)
+def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow],
+            checks: list[BudgetCheck], problems: list[str], shown: Path) -> str:
+    cfg = run.config
     seed = run.summary.get("seed", cfg.get("seed", "–"))
     version = run.summary.get("version", cfg.get("version", "–"))
-    conv = diag.converged
     src = "fit" if diag.converged_summary is not None else "recomputed"
-    meta = [
-        ("kind", f"{run.kind} — {KIND_TITLES.get(run.kind, 'unknown kind')}"),
-        ("run directory", str(shown)),
-        ("seed", seed),
-        ("version", version),
-        ("posterior", f"{diag.chains} chains × {diag.draws} draws"),
-    ]
-    out = [
-        f'<p>{badge("CONVERGED" if conv else "NOT CONVERGED", conv)} '
-        f'<span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
-        f"{ESS_MIN:g}, no divergences)</span> {adequacy_badge(run.summary)}</p>",
-        meta_list(meta),
-    ]
-    warns = _warnings(run, diag, rows) + problems
-    if warns:
-        out.append(f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>')
-    return "\n".join(out)
+    meta = (f"{run.kind} — {KIND_TITLES.get(run.kind, 'unknown kind')} · {shown} · seed {seed} · "
+            f"cassini-bayes {version} · {diag.chains} chains × {diag.draws} draws")
+    badges = (f"{verdict_badges(run.summary, converged=diag.converged, checks=checks)}"
+              f' <span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
+              f"{ESS_MIN:g}, no divergences)</span>")
+    return page_header(badges, meta, _warnings(run, diag, rows) + problems)
 
 
 def _warnings(run: RunData, diag: Diagnostics, rows: list[ParameterRow]) -> list[str]:
     w = [str(x) for x in (run.summary.get("warnings") or [])]
     w += list(run.notes)
     if diag.divergences:
-        w.append(f"{diag.divergences} divergent transitions: the posterior may be biased; "
-                 "look at the pair plot for where they sit")
+        w.append(f"{diag.divergences} divergent transitions: the posterior may be biased")
     if np.isfinite(diag.max_r_hat) and diag.max_r_hat > RHAT_MAX:
         w.append(f"max R-hat {diag.max_r_hat:.4f} > {RHAT_MAX}: chains disagree")
     if np.isfinite(diag.min_ess_bulk) and diag.min_ess_bulk < ESS_MIN:
@@ -212,115 +199,91 @@ def _warnings(run: RunData, diag: Diagnostics, rows: list[ParameterRow]) -> list
 
 
 # --------------------------------------------------------------------------------------------
-# tables
+# the answer
 
 
-def _cls_rhat(x: float) -> str:
-    return "" if not np.isfinite(x) else ("bad" if x > RHAT_MAX else "good")
+def _sep(unit: str) -> str:
+    return "" if unit == "°" else " "
 
 
-def _cls_ess(x: float) -> str:
-    return "" if not np.isfinite(x) else ("bad" if x < ESS_MIN else "good")
+def _budget_cells(b: BudgetCheck | None) -> tuple[list, list[str]]:
+    if b is None:
+        return ["–", "–", "–"], ["", "", ""]
+    return ([f"{b.bound} ({b.source})", f"{b.error_q95:.3g}{_sep(b.unit)}{b.unit}",
+             Raw(badge("pass" if b.passed else "FAIL", b.passed))],
+            ["", "good" if b.passed else "bad", ""])
 
 
-def _diagnostics_section(diag: Diagnostics) -> Section:
-    bfmi_txt = ("–" if diag.bfmi is None else ", ".join(f"{b:.2f}" for b in diag.bfmi))
-    bfmi_ok = None if diag.bfmi is None else bool(np.all(diag.bfmi >= BFMI_MIN))
-    div_txt = "not recorded" if diag.divergences is None else str(diag.divergences)
-    overview = table(
-        ["check", "value", "threshold", "status"],
-        [
-            ["max R-hat", fmt(diag.max_r_hat, 4), f"≤ {RHAT_MAX}",
-             Raw(badge("ok" if _cls_rhat(diag.max_r_hat) == "good" else "check",
-                       _cls_rhat(diag.max_r_hat) == "good"))],
-            ["min bulk ESS", fmt(diag.min_ess_bulk, 0), f"≥ {ESS_MIN:g}",
-             Raw(badge("ok" if _cls_ess(diag.min_ess_bulk) == "good" else "check",
-                       _cls_ess(diag.min_ess_bulk) == "good"))],
-            ["min tail ESS", fmt(diag.min_ess_tail, 0), f"≥ {ESS_MIN:g} (advisory)",
-             Raw(badge("ok" if _cls_ess(diag.min_ess_tail) == "good" else "check",
-                       _cls_ess(diag.min_ess_tail) == "good"))],
-            ["divergences", div_txt, "0",
-             Raw(badge("ok" if diag.divergences == 0 else
-                       ("n/a" if diag.divergences is None else "check"),
-                       None if diag.divergences is None else diag.divergences == 0))],
-            ["energy BFMI (per chain)", bfmi_txt, f"≥ {BFMI_MIN}",
-             Raw(badge("n/a" if bfmi_ok is None else ("ok" if bfmi_ok else "check"), bfmi_ok))],
-        ],
-    )
-    interest = [r for r in diag.rows if r.of_interest]
-    nuisance = [r for r in diag.rows if not r.of_interest]
-    shown = interest + nuisance[:MAX_NUISANCE_ROWS]
-
-    def _row(r):
-        return [r.label, r.role, fmt(r.r_hat, 4),
-                fmt(r.ess_bulk, 0), fmt(r.ess_tail, 0), f"{r.mcse_mean:.3g}"]
-
-    per_var = table(
-        ["variable", "role", "R-hat", "bulk ESS", "tail ESS", "MCSE(mean)"],
-        [_row(r) for r in shown],
-        left=2,
-        classes=[["", "", _cls_rhat(r.r_hat), _cls_ess(r.ess_bulk), _cls_ess(r.ess_tail), ""]
-                 for r in shown],
-    )
-    body = [overview, "<h3>Per variable</h3>", per_var]
-    if len(nuisance) > MAX_NUISANCE_ROWS:
-        rest = nuisance[MAX_NUISANCE_ROWS:]
-        body.append(paragraph(
-            f"{len(rest)} more components not listed (worst R-hat among them "
-            f"{max(r.r_hat for r in rest):.4f}, min bulk ESS {min(r.ess_bulk for r in rest):.0f}).",
-            note=True))
-    body.append(paragraph(
-        "Rank-normalised split R-hat and bulk/tail effective sample sizes (Vehtari et al. 2021) "
-        "and E-BFMI (Betancourt 2016), all computed with ArviZ from posterior.nc. The extremes "
-        "above, like the fit's verdict, cover the parameters and the nuisance in summary.json; "
-        "a sampler coordinate (the whitened variables the sampler moves) is listed but not "
-        "judged: each parameter is a function of them. Tail ESS is advisory: it is not part of "
-        "the verdict.", note=True))
-    return section("Diagnostics", body, id="diagnostics")
-
-
-def _parameters_section(run: RunData, rows: list[ParameterRow]) -> Section:
-    if not rows:
-        return section("Parameters", not_available("no calibration parameters in the posterior"),
-                       id="parameters")
+def answer_table(rows: list[ParameterRow], derived=()) -> str:
+    """The answer table: one row per calibrated quantity (then the papers' derived quantities:
+    their error's median and 90 % interval), the answer's columns first."""
     has_truth = any(r.truth is not None for r in rows)
-    headers = ["parameter", "unit", "mean", "sd", "5 %", "95 %", "least squares"]
+    headers = ["quantity", "unit", "posterior mean", "sd", "90 % interval",
+               "model file (prior mean)", "prior sd", "least squares (papers)"]
     if has_truth:
-        headers += ["truth", "in 90 %"]
-    headers += ["prior sd", "contraction", "identification"]
-    body_rows, classes = [], []
+        headers += ["truth", "truth in 90 %"]
+    headers += ["identified (contraction)", "papers' budget", "error, 95th percentile",
+                "verdict"]
+    body, classes = [], []
     for r in rows:
         d = decimals_for(r.sd)
-        cells = [r.label, r.unit, fmt(r.mean, d), fmt(r.sd, d + 1), fmt(r.q05, d), fmt(r.q95, d),
-                 fmt(r.baseline, d)]
-        cls = ["", "", "", "", "", "", ""]
+        interval = ("–" if r.q05 is None or r.q95 is None
+                    else f"[{fmt(r.q05, d)}, {fmt(r.q95, d)}]")
+        prior_sd = "–" if r.prior_sd is None else fmt(r.prior_sd, decimals_for(r.prior_sd))
+        cells = [r.label, r.unit or "–", fmt(r.mean, d), fmt(r.sd, d + 1), interval,
+                 fmt(r.prior_mean, d), prior_sd, fmt(r.baseline, d)]
+        cls = [""] * len(cells)
         if has_truth:
             inside = (None if r.truth is None or r.q05 is None or r.q95 is None
                       else r.q05 <= r.truth <= r.q95)
             cells += [fmt(r.truth, d), "–" if inside is None else ("yes" if inside else "no")]
             cls += ["", "" if inside is None else ("good" if inside else "warn")]
-        prior_sd = ("n/a" if r.prior_sd is None
-                    else fmt(r.prior_sd, decimals_for(r.prior_sd)))  # 2 significant digits
-        cells += [prior_sd,
-                  fmt(r.contraction, 3), r.flag or "identified"]
-        cls += ["", "warn" if r.flag else "", "warn" if r.flag else "good"]
         if r.contraction is None:
-            cells[-1] = "unknown (no prior)"
-            cls[-1] = ""
-        body_rows.append(cells)
-        classes.append(cls)
-    body = [
-        table(headers, body_rows, left=2, classes=classes),
-        paragraph(
-            "90 % interval = 5 % and 95 % posterior quantiles. Least squares = the papers' "
-            "estimator on the same data (summary.json baseline). Contraction = 1 − Var(post) / "
-            "Var(prior) (Betancourt 2018); below 0.5 the parameter is weakly identified (the data "
-            "shrink its sd by less than 30 %), below 0.1 the posterior is essentially the prior.",
-            note=True),
-    ]
+            cells.append("unknown (no prior)")
+            cls.append("")
+        else:
+            cells.append(f"{r.flag or 'yes'} ({r.contraction:.3f})")
+            cls.append("warn" if r.flag else "good")
+        b_cells, b_cls = _budget_cells(r.budget)
+        body.append(cells + b_cells)
+        classes.append(cls + b_cls)
+    for label, unit, err, check in derived:
+        q05, med, q95 = np.quantile(err, [0.05, 0.5, 0.95])
+        cells = [label, unit, f"{med:.3g} (median)", "", f"[{q05:.3g}, {q95:.3g}]", "–", "–",
+                 "–"] + (["–", "–"] if has_truth else []) + ["–"]
+        b_cells, b_cls = _budget_cells(check)
+        body.append(cells + b_cells)
+        classes.append(["w"] + [""] * (len(cells) - 1) + b_cls)
+    return table(headers, body, left=1, classes=classes)
+
+
+def _answer_section(run: RunData, names, rows, derived, fig) -> Section:
+    if not rows:
+        return section("Answer", not_available("no calibration parameters in the posterior"),
+                       id="answer")
+    body = [answer_table(rows, derived), paragraph(
+        "Model file = the spacecraft model's prediction, the prior's centre (– where the model "
+        "predicts none, e.g. an axis under a uniform prior); prior sd from the prior draws. Least "
+        "squares = the papers' estimator on the same data (summary.json baseline). Identified: "
+        "contraction = 1 − Var(post)/Var(prior) (Betancourt 2018), weakly identified below 0.5. "
+        "Papers' budget: each posterior draw read as the truth and the posterior mean as the "
+        "estimate; the error's 95th percentile must lie within the bound (docs/budgets.md).",
+        note=True)]
     if run.kind == "rwa4":
         body.append(_direction_table(run))
-    return section("Parameters", body, id="parameters")
+        body.append(_axis_figure(run, fig))
+    else:
+        post = flatten_draws(run.posterior, names)
+        panels = [figures.Panel(r.label, r.unit, post[r.label], r.baseline, r.truth, r.prior_mean)
+                  for r in rows if r.label in post]
+        body.append(fig(
+            "posteriors beside the least squares",
+            lambda: figures.answer_figure(panels),
+            "Each parameter's posterior at its own scale (histogram of the draws, 90 % interval "
+            "shaded, mean solid), the papers' least squares dashed, the truth red when known, the "
+            "model file's prediction dotted; a value further than "
+            f"{figures.WINDOW_SD:g} posterior sd away is written at the edge with its distance."))
+    return section("Answer", body, id="answer")
 
 
 def _angle_deg(a, b) -> float:
@@ -330,8 +293,8 @@ def _angle_deg(a, b) -> float:
 
 
 def _axis_draws(run: RunData) -> np.ndarray | None:
-    post = run.idata.posterior
-    if not all(n in post.data_vars for n in U4_NAMES):
+    post = run.posterior
+    if not all(n in post for n in U4_NAMES):
         return None
     return np.stack([np.asarray(post[n].values, float).ravel() for n in U4_NAMES], -1)
 
@@ -412,66 +375,44 @@ def _direction_table(run: RunData) -> str:
     return "<h3>Spin-axis direction</h3>\n" + table(["quantity", "value"], rows, left=1)
 
 
+def _axis_figure(run: RunData, fig) -> str:
+    draws = _axis_draws(run)
+    mean, cones = _direction(run)
+    if draws is None or mean is None:
+        return not_available("spin-axis sky plot (no u4_x, u4_y, u4_z draws in the posterior)")
+    truth = _axis_vec(run.summary.get("truth"))
+    base = _axis_vec(run.summary.get("baseline"))
+    return fig("spin-axis sky plot",
+               lambda: figures.axis_sky_figure(draws, mean=mean, cones_deg=cones, truth=truth,
+                                               baseline=base),
+               "RWA4 spin-axis posterior. Left: body azimuth/elevation of the draws, the "
+               "articulation cone and the RWA1 target axis. Middle: azimuthal-equidistant view "
+               "about the posterior mean at the budgets' scale, the dotted circles true 1°, 2° "
+               "and 3° cones (the papers' ±1° RWA-method and 3° RCS-method budgets). Right: the "
+               "same view at the posterior's own scale, the solid circles the posterior "
+               "50/90/95 % cones, the least-squares axis (and truth) marked; an axis beyond a "
+               "view's edge is written with its distance instead.")
+
+
 # --------------------------------------------------------------------------------------------
-# figures
+# per-pulse impulses, residuals
 
 
-def _trace_section(run: RunData, names, fig) -> Section:
-    body = fig("trace plot", lambda: figures.trace_png(run.idata, names),
-               "Left: marginal posterior per chain; right: draws against iteration (thinned to at "
-               "most 500 per chain). Chains should overlap and look like stationary noise.")
-    return section("Trace plots", body, id="trace")
-
-
-def _rank_section(run: RunData, names, fig) -> Section:
-    body = fig("rank plot", lambda: figures.rank_png(run.idata, names),
-               "Rank histograms per chain (Vehtari et al. 2021): all near-uniform when the chains "
-               "mix; a chain sitting high or low did not explore the same distribution.")
-    return section("Rank plots", body, id="rank")
-
-
-def _prior_posterior_section(run: RunData, names, rows: list[ParameterRow], fig) -> Section:
-    post = flatten_draws(run.idata.posterior, names)
-    prior = flatten_draws(run.idata.prior, names) if run.has_group("prior") else {}
-    by = {r.label: r for r in rows}
-    body = []
-    if not prior:
-        body.append(not_available("prior draws (posterior.nc has no prior group); the posterior "
-                                  "is shown alone"))
-    body.append(fig(
-        "prior vs posterior",
-        lambda: figures.prior_posterior_png(
-            post, prior,
-            baseline={k: by[k].baseline for k in post if k in by},
-            truth={k: by[k].truth for k in post if k in by},
-            contraction={k: by[k].contraction for k in post if k in by},
-            units={k: by[k].unit for k in post if k in by},
-        ),
-        "Prior (grey) and posterior (blue) densities, each scaled to a peak of 1; least-squares "
-        "estimate dashed, truth red when known. A narrow posterior inside a wide prior means the "
-        "data identify the parameter; overlapping curves mean the prior decides it."))
-    return section("Prior vs posterior", body, id="prior-posterior")
-
-
-def _pair_names(run: RunData) -> list[str]:
-    post = run.idata.posterior
-    if run.kind == "inertia":
-        return [n for n in INERTIA_NAMES if n in post.data_vars]
-    fs = [n for n in F_NAMES if n in post.data_vars]
-    return fs + [n for n in TAU_NAMES if n in post.data_vars]
-
-
-def _pair_section(run: RunData, fig) -> Section:
-    names = _pair_names(run)
-    what = "the six inertia entries" if run.kind == "inertia" else "thrust and time constants"
-    if len(names) < 2:
-        body = not_available(f"pair plot of {what} (fewer than two of them in the posterior)")
-    else:
-        body = fig(f"pair plot of {what}", lambda: figures.pair_png(run.idata, names),
-                   f"Joint posterior of {what} (at most 1000 draws shown); divergent transitions, "
-                   "if any, are marked. Strong correlations show which combinations the data "
-                   "determine and which they trade off.")
-    return section("Pair plot", body, id="pair")
+def _pulses_section(run: RunData, fig) -> Section:
+    g = run.groups.get("pulse_impulses")
+    if g is None or "measured" not in g:
+        return section("Per-pulse impulses", not_available(
+            "per-pulse impulses (posterior.nc has no pulse_impulses group: a run written before "
+            "they were stored; re-run the fit)"), id="pulses")
+    n = len(g["measured"].values)
+    body = fig("per-pulse impulses", lambda: figures.pulse_impulse_figure(g),
+               f"{n} pulse groups (the pulses between two telemetry samples, joined while one "
+               "is still acting). Left: the angular impulse measured across each group (the "
+               "momentum's change along the predicted direction; bar: 90 % of the telemetry "
+               "noise) against the impulse model's prediction (Feldman & Lee Eq 17 and §V; bar: "
+               "posterior 90 %). Right: their misfit against the group's commanded on-time: a "
+               "trend with pulse length means the pulse time constants are off.")
+    return section("Per-pulse impulses", body, id="pulses")
 
 
 def _residuals_section(run: RunData, fig) -> Section:
@@ -479,9 +420,9 @@ def _residuals_section(run: RunData, fig) -> Section:
         return section("Residuals",
                        not_available("model residuals (posterior.nc has no residuals group)"),
                        id="residuals")
-    ds = run.idata.residuals
+    ds = run.groups["residuals"]
     # the posterior-mean residual first, then any companions (e.g. the whitened residual)
-    names = sorted(ds.data_vars, key=lambda v: (v != "residual", str(v)))[:MAX_RESIDUAL_FIGURES]
+    names = sorted(ds.vars, key=lambda v: (v != "residual", str(v)))[:MAX_RESIDUAL_FIGURES]
     model = {"inertia": "momentum model (Feldman & Lee Eq 11)",
              "thrust": "impulse model (Feldman & Lee Eq 17)"}.get(run.kind, "model")
     body = []
@@ -491,15 +432,15 @@ def _residuals_section(run: RunData, fig) -> Section:
         units = str(attrs.get("units", ""))
         if var == "residual":
             label = RESIDUAL_LABELS.get(run.kind, "residual")
-            if units and "(" not in label:
-                label = f"{label} ({units})"
+            if "(" not in label:
+                label = f"{label} ({units or 'unit not recorded'})"
         else:
-            label = f"{var} ({'dimensionless' if units == '1' else units})" if units else str(var)
+            label = f"{var} ({'dimensionless' if units in ('1', '') else units})"
         frame = f", {attrs['frame']} axes" if attrs.get("frame") else ""
         what = desc or ("posterior-mean residual" if var == "residual" else str(var))
         body.append(fig(
             f"residuals: {var}",
-            lambda var=var, label=label: figures.residuals_png(ds, var=str(var), ylabel=label),
+            lambda var=var, label=label: figures.residuals_figure(ds, var=str(var), ylabel=label),
             f"{what[:1].upper()}{what[1:]} of the {model} against time{frame}. Structure "
             "(drifts, steps at slew or pulse times) points at an unmodelled effect; white noise "
             "at the telemetry noise level (or of unit variance, when whitened) is what a good fit "
@@ -507,35 +448,111 @@ def _residuals_section(run: RunData, fig) -> Section:
     return section("Residuals", body, id="residuals")
 
 
-def _axis_section(run: RunData, fig) -> Section:
-    draws = _axis_draws(run)
-    mean, cones = _direction(run)
-    if draws is None or mean is None:
-        return section("Spin axis", not_available("u4_x, u4_y, u4_z draws in the posterior"),
-                       id="axis")
-    truth = _axis_vec(run.summary.get("truth"))
-    base = _axis_vec(run.summary.get("baseline"))
-    body = fig("spin-axis sky plot",
-               lambda: figures.axis_sky_png(draws, mean=mean, cones_deg=cones, truth=truth,
-                                            baseline=base),
-               "RWA4 spin-axis posterior. Left: body azimuth/elevation of the draws, the "
-               "articulation cone and the RWA1 target axis. Right: azimuthal-equidistant view "
-               "about the posterior mean, so the dotted circles are true 1°, 2° and 3° cones (the "
-               "papers' "
-               "±1° RWA-method and ±3° RCS-method budgets) and the solid ones the posterior "
-               "50/90/95 % cones.")
-    return section("Spin axis", body, id="axis")
+# --------------------------------------------------------------------------------------------
+# sampler diagnostics
 
 
-def _energy_section(run: RunData, diag: Diagnostics, fig) -> Section:
-    if diag.bfmi is None:
-        return section("Energy", not_available("energy plot (sample_stats has no energy)"),
-                       id="energy")
-    body = fig("energy plot", lambda: figures.energy_png(run.idata),
-               "Marginal energy against energy transitions of the Hamiltonian sampler (Betancourt "
-               "2016). When the transition distribution is much narrower than the marginal one "
-               "(E-BFMI < 0.3) the sampler explores the tails poorly.")
-    return section("Energy", body, id="energy")
+def _cls_rhat(x: float) -> str:
+    return "" if not np.isfinite(x) else ("bad" if x > RHAT_MAX else "good")
+
+
+def _cls_ess(x: float) -> str:
+    return "" if not np.isfinite(x) else ("bad" if x < ESS_MIN else "good")
+
+
+def _ok_badge(cls: str) -> Raw:
+    return Raw(badge("ok" if cls == "good" else ("n/a" if not cls else "check"),
+                     None if not cls else cls == "good"))
+
+
+def _overview_table(diag: Diagnostics) -> str:
+    bfmi_txt = ("–" if diag.bfmi is None else ", ".join(f"{b:.2f}" for b in diag.bfmi))
+    bfmi_ok = None if diag.bfmi is None else bool(np.all(diag.bfmi >= BFMI_MIN))
+    div_txt = "not recorded" if diag.divergences is None else str(diag.divergences)
+    return table(
+        ["check", "value", "threshold", "status"],
+        [
+            ["max R-hat", fmt(diag.max_r_hat, 4), f"≤ {RHAT_MAX}",
+             _ok_badge(_cls_rhat(diag.max_r_hat))],
+            ["min bulk ESS", fmt(diag.min_ess_bulk, 0), f"≥ {ESS_MIN:g}",
+             _ok_badge(_cls_ess(diag.min_ess_bulk))],
+            ["min tail ESS", fmt(diag.min_ess_tail, 0), f"≥ {ESS_MIN:g} (advisory)",
+             _ok_badge(_cls_ess(diag.min_ess_tail))],
+            ["divergences", div_txt, "0",
+             Raw(badge("ok" if diag.divergences == 0 else
+                       ("n/a" if diag.divergences is None else "check"),
+                       None if diag.divergences is None else diag.divergences == 0))],
+            ["energy BFMI (per chain)", bfmi_txt, f"≥ {BFMI_MIN}",
+             Raw(badge("n/a" if bfmi_ok is None else ("ok" if bfmi_ok else "check"), bfmi_ok))],
+        ],
+    )
+
+
+def _per_variable_table(diag: Diagnostics) -> str:
+    rows, classes = [], []
+    for r in diag.rows:
+        d = decimals_for(r.sd)
+        rows.append([r.label, r.role, fmt(r.mean, d), fmt(r.sd, d + 1),
+                     fmt(r.contraction, 3), fmt(r.r_hat, 4), fmt(r.ess_bulk, 0),
+                     fmt(r.ess_tail, 0)])
+        classes.append(["", "", "", "", "", _cls_rhat(r.r_hat), _cls_ess(r.ess_bulk),
+                        _cls_ess(r.ess_tail)])
+    out = table(["variable", "role", "mean", "sd", "contraction", "R-hat", "bulk ESS",
+                 "tail ESS"], rows, left=2, classes=classes)
+    if diag.sampler:
+        listed = ", ".join(f"{k} ({n})" for k, n in diag.sampler.items())
+        out += paragraph(f"Sampler coordinates, not judged (each parameter is a function of "
+                         f"them; no diagnostics computed): {listed}.", note=True)
+    return out
+
+
+def _correlation_table(post: dict[str, np.ndarray]) -> str:
+    labels = list(post)
+    x = np.stack([np.asarray(post[k], float).ravel() for k in labels])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.corrcoef(x)
+    rows, classes = [], []
+    for i, a in enumerate(labels):
+        rows.append([a] + ["" if j == i else f"{c[i, j]:+.2f}" for j in range(len(labels))])
+        classes.append([""] + ["" if j == i or not np.isfinite(c[i, j]) else
+                               ("warn" if abs(c[i, j]) >= 0.9 else "")
+                               for j in range(len(labels))])
+    return table([""] + labels, rows, left=1, classes=classes)
+
+
+def _diagnostics_section(run: RunData, names, diag: Diagnostics, rows: list[ParameterRow],
+                         fig) -> Section:
+    post = flatten_draws(run.posterior, names)
+    units = {r.label: r.unit for r in rows}
+    n_nuis = sum(1 for r in diag.rows if not r.of_interest)
+    body = [_overview_table(diag)]
+    if post:
+        body.append(fig(
+            "trace and rank plots",
+            lambda: figures.trace_rank_figure(post, units),
+            "Left: each chain's draws of each calibrated parameter against iteration (thinned "
+            f"to at most {figures.MAX_TRACE_DRAWS} per chain): chains should overlap and look "
+            "like stationary noise. Right: each chain's histogram of its draws' ranks among all "
+            "chains (Vehtari et al. 2021), dashed the flat count of chains that mix; a chain "
+            "sitting high or low did not explore the same distribution."))
+    if len(post) > 1:
+        body += ["<h3>Posterior correlations of the calibrated parameters</h3>",
+                 _correlation_table(post),
+                 paragraph("Pearson correlations over all draws; |ρ| ≥ 0.9 highlighted: the data "
+                           "determine that combination better than either parameter alone.",
+                           note=True)]
+    body.append(details(
+        f"Per-variable diagnostics: {len(diag.rows) - n_nuis} parameters, {n_nuis} nuisance "
+        "components", _per_variable_table(diag)))
+    src = ("the fit's, from summary.json" if not diag.computed else
+           f"the fit's from summary.json; computed here with ArviZ for {len(diag.computed)} "
+           "components it lacks")
+    body.append(paragraph(
+        "Rank-normalised split R-hat and bulk/tail effective sample sizes (Vehtari et al. 2021), "
+        f"{src}; E-BFMI (Betancourt 2016) from posterior.nc. The extremes cover the parameters and "
+        "the nuisance, as the fit's verdict does. Tail ESS is advisory: it is not part of the "
+        "verdict.", note=True))
+    return section("Sampler diagnostics", body, id="diagnostics")
 
 
 def _config_section(run: RunData) -> Section:

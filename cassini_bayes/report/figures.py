@@ -1,45 +1,53 @@
-"""Figures of the diagnostic report, rendered to PNG bytes (ArviZ + matplotlib, Agg).
+"""Figures of the reports, rendered to PNG bytes (matplotlib's Agg canvas, no ``pyplot``).
 
-Every function builds a :class:`matplotlib.figure.Figure` directly (no ``pyplot`` state, so nothing
-to close and no interactive backend is touched), draws into it — with ArviZ where ArviZ has the plot
-— and returns the PNG bytes, palette-quantised to keep a report with 4000 draws around a megabyte.
-Draws are thinned for plotting only (``MAX_TRACE_DRAWS`` per chain, ``MAX_SCATTER`` points);
-all numbers in the report come from the full posterior.
+Every ``*_figure`` function builds a :class:`matplotlib.figure.Figure` directly (no ``pyplot``
+state, so nothing to close and no interactive backend is touched); :func:`png_bytes` renders it,
+palette-quantised to keep a page small. Every axis is labelled with its unit and carries at most
+a few ticks, so no tick labels overlap (tests/test_report.py checks both). Draws are thinned for
+plotting only (``MAX_TRACE_DRAWS`` per chain, ``MAX_SCATTER`` points); every number in a report
+comes from the full posterior.
+
+Plain NumPy and matplotlib, no ArviZ: importing ArviZ alone costs more CPU than the whole page
+(docs/performance.md).
 """
 
 from __future__ import annotations
 
 import io
 import math
-import warnings
 from collections.abc import Mapping, Sequence
+from typing import NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
 __all__ = [
     "DPI",
     "png_bytes",
-    "thin",
-    "trace_png",
-    "rank_png",
-    "prior_posterior_png",
-    "pair_png",
-    "residuals_png",
-    "energy_png",
-    "axis_sky_png",
+    "Panel",
+    "answer_figure",
+    "trace_rank_figure",
+    "residuals_figure",
+    "pulse_impulse_figure",
+    "axis_sky_figure",
+    "axis_label",
+    "tidy_ticks",
     "RWA1_AXIS",
     "ARTICULATION_CONE_DEG",
 ]
 
 DPI = 80
 MAX_TRACE_DRAWS = 500  # per chain, trace plots
-MAX_SCATTER = 1000  # points, pair and sky plots
+MAX_SCATTER = 1000  # points, sky plots
+RANK_BINS = 20
+WINDOW_SD = 6.0  # a marker further than this many posterior sd from the mean is off-scale
 # Brown (2012) §I: the RWA1 spin axis, RWA4's target when it replaces a failed RWA1
 RWA1_AXIS = np.array([0.0, 0.816497, 0.577350])
 # Brown (2012) §I: RWA4's spin axis is canted 54.7° from the articulation (+Z) axis
 ARTICULATION_CONE_DEG = 54.7356
-PRIOR_COLOR, POST_COLOR, BASE_COLOR, TRUTH_COLOR = "#9aa7b8", "#1f4e8c", "#222222", "#c0392b"
+PRIOR_COLOR, POST_COLOR, BASE_COLOR, TRUTH_COLOR = "#6b7a8f", "#1f4e8c", "#222222", "#c0392b"
+CHAIN_COLORS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8")
 
 
 def png_bytes(fig: Figure, *, dpi: int = DPI) -> bytes:
@@ -68,183 +76,186 @@ def png_bytes(fig: Figure, *, dpi: int = DPI) -> bytes:
 
 def _grid_figure(nrow: int, ncol: int, *, cell: tuple[float, float], left: float = 0.75,
                  right: float = 0.2, top: float = 0.45, bottom: float = 0.55, wspace: float = 0.45,
-                 hspace: float = 0.55, **subplots_kw):
+                 hspace: float = 0.55, width_ratios: Sequence[float] | None = None,
+                 **subplots_kw):
     """A figure of ``nrow × ncol`` axes with fixed margins in inches.
 
     Constrained layout costs several extra draw passes and dominates the time of figures with many
-    axes (a pair plot of eleven variables: 20 s against 4 s), so grids are laid out by hand.
+    axes, so grids are laid out by hand. ``cell`` is the size of the mean cell; ``width_ratios``
+    widens some columns.
     """
-    w = left + right + ncol * cell[0] + (ncol - 1) * wspace
+    ratios = list(width_ratios) if width_ratios is not None else [1.0] * ncol
+    w = left + right + cell[0] * sum(ratios) + (ncol - 1) * wspace
     h = top + bottom + nrow * cell[1] + (nrow - 1) * hspace
     fig = Figure(figsize=(w, h))
+    if width_ratios is not None:
+        subplots_kw["gridspec_kw"] = {"width_ratios": ratios}
     axes = fig.subplots(nrow, ncol, squeeze=False, **subplots_kw)
     fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
-                        wspace=wspace / cell[0], hspace=hspace / cell[1])
+                        wspace=wspace / (cell[0] * np.mean(ratios)), hspace=hspace / cell[1])
     return fig, axes
 
 
-def thin(idata, max_draws: int):
-    """Every k-th draw so that at most ``max_draws`` remain per chain (plots only)."""
-    n = int(idata.posterior.sizes.get("draw", 0))
-    k = max(1, math.ceil(n / max_draws))
-    return idata if k == 1 else idata.isel(draw=slice(None, None, k))
+def axis_label(name: str, unit: str) -> str:
+    """``"Ixx (kg m²)"``; a dimensionless quantity says so."""
+    unit = unit if unit and unit not in ("–", "1") else "dimensionless"
+    return f"{name} ({unit})"
 
 
-def _n_components(ds, names: Sequence[str]) -> int:
-    n = 0
-    for name in names:
-        shape = [s for d, s in ds[name].sizes.items() if d not in ("chain", "draw")]
-        n += int(np.prod(shape)) if shape else 1
-    return n
+def tidy_ticks(ax, *, x: int = 4, y: int = 4) -> None:
+    """At most ``x``/``y`` major ticks, plain numbers without an offset: labels never overlap and
+    read without a separate ``+7.1e3`` corner note."""
+    for axis, n in ((ax.xaxis, x), (ax.yaxis, y)):
+        if n:
+            axis.set_major_locator(MaxNLocator(nbins=n, min_n_ticks=2))
+            if isinstance(axis.get_major_formatter(), ScalarFormatter):
+                fmt = ScalarFormatter(useOffset=False)
+                fmt.set_powerlimits((-4, 6))
+                axis.set_major_formatter(fmt)
+    ax.tick_params(labelsize=8)
 
 
-def trace_png(idata, var_names: Sequence[str]) -> bytes:
-    """ArviZ trace plot: marginal density per chain | draws against iteration, a row a variable."""
-    import arviz as az
-
-    idata = thin(idata, MAX_TRACE_DRAWS)
-    n = len(var_names)
-    fig, axes = _grid_figure(n, 2, cell=(4.5, 1.35), left=0.45, right=0.15, top=0.35,
-                             bottom=0.35, wspace=0.8, hspace=0.5)
-    with warnings.catch_warnings(), az.rc_context({"plot.max_subplots": 2 * n + 1}):
-        warnings.simplefilter("ignore")
-        az.plot_trace(idata, var_names=list(var_names), axes=axes, compact=True,
-                      chain_prop={"color": ["C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8"]},
-                      legend=True, trace_kwargs={"alpha": 0.6, "linewidth": 0.6})
-    for ax in axes.ravel():
-        ax.tick_params(labelsize=8)
-        ax.title.set_fontsize(9)
-    return png_bytes(fig)
+def _thin(x: np.ndarray, max_draws: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every k-th draw of a (chain, draw) array, so that at most ``max_draws`` remain per chain;
+    returns the kept draws and their iteration numbers."""
+    k = max(1, math.ceil(x.shape[1] / max_draws))
+    it = np.arange(0, x.shape[1], k)
+    return x[:, ::k], it
 
 
-def rank_png(idata, var_names: Sequence[str]) -> bytes:
-    """ArviZ rank plots: per chain, the histogram of the draws' ranks (flat when chains mix)."""
-    import arviz as az
+class Panel(NamedTuple):
+    """One parameter of :func:`answer_figure`: its draws and the values marked beside them."""
 
-    n = _n_components(idata.posterior, var_names)
+    label: str
+    unit: str
+    draws: np.ndarray
+    baseline: float | None = None
+    truth: float | None = None
+    prior_mean: float | None = None
+
+
+def _mark(ax, value, lo, hi, mean, sd, *, color, style, name, text_y) -> str | None:
+    """A vertical line at ``value`` inside ``[lo, hi]``; outside, an arrow at the nearer edge with
+    the value and its distance in posterior sd. Returns the legend name when drawn as a line."""
+    if value is None:
+        return None
+    if lo <= value <= hi:
+        ax.axvline(value, color=color, linestyle=style, linewidth=1.3)
+        return name
+    right = value > hi
+    dist = abs(value - mean) / sd if sd > 0 else float("inf")
+    text = f"{name} {value:.6g}\n{dist:.0f} sd away"
+    ax.annotate(f"{text} →" if right else f"← {text}",
+                xy=(0.98 if right else 0.02, text_y), xycoords="axes fraction",
+                ha="right" if right else "left", va="top", fontsize=7, color=color)
+    return None
+
+
+def answer_figure(panels: Sequence[Panel]) -> Figure:
+    """Each calibrated parameter's posterior at the posterior's own scale: a histogram of the
+    draws with the 90 % interval shaded, the papers' least squares (dashed) and the truth (red)
+    beside it, and the model file's prediction (the prior's centre, dotted). A value further than
+    ``WINDOW_SD`` posterior sd from the mean is written at the edge with its distance instead."""
+    n = len(panels)
     ncol = min(3, n)
     nrow = math.ceil(n / ncol)
-    fig, axes = _grid_figure(nrow, ncol, cell=(3.0, 1.6), left=0.55, wspace=0.6, hspace=0.75)
+    fig, axes = _grid_figure(nrow, ncol, cell=(3.6, 1.9), left=0.7, right=0.25, top=0.6,
+                             bottom=0.55, wspace=0.75, hspace=0.95)
     axes = axes.ravel()
-    with warnings.catch_warnings(), az.rc_context({"plot.max_subplots": n + 1}):
-        warnings.simplefilter("ignore")
-        az.plot_rank(idata, var_names=list(var_names), ax=axes[:n], kind="bars")
+    shown: list[str] = []
+    for ax, p in zip(axes, panels):
+        x = np.asarray(p.draws, float).ravel()
+        x = x[np.isfinite(x)]
+        mean, sd = float(np.mean(x)), float(np.std(x))
+        lo, hi = (float(v) for v in np.quantile(x, [0.002, 0.998]))
+        for v in (p.baseline, p.truth, p.prior_mean):
+            if v is not None and abs(v - mean) <= WINDOW_SD * sd:
+                lo, hi = min(lo, v), max(hi, v)
+        pad = 0.08 * (hi - lo) if hi > lo else max(abs(mean) * 1e-6, 1e-12)
+        lo, hi = lo - pad, hi + pad
+        counts, edges = np.histogram(x, bins=40, range=(lo, hi), density=True)
+        ax.stairs(counts, edges, fill=True, color=POST_COLOR, alpha=0.35, linewidth=0)
+        ax.stairs(counts, edges, color=POST_COLOR, linewidth=1.0)
+        q05, q95 = np.quantile(x, [0.05, 0.95])
+        ax.axvspan(q05, q95, color=POST_COLOR, alpha=0.08, linewidth=0)
+        ax.axvline(mean, color=POST_COLOR, linewidth=1.2)
+        names = ["posterior mean, 90 % interval"]
+        for value, color, style, name, y in (
+                (p.baseline, BASE_COLOR, "--", "least squares", 0.97),
+                (p.truth, TRUTH_COLOR, "-", "truth", 0.72),
+                (p.prior_mean, PRIOR_COLOR, ":", "model file", 0.47)):
+            drawn = _mark(ax, value, lo, hi, mean, sd, color=color, style=style, name=name,
+                          text_y=y)
+            if drawn:
+                names.append(drawn)
+        shown += [nm for nm in names if nm not in shown]
+        ax.set_xlim(lo, hi)
+        ax.set_ylim(0, counts.max() * 1.35 if counts.max() > 0 else 1)
+        d = max(0, 1 - math.floor(math.log10(sd))) if sd > 0 else 4   # 2 digits of the sd
+        ax.set_title(f"{p.label} = {mean:.{d}f} ± {sd:.{d}f}", fontsize=9)
+        ax.set_xlabel(axis_label(p.label, p.unit), fontsize=8)
+        unit = p.unit if p.unit and p.unit not in ("–", "1") else ""
+        ax.set_ylabel(f"density (1/{unit})" if unit else "density (dimensionless)", fontsize=8)
+        ax.set_yticks([])  # a density's scale says nothing the x-axis does not
+        tidy_ticks(ax, x=4, y=0)
     for ax in axes[n:]:
         ax.set_visible(False)
-    for ax in axes[:n]:
-        ax.tick_params(labelsize=8)
-        ax.title.set_fontsize(9)
-        ax.xaxis.label.set_fontsize(8)
-        ax.yaxis.label.set_fontsize(8)
-    return png_bytes(fig)
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    style = {"posterior mean, 90 % interval": Patch(color=POST_COLOR, alpha=0.35),
+             "least squares": Line2D([], [], color=BASE_COLOR, linestyle="--"),
+             "truth": Line2D([], [], color=TRUTH_COLOR),
+             "model file": Line2D([], [], color=PRIOR_COLOR, linestyle=":")}
+    fig.legend([style[s] for s in shown], shown, loc="upper center", ncol=len(shown),
+               fontsize=8, frameon=False)
+    return fig
 
 
-def _scaled_kde(ax, x: np.ndarray, *, color: str, label: str, fill: bool) -> None:
-    import arviz as az
-
-    x = x[np.isfinite(x)]
-    if x.size < 2 or np.ptp(x) == 0:
-        ax.axvline(x[0] if x.size else 0.0, color=color, label=label)
-        return
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        grid, pdf = az.kde(x)
-    pdf = pdf / pdf.max()
-    if fill:
-        ax.fill_between(grid, pdf, color=color, alpha=0.45, linewidth=0, label=label)
-    else:
-        ax.plot(grid, pdf, color=color, linewidth=1.6, label=label)
-
-
-def prior_posterior_png(
-    posterior: Mapping[str, np.ndarray],
-    prior: Mapping[str, np.ndarray],
-    *,
-    baseline: Mapping[str, float | None],
-    truth: Mapping[str, float | None],
-    contraction: Mapping[str, float | None],
-    units: Mapping[str, str],
-) -> bytes:
-    """Prior (grey, filled) against posterior (blue) density per parameter, each scaled to peak 1.
-
-    The x-range spans the prior's central 99 % and the whole posterior, so a well-identified
-    parameter shows as a narrow spike inside a broad prior and a prior-dominated one as two
-    overlapping curves. Baseline (least squares, black dashed) and truth (red) are marked.
-    """
-    labels = list(posterior)
+def trace_rank_figure(draws: Mapping[str, np.ndarray], units: Mapping[str, str]) -> Figure:
+    """Per parameter (a row): the draws of each chain against iteration (thinned to
+    ``MAX_TRACE_DRAWS`` per chain) and each chain's histogram of the draws' ranks among all chains
+    (Vehtari et al. 2021): chains that mix overlap as stationary noise and have flat rank
+    histograms."""
+    labels = list(draws)
     n = len(labels)
-    ncol = min(3, n)
-    nrow = math.ceil(n / ncol)
-    fig, axes = _grid_figure(nrow, ncol, cell=(3.4, 1.65), left=0.2, top=0.65, wspace=0.3,
-                             hspace=0.8)
-    axes = axes.ravel()
-    for ax, label in zip(axes, labels):
-        x = np.asarray(posterior[label]).ravel()
-        lo, hi = np.nanmin(x), np.nanmax(x)
-        if label in prior:
-            p = np.asarray(prior[label]).ravel()
-            _scaled_kde(ax, p, color=PRIOR_COLOR, label="prior", fill=True)
-            plo, phi = np.nanquantile(p, [0.005, 0.995])
-            lo, hi = min(lo, plo), max(hi, phi)
-        _scaled_kde(ax, x, color=POST_COLOR, label="posterior", fill=False)
-        for value, color, style, name in (
-            (baseline.get(label), BASE_COLOR, "--", "least squares"),
-            (truth.get(label), TRUTH_COLOR, "-", "truth"),
-        ):
-            if value is not None:
-                ax.axvline(value, color=color, linestyle=style, linewidth=1.2, label=name)
-                lo, hi = min(lo, value), max(hi, value)
-        pad = 0.04 * (hi - lo) if hi > lo else 1.0
-        ax.set_xlim(lo - pad, hi + pad)
-        ax.set_ylim(0, 1.08)
-        c = contraction.get(label)
-        title = label if c is None else f"{label}   contraction {c:.2f}"
-        if label not in prior:
-            title += "   (no prior draws)"
-        ax.set_title(title, fontsize=9)
+    fig, axes = _grid_figure(n, 2, cell=(4.0, 1.25), left=0.95, right=0.2, top=0.45,
+                             bottom=0.5, wspace=0.85, hspace=0.75, width_ratios=(1.6, 0.7))
+    for (ax_t, ax_r), label in zip(axes, labels):
+        x = np.asarray(draws[label], float)
+        chains, total = x.shape[0], x.size
+        xt, it = _thin(x, MAX_TRACE_DRAWS)
+        ranks = np.empty(total)
+        ranks[np.argsort(x.ravel(), kind="stable")] = np.arange(total)
+        ranks = ranks.reshape(x.shape)
+        edges = np.linspace(0, total, RANK_BINS + 1)
+        top = 0
+        for c in range(chains):
+            color = CHAIN_COLORS[c % len(CHAIN_COLORS)]
+            ax_t.plot(it, xt[c], color=color, linewidth=0.6, alpha=0.7)
+            counts, _ = np.histogram(ranks[c], bins=edges)
+            ax_r.stairs(counts, edges, color=color, linewidth=1.0)
+            top = max(top, int(counts.max()))
+        ax_r.axhline(x.shape[1] / RANK_BINS, color="#555555", linestyle="--", linewidth=0.8)
         unit = units.get(label, "")
-        ax.set_xlabel(f"{label} ({unit})" if unit and unit != "–" else label, fontsize=8)
-        ax.set_yticks([])
-        ax.tick_params(labelsize=7)
-    for ax in axes[n:]:
-        ax.set_visible(False)
-    handles, names = [], []
-    for ax in axes[:n]:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in names:
-                handles.append(h)
-                names.append(lab)
-    fig.legend(handles, names, loc="upper center", ncol=len(names), fontsize=8, frameon=False)
-    return png_bytes(fig)
+        ax_t.set_ylabel(axis_label(label, unit), fontsize=8)
+        ax_t.set_xlabel("iteration (draw)", fontsize=8)
+        ax_r.set_xlabel(f"rank among all {total} draws (count)", fontsize=8)
+        ax_r.set_ylabel("draws per bin (count)", fontsize=8)
+        ax_r.set_ylim(0, 1.25 * top)
+        ax_r.set_xlim(0, total)
+        ax_r.set_xticks([0, total])
+        tidy_ticks(ax_t, x=4, y=3)
+        tidy_ticks(ax_r, x=0, y=2)
+    return fig
 
 
-def pair_png(idata, var_names: Sequence[str]) -> bytes:
-    """ArviZ pair plot (scatter of thinned draws, marginals on the diagonal, divergences marked)."""
-    import arviz as az
-
-    n_total = int(idata.posterior.sizes["chain"] * idata.posterior.sizes["draw"])
-    k = max(1, math.ceil(n_total / MAX_SCATTER))
-    idata = idata.isel(draw=slice(None, None, k)) if k > 1 else idata
-    n = _n_components(idata.posterior, var_names)
-    size = min(1.9, 11.0 / max(n, 1))
-    fig, axes = _grid_figure(n, n, cell=(size, size), left=0.9, right=0.15, top=0.15, bottom=0.7,
-                             wspace=0.1, hspace=0.1)
-    divs = ("sample_stats" in idata.groups() and "diverging" in idata.sample_stats.data_vars
-            and bool(np.asarray(idata.sample_stats["diverging"].values).any()))
-    with warnings.catch_warnings(), az.rc_context({"plot.max_subplots": n * n + 1}):
-        warnings.simplefilter("ignore")
-        az.plot_pair(idata, var_names=list(var_names), kind="scatter", marginals=True, ax=axes,
-                     divergences=divs, scatter_kwargs={"alpha": 0.5, "s": 7},
-                     textsize=8)
-    return png_bytes(fig)
-
-
-def residuals_png(ds, *, var: str = "residual", ylabel: str) -> bytes:
+def residuals_figure(ds, *, var: str = "residual", ylabel: str) -> Figure:
     """Residuals against time: one panel per component of the ``axis`` dimension.
 
     Parameters
     ----------
-    ds : xarray.Dataset
+    ds : cassini_bayes.report.rundata.Group
         The ``residuals`` group: variables with a ``t`` dimension (s) and optionally ``axis``.
         Any other dimension (event) becomes separate lines; so does a coordinate along ``t`` that
         tells concatenated segments apart (``file``, ``event``: each segment has its own clock).
@@ -256,26 +267,25 @@ def residuals_png(ds, *, var: str = "residual", ylabel: str) -> bytes:
     da = ds[var]
     tdim = "t" if "t" in da.dims else da.dims[0]
     comp_dim = "axis" if "axis" in da.dims else None
-    comps = list(da.coords[comp_dim].values) if comp_dim and comp_dim in da.coords else (
-        list(range(da.sizes[comp_dim])) if comp_dim else [None])
+    comps = ds.labels(comp_dim) if comp_dim else [None]
     other = [d for d in da.dims if d not in (tdim, comp_dim)]
-    t = np.asarray(da.coords[tdim].values if tdim in da.coords else np.arange(da.sizes[tdim]),
-                   dtype=float)
+    t = np.asarray(ds.labels(tdim), dtype=float)
     seg_coord = next((c for c in ("file", "event", "segment")
-                      if c in da.coords and da.coords[c].dims == (tdim,)), None)
-    seg = np.asarray(da.coords[seg_coord].values) if seg_coord else np.zeros(t.size, int)
+                      if c in ds.coords and ds.coords[c].dims == (tdim,)), None)
+    seg = np.asarray(ds.coords[seg_coord].values) if seg_coord else np.zeros(t.size, int)
     segments = list(dict.fromkeys(seg.tolist()))
-    fig, axes = _grid_figure(len(comps), 1, cell=(10.0, 1.55), left=0.85, top=0.3, bottom=0.5,
+    order = [tdim, *([comp_dim] if comp_dim else []), *other]
+    vals_all = np.moveaxis(np.asarray(da.values, float), [da.dims.index(d) for d in order],
+                           range(len(order)))
+    fig, axes = _grid_figure(len(comps), 1, cell=(10.0, 1.55), left=0.95, top=0.3, bottom=0.5,
                              hspace=0.45, sharex=True)
     axes = axes.ravel()
-    n_lines = 0
+    other_labels = [ds.labels(d) for d in other]
+    names = [", ".join(str(other_labels[k][i]) for k, i in enumerate(idx))
+             for idx in np.ndindex(*vals_all.shape[2 if comp_dim else 1:])] if other else [""]
     for i, (ax, comp) in enumerate(zip(axes, comps)):
-        sub = da.isel({comp_dim: i}) if comp_dim else da
-        sub = sub.transpose(tdim, *other)
-        vals = np.asarray(sub.values, dtype=float).reshape(sub.sizes[tdim], -1)
-        names = [", ".join(str(sub.coords[d].values[k]) if d in sub.coords else str(k)
-                           for d, k in zip(other, idx))
-                 for idx in np.ndindex(*[sub.sizes[d] for d in other])] if other else [""]
+        sub = vals_all[:, i] if comp_dim else vals_all
+        vals = sub.reshape(sub.shape[0], -1)
         n_lines = 0
         for j in range(vals.shape[1]):
             for s_val in segments:
@@ -294,21 +304,59 @@ def residuals_png(ds, *, var: str = "residual", ylabel: str) -> bytes:
         name = f"{var}[{comp}]" if comp is not None else var
         ax.set_title(f"{name}   rms {rms:.3g}", fontsize=9, loc="left")
         ax.set_ylabel(ylabel, fontsize=8)
-        ax.tick_params(labelsize=8)
+        tidy_ticks(ax, x=8, y=3)
     axes[-1].set_xlabel("t (s)", fontsize=8)
-    return png_bytes(fig)
+    return fig
 
 
-def energy_png(idata) -> bytes:
-    """ArviZ energy plot: marginal energy against energy transition, with E-BFMI per chain."""
-    import arviz as az
+def pulse_impulse_figure(group) -> Figure:
+    """Each pulse group's angular impulse, measured (the momentum's change across it, with the
+    telemetry noise's 90 % bar) against the model's prediction (posterior 90 % band), and their
+    ratio against the group's commanded on-time.
 
-    fig = Figure(figsize=(6.5, 3.8), layout="constrained")
-    ax = fig.subplots()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        az.plot_energy(idata, ax=ax, textsize=8)
-    return png_bytes(fig)
+    ``group``: the ``pulse_impulses`` group of a thrust run (``measured``, ``measured_sd``,
+    ``predicted`` (quantile 5/50/95 %) along each group's predicted direction, N m s;
+    ``on_time`` s).
+    """
+    meas = np.asarray(group["measured"].values, float)
+    msd = np.asarray(group["measured_sd"].values, float)
+    pred = np.asarray(group["predicted"].values, float)
+    on = np.asarray(group["on_time"].values, float)
+    lo, med, hi = pred[:, 0], pred[:, 1], pred[:, 2]
+    z90 = 1.6448536269514722
+    fig, axes = _grid_figure(1, 2, cell=(4.6, 3.4), left=0.9, right=0.25, top=0.45,
+                             bottom=0.6, wspace=0.9)
+    ax, ax_r = axes[0]
+    ax.errorbar(med, meas, yerr=z90 * msd, xerr=[med - lo, hi - med], fmt="o", ms=3,
+                color=POST_COLOR, ecolor="#8fa6c8", elinewidth=0.8, capsize=0)
+    top = float(np.nanmax(np.concatenate([hi, meas + z90 * msd]))) * 1.05
+    bottom = min(0.0, float(np.nanmin(np.concatenate([lo, meas - z90 * msd]))))
+    ax.plot([bottom, top], [bottom, top], color="#555555", linestyle="--", linewidth=0.8,
+            label="measured = predicted")
+    ax.set_xlim(bottom, top)
+    ax.set_ylim(bottom, top)
+    ax.set_xlabel("predicted impulse, posterior median (N m s)", fontsize=8)
+    ax.set_ylabel("measured impulse (N m s)", fontsize=8)
+    ax.set_title("angular impulse of each pulse group", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = 100.0 * (meas / med - 1.0)
+        r_lo, r_hi = 100.0 * (lo / med - 1.0), 100.0 * (hi / med - 1.0)
+        r_err = 100.0 * z90 * msd / med
+    ok = np.isfinite(ratio)
+    ax_r.errorbar(1e3 * on[ok], ratio[ok], yerr=r_err[ok], fmt="o", ms=3, color=POST_COLOR,
+                  ecolor="#8fa6c8", elinewidth=0.8, capsize=0, label="measured, noise 90 %")
+    order = np.argsort(on[ok])
+    ax_r.fill_between(1e3 * on[ok][order], r_lo[ok][order], r_hi[ok][order], color=POST_COLOR,
+                      alpha=0.15, linewidth=0, label="prediction, posterior 90 %")
+    ax_r.axhline(0.0, color="#555555", linewidth=0.8)
+    ax_r.set_xlabel("commanded on-time of the group (ms)", fontsize=8)
+    ax_r.set_ylabel("measured / predicted − 1 (%)", fontsize=8)
+    ax_r.set_title("misfit against pulse length", fontsize=9)
+    ax_r.legend(fontsize=7, loc="upper right")
+    tidy_ticks(ax, x=5, y=5)
+    tidy_ticks(ax_r, x=5, y=5)
+    return fig
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -338,7 +386,45 @@ def _az_el_deg(u: np.ndarray) -> np.ndarray:
                                -1))
 
 
-def axis_sky_png(
+def _cone_panel(ax, xy, marks, cones, lim, rings, title, m, east, north) -> None:
+    """One azimuthal-equidistant view about the posterior mean: draws, the posterior cones, the
+    dotted ``rings`` (deg) and the marked axes, those beyond ``lim`` written as off-scale."""
+    ax.scatter(xy[:, 0], xy[:, 1], s=4, color=POST_COLOR, alpha=0.45, label="posterior draws")
+    ang = np.linspace(0, 2 * np.pi, 241)
+    for r in rings:
+        ax.plot(r * np.cos(ang), r * np.sin(ang), color="#777777", linestyle=":", linewidth=1)
+        ax.annotate(f"{r:g}°", (r * np.cos(np.pi / 4), r * np.sin(np.pi / 4)), fontsize=7,
+                    color="#555555")
+    for (key, r), col in zip(sorted((cones or {}).items(), key=lambda kv: float(kv[0])),
+                             ("#7fb3d5", "#2e86c1", "#1b4f72")):
+        if r is not None and np.isfinite(r):
+            ax.plot(r * np.cos(ang), r * np.sin(ang), color=col, linewidth=1.3,
+                    label=f"{key} % cone ({r:.3g}°)")
+    off = []
+    for name, v, mk, col in marks:
+        p = _to_plane_deg(v, m, east, north)[0]
+        d = float(np.hypot(*p))
+        if max(abs(p[0]), abs(p[1])) <= lim:
+            ax.scatter([p[0]], [p[1]], marker=mk, s=120, color=col, label=f"{name} ({d:.3g}°)",
+                       zorder=5)
+        else:
+            off.append(f"{name}: {d:.3g}° from the mean (off-scale)")
+    ax.scatter([0], [0], marker="o", s=25, color="k", label="posterior mean", zorder=6)
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.set_xlabel("east of the mean (deg)", fontsize=8)
+    ax.set_ylabel("north of the mean (deg)", fontsize=8)
+    ax.set_title(title, fontsize=9)
+    if off:
+        ax.text(0.02, 0.02, "\n".join(off), transform=ax.transAxes, fontsize=7, va="bottom",
+                color="#444444")
+    ax.legend(fontsize=6.5, loc="upper right")
+    tidy_ticks(ax, x=5, y=5)
+
+
+def axis_sky_figure(
     draws: np.ndarray,
     *,
     mean: np.ndarray,
@@ -346,14 +432,15 @@ def axis_sky_png(
     truth: np.ndarray | None = None,
     baseline: np.ndarray | None = None,
     target: np.ndarray = RWA1_AXIS,
-) -> bytes:
-    """RWA4 spin-axis posterior: body azimuth–elevation overview and a zoom about the mean.
+) -> Figure:
+    """RWA4 spin-axis posterior in three views.
 
     Left: azimuth ``atan2(y, x)`` and elevation ``asin(z)`` of the draws in body axes, with the
-    articulation cone (54.7356° from +Z, Brown §I) and the RWA1 target axis. Right: the draws in an
-    azimuthal-equidistant projection about the posterior mean direction, so circles are true cones:
-    1°, 2°, 3° (dotted) and the posterior 50/90/95 % cones of ``summary.json`` (solid); the target,
-    truth and least-squares axis are marked, or their angular distance is written when off-scale.
+    articulation cone (54.7356° from +Z, Brown §I) and the RWA1 target axis. Middle: the draws in
+    an azimuthal-equidistant projection about the posterior mean direction, so circles are true
+    cones, at the papers' budgets' scale: 1°, 2°, 3° (dotted). Right: the same at the posterior's
+    own scale, with the posterior 50/90/95 % cones (solid) and the least-squares axis and truth;
+    a marked axis beyond a view's edge is written with its angular distance instead.
 
     Parameters
     ----------
@@ -367,8 +454,9 @@ def axis_sky_png(
         draws = draws[:: math.ceil(len(draws) / MAX_SCATTER)]
     m = _unit(mean)
     east, north = _tangent_basis(m)
-    fig = Figure(figsize=(11.5, 5.0), layout="constrained")
-    ax_g, ax_z = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.25, 1]})
+    fig, axes = _grid_figure(1, 3, cell=(4.1, 4.1), left=0.75, right=0.2, top=0.4, bottom=0.6,
+                             wspace=0.85, width_ratios=(1.15, 1, 1))
+    ax_g, ax_b, ax_z = axes[0]
 
     # overview in azimuth-elevation, a window about the mean wide enough for every marker
     ae_m = _az_el_deg(m)[0]
@@ -396,46 +484,19 @@ def axis_sky_png(
     ax_g.set_xlim(ae_m[0] - half, ae_m[0] + half)
     ax_g.set_ylim(max(-90.0, ae_m[1] - half), min(90.0, ae_m[1] + half))
     ax_g.grid(alpha=0.3)
-    ax_g.set_xlabel("body azimuth atan2(y, x) (deg)", fontsize=9)
-    ax_g.set_ylabel("body elevation asin(z) (deg)", fontsize=9)
-    ax_g.set_title("spin axis in body axes (azimuth–elevation)", fontsize=10)
-    ax_g.legend(fontsize=7, loc="lower left")
+    ax_g.set_xlabel("body azimuth atan2(y, x) (deg)", fontsize=8)
+    ax_g.set_ylabel("body elevation asin(z) (deg)", fontsize=8)
+    ax_g.set_title("spin axis in body axes", fontsize=9)
+    ax_g.legend(fontsize=6.5, loc="lower left")
+    tidy_ticks(ax_g, x=5, y=5)
 
-    # zoom about the posterior mean
     xy = _to_plane_deg(draws, m, east, north)
-    ax_z.scatter(xy[:, 0], xy[:, 1], s=4, color=POST_COLOR, alpha=0.45, label="posterior draws")
-    ang = np.linspace(0, 2 * np.pi, 241)
-    for r in (1.0, 2.0, 3.0):
-        ax_z.plot(r * np.cos(ang), r * np.sin(ang), color="#777777", linestyle=":", linewidth=1)
-        ax_z.annotate(f"{r:g}°", (r * np.cos(np.pi / 4), r * np.sin(np.pi / 4)), fontsize=7,
-                      color="#555555")
-    for (key, r), col in zip(sorted((cones_deg or {}).items(), key=lambda kv: float(kv[0])),
-                             ("#7fb3d5", "#2e86c1", "#1b4f72")):
-        if r is not None and np.isfinite(r):
-            ax_z.plot(r * np.cos(ang), r * np.sin(ang), color=col, linewidth=1.3,
-                      label=f"{key} % cone ({r:.2f}°)")
-    lim = max(3.3, 1.1 * float(np.max(np.hypot(xy[:, 0], xy[:, 1]))))
-    off = []
-    for name, v, mk, col in marks:
-        p = _to_plane_deg(v, m, east, north)[0]
-        d = float(np.hypot(*p))
-        if d <= lim:
-            ax_z.scatter([p[0]], [p[1]], marker=mk, s=120, color=col, label=f"{name} ({d:.2f}°)",
-                         zorder=5)
-        else:
-            off.append(f"{name}: {d:.2f}° from mean (off-scale)")
-    ax_z.scatter([0], [0], marker="o", s=25, color="k", label="posterior mean", zorder=6)
-    ax_z.set_xlim(-lim, lim)
-    ax_z.set_ylim(-lim, lim)
-    ax_z.set_aspect("equal")
-    ax_z.grid(alpha=0.3)
-    ax_z.set_xlabel("east of mean (deg, azimuthal equidistant)", fontsize=9)
-    ax_z.set_ylabel("north of mean (deg)", fontsize=9)
-    ax_z.set_title("about the posterior mean: 1°, 2°, 3° cones", fontsize=10)
-    if off:
-        ax_z.text(0.02, 0.02, "\n".join(off), transform=ax_z.transAxes, fontsize=7,
-                  va="bottom", color="#444444")
-    ax_z.legend(fontsize=7, loc="upper right")
-    for ax in (ax_g, ax_z):
-        ax.tick_params(labelsize=8)
-    return png_bytes(fig)
+    spread = float(np.max(np.hypot(xy[:, 0], xy[:, 1])))
+    _cone_panel(ax_b, xy, marks, {}, max(3.3, 1.1 * spread), (1.0, 2.0, 3.0),
+                "at the budgets' scale: 1°, 2°, 3° cones", m, east, north)
+    zoom = 1.15 * max([spread] + [float(r) for r in (cones_deg or {}).values()
+                                  if r is not None and np.isfinite(r)])
+    _cone_panel(ax_z, xy, [mk for mk in marks if mk[0] != "RWA1 target"], cones_deg, zoom,
+                [r for r in (1.0, 2.0, 3.0) if r <= zoom], "at the posterior's scale", m, east,
+                north)
+    return fig

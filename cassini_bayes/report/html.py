@@ -37,6 +37,7 @@ __all__ = [
     "link",
     "not_available",
     "details",
+    "page_header",
     "meta_list",
     "preformatted",
     "write_atomic",
@@ -45,7 +46,7 @@ __all__ = [
 
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
-       margin: 0 auto; max-width: 1150px; padding: 0 1.2em 3em; color: #1d2330; background: #fff;
+       margin: 0 auto; max-width: 1320px; padding: 0 1.2em 3em; color: #1d2330; background: #fff;
        line-height: 1.45; }
 header { border-bottom: 2px solid #2b4a7a; margin-bottom: 1em; padding: 0.8em 0 0.6em; }
 h1 { font-size: 1.55em; margin: 0.2em 0; color: #2b4a7a; }
@@ -60,10 +61,16 @@ dl.meta { display: grid; grid-template-columns: max-content auto; gap: 0.1em 1em
 dl.meta dt { font-weight: 600; color: #4a5568; }
 dl.meta dd { margin: 0; font-family: ui-monospace, Menlo, Consolas, monospace;
              word-break: break-all; }
+div.tbl { overflow-x: auto; max-width: 100%; }
 table { border-collapse: collapse; margin: 0.4em 0 1em; font-size: 0.88em; }
 th, td { border: 1px solid #d5dbe5; padding: 0.25em 0.6em; text-align: right; white-space: nowrap; }
-th { background: #eef2f8; text-align: center; }
+th { background: #eef2f8; text-align: center; white-space: normal; }
 td.l, th.l { text-align: left; }
+td.w { white-space: normal; min-width: 9em; max-width: 30em; text-align: left; }
+table.fit { width: 100%; }
+p.verdicts { margin: 0.5em 0 0.2em; }
+p.verdicts .badge { font-size: 0.95em; padding: 0.2em 0.8em; }
+p.meta { margin: 0.2em 0; font-size: 0.85em; color: #4a5568; }
 tr:nth-child(even) td { background: #fafbfd; }
 td.bad { background: #fde2e1 !important; color: #8a1c14; font-weight: 600; }
 td.warn { background: #fff4d6 !important; color: #7a5200; }
@@ -198,6 +205,7 @@ def table(
     *,
     left: int = 1,
     classes: Iterable[Sequence[str]] | None = None,
+    fit: bool = False,
 ) -> str:
     """An HTML table.
 
@@ -210,7 +218,15 @@ def table(
     left : int
         Number of leading columns aligned left (labels); the rest are right-aligned numbers.
     classes : iterable of sequences of str, optional
-        Per-cell CSS classes (``"bad"``, ``"warn"``, ``"good"``), same shape as ``rows``.
+        Per-cell CSS classes (``"bad"``, ``"warn"``, ``"good"``; ``"w"``: a text cell that
+        wraps), same shape as ``rows``.
+
+    fit : bool
+        Fit the page's width, the wrapping cells (class ``"w"``) taking what is left: for a
+        table of long text.
+
+    The table sits in a box that scrolls sideways when it is wider than the page: nothing is
+    ever cut off.
     """
     rows = [list(r) for r in rows]
     cls = [list(c) for c in classes] if classes is not None else [[""] * len(r) for r in rows]
@@ -218,7 +234,8 @@ def table(
         f'<th class="l">{esc(h)}</th>' if i < left else f"<th>{esc(h)}</th>"
         for i, h in enumerate(headers)
     )
-    out = [f"<table>\n<thead><tr>{head}</tr></thead>\n<tbody>"]
+    table_cls = ' class="fit"' if fit else ""
+    out = [f'<div class="tbl"><table{table_cls}>\n<thead><tr>{head}</tr></thead>\n<tbody>']
     for r, c in zip(rows, cls, strict=True):
         cells = []
         for i, v in enumerate(r):
@@ -228,7 +245,7 @@ def table(
             text = v if isinstance(v, Raw) else esc(v)
             cells.append(f"<td{attr}>{text}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</tbody>\n</table>")
+    out.append("</tbody>\n</table></div>")
     return "\n".join(out)
 
 
@@ -278,6 +295,16 @@ def meta_list(pairs: Iterable[tuple[str, object]]) -> str:
 def details(summary: str, body: str) -> str:
     """A collapsible block: escaped ``summary`` line, HTML ``body``."""
     return f"<details><summary>{esc(summary)}</summary>\n{body}\n</details>"
+
+
+def page_header(badges: str, meta: str, warnings: Iterable[str] = ()) -> str:
+    """The header every report opens with: the verdict ``badges`` (HTML), one line of escaped
+    ``meta`` (command, version, sizes) and, when there are any, the ``warnings`` (escaped)."""
+    warns = [str(w) for w in warnings]
+    out = [f'<p class="verdicts">{badges}</p>', f'<p class="meta">{esc(meta)}</p>']
+    if warns:
+        out.append(f'<div class="warnings"><strong>Warnings</strong>{bullet_list(warns)}</div>')
+    return "\n".join(out)
 
 
 def preformatted(text: str) -> str:

@@ -1,12 +1,20 @@
-"""The numbers of the report: sampler diagnostics and the parameter table.
+"""The numbers of the report: the answer table, the papers' budgets and the sampler diagnostics.
 
-Diagnostics (R-hat, bulk/tail ESS, MCSE, energy BFMI) are computed with ArviZ from the posterior
-file, never by hand, so a rebuilt report always matches ``posterior.nc``.
+**Diagnostics** (R-hat, bulk/tail ESS) are the fit's own: ``summary.json`` holds ArviZ's values
+for every parameter and nuisance component, and the report shows those, so a page and its
+summary never disagree. A component ``summary.json`` lacks (an older or hand-made run) is computed
+with ArviZ from the posterior file, the one path that imports it. Energy BFMI is ArviZ's formula
+(Betancourt 2016) on ``sample_stats.energy``.
 
 Posterior/prior **contraction** is ``1 − Var_post / Var_prior`` (Betancourt 2018, "Calibrating
 model-based inferences and decisions", §2): 1 when the data pin a parameter down, 0 when the
 posterior is the prior. A parameter is flagged *weakly identified* below 0.5 (its posterior sd is
 still more than 70 % of the prior sd) and *prior-dominated* below 0.1.
+
+**Budgets**: a calibrated quantity with a budget in the papers
+(:data:`~cassini_bayes.analysis.paper_facts.PAPER_FACTS`) is judged as ``cassini-bayes budget``
+judges its line (docs/budgets.md): each posterior draw read as the truth and the posterior mean
+as the estimate, the error's 95th percentile must lie within the paper's bound.
 """
 
 from __future__ import annotations
@@ -28,12 +36,16 @@ __all__ = [
     "BFMI_MIN",
     "WEAK_CONTRACTION",
     "PRIOR_DOMINATED_CONTRACTION",
+    "BUDGET_QUANTILE",
     "DiagnosticRow",
     "Diagnostics",
+    "BudgetCheck",
     "ParameterRow",
     "parameter_names",
     "diagnostics",
     "parameter_rows",
+    "derived_rows",
+    "budget_check",
     "unit_of",
     "lookup",
 ]
@@ -43,17 +55,20 @@ ESS_MIN = 400.0  # min bulk ESS >= 400: 100 per chain for 4 chains, Vehtari et a
 BFMI_MIN = 0.3  # Betancourt (2016): E-BFMI below 0.3 indicates poor exploration
 WEAK_CONTRACTION = 0.5
 PRIOR_DOMINATED_CONTRACTION = 0.1
+BUDGET_QUANTILE = 0.95  # a budget passes when this quantile of the error is within the bound
 
 
 class DiagnosticRow(NamedTuple):
-    """ArviZ diagnostics of one scalar component of the posterior."""
+    """Diagnostics and posterior summary of one scalar component of the posterior."""
 
     label: str
     r_hat: float
     ess_bulk: float
     ess_tail: float
-    mcse_mean: float
-    role: str  # "parameter", "nuisance" (both judged by the fit's verdict) or "sampler coordinate"
+    role: str  # "parameter" or "nuisance" (both judged by the fit's verdict)
+    mean: float | None = None
+    sd: float | None = None
+    contraction: float | None = None
 
     @property
     def of_interest(self) -> bool:
@@ -63,7 +78,7 @@ class DiagnosticRow(NamedTuple):
     @property
     def judged(self) -> bool:
         """In the fit's convergence verdict (``summary.json``'s parameters and nuisance)."""
-        return self.role != "sampler coordinate"
+        return self.role in ("parameter", "nuisance")
 
 
 @dataclass(frozen=True)
@@ -73,23 +88,27 @@ class Diagnostics:
     Attributes
     ----------
     rows : tuple of DiagnosticRow
-        Per scalar component; parameters of interest first, then nuisance variables by worst R-hat.
+        Per scalar component the fit judges: parameters of interest first, then nuisance
+        components by worst R-hat.
+    sampler : dict
+        The sampler's own coordinates (whitened ``z``, ``w``): name → number of components.
+        Listed, not judged: every parameter is a function of them.
     chains, draws : int
         Posterior shape.
     divergences : int or None
         Divergent transitions after warm-up (``None``: ``sample_stats.diverging`` absent).
     bfmi : numpy.ndarray or None
-        Energy BFMI per chain (``arviz.bfmi``); ``None`` without ``sample_stats.energy``.
+        Energy BFMI per chain; ``None`` without ``sample_stats.energy``.
     max_r_hat, min_ess_bulk, min_ess_tail : float
-        Extremes over the components the fit's verdict judges: ``summary.json``'s parameters and
-        nuisance, as the fit computed them (all components for a run without them); NaN when
-        not computable, e.g. one chain. The sampler's own coordinates (whitened ``z``, ``w``)
-        are listed in :attr:`rows` but not judged.
+        Extremes over :attr:`rows`; NaN when not computable, e.g. one chain.
     converged_summary : bool or None
         ``summary.json``'s ``diagnostics.converged`` (the fit's verdict).
+    computed : tuple of str
+        Components whose statistics ``summary.json`` lacked and ArviZ computed here.
     """
 
     rows: tuple[DiagnosticRow, ...]
+    sampler: dict
     chains: int
     draws: int
     divergences: int | None
@@ -98,6 +117,7 @@ class Diagnostics:
     min_ess_bulk: float
     min_ess_tail: float
     converged_summary: bool | None
+    computed: tuple[str, ...] = ()
 
     @property
     def converged_recomputed(self) -> bool:
@@ -116,8 +136,29 @@ class Diagnostics:
         return self.converged_summary
 
 
+class BudgetCheck(NamedTuple):
+    """A calibrated quantity against the papers' budget (module docstring).
+
+    Attributes
+    ----------
+    fact_id : the :data:`~cassini_bayes.analysis.paper_facts.PAPER_FACTS` row.
+    bound : the paper's bound as printed (``"≤ 1 %"``).
+    source : where the paper states it (``"000 §VI"``).
+    error_q95 : the error's 95th percentile over the posterior draws, in the bound's unit.
+    unit : that unit.
+    passed : whether ``error_q95`` is within the bound.
+    """
+
+    fact_id: str
+    bound: str
+    source: str
+    error_q95: float
+    unit: str
+    passed: bool
+
+
 class ParameterRow(NamedTuple):
-    """One row of the parameter table (SI units, see ``unit``)."""
+    """One row of the answer table (SI units, see ``unit``)."""
 
     label: str
     unit: str
@@ -132,6 +173,8 @@ class ParameterRow(NamedTuple):
     flag: str  # "", "weakly identified" or "prior-dominated"
     r_hat: float | None
     ess_bulk: float | None
+    prior_mean: float | None = None  # the model file's prediction (the prior's centre)
+    budget: BudgetCheck | None = None
 
 
 def _le(x: float, lim: float) -> bool:
@@ -155,23 +198,23 @@ def parameter_names(run: RunData) -> list[str]:
     The keys of ``summary.json``'s ``parameters`` when given (stripped of ``[...]`` components),
     else the docs/design.md §3 names present in the posterior for the run's kind.
     """
-    post = set(run.idata.posterior.data_vars)
-    names: list[str] = []
+    post = set(run.posterior.vars)
+    out: list[str] = []
     for key in (run.summary.get("parameters") or {}):
         base = str(key).split("[")[0]
-        if base in post and base not in names:
-            names.append(base)
-    if names:
-        return names
+        if base in post and base not in out:
+            out.append(base)
+    if out:
+        return out
     candidates = {
         "inertia": INERTIA_NAMES,
         "thrust": F_NAMES + TAU_NAMES,
         "rwa4": U4_NAMES,
     }.get(run.kind, INERTIA_NAMES + F_NAMES + TAU_NAMES + U4_NAMES)
-    names = [n for n in candidates if n in post]
-    if not names:  # unknown naming: every posterior variable is "of interest"
-        names = list(run.idata.posterior.data_vars)
-    return names
+    out = [n for n in candidates if n in post]
+    if not out:  # unknown naming: every posterior variable is "of interest"
+        out = list(run.posterior.vars)
+    return out
 
 
 def _judged_names(run: RunData) -> set[str] | None:
@@ -183,51 +226,85 @@ def _judged_names(run: RunData) -> set[str] | None:
     return {str(k).split("[")[0] for k in keys} or None
 
 
-def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
-    """ArviZ diagnostics of every posterior variable (``names``: the parameters of interest)."""
+def _arviz_stats(draws: dict[str, np.ndarray]) -> dict[str, tuple[float, float, float]]:
+    """R-hat, bulk and tail ESS of each (chain, draw) array, computed by ArviZ."""
     import arviz as az
 
-    post = run.idata.posterior
-    chains, draws = int(post.sizes.get("chain", 1)), int(post.sizes.get("draw", 0))
+    from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
+
+    quiet_arviz_shape_warnings()
+    out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        table = az.summary(run.idata, kind="diagnostics", round_to="none")
-    interest = set(flatten_draws(post, names))
+        for label, x in draws.items():
+            out[label] = (float(az.rhat(x)), float(az.ess(x, method="bulk")),
+                          float(az.ess(x, method="tail")))
+    return out
+
+
+def _nan(x) -> float:
+    """A summary.json number, NaN for ``null``."""
+    v = finite_or_none(x)
+    return float("nan") if v is None else v
+
+
+def energy_bfmi(energy: np.ndarray) -> np.ndarray:
+    """E-BFMI per chain of a (chain, draw) energy array (Betancourt 2016; ArviZ's formula)."""
+    e = np.asarray(energy, float)
+    return np.square(np.diff(e, axis=1)).mean(axis=1) / np.var(e, axis=1)
+
+
+def diagnostics(run: RunData, param_names: list[str]) -> Diagnostics:
+    """Diagnostics of every judged posterior component (``param_names``: the parameters of
+    interest); the fit's numbers from ``summary.json``, ArviZ for any it lacks."""
+    post = run.posterior
+    sizes = post.sizes
+    chains, draws = int(sizes.get("chain", 1)), int(sizes.get("draw", 0))
     judged = _judged_names(run)
-
-    def role(label: str) -> str:
-        if label in interest:
-            return "parameter"
-        if judged is None or label.split("[")[0] in judged:
-            return "nuisance"
-        return "sampler coordinate"
-
-    rows = [
-        DiagnosticRow(
-            str(label),
-            float(r["r_hat"]),
-            float(r["ess_bulk"]),
-            float(r["ess_tail"]),
-            float(r["mcse_mean"]),
-            role(str(label)),
-        )
-        for label, r in table.iterrows()
-    ]
+    stats = {**(run.summary.get("nuisance") or {}), **(run.summary.get("parameters") or {})}
+    interest = set(param_names)
+    sampler: dict[str, int] = {}
+    todo: dict[str, tuple[str, np.ndarray]] = {}    # label -> (role, draws) to compute
+    rows = []
+    for name, var in post.vars.items():
+        if var.dims[:2] != ("chain", "draw"):
+            continue
+        role = ("parameter" if name in interest else
+                "nuisance" if judged is None or name in judged else "sampler coordinate")
+        if role == "sampler coordinate":
+            sampler[name] = int(np.prod(var.values.shape[2:], dtype=int))
+            continue
+        for label, x in flatten_draws(post, [name]).items():
+            s = stats.get(label)
+            if isinstance(s, dict) and "r_hat" in s:      # (null: undefined, e.g. one chain)
+                rows.append(DiagnosticRow(label, _nan(s.get("r_hat")), _nan(s.get("ess_bulk")),
+                                          _nan(s.get("ess_tail")), role,
+                                          finite_or_none(s.get("mean")),
+                                          finite_or_none(s.get("sd")),
+                                          finite_or_none(s.get("contraction"))))
+            else:
+                todo[label] = (role, x)
+    if todo:
+        computed = _arviz_stats({k: x for k, (_, x) in todo.items()})
+        for label, (role, x) in todo.items():
+            r, eb, et = computed[label]
+            s = stats.get(label) if isinstance(stats.get(label), dict) else {}
+            rows.append(DiagnosticRow(label, r, eb, et, role, float(np.mean(x)),
+                                      float(np.std(x, ddof=1)) if x.size > 1 else None,
+                                      finite_or_none(s.get("contraction"))))
     first = [r for r in rows if r.of_interest]
-    rest = sorted((r for r in rows if not r.of_interest),  # judged first, worst R-hat, NaN last
-                  key=lambda r: (not r.judged, -r.r_hat if np.isfinite(r.r_hat) else np.inf))
+    rest = sorted((r for r in rows if not r.of_interest),  # worst R-hat first, NaN last
+                  key=lambda r: -r.r_hat if np.isfinite(r.r_hat) else np.inf)
     rows = first + rest
 
-    divergences = None
-    bfmi = None
-    if run.has_group("sample_stats"):
-        ss = run.idata.sample_stats
-        if "diverging" in ss.data_vars:
+    divergences = bfmi = None
+    ss = run.groups.get("sample_stats")
+    if ss is not None:
+        if "diverging" in ss:
             divergences = int(np.asarray(ss["diverging"].values).astype(bool).sum())
-        if "energy" in ss.data_vars:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                bfmi = np.asarray(az.bfmi(run.idata), dtype=float)
+        if "energy" in ss and ss["energy"].dims[:2] == ("chain", "draw"):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                bfmi = energy_bfmi(ss["energy"].values)
 
     def _ext(f, xs):
         xs = [x for x in xs if np.isfinite(x)]
@@ -236,14 +313,16 @@ def diagnostics(run: RunData, names: list[str]) -> Diagnostics:
     conv = (run.summary.get("diagnostics") or {}).get("converged")
     return Diagnostics(
         rows=tuple(rows),
+        sampler=sampler,
         chains=chains,
         draws=draws,
         divergences=divergences,
         bfmi=bfmi,
-        max_r_hat=_ext(max, [r.r_hat for r in rows if r.judged]),
-        min_ess_bulk=_ext(min, [r.ess_bulk for r in rows if r.judged]),
-        min_ess_tail=_ext(min, [r.ess_tail for r in rows if r.judged]),
+        max_r_hat=_ext(max, [r.r_hat for r in rows]),
+        min_ess_bulk=_ext(min, [r.ess_bulk for r in rows]),
+        min_ess_tail=_ext(min, [r.ess_tail for r in rows]),
         converged_summary=None if conv is None else bool(conv),
+        computed=tuple(todo),
     )
 
 
@@ -271,20 +350,47 @@ def lookup(mapping: Any, label: str) -> float | None:
     return None
 
 
-def _stated_prior_sd(run: RunData) -> dict[str, float]:
-    """Prior sd per parameter stated by the fit in ``constant_data.prior_sd`` (coordinate
-    ``param``), used when the prior group has no draws of that parameter."""
-    if not run.has_group("constant_data") or "prior_sd" not in run.idata.constant_data:
+def _stated(run: RunData, var: str) -> dict[str, float]:
+    """A per-parameter value the fit stated in ``constant_data`` (``prior_sd``, ``prior_mean``
+    along a ``param`` coordinate)."""
+    cd = run.groups.get("constant_data")
+    if cd is None or var not in cd:
         return {}
-    da = run.idata.constant_data["prior_sd"]
-    if da.ndim != 1 or da.dims[0] not in da.coords:
+    v = cd[var]
+    if len(v.dims) != 1:
         return {}
     out = {}
-    for name, value in zip(da.coords[da.dims[0]].values, np.asarray(da.values, float)):
-        v = finite_or_none(value)
-        if v is not None:
-            out[str(name)] = v
+    for name, value in zip(cd.labels(v.dims[0]), np.asarray(v.values, float)):
+        x = finite_or_none(value)
+        if x is not None:
+            out[str(name)] = x
     return out
+
+
+def _find_key(tree: Any, key: str) -> float | None:
+    """The number stored under ``key`` anywhere in a nested TOML table (the spacecraft model)."""
+    if isinstance(tree, dict):
+        if key in tree and finite_or_none(tree[key]) is not None and \
+                not isinstance(tree[key], bool):
+            return float(tree[key])
+        for v in tree.values():
+            found = _find_key(v, key)
+            if found is not None:
+                return found
+    return None
+
+
+def _model_value(label: str, stated: dict[str, float], model: Any) -> float | None:
+    """The spacecraft model file's prediction of a parameter: the prior mean the fit stated
+    (``constant_data.prior_mean``), else the model's entry of that name in ``config.toml``'s
+    ``[spacecraft]`` (a per-thruster ``F_…`` falls back to the model's ``F``); ``None`` when
+    the model predicts none (an axis under a uniform prior)."""
+    if label in stated:
+        return stated[label]
+    value = _find_key(model, label)
+    if value is None and names.unit_of(label.split("[")[0]) == "N":
+        value = _find_key(model, label.split("_")[0].split("[")[0])
+    return value
 
 
 def _contraction(sd_post: float | None, sd_prior: float | None) -> float | None:
@@ -293,16 +399,82 @@ def _contraction(sd_post: float | None, sd_prior: float | None) -> float | None:
     return 1.0 - (sd_post / sd_prior) ** 2
 
 
-def parameter_rows(run: RunData, names: list[str], diag: Diagnostics) -> list[ParameterRow]:
-    """The parameter table: posterior summary, baseline, truth, prior sd and contraction."""
-    post = flatten_draws(run.idata.posterior, names)
-    prior = flatten_draws(run.idata.prior, names) if run.has_group("prior") else {}
+def budget_check(label: str, draws: np.ndarray) -> BudgetCheck | None:
+    """The papers' budget of one calibrated quantity, judged on its posterior draws (module
+    docstring); ``None`` for a quantity the papers give no budget for.
+
+    A moment of inertia: Feldman & Lee Eq 12, ``100 |Î − I| / I`` against ±1 % (000 §VI); a
+    thrust (any parameter in newtons): ``100 |F̂ − F| / F`` against ±10 % (000 §V, §VI).
+    """
+    from cassini_bayes.analysis import budget_lines as bl
+
+    x = np.asarray(draws, float).ravel()
+    if x.size < 2:
+        return None
+    est = float(np.mean(x))
+    if label in INERTIA_NAMES[:3]:
+        err = 100.0 * np.abs(est - x) / x                   # Feldman & Lee Eq 12, truth = draw
+        return _check("inertia_accuracy_pct", err)
+    if names.unit_of(label.split("[")[0]) == "N":
+        return _check("thrust_accuracy_pct", bl.thrust_error_pct({"F": x}, est))
+    return None
+
+
+def _check(fact_id: str, err: np.ndarray) -> BudgetCheck:
+    from cassini_bayes.analysis.paper_facts import fact
+
+    f = fact(fact_id)
+    q = float(np.quantile(err, BUDGET_QUANTILE))
+    bound = f.printed
+    if f.unit == "%":
+        bound = f"±{f.value:g} %"
+    elif f.unit == "deg":
+        bound = bound.replace(" deg", "°")
+    return BudgetCheck(f.id, bound, f.source, q, "°" if f.unit == "deg" else f.unit,
+                       bool(f.passes(q)))
+
+
+def derived_rows(run: RunData) -> list[tuple[str, str, np.ndarray, BudgetCheck | None]]:
+    """Quantities the papers judge that are functions of several parameters: ``(label, unit,
+    draws of the error, budget)`` — an inertia fit's worst moment (Feldman & Lee Eq 12, the
+    ``budget`` command's line), an RWA4 fit's axis knowledge (Brown: ≤ 1° by the RWA method,
+    < 3° by the RCS method)."""
+    from cassini_bayes.analysis import budget_lines as bl
+
+    post = run.posterior
+    out = []
+    moments = INERTIA_NAMES[:3]
+    if run.kind == "inertia" and all(n in post for n in moments):
+        d = {n: np.asarray(post[n].values, float).ravel() for n in moments}
+        est = np.array([d[n].mean() for n in moments] + [0.0, 0.0, 0.0])
+        err = bl.inertia_worst_moment_pct(d, est)
+        out.append(("worst moment's error (Feldman & Lee Eq 12)", "%", err,
+                    _check("inertia_accuracy_pct", err)))
+    if run.kind == "rwa4" and all(n in post for n in U4_NAMES):
+        u = np.stack([np.asarray(post[n].values, float).ravel() for n in U4_NAMES], -1)
+        mean = u.mean(0)
+        err = bl.axis_error_deg({"u4": u}, mean / np.linalg.norm(mean))
+        method = run.summary.get("method") or (run.config.get("options") or {}).get("method")
+        fid = "rwa4_rwa_expected_deg" if method == "rwa" else "rwa4_rcs_total_deg"
+        name = {"rwa": "RWA method", "rcs": "RCS method"}.get(method, "method not recorded")
+        out.append((f"spin-axis error, angle from the mean ({name})", "°", err,
+                    _check(fid, err)))
+    return out
+
+
+def parameter_rows(run: RunData, param_names: list[str], diag: Diagnostics
+                   ) -> list[ParameterRow]:
+    """The answer table: posterior summary, the model file's prediction and the prior sd, the
+    papers' least squares (``baseline``), truth when known, contraction and budget."""
+    post = flatten_draws(run.posterior, param_names)
+    prior = flatten_draws(run.groups.get("prior"), param_names)
     by_label = {r.label: r for r in diag.rows}
     summ = run.summary.get("parameters") or {}
     baseline = run.summary.get("baseline")
     truth = run.summary.get("truth")
+    model = run.config.get("spacecraft")
 
-    stated_sd = _stated_prior_sd(run)
+    stated_sd, stated_mean = _stated(run, "prior_sd"), _stated(run, "prior_mean")
     labels = list(post)
     labels += [k for k in summ if k not in post]  # in the summary but not the file
     rows = []
@@ -313,13 +485,15 @@ def parameter_rows(run: RunData, names: list[str], diag: Diagnostics) -> list[Pa
             mean, sd = float(np.mean(x)), float(np.std(x, ddof=1)) if x.size > 1 else float("nan")
             q05, q95 = (float(v) for v in np.quantile(x, [0.05, 0.95]))
         else:
+            x = None
             mean, sd = finite_or_none(s.get("mean")), finite_or_none(s.get("sd"))
             q05, q95 = finite_or_none(s.get("q05")), finite_or_none(s.get("q95"))
-        if label in prior:
-            p = prior[label].ravel()
-            prior_sd = float(np.std(p, ddof=1)) if p.size > 1 else None
+        p = prior[label].ravel() if label in prior else None
+        if p is not None and p.size > 1:
+            prior_sd = float(np.std(p, ddof=1))
         else:
             prior_sd = stated_sd.get(label, finite_or_none(s.get("prior_sd")))
+        prior_mean = _model_value(label, stated_mean, model)
         contraction = _contraction(sd, prior_sd)
         if contraction is None:
             contraction = finite_or_none(s.get("contraction"))
@@ -347,6 +521,8 @@ def parameter_rows(run: RunData, names: list[str], diag: Diagnostics) -> list[Pa
                 flag=flag,
                 r_hat=d.r_hat if d else finite_or_none(s.get("r_hat")),
                 ess_bulk=d.ess_bulk if d else finite_or_none(s.get("ess_bulk")),
+                prior_mean=prior_mean,
+                budget=budget_check(label, x) if x is not None else None,
             )
         )
     return rows

@@ -35,6 +35,7 @@ __all__ = [
     "rwa_wheel_torques",
     "rcs_commands",
     "wheel_ramp_torques",
+    "limit_wheel_torques",
 ]
 
 COMMAND_RESOLUTION_S = 0.125  # thruster and articulation command resolution (Brown §I: 1/8 s)
@@ -152,10 +153,19 @@ def wheel_ramp_torques(wheel_rates: Array, target_rad_s: Array, torque_max_nm: A
     return jnp.clip(u, -torque_max_nm, torque_max_nm)
 
 
+def limit_wheel_torques(u: Array, wheel_rates: Array, rate_max_rad_s: Array,
+                        torque_max_nm: Array) -> Array:
+    """Motor torques (k,) N m within the wheels' limits: each clipped to ``±torque_max_nm``, and
+    zero where a wheel at its rate limit ``rate_max_rad_s`` would be driven faster (the motor
+    drive's speed limit). ``inf`` is no limit."""
+    u = jnp.clip(u, -torque_max_nm, torque_max_nm)
+    return jnp.where((jnp.abs(wheel_rates) >= rate_max_rad_s) & (u * wheel_rates > 0), 0.0, u)
+
+
 def rcs_commands(q: Array, omega: Array, cmd: Array, deadband_rad: Array,
                  free: Array, pairs: Array, rate_gain_s: float, width_gain_s_per_rad: float,
                  max_units: int) -> Array:
-    """Pulse widths in units of 1/8 s (8,) commanded now by the RCS dead-band controller.
+    """Pulse widths in units of 1/8 s (m,) commanded now by the RCS dead-band controller.
 
     Per axis ``s = θ + τ_r (ω − ω_cmd)``; beyond ``+db`` the pair for negative torque fires, beyond
     ``−db`` the pair for positive torque, with width ``0.125 s + k_w (|s| − db)`` rounded down to

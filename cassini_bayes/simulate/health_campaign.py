@@ -82,7 +82,7 @@ def _num(table: dict, key: str, src: str, lo: float, hi: float, default=None) ->
 
 def load_campaign(path: str | Path) -> Campaign:
     """Read a campaign TOML (a path, or the stem of a shipped one, e.g. ``health_control``)."""
-    p = scenario_path(str(path))
+    p = scenario_path(path, "campaign")
     d = read_toml(p, "campaign", "experiments/scenarios/")
     src = str(p)
     if "campaign" not in d and "run" in d:
@@ -98,7 +98,8 @@ def load_campaign(path: str | Path) -> Campaign:
                          path=src)
     ev = Path(str(d["event"]))
     ev = p.parent / ev if not ev.is_absolute() and (p.parent / ev).exists() else ev
-    template = read_toml(scenario_path(str(ev)), "event scenario", "experiments/scenarios/")
+    template = read_toml(scenario_path(ev, "event scenario"), "event scenario",
+                         "experiments/scenarios/")
     c, e = d["campaign"], d.get("errors", {})
     seed = d.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:

@@ -39,8 +39,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from cassini_bayes._devices import require_x64
 from cassini_bayes.physics import dynamics
-from cassini_bayes.physics.impulse import moment_matrix
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.simulate import controllers as ctl
@@ -54,6 +54,11 @@ __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_param
 
 PULSE_RING = 6           # pulses remembered per thruster (older tails are < 1e-8 of a pulse)
 _TRACES = [0]            # incremented each time the core is traced (compile-once test)
+QUIET_TORQUE_KNOWLEDGE = 10.0
+"""A wheel is busy (biasing) in :func:`quiet_windows` while its motor torque exceeds this many
+times the truth model's ``[torque_knowledge] sd_nm``: more than holding the attitude against the
+environment takes (Cassini: 1.5e-4 N m)."""
+_IMPULSE_RTOL = 1e-9      # a thruster fires while its impulse grows by this × the run's largest step
 
 
 def trace_count() -> int:
@@ -67,7 +72,7 @@ class TruthParams(NamedTuple):
     inertia : (6,) ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` kg m², incl. wheels.
     wheel_axes : (k, 3) true unit spin axes (RWA4 wherever it really is).
     wheel_inertias : (k,) spin inertias, kg m² (0 for a wheel that is off).
-    thrust_n : (8,) steady thrust per thruster ``Z1 … Y4``, N.
+    thrust_n : (m,) steady thrust per thruster of the truth model (Cassini: ``Z1 … Y4``), N.
     tau_s : (3,) ``(tau_delay, tau_rise, tau_fall)``, s.
     torque_inertial_nm : (3,) external torque at t = 0, inertial axes, N m.
     torque_body_nm : (3,) constant external torque, body axes, N m.
@@ -99,10 +104,10 @@ class SimArrays(NamedTuple):
     impulse_inertial : (n, 3) cumulative angular impulse of the body-fixed torques (thrusters and
         body-axis external torque) in inertial axes, N m s.
     impulse_body : (n, 3) the same accumulated in body axes (no rotation), N m s.
-    thruster_impulse : (n, 8) cumulative impulse of each thruster, N s.
-    on_times : (n, 8) cumulative commanded on-time, s.
+    thruster_impulse : (n, m) cumulative impulse of each thruster, N s.
+    on_times : (n, m) cumulative commanded on-time, s.
     pointing_error : (n, 3) attitude error w.r.t. the command, rad.
-    pulse_units : (n_steps, 8) int8 widths (units of 1/8 s) commanded at each step (empty when
+    pulse_units : (n_steps, m) int8 widths (units of 1/8 s) commanded at each step (empty when
         the scenario fires no thrusters).
     t_meas : (n,) recorded (time-tag-jittered) sample times, s; equal to ``t`` without jitter.
     flex_eta : (n,) modal coordinate ``η`` of the flexible/slosh mode, kg^½ m (zeros without).
@@ -164,6 +169,7 @@ class _Config:
     wheel_gain: float
     flex: bool
     leak: bool
+    wheel_limits: bool
 
 
 def truth_params(scenario: Scenario) -> TruthParams:
@@ -205,21 +211,30 @@ def _config(s: Scenario) -> _Config:
         rate_gain_s=s.rcs.rate_gain_s, width_gain=s.rcs.width_gain_s_per_rad,
         max_units=int(round(s.rcs.max_pulse_s / ctl.COMMAND_RESOLUTION_S)),
         min_off_s=s.rcs.min_off_s, wheel_gain=s.rcs.wheel_rate_gain_per_s,
-        flex=s.flex is not None, leak=s.leak is not None)
+        flex=s.flex is not None, leak=s.leak is not None,
+        wheel_limits=bool(np.isfinite(_wheel_limits(s)).any()))
+
+
+def _wheel_limits(s: Scenario) -> np.ndarray:
+    """(2, k) the truth model's wheel limits: rate (rad/s) and motor torque (N m); inf: none."""
+    rpm_to_rad_s = 2.0 * np.pi / 60.0
+    return np.array([[w.max_speed_rpm * rpm_to_rad_s for w in s.truth.wheels],
+                     [w.max_torque_nm for w in s.truth.wheels]], float)
 
 
 def _plan(s: Scenario) -> np.ndarray:
     """Per-step commands (n_out, sps, P): ``cmd(10)`` then, with thrusters, open-loop pulse units
-    (8), dead-bands (3), wheel ramp targets (k) and torque limits (k); last, with a leak, each
-    thruster's leak fraction averaged over the step (8)."""
+    (m), dead-bands (3), wheel ramp targets (k) and torque limits (k); last, with a leak, each
+    thruster's leak fraction averaged over the step (m)."""
     n = s.n_steps
     t = np.arange(n) * s.dt_s
     slews = [(sl.t_start_s, sl.axis, sl.angle_rad, sl.rate_rad_s, sl.accel_rad_s2)
              for sl in s.slews]
     cols = [ctl.command_profile(t, s.q0, slews)]
+    m = len(s.truth.thrusters)
     if s.uses_thrusters:
         k = len(s.wheels_on)
-        forced = np.zeros((n, 8))
+        forced = np.zeros((n, m))
         for p in s.pulses:
             i = int(round(p.t_on_s / s.dt_s))
             if i < n:
@@ -236,7 +251,7 @@ def _plan(s: Scenario) -> np.ndarray:
             tmax[m, r.wheel] = r.torque_nm
         cols += [forced, db, target, tmax]
     if s.leak is not None:
-        leak = np.zeros((n, 8))
+        leak = np.zeros((n, m))
         # the share of each step after the onset, so the leak impulse is exact
         leak[:, s.leak.thruster] = s.leak.fraction * np.clip(
             (t + s.dt_s - s.leak.t_start_s) / s.dt_s, 0.0, 1.0)
@@ -255,14 +270,17 @@ def _sample_commands(s: Scenario) -> np.ndarray:
 def _controller_arrays(s: Scenario) -> dict[str, Array]:
     on = np.array(s.wheels_on, float)
     believed = np.asarray(s.rwa.believed_axes) * on[:, None]
-    th = s.truth.thrusters
+    limits = _wheel_limits(s)
     return {
         "inertia_ctrl": jnp.asarray(s.prior.inertia),
         "axes_believed": jnp.asarray(believed),
         "axes_pinv": jnp.asarray(np.linalg.pinv(believed.T)),
         "wheel_j_ctrl": jnp.asarray(s.prior.wheel_inertias * on),
-        "q_matrix": moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com),
-        "pairs": jnp.asarray(ctl.pair_matrix()),
+        "q_matrix": jnp.asarray(s.truth.moment_matrix),
+        "pairs": jnp.asarray(ctl.pair_matrix() if s.truth.eq16_layout
+                             else np.zeros((3, 2, len(s.truth.thrusters)))),
+        "wheel_rate_max": jnp.asarray(limits[0]),
+        "wheel_torque_max": jnp.asarray(limits[1]),
         "q0": jnp.asarray(s.q0),
         "w0": jnp.asarray(s.rates0_rad_s),
         "rho0": jnp.asarray(s.wheel0_rad_s),
@@ -288,6 +306,7 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
     _TRACES[0] += 1
     dt = cfg.dt
     k = truth.wheel_axes.shape[0]
+    m = carr["q_matrix"].shape[1]        # thrusters of the truth model
     on = jnp.asarray(cfg.on)
     plant, d_norm = _plant(truth, cfg)
     rho0 = jnp.concatenate([carr["rho0"], jnp.zeros(1)]) if cfg.flex else carr["rho0"]
@@ -311,26 +330,31 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
                                       carr["axes_believed"], carr["axes_pinv"],
                                       carr["wheel_j_ctrl"], cfg.kp, cfg.kd)
         else:
-            u = ctl.wheel_ramp_torques(rho, row[21:21 + k], row[21 + k:21 + 2 * k],
-                                       truth.wheel_inertias, cfg.wheel_gain)
+            u = ctl.wheel_ramp_torques(rho, row[13 + m:13 + m + k],
+                                       row[13 + m + k:13 + m + 2 * k], truth.wheel_inertias,
+                                       cfg.wheel_gain)
+        if cfg.wheel_limits:
+            u = ctl.limit_wheel_torques(u, rho, carr["wheel_rate_max"],
+                                        carr["wheel_torque_max"])
         u = jnp.where(on, u, 0.0)
         body_imp = truth.torque_body_nm * dt
         if cfg.thrusters:
-            forced = row[10:18]
+            forced = row[10:10 + m]
             units = forced
             if cfg.control == "rcs":
                 free = t >= free_at - 1e-9
-                auto = ctl.rcs_commands(state.q, omega, cmd, row[18:21], free, carr["pairs"],
+                auto = ctl.rcs_commands(state.q, omega, cmd, row[10 + m:13 + m], free,
+                                        carr["pairs"],
                                         cfg.rate_gain_s, cfg.width_gain, cfg.max_units)
                 units = jnp.maximum(units, auto)
             fire = units > 0
             width = units * ctl.COMMAND_RESOLUTION_S
             ring_t = jnp.where(fire[:, None], jnp.concatenate(
-                [jnp.full((8, 1), t), ring_t[:, :-1]], 1), ring_t)
+                [jnp.full((m, 1), t), ring_t[:, :-1]], 1), ring_t)
             ring_w = jnp.where(fire[:, None], jnp.concatenate(
                 [width[:, None], ring_w[:, :-1]], 1), ring_w)
             ring_g = jnp.where(fire[:, None], jnp.concatenate(
-                [jnp.zeros((8, 1)), ring_g[:, :-1]], 1), ring_g)
+                [jnp.zeros((m, 1)), ring_g[:, :-1]], 1), ring_g)
             free_at = jnp.where(fire, t + width + cfg.min_off_s, free_at)
             # Exact impulse of each pulse over [t, t + dt] (Feldman & Lee §V profile):
             # g(t + dt − t_on) − g(t − t_on), the second term carried from the previous step.
@@ -345,18 +369,18 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
                 return truth.thrust_n * jnp.sum(g1 - ring_g, axis=1), g1, jnp.sum(over, axis=1)
 
             def idle(ring_g):
-                return jnp.zeros(8), ring_g, jnp.zeros(8)
+                return jnp.zeros(m), ring_g, jnp.zeros(m)
 
-            j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (8,) N s
+            j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (m,) N s
             cum_on = cum_on + on_step
             cum_thr = cum_thr + j_step
             body_imp = body_imp + carr["q_matrix"] @ j_step                      # Eq 16
             out_units = units.astype(jnp.int8)
         else:
-            out_units = jnp.zeros((8,), jnp.int8)[:0]
+            out_units = jnp.zeros((m,), jnp.int8)[:0]
         if cfg.leak:
             # stuck-open valve (Lee §3.2): f F_k of thrust, torque f F_k Q[:, k] (Eq 16)
-            body_imp = body_imp + carr["q_matrix"] @ (truth.thrust_n * row[-8:] * dt)
+            body_imp = body_imp + carr["q_matrix"] @ (truth.thrust_n * row[-m:] * dt)
         # linear-in-time inertial torque: its mean over the step is its value at mid-step
         t_n = truth.torque_inertial_nm + truth.torque_inertial_rate_nm_s * (t + 0.5 * dt)
         if cfg.flex:
@@ -386,9 +410,9 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
         return (state.q, omega, rho, state.h_inertial, carry[8], carry[7], carry[6], carry[5],
                 err, carry[9])
 
-    z8 = jnp.zeros(8)
-    carry0 = (state0, jnp.full((8, PULSE_RING), -1e9), jnp.zeros((8, PULSE_RING)),
-              jnp.zeros((8, PULSE_RING)), jnp.full(8, -1.0), z8, z8, jnp.zeros(3), jnp.zeros(3),
+    zm = jnp.zeros(m)
+    carry0 = (state0, jnp.full((m, PULSE_RING), -1e9), jnp.zeros((m, PULSE_RING)),
+              jnp.zeros((m, PULSE_RING)), jnp.full(m, -1.0), zm, zm, jnp.zeros(3), jnp.zeros(3),
               jnp.zeros(()))
     obs0 = _observe(carry0, carr["cmd_samples"][0])
     _, (obs, units) = jax.lax.scan(one_sample, carry0, (jnp.arange(cfg.n_out), plan,
@@ -399,7 +423,7 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
     t = jnp.arange(cfg.n_out + 1) * (cfg.sps * dt)
     t_m = time_tags(jax.random.fold_in(key, 1), t, noise)   # own stream: q/ω/ρ noise unchanged
     return SimArrays(t, q, omega, rho, q_m, w_m, rho_m, h_n, imp_n, imp_b, thr, on_t, err,
-                     units.reshape(-1, 8) if cfg.thrusters else jnp.zeros((0, 8), jnp.int8),
+                     units.reshape(-1, m) if cfg.thrusters else jnp.zeros((0, m), jnp.int8),
                      t_m, eta)
 
 
@@ -436,6 +460,7 @@ def _prepared(s: Scenario):
 def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = None,
                     noise: NoiseParams | None = None) -> SimArrays:
     """One run as raw arrays (compiled once per scenario shape); ``truth``: the file's."""
+    require_x64("simulate")
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
     plan, carr = _prepared(scenario)
@@ -459,6 +484,7 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     -------
     :class:`SimArrays` with a leading batch axis.
     """
+    require_x64("simulate")
     batched = truth is not None
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
@@ -470,7 +496,8 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
 def _telemetry(s: Scenario, t, q, w, rho, on_times, source) -> Telemetry:
     return Telemetry(t=np.asarray(t), q=np.asarray(q), omega=np.asarray(w),
                      wheel_rates=np.asarray(rho), wheel_names=s.wheel_names,
-                     on_times=np.asarray(on_times) if s.uses_thrusters else None, source=source)
+                     on_times=np.asarray(on_times) if s.uses_thrusters else None, source=source,
+                     thruster_names=s.truth.thruster_names)
 
 
 def pulse_log(arrays: SimArrays, scenario: Scenario) -> PulseLog | None:
@@ -483,7 +510,8 @@ def pulse_log(arrays: SimArrays, scenario: Scenario) -> PulseLog | None:
     step, thr = step[order], thr[order]
     return PulseLog(t_on=step * scenario.dt_s, thruster=thr.astype(int),
                     width=units[step, thr].astype(float) * ctl.COMMAND_RESOLUTION_S,
-                    source=f"<simulated {scenario.name}>")
+                    source=f"<simulated {scenario.name}>",
+                    thruster_names=scenario.truth.thruster_names)
 
 
 def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -> SimResult:
@@ -506,9 +534,10 @@ def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -
 
 def quiet_windows(result: SimResult, settle_s: float = 120.0,
                   min_length_s: float = 120.0) -> list[tuple[float, float]]:
-    """Quiet windows ``[(t0, t1), …]`` of a run: no slew commanded, no wheel biasing
-    (wheel torques below 1e-4 N m), no thruster impulse, at least ``settle_s`` after any of them,
-    and at least ``min_length_s`` long. Computed from the truth."""
+    """Quiet windows ``[(t0, t1), …]`` of a run: no slew commanded, no wheel biasing (wheel
+    torques below :data:`QUIET_TORQUE_KNOWLEDGE` × the model's external-torque knowledge), no
+    thruster impulse, at least ``settle_s`` after any of them, and at least ``min_length_s``
+    long. Computed from the truth."""
     a, s = result.arrays, result.scenario
     t = np.asarray(a.t)
     active = np.zeros(t.size, bool)
@@ -517,8 +546,9 @@ def quiet_windows(result: SimResult, settle_s: float = 120.0,
     j = np.asarray(result.params.wheel_inertias)
     rho = np.nan_to_num(np.asarray(a.wheel_rates))
     torque = np.abs(np.diff(rho, axis=0)) * j / np.diff(t)[:, None]
-    busy = np.any(torque > 1e-4, axis=1)
-    imp = np.any(np.abs(np.diff(np.asarray(a.thruster_impulse), axis=0)) > 1e-12, axis=1)
+    busy = np.any(torque > QUIET_TORQUE_KNOWLEDGE * s.truth.knowledge.torque_sd_nm, axis=1)
+    step = np.abs(np.diff(np.asarray(a.thruster_impulse), axis=0))
+    imp = np.any(step > _IMPULSE_RTOL * step.max(initial=0.0), axis=1)
     active[1:] |= busy | imp
     active[:-1] |= busy | imp
     # grow the activity by the settling time

@@ -9,7 +9,8 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     name = "..."                 description = "..."          seed = 0
     [run]       duration_s, dt_s, sample_period_s, control = "rwa" | "rcs"
     [truth]     model = "models/…toml" (required); optional overrides:
-                inertia = {Ixx = …, …}, thrust_n = 0.75 | [8 values], tau_delay_s, tau_rise_s,
+                inertia = {Ixx = …, …}, thrust_n = 0.75 | [one per thruster], tau_delay_s,
+                tau_rise_s,
                 tau_fall_s (``tau_delay_s = 0`` and ``tau_rise_s = tau_fall_s`` is a first-order
                 valve), rwa4_axis = [x, y, z] (unit), external_torque_inertial_nm = [3],
                 external_torque_body_nm = [3], external_torque_inertial_rate_nm_s = [3],
@@ -29,16 +30,22 @@ noise and the seed. Unknown keys, missing required values and impossible values 
     [[slew]]         t_start_s, axis = [3] (unit), angle_deg, rate_mrad_s, accel_mrad_s2
     [[wheel_ramp]]   wheel, t_start_s, target_rpm, torque_nm
     [[deadband]]     t_s, deadband_mrad = [3]
-    [[pulse]]        t_on_s, thruster = "Z1"…"Y4", width_s
+    [[pulse]]        t_on_s, thruster = a thruster of the truth model ("Z1"…"Y4"), width_s
     [noise]     gyro_rad_s, star_tracker_rad, tach_quantum_rpm, tach_noise_rpm,
                 gyro_bias_rad_s = [3], gyro_scale_factor = [3]  (ω_meas = (1 + s) ω + b + noise),
                 time_tag_jitter_s (sd of each sample's time-tag error, ≤ sample_period_s / 20)
     [flex_mode] freq_hz, damping, coupling = [3] (kg^½ m): one flexible or slosh mode
                 (:class:`FlexMode`; off when the section is absent)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
-    [leak]      thruster = "Z1"…"Y4", fraction (0 < f ≤ 1 of the true thrust), t_start_s: from
-                ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a stuck-open valve leaking
+    [leak]      thruster (of the truth model), fraction (0 < f ≤ 1 of the true thrust),
+                t_start_s: from ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a stuck-open valve leaking
                 ``f`` of thruster ``k``'s thrust, Lee §3.2; off when the section is absent)
+
+Thrusters: RCS control (``control = "rcs"``) needs Cassini's eight thrusters in the layout of
+Feldman & Lee Eq 16 (its thruster pairs per axis); open-loop ``[[pulse]]`` and ``[leak]`` take any
+thruster of the truth model; a model without thrusters flies RWA slews only. Wheels: any number;
+the RWA controller allocates torque with the pseudo-inverse of the believed axes, and the truth
+model's optional ``max_speed_rpm`` / ``max_torque_nm`` limit each wheel.
 
 Bounds (docs/limits.md): a run has at most :data:`MAX_STEPS` integration steps and
 :data:`MAX_SAMPLES` telemetry samples; every number is at most :data:`NUMBER_ABS_MAX` in
@@ -49,16 +56,16 @@ the spacecraft-model ranges of :mod:`cassini_bayes.spacecraft`; ``seed`` in 0 ..
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR
+from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR, input_path
 from cassini_bayes._toml import is_numbers, read_toml
-from cassini_bayes.errors import InputError, as_path
-from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.errors import InputError
 from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
                                       load_spacecraft, tilted_axis)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
@@ -117,7 +124,8 @@ class DeadbandChange:
 
 @dataclass(frozen=True)
 class PulseCommand:
-    """Open-loop thruster pulse: ``thruster`` index 0..7, command time and width (s)."""
+    """Open-loop thruster pulse: ``thruster`` index into the truth model's thrusters, command
+    time and width (s)."""
 
     t_on_s: float
     thruster: int
@@ -184,7 +192,8 @@ class Window:
 
 @dataclass(frozen=True)
 class Leak:
-    """A leaking thruster: index 0..7 (``Z1 … Y4``), fraction of its true thrust, onset (s)."""
+    """A leaking thruster: index into the truth model's thrusters, fraction of its true thrust,
+    onset (s)."""
 
     thruster: int
     fraction: float
@@ -279,12 +288,11 @@ def check_size(s: Scenario) -> None:
                          f"{MAX_SAMPLES} samples; split the run (docs/limits.md)", path=s.source)
 
 
-def scenario_path(name: str) -> Path:
-    """Path of a scenario: a file path, or the stem of a file under ``experiments/scenarios/``."""
-    p = Path(name)
-    if p.suffix != ".toml":
-        p = p.with_suffix(".toml")
-    return p if p.is_absolute() or p.exists() else SCENARIOS_DIR / p.name
+def scenario_path(name: str | os.PathLike, what: str = "scenario") -> Path:
+    """Path of a scenario (or campaign): a file, or the bare name of one shipped under
+    ``experiments/scenarios/`` (:func:`cassini_bayes._paths.input_path`, the rule of every file
+    argument)."""
+    return input_path(name, what, SCENARIOS_DIR)
 
 
 class _Reader:
@@ -434,20 +442,29 @@ def _flex_mode(top: _Reader, inertia: np.ndarray, dt: float, src: str) -> FlexMo
     return FlexMode(f, zeta, tuple(float(x) for x in delta))
 
 
-def _leak(top: _Reader, duration: float, dt: float) -> Leak | None:
+def _thruster_index(r: "_Reader", key: str, truth: Spacecraft) -> int:
+    """Index of the thruster ``r[key]`` names among the truth model's (case-insensitive)."""
+    name = r.str_(key)
+    names = [n.upper() for n in truth.thruster_names]
+    if name.upper() not in names:
+        have = ", ".join(truth.thruster_names) or "none"
+        raise r.err(key, f"must be a thruster of the truth model {truth.name!r} ({have}), got "
+                         f"{name!r}")
+    return names.index(name.upper())
+
+
+def _leak(top: _Reader, duration: float, dt: float, truth: Spacecraft) -> Leak | None:
     """The optional ``[leak]`` section (all three keys required)."""
     if not top.has("leak"):
         return None
     lk = top.sub("leak", {"thruster", "fraction", "t_start_s"})
-    name = lk.str_("thruster").upper()
-    if name not in THRUSTER_NAMES:
-        raise lk.err("thruster", f"must be one of {', '.join(THRUSTER_NAMES)}, got {name!r}")
+    k = _thruster_index(lk, "thruster", truth)
     f = lk.num("fraction", positive=True)
     if f > 1.0:
         raise lk.err("fraction", f"= {f} must be at most 1 (a fraction of the thrust)")
     t0 = lk.num("t_start_s")
     _check_time(lk, "t_start_s", t0, duration)
-    return Leak(THRUSTER_NAMES.index(name), f, t0)
+    return Leak(k, f, t0)
 
 
 def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
@@ -499,20 +516,24 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     check_physical_inertia(inertia, "[truth.inertia]", src)
     truth = truth.with_inertia(inertia)
+    m = len(truth.thrusters)
     if tr.has("thrust_n"):
+        if not m:
+            raise tr.err("thrust_n", f"gives a thrust, but the truth model {truth.name!r} has no "
+                                     "thrusters")
         v = tr.t["thrust_n"]
-        thrust = (np.full(8, tr.num("thrust_n", positive=True, hi=THRUST_MAX))
-                  if not isinstance(v, list) else tr.vec("thrust_n", 8, nonneg=True, hi=THRUST_MAX))
+        thrust = (np.full(m, tr.num("thrust_n", positive=True, hi=THRUST_MAX))
+                  if not isinstance(v, list) else tr.vec("thrust_n", m, nonneg=True, hi=THRUST_MAX))
         if np.any(thrust <= 0):
             raise tr.err("thrust_n", "must be positive (N)")
     else:
-        thrust = np.full(8, truth.thrust)
+        thrust = truth.thrust_per_thruster
     pulse = truth.pulse
     # a valve may open at once (first-order valve: tau_delay_s = 0, tau_rise_s = tau_fall_s)
     pulse = replace(pulse, **{k: tr.num(f"{k}_s", getattr(pulse, k), positive=k != "tau_delay",
                                         nonneg=True, hi=TAU_MAX)
                               for k in ("tau_delay", "tau_rise", "tau_fall")})
-    truth = replace(truth, pulse=pulse, thrust=float(np.mean(thrust)))
+    truth = replace(truth, pulse=pulse, thrust=float(np.mean(thrust)) if m else truth.thrust)
     if tr.has("rwa4_axis"):
         axis = tr.vec("rwa4_axis", unit=True)
         _wheel_index(truth, "RWA4", "truth.rwa4_axis", src)
@@ -541,6 +562,8 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     prior, prior_path = _model(pr.str_("model"), "prior.model", src)
     if prior.wheel_names != truth.wheel_names:
         raise InputError("'prior.model' must have the same wheels as 'truth.model'", path=src)
+    if prior.thruster_names != truth.thruster_names:
+        raise InputError("'prior.model' must have the same thrusters as 'truth.model'", path=src)
 
     k = len(truth.wheels)
     ini = top.sub("initial", {"wheels_on", "q", "rates_rad_s", "wheel_rpm"}, required=True)
@@ -615,6 +638,11 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         slews.append(s)
     if slews and control != "rwa":
         raise InputError("[[slew]] needs 'run.control = \"rwa\"'", path=src)
+    if control == "rcs" and not truth.eq16_layout:
+        have = ", ".join(truth.thruster_names) or "no thrusters"
+        raise run.err("control", f"= \"rcs\" needs Cassini's eight thrusters in the layout of "
+                                 f"Feldman & Lee Eq 16 (its thruster pairs per axis); the truth "
+                                 f"model {truth.name!r} has {have}")
 
     ramps = []
     for r in top.items("wheel_ramp", {"wheel", "t_start_s", "target_rpm", "torque_nm"}):
@@ -638,9 +666,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         deadbands.append(DeadbandChange(t0, tuple(v * 1e-3)))
     pulses = []
     for r in top.items("pulse", {"t_on_s", "thruster", "width_s"}):
-        name = r.str_("thruster").upper()
-        if name not in THRUSTER_NAMES:
-            raise r.err("thruster", f"must be one of {', '.join(THRUSTER_NAMES)}, got {name!r}")
+        k = _thruster_index(r, "thruster", truth)
         t0 = r.num("t_on_s")
         _check_time(r, "t_on_s", t0, duration)
         w = r.num("width_s", positive=True)
@@ -649,7 +675,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
                 raise r.err(key, f"= {val} is not on the 1/8 s command grid")
         if w < MIN_PULSE_S:
             raise r.err("width_s", f"= {w} s is below the 125 ms minimum pulse")
-        pulses.append(PulseCommand(t0, THRUSTER_NAMES.index(name), w))
+        pulses.append(PulseCommand(t0, k, w))
     if (control == "rcs" or pulses) and abs(dt - COMMAND_RESOLUTION_S) > 1e-12:
         raise run.err("dt_s", "must be 0.125 s when thrusters fire (the 1/8 s command "
                               "resolution)")
@@ -679,7 +705,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         if t1 <= t0:
             raise r.err("t1_s", f"= {t1} must be after t0_s = {t0}")
         windows.append(Window(r.str_("name"), t0, t1))
-    leak = _leak(top, duration, dt)
+    leak = _leak(top, duration, dt, truth)
 
     return Scenario(
         name=top.str_("name", Path(src).stem), description=top.str_("description", ""),
@@ -701,9 +727,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
 
 def load_scenario(path: str | Path) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
-    if as_path(path, "a scenario .toml file or a shipped scenario's name").is_dir():
-        raise InputError("is a directory, expected a scenario .toml file", path=str(path))
-    p = scenario_path(str(path))
+    p = scenario_path(path)
     d = read_toml(p, "scenario", "experiments/scenarios/")
     if "campaign" in d:
         raise InputError("a thruster-health campaign file, not a scenario: simulate it with "

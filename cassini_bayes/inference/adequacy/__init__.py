@@ -22,7 +22,9 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
 * ``residual_regression`` — whiteness against the regressors of the model (inertia fits: body
   rate and wheel momentum; not used for thrust fits, see :func:`thrust_adequacy`): per block and
   axis the F-test of the (AR(1)-prewhitened) residual regressed on them, as the normal deviate
-  of the smallest Bonferroni-adjusted p-value.
+  of the smallest Bonferroni-adjusted p-value; every other sample is tested, against the
+  regressors interpolated from its neighbours, so the measurement noise that the residual and
+  the regressors share does not make the statistic grow with the number of samples.
 * ``balance_fit`` (RWA4 fits) — the window-mean momentum balances at the posterior mean against
   the likelihood's own covariance (noise plus the integrated-out nuisance effects): ``χ²`` on
   ``3G − 2`` degrees of freedom (G window pairs), as the normal deviate of its upper tail.

@@ -30,11 +30,13 @@ def _residual_checks(idata, covariates: np.ndarray | None, names: Sequence[str] 
     r = np.asarray(res["residual_std"] if "residual_std" in res else res["residual"])
     block = (np.asarray(res[block_coord]) if block_coord in res.coords
              else np.zeros(r.shape[0], int))
+    times = np.asarray(res["t"], float) if "t" in res.coords else None
     checks = [residual_autocorrelation(r, block, labels=labels)]
     if covariates is None:
         checks.append(not_applicable("residual_regression", Z_THRESHOLD, no_regression))
     else:
-        checks.append(residual_regression(r, covariates, block, names=names, labels=labels))
+        checks.append(residual_regression(r, covariates, block, names=names, labels=labels,
+                                          times=times))
     return checks
 
 

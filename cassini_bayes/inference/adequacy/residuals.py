@@ -52,12 +52,40 @@ def _lag1(x: np.ndarray) -> np.ndarray:
     return np.where(den > 0, np.sum(x[1:] * x[:-1], 0) / np.where(den > 0, den, 1.0), 0.0)
 
 
+def _neighbour_split(idx: np.ndarray, times: np.ndarray | None):
+    """Every other sample of a block and its two neighbours: ``mid`` (the samples whose residual
+    is tested), ``left``, ``right`` (indices) and the weight ``w`` of ``right`` in the linear
+    interpolation at ``mid`` (in time when ``times`` is given, else ½)."""
+    m = (idx.size - 1) // 2
+    left, mid, right = idx[0:2 * m:2], idx[1:2 * m:2], idx[2:2 * m + 1:2]
+    w = np.full(m, 0.5)
+    if times is not None:
+        t = np.asarray(times, float)
+        span = t[right] - t[left]
+        w = np.where(span > 0, (t[mid] - t[left]) / np.where(span > 0, span, 1.0), 0.5)
+    return mid, left, right, w
+
+
 def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.ndarray,
                         threshold: float = Z_THRESHOLD, names: Sequence[str] | None = None,
-                        labels: Sequence[str] | None = None) -> Check:
+                        labels: Sequence[str] | None = None,
+                        times: np.ndarray | None = None) -> Check:
     """F-test of each block's residual axis regressed on ``covariates`` (N, K) and a constant.
 
-    Both sides are first prewhitened with the residual's own lag-1 autocorrelation ``ρ̂``
+    The regressors at a tested sample are interpolated from its two neighbours (linearly in
+    ``times`` when given), and only every other sample is tested, so no regressor value holds
+    the measurement noise of a tested sample. Why: the residual is made of the same measured
+    quantities as the regressors (the inertia balance ``I ω + H_w − A H_N``), so a regressor
+    taken at its own sample carries the noise that makes up the residual, and a combination of
+    them (``I ω + H_w``, whose signal is only the slowly turning ``A H_N``) reproduces it: a
+    fixed correlation at the noise level, whose F-statistic grows in proportion to the number
+    of samples (docs/adequacy.md, "The number of samples"). For noise that is white from
+    sample to sample the interpolated regressors are
+    independent of the tested residual, whatever the number of samples; a misfit (a residual
+    that follows the slowly varying signal of the regressors) is kept, since interpolating a
+    smooth signal between neighbours changes it little.
+
+    Both sides are then prewhitened with the tested residual's own lag-1 autocorrelation ``ρ̂``
     (Cochrane–Orcutt: ``y_t − ρ̂ y_{t−1}``), so the test stays valid when the residuals carry a
     mild AR(1) correlation and asks only whether the regressors explain them. Statistic: the
     normal deviate of the smallest Bonferroni-adjusted p-value over blocks and axes; ``parameter``
@@ -69,13 +97,15 @@ def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.
                      else [f"x{k}" for k in range(covariates.shape[1])])
     tests = []
     for label, idx in _blocks(np.asarray(block), labels):
-        if idx.size < 3 * covariates.shape[1] + 10:
+        if idx.size < 2 * (3 * covariates.shape[1] + 10) + 1:
             continue
+        mid, left, right, w = _neighbour_split(idx, times)
+        x_mid = (1.0 - w)[:, None] * covariates[left] + w[:, None] * covariates[right]
         for a in range(residual.shape[1]):
-            y0 = residual[idx, a]
+            y0 = residual[mid, a]
             rho = float(_lag1(y0[:, None])[0])
             y = y0[1:] - rho * y0[:-1]
-            x = covariates[idx][1:] - rho * covariates[idx][:-1]
+            x = x_mid[1:] - rho * x_mid[:-1]
             x, y = x - x.mean(0), y - y.mean()
             keep = np.std(x, 0) > 0
             if not keep.any():

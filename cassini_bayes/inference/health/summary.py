@@ -35,6 +35,7 @@ spacecraft model's (shared by all events).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -42,9 +43,12 @@ import numpy as np
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.thrust import regression_inputs
-from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs, moment_matrix
+from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
+from cassini_bayes.telemetry import pulses_in_span
 
-__all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "event_summary", "channel_design"]
+__all__ = ["CHANNELS", "CHANNEL_THRUSTERS", "EventSummary", "EventDesign", "event_summary",
+           "event_design", "channel_design", "weighted_fit", "residual_cov", "newey_west_lags",
+           "left_out_channels"]
 
 CHANNELS = ("Z1", "Z2", "Z3", "Z4", "Y13", "Y24")
 """The identifiable thrust combinations of one event (Feldman & Lee Eqs 19 and 21)."""
@@ -149,19 +153,36 @@ def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, fired, f, xw, w, a_inv):
     return out
 
 
-def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
-                  lags: int | None = None, tau_sd_frac: float = TAU_SD_FRAC) -> EventSummary:
-    """Summary of one event from its telemetry, pulse log and the spacecraft model.
+class EventDesign(NamedTuple):
+    """The regression of one event (Feldman & Lee Eq 17): ``v`` (n, 3) N m s, the per-newton
+    impulses ``j`` (n, 8) s, the design ``x`` (n, 3, p) of the fired channels and pair splits,
+    ``fired`` (8,) bool (channels, then splits), ``n_pulses`` (6,), the moment matrix ``q``
+    (3, 8) m, the pulse ``log`` arrays and the time constants ``tau`` (3,) s."""
 
-    ``lags``: Newey-West bandwidth in samples (default ``⌈4 (n/100)^{2/9}⌉ · 3``, three times the
-    usual rule: the cumulative regression's residuals are long-correlated). ``tau_sd_frac``:
-    per-event variation of the time constants propagated into the covariance.
-    """
+    v: np.ndarray
+    j: np.ndarray
+    x: np.ndarray
+    fired: np.ndarray
+    n_pulses: np.ndarray
+    q: np.ndarray
+    log: tuple
+    tau: np.ndarray
+
+
+def event_design(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES) -> EventDesign:
+    """The regression inputs of one event under the spacecraft model (its inertia, wheels,
+    thruster geometry and time constants); refuses an event that identifies no channel.
+
+    Pulses acting entirely outside the telemetry are left out with a warning
+    (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    if pulses is not None:
+        p = spacecraft.pulse   # (its thrust is negligible 40 fall times after the command)
+        pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + 40.0 * p.tau_fall)
     if pulses is None or np.asarray(pulses.t_on).size == 0:
         raise InputError("has no thruster pulses; a thrust-health event needs the pulse log of a "
                          "biasing event", path=getattr(tel, "source", "telemetry"))
-    th, p = spacecraft.thrusters, spacecraft.pulse
-    q = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    p = spacecraft.pulse
+    q = spacecraft.moment_matrix
     log = (pulses.t_on, pulses.thruster, pulses.width)
     tau = np.array([p.tau_delay, p.tau_rise, p.tau_fall])
     v, j = regression_inputs(tel.t, tel.omega, wheel_momentum(tel, spacecraft),
@@ -175,20 +196,68 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
         raise InputError(f"identifies no thrust channel (pulses per channel "
                          f"{dict(zip(CHANNELS, n_pulses.tolist()))}, {n} samples)",
                          path=getattr(tel, "source", "telemetry"))
-    lags = int(np.ceil(4.0 * (n / 100.0) ** (2.0 / 9.0))) * 3 if lags is None else int(lags)
-    w = np.ones(3)
-    for _ in range(2):  # weighted least squares, each axis by its residual level
+    return EventDesign(v, j, x, fired, n_pulses, q, log, tau)
+
+
+def weighted_fit(x: np.ndarray, v: np.ndarray, w: np.ndarray | None = None):
+    """Least squares of ``v`` (n, 3) on ``x`` (n, 3, p), each axis weighted by its residual
+    level: two passes from equal weights, the second weighted by the first's residual levels;
+    or one pass with the given per-axis weights ``w`` (3,).
+
+    Returns ``(f (p,), w (3,) the weights of the last pass, a (p, p) its weighted normal
+    matrix, e (n, 3) residuals, rms (3,) their level per axis)``."""
+    passes, w = (2, np.ones(3)) if w is None else (1, np.asarray(w, float))
+    rms = np.ones(3)
+    for i in range(passes):
+        if i:
+            w = 1.0 / np.maximum(rms, 1e-12) ** 2
         xw = x * np.sqrt(w)[None, :, None]
-        vw = v * np.sqrt(w)[None, :]
         a = np.einsum("tap,taq->pq", xw, xw)
-        f = np.linalg.solve(a, np.einsum("tap,ta->p", xw, vw))
+        f = np.linalg.solve(a, np.einsum("tap,ta->p", xw, v * np.sqrt(w)[None, :]))
         e = v - np.einsum("tap,p->ta", x, f)
         rms = np.sqrt(np.mean(e * e, axis=0))
-        w = 1.0 / np.maximum(rms, 1e-12) ** 2
+    return f, w, a, e, rms
+
+
+def residual_cov(x: np.ndarray, e: np.ndarray, w_fit: np.ndarray, w: np.ndarray, a: np.ndarray,
+                 lags: int) -> np.ndarray:
+    """(p, p) Newey-West covariance of a weighted fit's estimate: design ``x`` (n, 3, p) and
+    residuals ``e`` (n, 3) of the fit with per-axis weights ``w_fit`` and normal matrix ``a``;
+    the scores weighted by ``w`` (the residual levels); scaled by ``n / (n − p)``."""
+    n = e.shape[0]
     a_inv = np.linalg.inv(a)
-    cov_f = a_inv @ _newey_west(xw, e * np.sqrt(w)[None, :], lags) @ a_inv
-    cov_f *= n / max(n - f.size, 1)
-    for g in _sensitivities(tel, log, spacecraft, tau, tau_sd_frac, q, fired, f, xw, w, a_inv):
+    xw = x * np.sqrt(w_fit)[None, :, None]
+    cov = a_inv @ _newey_west(xw, e * np.sqrt(w)[None, :], lags) @ a_inv
+    return cov * (n / max(n - x.shape[-1], 1))
+
+
+def newey_west_lags(n: int) -> int:
+    """The Newey-West bandwidth (samples) of an event of ``n`` samples: ``⌈4 (n/100)^{2/9}⌉ · 3``,
+    three times the usual rule (the cumulative regression's residuals are long-correlated)."""
+    return int(np.ceil(4.0 * (n / 100.0) ** (2.0 / 9.0))) * 3
+
+
+def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
+                  lags: int | None = None, tau_sd_frac: float = TAU_SD_FRAC) -> EventSummary:
+    """Summary of one event from its telemetry, pulse log and the spacecraft model.
+
+    ``lags``: Newey-West bandwidth in samples (default :func:`newey_west_lags`).
+    ``tau_sd_frac``: per-event variation of the time constants propagated into the covariance.
+    A channel that fired but is not reported (fewer than ``min_pulses`` pulses, or a thrust
+    estimate that is not positive) is NaN in ``log_thrust`` with a finite ``thrust_n``
+    (:func:`left_out_channels` says so for a fit).
+    """
+    des = event_design(tel, pulses, spacecraft, min_pulses=min_pulses)
+    v, x, fired, n_pulses, q = des.v, des.x, des.fired, des.n_pulses, des.q
+    n = v.shape[0]
+    lags = newey_west_lags(n) if lags is None else int(lags)
+    f, w_fit, a, e, rms = weighted_fit(x, v)
+    xw = x * np.sqrt(w_fit)[None, :, None]
+    w = 1.0 / np.maximum(rms, 1e-12) ** 2
+    a_inv = np.linalg.inv(a)
+    cov_f = residual_cov(x, e, w_fit, w, a, lags)
+    for g in _sensitivities(tel, des.log, spacecraft, des.tau, tau_sd_frac, q, fired, f, xw, w,
+                            a_inv):
         cov_f += np.outer(g, g)
     idx = np.flatnonzero(fired[:6])
     f, cov_f = f[:idx.size], cov_f[:idx.size, :idx.size]    # the splits are nuisance
@@ -202,3 +271,20 @@ def event_summary(tel, pulses, spacecraft, *, min_pulses: int = MIN_PULSES,
     cov = np.full((6, 6), np.nan)
     cov[np.ix_(idx[keep], idx[keep])] = c_log[np.ix_(keep, keep)]
     return EventSummary(log_thrust, cov, thrust, n_pulses, rms)
+
+
+def left_out_channels(summaries, dates_days) -> list[str]:
+    """One warning line per channel that fired in some events but is left out of some of them
+    (fewer than ``min_pulses`` pulses, or a thrust estimate that is not positive): those pulses
+    are measured and not used, and a fit must say so (one line per channel, the events named by
+    their dates in days)."""
+    lines = []
+    for k, name in enumerate(CHANNELS):
+        fired = [s.n_pulses[k] > 0 for s in summaries]
+        out = [d for s, d, f in zip(summaries, dates_days, fired) if f and not s.observed[k]]
+        if out:
+            days = ", ".join(f"{d:g}" for d in out[:5]) + (", …" if len(out) > 5 else "")
+            lines.append(f"channel {name} is left out of {len(out)} of the {sum(fired)} events in "
+                         f"which it fired (fewer than {MIN_PULSES} pulses, or a thrust estimate "
+                         f"that is not positive): days {days}")
+    return lines

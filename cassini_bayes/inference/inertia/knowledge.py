@@ -11,7 +11,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.prior import inertia_prior
-from cassini_bayes.names import INERTIA_NAMES
+from cassini_bayes.names import INERTIA_NAMES, a_kind
 from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["InertiaGaussian", "inertia_from_run", "inertia_from_idata", "inertia_prior_gaussian"]
@@ -41,7 +41,7 @@ def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
                          "run directory of an earlier 'cassini-bayes fit inertia'")
     kind = run_kind(run_dir)
     if kind not in (None, "inertia"):  # a thrust or RWA4 run may carry inertia draws too
-        raise InputError(f"{arg('inertia_posterior', run_dir)}: a {kind} fit; give the run "
+        raise InputError(f"{arg('inertia_posterior', run_dir)}: {a_kind(kind)} fit; give the run "
                          "directory of a 'cassini-bayes fit inertia' (an inertia calibration "
                          "from slews)")
     try:

@@ -4,7 +4,6 @@ turned into the prepared :class:`ThrustProblem` (:func:`prepare_thrust`).
 
 from __future__ import annotations
 
-import warnings
 from typing import NamedTuple, Sequence
 
 import jax
@@ -23,11 +22,10 @@ from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, p
                                                        time_tag_rates, time_tag_rows)
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
-from cassini_bayes.physics.impulse import impulse_lhs_basis, moment_matrix
+from cassini_bayes.physics.impulse import impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import (PulseAtStartWarning, PulseLog, Telemetry,
-                                     check_pulses_in_span)
+from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
 
 __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
@@ -165,12 +163,7 @@ def _checked_events(events) -> tuple[list[Telemetry], list[PulseLog]]:
                              + ", columns t_on, thruster, width)", path=tel.source)
         if tel.n < 10:
             raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            log = check_pulses_in_span(log, tel, tail_s=_TAIL_S)
-        for w in caught:   # the other span notes are for `check`; this one changes the model
-            if issubclass(w.category, PulseAtStartWarning):
-                warnings.warn(str(w.message), PulseAtStartWarning, stacklevel=3)
+        log = pulses_in_span(log, tel, tail_s=_TAIL_S)   # a warning per pulse left out
         if log.t_on.size == 0:
             raise InputError(f"no pulse of {log.source} falls inside the telemetry span "
                              f"{tel.t[0]:.10g}..{tel.t[-1]:.10g} s; thrust calibration needs an "
@@ -289,8 +282,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors)
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust)
-    th = spacecraft.thrusters
-    q_mat = np.asarray(moment_matrix(th.Lx, th.Ly, th.Lzy, th.Lzz, th.com))
+    q_mat = spacecraft.moment_matrix
     tp = tau_prior(spacecraft)
     if inertia is not None:
         tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))

@@ -20,6 +20,7 @@ from cassini_bayes.inference.thrust.model import _nuisance_sampler, thrust_model
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauIdentificationWarning,
                                                   resolve_inertia, sample_thrust_prior,
                                                   tau_identification)
+from cassini_bayes.inference.thrust.pulses import pulse_impulses
 from cassini_bayes.names import EFFECTS, INERTIA_NAMES, TAU_NAMES, THRUSTER_NAMES
 from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.physics.momentum import inertia_matrix
@@ -164,8 +165,9 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         ``idata`` with ``posterior`` (thrust names in N, ``tau_*`` in s, ``sigma_omega``,
         ``sigma_rho`` per event, inertia entries when sampled, sampler coordinates),
         ``sample_stats``, ``prior``, ``observed_data`` (``v``: the left side of Eq 17 at the
-        fixed/prior-mean inertia, N m s), ``constant_data`` (prior centres and scales) and
-        ``residuals`` (posterior-mean offset-free residuals, N m s).
+        fixed/prior-mean inertia, N m s), ``constant_data`` (prior centres and scales),
+        ``residuals`` (posterior-mean offset-free residuals, N m s) and ``pulse_impulses``
+        (each pulse group's measured and predicted impulse, :func:`pulse_impulses`).
 
     Warns
     -----
@@ -175,6 +177,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     PulseAtStartWarning
         A pulse acts on the first sample of an event (only its impulse after that sample is
         modelled: the event's free offset absorbs the rest).
+    PulsesDroppedWarning
+        Pulses of a log act entirely outside their event's telemetry and are left out.
     """
     from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.runner import SamplerSettings, diagnostics, run_nuts
@@ -212,7 +216,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                                            sample_inertia, coords, dims)
         post = idata.posterior
         d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
-    replace_groups(idata, _data_groups(problem, d))
+    replace_groups(idata, _data_groups(problem, d)
+                   | {"pulse_impulses": pulse_impulses(problem, post, nu_draws)})
     for line in tau_identification(post, problem.tau):
         warnings.warn(line, TauIdentificationWarning, stacklevel=2)
     names = list(problem.names) + list(TAU_NAMES) + ["sigma_omega", "sigma_rho"]
