@@ -226,7 +226,8 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
 
     kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
               slot=slot, k_slots=k_slots, wheel_cov=wcov,
-              log_noise_hat=np.log(noise), nu_cols=np.ascontiguousarray(nu_cols.transpose(0, 3, 2, 1)))
+              log_noise_hat=np.log(noise),
+              nu_cols=np.ascontiguousarray(nu_cols.transpose(0, 3, 2, 1)))
     return kw, fired, noise
 
 

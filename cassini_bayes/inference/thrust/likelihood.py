@@ -44,7 +44,7 @@ class EventData(NamedTuple):
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
-    nu_stats: ColumnStatistics  # sums of ``nu_cols`` (:func:`~cassini_bayes.inference.gaussian.column_statistics`)
+    nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
 
 
 class PulseLayout(NamedTuple):
@@ -57,7 +57,7 @@ class PulseLayout(NamedTuple):
     dt: jax.Array        # (m, K) s, each transient sample's time after the command
     width: jax.Array     # (m,) s commanded widths (0: padding, no impulse)
     thruster: jax.Array  # (m,) int index into THRUSTER_NAMES
-    at: jax.Array        # (m, K) int, flat index thruster n + sample into an (8, n) array; 8 n: none
+    at: jax.Array        # (m, K) int, flat index thruster·n + sample into (8, n); 8 n: none
     settled: jax.Array   # (n,) int, how many pulses have settled by each sample
 
 
@@ -110,7 +110,7 @@ def _event_residual(pi, q_f, tau, ev: EventData):
     v = ev.lhs_wheels
     for k in range(6):
         v = v + pi[k] * ev.lhs_inertia[k]
-    return v - thruster_impulse(ev.pulses, q_f, *tau)                                               # Feldman & Lee Eq 17
+    return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
 def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, q_matrix):
@@ -168,9 +168,9 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd):
     """(8, n) s: ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
     newton at each sample (module docstring, "Robust model"): the thrust profile
     (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
-    :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples, at the
-    time constants ``τ`` (3,) s, the prior's medians: evaluated once, so the covariance does not
-    move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
+    :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples,
+    at the time constants ``τ`` (3,) s, the prior's medians: evaluated once, so the covariance
+    does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
 
     The likelihood's time-tag column is ``Q (F ⊙ rates)`` at the *sampled* thrust
     (:func:`_event_loglik`). Fixed at the predicted thrust, as it was, it broke the likelihood's
@@ -190,8 +190,8 @@ def time_tag_rows(rates, torque, noise_sd, mask) -> np.ndarray:
     ``rates`` (8, n) s (:func:`time_tag_rates`), ``torque`` (3, 8) N m the thrusters' torques at
     the predicted thrust, ``noise_sd`` the smallest white-noise sd of one sample's left side at
     the data's noise levels (N m s). A pulse's rate decays as ``e^{−t/τf}`` after its command
-    ends but stays above zero for every sample up to :class:`PulseLayout`'s ``K`` transient samples after it;
-    the term ``m_i m_iᵀ`` of a sample whose time-tag sd ``|m_i|`` is below
+    ends but stays above zero for every sample up to :class:`PulseLayout`'s ``K`` transient
+    samples after it; the term ``m_i m_iᵀ`` of a sample whose time-tag sd ``|m_i|`` is below
     :data:`TAG_RELATIVE_SD` of ``noise_sd`` changes its covariance by less than 1e-20 of itself,
     which double precision does not represent (``B + m mᵀ == B``): the rank-one algebra of
     :func:`offset_marginal` is left out there, and the likelihood is unchanged.
