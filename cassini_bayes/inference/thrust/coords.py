@@ -72,10 +72,9 @@ def _tau_from_z(tau_z, kw):
       ``s → ∓∞``, with no wall between them; the split is what only samples within a few
       ``τr`` of a command resolve. The sampler sees ``s_z = asinh(s)`` (``s = sinh s_z``):
       ``s`` itself has a long, exponential tail towards ``τd → 0`` (the half-normal delay prior
-      seen through ``τd = a σ(s)``), which no affine whitening makes Gaussian — measured on an
-      821-sample, 468-pulse event (``biasing_long``): skewness −1.4 and excess kurtosis 2.9 in the
-      whitened coordinates, step sizes 0.27–0.43 and 12.2 leapfrog steps per iteration; with
-      ``asinh``, 0.54–0.58 and 7.0, those of a standard normal of the same dimension.
+      seen through ``τd = a σ(s)``), which no affine whitening makes Gaussian; ``asinh`` folds it
+      to about the tails of a normal (leapfrog steps and step sizes: docs/performance.md, "The
+      thrust fit of a long biasing event").
     * ``c_z``: the long-pulse excess ``c = c_mu + C c_z`` (:func:`long_pulse_excess`, ``C`` =
       :data:`C_SCALE_S`), pinned by the long pulses' impulses; ``τf = c + b``.
 
