@@ -82,3 +82,28 @@ def test_first_order_valve_impulse_is_thrust_times_width(tau):
     np.testing.assert_allclose(np.asarray(pulse_impulse_until(10.0, widths, 0.0, tau, tau)),
                                widths, rtol=1e-12, atol=1e-15)
     assert float(long_pulse_excess(0.0, tau, tau)) == 0.0
+
+
+# τd = 0 exactly puts the clipped phases' ends on ties, where the formula's operation-by-operation
+# derivative is a convention of ``jnp.clip``, not a derivative (a sampler never sees τd = 0)
+@pytest.mark.parametrize("width, td, tr, tf",
+                         [(w, max(td, 1e-6), tr, tf) for w, td, tr, tf in CASES]
+                         + [(0.003, 0.005, 0.020, 0.065)])
+def test_stated_derivatives_equal_those_of_the_formulas(width, td, tr, tf):
+    """The closed-form derivatives of :func:`pulse_impulse` and :func:`pulse_impulse_until` in
+    every argument (thrust included) equal the derivatives of their formulas, operation by
+    operation (``.fun``, the undecorated function), at times in every phase: before the delay,
+    rising, held, decaying, long after; a pulse shorter than its delay and a near-first-order
+    valve (τd = 1 µs) included. Exact
+    arithmetic on both sides: tolerance 1e-10 relative."""
+    times = np.array([0.5 * td, td + 0.3 * width, width + 0.5 * td, width + td + 0.03,
+                      width + td + 1.0]) + 1e-4
+    for t in times:
+        args = (t, width, td, tr, tf, 0.7)
+        got = jax.jacfwd(pulse_impulse_until, argnums=tuple(range(6)))(*args)
+        want = jax.jacfwd(pulse_impulse_until.fun, argnums=tuple(range(6)))(*args)
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-10, atol=1e-13)
+    args = (width, td, tr, tf, 0.7)
+    got = jax.jacrev(pulse_impulse, argnums=tuple(range(5)))(*args)
+    want = jax.jacrev(pulse_impulse.fun, argnums=tuple(range(5)))(*args)
+    np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-10, atol=1e-13)

@@ -71,8 +71,10 @@ Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
 sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
 ``f_z`` (prior-whitened ``log F``), ``a_z`` (the rise deficit ``a = τd + τr e^{−τd/τr}`` =
 ``a_mu e^{0.4 a_z}``, :func:`rise_deficit`: a pulse still on has delivered ``F (t − a)``, so the
-samples inside pulses pin it), ``s`` (its split, ``τd = a σ(s)``, ``a − τd = a σ(−s)``, σ the
-logistic function) and ``c_z`` (``c = c_mu + 0.01 s · c_z``); ``τr``, ``τf`` follow in closed form,
+samples inside pulses pin it), ``s_z = asinh s`` (``s`` its split, ``τd = a σ(s)``,
+``a − τd = a σ(−s)``, σ the logistic function; the ``asinh`` folds the long tail of ``s`` towards
+``τd → 0`` that the half-normal delay prior leaves) and ``c_z`` (``c = c_mu + 0.01 s · c_z``);
+``τr``, ``τf`` follow in closed form,
 the prior carried over by the Jacobian (:func:`_tau_from_z`). With the delay free over 0-10 ms
 the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6
 divergences, R-hat up to 1.048 and bulk ESS ~60 on the idealised fit of
@@ -164,8 +166,8 @@ from cassini_bayes.inference.thrust.coords import (A_LOG_SCALE, C_SCALE_S, long_
                                                    rise_deficit)
 from cassini_bayes.inference.thrust.data import ThrustData, ThrustProblem, prepare_thrust
 from cassini_bayes.inference.thrust.fit import RESIDUAL_DRAWS, ThrustPosterior, fit_thrust
-from cassini_bayes.inference.thrust.likelihood import (impulse_residuals, pulse_increments,
-                                                       time_tag_rates)
+from cassini_bayes.inference.thrust.likelihood import (thruster_impulse, impulse_residuals,
+                                                       pulse_layout, time_tag_rates)
 from cassini_bayes.inference.thrust.model import thrust_model
 from cassini_bayes.inference.thrust.prior import (CONTRACTION_UNIDENTIFIED, MODES,
                                                   NOISE_PRIOR_LOG_SD, PRIOR_CONFLICT_MASS,
@@ -197,7 +199,8 @@ __all__ = [
     "thrust_names",
     "ThrustData", "ThrustProblem",
     "prepare_thrust",
-    "pulse_increments",
+    "pulse_layout",
+    "thruster_impulse",
     "time_tag_rates",
     "impulse_residuals",
     "inv3_spd",

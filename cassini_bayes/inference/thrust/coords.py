@@ -18,7 +18,7 @@ A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sample
 
 
 def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
-    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(s, a_z, c_z)``,
+    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(s_z, a_z, c_z)``,
     ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
     tau_z = theta[n_f:n_f + 3]
@@ -61,7 +61,7 @@ def _lambert_w0(x):
 
 
 def _tau_from_z(tau_z, kw):
-    """Time constants (3,) s from the sampler's ``(s, a_z, c_z)`` and the log prior density
+    """Time constants (3,) s from the sampler's ``(s_z, a_z, c_z)`` and the log prior density
     of the sampler coordinates (exact: the Jacobians included).
 
     * ``a_z``: the rise deficit ``a = a_mu e^{A a_z}`` (:func:`rise_deficit`, ``A`` =
@@ -70,18 +70,23 @@ def _tau_from_z(tau_z, kw):
       ``b = a − τd = τr e^{−τd/τr} = a σ(−s)``; ``τd/b = e^s``, so ``τr = b e^{W(e^s)}``
       (Lambert's W). ``τd → 0`` (a first-order valve) and ``τr → 0`` are the two tails
       ``s → ∓∞``, with no wall between them; the split is what only samples within a few
-      ``τr`` of a command resolve.
+      ``τr`` of a command resolve. The sampler sees ``s_z = asinh(s)`` (``s = sinh s_z``):
+      ``s`` itself has a long, exponential tail towards ``τd → 0`` (the half-normal delay prior
+      seen through ``τd = a σ(s)``), which no affine whitening makes Gaussian; ``asinh`` folds it
+      to about the tails of a normal (leapfrog steps and step sizes: docs/performance.md, "The
+      thrust fit of a long biasing event").
     * ``c_z``: the long-pulse excess ``c = c_mu + C c_z`` (:func:`long_pulse_excess`, ``C`` =
       :data:`C_SCALE_S`), pinned by the long pulses' impulses; ``τf = c + b``.
 
     Sampling ``(a, c)`` instead of ``(τr, τf)`` turns the two narrow, curved ridges of the
     likelihood into coordinate axes. The prior of ``(τd, τr, τf)`` is carried over with
-    ``|∂(τd, b)/∂(s, log a)| = a² σ(s) σ(−s)``, ``∂τr/∂b = e^u/(1 + u)`` (``u = τd/τr``) and the
-    coordinates' scales. ``τf ≤ 0`` gives NaN.
+    ``|∂(τd, b)/∂(s, log a)| = a² σ(s) σ(−s)``, ``∂τr/∂b = e^u/(1 + u)`` (``u = τd/τr``),
+    ``ds/ds_z = cosh s_z`` and the coordinates' scales. ``τf ≤ 0`` gives NaN.
 
     A first-order valve (``τd = 0``, ``τr = τf = τ``) is ``a = τ``, ``s → −∞``, ``c = 0``.
     """
-    s = tau_z[0]
+    s = jnp.sinh(tau_z[0])
+    log_cosh = jnp.logaddexp(tau_z[0], -tau_z[0]) - jnp.log(2.0)     # log ds/ds_z
     a = kw.a_mu * jnp.exp(A_LOG_SCALE * tau_z[1])
     t_d = a * jax.nn.sigmoid(s)
     b = a * jax.nn.sigmoid(-s)
@@ -95,7 +100,7 @@ def _tau_from_z(tau_z, kw):
     sd_d = kw.tau_delay_scale
     log_prior_delay = jnp.log(2.0 / sd_d) + std.log_prob(t_d / sd_d)      # half-normal
     log_jac = (2.0 * jnp.log(a) + jax.nn.log_sigmoid(s) + jax.nn.log_sigmoid(-s)
-               + jnp.log(A_LOG_SCALE) + u - jnp.log1p(u) + jnp.log(C_SCALE_S))
+               + jnp.log(A_LOG_SCALE) + u - jnp.log1p(u) + jnp.log(C_SCALE_S) + log_cosh)
     log_prior = (log_prior_delay + jnp.sum(std.log_prob(z_rf) - jnp.log(kw.tau_sd) - log_tau)
                  + log_jac)
     return jnp.stack([t_d, t_r, t_f]), log_prior

@@ -13,12 +13,13 @@ import numpy as np
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
-from cassini_bayes.inference.gaussian import column_statistics
+from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
 from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
-from cassini_bayes.inference.thrust.likelihood import EventData, time_tag_rates
+from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
+                                                       time_tag_rates, time_tag_rows)
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
 from cassini_bayes.physics.impulse import impulse_lhs_basis
@@ -41,7 +42,6 @@ class ThrustData(NamedTuple):
     ----------
     events : :class:`~cassini_bayes.inference.thrust.likelihood.EventData`, each field with a
         leading event axis (E), padded to common lengths.
-    slot_offsets : (k,) int, the samples after a pulse's first one its thrust can still change.
     log_noise_hat : (E, 2) log data noise levels (σ_ω, σ_ρ rad/s).
     q_matrix : (3, 8) m, torque per newton of each thruster (Feldman & Lee Eq 16).
     tau_delay_scale, tau_mu, tau_sd, a_mu, c_mu : the pulse time constants' prior and the
@@ -55,7 +55,6 @@ class ThrustData(NamedTuple):
     """
 
     events: EventData
-    slot_offsets: object
     log_noise_hat: object
     q_matrix: object
     tau_delay_scale: object
@@ -225,20 +224,39 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         noise[e] = rate_noise_levels(tel)
         fired[np.unique(log.thruster)] = True
 
-    kw = jax.device_put(dict(
-        t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid, slot=slot,
-        slot_offsets=np.arange(k_slots), wheel_cov=wcov, log_noise_hat=np.log(noise),
-        nu_cols=nu_cols))
+    kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
+              slot=slot, k_slots=k_slots, wheel_cov=wcov,
+              log_noise_hat=np.log(noise),
+              nu_cols=np.ascontiguousarray(nu_cols.transpose(0, 3, 2, 1)))
     return kw, fired, noise
 
 
 # every event's time-tag columns, one XLA program (run eagerly, the vmapped forward-mode
 # derivative compiles some seventy one-operation programs)
-_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, 0, 0, 0, 0, None, None, None)))
-
-
-_column_statistics = jax.jit(jax.vmap(column_statistics))
+_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None)))
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
+
+
+def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
+    """The samples of each event that keep a time-tag term (:func:`time_tag_rows`), padded to a
+    common count (a multiple of :data:`_PULSE_BUCKET`, as the pulses are): their indices and
+    nuisance columns (:class:`RankOneRows`) and their rates (E, 8, p). Padding rows have zero
+    rates, which the likelihood's algebra leaves out exactly."""
+    keep = []
+    for e in range(rates.shape[0]):
+        b_hat = noise[e, 0]**2 * i_lin @ i_lin + noise[e, 1]**2 * kw["wheel_cov"][e]
+        noise_sd = float(np.sqrt(np.linalg.eigvalsh(b_hat)[0]))
+        keep.append(np.flatnonzero(time_tag_rows(rates[e], torque, noise_sd, kw["mask"][e])))
+    p_max = max(1, -(-max(k.size for k in keep) // _PULSE_BUCKET) * _PULSE_BUCKET)
+    rows = np.zeros((len(keep), p_max), int)
+    tag = np.zeros((len(keep), 8, p_max))
+    n_ev, n_nu = kw["nu_cols"].shape[:2]
+    cols = np.zeros((n_ev, 3, n_nu, p_max))
+    for e, k in enumerate(keep):
+        rows[e, :k.size] = k
+        tag[e, :, :k.size] = rates[e][:, k]
+        cols[e, ..., :k.size] = kw["nu_cols"][e][..., k].transpose(1, 0, 2)
+    return RankOneRows(rows, (cols[:, 0], cols[:, 1], cols[:, 2])), tag
 
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
@@ -272,22 +290,33 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         i_mean, i_tril = np.asarray(inertia.mean, float), tril
     else:
         i_mean, i_tril = np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
-    # device_put, not jnp.asarray (a compiled one-operation program per shape, every process;
-    # Python numbers stay weakly typed either way)
-    kw = dict(**kw, **jax.device_put(dict(
+    sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
+    k_slots = kw.pop("k_slots")
+    layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
+                            k_slots) for e in range(n_ev)]
+    layout_e = PulseLayout(*(np.stack(x) for x in zip(*layouts)))
+    rates = np.asarray(_time_tag_rates(jax.device_put(layout_e),
+                                       tuple(jax.device_put(x) for x in tp.median()),
+                                       jax.device_put(sd_t)))
+    rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * spacecraft.thrust, noise, i_lin)
+    basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
+    basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
+    nu_cols = kw.pop("nu_cols")
+    stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
+    derived = dict(time_tag_rates=tag_rates, rank_one=rank_one, pulses=layout_e,
+                   lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], nu_cols=nu_cols,
+                   nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
+                                             np.stack([x.total for x in stats])))
+    # one device_put of everything, not jnp.asarray (a compiled one-operation program per
+    # shape, every process; Python numbers stay weakly typed either way)
+    kw, derived, rest = jax.device_put((kw, derived, dict(
         q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
         a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
         f_mu=np.log(spacecraft.thrust), f_index=_thrust_index(mode), inertia_mean=i_mean,
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0))))
-    sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
-    time_tag = _time_tag_rates(
-        kw["t"], kw["t_on"], kw["thruster"], kw["width"], kw["slot"], kw["slot_offsets"],
-        tuple(jax.device_put(x) for x in tp.median()), jax.device_put(sd_t))
-    derived = dict(time_tag_rates=time_tag,
-                   nu_stats=_column_statistics(kw["nu_cols"], kw["mask"]),
-                   lhs_basis=_lhs_basis(kw["t"], kw["omega"], kw["h_wheels"]))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
+    kw.update(rest)
     data = ThrustData(events=events, **kw)
     n_f = len(names)
     dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)

@@ -11,20 +11,23 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from cassini_bayes.inference.gaussian import ColumnStatistics, offset_marginal
+from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
-from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until
+from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until, thrust_profile
 
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["EventData", "pulse_increments", "time_tag_rates", "impulse_residuals"]
+__all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "time_tag_rates",
+           "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals"]
 
 
 class EventData(NamedTuple):
     """One biasing event's arrays, padded to the events' common lengths (``n`` samples, ``m``
-    pulses): a pytree the likelihood is vmapped over. In ``ThrustData.events`` each field has
-    a leading event axis (E)."""
+    pulses, ``p`` rank-one rows): a pytree the likelihood is vmapped over. In
+    ``ThrustData.events`` each field has a leading event axis (E). Per-sample arrays the
+    likelihood reads hold one axis component per row (``(3, n)``, ``(R, 3, n)``;
+    :func:`~cassini_bayes.inference.gaussian.offset_marginal`)."""
 
     t: jax.Array               # (n,) s; padding repeats the last sample
     omega: jax.Array           # (n, 3) rad/s body rates
@@ -34,52 +37,83 @@ class EventData(NamedTuple):
     thruster: jax.Array        # (m,) int index into THRUSTER_NAMES
     width: jax.Array           # (m,) s commanded widths (0: padding, no impulse)
     slot: jax.Array            # (m,) index of each pulse's first sample (n: padding, dropped)
+    pulses: PulseLayout        # where the pulses act (:func:`pulse_layout`)
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
-    nu_cols: jax.Array         # (n, 3, R) columns of the robust nuisance ν
-    time_tag_rates: jax.Array  # (n, 8) s, σ_t ∂j/∂t per thruster (:func:`time_tag_rates`)
-    lhs_basis: jax.Array       # (7, n, 3) N m s, V = lhs_basis[0] + Σ π_k lhs_basis[1 + k]
-    nu_stats: ColumnStatistics  # sums of ``nu_cols`` (:func:`~cassini_bayes.inference.gaussian.column_statistics`)
+    nu_cols: jax.Array         # (R, 3, n) columns of the robust nuisance ν (0 on padding)
+    time_tag_rates: jax.Array  # (8, p) s, σ_t ∂j/∂t per thruster at ``rank_one.rows``
+    rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
+    lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
+    lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
+    nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
 
 
-def pulse_increments(t, t_on, thruster, width, slot, slot_offsets, tau_delay, tau_rise, tau_fall):
-    """Accumulated actual impulse per newton (n, 8), s — the sparse form of
+class PulseLayout(NamedTuple):
+    """Where each pulse of one event acts on its samples (data only, :func:`pulse_layout`).
+
+    A pulse changes ``j`` only at its first ``K`` samples at or after its command; from sample
+    ``slot + K`` on it has delivered its whole impulse (it has *settled*). Pulses are ordered by
+    that sample, so the pulses settled by any sample are a leading run of them."""
+
+    dt: jax.Array        # (m, K) s, each transient sample's time after the command
+    width: jax.Array     # (m,) s commanded widths (0: padding, no impulse)
+    thruster: jax.Array  # (m,) int index into THRUSTER_NAMES
+    at: jax.Array        # (m, K) int, flat index thruster·n + sample into (8, n); 8 n: none
+    settled: jax.Array   # (n,) int, how many pulses have settled by each sample
+
+
+def pulse_layout(t, t_on, thruster, width, slot, k: int) -> PulseLayout:
+    """:class:`PulseLayout` (NumPy) of pulses commanded at ``t_on`` (m,) s on ``thruster`` (m,)
+    with widths ``width`` (m,) s, first sample at or after the command ``slot`` (m,) (``n``:
+    none), on samples ``t`` (n,) s, ``k`` transient samples per pulse."""
+    t = np.asarray(t, float)
+    n = t.size
+    order = np.argsort(np.asarray(slot), kind="stable")
+    slot, t_on = np.asarray(slot)[order], np.asarray(t_on, float)[order]
+    rows = slot[:, None] + np.arange(k)[None, :]
+    row_ok = rows < n
+    dt = np.where(row_ok, t[np.minimum(rows, n - 1)] - t_on[:, None], 0.0)
+    at = np.where(row_ok, np.asarray(thruster)[order][:, None] * n + rows, 8 * n)
+    settled = np.searchsorted(slot + k, np.arange(n), side="right")
+    return PulseLayout(dt, np.asarray(width, float)[order], np.asarray(thruster)[order], at,
+                       settled)
+
+
+def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
+    """The thrusters' accumulated angular impulse ``Q (F ⊙ j(t_i))`` (3, n) N m s, one axis per
+    row (Feldman & Lee Eq 17, right side): ``q_f = Q diag(F)`` (3, 8) N m per thruster (Eq 16
+    times the thrust), ``j`` the actual impulse per newton of the pulse log — the sparse form of
     :func:`~cassini_bayes.physics.impulse.impulse_from_pulses`.
 
-    A pulse changes ``j`` only at its first ``K = len(slot_offsets)`` samples at or after its
-    command (``slot`` (m,) = index of the first); there its increments are the differences of
-    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`, and at sample ``slot + K`` the rest
-    of the full pulse impulse (Feldman & Lee §V closed form, :func:`pulse_impulse`) is added. A
-    cumulative sum over samples gives ``j``. ``O(m K)`` instead of ``O(n m)`` work; identical to
-    the dense form when every pulse has decayed ``K`` samples after its command.
+    At a pulse's ``K`` transient samples (:class:`PulseLayout`) its impulse so far,
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`; from the next sample on the whole
+    pulse's, Feldman & Lee §V closed form (:func:`pulse_impulse`), accumulated by one cumulative
+    sum over the pulses. ``O(m K + n)`` instead of ``O(n m)`` work; identical to the dense form
+    when every pulse has decayed ``K`` samples after its command.
     """
-    n = t.shape[0]
-    idx = slot[:, None] + slot_offsets[None, :]                       # (m, K)
-    t_s = t[jnp.clip(idx, 0, n - 1)]
-    until = pulse_impulse_until(t_s - t_on[:, None], width[:, None], tau_delay, tau_rise,
-                                tau_fall)
-    until = jnp.where(idx < n, until, 0.0)
-    inc = jnp.diff(until, axis=1, prepend=jnp.zeros_like(until[:, :1]))
-    # Feldman & Lee §V: impulse of the whole pulse; what remains after the K samples
-    full = pulse_impulse(width, tau_delay, tau_rise, tau_fall)
-    rest = full - until[:, -1]
-    idx_all = jnp.concatenate([idx, slot[:, None] + slot_offsets.shape[0]], 1)
-    inc_all = jnp.concatenate([inc, rest[:, None]], 1)
-    cols = jnp.broadcast_to(thruster[:, None], idx_all.shape)
-    grid = jnp.zeros((n, 8)).at[idx_all, cols].add(inc_all, mode="drop")
-    return jnp.cumsum(grid, 0)
+    w = layout.width
+    n = layout.settled.shape[0]
+    until = pulse_impulse_until(layout.dt, w[:, None], tau_delay, tau_rise, tau_fall)
+    full = pulse_impulse(w, tau_delay, tau_rise, tau_fall)           # Feldman & Lee §V
+    qcol = q_f[:, layout.thruster]                                    # (3, m)
+    settled = jnp.cumsum(qcol * full[None, :], 1)
+    settled = jnp.concatenate([jnp.zeros_like(settled[:, :1]), settled], 1)[:, layout.settled]
+    transient = jnp.zeros(8 * n).at[layout.at].add(until, mode="drop").reshape(8, n)
+    return settled + q_f @ transient
 
 
-def _event_residual(pi, f8, tau, lhs_basis, t, t_on, thruster, width, slot, slot_offsets,
-                    q_matrix):
-    """``r = V(t_i) − Q (F ⊙ j(t_i))`` (n, 3) N m s: Feldman & Lee Eq 17, left minus right;
+def _event_residual(pi, q_f, tau, ev: EventData):
+    """``r = V(t_i) − Q (F ⊙ j(t_i))`` (3, n) N m s: Feldman & Lee Eq 17, left minus right;
     ``V`` from its basis in the inertia ``pi`` (6,) kg m²
-    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`)."""
-    v = lhs_basis[0] + jnp.tensordot(pi, lhs_basis[1:], 1)           # Feldman & Lee Eq 17 (left)
-    j = pulse_increments(t, t_on, thruster, width, slot, slot_offsets, *tau)
-    return v - (j * f8[None, :]) @ q_matrix.T                        # Feldman & Lee Eq 17
+    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`), ``q_f = Q diag(F)`` (3, 8)."""
+    # Feldman & Lee Eq 17 (left); six fused multiply-adds, where a product with the (6, 3 n)
+    # basis copied it into the layout of XLA's matrix-vector kernel at every gradient
+    v = ev.lhs_wheels
+    for k in range(6):
+        v = v + pi[k] * ev.lhs_inertia[k]
+    return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
-def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix):
+def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, q_matrix):
     """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``; ``pi``
     (6,) kg m² the inertia.
 
@@ -101,13 +135,21 @@ def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, slot_offsets, q_matrix)
     inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
     """
     inertia = inertia_matrix(pi)
-    r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
-                        ev.slot, slot_offsets, q_matrix)
+    q_f = q_matrix * f8[None, :]
+    r = _event_residual(pi, q_f, tau, ev)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
-                         _time_tag_cols(ev.time_tag_rates, f8, q_matrix), ev.mask, ev.nu_cols,
-                         ev.nu_stats)
-    log_jacobian = (jnp.sum(ev.mask) - 1.0) * jnp.linalg.slogdet(inertia)[1]
+                         q_f @ ev.time_tag_rates, ev.mask, ev.rank_one, ev.nu_cols, ev.nu_stats)
+    log_jacobian = (jnp.sum(ev.mask) - 1.0) * _log_abs_det3(inertia)
     return st._replace(loglik=st.loglik + log_jacobian)
+
+
+def _log_abs_det3(a):
+    """``log |det a|`` of a 3×3 matrix by its cofactor expansion (what ``slogdet`` gives, without
+    an LU factorisation and its derivative's solves in every gradient)."""
+    det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+           - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+           + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+    return jnp.log(jnp.abs(det))
 
 
 def _noise_cov(inertia, log_sigma, wheel_cov):
@@ -117,41 +159,59 @@ def _noise_cov(inertia, log_sigma, wheel_cov):
     return s2[0] * inertia @ inertia + s2[1] * wheel_cov
 
 
-def time_tag_rates(t, t_on, thruster, width, slot, slot_offsets, tau, time_tag_sd):
-    """(n, 8) s: ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
-    newton at each sample (module docstring, "Robust model"); ``∂j/∂t`` is exact (forward-mode
-    derivative of :func:`pulse_increments` in the sample times) at the time constants ``τ``
-    (3,) s, the prior's medians: evaluated once, so the covariance does not move with ``τ``
-    (evaluated at each draw it made some fits take tens of minutes).
+TAG_RELATIVE_SD = 1e-10
+"""A sample keeps a time-tag term when its time-tag sd (at the predicted thrust) is at least this
+fraction of its white-noise sd at the data's noise levels (:func:`time_tag_rows`)."""
+
+
+def time_tag_rates(layout: PulseLayout, tau, time_tag_sd):
+    """(8, n) s: ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
+    newton at each sample (module docstring, "Robust model"): the thrust profile
+    (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
+    :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples,
+    at the time constants ``τ`` (3,) s, the prior's medians: evaluated once, so the covariance
+    does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
 
     The likelihood's time-tag column is ``Q (F ⊙ rates)`` at the *sampled* thrust
-    (:func:`_time_tag_cols`). Fixed at the predicted thrust, as it was, it broke the likelihood's
+    (:func:`_event_loglik`). Fixed at the predicted thrust, as it was, it broke the likelihood's
     invariance under the common scale of ``I``, ``F`` and the wheel inertias that the data cannot
     see (:func:`_event_loglik`): shrinking all three shrank the residuals a time-tag error leaves
     but not their stated variance, so time tags wider than stated pulled the scale, and ``F``,
     down — by 0.19 of ``F``'s sd at 1.5 × the stated spread on ``biasing_day028``
     (``benchmarks/time_tag_bias.py``), the bias the open-world campaigns measured."""
-    _, j_dot = jax.jvp(lambda tt: pulse_increments(tt, t_on, thruster, width, slot,
-                                                   slot_offsets, *tau), (t,), (jnp.ones_like(t),))
-    return time_tag_sd * j_dot
+    n = layout.settled.shape[0]
+    rate = thrust_profile(layout.dt, layout.width[:, None], *tau)
+    return time_tag_sd * jnp.zeros(8 * n).at[layout.at].add(rate, mode="drop").reshape(8, n)
 
 
-def _time_tag_cols(rates, f8, q_matrix):
-    """(n, 3) N m s: the time-tag column ``Q (F ⊙ rates)`` of each sample at thrust ``f8`` (8,) N."""
-    return (rates * f8[None, :]) @ q_matrix.T
+def time_tag_rows(rates, torque, noise_sd, mask) -> np.ndarray:
+    """(n,) bool: the samples whose time-tag term the likelihood keeps (NumPy, data only).
+
+    ``rates`` (8, n) s (:func:`time_tag_rates`), ``torque`` (3, 8) N m the thrusters' torques at
+    the predicted thrust, ``noise_sd`` the smallest white-noise sd of one sample's left side at
+    the data's noise levels (N m s). A pulse's rate decays as ``e^{−t/τf}`` after its command
+    ends but stays above zero for every sample up to :class:`PulseLayout`'s ``K`` transient
+    samples after it; the term ``m_i m_iᵀ`` of a sample whose time-tag sd ``|m_i|`` is below
+    :data:`TAG_RELATIVE_SD` of ``noise_sd`` changes its covariance by less than 1e-20 of itself,
+    which double precision does not represent (``B + m mᵀ == B``): the rank-one algebra of
+    :func:`offset_marginal` is left out there, and the likelihood is unchanged.
+    """
+    tag_sd = np.linalg.norm(np.asarray(torque) @ np.asarray(rates), axis=0)
+    return (tag_sd >= TAG_RELATIVE_SD * noise_sd) & (np.asarray(mask) > 0)
 
 
 @jax.jit
-def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, slot_offsets, q_matrix):
+def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, q_matrix):
     i_m = inertia_matrix(pi)
+    q_f = q_matrix * f8[None, :]
 
     def one(log_sigma, ev):
-        r = _event_residual(pi, f8, tau, ev.lhs_basis, ev.t, ev.t_on, ev.thruster, ev.width,
-                            ev.slot, slot_offsets, q_matrix) - ev.nu_cols @ nu
-        none = ColumnStatistics(jnp.zeros((3, 3, 0, 0)), jnp.zeros((3, 0)))
+        r = _event_residual(pi, q_f, tau, ev) - jnp.tensordot(nu, ev.nu_cols, 1)
+        none = ColumnStatistics(jnp.zeros((0, 0, 3, 3)), jnp.zeros((3, 0)))
+        rank_one = ev.rank_one._replace(cols=tuple(c[:0] for c in ev.rank_one.cols))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov),
-                               _time_tag_cols(ev.time_tag_rates, f8, q_matrix), ev.mask,
-                               ev.nu_cols[..., :0], none).resid
+                               q_f @ ev.time_tag_rates, ev.mask, rank_one, ev.nu_cols[:0],
+                               none).resid
 
     return jax.vmap(one)(log_sigma, ev)
 
@@ -166,7 +226,8 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     f8 = np.asarray(thrust, float)[idx]
     pi = np.asarray(kw.inertia_mean) if pi is None else np.asarray(pi, float)
     nu = np.zeros(kw.nu_sd.shape[0]) if nu is None else np.asarray(nu, float)
-    d = _residuals_jit(jnp.asarray(pi), jnp.asarray(f8),
-                       tuple(jnp.asarray(float(x)) for x in tau), jnp.log(jnp.asarray(sigma)),
-                       jnp.asarray(nu), kw.events, kw.slot_offsets, kw.q_matrix)
-    return np.asarray(d) * np.asarray(kw.events.mask)[..., None]
+    d = _residuals_jit(jax.device_put(pi), jax.device_put(f8),
+                       tuple(jax.device_put(float(x)) for x in tau),
+                       jnp.log(jax.device_put(np.asarray(sigma, float))), jax.device_put(nu),
+                       kw.events, kw.q_matrix)
+    return np.swapaxes(np.asarray(d), 1, 2) * np.asarray(kw.events.mask)[..., None]

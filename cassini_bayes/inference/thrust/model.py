@@ -13,7 +13,8 @@ import numpyro
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
-from cassini_bayes.inference.gaussian import OffsetMarginal, nuisance_marginal
+from cassini_bayes.inference.gaussian import (OffsetMarginal, nuisance_log_marginal,
+                                              nuisance_marginal)
 from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpack
 from cassini_bayes.inference.thrust.likelihood import _event_loglik
 from cassini_bayes.inference.thrust.prior import _NOISE_STEP, NOISE_PRIOR_LOG_SD, thrust_names
@@ -24,8 +25,8 @@ __all__ = ["thrust_model"]
 def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
     _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
-    return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
-        pi, f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events, kw.slot_offsets, kw.q_matrix)
+    return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None))(
+        pi, f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events, kw.q_matrix)
 
 
 def _log_density(theta, kw, n_f: int, sample_inertia: bool):
@@ -41,7 +42,7 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
     st = _event_stats(theta, kw, n_f, sample_inertia)
     out = log_prior + jnp.sum(st.loglik)
     if kw.nu_sd.shape[0]:
-        out += nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)[0]
+        out += nuisance_log_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
 

@@ -4,7 +4,7 @@
 A *pulse group* is the pulses between two telemetry samples ``a < b`` such that none of the
 event's other pulses acts between them: ``a`` is the sample before the group's first pulse and
 ``b`` the first sample at which the last one has delivered its whole impulse (in the model's
-sparse form, :func:`~cassini_bayes.inference.thrust.likelihood.pulse_increments`, ``K`` samples
+sparse form, :class:`~cassini_bayes.inference.thrust.likelihood.PulseLayout`, ``K`` samples
 after its first). Groups whose spans overlap are merged. Over a group, Feldman & Lee Eq 17 reads
 
     V(t_b) − V(t_a) = Σ_p Q_{s_p} F_{s_p} I(Δ_p; τ)        (I: the §V closed-form impulse)
@@ -76,7 +76,7 @@ def pulse_impulses(problem, post, nu_draws=None):
 
     kw = problem.data
     ev = kw.events
-    k = int(np.asarray(kw.slot_offsets).shape[0])
+    k = int(np.asarray(ev.pulses.dt).shape[-1])                          # K transient samples
     q = np.asarray(kw.q_matrix, float)                                   # (3, 8) m
     f = np.concatenate([_flat(post, n) for n in problem.names], 1)
     n_s = f.shape[0]
@@ -100,9 +100,9 @@ def pulse_impulses(problem, post, nu_draws=None):
         groups = pulse_groups(slot, width, n, k)
         if not groups:
             continue
-        basis = np.asarray(ev.lhs_basis[e], float)
-        v = basis[0] + np.tensordot(pi, basis[1:], 1)                   # Feldman & Lee Eq 17
-        v = v - np.asarray(ev.nu_cols[e], float) @ nu                   # (n, 3) N m s
+        v = (np.asarray(ev.lhs_wheels[e], float)
+             + np.tensordot(pi, np.asarray(ev.lhs_inertia[e], float), 1))   # Feldman & Lee Eq 17
+        v = (v - np.tensordot(nu, np.asarray(ev.nu_cols[e], float), 1)).T   # (n, 3) N m s
         b_cov = s2[e, 0] * i_m @ i_m + s2[e, 1] * np.asarray(ev.wheel_cov[e], float)
         used = sorted({i for _, _, idx in groups for i in idx})
         # Feldman & Lee §V: each pulse's impulse per newton at every draw's time constants
