@@ -790,3 +790,27 @@ def test_inertia_off_its_prediction_reaches_f_only_when_fixed():
             ixx = post.idata.posterior["Ixx"].values.ravel()
             assert abs(ixx.mean() / truth[0] - 1) < 0.02, ixx.mean()
     assert abs(z[None]) < 3 and abs(z["fixed"]) > 5, z
+
+
+def test_thrusters_that_cannot_torque_the_data_are_refused():
+    """Feldman & Lee Eq 16/17: an event's momentum change lies in the span of its fired
+    thrusters' torques. The FSDS event fitted with a model whose Y thrusters push along −Z (so
+    no fired thruster torques about Z) is refused, naming the axis and the thrusters; the true
+    model passes."""
+    import dataclasses
+
+    from cassini_bayes.inference.thrust.data import _check_torque_span
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    sc = load_scenario("fsds_biasing")
+    r = simulate(jax.random.key(31), sc)
+    good = sc.prior
+    _check_torque_span(r.telemetry, r.pulses, good, good.inertia)   # the data's model: fine
+    bent = tuple(dataclasses.replace(t, direction=np.array([0.0, 0.0, -1.0]))
+                 if t.name.startswith("Y") else t for t in good.thrusters)
+    bad = dataclasses.replace(good, thrusters=bent)
+    with pytest.raises(InputError, match=r"about body axis \[.*\] .* which the fired thrusters "
+                                         r".*Y.* cannot torque") as e:
+        prepare_thrust([(r.telemetry, r.pulses)], bad)
+    assert "\n" not in str(e.value)
+

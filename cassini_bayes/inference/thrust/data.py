@@ -22,7 +22,7 @@ from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, p
                                                        time_tag_rates, time_tag_rows)
 from cassini_bayes.inference.thrust.model import _laplace_density
 from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
-from cassini_bayes.physics.impulse import impulse_lhs_basis
+from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
@@ -32,6 +32,11 @@ __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 # A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
 _TAIL_S = 1.5
 _PULSE_BUCKET = 64
+SPAN_MISS_SHARE = 0.3
+"""An event's momentum change outside the torques its fired thrusters can make, as a share of
+the change: above it (and above :data:`SPAN_MISS_NOISE` noise sd) the model's thrusters cannot
+be what moved the spacecraft."""
+SPAN_MISS_NOISE = 10.0
 
 
 class ThrustData(NamedTuple):
@@ -177,6 +182,36 @@ def _checked_events(events) -> tuple[list[Telemetry], list[PulseLog]]:
     return tels, logs
 
 
+def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
+                       inertia: np.ndarray) -> None:
+    """Refuse an event whose momentum change (Feldman & Lee Eq 17's left side ``V``) leaves the
+    span of its fired thrusters' torques ``Q`` (Eq 16) by more than :data:`SPAN_MISS_SHARE` of
+    the change and :data:`SPAN_MISS_NOISE` × its sample noise: a thruster's position, direction
+    or name in the model file is wrong, and no thrust could fit."""
+    fired = np.unique(log.thruster)
+    q = spacecraft.moment_matrix[:, fired]                       # (3, k) N m per N
+    u, sv, _ = np.linalg.svd(q, full_matrices=True)
+    rank = int(np.sum(sv > 1e-6 * max(float(np.max(sv, initial=0.0)), 1e-300)))
+    if rank == 3:
+        return
+    h, _, _ = _wheel_momentum(tel, spacecraft)
+    v = np.asarray(impulse_lhs(tel.t, tel.omega, inertia, h))    # (n, 3) N m s
+    miss = (v - v[0]) @ u[:, rank:]                              # outside the torques' span
+    swing = float(np.max(np.linalg.norm(v - v[0], axis=1)))
+    worst = int(np.argmax(np.linalg.norm(miss, axis=1)))
+    miss_swing = float(np.linalg.norm(miss[worst]))
+    noise = float(np.median(np.linalg.norm(np.diff(miss, axis=0), axis=1))) / 0.6745
+    if miss_swing > SPAN_MISS_SHARE * swing and miss_swing > SPAN_MISS_NOISE * noise:
+        names = " ".join(spacecraft.thruster_names[i] for i in fired)
+        axis = np.array2string(u[:, rank:] @ miss[worst] / miss_swing, precision=2,
+                               suppress_small=True)
+        raise InputError(f"the momentum changes by {miss_swing:.3g} N m s about body axis {axis}"
+                         f" ({miss_swing / swing:.0%} of the event's {swing:.3g} N m s), which "
+                         f"the fired thrusters {names} cannot torque: check their position, "
+                         "direction and names in the spacecraft model",
+                         path=tel.source)
+
+
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
                    layout, i_lin: np.ndarray, robust: bool) -> tuple[dict, np.ndarray, np.ndarray]:
     """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
@@ -279,6 +314,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     n_ev = len(tels)
     i_fixed = np.asarray(spacecraft.inertia, float)
     i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
+    for tel, log in zip(tels, logs):
+        _check_torque_span(tel, log, spacecraft, i_lin)
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors)
