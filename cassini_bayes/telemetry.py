@@ -62,7 +62,6 @@ from __future__ import annotations
 import csv
 import itertools
 import os
-import tempfile
 import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -70,10 +69,11 @@ from pathlib import Path
 
 import numpy as np
 
-from cassini_bayes._file_mode import default_file_mode
+from cassini_bayes.files import atomic_path
 from cassini_bayes._paths import input_path, not_utf8
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = [
     "Telemetry",
@@ -111,7 +111,6 @@ __all__ = [
     "RATE_NOISE_FLOORS",
 ]
 
-RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
 """Cassini's wheels: the telemetry's wheel columns ``rwa1 … rwa4`` when no model names others."""
 IDLE_RPM = 1.0
@@ -799,25 +798,15 @@ def read_telemetry_many(paths: Iterable[str | os.PathLike], *, check_units: bool
 
 
 def _atomic_write(path: Path, force: bool, write) -> None:
-    """Write via a temporary file in the same directory, then ``os.replace``."""
+    """Write with ``write(tmp)`` atomically (:func:`cassini_bayes.files.atomic_path`)."""
     if path.exists() and not force:
         raise InputError("already exists; choose another path or pass force=True to overwrite",
                          path=str(path))
     if not path.parent.exists():
         raise InputError(f"directory '{path.parent}' does not exist; create it first",
                          path=str(path))
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        os.chmod(tmp, default_file_mode())
-        write(Path(tmp))
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    with atomic_path(path) as tmp:
+        write(tmp)
 
 
 def _cell(x: object) -> str:

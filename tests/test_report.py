@@ -382,7 +382,7 @@ def test_diagnostics_judge_what_the_fit_judged(tmp_path):
     roles = {r.label: r.role for r in diag.rows}
     assert roles["Ixx"] == "parameter" and roles["sigma_H"] == "nuisance"
     assert "z" not in roles and diag.sampler == {"z": 1, "H0": 3}   # listed, not judged
-    assert diag.max_r_hat == max(r.r_hat for r in diag.rows) < 1.05
+    assert diag.overall.max_r_hat == max(r.r_hat for r in diag.rows) < 1.05
     html = build_report(run).read_text(encoding="utf-8")
     assert "Sampler coordinates, not judged" in html and "z (1)" in html
 

@@ -71,7 +71,8 @@ def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
     ``display_dir`` is the directory the report names (the final one when ``run_dir`` is a
     temporary sibling).
     """
-    from cassini_bayes.rundir import write_config, write_posterior, write_report, write_summary
+    from cassini_bayes.report import write_report
+    from cassini_bayes.rundir import write_config, write_posterior, write_summary
 
     write_posterior(run_dir, idata)
     write_summary(run_dir, summary)
@@ -134,12 +135,12 @@ class FitResult:
 
     @property
     def diagnostics(self):
-        """:class:`~cassini_bayes.inference.runner.Diagnostics` (R-hat, ESS, divergences)."""
+        """:class:`~cassini_bayes.diagnostics.Diagnostics` (R-hat, ESS, divergences)."""
         return self.posterior.diagnostics
 
     @property
     def converged(self) -> bool:
-        """Whether the sampler converged (max R-hat ≤ 1.01, min bulk ESS ≥ 400, no divergences)."""
+        """Whether the sampler converged (the rule of :mod:`cassini_bayes.diagnostics`)."""
         return bool(self._summary["diagnostics"]["converged"])
 
     @property

@@ -26,7 +26,6 @@ re-runnable as it is) and ``figures/*.png``.
 from __future__ import annotations
 
 import importlib
-import json
 import math
 import os
 import pkgutil
@@ -39,13 +38,14 @@ from pathlib import Path
 from typing import Any
 
 import jax
-import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, not_utf8
 from cassini_bayes.analysis.paper_facts import fact
+from cassini_bayes.diagnostics import ESS_BULK_MIN, R_HAT_MAX, Diagnostics
 from cassini_bayes.errors import InputError
+from cassini_bayes.files import json_text, toml_text
 
 __all__ = [
     "Check",
@@ -106,18 +106,18 @@ class Check:
         return f"{self.ours:.{self.decimals}f} {self.unit}".strip()
 
     def to_dict(self) -> dict[str, Any]:
-        return {"label": self.label, "ours": _json_float(self.ours), "unit": self.unit,
+        return {"label": self.label, "ours": self.ours, "unit": self.unit,
                 "fact_id": self.fact_id, "paper": self.paper, "passed": self.passed,
                 "note": self.note}
 
 
-def convergence_check(what: str, diagnostics, quick: bool = False) -> Check:
-    """A check row saying whether a fit's sampler converged (max R-hat ≤ 1.01, min bulk ESS ≥
-    400, no divergences). Under ``--quick`` the runs are too short to judge: the row is shown
-    but not counted (``passed=None``)."""
+def convergence_check(what: str, diagnostics: Diagnostics, quick: bool = False) -> Check:
+    """A check row saying whether a fit's sampler converged (the rule of
+    :mod:`cassini_bayes.diagnostics`). Under ``--quick`` the runs are too short to judge: the
+    row is shown but not counted (``passed=None``)."""
     d = diagnostics
     note = (f"min bulk ESS {d.min_ess_bulk:.0f}, {d.divergences} divergences "
-            "(R-hat ≤ 1.01, ESS ≥ 400, no divergences)")
+            f"(R-hat ≤ {R_HAT_MAX}, ESS ≥ {ESS_BULK_MIN:g}, no divergences)")
     if quick:
         note += "; --quick: too few draws to judge, not counted"
     return Check(f"{what}: sampler converged", float(d.max_r_hat), "max R-hat", decimals=3,
@@ -466,26 +466,6 @@ class RunRecord:
     elapsed_s: float
 
 
-def _json_float(x: Any) -> Any:
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
-
-
-def _jsonable(x: Any) -> Any:
-    if isinstance(x, Mapping):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, (np.ndarray, jax.Array)):
-        return _jsonable(np.asarray(x).tolist())
-    if isinstance(x, np.generic):
-        return _jsonable(x.item())
-    if isinstance(x, float):
-        return _json_float(x)
-    return x
-
-
 def _config_dict(exp: Experiment, settings: Mapping[str, Any], seed: int, quick: bool) -> dict:
     d: dict[str, Any] = {"kind": exp.kind.name, "title": exp.title}
     if exp.description:
@@ -498,8 +478,6 @@ def _config_dict(exp: Experiment, settings: Mapping[str, Any], seed: int, quick:
 def write_run(exp: Experiment, workdir: Path, output: ExperimentOutput,
               settings: Mapping[str, Any], seed: int, quick: bool, elapsed_s: float) -> None:
     """Write ``results.json``, ``config.toml``, ``figures/*.png``, ``report.html`` into ``workdir``."""
-    import tomli_w
-
     from cassini_bayes.experiments._page import experiment_page
 
     fig_dir = workdir / "figures"
@@ -518,9 +496,8 @@ def write_run(exp: Experiment, workdir: Path, output: ExperimentOutput,
         "tables": [t.to_dict() for t in output.tables],
         "links": [{"label": label, "path": path} for label, path in output.links],
     }
-    (workdir / "results.json").write_text(json.dumps(_jsonable(results), indent=2,
-                                                     allow_nan=False) + "\n")
-    (workdir / "config.toml").write_text(tomli_w.dumps(_config_dict(exp, settings, seed, quick)))
+    (workdir / "results.json").write_text(json_text(results))
+    (workdir / "config.toml").write_text(toml_text(_config_dict(exp, settings, seed, quick)))
     (workdir / "report.html").write_text(
         experiment_page(exp, output, settings, seed, quick, elapsed_s), encoding="utf-8")
 

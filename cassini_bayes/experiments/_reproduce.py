@@ -10,7 +10,6 @@ written atomically.
 
 from __future__ import annotations
 
-import json
 import os
 import time
 import tomllib
@@ -32,6 +31,7 @@ from cassini_bayes.experiments._core import (
     registered_kinds,
     run_into,
 )
+from cassini_bayes.files import json_text
 
 __all__ = ["ReproduceResult", "ExperimentStatus", "discover_experiments", "reproduce"]
 
@@ -172,5 +172,5 @@ def _write_summary(tmp: Path, result: ReproduceResult, seed: int, quick: bool) -
         "checks": rows,
         "uncovered_facts": sorted({f.id for f in PAPER_FACTS} - {r["fact_id"] for r in rows}),
     }
-    (tmp / "results.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (tmp / "results.json").write_text(json_text(summary))
     (tmp / "report.html").write_text(reproduce_page(result, seed, quick), encoding="utf-8")

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes.diagnostics import ESS_BULK_MIN, R_HAT_MAX
 from cassini_bayes.names import U4_NAMES
 from cassini_bayes.report import figures
 from cassini_bayes.report.adequacy import adequacy_badge, adequacy_section
@@ -36,15 +37,13 @@ from cassini_bayes.report.html import (
     preformatted,
     section,
     table,
-    write_atomic,
 )
-from cassini_bayes.report.rundata import RunData, finite_or_none, flatten_draws, load_run
+from cassini_bayes.files import finite_or_none, write_text
+from cassini_bayes.report.rundata import RunData, flatten_draws, load_run
 from cassini_bayes.report.tables import (
     BFMI_MIN,
-    ESS_MIN,
-    RHAT_MAX,
     BudgetCheck,
-    Diagnostics,
+    DiagnosticTable,
     ParameterRow,
     decimals_for,
     derived_rows,
@@ -103,7 +102,7 @@ def build_report(
     """
     run = load_run(run_dir)
     out = Path(out) if out is not None else run.run_dir / "report.html"
-    return write_atomic(out, render_report(run, display_dir=display_dir))
+    return write_text(out, render_report(run, display_dir=display_dir))
 
 
 def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str:
@@ -161,7 +160,7 @@ def verdict_badges(summary: dict, *, converged: bool | None = None,
     return " ".join(out)
 
 
-def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow],
+def _header(run: RunData, diag: DiagnosticTable, rows: list[ParameterRow],
             checks: list[BudgetCheck], problems: list[str], shown: Path) -> str:
     cfg = run.config
     seed = run.summary.get("seed", cfg.get("seed", "–"))
@@ -170,26 +169,26 @@ def _header(run: RunData, diag: Diagnostics, rows: list[ParameterRow],
     meta = (f"{run.kind} — {KIND_TITLES.get(run.kind, 'unknown kind')} · {shown} · seed {seed} · "
             f"cassini-bayes {version} · {diag.chains} chains × {diag.draws} draws")
     badges = (f"{verdict_badges(run.summary, converged=diag.converged, checks=checks)}"
-              f' <span class="na">({esc(src)} verdict: max R-hat ≤ {RHAT_MAX}, min bulk ESS ≥ '
-              f"{ESS_MIN:g}, no divergences)</span>")
+              f' <span class="na">({esc(src)} verdict: max R-hat ≤ {R_HAT_MAX}, min bulk ESS ≥ '
+              f"{ESS_BULK_MIN:g}, no divergences)</span>")
     return page_header(badges, meta, _warnings(run, diag, rows) + problems)
 
 
-def _warnings(run: RunData, diag: Diagnostics, rows: list[ParameterRow]) -> list[str]:
+def _warnings(run: RunData, diag: DiagnosticTable, rows: list[ParameterRow]) -> list[str]:
     w = [str(x) for x in (run.summary.get("warnings") or [])]
     w += list(run.notes)
     if diag.divergences:
         w.append(f"{diag.divergences} divergent transitions: the posterior may be biased")
-    if np.isfinite(diag.max_r_hat) and diag.max_r_hat > RHAT_MAX:
-        w.append(f"max R-hat {diag.max_r_hat:.4f} > {RHAT_MAX}: chains disagree")
-    if np.isfinite(diag.min_ess_bulk) and diag.min_ess_bulk < ESS_MIN:
-        w.append(f"min bulk ESS {diag.min_ess_bulk:.0f} < {ESS_MIN:g}")
+    if np.isfinite(diag.overall.max_r_hat) and diag.overall.max_r_hat > R_HAT_MAX:
+        w.append(f"max R-hat {diag.overall.max_r_hat:.4f} > {R_HAT_MAX}: chains disagree")
+    if np.isfinite(diag.overall.min_ess_bulk) and diag.overall.min_ess_bulk < ESS_BULK_MIN:
+        w.append(f"min bulk ESS {diag.overall.min_ess_bulk:.0f} < {ESS_BULK_MIN:g}")
     if diag.bfmi is not None and np.any(diag.bfmi < BFMI_MIN):
         w.append(f"energy BFMI below {BFMI_MIN} in chain(s) "
                  f"{', '.join(str(i) for i in np.flatnonzero(diag.bfmi < BFMI_MIN))}")
-    if diag.converged_summary is not None and diag.converged_summary != diag.converged_recomputed:
+    if diag.converged_summary is not None and diag.converged_summary != diag.overall.converged:
         w.append(f"the fit's verdict (converged = {diag.converged_summary}) differs from this "
-                 f"report's check on posterior.nc (R-hat ≤ {RHAT_MAX}, bulk ESS ≥ {ESS_MIN:g}, "
+                 f"report's check on posterior.nc (R-hat ≤ {R_HAT_MAX}, bulk ESS ≥ {ESS_BULK_MIN:g}, "
                  "no divergences)")
     weak = [r.label for r in rows if r.flag]
     if weak:
@@ -453,11 +452,11 @@ def _residuals_section(run: RunData, fig) -> Section:
 
 
 def _cls_rhat(x: float) -> str:
-    return "" if not np.isfinite(x) else ("bad" if x > RHAT_MAX else "good")
+    return "" if not np.isfinite(x) else ("bad" if x > R_HAT_MAX else "good")
 
 
 def _cls_ess(x: float) -> str:
-    return "" if not np.isfinite(x) else ("bad" if x < ESS_MIN else "good")
+    return "" if not np.isfinite(x) else ("bad" if x < ESS_BULK_MIN else "good")
 
 
 def _ok_badge(cls: str) -> Raw:
@@ -465,19 +464,19 @@ def _ok_badge(cls: str) -> Raw:
                      None if not cls else cls == "good"))
 
 
-def _overview_table(diag: Diagnostics) -> str:
+def _overview_table(diag: DiagnosticTable) -> str:
     bfmi_txt = ("–" if diag.bfmi is None else ", ".join(f"{b:.2f}" for b in diag.bfmi))
     bfmi_ok = None if diag.bfmi is None else bool(np.all(diag.bfmi >= BFMI_MIN))
     div_txt = "not recorded" if diag.divergences is None else str(diag.divergences)
     return table(
         ["check", "value", "threshold", "status"],
         [
-            ["max R-hat", fmt(diag.max_r_hat, 4), f"≤ {RHAT_MAX}",
-             _ok_badge(_cls_rhat(diag.max_r_hat))],
-            ["min bulk ESS", fmt(diag.min_ess_bulk, 0), f"≥ {ESS_MIN:g}",
-             _ok_badge(_cls_ess(diag.min_ess_bulk))],
-            ["min tail ESS", fmt(diag.min_ess_tail, 0), f"≥ {ESS_MIN:g} (advisory)",
-             _ok_badge(_cls_ess(diag.min_ess_tail))],
+            ["max R-hat", fmt(diag.overall.max_r_hat, 4), f"≤ {R_HAT_MAX}",
+             _ok_badge(_cls_rhat(diag.overall.max_r_hat))],
+            ["min bulk ESS", fmt(diag.overall.min_ess_bulk, 0), f"≥ {ESS_BULK_MIN:g}",
+             _ok_badge(_cls_ess(diag.overall.min_ess_bulk))],
+            ["min tail ESS", fmt(diag.overall.min_ess_tail, 0), f"≥ {ESS_BULK_MIN:g} (advisory)",
+             _ok_badge(_cls_ess(diag.overall.min_ess_tail))],
             ["divergences", div_txt, "0",
              Raw(badge("ok" if diag.divergences == 0 else
                        ("n/a" if diag.divergences is None else "check"),
@@ -488,7 +487,7 @@ def _overview_table(diag: Diagnostics) -> str:
     )
 
 
-def _per_variable_table(diag: Diagnostics) -> str:
+def _per_variable_table(diag: DiagnosticTable) -> str:
     rows, classes = [], []
     for r in diag.rows:
         d = decimals_for(r.sd)
@@ -520,7 +519,7 @@ def _correlation_table(post: dict[str, np.ndarray]) -> str:
     return table([""] + labels, rows, left=1, classes=classes)
 
 
-def _diagnostics_section(run: RunData, names, diag: Diagnostics, rows: list[ParameterRow],
+def _diagnostics_section(run: RunData, names, diag: DiagnosticTable, rows: list[ParameterRow],
                          fig) -> Section:
     post = flatten_draws(run.posterior, names)
     units = {r.label: r.unit for r in rows}

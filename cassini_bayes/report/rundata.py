@@ -1,5 +1,6 @@
 """Reading a run directory (docs/design.md §4.4) for the report: ``posterior.nc``, ``summary.json``,
-``config.toml``.
+``config.toml`` (the JSON and TOML files through :func:`cassini_bayes.rundir.read_run_file`, the
+reader of every run directory).
 
 ``posterior.nc`` is read with h5py straight into NumPy arrays (:class:`Group`, :class:`Var`):
 ArviZ and xarray are not imported to read it, which keeps ``cassini-bayes report DIR`` under a
@@ -16,20 +17,18 @@ configuration listing. Anything present but unreadable is an
 
 from __future__ import annotations
 
-import json
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_kind
+from cassini_bayes.rundir import read_run_file, run_command
 
 __all__ = ["Var", "Group", "RunData", "load_run", "read_groups", "flatten_draws",
-           "component_label", "KINDS", "check_same_run", "finite_or_none"]
+           "component_label", "KINDS", "check_same_run"]
 
 KINDS = ("inertia", "thrust", "rwa4")
 _FIT_COMMANDS = {f"fit {k}": k for k in KINDS}
@@ -266,8 +265,6 @@ def load_run(run_dir: str | Path) -> RunData:
         raise InputError(f"{run_dir}: run directory not found; pass the --out directory of a fit")
     nc = run_dir / "posterior.nc"
     if not nc.is_file():
-        from cassini_bayes.run_kind import run_command
-
         command = run_command(run_dir)
         if command is not None and command not in ("fit inertia", "fit thrust", "fit rwa4"):
             raise InputError(f"{run_dir}: a `{command}` run; `report` rebuilds the page of a "
@@ -285,26 +282,18 @@ def load_run(run_dir: str | Path) -> RunData:
         raise InputError(f"{nc}: has no posterior group; re-run the fit that wrote it")
 
     notes: list[str] = []
-    summary: dict = {}
-    sj = run_dir / "summary.json"
-    if sj.is_file():
-        try:
-            summary = json.loads(sj.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise InputError(f"{sj}: not valid JSON ({e}); re-run the fit or fix the file")
-        if not isinstance(summary, dict):
-            raise InputError(f"{sj}: expected a JSON object at the top level")
-    else:
+    summary = read_run_file(run_dir, "summary.json", strict=True)
+    if summary is None:
+        summary = {}
         notes.append("summary.json not found: baseline and truth columns are empty")
 
     config_text, config = None, None
     ct = run_dir / "config.toml"
     if ct.is_file():
         config_text = ct.read_text(encoding="utf-8", errors="replace")
-        try:
-            config = tomllib.loads(config_text)
-        except tomllib.TOMLDecodeError as e:
-            notes.append(f"config.toml is not valid TOML ({e})")
+        config = read_run_file(run_dir, "config.toml")
+        if config is None:
+            notes.append("config.toml is not valid TOML")
 
     check_same_run(run_dir, groups["posterior"], summary, config)
     kind = summary.get("kind") or _infer_kind(set(groups["posterior"].vars))
@@ -352,12 +341,3 @@ def flatten_draws(group: Group | None, names) -> dict[str, np.ndarray]:
             lab = tuple(labels[k][i] for k, i in enumerate(idx))
             out[component_label(name, lab)] = vals[(slice(None), slice(None)) + idx]
     return out
-
-
-def finite_or_none(x: Any) -> float | None:
-    """``float(x)`` when it is a finite number, else ``None`` (JSON nulls, NaN, strings)."""
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return None
-    return v if math.isfinite(v) else None
