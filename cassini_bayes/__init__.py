@@ -23,27 +23,45 @@ uses the package's modules directly calls ``cassini_bayes.setup_jax()`` once aft
 (docs/api.md, "JAX settings").
 """
 
-import sys
-import types
-import importlib
+import importlib as _importlib
+import sys as _sys
+import types as _types
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "FitResult",
+    "InputError",
+    "PulseLog",
+    "Simulation",
+    "Spacecraft",
+    "Telemetry",
+    "VectorTree",
     "__version__",
-    "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
-    "fit_inertia", "fit_thrust", "fit_rwa4",
-    "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
-    "InputError", "setup_jax", "request_host_devices",
-    "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
-    "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
+    "budget",
+    "check_telemetry",
+    "fit_chebyshev_segments",
+    "fit_health",
+    "fit_inertia",
+    "fit_rwa4",
+    "fit_thrust",
+    "fit_trajectory",
+    "load_spacecraft",
+    "monitor_leak",
+    "propagate_conic",
+    "read_pulses",
+    "read_telemetry",
+    "request_host_devices",
+    "setup_jax",
+    "simulate",
+    "simulate_health_campaign",
 ]
 
 def _api():
     """:mod:`cassini_bayes.api`, imported on first use. By name: the package's modules import
     ``__version__`` from here, and the layering contracts (``lint-imports``) must not read that
     as a dependency of every layer on the API, which this module never imports on its own."""
-    return importlib.import_module("cassini_bayes.api")
+    return _importlib.import_module("cassini_bayes.api")
 
 
 def __getattr__(name: str):
@@ -58,10 +76,12 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    """The public names (``__all__``) and the module's own dunders: no helpers, no imported
+    modules, no subpackages."""
+    return sorted(set(__all__) | {n for n in globals() if n.startswith("__") and n.endswith("__")})
 
 
-class _Package(types.ModuleType):
+class _Package(_types.ModuleType):
     """The module type of this package, for one name: ``cassini_bayes.simulate`` is the public
     :func:`~cassini_bayes.api.simulate` function, although the simulator's subpackage has the
     same name (import from it as usual: ``from cassini_bayes.simulate import load_scenario``;
@@ -77,4 +97,4 @@ class _Package(types.ModuleType):
         reachable in ``sys.modules``, the name keeps the function."""
 
 
-sys.modules[__name__].__class__ = _Package
+_sys.modules[__name__].__class__ = _Package

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-__all__ = ["R_HAT_MAX", "ESS_BULK_MIN", "Diagnostics", "converged"]
+__all__ = ["ESS_BULK_MIN", "R_HAT_MAX", "Diagnostics", "converged"]
 
 R_HAT_MAX = 1.01
 """Largest rank-normalised split R-hat of a converged fit (Vehtari et al. 2021)."""

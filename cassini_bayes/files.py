@@ -33,10 +33,25 @@ from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["default_file_mode", "default_dir_mode", "atomic_path", "write_text", "write_bytes",
-           "write_json", "write_toml", "json_text", "toml_text", "json_clean", "toml_clean",
-           "finite_or_none", "make_temp_dir", "sync_tree", "sync_dir", "exchange_dirs",
-           "publish_dir"]
+__all__ = [
+    "atomic_path",
+    "default_dir_mode",
+    "default_file_mode",
+    "exchange_dirs",
+    "finite_or_none",
+    "json_clean",
+    "json_text",
+    "make_temp_dir",
+    "publish_dir",
+    "sync_dir",
+    "sync_tree",
+    "toml_clean",
+    "toml_text",
+    "write_bytes",
+    "write_json",
+    "write_text",
+    "write_toml",
+]
 
 
 def _umask() -> int:
@@ -179,7 +194,7 @@ def make_temp_dir(parent: str | os.PathLike, prefix: str) -> Path:
 
 def sync_tree(root: str | os.PathLike) -> None:
     """``fsync`` every file and folder under ``root`` (before it is published by a rename)."""
-    for here, _, names in os.walk(root):
+    for here, _, names in os.walk(os.fspath(root)):
         for name in names:
             p = os.path.join(here, name)
             if not os.path.islink(p):

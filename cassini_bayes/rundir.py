@@ -52,11 +52,12 @@ import socket
 import tempfile
 import tomllib
 import warnings
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from typing import TYPE_CHECKING, Any, Literal
 
-from cassini_bayes.files import json_text, make_temp_dir, publish_dir, toml_text
 from cassini_bayes.errors import InputError, as_flag, spelled
+from cassini_bayes.files import json_text, make_temp_dir, publish_dir, toml_text
 from cassini_bayes.names import a_kind, unit_of
 
 if TYPE_CHECKING:
@@ -134,7 +135,7 @@ def sweep_stale(parent: Path) -> list[Path]:
     ended without cleaning up (killed by SIGKILL, a crash of the machine); returns them. Only
     directories this package made (their :data:`TEMP_MARK`) and whose process on this host is
     gone (:func:`_writer_ended`) are removed."""
-    removed = []
+    removed: list[Path] = []
     try:
         entries = [p for p in Path(parent).iterdir()
                    if p.name.startswith(".") and ".tmp-" in p.name and p.is_dir()
@@ -338,9 +339,11 @@ class RunDir:
                  inputs: Iterable[str | os.PathLike] = ()):
         self.final = check_out(out, force=force, inputs=inputs)
         self.force = force
-        self.path: Path | None = None
 
-    def __enter__(self) -> "RunDir":
+    path: Path
+    """The temporary directory to write into (set on entering the context)."""
+
+    def __enter__(self) -> RunDir:
         parent = self.final.parent
         try:
             parent.mkdir(parents=True, exist_ok=True)
@@ -356,7 +359,7 @@ class RunDir:
             raise
         return self
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type, exc, tb) -> Literal[False]:
         if exc_type is not None:
             _discard(self.path)
             return False

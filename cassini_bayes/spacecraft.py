@@ -17,6 +17,7 @@ optional wheel limits. Wheel axes and thrust directions are unit vectors in body
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -28,6 +29,7 @@ from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
            "WHEEL_SPEED_NOMINAL_RPM",
@@ -384,7 +386,7 @@ def _capacity_nms(wheels: Sequence[Wheel]) -> float:
     """:attr:`Spacecraft.momentum_capacity_nms` of ``wheels``, N m s."""
     return float(sum(w.inertia * (w.max_speed_rpm if np.isfinite(w.max_speed_rpm)
                                   else WHEEL_SPEED_NOMINAL_RPM) for w in wheels)
-                 * 2.0 * np.pi / 60.0)
+                 * RPM_TO_RAD_S)
 
 
 def _default_com_sd(thrusters: Sequence[Thruster]) -> float:
@@ -770,7 +772,7 @@ def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
     return Knowledge(**kw)
 
 
-def load_spacecraft(path: str | Path) -> Spacecraft:
+def load_spacecraft(path: str | os.PathLike) -> Spacecraft:
     """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
     if as_path(path, "a spacecraft model .toml file or a shipped model's name").is_dir():
         raise InputError("is a directory, expected a spacecraft model .toml file", path=str(path))

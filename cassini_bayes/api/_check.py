@@ -10,11 +10,15 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
+
+if TYPE_CHECKING:
+    from cassini_bayes.consistency import AttitudeAgreement, MomentumScale
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
 
@@ -62,8 +66,8 @@ class TelemetryCheck:
     t: np.ndarray
     max_rate_rad_s: float
     max_turn_rad: float
-    attitude: object
-    momentum: object
+    attitude: AttitudeAgreement | None
+    momentum: MomentumScale | None
     physics: str
     wheels: tuple[WheelStats, ...]
     thruster_source: str | None
@@ -170,8 +174,12 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         The first rule or physics check the file breaks, in one line naming where.
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
-    from cassini_bayes.consistency import (GyroBiasWarning, QuantisedRatesWarning,
-                                           check_telemetry_data, quantised_rates)
+    from cassini_bayes.consistency import (
+        GyroBiasWarning,
+        QuantisedRatesWarning,
+        check_telemetry_data,
+        quantised_rates,
+    )
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
@@ -219,7 +227,8 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
             total = float(on[-1] - on[0])
             if total <= 0:
                 continue
-            count = (int(np.count_nonzero(log.thruster == k)) if source != "on_* columns"
+            count = (int(np.count_nonzero(log.thruster == k))
+                     if log is not None and source != "on_* columns"
                      else _pulse_count(on))
             thrusters.append(ThrusterStats(name, count, total))
     quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,

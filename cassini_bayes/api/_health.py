@@ -12,12 +12,17 @@ import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
+
+if TYPE_CHECKING:
+    from cassini_bayes.inference.health.changepoint import HealthPosterior
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
            "HEALTH_FRACTION"]
@@ -33,7 +38,7 @@ class HealthResult:
     the per-event ``summaries``, the event ``files`` ((date, telemetry, pulses) each), the loss
     ``fraction``, the JSON ``summary`` and the ``config``."""
 
-    posterior: object
+    posterior: HealthPosterior
     summaries: tuple
     files: tuple
     fraction: float
@@ -276,9 +281,9 @@ def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | No
     and ``truth.json`` (dates, true thrusts, the degradation); atomically."""
     from cassini_bayes.api._inputs import check_seed
     from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.rundir import RunDir
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
-    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.telemetry import write_pulses, write_telemetry
 
     camp = load_campaign(campaign)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import functools
 import numbers
 import os
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -86,8 +87,12 @@ def telemetry_inputs(telemetry, name: str = "telemetry", spacecraft: Spacecraft 
     with the columns of ``spacecraft``'s wheels and thrusters (Cassini's without one), and a
     Telemetry must name wheels of it."""
     from cassini_bayes.rundir import file_record
-    from cassini_bayes.telemetry import (check_model_names, read_telemetry, read_telemetry_many,
-                                         validate_telemetry)
+    from cassini_bayes.telemetry import (
+        check_model_names,
+        read_telemetry,
+        read_telemetry_many,
+        validate_telemetry,
+    )
 
     items = _items(telemetry, name)
     if not items:
@@ -208,14 +213,18 @@ def choice(name: str, value: str, choices: Sequence[str]) -> str:
     return value
 
 
-def number(name: str, value, *, lo: float | None = None, hi: float | None = None,
+def _finite_within(value: Any, lo: float | None, hi: float | None) -> bool:
+    return bool(np.isfinite(value) and (lo is None or value >= lo) and (hi is None or value <= hi))
+
+
+def number(name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
            integer: bool = False, where: str | None = None) -> float | int:
     """``value`` when it is a real number (an integer with ``integer``) in ``[lo, hi]``, else
     an InputError naming the argument (``where``: its name as spelled, default
     :func:`~cassini_bayes.errors.arg`'s)."""
     kind = numbers.Integral if integer else numbers.Real   # NumPy scalars included
-    ok = (not isinstance(value, bool) and isinstance(value, kind) and np.isfinite(value)
-          and (lo is None or value >= lo) and (hi is None or value <= hi))
+    ok = (not isinstance(value, bool) and isinstance(value, kind)
+          and _finite_within(value, lo, hi))
     if not ok:
         want = "an integer" if integer else "a number"
         rng = (f" in {lo:g} .. {hi:g}" if lo is not None and hi is not None else

@@ -10,12 +10,17 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
+
+if TYPE_CHECKING:
+    from cassini_bayes.estimators.leak import ThresholdResult
+    from cassini_bayes.inference.leak import LeakPosterior
 
 __all__ = ["LeakResult", "monitor_leak"]
 
@@ -27,8 +32,8 @@ class LeakResult:
     (:class:`~cassini_bayes.estimators.leak.ThresholdResult`), the ``summary`` (``summary.json``)
     and ``config`` (``config.toml``) dicts, and the input ``files``."""
 
-    posterior: object
-    lee: object
+    posterior: LeakPosterior
+    lee: ThresholdResult
     summary: dict
     config: dict
     files: tuple

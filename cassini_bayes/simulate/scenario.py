@@ -725,7 +725,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     )
 
 
-def load_scenario(path: str | Path) -> Scenario:
+def load_scenario(path: str | os.PathLike) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
     p = scenario_path(path)
     d = read_toml(p, "scenario", "experiments/scenarios/")
