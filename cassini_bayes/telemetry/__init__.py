@@ -18,7 +18,6 @@ One idea a module; import the names from here:
 
 from cassini_bayes.names import THRUSTER_NAMES as THRUSTER_NAMES
 from cassini_bayes.telemetry import limits as limits
-
 from cassini_bayes.telemetry._files import _write_frame as _write_frame
 from cassini_bayes.telemetry._files import check_model_names as check_model_names
 from cassini_bayes.telemetry._files import read_telemetry as read_telemetry
