@@ -11,12 +11,13 @@ import pytest
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments import (
+    ExperimentKind,
     ExperimentOutput,
+    _registry,
     load_experiment,
     registered_kinds,
     run_experiment,
 )
-from cassini_bayes.experiments import _core
 
 SHIPPED = sorted(EXPERIMENTS_DIR.glob("*.toml"))
 RUNNABLE = [p for p in SHIPPED
@@ -133,9 +134,9 @@ def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
     def boom(key, settings, ctx):
         raise RuntimeError("kaboom")
 
-    kinds = dict(_core._KINDS)
-    kinds["test_boom"] = _core.ExperimentKind("test_boom", boom, {"n": 1})
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    kinds["test_boom"] = ExperimentKind("test_boom", boom, {"n": 1})
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
     path = _write(tmp_path, 'kind = "test_boom"\n')
     with pytest.raises(RuntimeError, match="kaboom"):
         run_experiment(path, tmp_path / "out")
@@ -145,8 +146,8 @@ def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
 
 def test_a_new_kind_is_one_function(tmp_path, monkeypatch):
     """The framework contract: register a function, write a two-line file, run it."""
-    kinds = dict(_core._KINDS)
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
 
     @_core.register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
     def square(key, settings, ctx):
@@ -187,8 +188,8 @@ def test_paper_fact_verdicts():
 
 
 def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
-    kinds = dict(_core._KINDS)
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
 
     @_core.register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
     def tables(key, settings, ctx):

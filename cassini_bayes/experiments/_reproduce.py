@@ -23,17 +23,12 @@ from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.analysis.paper_facts import PAPER_FACTS
 from cassini_bayes.errors import InputError
-from cassini_bayes.experiments._core import (
-    Experiment,
-    RunRecord,
-    experiment_from_dict,
-    experiment_key,
-    registered_kinds,
-    run_into,
-)
+from cassini_bayes.experiments._registry import registered_kinds
+from cassini_bayes.experiments._run import RunRecord, experiment_key, run_into
+from cassini_bayes.experiments._schema import Experiment, experiment_from_dict
 from cassini_bayes.files import json_text
 
-__all__ = ["ReproduceResult", "ExperimentStatus", "discover_experiments", "reproduce"]
+__all__ = ["ExperimentStatus", "ReproduceResult", "discover_experiments", "reproduce"]
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from cassini_bayes.analysis.paper_facts import (
     TABLE1_PARAMS,
     fact,
 )
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
@@ -178,9 +178,9 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
     ``torque`` (constant external torque in the posterior model), ``chains/warmup/draws`` (NUTS),
     ``weak_ratio_min`` (expected Izz sd ratio Post-PRM / Post-PROBE, the weak-Z check).
     """
+    from cassini_bayes.api import collect_warnings, inertia_summary
     from cassini_bayes.estimators.baseline import fit_inertia_baseline
     from cassini_bayes.estimators.inertia import table1_errors
-    from cassini_bayes.api import collect_warnings, inertia_summary
     from cassini_bayes.inference.inertia import fit_inertia
     from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
     from cassini_bayes.simulate import load_scenario, simulate

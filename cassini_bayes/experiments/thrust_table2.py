@@ -25,7 +25,7 @@ import jax
 import numpy as np
 
 from cassini_bayes.analysis.paper_facts import TABLE2, fact
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
