@@ -12,14 +12,13 @@ NumPyro model whose data arrive as keyword arguments, prepares those arrays once
   by ``vmap``), cached per (model, settings, chain method) and called with the data as
   arguments: fitting new data of the same shapes never recompiles (tested by counting XLA
   compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
-  a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
+  a new program on every ``run`` (docs/performance.md, "The sampler loop"),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
   the deepest tree). The command line and the fit functions ask JAX for one CPU device per
   core, and at least 4 (the default chains; more threads than cores still beats lock-step),
-  before the backend starts (``jax_num_cpu_devices``, :func:`cassini_bayes.setup_jax`);
-  measured with benchmarks/bench_inertia.py on the 2-core machine, 4 × 2000 iterations: 1.8 s
-  parallel vs 3.1 s vectorized (loaded machine),
+  before the backend starts (``jax_num_cpu_devices``, :func:`cassini_bayes.setup_jax`):
+  parallel chains finish sooner than lock-step ones (docs/performance.md, "The sampler loop"),
 * shows a rich progress bar when asked, as a step of :mod:`cassini_bayes.inference.progress`:
   the loop runs in about ten calls of one program (:func:`_build_sampler`), so the bar needs no
   callback inside the compiled code and the same programs, all kept by the persistent

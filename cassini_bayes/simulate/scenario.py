@@ -78,9 +78,8 @@ __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "Flex
 
 _UNIT_TOL = 1e-6
 MAX_STEPS = 2_000_000
-"""Most integration steps ``duration_s / dt_s`` of one scenario. Measured peak memory of
-``simulate`` is ~0.5 GB plus ~350 bytes per step (8 steps per sample), so ~1.2 GB at the limit
-(docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
+"""Most integration steps ``duration_s / dt_s`` of one scenario: ``simulate``'s memory grows with
+the steps (per-step cost: docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
 MAX_SAMPLES = MAX_ROWS
 """Most telemetry samples ``duration_s / sample_period_s + 1`` of one scenario: the telemetry file
 row limit :data:`cassini_bayes.telemetry.MAX_ROWS`, so every simulated file can be read back."""

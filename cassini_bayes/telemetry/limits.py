@@ -69,9 +69,9 @@ WHEEL_RPM_MAX = 1e4
 OMEGA_ABS_MAX = 5.0
 """Largest body-rate component magnitude, rad/s, checked even without the unit heuristics."""
 MAX_ROWS = 200_000
-"""Most data rows of one telemetry file, and of all the files of one fit together (measured
-peak memory: ~0.35 kB per row to read and check, ~4-5 kB per row to prepare an inertia fit, so
-~1 GB at the limit; docs/limits.md). 55 h at 1 Hz; longer records: decimate or split."""
+"""Most data rows of one telemetry file, and of all the files of one fit together: reading and
+preparing a fit take memory in proportion to the rows (per-row costs: docs/limits.md). 55 h at
+1 Hz; longer records: decimate or split."""
 _CHUNK_ROWS = 8192  # CSV rows parsed to floats at a time (bounds the text held in memory)
 PULSE_WIDTH_MAX = 3600.0
 """Longest accepted pulse width, s (Cassini's RCS pulses are below a second)."""
