@@ -14,7 +14,7 @@ The rules (all writers, run directories included):
   the umask): ``tempfile``, behind every atomic write, makes its files and folders private.
 - **JSON.** NaN and infinities are written as ``null`` (JSON has neither); arrays and NumPy or
   JAX scalars as lists and numbers (:func:`json_clean`). **TOML** has no null: ``None`` entries
-  are dropped (:func:`toml_clean`).
+  are dropped (:func:`_toml_clean`).
 
 No heavy imports: any layer may use this module.
 """
@@ -35,22 +35,15 @@ from typing import Any
 
 __all__ = [
     "atomic_path",
-    "default_dir_mode",
-    "default_file_mode",
     "exchange_dirs",
     "finite_or_none",
     "json_clean",
     "json_text",
     "make_temp_dir",
     "publish_dir",
-    "sync_dir",
-    "sync_tree",
-    "toml_clean",
     "toml_text",
     "write_bytes",
-    "write_json",
     "write_text",
-    "write_toml",
 ]
 
 
@@ -60,17 +53,17 @@ def _umask() -> int:
     return mask
 
 
-def default_file_mode() -> int:
+def _default_file_mode() -> int:
     """``0o666`` less the process's umask (what ``open`` gives a new file)."""
     return 0o666 & ~_umask()
 
 
-def default_dir_mode() -> int:
+def _default_dir_mode() -> int:
     """``0o777`` less the process's umask (what ``mkdir`` gives a new folder)."""
     return 0o777 & ~_umask()
 
 
-def sync_dir(path: str | os.PathLike) -> None:
+def _sync_dir(path: str | os.PathLike) -> None:
     """``fsync`` the folder ``path`` (its entries: a rename in it reaches the disk); ignored where
     the OS cannot open a folder for it."""
     try:
@@ -101,7 +94,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        os.chmod(tmp, default_file_mode())
+        os.chmod(tmp, _default_file_mode())
         yield Path(tmp)
         _sync_file(tmp)
         os.replace(tmp, path)
@@ -109,7 +102,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
-    sync_dir(path.parent)
+    _sync_dir(path.parent)
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
@@ -147,14 +140,14 @@ def json_clean(x: Any) -> Any:
     return x
 
 
-def toml_clean(x: Any) -> Any:
+def _toml_clean(x: Any) -> Any:
     """``x`` as TOML can hold it: ``None`` entries dropped (TOML has no null), arrays as lists."""
     if isinstance(x, Mapping):
-        return {str(k): toml_clean(v) for k, v in x.items() if v is not None}
+        return {str(k): _toml_clean(v) for k, v in x.items() if v is not None}
     if isinstance(x, (list, tuple)):
-        return [toml_clean(v) for v in x if v is not None]
+        return [_toml_clean(v) for v in x if v is not None]
     if hasattr(x, "tolist"):
-        return toml_clean(x.tolist())
+        return _toml_clean(x.tolist())
     return x
 
 
@@ -164,20 +157,12 @@ def json_text(obj: Any) -> str:
 
 
 def toml_text(obj: Mapping[str, Any]) -> str:
-    """``obj`` as the package writes TOML (:func:`toml_clean`)."""
+    """``obj`` as the package writes TOML (:func:`_toml_clean`)."""
     import tomli_w
 
-    return tomli_w.dumps(toml_clean(dict(obj)))
+    return tomli_w.dumps(_toml_clean(dict(obj)))
 
 
-def write_json(path: str | os.PathLike, obj: Any) -> Path:
-    """:func:`json_text` of ``obj`` to ``path``, atomically; returns ``path``."""
-    return write_text(path, json_text(obj))
-
-
-def write_toml(path: str | os.PathLike, obj: Mapping[str, Any]) -> Path:
-    """:func:`toml_text` of ``obj`` to ``path``, atomically; returns ``path``."""
-    return write_text(path, toml_text(obj))
 
 
 def make_temp_dir(parent: str | os.PathLike, prefix: str) -> Path:
@@ -185,21 +170,21 @@ def make_temp_dir(parent: str | os.PathLike, prefix: str) -> Path:
     makes it private; what is published from it is not)."""
     path = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
     try:
-        os.chmod(path, default_dir_mode())
+        os.chmod(path, _default_dir_mode())
     except BaseException:
         shutil.rmtree(path, ignore_errors=True)
         raise
     return path
 
 
-def sync_tree(root: str | os.PathLike) -> None:
+def _sync_tree(root: str | os.PathLike) -> None:
     """``fsync`` every file and folder under ``root`` (before it is published by a rename)."""
     for here, _, names in os.walk(os.fspath(root)):
         for name in names:
             p = os.path.join(here, name)
             if not os.path.islink(p):
                 _sync_file(p)
-        sync_dir(here)
+        _sync_dir(here)
 
 
 def exchange_dirs(a: Path, b: Path) -> bool:
@@ -230,11 +215,11 @@ def publish_dir(tmp: Path, final: Path, *,
     then renamed into place; an existing ``final`` is swapped out in one step where the OS can
     (else renamed aside just before) and then removed (``discard_old``, default
     ``shutil.rmtree``). A kill at any moment leaves the old or the new folder under ``final``."""
-    sync_tree(tmp)
+    _sync_tree(tmp)
     discard = discard_old or (lambda p: shutil.rmtree(p, ignore_errors=True))
     if final.exists() and any(final.iterdir()):
         if exchange_dirs(tmp, final):
-            sync_dir(final.parent)
+            _sync_dir(final.parent)
             discard(tmp)                       # now holds the old folder
             return
         old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=final.parent))
@@ -245,8 +230,8 @@ def publish_dir(tmp: Path, final: Path, *,
         except BaseException:
             os.replace(old, final)  # put the old folder back
             raise
-        sync_dir(final.parent)
+        _sync_dir(final.parent)
         shutil.rmtree(old, ignore_errors=True)
         return
     os.replace(tmp, final)  # new, or an empty folder
-    sync_dir(final.parent)
+    _sync_dir(final.parent)

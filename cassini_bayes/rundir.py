@@ -25,7 +25,7 @@ is renamed in. The old run is deleted last.
 A process killed outright (SIGKILL, a power cut) cannot remove its temporary directory. Each one
 holds a note of its writer (:data:`TEMP_MARK`: host, process id and start time), and every
 :class:`RunDir` first removes the temporary directories in its parent whose writer on this host
-has ended (:func:`sweep_stale`); a directory without the note, or written from another host or by
+has ended (:func:`_sweep_stale`); a directory without the note, or written from another host or by
 a process still running, is never touched.
 
 Usage::
@@ -88,7 +88,7 @@ def _process_start(pid: int) -> str | None:
 
 
 def _mark(tmp: Path) -> None:
-    """Note in the temporary directory ``tmp`` which process writes it (:func:`sweep_stale`)."""
+    """Note in the temporary directory ``tmp`` which process writes it (:func:`_sweep_stale`)."""
     (tmp / TEMP_MARK).write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
                                              "started": _process_start(os.getpid())}) + "\n")
 
@@ -116,7 +116,7 @@ def _writer_ended(tmp: Path) -> bool:
 
 def _discard(tmp: Path) -> None:
     """Remove a temporary directory, its :data:`TEMP_MARK` last (a kill half-way leaves a
-    directory that the next :func:`sweep_stale` still recognises); errors are ignored."""
+    directory that the next :func:`_sweep_stale` still recognises); errors are ignored."""
     try:
         entries = [p for p in tmp.iterdir() if p.name != TEMP_MARK]
     except OSError:
@@ -130,7 +130,7 @@ def _discard(tmp: Path) -> None:
     shutil.rmtree(tmp, ignore_errors=True)
 
 
-def sweep_stale(parent: Path) -> list[Path]:
+def _sweep_stale(parent: Path) -> list[Path]:
     """Remove the temporary run directories (``.NAME.tmp-…``) in ``parent`` whose writer has
     ended without cleaning up (killed by SIGKILL, a crash of the machine); returns them. Only
     directories this package made (their :data:`TEMP_MARK`) and whose process on this host is
@@ -167,9 +167,20 @@ def _force() -> str:
     return spelled("--force", "force=True")
 
 
-__all__ = ["RunDir", "check_out", "check_writable", "is_package_output", "file_record",
-           "write_posterior", "write_summary", "write_config", "sweep_stale", "read_run_file", "run_kind", "run_command",
-           "read_posterior"]
+__all__ = [
+    "RunDir",
+    "check_out",
+    "check_writable",
+    "file_record",
+    "is_package_output",
+    "read_posterior",
+    "read_run_file",
+    "run_command",
+    "run_kind",
+    "write_config",
+    "write_posterior",
+    "write_summary",
+]
 
 
 def read_run_file(run_dir: str | os.PathLike, name: str, *,
@@ -350,7 +361,7 @@ class RunDir:
         except OSError as e:
             raise InputError(f"cannot create the parent directory: {e.strerror}",
                              path=str(parent)) from None
-        sweep_stale(parent)   # what killed runs left here
+        _sweep_stale(parent)   # what killed runs left here
         self.path = make_temp_dir(parent, f".{self.final.name}.tmp-")
         try:
             _mark(self.path)
@@ -383,7 +394,7 @@ class RunDir:
 
 
 def _discard_marked(old: Path) -> None:
-    """Delete an old run swapped out of its place, marked first (:func:`sweep_stale` finishes
+    """Delete an old run swapped out of its place, marked first (:func:`_sweep_stale` finishes
     the job should this process be killed half-way)."""
     _mark(old)
     _discard(old)

@@ -13,7 +13,7 @@ from cassini_bayes import __version__
 from cassini_bayes.errors import InputError
 from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-__all__ = ["summarize", "write_run", "work_dir"]
+__all__ = ["write_run", "work_dir"]
 
 
 def work_dir(out: Path) -> Path:
@@ -21,7 +21,7 @@ def work_dir(out: Path) -> Path:
     return out.parent / f".{out.name}.sbc-work"
 
 
-def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
+def _summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
     """``(SbcResult, summary dict)`` of a finished campaign (failed replicates left out)."""
     from cassini_bayes.analysis.sbc import sbc_result
 
@@ -92,7 +92,7 @@ def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "
     """
     from cassini_bayes.report.sbc import sbc_report_html
 
-    sbc, summary = summarize(spec, result, alpha=alpha, executor=executor)
+    sbc, summary = _summarize(spec, result, alpha=alpha, executor=executor)
     with RunDir(out, force=force) as rd:
         tmp = rd.path
         write_summary(tmp, summary)

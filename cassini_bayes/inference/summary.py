@@ -26,7 +26,7 @@ from cassini_bayes import __version__
 from cassini_bayes.files import finite_or_none as _num
 from cassini_bayes.files import json_clean
 
-__all__ = ["CONTRACTION_WEAK", "parameter_stats", "build_summary"]
+__all__ = ["CONTRACTION_WEAK", "build_summary"]
 
 CONTRACTION_WEAK = 0.5
 
@@ -45,7 +45,7 @@ def _flat(idata, group: str, name: str) -> dict[str, np.ndarray]:
     return out
 
 
-def parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, dict]:
+def _parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, dict]:
     """Per-element posterior statistics (ArviZ R-hat and ESS) of the variables ``names``."""
     out = {}
     for name in names:
@@ -97,7 +97,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
     extra : more top-level keys (e.g. ``direction`` for rwa4).
     adequacy : :class:`cassini_bayes.inference.adequacy.Adequacy` of the fit, or ``None``.
     """
-    params = parameter_stats(idata, parameters)
+    params = _parameter_stats(idata, parameters)
     weak = [k for k, v in params.items()
             if v.get("contraction") is not None and v["contraction"] < CONTRACTION_WEAK]
     out = {
@@ -109,7 +109,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
         "seed": int(seed),
         "version": __version__,
         "weakly_identified": weak,
-        "nuisance": parameter_stats(idata, nuisance),
+        "nuisance": _parameter_stats(idata, nuisance),
         "warnings": (_convergence_warning(diagnostics) + list(warnings)
                      + (adequacy.warnings() if adequacy is not None else [])),
     }

@@ -54,7 +54,7 @@ from cassini_bayes.report.tables import (
     parameter_rows,
 )
 
-__all__ = ["build_report", "render_report", "verdict_badges", "answer_table"]
+__all__ = ["build_report", "render_report", "verdict_badges"]
 
 MAX_RESIDUAL_FIGURES = 1
 RWA1_REQUIREMENT_DEG = 2.0  # Brown (2012) §I: RWA4 must sit within ±2° of the RWA1 axis
@@ -213,7 +213,7 @@ def _budget_cells(b: BudgetCheck | None) -> tuple[list, list[str]]:
             ["", "good" if b.passed else "bad", ""])
 
 
-def answer_table(rows: list[ParameterRow], derived=()) -> str:
+def _answer_table(rows: list[ParameterRow], derived=()) -> str:
     """The answer table: one row per calibrated quantity (then the papers' derived quantities:
     their error's median and 90 % interval), the answer's columns first."""
     has_truth = any(r.truth is not None for r in rows)
@@ -260,7 +260,7 @@ def _answer_section(run: RunData, names, rows, derived, fig) -> Section:
     if not rows:
         return section("Answer", not_available("no calibration parameters in the posterior"),
                        id="answer")
-    body = [answer_table(rows, derived), paragraph(
+    body = [_answer_table(rows, derived), paragraph(
         "Model file = the spacecraft model's prediction, the prior's centre (– where the model "
         "predicts none, e.g. an axis under a uniform prior); prior sd from the prior draws. Least "
         "squares = the papers' estimator on the same data (summary.json baseline). Identified: "

@@ -12,7 +12,7 @@ Only ``posterior.nc`` is required. A missing ``summary.json`` costs the baseline
 kind is then recognised from the posterior's variable names); a missing ``config.toml`` costs the
 configuration listing. Anything present but unreadable is an
 :class:`~cassini_bayes.errors.InputError`, and so are files that belong to different runs
-(:func:`check_same_run`: a page must never put one run's title and numbers over another's draws).
+(:func:`_check_same_run`: a page must never put one run's title and numbers over another's draws).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_k
 from cassini_bayes.rundir import read_run_file, run_command
 
 __all__ = ["Var", "Group", "RunData", "load_run", "read_groups", "flatten_draws",
-           "component_label", "KINDS", "check_same_run"]
+           "KINDS"]
 
 KINDS = ("inertia", "thrust", "rwa4")
 _FIT_COMMANDS = {f"fit {k}": k for k in KINDS}
@@ -211,7 +211,7 @@ def _infer_kind(names: set[str]) -> str:
     return "unknown"
 
 
-def check_same_run(run_dir: Path, posterior: Group, summary: dict, config: dict | None) -> None:
+def _check_same_run(run_dir: Path, posterior: Group, summary: dict, config: dict | None) -> None:
     """Refuse, naming the file, a run directory whose files come from different runs (one copied
     over from another run): the kind ``summary.json`` records against the draws in
     ``posterior.nc`` (their variable names) and against the command in ``config.toml``; the
@@ -295,14 +295,14 @@ def load_run(run_dir: str | Path) -> RunData:
         if config is None:
             notes.append("config.toml is not valid TOML")
 
-    check_same_run(run_dir, groups["posterior"], summary, config)
+    _check_same_run(run_dir, groups["posterior"], summary, config)
     kind = summary.get("kind") or _infer_kind(set(groups["posterior"].vars))
     if kind not in KINDS:
         notes.append(f"unknown run kind {kind!r}: kind-specific sections are skipped")
     return RunData(run_dir.resolve(), groups, summary, config_text, str(kind), tuple(notes))
 
 
-def component_label(name: str, labels: tuple) -> str:
+def _component_label(name: str, labels: tuple) -> str:
     """A scalar component's label as ``summary.json`` writes it: ``"F"``, ``"H0[0,x]"``."""
     return f"{name}[{','.join(str(x) for x in labels)}]" if labels else name
 
@@ -320,7 +320,7 @@ def flatten_draws(group: Group | None, names) -> dict[str, np.ndarray]:
     Returns
     -------
     dict
-        ``label -> array (chain, draw)``; labels as ``summary.json``'s (:func:`component_label`).
+        ``label -> array (chain, draw)``; labels as ``summary.json``'s (:func:`_component_label`).
     """
     out: dict[str, np.ndarray] = {}
     if group is None:
@@ -339,5 +339,5 @@ def flatten_draws(group: Group | None, names) -> dict[str, np.ndarray]:
         labels = [group.labels(d) for d in extra]
         for idx in np.ndindex(*vals.shape[2:]):
             lab = tuple(labels[k][i] for k, i in enumerate(idx))
-            out[component_label(name, lab)] = vals[(slice(None), slice(None)) + idx]
+            out[_component_label(name, lab)] = vals[(slice(None), slice(None)) + idx]
     return out
