@@ -14,7 +14,10 @@ from cassini_bayes.experiments import (
     ExperimentKind,
     ExperimentOutput,
     _registry,
+    check_fact,
+    experiment_from_dict,
     load_experiment,
+    register,
     registered_kinds,
     run_experiment,
 )
@@ -149,10 +152,10 @@ def test_a_new_kind_is_one_function(tmp_path, monkeypatch):
     kinds = dict(_registry._KINDS)
     monkeypatch.setattr(_registry, "_KINDS", kinds)
 
-    @_core.register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
+    @register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
     def square(key, settings, ctx):
         return ExperimentOutput(summary={"x2": settings["x"] ** 2},
-                                checks=(_core.check_fact("R_fsds_mix", 1.34058),))
+                                checks=(check_fact("R_fsds_mix", 1.34058),))
 
     path = _write(tmp_path, 'kind = "test_square"\n[settings]\nx = 4\n')
     rec = run_experiment(path, tmp_path / "full")
@@ -191,7 +194,7 @@ def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
     kinds = dict(_registry._KINDS)
     monkeypatch.setattr(_registry, "_KINDS", kinds)
 
-    @_core.register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
+    @register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
     def tables(key, settings, ctx):
         return ExperimentOutput(summary={"events": settings["events"]})
 
@@ -205,5 +208,5 @@ def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
 
 def test_a_fits_config_toml_is_named_as_such():
     with pytest.raises(InputError, match="config.toml of a 'fit inertia' run, not an experiment"):
-        _core.experiment_from_dict({"command": "fit inertia", "version": "0.1.0", "seed": 0},
-                                   "c.toml")
+        experiment_from_dict({"command": "fit inertia", "version": "0.1.0", "seed": 0},
+                             "c.toml")
