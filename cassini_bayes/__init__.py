@@ -29,32 +29,14 @@ import types as _types
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "FitResult",
-    "InputError",
-    "PulseLog",
-    "Simulation",
-    "Spacecraft",
-    "Telemetry",
-    "VectorTree",
+__all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "__version__",
-    "budget",
-    "check_telemetry",
-    "fit_chebyshev_segments",
-    "fit_health",
-    "fit_inertia",
-    "fit_rwa4",
-    "fit_thrust",
-    "fit_trajectory",
-    "load_spacecraft",
-    "monitor_leak",
-    "propagate_conic",
-    "read_pulses",
-    "read_telemetry",
-    "request_host_devices",
-    "setup_jax",
-    "simulate",
-    "simulate_health_campaign",
+    "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
+    "fit_inertia", "fit_thrust", "fit_rwa4",
+    "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
+    "InputError", "setup_jax", "request_host_devices",
+    "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
+    "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
 ]
 
 def _api():

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
@@ -311,10 +312,11 @@ class Spacecraft:
         raise InputError(f"spacecraft model {self.name!r} has no thruster {name!r}; it has "
                          f"{have}")
 
-    def with_inertia(self, inertia) -> "Spacecraft":
+    def with_inertia(self, inertia: ArrayLike) -> Spacecraft:
+        """This model with the inertia tensor ``inertia`` (3, 3), kg m²."""
         return replace(self, inertia=np.asarray(inertia, float))
 
-    def with_wheel_axis(self, name: str, axis) -> "Spacecraft":
+    def with_wheel_axis(self, name: str, axis: ArrayLike) -> Spacecraft:
         axis = np.asarray(axis, float)
         wheels = tuple(replace(w, axis=axis) if w.name.upper() == name.upper() else w
                        for w in self.wheels)

@@ -3,6 +3,7 @@ that the type checker passes over the public API modules (``[tool.mypy]`` in pyp
 
 from __future__ import annotations
 
+import inspect
 import re
 import shutil
 import subprocess
@@ -34,6 +35,32 @@ def test_every_public_name_is_documented():
     missing = [n for n in cb.__all__
                if n != "__version__" and not re.search(rf"`{re.escape(n)}[`(]", text)]
     assert not missing, f"docs/api.md does not list {missing}"
+
+
+def _unannotated(fn, qual: str) -> list[str]:
+    sig = inspect.signature(inspect.unwrap(fn))
+    out = [f"{qual}({p.name})" for p in sig.parameters.values()
+           if p.name not in ("self", "cls") and p.annotation is inspect.Parameter.empty]
+    if fn.__name__ != "__init__" and sig.return_annotation is inspect.Signature.empty:
+        out.append(f"{qual} -> ?")
+    return out
+
+
+def test_every_public_function_is_fully_annotated():
+    """Every function of ``cassini_bayes.__all__``, and every public method and property of its
+    classes, annotates each argument and its return (the type checker then checks them)."""
+    missing = []
+    for name in cb.__all__:
+        obj = getattr(cb, name)
+        if inspect.isclass(obj):
+            for key, member in vars(obj).items():
+                fn = member.fget if isinstance(member, property) else member
+                if ((key == "__init__" or not key.startswith("_")) and inspect.isfunction(fn)
+                        and fn.__module__.startswith("cassini_bayes")):
+                    missing += _unannotated(fn, f"{name}.{key}")
+        elif callable(obj) and name != "__version__":
+            missing += _unannotated(obj, name)
+    assert not missing, missing
 
 
 @pytest.mark.skipif(shutil.which("mypy", path=str(Path(sys.executable).parent)) is None

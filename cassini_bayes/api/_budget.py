@@ -20,6 +20,7 @@ from cassini_bayes.names import a_kind
 
 if TYPE_CHECKING:
     from cassini_bayes.analysis.posterior_budgets import PosteriorBudget
+    from cassini_bayes.api._inputs import FitArg
 
 __all__ = ["BudgetResult", "budget"]
 
@@ -56,7 +57,8 @@ class BudgetResult:
 
 
 @jax_entry
-def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
+def budget(*, inertia: FitArg | None = None, thrust: FitArg | None = None,
+           rwa4: FitArg | None = None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).
 

@@ -18,6 +18,7 @@ from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 
 if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import PulsesArg, SpacecraftArg, TelemetryArg
     from cassini_bayes.consistency import AttitudeAgreement, MomentumScale
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
@@ -149,7 +150,8 @@ def _pulse_count(on: np.ndarray) -> int:
 
 
 @jax_entry
-def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: float = 60.0,
+def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
+                    spacecraft: SpacecraftArg | None = None, min_quiet_s: float = 60.0,
                     rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
                     check_units: bool = True) -> TelemetryCheck:
     """Validate a telemetry file (and pulse log) and say what it holds.

@@ -10,9 +10,10 @@ from __future__ import annotations
 import csv
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 
@@ -21,7 +22,12 @@ from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
 
+EventsArg: TypeAlias = ("str | os.PathLike | Sequence[str | os.PathLike | "
+                        "tuple[float, str | os.PathLike, str | os.PathLike]]")
+"""``events.csv`` files or folders holding one, or ``(date_days, telemetry, pulses)`` tuples."""
+
 if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import SpacecraftArg
     from cassini_bayes.inference.health.changepoint import HealthPosterior
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
@@ -74,7 +80,7 @@ def _write_csv(path: Path, header: list[str], rows) -> None:
             w.writerow([f"{x:.10g}" if isinstance(x, float) else x for x in r])
 
 
-def read_event_list(events) -> list[tuple[float, Path, Path]]:
+def read_event_list(events: EventsArg) -> list[tuple[float, Path, Path]]:
     """``(date_days, telemetry, pulses)`` of each event from ``events``: one or more
     ``events.csv`` files or folders holding one, or a list of ``(date_days, telemetry, pulses)``
     tuples."""
@@ -126,7 +132,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
 
 
 @jax_entry
-def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
+def fit_health(events: EventsArg, spacecraft: SpacecraftArg, *, fraction: float = HEALTH_FRACTION,
                p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
     """Posterior of each thrust channel's health over many biasing events; what
@@ -273,7 +279,7 @@ _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
 @jax_entry
-def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
+def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike, *, seed: int | None = None,
                              force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.
     ``"health_degradation"``) into ``out``: one folder per event (``telemetry.csv``,

@@ -2,14 +2,25 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING
 
 from cassini_bayes._devices import jax_entry
-from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
-                                       shows_progress, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._inputs import (
+    WHEEL_ERRORS,
+    check_seed,
+    choice,
+    sampler_settings,
+    shows_progress,
+    spacecraft_input,
+    telemetry_inputs,
+)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import as_flag
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import SpacecraftArg, TelemetriesArg, WheelErrors
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
@@ -58,9 +69,9 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
 
 @jax_entry
 @shows_progress
-def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
+def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
-                wheel_errors: str = "per_wheel", torque: bool = True,
+                wheel_errors: WheelErrors = "per_wheel", torque: bool = True,
                 progress: bool = False) -> FitResult:
     """Posterior of the inertia tensor from RWA slews (one inertia, each file its own momentum);
     what ``cassini-bayes fit inertia`` computes.
@@ -90,8 +101,8 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     import jax
 
     from cassini_bayes.consistency import check_inertia_data
-    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
+    from cassini_bayes.inference.progress import step
 
     seed = check_seed(seed)
     robust, torque = as_flag(robust, "robust"), as_flag(torque, "torque")

@@ -7,7 +7,7 @@ import numbers
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias, TypeVar
 
 import numpy as np
 
@@ -16,6 +16,9 @@ from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
+if TYPE_CHECKING:
+    from cassini_bayes.api._result import FitResult
+
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
            "one_telemetry", "one_pulse_log", "choice", "number", "sampler_settings",
            "check_seed", "shows_progress"]
@@ -23,6 +26,17 @@ __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "
 WHEEL_ERRORS = ("per_wheel", "common")
 
 PathLike = str | os.PathLike
+
+# The public functions' argument types: an object, or a file (a shipped model or scenario by
+# name) to read it from.
+TelemetryArg: TypeAlias = "Telemetry | str | os.PathLike"
+TelemetriesArg: TypeAlias = "TelemetryArg | Sequence[TelemetryArg]"
+PulsesArg: TypeAlias = "PulseLog | str | os.PathLike"
+PulseLogsArg: TypeAlias = "PulsesArg | Sequence[PulsesArg]"
+SpacecraftArg: TypeAlias = "Spacecraft | str | os.PathLike"
+FitArg: TypeAlias = "FitResult | str | os.PathLike"
+"""An earlier fit: its result, or its run directory."""
+WheelErrors = Literal["per_wheel", "common"]
 
 
 def shows_progress(fit):
@@ -205,7 +219,10 @@ def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = N
     return logs, records, paths
 
 
-def choice(name: str, value: str, choices: Sequence[str]) -> str:
+_S = TypeVar("_S", bound=str)
+
+
+def choice(name: str, value: _S, choices: Sequence[str]) -> _S:
     """``value`` when it is one of ``choices``, else an InputError naming the argument."""
     if value not in choices:
         raise InputError(f"{arg(name, value, cli_quote=True)}: choose "

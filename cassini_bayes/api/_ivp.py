@@ -21,8 +21,11 @@ from cassini_bayes._devices import jax_entry, setup_jax
 from cassini_bayes.errors import InputError, spelled
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from cassini_bayes.ivp.segmenter import SegmentFit
     from cassini_bayes.ivp.trajectory import Trajectory
+    from cassini_bayes.ivp.tree import TreeEntry
 
 __all__ = ["TrajectoryFit", "fit_trajectory", "propagate_conic", "fit_chebyshev_segments",
            "VectorTree"]
@@ -34,7 +37,7 @@ fit_chebyshev_segments = jax_entry(ivp.fit_chebyshev_segments)
 class VectorTree(ivp.VectorTree):
     __doc__ = ivp.VectorTree.__doc__
 
-    def __init__(self, entries) -> None:
+    def __init__(self, entries: Sequence[TreeEntry]) -> None:
         setup_jax()
         super().__init__(entries)
 
@@ -112,7 +115,7 @@ class TrajectoryFit:
 
 
 @jax_entry
-def fit_trajectory(trajectory, *, requirement_urad: float = 40.0, max_order: int = 12,
+def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_urad: float = 40.0, max_order: int = 12,
                    mu: float | None = None) -> TrajectoryFit:
     """Chebyshev segments of a trajectory whose direction stays within ``requirement_urad`` of
     the trajectory's (Lee §3.3.2; :func:`~cassini_bayes.ivp.fit_chebyshev_segments`).

@@ -11,12 +11,18 @@ from __future__ import annotations
 import copy
 import os
 import warnings
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 from cassini_bayes import __version__, _jax_cache
+
+if TYPE_CHECKING:
+    from arviz import InferenceData
+
+    from cassini_bayes.diagnostics import Diagnostics
 
 __all__ = ["FitResult", "fit_config", "collect_warnings", "write_run", "write_run_files"]
 
@@ -128,13 +134,13 @@ class FitResult:
         return f"<{self.config.get('command', self.kind)} result, seed {self.config.get('seed')}>"
 
     @property
-    def idata(self):
+    def idata(self) -> InferenceData:
         """The ArviZ InferenceData (``posterior``, ``sample_stats``, ``prior``,
         ``observed_data``, …)."""
         return self.posterior.idata
 
     @property
-    def diagnostics(self):
+    def diagnostics(self) -> Diagnostics:
         """:class:`~cassini_bayes.diagnostics.Diagnostics` (R-hat, ESS, divergences)."""
         return self.posterior.diagnostics
 

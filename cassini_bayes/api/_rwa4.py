@@ -2,11 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Literal
 
 from cassini_bayes._devices import jax_entry
-from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
-                                       shows_progress, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._inputs import (
+    WHEEL_ERRORS,
+    check_seed,
+    choice,
+    sampler_settings,
+    shows_progress,
+    spacecraft_input,
+    telemetry_inputs,
+)
 from cassini_bayes.api._limits import RWA4_TARGET_ACCEPT
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.api._thrust import _inertia_knowledge
@@ -17,6 +25,10 @@ TARGET_ACCEPT = RWA4_TARGET_ACCEPT  # 0.95, the other fits' 0.9 (cassini_bayes.a
 RCS_BUDGET_DEG = 3.0
 """Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
 mass properties), with a flight-calibrated inertia."""
+
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import FitArg, SpacecraftArg, TelemetryArg, WheelErrors
 
 __all__ = ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"]
 
@@ -95,10 +107,13 @@ def _window_pairs(windows) -> list | None:
 
 @jax_entry
 @shows_progress
-def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
-             inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
+def fit_rwa4(telemetry: TelemetryArg, spacecraft: SpacecraftArg, *,
+             method: Literal["rcs", "rwa"],
+             windows: Sequence[tuple[tuple[float, float], tuple[float, float]]] | None = None,
+             prior: Literal["uniform", "cone"] = "uniform",
+             inertia_posterior: FitArg | None = None, seed: int = 0, chains: int = 4, warmup: int = 1000,
              draws: int = 1000, target_accept: float = TARGET_ACCEPT, robust: bool = True,
-             wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+             wheel_errors: WheelErrors = "per_wheel", progress: bool = False) -> FitResult:
     """Posterior of the RWA4 spin axis, the inertia uncertainty sampled jointly; what
     ``cassini-bayes fit rwa4`` computes.
 
@@ -129,7 +144,8 @@ def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "
 
     from cassini_bayes.consistency import check_rwa4_data
     from cassini_bayes.inference.progress import step
-    from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
+    from cassini_bayes.inference.rwa4 import METHODS, PRIORS
+    from cassini_bayes.inference.rwa4 import fit_rwa4 as sample_rwa4
 
     seed = check_seed(seed)
     robust = as_flag(robust, "robust")

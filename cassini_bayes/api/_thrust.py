@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (
@@ -21,6 +21,15 @@ from cassini_bayes.api._inputs import (
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.names import a_kind
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import (
+        FitArg,
+        PulseLogsArg,
+        SpacecraftArg,
+        TelemetriesArg,
+        WheelErrors,
+    )
 
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
@@ -162,11 +171,12 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
 
 @jax_entry
 @shows_progress
-def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
-               inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,
+def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: SpacecraftArg, *,
+               mode: Literal["mean", "branch", "thruster"] = "mean",
+               inertia_posterior: FitArg | None = None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
                target_accept: float = 0.9, robust: bool = True,
-               wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+               wheel_errors: WheelErrors = "per_wheel", progress: bool = False) -> FitResult:
     """Posterior of the thrust and the pulse time constants from biasing events; what
     ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
     and thrust).

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,9 +36,12 @@ from cassini_bayes.telemetry._validate import _check_time, validate_telemetry
 from cassini_bayes.telemetry.limits import TIME_ABS_MAX
 from cassini_bayes.units import RPM_TO_RAD_S
 
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
+
 
 def read_telemetry(path: str | os.PathLike, *, check_units: bool = True,
-                   spacecraft=None) -> Telemetry:
+                   spacecraft: Spacecraft | None = None) -> Telemetry:
     """Read and validate a telemetry file (CSV, or Parquet where pyarrow is installed).
 
     Parameters
@@ -123,7 +127,7 @@ def check_model_names(tel: Telemetry, spacecraft) -> Telemetry:
 
 
 def read_telemetry_many(paths: Iterable[str | os.PathLike], *, check_units: bool = True,
-                        spacecraft=None) -> list[Telemetry]:
+                        spacecraft: Spacecraft | None = None) -> list[Telemetry]:
     """Read several telemetry files (e.g. one per slew; columns named by ``spacecraft`` as in
     :func:`read_telemetry`); errors name the offending file."""
     paths = list(paths)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,6 +36,9 @@ class PulsesDroppedWarning(PulseSpanWarning):
     """Pulses of the log act entirely outside the telemetry span: they are left out."""
 
 
+
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
 
 
 def validate_pulses(log: PulseLog) -> PulseLog:
@@ -89,7 +93,7 @@ def validate_pulses(log: PulseLog) -> PulseLog:
     return PulseLog(t_on[order], thr[order], width[order], path, names)
 
 
-def read_pulses(path: str | os.PathLike, *, spacecraft=None) -> PulseLog:
+def read_pulses(path: str | os.PathLike, *, spacecraft: Spacecraft | None = None) -> PulseLog:
     """Read and validate a pulse log: columns ``t_on`` (s), ``thruster`` (a thruster of
     ``spacecraft``; Cassini's ``Z1..Y4`` when ``None``), ``width`` (s).
 
