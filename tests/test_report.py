@@ -351,7 +351,7 @@ def test_rwa4_requirement_is_decided_by_the_posterior(reports):
     """Brown's ±2° requirement: "yes"/"no" only at posterior probability ≥ 0.95 / ≤ 0.05; the
     mean axis alone can sit inside while most of the posterior does not (the number audit's
     RCS fit: mean 1.43° from RWA1, probability 0.26, was called "yes")."""
-    from cassini_bayes.report.build import _requirement_verdict
+    from cassini_bayes.report._answer import _requirement_verdict
 
     _, html = reports["rwa4"]      # 3.1° from RWA1, ±0.4°
     assert re.search(r"within ±2° of RWA1 \(replacement requirement, Brown §I\)</td><td>no "
