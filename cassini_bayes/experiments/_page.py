@@ -37,8 +37,8 @@ def _checks_table(checks: Sequence[Any], *, link: str | None = None) -> str:
     """Our value beside the paper's for each check, with its verdict."""
     rows, classes = [], []
     for c in checks:
-        row = [c.label, c.fact_id or "—", c.paper or "—", c.ours_text, Raw(_verdict_badge(c.passed)),
-               c.note]
+        row = [c.label, c.fact_id or "—", c.paper or "—", c.ours_text,
+               Raw(_verdict_badge(c.passed)), c.note]
         if link is not None:
             row.append(Raw(f'<a href="{esc(link)}">report</a>'))
         rows.append(row)

@@ -59,7 +59,8 @@ def _config_dict(exp: Experiment, settings: Mapping[str, Any], seed: int, quick:
 
 def write_run(exp: Experiment, workdir: Path, output: ExperimentOutput,
               settings: Mapping[str, Any], seed: int, quick: bool, elapsed_s: float) -> None:
-    """Write ``results.json``, ``config.toml``, ``figures/*.png``, ``report.html`` into ``workdir``."""
+    """Write ``results.json``, ``config.toml``, ``figures/*.png`` and ``report.html`` into
+    ``workdir``."""
     from cassini_bayes.experiments._page import experiment_page
 
     fig_dir = workdir / "figures"

@@ -35,7 +35,7 @@ from cassini_bayes.experiments import (
     png,
     register,
 )
-from cassini_bayes.experiments.inertia_table1 import (
+from cassini_bayes.experiments._fits import (
     check_sampler_settings,
     fit_seed,
     sampler,
