@@ -577,7 +577,7 @@ def _axes_problems(fig) -> list[str]:
 
 def _report_figures(run_dir):
     """Every figure a fit report of ``run_dir`` draws, built as the report builds them."""
-    from cassini_bayes.report import build, figures
+    from cassini_bayes.report import _answer, figures
 
     run = load_run(run_dir)
     names = parameter_names(run)
@@ -587,10 +587,10 @@ def _report_figures(run_dir):
            "residuals": figures.residuals_figure(run.groups["residuals"], var="residual",
                                                  ylabel="residual (N m s)")}
     if run.kind == "rwa4":
-        mean, cones = build._direction(run)
-        out["sky"] = figures.axis_sky_figure(build._axis_draws(run), mean=mean, cones_deg=cones,
-                                             truth=build._axis_vec(run.summary["truth"]),
-                                             baseline=build._axis_vec(run.summary["baseline"]))
+        mean, cones = _answer._direction(run)
+        out["sky"] = figures.axis_sky_figure(_answer._axis_draws(run), mean=mean, cones_deg=cones,
+                                             truth=_answer._axis_vec(run.summary["truth"]),
+                                             baseline=_answer._axis_vec(run.summary["baseline"]))
     else:
         out["answer"] = figures.answer_figure(
             [figures.Panel(r.label, r.unit, post[r.label], r.baseline, r.truth, r.prior_mean)
