@@ -39,14 +39,14 @@ __all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
 ]
 
-def _api():
+def _api() -> _types.ModuleType:
     """:mod:`cassini_bayes.api`, imported on first use. By name: the package's modules import
     ``__version__`` from here, and the layering contracts (``lint-imports``) must not read that
     as a dependency of every layer on the API, which this module never imports on its own."""
     return _importlib.import_module("cassini_bayes.api")
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     """Import a public name from :mod:`cassini_bayes.api` on first use."""
     if name == "InputError":
         from cassini_bayes.errors import InputError
@@ -70,11 +70,11 @@ class _Package(_types.ModuleType):
     ``import cassini_bayes.simulate.run as m`` does not work)."""
 
     @property
-    def simulate(self):
+    def simulate(self) -> object:
         return _api().simulate
 
     @simulate.setter
-    def simulate(self, module) -> None:
+    def simulate(self, module: _types.ModuleType) -> None:
         """The import system binds the subpackage here when it is first imported; it stays
         reachable in ``sys.modules``, the name keeps the function."""
 

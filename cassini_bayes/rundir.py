@@ -54,6 +54,7 @@ import tomllib
 import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+from types import TracebackType
 from typing import TYPE_CHECKING, Any, Literal
 
 from cassini_bayes.errors import InputError, as_flag, spelled
@@ -370,7 +371,8 @@ class RunDir:
             raise
         return self
 
-    def __exit__(self, exc_type, exc, tb) -> Literal[False]:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> Literal[False]:
         if exc_type is not None:
             _discard(self.path)
             return False
@@ -410,7 +412,7 @@ def file_record(path: str | os.PathLike) -> dict[str, str]:
     return {"path": str(p), "sha256": h.hexdigest()}
 
 
-def write_posterior(run_dir: Path, idata) -> Path:
+def write_posterior(run_dir: Path, idata: InferenceData) -> Path:
     """``posterior.nc``: the InferenceData, every group (custom ones such as ``residuals`` too).
 
     Refuses first, as a full disk (``ENOSPC``), when the file system has less room than the

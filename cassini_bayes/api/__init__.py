@@ -47,7 +47,7 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     """Import a public name from its module on first use: a command imports only what it runs
     (``cassini-bayes check`` no fitting code, ``fit inertia`` no simulator)."""
     if name in _HOME:

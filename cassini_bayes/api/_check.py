@@ -20,6 +20,8 @@ from cassini_bayes.errors import InputError, spelled
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import PulsesArg, SpacecraftArg, TelemetryArg
     from cassini_bayes.consistency import AttitudeAgreement, MomentumScale
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
 
@@ -97,7 +99,8 @@ class TelemetryCheck:
         return text + ")"
 
 
-def _physics_line(attitude, momentum, spacecraft) -> str:
+def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | None,
+                  spacecraft: Spacecraft | None) -> str:
     """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
     from cassini_bayes.consistency import AXES_CONDITION_MIN, MOMENTUM_ALIGN_MIN
     from cassini_bayes.errors import spelled
@@ -128,7 +131,7 @@ def _physics_line(attitude, momentum, spacecraft) -> str:
             "rad/s would give 9.55)" + axes_text)
 
 
-def _check_shared_span(tel, log) -> None:
+def _check_shared_span(tel: Telemetry, log: PulseLog) -> None:
     """Refuse a pulse log none of whose pulses touches the telemetry's span: the two files use
     different time bases, or belong to different events (``check`` had said "none fired")."""
     from cassini_bayes.telemetry import check_pulses_in_span

@@ -5,9 +5,9 @@ from __future__ import annotations
 import functools
 import numbers
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal, TypeAlias, TypeVar
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias, TypeVar, cast
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from cassini_bayes.telemetry import PulseLog, Telemetry
 
 if TYPE_CHECKING:
     from cassini_bayes.api._result import FitResult
+    from cassini_bayes.inference.runner import SamplerSettings
 
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
            "one_telemetry", "one_pulse_log", "choice", "number", "sampler_settings",
@@ -39,20 +40,23 @@ FitArg: TypeAlias = "FitResult | str | os.PathLike"
 WheelErrors = Literal["per_wheel", "common"]
 
 
-def shows_progress(fit):
+_Fit = TypeVar("_Fit", bound=Callable[..., Any])
+
+
+def shows_progress(fit: _Fit) -> _Fit:
     """Decorate a fit function: with ``progress=True`` its steps are shown on the terminal
     (:func:`cassini_bayes.inference.progress.shown`) while it runs."""
     @functools.wraps(fit)
-    def wrapper(*args, progress: bool = False, **kwargs):
+    def wrapper(*args: Any, progress: bool = False, **kwargs: Any) -> Any:
         from cassini_bayes.inference.progress import shown
 
         with shown(as_flag(progress, "progress")):
             return fit(*args, progress=progress, **kwargs)
 
-    return wrapper
+    return cast(_Fit, wrapper)
 
 
-def _is_path(x) -> bool:
+def _is_path(x: object) -> bool:
     return isinstance(x, (str, os.PathLike))
 
 
@@ -83,7 +87,7 @@ def spacecraft_input(spacecraft: Spacecraft | PathLike) -> tuple[Spacecraft, dic
     return sc, file_record(path), [path]
 
 
-def _items(x, name: str) -> list:
+def _items(x: Any, name: str) -> list:
     if x is None:
         return []
     if _is_path(x) or isinstance(x, (Telemetry, PulseLog)):
@@ -94,7 +98,7 @@ def _items(x, name: str) -> list:
                      f"{type(x).__name__}")
 
 
-def telemetry_inputs(telemetry, name: str = "telemetry", spacecraft: Spacecraft | None = None
+def telemetry_inputs(telemetry: TelemetriesArg, name: str = "telemetry", spacecraft: Spacecraft | None = None
                      ) -> tuple[list[Telemetry], list[dict], list[Path]]:
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
     :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them; files are read
@@ -152,7 +156,7 @@ def _once(tels: list[Telemetry], name: str) -> list[Telemetry]:
     return tels
 
 
-def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True,
+def one_telemetry(telemetry: TelemetryArg, name: str = "telemetry", *, check_units: bool = True,
                   spacecraft: Spacecraft | None = None) -> Telemetry:
     """One telemetry argument, a :class:`~cassini_bayes.telemetry.Telemetry` or a file path,
     read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics; columns
@@ -180,7 +184,7 @@ def _model_pulses(log: PulseLog, spacecraft: Spacecraft | None) -> PulseLog:
     return log
 
 
-def one_pulse_log(pulses, name: str = "pulses", *,
+def one_pulse_log(pulses: PulsesArg, name: str = "pulses", *,
                   spacecraft: Spacecraft | None = None) -> PulseLog:
     """One pulse-log argument, a :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path,
     read or checked with the file rules (thrusters of ``spacecraft``; Cassini's without one)."""
@@ -194,7 +198,7 @@ def one_pulse_log(pulses, name: str = "pulses", *,
     return read_pulses(pulses, spacecraft=spacecraft)
 
 
-def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = None
+def pulse_inputs(pulses: PulseLogsArg | None, name: str = "pulses", spacecraft: Spacecraft | None = None
                  ) -> tuple[list[PulseLog], list[dict], list[Path]]:
     """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
     :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them (thrusters of
@@ -259,7 +263,7 @@ def check_seed(seed: int) -> int:
 
 
 def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
-                     progress: bool = False):
+                     progress: bool = False) -> SamplerSettings:
     """:class:`~cassini_bayes.inference.runner.SamplerSettings` from the fit functions'
     arguments, checked against the ranges the command line accepts; warns (once) when the
     chains must run vectorised because JAX started before the fit could ask for devices."""

@@ -21,7 +21,7 @@ from cassini_bayes._devices import jax_entry, setup_jax
 from cassini_bayes.errors import InputError, spelled
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Callable, Sequence
 
     from cassini_bayes.ivp.segmenter import SegmentFit
     from cassini_bayes.ivp.trajectory import Trajectory
@@ -108,7 +108,7 @@ class TrajectoryFit:
         return rd.final
 
     @property
-    def fit_function(self):
+    def fit_function(self) -> Callable[[np.ndarray], np.ndarray]:
         from cassini_bayes.ivp.trajectory import interpolant
 
         return interpolant(self.trajectory)

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from arviz import InferenceData
 
     from cassini_bayes.diagnostics import Diagnostics
+    from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["FitResult", "fit_config", "collect_warnings", "write_run", "write_run_files"]
 
@@ -43,7 +45,8 @@ def collect_warnings() -> Iterator[list[str]]:
             lines.append(msg)
 
 
-def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping,
+def fit_config(command: str, *, seed: int, spacecraft: Spacecraft, settings: SamplerSettings,
+               inputs: Mapping,
                options: Mapping) -> dict:
     """``config.toml`` of a fit: the resolved inputs, options, sampler settings, spacecraft model,
     seed and package version, enough to re-run it (docs/cli.md, "Run directory"). ``[sampler]``
@@ -69,7 +72,7 @@ def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping
     }
 
 
-def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
+def write_run_files(run_dir: Path, *, idata: InferenceData, summary: Mapping, config: Mapping,
                     display_dir: Path | None = None) -> list[str]:
     """Write a fit's four files into the existing directory ``run_dir`` (not atomically: the
     caller's directory is the temporary one); returns the report's warnings (one line each).
@@ -88,7 +91,7 @@ def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
     return report_warnings
 
 
-def write_run(out: str | os.PathLike, *, idata, summary: Mapping, config: Mapping,
+def write_run(out: str | os.PathLike, *, idata: InferenceData, summary: Mapping, config: Mapping,
               force: bool = False, inputs: Iterable[str | os.PathLike] = ()
               ) -> tuple[Path, list[str]]:
     """Write a fit's run directory ``out`` atomically (:class:`cassini_bayes.rundir.RunDir`);

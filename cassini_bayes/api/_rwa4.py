@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (
@@ -93,7 +93,7 @@ def rcs_budget_warning(method: str, has_inertia_posterior: bool, cone95_deg: flo
             f"({arg('inertia_posterior')})")
 
 
-def _window_pairs(windows) -> list | None:
+def _window_pairs(windows: Any) -> list | None:
     """``[((a0, a1), (b0, b1)), …]`` floats (s) from the ``windows`` argument, or ``None``."""
     if windows is None:
         return None
