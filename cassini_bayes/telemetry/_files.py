@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -159,7 +160,7 @@ def _atomic_write(path: Path, force: bool, write) -> None:
 def _cell(x: object) -> str:
     """Shortest text that reads back to the same float (Python's repr); NaN → empty cell."""
     if isinstance(x, float):
-        return "" if x != x else repr(x)
+        return "" if math.isnan(x) else repr(x)
     return str(x)
 
 
@@ -167,8 +168,7 @@ def _write_csv(path: Path, columns: dict[str, list]) -> None:
     names = list(columns)
     with open(path, "w", newline="", encoding="utf-8") as f:
         f.write(",".join(names) + "\n")
-        for row in zip(*(columns[c] for c in names)):
-            f.write(",".join(map(_cell, row)) + "\n")
+        f.writelines(",".join(map(_cell, row)) + "\n" for row in zip(*(columns[c] for c in names)))
 
 
 def _write_frame(path: Path, columns: dict[str, object], force: bool) -> None:

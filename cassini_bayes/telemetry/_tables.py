@@ -56,7 +56,7 @@ def _read_table(path: Path, what: str,
             df = pd.read_parquet(path)
         except InputError:
             raise
-        except Exception as e:  # corrupt file: pyarrow's message, on one line
+        except Exception as e:  # noqa: BLE001  (corrupt file: pyarrow's message, on one line)
             raise InputError(f"cannot read Parquet ({e}); re-export the file", path=name) from None
         header = [str(c).strip() for c in df.columns]
         cols = [df.iloc[:, j].to_numpy() for j in range(df.shape[1])]
