@@ -71,3 +71,33 @@ def test_type_checker_passes_on_the_public_api():
     proc = subprocess.run([sys.executable, "-m", "mypy"], cwd=ROOT, capture_output=True,
                           text=True, timeout=600, check=False)
     assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
+
+
+_USER_SCRIPT = """
+import cassini_bayes as cb
+
+
+def use(fit: cb.FitResult) -> float:
+    tel = cb.read_telemetry("slew.csv")
+    sc = cb.load_spacecraft("cassini_post_probe")
+    again = cb.fit_inertia([tel], sc, seed=1, wheel_errors=WHEEL_ERRORS)
+    return float(fit.idata.posterior["Ixx"].mean()) + again.summary()["seed"]
+"""
+
+
+@pytest.mark.skipif(shutil.which("mypy", path=str(Path(sys.executable).parent)) is None
+                    and not shutil.which("mypy"), reason="mypy not installed (the dev extra)")
+def test_a_users_script_is_type_checked_against_the_api(tmp_path):
+    """The types reach a user: ``cassini_bayes``'s lazily loaded names are typed for checkers.
+    A script using them passes, and the same script with a misspelt option fails."""
+    def check(wheel_errors: str) -> subprocess.CompletedProcess:
+        script = tmp_path / f"user_{len(wheel_errors)}.py"
+        script.write_text(_USER_SCRIPT.replace("WHEEL_ERRORS", repr(wheel_errors)))
+        return subprocess.run([sys.executable, "-m", "mypy", str(script)],
+                              cwd=ROOT, capture_output=True, text=True, timeout=600,
+                              check=False)
+
+    ok = check("common")
+    assert ok.returncode == 0, ok.stdout[-3000:]
+    bad = check("commn")
+    assert bad.returncode == 1 and "wheel_errors" in bad.stdout, bad.stdout[-3000:]

@@ -28,6 +28,7 @@ EventsArg: TypeAlias = ("str | os.PathLike | Sequence[str | os.PathLike | "
 
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import SpacecraftArg
+    from cassini_bayes.inference.adequacy import Adequacy
     from cassini_bayes.inference.health.changepoint import HealthPosterior
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
@@ -200,7 +201,8 @@ def _event_label(day: float, telemetry: Path) -> str:
     return f"{name} (day {day:g})"
 
 
-def health_summary(post, fraction: float, adequacy=None) -> dict:
+def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | None = None
+                   ) -> dict:
     """``summary.json`` of a health fit: the change probability and date, per channel the step
     and ``P(down by more than fraction)`` at the last event, and the ``adequacy`` verdict
     (:func:`~cassini_bayes.inference.health.adequacy.health_adequacy`) with a warning per
@@ -263,7 +265,7 @@ def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
     return header, rows
 
 
-def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
+def band_table(post: HealthPosterior, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
     """``thrust_bands.csv``: on a grid of dates, each channel's thrust relative to its first
     calibration, posterior 5/25/50/75/95 % quantiles (from exact draws, seed 0)."""
     from cassini_bayes.inference.health import CHANNELS
@@ -301,6 +303,9 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
             sim = simulate(ev.scenario)
             d = rd.path / f"event_{k:03d}"
             d.mkdir()
+            if sim.pulses is None:
+                raise InputError(f"{camp.source}: event {k} fires no thruster; a health "
+                                 "campaign's events are biasing events, each with firings")
             write_telemetry(d / "telemetry.csv", sim.telemetry)
             write_pulses(d / "pulses.csv", sim.pulses)
             (d / "truth.json").write_text(json.dumps(sim.truth(), indent=2) + "\n")
@@ -319,7 +324,7 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
     return rd.final
 
 
-def campaign_summaries(campaign, seed: int, *, tau_sd_frac: float | None = None
+def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """In memory, without files: ``(dates (N,), log thrust (N, 6), sd (N, 6))`` of a simulated
     campaign's events (what the benchmark and the tests feed :func:`health_posterior`)."""

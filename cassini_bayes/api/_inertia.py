@@ -21,11 +21,15 @@ from cassini_bayes.errors import as_flag
 
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import SpacecraftArg, TelemetriesArg, WheelErrors
+    from cassini_bayes.inference.inertia import InertiaPosterior
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import Telemetry
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
 
-def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
+def inertia_baseline(telemetries: Sequence[Telemetry], spacecraft: Spacecraft
+                     ) -> tuple[dict | None, list[str]]:
     """The paper's all-axes least squares (Feldman & Lee Eq 11) on the same data, or ``None``,
     with warning lines: :func:`cassini_bayes.estimators.baseline.fit_inertia_baseline` with
     ``method="all_axes"`` (several files: their Eq 11 systems, each anchored on its own first
@@ -42,7 +46,7 @@ def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
             [f"baseline: {m}" for m in fit.warnings])
 
 
-def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
+def inertia_summary(post: InertiaPosterior, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
                     baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of an inertia posterior (``InertiaPosterior``): parameters, baseline,
     diagnostics, adequacy, nuisance, ``model``, ``wheel_errors`` and ``sensitivity``."""
@@ -63,7 +67,8 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "robust" if robust else "idealised"
     summary["wheel_errors"] = wheel_errors if robust else None
-    summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
+    sens = post.problem.sensitivity        # (always set by prepare_inertia)
+    summary["sensitivity"] = sensitivity_block(sens, post_sd) if sens is not None else None
     return summary
 
 

@@ -137,9 +137,10 @@ class FitResult:
         return f"<{self.config.get('command', self.kind)} result, seed {self.config.get('seed')}>"
 
     @property
-    def idata(self) -> InferenceData:
+    def idata(self) -> Any:
         """The ArviZ InferenceData (``posterior``, ``sample_stats``, ``prior``,
-        ``observed_data``, …)."""
+        ``observed_data``, …); typed ``Any``: ArviZ sets its groups as attributes at run time,
+        which a type checker cannot see."""
         return self.posterior.idata
 
     @property

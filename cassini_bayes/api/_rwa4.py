@@ -29,11 +29,12 @@ mass properties), with a flight-calibrated inertia."""
 
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import FitArg, SpacecraftArg, TelemetryArg, WheelErrors
+    from cassini_bayes.inference.rwa4 import Rwa4Posterior
 
 __all__ = ["fit_rwa4", "rwa4_sensitivity", "rwa4_summary"]
 
 
-def rwa4_sensitivity(post) -> dict:
+def rwa4_sensitivity(post: Rwa4Posterior) -> dict:
     """``sensitivity`` block of an RWA4 fit: the RMS axis shift (deg) each nuisance effect of
     prior size causes in a model that leaves it out
     (:func:`cassini_bayes.inference.rwa4.axis_sensitivity`), and that shift over the posterior's
@@ -52,7 +53,7 @@ def rwa4_sensitivity(post) -> dict:
             for effect, shift in axis_sensitivity(post.problem).items()}
 
 
-def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, wheel_errors: str,
+def rwa4_summary(post: Rwa4Posterior, *, seed: int, method: str, prior: str, robust: bool, wheel_errors: str,
                  baseline: dict | None = None, warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of an RWA4 posterior (``Rwa4Posterior``): parameters ``u4_*``, the
     baseline (default Brown's least squares of the prepared problem), diagnostics, adequacy,
