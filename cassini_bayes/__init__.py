@@ -31,12 +31,31 @@ import typing as _typing
 __version__ = "0.1.0"
 
 if _typing.TYPE_CHECKING:   # the types for checkers; at run time the names load on first use
-    from cassini_bayes.api import (FitResult, PulseLog, Simulation, Spacecraft, Telemetry,
-                                   VectorTree, budget, check_telemetry, fit_chebyshev_segments,
-                                   fit_health, fit_inertia, fit_rwa4, fit_thrust, fit_trajectory,
-                                   load_spacecraft, monitor_leak, propagate_conic, read_pulses,
-                                   read_telemetry, request_host_devices, setup_jax, simulate,
-                                   simulate_health_campaign)
+    from cassini_bayes.api import (
+        FitResult,
+        PulseLog,
+        Simulation,
+        Spacecraft,
+        Telemetry,
+        VectorTree,
+        budget,
+        check_telemetry,
+        fit_chebyshev_segments,
+        fit_health,
+        fit_inertia,
+        fit_rwa4,
+        fit_thrust,
+        fit_trajectory,
+        load_spacecraft,
+        monitor_leak,
+        propagate_conic,
+        read_pulses,
+        read_telemetry,
+        request_host_devices,
+        setup_jax,
+        simulate,
+        simulate_health_campaign,
+    )
     from cassini_bayes.errors import InputError
 
 __all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)

@@ -22,15 +22,29 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time each name load
     from cassini_bayes.api._check import TelemetryCheck, check_telemetry
     from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
     from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
-    from cassini_bayes.api._ivp import (TrajectoryFit, VectorTree, fit_chebyshev_segments,
-                                        fit_trajectory, propagate_conic)
+    from cassini_bayes.api._ivp import (
+        TrajectoryFit,
+        VectorTree,
+        fit_chebyshev_segments,
+        fit_trajectory,
+        propagate_conic,
+    )
     from cassini_bayes.api._leak import LeakResult, monitor_leak
-    from cassini_bayes.api._result import (FitResult, collect_warnings, fit_config, write_run,
-                                           write_run_files)
+    from cassini_bayes.api._result import (
+        FitResult,
+        collect_warnings,
+        fit_config,
+        write_run,
+        write_run_files,
+    )
     from cassini_bayes.api._rwa4 import fit_rwa4, rwa4_sensitivity, rwa4_summary
     from cassini_bayes.api._simulation import Simulation, simulate, truth_document
-    from cassini_bayes.api._thrust import (fit_thrust, thrust_baseline, thrust_sensitivity,
-                                           thrust_summary)
+    from cassini_bayes.api._thrust import (
+        fit_thrust,
+        thrust_baseline,
+        thrust_sensitivity,
+        thrust_summary,
+    )
     from cassini_bayes.spacecraft import Spacecraft, load_spacecraft
     from cassini_bayes.telemetry import PulseLog, Telemetry, read_pulses, read_telemetry
 
