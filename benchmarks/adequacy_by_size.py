@@ -158,13 +158,13 @@ def table(results: dict) -> str:
 
 
 def write_docs(text: str) -> None:
-    from cassini_bayes.report.html import write_atomic
+    from cassini_bayes.files import write_text
 
     doc = DOCS.read_text(encoding="utf-8")
     if BEGIN not in doc or END not in doc:
         raise SystemExit(f"{DOCS}: markers {BEGIN} … {END} not found")
     head, rest = doc.split(BEGIN, 1)
-    write_atomic(DOCS, head + BEGIN + "\n" + text + "\n" + END + rest.split(END, 1)[1])
+    write_text(DOCS, head + BEGIN + "\n" + text + "\n" + END + rest.split(END, 1)[1])
 
 
 def main(argv=None) -> None:
@@ -185,7 +185,7 @@ def main(argv=None) -> None:
                     help="folder for each fit's residuals and regressors (.npz)")
     args = ap.parse_args(argv)
     from cassini_bayes.inference.runner import SamplerSettings
-    from cassini_bayes.report.html import write_atomic
+    from cassini_bayes.files import write_text
 
     settings = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws,
                                chain_method="vectorized")
@@ -212,7 +212,7 @@ def main(argv=None) -> None:
                 if this_run not in runs:
                     runs.append(this_run)
                 if args.json is not None:
-                    write_atomic(args.json, json.dumps({"runs": runs, "results": results},
+                    write_text(args.json, json.dumps({"runs": runs, "results": results},
                                                        indent=1) + "\n")
     merged = {case: {rows: dict(seeds) for rows, seeds in by_rows.items()}
               for case, by_rows in results.items()}

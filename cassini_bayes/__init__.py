@@ -23,13 +23,42 @@ uses the package's modules directly calls ``cassini_bayes.setup_jax()`` once aft
 (docs/api.md, "JAX settings").
 """
 
-import sys
-import types
-import importlib
+import importlib as _importlib
+import sys as _sys
+import types as _types
+import typing as _typing
 
 __version__ = "0.1.0"
 
-__all__ = [
+if _typing.TYPE_CHECKING:   # the types for checkers; at run time the names load on first use
+    from cassini_bayes.api import (
+        FitResult,
+        PulseLog,
+        Simulation,
+        Spacecraft,
+        Telemetry,
+        VectorTree,
+        budget,
+        check_telemetry,
+        fit_chebyshev_segments,
+        fit_health,
+        fit_inertia,
+        fit_rwa4,
+        fit_thrust,
+        fit_trajectory,
+        load_spacecraft,
+        monitor_leak,
+        propagate_conic,
+        read_pulses,
+        read_telemetry,
+        request_host_devices,
+        setup_jax,
+        simulate,
+        simulate_health_campaign,
+    )
+    from cassini_bayes.errors import InputError
+
+__all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "__version__",
     "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
     "fit_inertia", "fit_thrust", "fit_rwa4", "fit_wheel_axis",
@@ -39,14 +68,14 @@ __all__ = [
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
 ]
 
-def _api():
+def _api() -> _types.ModuleType:
     """:mod:`cassini_bayes.api`, imported on first use. By name: the package's modules import
     ``__version__`` from here, and the layering contracts (``lint-imports``) must not read that
     as a dependency of every layer on the API, which this module never imports on its own."""
-    return importlib.import_module("cassini_bayes.api")
+    return _importlib.import_module("cassini_bayes.api")
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     """Import a public name from :mod:`cassini_bayes.api` on first use."""
     if name == "InputError":
         from cassini_bayes.errors import InputError
@@ -58,23 +87,25 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    """The public names (``__all__``) and the module's own dunders: no helpers, no imported
+    modules, no subpackages."""
+    return sorted(set(__all__) | {n for n in globals() if n.startswith("__") and n.endswith("__")})
 
 
-class _Package(types.ModuleType):
+class _Package(_types.ModuleType):
     """The module type of this package, for one name: ``cassini_bayes.simulate`` is the public
     :func:`~cassini_bayes.api.simulate` function, although the simulator's subpackage has the
     same name (import from it as usual: ``from cassini_bayes.simulate import load_scenario``;
     ``import cassini_bayes.simulate.run as m`` does not work)."""
 
     @property
-    def simulate(self):
+    def simulate(self) -> object:
         return _api().simulate
 
     @simulate.setter
-    def simulate(self, module) -> None:
+    def simulate(self, module: _types.ModuleType) -> None:
         """The import system binds the subpackage here when it is first imported; it stays
         reachable in ``sys.modules``, the name keeps the function."""
 
 
-sys.modules[__name__].__class__ = _Package
+_sys.modules[__name__].__class__ = _Package

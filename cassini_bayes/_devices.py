@@ -16,6 +16,8 @@ from __future__ import annotations
 import functools
 import os
 import warnings
+from collections.abc import Callable
+from typing import Any, TypeVar, cast
 
 DEFAULT_CHAINS = 4
 
@@ -89,16 +91,19 @@ def require_x64(what: str) -> None:
                            "after the imports (the command line and the API functions do)")
 
 
-def jax_entry(fn):
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def jax_entry(fn: _F) -> _F:
     """Decorate a public function that computes with JAX: :func:`setup_jax` first, so that
     whichever the caller runs first (a simulation, a check, a fit) computes in 64-bit and the
-    fits that follow get their devices."""
+    fits that follow get their devices. The function keeps its signature (and its types)."""
     @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
         setup_jax()
         return fn(*args, **kwargs)
 
-    return wrapper
+    return cast(_F, wrapper)
 
 
 def warn_if_vectorised(chains: int) -> None:

@@ -42,7 +42,7 @@ import warnings
 from pathlib import Path
 from typing import NamedTuple
 
-__all__ = ["ENV", "OFF", "CacheStats", "default_dir", "resolve", "enable", "enable_once",
+__all__ = ["ENV", "OFF", "CacheStats", "resolve", "enable", "enable_once",
            "stats"]
 
 ENV = "CASSINI_BAYES_JAX_CACHE"
@@ -89,7 +89,7 @@ _state: dict = {"dir": None, "hits": 0, "requests": 0, "rejected": 0, "warned": 
                 "listening": False, "jax_own": None}
 
 
-def default_dir() -> Path:
+def _default_dir() -> Path:
     """``$XDG_CACHE_HOME/cassini-bayes/jax`` (when set to an absolute path), else
     ``~/.cache/cassini-bayes/jax``."""
     xdg = os.environ.get("XDG_CACHE_HOME", "")
@@ -99,12 +99,12 @@ def default_dir() -> Path:
 
 def resolve(setting: str | os.PathLike | None = None) -> Path | None:
     """The cache folder for ``setting`` (a folder, ``"off"``, or ``None``: the environment
-    variable, then JAX's own setting, then :func:`default_dir`); ``None`` means off."""
+    variable, then JAX's own setting, then :func:`_default_dir`); ``None`` means off."""
     if setting is None:
         setting = os.environ.get(ENV) or None
     if setting is None:
         own = _state["jax_own"]
-        return Path(own) if own else default_dir()
+        return Path(own) if own else _default_dir()
     text = str(setting).strip()
     if text.lower() in _OFF_WORDS or not text:
         return None

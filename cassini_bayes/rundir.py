@@ -25,7 +25,7 @@ is renamed in. The old run is deleted last.
 A process killed outright (SIGKILL, a power cut) cannot remove its temporary directory. Each one
 holds a note of its writer (:data:`TEMP_MARK`: host, process id and start time), and every
 :class:`RunDir` first removes the temporary directories in its parent whose writer on this host
-has ended (:func:`sweep_stale`); a directory without the note, or written from another host or by
+has ended (:func:`_sweep_stale`); a directory without the note, or written from another host or by
 a process still running, is never touched.
 
 Usage::
@@ -36,30 +36,33 @@ Usage::
         write_posterior(rd.path, idata)
         write_summary(rd.path, summary)
         write_config(rd.path, config)
-        write_report(rd.path, display_dir=rd.final)
+        write_report(rd.path, display_dir=rd.final)   # cassini_bayes.report
     # here `out` is complete
 """
 
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import errno
 import hashlib
 import json
-import math
 import os
 import shutil
 import socket
 import tempfile
 import tomllib
 import warnings
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from types import TracebackType
+from typing import TYPE_CHECKING, Any, Literal
 
-from cassini_bayes._file_mode import default_dir_mode
 from cassini_bayes.errors import InputError, as_flag, spelled
-from cassini_bayes.names import unit_of
+from cassini_bayes.files import json_text, make_temp_dir, publish_dir, toml_text
+from cassini_bayes.names import a_kind, unit_of
+
+if TYPE_CHECKING:
+    from arviz import InferenceData
 
 
 WRITTEN = ".cassini-bayes-files"   # in every run directory: the files it was written with
@@ -86,7 +89,7 @@ def _process_start(pid: int) -> str | None:
 
 
 def _mark(tmp: Path) -> None:
-    """Note in the temporary directory ``tmp`` which process writes it (:func:`sweep_stale`)."""
+    """Note in the temporary directory ``tmp`` which process writes it (:func:`_sweep_stale`)."""
     (tmp / TEMP_MARK).write_text(json.dumps({"host": socket.gethostname(), "pid": os.getpid(),
                                              "started": _process_start(os.getpid())}) + "\n")
 
@@ -114,7 +117,7 @@ def _writer_ended(tmp: Path) -> bool:
 
 def _discard(tmp: Path) -> None:
     """Remove a temporary directory, its :data:`TEMP_MARK` last (a kill half-way leaves a
-    directory that the next :func:`sweep_stale` still recognises); errors are ignored."""
+    directory that the next :func:`_sweep_stale` still recognises); errors are ignored."""
     try:
         entries = [p for p in tmp.iterdir() if p.name != TEMP_MARK]
     except OSError:
@@ -128,12 +131,12 @@ def _discard(tmp: Path) -> None:
     shutil.rmtree(tmp, ignore_errors=True)
 
 
-def sweep_stale(parent: Path) -> list[Path]:
+def _sweep_stale(parent: Path) -> list[Path]:
     """Remove the temporary run directories (``.NAME.tmp-…``) in ``parent`` whose writer has
     ended without cleaning up (killed by SIGKILL, a crash of the machine); returns them. Only
     directories this package made (their :data:`TEMP_MARK`) and whose process on this host is
     gone (:func:`_writer_ended`) are removed."""
-    removed = []
+    removed: list[Path] = []
     try:
         entries = [p for p in Path(parent).iterdir()
                    if p.name.startswith(".") and ".tmp-" in p.name and p.is_dir()
@@ -165,24 +168,97 @@ def _force() -> str:
     return spelled("--force", "force=True")
 
 
-__all__ = ["RunDir", "check_out", "check_writable", "is_package_output", "file_record",
-           "write_posterior", "write_summary", "write_config", "write_report",
-           "minimal_report_html", "sweep_stale"]
+__all__ = [
+    "RunDir",
+    "check_out",
+    "check_writable",
+    "file_record",
+    "is_package_output",
+    "read_posterior",
+    "read_run_file",
+    "run_command",
+    "run_kind",
+    "write_config",
+    "write_posterior",
+    "write_summary",
+]
 
 
-def _read_toml(path: Path) -> dict | None:
+def read_run_file(run_dir: str | os.PathLike, name: str, *,
+                  strict: bool = False) -> dict[str, Any] | None:
+    """The run directory's JSON or TOML file ``name`` (by its suffix) as a dict; None when it is
+    absent, or (unless ``strict``) unreadable or not a table. ``strict``: an unreadable file is an
+    :class:`InputError` naming it."""
+    path = Path(run_dir) / name
+    toml = name.endswith(".toml")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
         return None
-
-
-def _read_json(path: Path) -> dict | None:
+    except (OSError, UnicodeDecodeError) as e:
+        if strict:
+            raise InputError(f"{path}: cannot be read ({e}); re-run the command that wrote "
+                             "it") from None
+        return None
     try:
-        d = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError):
+        d = tomllib.loads(text) if toml else json.loads(text)
+    except ValueError as e:        # (TOMLDecodeError and JSONDecodeError are ValueErrors)
+        if strict:
+            raise InputError(f"{path}: not valid {'TOML' if toml else 'JSON'} ({e}); re-run "
+                             "the fit or fix the file") from None
         return None
-    return d if isinstance(d, dict) else None
+    if not isinstance(d, dict):
+        if strict:
+            raise InputError(f"{path}: expected a JSON object at the top level")
+        return None
+    return d
+
+
+def _text_field(run_dir: str | os.PathLike, name: str, key: str) -> str | None:
+    value = (read_run_file(run_dir, name) or {}).get(key)
+    return value if isinstance(value, str) else None
+
+
+def run_kind(run_dir: str | os.PathLike) -> str | None:
+    """The ``kind`` a fit run directory's ``summary.json`` records (``"inertia"``, ``"thrust"``,
+    ``"rwa4"``), or None when there is none to read."""
+    return _text_field(run_dir, "summary.json", "kind")
+
+
+def run_command(run_dir: str | os.PathLike) -> str | None:
+    """The command that wrote a run directory (``"fit inertia"``, ``"budget"``, ``"fit health"``
+    …): its ``summary.json``'s ``command``, else its ``config.toml``'s; None when neither says."""
+    return (_text_field(run_dir, "summary.json", "command")
+            or _text_field(run_dir, "config.toml", "command"))
+
+
+def read_posterior(run_dir: str | os.PathLike, kind: str | None = None,
+                   where: str | None = None) -> InferenceData:
+    """``posterior.nc`` of a fit's run directory (ArviZ InferenceData); refused, naming
+    ``where`` (default the directory), when the directory or the file is missing, the run is a
+    fit of another ``kind`` than asked (a thrust run carries inertia draws too), or the file
+    cannot be read."""
+    import arviz as az
+
+    run_dir = Path(run_dir)
+    where = where or str(run_dir)
+    wanted = f"{a_kind(kind)} fit" if kind else "a fit"
+    if not run_dir.is_dir():
+        raise InputError(f"{where}: run directory not found; give the --out directory of "
+                         f"{wanted}")
+    nc = run_dir / "posterior.nc"
+    if not nc.is_file():
+        raise InputError(f"{where}: no posterior.nc there; give the --out directory of {wanted}")
+    found = run_kind(run_dir)
+    if kind is not None and found not in (None, kind):
+        raise InputError(f"{where}: {a_kind(found)} fit; give the --out directory of {wanted}")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return az.from_netcdf(nc)
+    except Exception as e:  # netCDF/HDF5 errors have many types
+        raise InputError(f"{where}: posterior.nc cannot be read ({type(e).__name__}); re-run "
+                         "the fit") from None
 
 
 def is_package_output(path: str | os.PathLike) -> bool:
@@ -194,15 +270,15 @@ def is_package_output(path: str | os.PathLike) -> bool:
     (``simulate``); ``results.json`` with ``seed`` and ``version`` (``reproduce``).
     """
     p = Path(path)
-    cfg = _read_toml(p / "config.toml") or {}
+    cfg = read_run_file(p, "config.toml") or {}
     if {"command", "version"} <= cfg.keys():
         return True
     if isinstance(cfg.get("run"), dict) and "version" in cfg["run"] and "kind" in cfg:
         return True
-    truth = _read_json(p / "truth.json") or {}
+    truth = read_run_file(p, "truth.json") or {}
     if {"scenario", "version"} <= truth.keys():
         return True
-    results = _read_json(p / "results.json") or {}
+    results = read_run_file(p, "results.json") or {}
     return {"seed", "version"} <= results.keys()
 
 
@@ -262,28 +338,6 @@ def check_out(out: str | os.PathLike, *, force: bool = False,
     return final
 
 
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap the directories ``a`` and ``b`` in one atomic step (Linux ``renameat2``).
-
-    Returns False where the OS or file system cannot (the caller falls back to two renames).
-    """
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        renameat2 = libc.renameat2
-    except (OSError, AttributeError):
-        return False
-    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                          ctypes.c_uint]
-    at_fdcwd, rename_exchange = -100, 2  # <fcntl.h>, <linux/fs.h>
-    rc = renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange)
-    if rc == 0:
-        return True
-    err = ctypes.get_errno()
-    if err in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP):
-        return False
-    raise OSError(err, os.strerror(err), str(b))
-
-
 class RunDir:
     """Context manager writing a run directory atomically (module docstring).
 
@@ -297,26 +351,28 @@ class RunDir:
                  inputs: Iterable[str | os.PathLike] = ()):
         self.final = check_out(out, force=force, inputs=inputs)
         self.force = force
-        self.path: Path | None = None
 
-    def __enter__(self) -> "RunDir":
+    path: Path
+    """The temporary directory to write into (set on entering the context)."""
+
+    def __enter__(self) -> RunDir:
         parent = self.final.parent
         try:
             parent.mkdir(parents=True, exist_ok=True)
         except OSError as e:
             raise InputError(f"cannot create the parent directory: {e.strerror}",
                              path=str(parent)) from None
-        sweep_stale(parent)   # what killed runs left here
-        self.path = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.tmp-", dir=parent))
+        _sweep_stale(parent)   # what killed runs left here
+        self.path = make_temp_dir(parent, f".{self.final.name}.tmp-")
         try:
             _mark(self.path)
-            os.chmod(self.path, default_dir_mode())  # mkdtemp makes it private; a run is not
         except BaseException:
             shutil.rmtree(self.path, ignore_errors=True)
             raise
         return self
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> Literal[False]:
         if exc_type is not None:
             _discard(self.path)
             return False
@@ -335,24 +391,15 @@ class RunDir:
         if self.final.exists() and any(self.final.iterdir()):
             # the old run may have appeared while this one was computed: check again
             check_out(self.final, force=self.force)
-            (self.path / TEMP_MARK).unlink()
-            if _exchange(self.path, self.final):
-                _mark(self.path)               # now holds the old run, to be deleted
-                _discard(self.path)
-                return
-            old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.old-",
-                                        dir=self.final.parent))
-            os.rmdir(old)
-            os.replace(self.final, old)
-            try:
-                os.replace(self.path, self.final)
-            except BaseException:
-                os.replace(old, self.final)  # put the old run back
-                raise
-            shutil.rmtree(old, ignore_errors=True)
-            return
         (self.path / TEMP_MARK).unlink()
-        os.replace(self.path, self.final)  # new, or an empty directory
+        publish_dir(self.path, self.final, discard_old=_discard_marked)
+
+
+def _discard_marked(old: Path) -> None:
+    """Delete an old run swapped out of its place, marked first (:func:`_sweep_stale` finishes
+    the job should this process be killed half-way)."""
+    _mark(old)
+    _discard(old)
 
 
 def file_record(path: str | os.PathLike) -> dict[str, str]:
@@ -365,30 +412,7 @@ def file_record(path: str | os.PathLike) -> dict[str, str]:
     return {"path": str(p), "sha256": h.hexdigest()}
 
 
-def _json_clean(x: Any) -> Any:
-    if isinstance(x, dict):
-        return {str(k): _json_clean(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_clean(v) for v in x]
-    if hasattr(x, "tolist"):
-        return _json_clean(x.tolist())
-    if isinstance(x, float) and not math.isfinite(x):
-        return None
-    return x
-
-
-def _toml_clean(x: Any) -> Any:
-    """TOML has no null: drop ``None`` entries; arrays become lists."""
-    if isinstance(x, dict):
-        return {str(k): _toml_clean(v) for k, v in x.items() if v is not None}
-    if isinstance(x, (list, tuple)):
-        return [_toml_clean(v) for v in x if v is not None]
-    if hasattr(x, "tolist"):
-        return _toml_clean(x.tolist())
-    return x
-
-
-def write_posterior(run_dir: Path, idata) -> Path:
+def write_posterior(run_dir: Path, idata: InferenceData) -> Path:
     """``posterior.nc``: the InferenceData, every group (custom ones such as ``residuals`` too).
 
     Refuses first, as a full disk (``ENOSPC``), when the file system has less room than the
@@ -413,57 +437,12 @@ def write_posterior(run_dir: Path, idata) -> Path:
 def write_summary(run_dir: Path, summary: Mapping) -> Path:
     """``summary.json`` (NaN and infinities written as ``null``)."""
     p = Path(run_dir) / "summary.json"
-    p.write_text(json.dumps(_json_clean(dict(summary)), indent=2) + "\n")
+    p.write_text(json_text(dict(summary)))
     return p
 
 
 def write_config(run_dir: Path, config: Mapping) -> Path:
     """``config.toml``: the resolved inputs, seed, sampler settings and package version."""
-    import tomli_w
-
     p = Path(run_dir) / "config.toml"
-    p.write_text(tomli_w.dumps(_toml_clean(dict(config))))
-    return p
-
-
-def minimal_report_html(summary: Mapping) -> str:
-    """A small self-contained HTML page with the diagnostics table (fallback report)."""
-    from html import escape
-
-    d = summary.get("diagnostics", {})
-    rows = "".join(f"<tr><td>{escape(str(k))}</td><td>{escape(str(v))}</td></tr>"
-                   for k, v in d.items())
-    prow = "".join(
-        f"<tr><td>{escape(k)}</td>" + "".join(
-            f"<td>{escape(str(v.get(c)))}</td>"
-            for c in ("mean", "sd", "q05", "q95", "r_hat", "ess_bulk")) + "</tr>"
-        for k, v in summary.get("parameters", {}).items())
-    return ("<!DOCTYPE html><html><head><meta charset='utf-8'><title>cassini-bayes run</title>"
-            "</head><body><h1>cassini-bayes: " + escape(str(summary.get("kind", "run"))) +
-            "</h1><h2>Diagnostics</h2><table>" + rows + "</table><h2>Parameters</h2><table>"
-            "<tr><th>name</th><th>mean</th><th>sd</th><th>q05</th><th>q95</th><th>r_hat</th>"
-            "<th>ess_bulk</th></tr>" + prow + "</table></body></html>\n")
-
-
-def write_report(run_dir: Path, *, display_dir: Path | None = None,
-                 summary: Mapping | None = None) -> Path:
-    """``report.html`` from :func:`cassini_bayes.report.build_report`; a minimal page if that fails.
-
-    A failure of the report never loses a finished fit: it is turned into a warning and the
-    minimal page (diagnostics and parameter tables from ``summary``) is written instead.
-    """
-    p = Path(run_dir) / "report.html"
-    try:
-        from cassini_bayes.report import build_report
-
-        kwargs = {"display_dir": display_dir} if display_dir is not None else {}
-        build_report(run_dir, **kwargs)
-        if p.exists():
-            return p
-    except Exception as e:  # report layer missing or broken: keep the run, say so
-        warnings.warn(f"report.html: the full report failed ({type(e).__name__}: {e}); "
-                      "wrote a minimal one", stacklevel=2)
-    if summary is None:
-        summary = json.loads((Path(run_dir) / "summary.json").read_text())
-    p.write_text(minimal_report_html(summary))
+    p.write_text(toml_text(config))
     return p

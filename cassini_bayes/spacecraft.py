@@ -17,17 +17,20 @@ optional wheel limits. Wheel axes and thrust directions are unit vectors in body
 
 from __future__ import annotations
 
+import os
 import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["Wheel", "WheelCone", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
            "WHEEL_SPEED_NOMINAL_RPM",
@@ -327,10 +330,11 @@ class Spacecraft:
         raise InputError(f"spacecraft model {self.name!r} has no thruster {name!r}; it has "
                          f"{have}")
 
-    def with_inertia(self, inertia) -> "Spacecraft":
+    def with_inertia(self, inertia: ArrayLike) -> Spacecraft:
+        """This model with the inertia tensor ``inertia`` (3, 3), kg m²."""
         return replace(self, inertia=np.asarray(inertia, float))
 
-    def with_wheel_axis(self, name: str, axis) -> "Spacecraft":
+    def with_wheel_axis(self, name: str, axis: ArrayLike) -> Spacecraft:
         axis = np.asarray(axis, float)
         wheels = tuple(replace(w, axis=axis) if w.name.upper() == name.upper() else w
                        for w in self.wheels)
@@ -407,7 +411,7 @@ def _capacity_nms(wheels: Sequence[Wheel]) -> float:
     """:attr:`Spacecraft.momentum_capacity_nms` of ``wheels``, N m s."""
     return float(sum(w.inertia * (w.max_speed_rpm if np.isfinite(w.max_speed_rpm)
                                   else WHEEL_SPEED_NOMINAL_RPM) for w in wheels)
-                 * 2.0 * np.pi / 60.0)
+                 * RPM_TO_RAD_S)
 
 
 def _default_com_sd(thrusters: Sequence[Thruster]) -> float:
@@ -828,7 +832,7 @@ def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
     return Knowledge(**kw)
 
 
-def load_spacecraft(path: str | Path) -> Spacecraft:
+def load_spacecraft(path: str | os.PathLike) -> Spacecraft:
     """Load a spacecraft model TOML (a path, or the stem of a file shipped under ``models/``)."""
     if as_path(path, "a spacecraft model .toml file or a shipped model's name").is_dir():
         raise InputError("is a directory, expected a spacecraft model .toml file", path=str(path))

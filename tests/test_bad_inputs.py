@@ -414,7 +414,7 @@ def test_row_limit_refuses_a_huge_file_before_reading_it_all(tmp_path, run_cli, 
     line (docs/limits.md); the limit is lowered here so the file stays small."""
     import cassini_bayes.telemetry as telemetry
 
-    monkeypatch.setattr(telemetry, "MAX_ROWS", 100)
+    monkeypatch.setattr(telemetry.limits, "MAX_ROWS", 100)
     good = tmp_path / "slews.csv"
     write_telemetry(good, make_slews(jax.random.key(11), load_spacecraft(SC), dur=120.0))
     code, _, err = run_cli(*FIT, "--telemetry", good, "--out", tmp_path / "out")

@@ -18,6 +18,7 @@ from cassini_bayes.estimators import (fit_all_axes, fit_axis_by_axis, fit_axis_f
 from cassini_bayes.physics.impulse import impulse_from_pulses
 from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from cassini_bayes.spacecraft import CASSINI_WHEEL_AXES
+from cassini_bayes.units import RPM_TO_RAD_S as RPM
 from kinematics import (biasing_wheel_momentum, dcm_np, free_drift, rotvec_to_quat_np,
                         slew_segments,
                         wheels_for_conserved_momentum)
@@ -214,7 +215,6 @@ def test_pulse_corrected_regression_recovers_thrust_from_a_pulse_log():
 
 AXES4 = np.vstack([CASSINI_WHEEL_AXES, U4])
 J4 = np.array([0.161, 0.160, 0.161, 0.1595])
-RPM = 2 * np.pi / 60
 
 
 def test_rcs_method_recovers_axis_from_free_drift():

@@ -11,12 +11,16 @@ import pytest
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments import (
+    ExperimentKind,
     ExperimentOutput,
+    _registry,
+    check_fact,
+    experiment_from_dict,
     load_experiment,
+    register,
     registered_kinds,
     run_experiment,
 )
-from cassini_bayes.experiments import _core
 
 SHIPPED = sorted(EXPERIMENTS_DIR.glob("*.toml"))
 RUNNABLE = [p for p in SHIPPED
@@ -133,9 +137,9 @@ def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
     def boom(key, settings, ctx):
         raise RuntimeError("kaboom")
 
-    kinds = dict(_core._KINDS)
-    kinds["test_boom"] = _core.ExperimentKind("test_boom", boom, {"n": 1})
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    kinds["test_boom"] = ExperimentKind("test_boom", boom, {"n": 1})
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
     path = _write(tmp_path, 'kind = "test_boom"\n')
     with pytest.raises(RuntimeError, match="kaboom"):
         run_experiment(path, tmp_path / "out")
@@ -145,13 +149,13 @@ def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
 
 def test_a_new_kind_is_one_function(tmp_path, monkeypatch):
     """The framework contract: register a function, write a two-line file, run it."""
-    kinds = dict(_core._KINDS)
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
 
-    @_core.register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
+    @register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
     def square(key, settings, ctx):
         return ExperimentOutput(summary={"x2": settings["x"] ** 2},
-                                checks=(_core.check_fact("R_fsds_mix", 1.34058),))
+                                checks=(check_fact("R_fsds_mix", 1.34058),))
 
     path = _write(tmp_path, 'kind = "test_square"\n[settings]\nx = 4\n')
     rec = run_experiment(path, tmp_path / "full")
@@ -187,10 +191,10 @@ def test_paper_fact_verdicts():
 
 
 def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
-    kinds = dict(_core._KINDS)
-    monkeypatch.setattr(_core, "_KINDS", kinds)
+    kinds = dict(_registry._KINDS)
+    monkeypatch.setattr(_registry, "_KINDS", kinds)
 
-    @_core.register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
+    @register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
     def tables(key, settings, ctx):
         return ExperimentOutput(summary={"events": settings["events"]})
 
@@ -204,5 +208,5 @@ def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
 
 def test_a_fits_config_toml_is_named_as_such():
     with pytest.raises(InputError, match="config.toml of a 'fit inertia' run, not an experiment"):
-        _core.experiment_from_dict({"command": "fit inertia", "version": "0.1.0", "seed": 0},
-                                   "c.toml")
+        experiment_from_dict({"command": "fit inertia", "version": "0.1.0", "seed": 0},
+                             "c.toml")

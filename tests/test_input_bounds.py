@@ -124,8 +124,8 @@ def test_pulse_bounds_in_memory():
 
 
 def test_row_limit_per_file_and_per_fit(tmp_path, monkeypatch):
-    monkeypatch.setattr(telemetry, "MAX_ROWS", 10)
-    monkeypatch.setattr(telemetry, "_CHUNK_ROWS", 4)  # the limit is checked while reading
+    monkeypatch.setattr(telemetry.limits, "MAX_ROWS", 10)
+    monkeypatch.setattr(telemetry.limits, "_CHUNK_ROWS", 4)  # the limit is checked reading
     p = _write(tmp_path, "long.csv", "\n".join(_tel_lines(12)))
     _one_line_error(lambda: read_telemetry(p), str(p), "more than 10 data rows", "decimate")
     a = _write(tmp_path, "a.csv", "\n".join(_tel_lines(6)))
@@ -143,14 +143,14 @@ def test_row_limit_parquet(tmp_path, monkeypatch):
     pq = tmp_path / "a.parquet"
     telemetry.write_telemetry(pq, tel)
     assert read_telemetry(pq).n == 12
-    monkeypatch.setattr(telemetry, "MAX_ROWS", 10)
+    monkeypatch.setattr(telemetry.limits, "MAX_ROWS", 10)
     _one_line_error(lambda: read_telemetry(pq), str(pq), "more than 10 data rows")
 
 
 def test_chunked_reading_matches_and_names_the_global_row(tmp_path, monkeypatch):
     p = _write(tmp_path, "tel.csv", "\n".join(_tel_lines(12)))
     whole = read_telemetry(p)
-    monkeypatch.setattr(telemetry, "_CHUNK_ROWS", 5)
+    monkeypatch.setattr(telemetry.limits, "_CHUNK_ROWS", 5)
     chunked = read_telemetry(p)
     for a, b in ((whole.t, chunked.t), (whole.q, chunked.q), (whole.wheel_rates,
                                                               chunked.wheel_rates)):

@@ -351,7 +351,7 @@ def test_rwa4_requirement_is_decided_by_the_posterior(reports):
     """Brown's ±2° requirement: "yes"/"no" only at posterior probability ≥ 0.95 / ≤ 0.05; the
     mean axis alone can sit inside while most of the posterior does not (the number audit's
     RCS fit: mean 1.43° from RWA1, probability 0.26, was called "yes")."""
-    from cassini_bayes.report.build import _requirement_verdict
+    from cassini_bayes.report._answer import _requirement_verdict
 
     _, html = reports["rwa4"]      # 3.1° from RWA1, ±0.4°
     assert re.search(r"within ±2° of RWA1 \(reference wheel, spacecraft model\)</td><td>no "
@@ -382,7 +382,7 @@ def test_diagnostics_judge_what_the_fit_judged(tmp_path):
     roles = {r.label: r.role for r in diag.rows}
     assert roles["Ixx"] == "parameter" and roles["sigma_H"] == "nuisance"
     assert "z" not in roles and diag.sampler == {"z": 1, "H0": 3}   # listed, not judged
-    assert diag.max_r_hat == max(r.r_hat for r in diag.rows) < 1.05
+    assert diag.overall.max_r_hat == max(r.r_hat for r in diag.rows) < 1.05
     html = build_report(run).read_text(encoding="utf-8")
     assert "Sampler coordinates, not judged" in html and "z (1)" in html
 
@@ -578,7 +578,7 @@ def _axes_problems(fig) -> list[str]:
 
 def _report_figures(run_dir):
     """Every figure a fit report of ``run_dir`` draws, built as the report builds them."""
-    from cassini_bayes.report import build, figures
+    from cassini_bayes.report import _answer, figures
 
     run = load_run(run_dir)
     names = parameter_names(run)
@@ -588,10 +588,10 @@ def _report_figures(run_dir):
            "residuals": figures.residuals_figure(run.groups["residuals"], var="residual",
                                                  ylabel="residual (N m s)")}
     if run.kind == "rwa4":
-        mean, cones = build._direction(run)
-        out["sky"] = figures.axis_sky_figure(build._axis_draws(run), mean=mean, cones_deg=cones,
-                                             truth=build._axis_vec(run.summary["truth"]),
-                                             baseline=build._axis_vec(run.summary["baseline"]))
+        mean, cones = _answer._direction(run)
+        out["sky"] = figures.axis_sky_figure(_answer._axis_draws(run), mean=mean, cones_deg=cones,
+                                             truth=_answer._axis_vec(run.summary["truth"]),
+                                             baseline=_answer._axis_vec(run.summary["baseline"]))
     else:
         out["answer"] = figures.answer_figure(
             [figures.Panel(r.label, r.unit, post[r.label], r.baseline, r.truth, r.prior_mean)

@@ -12,11 +12,11 @@ import arviz as az
 import numpy as np
 import pytest
 
-from cassini_bayes import rundir
+from cassini_bayes import files, rundir
 from cassini_bayes.errors import InputError
+from cassini_bayes.report import minimal_report_html
 from cassini_bayes.rundir import (RunDir, check_out, file_record, is_package_output,
-                                  minimal_report_html, write_config, write_posterior,
-                                  write_summary)
+                                  write_config, write_posterior, write_summary)
 
 
 def _siblings(path):
@@ -67,7 +67,7 @@ def test_refuses_non_empty_without_force(tmp_path):
 @pytest.mark.parametrize("swap", [True, False], ids=["renameat2", "two-renames"])
 def test_force_replaces_atomically(tmp_path, monkeypatch, swap):
     if not swap:  # a file system without RENAME_EXCHANGE
-        monkeypatch.setattr(rundir, "_exchange", lambda a, b: False)
+        monkeypatch.setattr(files, "exchange_dirs", lambda a, b: False)
     out = tmp_path / "run"
     _old_run(out)
     with RunDir(out, force=True) as rd:
@@ -105,7 +105,7 @@ def test_exchange_swaps_in_one_step(tmp_path):
     b.mkdir()
     (a / "new").write_text("")
     (b / "old").write_text("")
-    if not rundir._exchange(a, b):
+    if not files.exchange_dirs(a, b):
         pytest.skip("no renameat2(RENAME_EXCHANGE) here")
     assert [p.name for p in b.iterdir()] == ["new"] and [p.name for p in a.iterdir()] == ["old"]
 

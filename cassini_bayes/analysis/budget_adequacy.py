@@ -22,9 +22,6 @@ wrong with them, and it assumes they describe one spacecraft. Four checks, each 
 from __future__ import annotations
 
 import itertools
-import json
-import tomllib
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +29,9 @@ from scipy import stats
 
 from cassini_bayes.inference.adequacy.check import (Z_THRESHOLD, Adequacy, Check, _check,
                                                     normal_deviate, not_applicable)
+from cassini_bayes.errors import InputError
 from cassini_bayes.names import INERTIA_NAMES
+from cassini_bayes.rundir import read_posterior, read_run_file
 
 __all__ = ["budget_adequacy", "input_convergence", "input_adequacy", "spacecraft_models",
            "shared_inertia", "run_summaries", "run_models", "run_inertia_draws"]
@@ -43,11 +42,7 @@ def run_summaries(runs: dict) -> dict[str, dict]:
     a directory or an unsaved fit (its ``summary()``)."""
     out = {}
     for kind, run in runs.items():
-        try:
-            summary = (run.summary() if hasattr(run, "summary") else
-                       json.loads((Path(run) / "summary.json").read_text(encoding="utf-8")))
-        except (OSError, UnicodeDecodeError, ValueError):
-            continue
+        summary = run.summary() if hasattr(run, "summary") else read_run_file(run, "summary.json")
         if isinstance(summary, dict):
             out[kind] = summary
     return out
@@ -58,10 +53,8 @@ def run_models(runs: dict) -> dict[str, str]:
     run is a directory or an unsaved fit (its ``config``)."""
     out = {}
     for kind, run in runs.items():
-        try:
-            cfg = (run.config if hasattr(run, "config") else
-                   tomllib.loads((Path(run) / "config.toml").read_text(encoding="utf-8")))
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        cfg = run.config if hasattr(run, "config") else read_run_file(run, "config.toml")
+        if cfg is None:
             continue
         name = (cfg.get("spacecraft") or {}).get("name")
         if isinstance(name, str):
@@ -72,16 +65,11 @@ def run_models(runs: dict) -> dict[str, str]:
 def run_inertia_draws(runs: dict) -> dict[str, np.ndarray]:
     """``(n, 6)`` draws of ``Ixx … Iyz`` (kg m²) of every run whose ``posterior.nc`` (or an
     unsaved fit's ``idata``) has them."""
-    import arviz as az
-
     out = {}
     for kind, run in runs.items():
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                post = (run.idata.posterior if hasattr(run, "idata") else
-                        az.from_netcdf(Path(run) / "posterior.nc").posterior)
-        except Exception:  # unreadable: load_posterior has already said so for the budget's own
+            post = (run.idata if hasattr(run, "idata") else read_posterior(run)).posterior
+        except InputError:  # unreadable: load_posterior has already said so for the budget's own
             continue
         if all(n in post for n in INERTIA_NAMES):
             d = np.stack([np.asarray(post[n].values, float).reshape(-1) for n in INERTIA_NAMES],

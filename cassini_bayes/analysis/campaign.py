@@ -25,7 +25,7 @@ replicate at ``B = 16``.
 
 Checkpoints: ``WORKDIR/manifest.json`` records what the campaign is (model, options, scenario
 hash, seed, batch size, package version); every finished batch is written to
-``WORKDIR/batch_NNNNNN.npz`` atomically (temporary file, then ``os.replace``), so a campaign
+``WORKDIR/batch_NNNNNN.npz`` atomically (:mod:`cassini_bayes.files`), so a campaign
 killed at any moment leaves only whole batches. :func:`run_campaign` on the same ``WORKDIR`` skips
 the batches already there and runs the rest: the result equals an uninterrupted run bit for bit.
 A damaged batch file (truncated by a full disk, say) is recomputed, with a warning.
@@ -46,7 +46,6 @@ import hashlib
 import json
 import math
 import os
-import tempfile
 import warnings
 import zipfile
 import zlib
@@ -60,7 +59,7 @@ import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
-from cassini_bayes._file_mode import default_file_mode
+from cassini_bayes.files import atomic_path, write_text
 from cassini_bayes.analysis.sbc import ranks
 from cassini_bayes.analysis.sbc_models import ModelSpec, SbcModel, build_model
 from cassini_bayes.errors import InputError
@@ -334,19 +333,9 @@ def _batch_path(workdir: Path, b: int) -> Path:
 
 
 def _save_batch(workdir: Path, b: int, result: dict[str, Any]) -> None:
-    """Write one batch atomically: temporary file in the same directory, then ``os.replace``."""
-    fd, tmp = tempfile.mkstemp(prefix=f".batch_{b:06d}.", suffix=".npz.tmp", dir=workdir)
-    try:
-        os.chmod(tmp, default_file_mode())  # mkstemp makes it private
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **{k: result[k] for k in _FIELDS})
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, _batch_path(workdir, b))
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    """Write one batch atomically (:func:`cassini_bayes.files.atomic_path`)."""
+    with atomic_path(_batch_path(workdir, b)) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **{k: result[k] for k in _FIELDS})
 
 
 def _load_batch(workdir: Path, b: int) -> dict[str, np.ndarray] | None:
@@ -396,11 +385,7 @@ def _check_manifest(workdir: Path, manifest: dict[str, Any]) -> None:
                 "seed, batch size or version differ); start over with --force or use another --out")
         return
     workdir.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=".manifest.", dir=workdir)
-    os.chmod(tmp, default_file_mode())
-    with os.fdopen(fd, "w") as f:
-        json.dump(manifest, f, indent=2)
-    os.replace(tmp, path)
+    write_text(path, json.dumps(manifest, indent=2))
 
 
 # -------------------------------------------------------------------------------- executors

@@ -18,7 +18,6 @@ the caller's key) to ``n_draws`` joint draws.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -30,6 +29,7 @@ from cassini_bayes.analysis.paper_facts import LEE_POINTING_TABLE2, TABLE1, fact
 from cassini_bayes.analysis.propagation import LineInterval, propagate
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_kind
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["Posterior", "load_posterior", "posterior_from_idata", "BudgetRow", "budget_table",
            "budget_csv", "TABLE_COLUMNS",
@@ -37,7 +37,6 @@ __all__ = ["Posterior", "load_posterior", "posterior_from_idata", "BudgetRow", "
 
 KINDS = ("inertia", "thrust", "rwa4")
 LEE_CONTROL_LINE = "Reaction wheel-based attitude control error"
-_RPM = 2.0 * math.pi / 60.0
 
 
 class Posterior(NamedTuple):
@@ -95,39 +94,13 @@ def load_posterior(run_dir, kind: str, *, option: str | None = None) -> Posterio
     ``option`` names the argument in errors (``--inertia``); the RWA4 method is read from the
     run's ``config.toml`` (``[options] method``) when it is there.
     """
-    import tomllib
-    import warnings
-
-    import arviz as az
-
-    from cassini_bayes.run_kind import run_kind
+    from cassini_bayes.rundir import read_posterior, read_run_file
 
     where = f"{option} {run_dir}" if option else str(run_dir)
-    run_dir = Path(run_dir)
-    nc = run_dir / "posterior.nc"
-    if not run_dir.is_dir():
-        raise InputError(f"{where}: run directory not found; give the --out directory of "
-                         f"{a_kind(kind)} fit")
-    if not nc.is_file():
-        raise InputError(f"{where}: no posterior.nc there; give the --out directory of "
-                         f"{a_kind(kind)} fit")
-    found = run_kind(run_dir)
-    if found not in (None, kind):  # e.g. a thrust run, which carries inertia draws too
-        raise InputError(f"{where}: {a_kind(found)} fit; give the --out directory of "
-                         f"{a_kind(kind)} fit")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            idata = az.from_netcdf(nc)
-    except Exception as e:  # netCDF/HDF5 errors have many types
-        raise InputError(f"{where}: posterior.nc cannot be read ({type(e).__name__}); re-run "
-                         "the fit") from None
+    idata = read_posterior(run_dir, kind, where)
     method = None
-    if kind == "rwa4" and (run_dir / "config.toml").is_file():
-        try:
-            cfg = tomllib.loads((run_dir / "config.toml").read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError):
-            cfg = {}
+    if kind == "rwa4":
+        cfg = read_run_file(run_dir, "config.toml") or {}
         m = (cfg.get("options") or {}).get("method", cfg.get("method"))
         method = m if m in ("rcs", "rwa") else None
     return posterior_from_idata(idata, kind, where, method)
@@ -196,7 +169,7 @@ def _default_maneuver() -> bl.Maneuver:
 
     axes = np.stack([CASSINI_WHEEL_AXES[1], CASSINI_WHEEL_AXES[2], CASSINI_WHEEL_AXES[0]])
     direction = np.ones(3) / math.sqrt(3.0)
-    h = (0.16 * _RPM * np.array([-600.0, -800.0, -850.0])) @ axes
+    h = (0.16 * RPM_TO_RAD_S * np.array([-600.0, -800.0, -850.0])) @ axes
     return bl.Maneuver(3e-3 * direction, 3e-5 * direction, h, 0.1, axes)
 
 

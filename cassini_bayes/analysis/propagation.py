@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["LineInterval", "credible_interval", "propagate", "median_center"]
+__all__ = ["LineInterval", "credible_interval", "propagate"]
 
 Draws = Mapping[str, np.ndarray]
 Line = Callable[[Draws], np.ndarray]
@@ -73,7 +73,7 @@ def credible_interval(values, level: float = 0.9) -> tuple[float, float, float]:
     return float(med), float(lo), float(hi)
 
 
-def median_center(draws: Draws) -> dict[str, np.ndarray]:
+def _median_center(draws: Draws) -> dict[str, np.ndarray]:
     """Posterior median of every parameter (component-wise for a vector parameter)."""
     return {k: np.median(np.asarray(v, float), axis=0) for k, v in draws.items()}
 
@@ -106,7 +106,7 @@ def propagate(line: Line, draws: Draws, *, level: float = 0.9,
         raise ValueError("propagate needs at least one parameter")
     n = _n_draws(draws)
     draws = {k: np.asarray(v, float) for k, v in draws.items()}
-    center = dict(median_center(draws) if center is None else center)
+    center = dict(_median_center(draws) if center is None else center)
     values = np.asarray(line(draws), float).reshape(n)
     med, lo, hi = credible_interval(values, level)
     total = float(np.var(values))

@@ -52,7 +52,6 @@ __all__ = [
     "ecdf_uniformity",
     "coverage",
     "sbc_result",
-    "default_bins",
     "plot_rank_histograms",
     "plot_ecdf_difference",
 ]
@@ -215,7 +214,7 @@ def ranks(key: jax.Array, draws: jax.Array, truth: jax.Array) -> jax.Array:
     return (below + jnp.floor(u * (ties + 1)).astype(below.dtype)).astype(jnp.int32)
 
 
-def default_bins(n_replicates: int, n_draws: int) -> int:
+def _default_bins(n_replicates: int, n_draws: int) -> int:
     """Number of rank bins: about ``N / 10`` expected counts per bin, between 2 and 20, ``≤ L + 1``.
 
     Ten expected counts per bin keeps the chi-square approximation good (the usual rule is ≥ 5).
@@ -238,7 +237,7 @@ def chi2_uniformity(rank: np.ndarray, n_draws: int, bins: int | None = None) -> 
     n_draws : int
         ``L``, the number of posterior draws the ranks were taken among.
     bins : int, optional
-        Number of bins ``B`` (default :func:`default_bins`). Bin ``b`` holds the rank values
+        Number of bins ``B`` (default :func:`_default_bins`). Bin ``b`` holds the rank values
         ``[e_b, e_{b+1})``; its expected count is ``N (e_{b+1} − e_b) / (L + 1)``, exact even when
         ``B`` does not divide ``L + 1``.
 
@@ -249,7 +248,7 @@ def chi2_uniformity(rank: np.ndarray, n_draws: int, bins: int | None = None) -> 
     """
     rank = np.asarray(rank)
     n = rank.size
-    bins = default_bins(n, n_draws) if bins is None else int(bins)
+    bins = _default_bins(n, n_draws) if bins is None else int(bins)
     if not 2 <= bins <= n_draws + 1:
         raise ValueError(f"bins must be in 2..{n_draws + 1}, got {bins}")
     edges = _bin_edges(n_draws, bins)
@@ -372,7 +371,7 @@ def sbc_result(names: Sequence[str], rank: np.ndarray, n_draws: int, *,
         Family-wise false-failure rate of each statistic; each parameter is tested at
         ``alpha_family / P``.
     bins : int, optional
-        Chi-square bins (default :func:`default_bins`).
+        Chi-square bins (default :func:`_default_bins`).
 
     Returns
     -------

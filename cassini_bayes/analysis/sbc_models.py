@@ -92,7 +92,6 @@ __all__ = [
     "registered_models",
     "build_model",
     "nuts_fit",
-    "toy_model",
 ]
 
 
@@ -293,7 +292,7 @@ def nuts_fit(model: Callable, names: tuple[str, ...], settings) -> Callable:
 # ------------------------------------------------------------------------------ toy model
 
 
-def toy_model(*, n_obs: int = 20, likelihood_noise_factor: float = 1.0,
+def _toy_model(*, n_obs: int = 20, likelihood_noise_factor: float = 1.0,
               simulator_noise_factor: float = 1.0, num_warmup: int = 150, num_draws: int = 150,
               num_chains: int = 2, thin: int = 3) -> SbcModel:
     """Linear-Gaussian regression with unknown noise, to test the SBC machinery.
@@ -383,7 +382,7 @@ def _toy(spec: ModelSpec) -> SbcModel:
         if unknown:
             raise InputError(f"unknown toy-model setting(s) {sorted(unknown)}; allowed: "
                              f"{sorted(_TOY_KEYS)}", path=where)
-    return toy_model(**settings)
+    return _toy_model(**settings)
 
 
 # --------------------------------------------------------------------------- inertia model

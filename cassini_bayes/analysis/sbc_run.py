@@ -5,16 +5,15 @@ and the checkpoint folder of a campaign under way."""
 from __future__ import annotations
 
 import datetime as _dt
-import json
 from pathlib import Path
 
 import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes.errors import InputError
-from cassini_bayes.rundir import RunDir
+from cassini_bayes.rundir import RunDir, write_config, write_summary
 
-__all__ = ["summarize", "write_run", "work_dir"]
+__all__ = ["write_run", "work_dir"]
 
 
 def work_dir(out: Path) -> Path:
@@ -22,7 +21,7 @@ def work_dir(out: Path) -> Path:
     return out.parent / f".{out.name}.sbc-work"
 
 
-def summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
+def _summarize(spec, result, *, alpha: float = 0.01, executor: str = "local"):
     """``(SbcResult, summary dict)`` of a finished campaign (failed replicates left out)."""
     from cassini_bayes.analysis.sbc import sbc_result
 
@@ -91,14 +90,12 @@ def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "
 
     Returns the ``summary.json`` content.
     """
-    import tomli_w
-
     from cassini_bayes.report.sbc import sbc_report_html
 
-    sbc, summary = summarize(spec, result, alpha=alpha, executor=executor)
+    sbc, summary = _summarize(spec, result, alpha=alpha, executor=executor)
     with RunDir(out, force=force) as rd:
         tmp = rd.path
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        write_summary(tmp, summary)
         config = {"command": "sbc", "model": spec.name, "replicates": summary["replicates"],
                   "seed": summary["seed"], "batch": summary["batch_size"], "alpha": alpha,
                   "executor": executor, "version": __version__,
@@ -107,7 +104,7 @@ def write_run(out: Path, spec, result, *, alpha: float = 0.01, executor: str = "
                   "options": _toml_safe(dict(spec.options))}
         if spec.scenario_text:
             config["scenario"] = spec.scenario_text
-        (tmp / "config.toml").write_text(tomli_w.dumps(config))
+        write_config(tmp, config)
         np.savez(tmp / "replicates.npz", names=np.asarray(result.names), truth=result.truth,
                  draws=result.draws, rank=result.rank, n_divergent=result.n_divergent,
                  rhat=result.rhat, ess=result.ess, failed=result.failed,

@@ -13,7 +13,40 @@ Also here, for the experiments and the CLI: the per-model summary builders
 Each name is imported from its module on first use.
 """
 
-import importlib
+import importlib as _importlib
+import typing as _typing
+
+if _typing.TYPE_CHECKING:   # the types for checkers; at run time each name loads on first use
+    from cassini_bayes._devices import request_host_devices, setup_jax
+    from cassini_bayes.api._budget import BudgetResult, budget
+    from cassini_bayes.api._check import TelemetryCheck, check_telemetry
+    from cassini_bayes.api._health import HealthResult, fit_health, simulate_health_campaign
+    from cassini_bayes.api._inertia import fit_inertia, inertia_baseline, inertia_summary
+    from cassini_bayes.api._ivp import (
+        TrajectoryFit,
+        VectorTree,
+        fit_chebyshev_segments,
+        fit_trajectory,
+        propagate_conic,
+    )
+    from cassini_bayes.api._leak import LeakResult, monitor_leak
+    from cassini_bayes.api._result import (
+        FitResult,
+        collect_warnings,
+        fit_config,
+        write_run,
+        write_run_files,
+    )
+    from cassini_bayes.api._rwa4 import fit_rwa4, rwa4_sensitivity, rwa4_summary
+    from cassini_bayes.api._simulation import Simulation, simulate, truth_document
+    from cassini_bayes.api._thrust import (
+        fit_thrust,
+        thrust_baseline,
+        thrust_sensitivity,
+        thrust_summary,
+    )
+    from cassini_bayes.spacecraft import Spacecraft, load_spacecraft
+    from cassini_bayes.telemetry import PulseLog, Telemetry, read_pulses, read_telemetry
 
 _HOMES = {
     "cassini_bayes._devices": ["request_host_devices", "setup_jax"],
@@ -48,11 +81,11 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     """Import a public name from its module on first use: a command imports only what it runs
     (``cassini-bayes check`` no fitting code, ``fit inertia`` no simulator)."""
     if name in _HOME:
-        value = getattr(importlib.import_module(_HOME[name]), name)
+        value = getattr(_importlib.import_module(_HOME[name]), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

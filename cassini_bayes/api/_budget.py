@@ -11,11 +11,16 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.names import a_kind
+
+if TYPE_CHECKING:
+    from cassini_bayes.analysis.posterior_budgets import PosteriorBudget
+    from cassini_bayes.api._inputs import FitArg
 
 __all__ = ["BudgetResult", "budget"]
 
@@ -27,10 +32,10 @@ class BudgetResult:
     (``summary.json``) and ``config`` (``config.toml``) dicts and the inputs ``runs`` (by kind:
     run directories or fit results, :class:`~cassini_bayes.api.FitResult`)."""
 
-    budget: object
-    summary: dict
-    config: dict
-    runs: dict
+    budget: PosteriorBudget
+    summary: dict[str, Any]
+    config: dict[str, Any]
+    runs: dict[str, Any]
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json`` (with the ``adequacy`` verdict of
@@ -51,8 +56,7 @@ class BudgetResult:
         return rd.final
 
 
-@jax_entry
-def _axis_wheel(run) -> str:
+def _axis_wheel(run: FitArg) -> str:
     """The wheel a spin-axis fit (a FitResult or a run directory) calibrated: its summary's
     ``wheel`` block; RWA4 for a summary written before the block existed (or none to read)."""
     import json
@@ -71,7 +75,9 @@ def _axis_wheel(run) -> str:
     return str(wheel.get("name") or "RWA4") if isinstance(wheel, dict) else "RWA4"
 
 
-def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
+@jax_entry
+def budget(*, inertia: FitArg | None = None, thrust: FitArg | None = None,
+           rwa4: FitArg | None = None, seed: int = 0,
            n_draws: int = 4000) -> BudgetResult:
     """Budget lines from the posteriors of fit run directories (any of the three; at least one).
 
@@ -85,8 +91,11 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
     import jax
 
     from cassini_bayes.analysis.budget_adequacy import budget_adequacy
-    from cassini_bayes.analysis.posterior_budgets import (load_posterior, posterior_budget,
-                                                          posterior_from_idata)
+    from cassini_bayes.analysis.posterior_budgets import (
+        load_posterior,
+        posterior_budget,
+        posterior_from_idata,
+    )
     from cassini_bayes.api._inputs import MAX_DRAWS, check_seed, number
     from cassini_bayes.api._result import FitResult
     from cassini_bayes.rundir import file_record
@@ -114,13 +123,14 @@ def budget(*, inertia=None, thrust=None, rwa4=None, seed: int = 0,
         raise InputError("give at least one run directory: "
                          + ", ".join(spelled(f"--{k} RUN", k) for k in runs))
     check_seed(seed)
-    n_draws = number("n_draws", n_draws, lo=10, hi=MAX_DRAWS, integer=True,
-                     where=spelled("--draws", "n_draws"))
+    n_draws = int(number("n_draws", n_draws, lo=10, hi=MAX_DRAWS, integer=True,
+                         where=spelled("--draws", "n_draws")))
     post = {k: (load_posterior(v, k, option=spelled(f"--{k}", k)) if isinstance(v, Path) else
                 posterior_from_idata(v.idata, k, f"{k}={v}",
                                      (v.config.get("options") or {}).get("method")))
             for k, v in given.items()}
-    result = posterior_budget(jax.random.key(seed), n_draws=n_draws, **post)
+    result = posterior_budget(jax.random.key(seed), n_draws=n_draws, inertia=post.get("inertia"),
+                              thrust=post.get("thrust"), rwa4=post.get("rwa4"))
     adequacy = budget_adequacy(given)
     summary = {"command": "budget", "version": __version__, "seed": seed, **result.to_dict(),
                "adequacy": adequacy.to_dict(), "warnings": adequacy.warnings()}

@@ -10,11 +10,18 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import PulsesArg, SpacecraftArg, TelemetryArg
+    from cassini_bayes.consistency import AttitudeAgreement, MomentumScale
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["TelemetryCheck", "WheelStats", "ThrusterStats", "check_telemetry"]
 
@@ -62,8 +69,8 @@ class TelemetryCheck:
     t: np.ndarray
     max_rate_rad_s: float
     max_turn_rad: float
-    attitude: object
-    momentum: object
+    attitude: AttitudeAgreement | None
+    momentum: MomentumScale | None
     physics: str
     wheels: tuple[WheelStats, ...]
     thruster_source: str | None
@@ -92,7 +99,8 @@ class TelemetryCheck:
         return text + ")"
 
 
-def _physics_line(attitude, momentum, spacecraft) -> str:
+def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | None,
+                  spacecraft: Spacecraft | None) -> str:
     """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
     from cassini_bayes.consistency import AXES_CONDITION_MIN, MOMENTUM_ALIGN_MIN
     from cassini_bayes.errors import spelled
@@ -123,7 +131,7 @@ def _physics_line(attitude, momentum, spacecraft) -> str:
             "rad/s would give 9.55)" + axes_text)
 
 
-def _check_shared_span(tel, log) -> None:
+def _check_shared_span(tel: Telemetry, log: PulseLog) -> None:
     """Refuse a pulse log none of whose pulses touches the telemetry's span: the two files use
     different time bases, or belong to different events (``check`` had said "none fired")."""
     from cassini_bayes.telemetry import check_pulses_in_span
@@ -145,7 +153,8 @@ def _pulse_count(on: np.ndarray) -> int:
 
 
 @jax_entry
-def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: float = 60.0,
+def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
+                    spacecraft: SpacecraftArg | None = None, min_quiet_s: float = 60.0,
                     rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
                     check_units: bool = True) -> TelemetryCheck:
     """Validate a telemetry file (and pulse log) and say what it holds.
@@ -170,8 +179,12 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         The first rule or physics check the file breaks, in one line naming where.
     """
     from cassini_bayes.api._inputs import one_pulse_log, one_telemetry, spacecraft_input
-    from cassini_bayes.consistency import (GyroBiasWarning, QuantisedRatesWarning,
-                                           check_telemetry_data, quantised_rates)
+    from cassini_bayes.consistency import (
+        GyroBiasWarning,
+        QuantisedRatesWarning,
+        check_telemetry_data,
+        quantised_rates,
+    )
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
@@ -219,7 +232,8 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
             total = float(on[-1] - on[0])
             if total <= 0:
                 continue
-            count = (int(np.count_nonzero(log.thruster == k)) if source != "on_* columns"
+            count = (int(np.count_nonzero(log.thruster == k))
+                     if log is not None and source != "on_* columns"
                      else _pulse_count(on))
             thrusters.append(ThrusterStats(name, count, total))
     quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,

@@ -10,14 +10,26 @@ from __future__ import annotations
 import csv
 import json
 import os
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeAlias
+
 import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import number
 from cassini_bayes.errors import InputError, arg, spelled
+
+EventsArg: TypeAlias = ("str | os.PathLike | Sequence[str | os.PathLike | "
+                        "tuple[float, str | os.PathLike, str | os.PathLike]]")
+"""``events.csv`` files or folders holding one, or ``(date_days, telemetry, pulses)`` tuples."""
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import SpacecraftArg
+    from cassini_bayes.inference.adequacy import Adequacy
+    from cassini_bayes.inference.health.changepoint import HealthPosterior
 
 __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_campaign",
            "HEALTH_FRACTION"]
@@ -33,7 +45,7 @@ class HealthResult:
     the per-event ``summaries``, the event ``files`` ((date, telemetry, pulses) each), the loss
     ``fraction``, the JSON ``summary`` and the ``config``."""
 
-    posterior: object
+    posterior: HealthPosterior
     summaries: tuple
     files: tuple
     fraction: float
@@ -61,7 +73,7 @@ class HealthResult:
         return rd.final
 
 
-def _write_csv(path: Path, header: list[str], rows) -> None:
+def _write_csv(path: Path, header: list[str], rows: Iterable[Sequence[object]]) -> None:
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
@@ -69,7 +81,7 @@ def _write_csv(path: Path, header: list[str], rows) -> None:
             w.writerow([f"{x:.10g}" if isinstance(x, float) else x for x in r])
 
 
-def read_event_list(events) -> list[tuple[float, Path, Path]]:
+def read_event_list(events: EventsArg) -> list[tuple[float, Path, Path]]:
     """``(date_days, telemetry, pulses)`` of each event from ``events``: one or more
     ``events.csv`` files or folders holding one, or a list of ``(date_days, telemetry, pulses)``
     tuples."""
@@ -121,7 +133,7 @@ def read_event_list(events) -> list[tuple[float, Path, Path]]:
 
 
 @jax_entry
-def fit_health(events, spacecraft, *, fraction: float = HEALTH_FRACTION,
+def fit_health(events: EventsArg, spacecraft: SpacecraftArg, *, fraction: float = HEALTH_FRACTION,
                p_change: float = 0.1, p_channel: float = 0.5, step_sd: float = 0.1,
                tau_sd_frac: float | None = None) -> HealthResult:
     """Posterior of each thrust channel's health over many biasing events; what
@@ -189,7 +201,8 @@ def _event_label(day: float, telemetry: Path) -> str:
     return f"{name} (day {day:g})"
 
 
-def health_summary(post, fraction: float, adequacy=None) -> dict:
+def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | None = None
+                   ) -> dict:
     """``summary.json`` of a health fit: the change probability and date, per channel the step
     and ``P(down by more than fraction)`` at the last event, and the ``adequacy`` verdict
     (:func:`~cassini_bayes.inference.health.adequacy.health_adequacy`) with a warning per
@@ -252,7 +265,7 @@ def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
     return header, rows
 
 
-def band_table(post, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
+def band_table(post: HealthPosterior, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
     """``thrust_bands.csv``: on a grid of dates, each channel's thrust relative to its first
     calibration, posterior 5/25/50/75/95 % quantiles (from exact draws, seed 0)."""
     from cassini_bayes.inference.health import CHANNELS
@@ -268,7 +281,7 @@ _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
 @jax_entry
-def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | None = None,
+def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike, *, seed: int | None = None,
                              force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.
     ``"health_degradation"``) into ``out``: one folder per event (``telemetry.csv``,
@@ -276,9 +289,9 @@ def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | No
     and ``truth.json`` (dates, true thrusts, the degradation); atomically."""
     from cassini_bayes.api._inputs import check_seed
     from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.rundir import RunDir
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
-    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.telemetry import write_pulses, write_telemetry
 
     camp = load_campaign(campaign)
@@ -290,6 +303,9 @@ def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | No
             sim = simulate(ev.scenario)
             d = rd.path / f"event_{k:03d}"
             d.mkdir()
+            if sim.pulses is None:
+                raise InputError(f"{camp.source}: event {k} fires no thruster; a health "
+                                 "campaign's events are biasing events, each with firings")
             write_telemetry(d / "telemetry.csv", sim.telemetry)
             write_pulses(d / "pulses.csv", sim.pulses)
             (d / "truth.json").write_text(json.dumps(sim.truth(), indent=2) + "\n")
@@ -308,7 +324,7 @@ def simulate_health_campaign(campaign, out: str | os.PathLike, *, seed: int | No
     return rd.final
 
 
-def campaign_summaries(campaign, seed: int, *, tau_sd_frac: float | None = None
+def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """In memory, without files: ``(dates (N,), log thrust (N, 6), sd (N, 6))`` of a simulated
     campaign's events (what the benchmark and the tests feed :func:`health_posterior`)."""

@@ -2,19 +2,34 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING
 
 from cassini_bayes._devices import jax_entry
-from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
-                                       shows_progress, spacecraft_input, telemetry_inputs)
+from cassini_bayes.api._inputs import (
+    WHEEL_ERRORS,
+    check_seed,
+    choice,
+    sampler_settings,
+    shows_progress,
+    spacecraft_input,
+    telemetry_inputs,
+)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import as_flag
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import SpacecraftArg, TelemetriesArg, WheelErrors
+    from cassini_bayes.inference.inertia import InertiaPosterior
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import Telemetry
 
 __all__ = ["fit_inertia", "inertia_baseline", "inertia_summary"]
 
 
-def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
+def inertia_baseline(telemetries: Sequence[Telemetry], spacecraft: Spacecraft
+                     ) -> tuple[dict | None, list[str]]:
     """The paper's all-axes least squares (Feldman & Lee Eq 11) on the same data, or ``None``,
     with warning lines: :func:`cassini_bayes.estimators.baseline.fit_inertia_baseline` with
     ``method="all_axes"`` (several files: their Eq 11 systems, each anchored on its own first
@@ -31,7 +46,7 @@ def inertia_baseline(telemetries, spacecraft) -> tuple[dict | None, list[str]]:
             [f"baseline: {m}" for m in fit.warnings])
 
 
-def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
+def inertia_summary(post: InertiaPosterior, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
                     baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of an inertia posterior (``InertiaPosterior``): parameters, baseline,
     diagnostics, adequacy, nuisance, ``model``, ``wheel_errors`` and ``sensitivity``."""
@@ -52,15 +67,16 @@ def inertia_summary(post, *, seed: int, torque: bool, robust: bool, wheel_errors
     post_sd = {n: float(post.idata.posterior[n].std()) for n in INERTIA_NAMES}
     summary["model"] = "robust" if robust else "idealised"
     summary["wheel_errors"] = wheel_errors if robust else None
-    summary["sensitivity"] = sensitivity_block(post.problem.sensitivity, post_sd)
+    sens = post.problem.sensitivity        # (always set by prepare_inertia)
+    summary["sensitivity"] = sensitivity_block(sens, post_sd) if sens is not None else None
     return summary
 
 
 @jax_entry
 @shows_progress
-def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
+def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
-                wheel_errors: str = "per_wheel", torque: bool = True,
+                wheel_errors: WheelErrors = "per_wheel", torque: bool = True,
                 progress: bool = False) -> FitResult:
     """Posterior of the inertia tensor from RWA slews (one inertia, each file its own momentum);
     what ``cassini-bayes fit inertia`` computes.
@@ -90,8 +106,8 @@ def fit_inertia(telemetry, spacecraft, *, seed: int = 0, chains: int = 4, warmup
     import jax
 
     from cassini_bayes.consistency import check_inertia_data
-    from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
+    from cassini_bayes.inference.progress import step
 
     seed = check_seed(seed)
     robust, torque = as_flag(robust, "robust"), as_flag(torque, "torque")

@@ -5,8 +5,9 @@ from __future__ import annotations
 import functools
 import numbers
 import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Any, Literal, TypeAlias, TypeVar, cast
 
 import numpy as np
 
@@ -14,6 +15,10 @@ from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS, SEED_MAX
 from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._result import FitResult
+    from cassini_bayes.inference.runner import SamplerSettings
 
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
            "one_telemetry", "one_pulse_log", "choice", "number", "sampler_settings",
@@ -23,21 +28,35 @@ WHEEL_ERRORS = ("per_wheel", "common")
 
 PathLike = str | os.PathLike
 
+# The public functions' argument types: an object, or a file (a shipped model or scenario by
+# name) to read it from.
+TelemetryArg: TypeAlias = "Telemetry | str | os.PathLike"
+TelemetriesArg: TypeAlias = "TelemetryArg | Sequence[TelemetryArg]"
+PulsesArg: TypeAlias = "PulseLog | str | os.PathLike"
+PulseLogsArg: TypeAlias = "PulsesArg | Sequence[PulsesArg]"
+SpacecraftArg: TypeAlias = "Spacecraft | str | os.PathLike"
+FitArg: TypeAlias = "FitResult | str | os.PathLike"
+"""An earlier fit: its result, or its run directory."""
+WheelErrors = Literal["per_wheel", "common"]
 
-def shows_progress(fit):
+
+_Fit = TypeVar("_Fit", bound=Callable[..., Any])
+
+
+def shows_progress(fit: _Fit) -> _Fit:
     """Decorate a fit function: with ``progress=True`` its steps are shown on the terminal
     (:func:`cassini_bayes.inference.progress.shown`) while it runs."""
     @functools.wraps(fit)
-    def wrapper(*args, progress: bool = False, **kwargs):
+    def wrapper(*args: Any, progress: bool = False, **kwargs: Any) -> Any:
         from cassini_bayes.inference.progress import shown
 
         with shown(as_flag(progress, "progress")):
             return fit(*args, progress=progress, **kwargs)
 
-    return wrapper
+    return cast(_Fit, wrapper)
 
 
-def _is_path(x) -> bool:
+def _is_path(x: object) -> bool:
     return isinstance(x, (str, os.PathLike))
 
 
@@ -68,7 +87,7 @@ def spacecraft_input(spacecraft: Spacecraft | PathLike) -> tuple[Spacecraft, dic
     return sc, file_record(path), [path]
 
 
-def _items(x, name: str) -> list:
+def _items(x: Any, name: str) -> list:
     if x is None:
         return []
     if _is_path(x) or isinstance(x, (Telemetry, PulseLog)):
@@ -79,15 +98,19 @@ def _items(x, name: str) -> list:
                      f"{type(x).__name__}")
 
 
-def telemetry_inputs(telemetry, name: str = "telemetry", spacecraft: Spacecraft | None = None
+def telemetry_inputs(telemetry: TelemetriesArg, name: str = "telemetry", spacecraft: Spacecraft | None = None
                      ) -> tuple[list[Telemetry], list[dict], list[Path]]:
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
     :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them; files are read
     with the columns of ``spacecraft``'s wheels and thrusters (Cassini's without one), and a
     Telemetry must name wheels of it."""
     from cassini_bayes.rundir import file_record
-    from cassini_bayes.telemetry import (check_model_names, read_telemetry, read_telemetry_many,
-                                         validate_telemetry)
+    from cassini_bayes.telemetry import (
+        check_model_names,
+        read_telemetry,
+        read_telemetry_many,
+        validate_telemetry,
+    )
 
     items = _items(telemetry, name)
     if not items:
@@ -133,7 +156,7 @@ def _once(tels: list[Telemetry], name: str) -> list[Telemetry]:
     return tels
 
 
-def one_telemetry(telemetry, name: str = "telemetry", *, check_units: bool = True,
+def one_telemetry(telemetry: TelemetryArg, name: str = "telemetry", *, check_units: bool = True,
                   spacecraft: Spacecraft | None = None) -> Telemetry:
     """One telemetry argument, a :class:`~cassini_bayes.telemetry.Telemetry` or a file path,
     read or checked with the file rules (``check_units``: the rpm-vs-rad/s heuristics; columns
@@ -161,7 +184,7 @@ def _model_pulses(log: PulseLog, spacecraft: Spacecraft | None) -> PulseLog:
     return log
 
 
-def one_pulse_log(pulses, name: str = "pulses", *,
+def one_pulse_log(pulses: PulsesArg, name: str = "pulses", *,
                   spacecraft: Spacecraft | None = None) -> PulseLog:
     """One pulse-log argument, a :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path,
     read or checked with the file rules (thrusters of ``spacecraft``; Cassini's without one)."""
@@ -175,7 +198,7 @@ def one_pulse_log(pulses, name: str = "pulses", *,
     return read_pulses(pulses, spacecraft=spacecraft)
 
 
-def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = None
+def pulse_inputs(pulses: PulseLogsArg | None, name: str = "pulses", spacecraft: Spacecraft | None = None
                  ) -> tuple[list[PulseLog], list[dict], list[Path]]:
     """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
     :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them (thrusters of
@@ -200,7 +223,10 @@ def pulse_inputs(pulses, name: str = "pulses", spacecraft: Spacecraft | None = N
     return logs, records, paths
 
 
-def choice(name: str, value: str, choices: Sequence[str]) -> str:
+_S = TypeVar("_S", bound=str)
+
+
+def choice(name: str, value: _S, choices: Sequence[str]) -> _S:
     """``value`` when it is one of ``choices``, else an InputError naming the argument."""
     if value not in choices:
         raise InputError(f"{arg(name, value, cli_quote=True)}: choose "
@@ -208,14 +234,18 @@ def choice(name: str, value: str, choices: Sequence[str]) -> str:
     return value
 
 
-def number(name: str, value, *, lo: float | None = None, hi: float | None = None,
+def _finite_within(value: Any, lo: float | None, hi: float | None) -> bool:
+    return bool(np.isfinite(value) and (lo is None or value >= lo) and (hi is None or value <= hi))
+
+
+def number(name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
            integer: bool = False, where: str | None = None) -> float | int:
     """``value`` when it is a real number (an integer with ``integer``) in ``[lo, hi]``, else
     an InputError naming the argument (``where``: its name as spelled, default
     :func:`~cassini_bayes.errors.arg`'s)."""
     kind = numbers.Integral if integer else numbers.Real   # NumPy scalars included
-    ok = (not isinstance(value, bool) and isinstance(value, kind) and np.isfinite(value)
-          and (lo is None or value >= lo) and (hi is None or value <= hi))
+    ok = (not isinstance(value, bool) and isinstance(value, kind)
+          and _finite_within(value, lo, hi))
     if not ok:
         want = "an integer" if integer else "a number"
         rng = (f" in {lo:g} .. {hi:g}" if lo is not None and hi is not None else
@@ -233,7 +263,7 @@ def check_seed(seed: int) -> int:
 
 
 def sampler_settings(chains: int, warmup: int, draws: int, target_accept: float,
-                     progress: bool = False):
+                     progress: bool = False) -> SamplerSettings:
     """:class:`~cassini_bayes.inference.runner.SamplerSettings` from the fit functions'
     arguments, checked against the ranges the command line accepts; warns (once) when the
     chains must run vectorised because JAX started before the fit could ask for devices."""

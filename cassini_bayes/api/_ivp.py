@@ -12,13 +12,20 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cassini_bayes import __version__
-from cassini_bayes import ivp
+from cassini_bayes import __version__, ivp
 from cassini_bayes._devices import jax_entry, setup_jax
 from cassini_bayes.errors import InputError, spelled
+
+if TYPE_CHECKING:
+    from collections.abc import Callable, Sequence
+
+    from cassini_bayes.ivp.segmenter import SegmentFit
+    from cassini_bayes.ivp.trajectory import Trajectory
+    from cassini_bayes.ivp.tree import TreeEntry
 
 __all__ = ["TrajectoryFit", "fit_trajectory", "propagate_conic", "fit_chebyshev_segments",
            "VectorTree"]
@@ -30,7 +37,7 @@ fit_chebyshev_segments = jax_entry(ivp.fit_chebyshev_segments)
 class VectorTree(ivp.VectorTree):
     __doc__ = ivp.VectorTree.__doc__
 
-    def __init__(self, entries) -> None:
+    def __init__(self, entries: Sequence[TreeEntry]) -> None:
         setup_jax()
         super().__init__(entries)
 
@@ -52,8 +59,8 @@ class TrajectoryFit:
     files : the input files.
     """
 
-    fit: object
-    trajectory: object
+    fit: SegmentFit
+    trajectory: Trajectory
     dense_t_s: np.ndarray
     dense_error_rad: np.ndarray
     sample_error_rad: np.ndarray
@@ -66,8 +73,12 @@ class TrajectoryFit:
         and the coefficients ``cx_0 … cz_12``, m), ``summary.json``, ``config.toml`` and
         ``report.html`` into ``out`` atomically; ``force`` replaces only a directory
         cassini-bayes wrote."""
-        from cassini_bayes.report.ivp import equioscillation_png, ivp_fit_page, \
-            most_uniform_segment, segment_errors_png
+        from cassini_bayes.report.ivp import (
+            equioscillation_png,
+            ivp_fit_page,
+            most_uniform_segment,
+            segment_errors_png,
+        )
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
         seg = self.fit.segments
@@ -97,14 +108,14 @@ class TrajectoryFit:
         return rd.final
 
     @property
-    def fit_function(self):
+    def fit_function(self) -> Callable[[np.ndarray], np.ndarray]:
         from cassini_bayes.ivp.trajectory import interpolant
 
         return interpolant(self.trajectory)
 
 
 @jax_entry
-def fit_trajectory(trajectory, *, requirement_urad: float = 40.0, max_order: int = 12,
+def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_urad: float = 40.0, max_order: int = 12,
                    mu: float | None = None) -> TrajectoryFit:
     """Chebyshev segments of a trajectory whose direction stays within ``requirement_urad`` of
     the trajectory's (Lee §3.3.2; :func:`~cassini_bayes.ivp.fit_chebyshev_segments`).
@@ -122,8 +133,13 @@ def fit_trajectory(trajectory, *, requirement_urad: float = 40.0, max_order: int
     from cassini_bayes.ivp._checks import check_mu, check_order
     from cassini_bayes.ivp.conic_fit import fit_conic
     from cassini_bayes.ivp.segmenter import angle_between_vectors, fit_chebyshev_segments
-    from cassini_bayes.ivp.trajectory import Trajectory, interpolant, interpolant_derivative, \
-        read_trajectory, validate_trajectory
+    from cassini_bayes.ivp.trajectory import (
+        Trajectory,
+        interpolant,
+        interpolant_derivative,
+        read_trajectory,
+        validate_trajectory,
+    )
     from cassini_bayes.rundir import file_record
 
     where_req = spelled("--requirement-urad", "requirement_urad")
@@ -133,7 +149,8 @@ def fit_trajectory(trajectory, *, requirement_urad: float = 40.0, max_order: int
     if mu is not None:
         check_mu(np.asarray(mu, float), spelled("--mu", "mu"))
     if isinstance(trajectory, Trajectory):
-        traj, record, files = validate_trajectory(trajectory), {"source": trajectory.source}, ()
+        files: tuple[Path, ...] = ()
+        traj, record = validate_trajectory(trajectory), {"source": trajectory.source}
     else:
         traj = read_trajectory(trajectory)
         record, files = file_record(trajectory), (Path(trajectory),)

@@ -10,12 +10,18 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, spelled
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import PulseLogsArg, SpacecraftArg, TelemetriesArg
+    from cassini_bayes.estimators.leak import ThresholdResult
+    from cassini_bayes.inference.leak import LeakPosterior
 
 __all__ = ["LeakResult", "monitor_leak"]
 
@@ -27,8 +33,8 @@ class LeakResult:
     (:class:`~cassini_bayes.estimators.leak.ThresholdResult`), the ``summary`` (``summary.json``)
     and ``config`` (``config.toml``) dicts, and the input ``files``."""
 
-    posterior: object
-    lee: object
+    posterior: LeakPosterior
+    lee: ThresholdResult
     summary: dict
     config: dict
     files: tuple
@@ -60,7 +66,8 @@ def _positive(value: float, option: str, argument: str) -> float:
 
 
 @jax_entry
-def monitor_leak(telemetry, spacecraft, *, pulses=None, prior_leak: float = 0.01,
+def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
+                 pulses: PulseLogsArg | None = None, prior_leak: float = 0.01,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
                  check_step_s: float = 60.0, eta: float = 0.05,
                  threshold_nms: float = 50.0, t_limit_h: float = 10.0) -> LeakResult:

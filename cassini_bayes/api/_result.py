@@ -11,12 +11,20 @@ from __future__ import annotations
 import copy
 import os
 import warnings
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 from cassini_bayes import __version__, _jax_cache
+
+if TYPE_CHECKING:
+    from arviz import InferenceData
+
+    from cassini_bayes.diagnostics import Diagnostics
+    from cassini_bayes.inference.runner import SamplerSettings
+    from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["FitResult", "fit_config", "collect_warnings", "write_run", "write_run_files"]
 
@@ -37,7 +45,8 @@ def collect_warnings() -> Iterator[list[str]]:
             lines.append(msg)
 
 
-def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping,
+def fit_config(command: str, *, seed: int, spacecraft: Spacecraft, settings: SamplerSettings,
+               inputs: Mapping,
                options: Mapping) -> dict:
     """``config.toml`` of a fit: the resolved inputs, options, sampler settings, spacecraft model,
     seed and package version, enough to re-run it (docs/cli.md, "Run directory"). ``[sampler]``
@@ -63,7 +72,7 @@ def fit_config(command: str, *, seed: int, spacecraft, settings, inputs: Mapping
     }
 
 
-def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
+def write_run_files(run_dir: Path, *, idata: InferenceData, summary: Mapping, config: Mapping,
                     display_dir: Path | None = None) -> list[str]:
     """Write a fit's four files into the existing directory ``run_dir`` (not atomically: the
     caller's directory is the temporary one); returns the report's warnings (one line each).
@@ -71,7 +80,8 @@ def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
     ``display_dir`` is the directory the report names (the final one when ``run_dir`` is a
     temporary sibling).
     """
-    from cassini_bayes.rundir import write_config, write_posterior, write_report, write_summary
+    from cassini_bayes.report import write_report
+    from cassini_bayes.rundir import write_config, write_posterior, write_summary
 
     write_posterior(run_dir, idata)
     write_summary(run_dir, summary)
@@ -81,7 +91,7 @@ def write_run_files(run_dir: Path, *, idata, summary: Mapping, config: Mapping,
     return report_warnings
 
 
-def write_run(out: str | os.PathLike, *, idata, summary: Mapping, config: Mapping,
+def write_run(out: str | os.PathLike, *, idata: InferenceData, summary: Mapping, config: Mapping,
               force: bool = False, inputs: Iterable[str | os.PathLike] = ()
               ) -> tuple[Path, list[str]]:
     """Write a fit's run directory ``out`` atomically (:class:`cassini_bayes.rundir.RunDir`);
@@ -127,19 +137,20 @@ class FitResult:
         return f"<{self.config.get('command', self.kind)} result, seed {self.config.get('seed')}>"
 
     @property
-    def idata(self):
+    def idata(self) -> Any:
         """The ArviZ InferenceData (``posterior``, ``sample_stats``, ``prior``,
-        ``observed_data``, …)."""
+        ``observed_data``, …); typed ``Any``: ArviZ sets its groups as attributes at run time,
+        which a type checker cannot see."""
         return self.posterior.idata
 
     @property
-    def diagnostics(self):
-        """:class:`~cassini_bayes.inference.runner.Diagnostics` (R-hat, ESS, divergences)."""
+    def diagnostics(self) -> Diagnostics:
+        """:class:`~cassini_bayes.diagnostics.Diagnostics` (R-hat, ESS, divergences)."""
         return self.posterior.diagnostics
 
     @property
     def converged(self) -> bool:
-        """Whether the sampler converged (max R-hat ≤ 1.01, min bulk ESS ≥ 400, no divergences)."""
+        """Whether the sampler converged (the rule of :mod:`cassini_bayes.diagnostics`)."""
         return bool(self._summary["diagnostics"]["converged"])
 
     @property

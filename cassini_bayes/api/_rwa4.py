@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Literal
 
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, sampler_settings,
@@ -19,10 +20,17 @@ RCS_BUDGET_DEG = 3.0
 """Brown §III.B: the RCS method's axis error is "< 3°" (testbed worst 1.4° plus 1.5° from the
 mass properties), with a flight-calibrated inertia."""
 
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import FitArg, SpacecraftArg, TelemetryArg, WheelErrors
+    from cassini_bayes.inference.rwa4 import Rwa4Posterior
+    from cassini_bayes.spacecraft import Spacecraft
+
 __all__ = ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity", "rwa4_summary", "wheel_block"]
 
+Windows = Sequence[tuple[tuple[float, float], tuple[float, float]]]
 
-def rwa4_sensitivity(post) -> dict:
+
+def rwa4_sensitivity(post: Rwa4Posterior) -> dict:
     """``sensitivity`` block of an RWA4 fit: the RMS axis shift (deg) each nuisance effect of
     prior size causes in a model that leaves it out
     (:func:`cassini_bayes.inference.rwa4.axis_sensitivity`), and that shift over the posterior's
@@ -41,7 +49,7 @@ def rwa4_sensitivity(post) -> dict:
             for effect, shift in axis_sensitivity(post.problem).items()}
 
 
-def wheel_block(post, spacecraft=None) -> dict:
+def wheel_block(post: Rwa4Posterior, spacecraft: Spacecraft | None = None) -> dict:
     """``summary.json``'s ``wheel``: the calibrated wheel's ``name``, its articulation ``cone``
     (``{"axis", "deg", "sd_deg"}``, ``None`` when the model gives none) and its ``reference``
     wheel (``{"name", "axis", "tol_deg"}`` from ``spacecraft``'s entry; ``None`` without one),
@@ -56,9 +64,9 @@ def wheel_block(post, spacecraft=None) -> dict:
     return {"name": pr.wheel, "cone": cone, "reference": ref}
 
 
-def rwa4_summary(post, *, seed: int, method: str, prior: str, robust: bool, wheel_errors: str,
-                 baseline: dict | None = None, warnings: Sequence[str] = (),
-                 spacecraft=None) -> dict:
+def rwa4_summary(post: Rwa4Posterior, *, seed: int, method: str, prior: str, robust: bool,
+                 wheel_errors: str, baseline: dict | None = None,
+                 warnings: Sequence[str] = (), spacecraft: Spacecraft | None = None) -> dict:
     """``summary.json`` of a spin-axis posterior (``Rwa4Posterior``, any wheel): parameters
     ``u4_*`` (the calibrated wheel's axis, whatever its name), the baseline (default Brown's
     least squares of the prepared problem), diagnostics, adequacy, ``direction``, ``method``,
@@ -100,7 +108,7 @@ def rcs_budget_warning(method: str, has_inertia_posterior: bool, cone95_deg: flo
             f"({arg('inertia_posterior')})")
 
 
-def _window_pairs(windows) -> list | None:
+def _window_pairs(windows: Any) -> list | None:
     """``[((a0, a1), (b0, b1)), …]`` floats (s) from the ``windows`` argument, or ``None``."""
     if windows is None:
         return None
@@ -114,11 +122,13 @@ def _window_pairs(windows) -> list | None:
 
 @jax_entry
 @shows_progress
-def fit_wheel_axis(telemetry, spacecraft, *, wheel: str, method: str, windows=None,
-                   prior: str = "uniform", inertia_posterior=None, seed: int = 0,
-                   chains: int = 4, warmup: int = 1000, draws: int = 1000,
-                   target_accept: float = TARGET_ACCEPT, robust: bool = True,
-                   wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+def fit_wheel_axis(telemetry: TelemetryArg, spacecraft: SpacecraftArg, *, wheel: str,
+                   method: Literal["rcs", "rwa"], windows: Windows | None = None,
+                   prior: Literal["uniform", "cone"] = "uniform",
+                   inertia_posterior: FitArg | None = None, seed: int = 0, chains: int = 4,
+                   warmup: int = 1000, draws: int = 1000, target_accept: float = TARGET_ACCEPT,
+                   robust: bool = True, wheel_errors: WheelErrors = "per_wheel",
+                   progress: bool = False) -> FitResult:
     """Posterior of any wheel's spin axis, the inertia uncertainty sampled jointly; what
     ``cassini-bayes fit wheel-axis`` computes (Brown 2012 §III, for any spacecraft model).
 
@@ -160,10 +170,13 @@ def fit_wheel_axis(telemetry, spacecraft, *, wheel: str, method: str, windows=No
 
 @jax_entry
 @shows_progress
-def fit_rwa4(telemetry, spacecraft, *, method: str, windows=None, prior: str = "uniform",
-             inertia_posterior=None, seed: int = 0, chains: int = 4, warmup: int = 1000,
-             draws: int = 1000, target_accept: float = TARGET_ACCEPT, robust: bool = True,
-             wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+def fit_rwa4(telemetry: TelemetryArg, spacecraft: SpacecraftArg, *,
+             method: Literal["rcs", "rwa"], windows: Windows | None = None,
+             prior: Literal["uniform", "cone"] = "uniform",
+             inertia_posterior: FitArg | None = None, seed: int = 0, chains: int = 4,
+             warmup: int = 1000, draws: int = 1000, target_accept: float = TARGET_ACCEPT,
+             robust: bool = True, wheel_errors: WheelErrors = "per_wheel",
+             progress: bool = False) -> FitResult:
     """Cassini's RWA4 spin axis: :func:`fit_wheel_axis` with ``wheel="RWA4"`` (the same
     numbers); what ``cassini-bayes fit rwa4`` computes. Parameters and result as there."""
     return _fit_axis("fit rwa4", telemetry, spacecraft, wheel="RWA4", method=method,
@@ -234,7 +247,7 @@ def _fit_axis(command: str, telemetry, spacecraft, *, wheel: str, method: str, w
                      (*paths, *sc_paths, *inertia_paths))
 
 
-def _model_wheel(sc, wheel) -> str:
+def _model_wheel(sc: Spacecraft, wheel: str) -> str:
     """The model's spelling of ``wheel``; a one-line InputError naming the model's wheels."""
     if not isinstance(wheel, str) or not wheel:
         raise InputError(f"{arg('wheel')}: name the wheel whose axis is calibrated, one of "

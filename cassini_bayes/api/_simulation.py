@@ -157,7 +157,8 @@ def simulate(scenario: Scenario | str | os.PathLike, *, seed: int | None = None)
     import jax
 
     from cassini_bayes.api._inputs import check_seed
-    from cassini_bayes.simulate import load_scenario, simulate as run_scenario
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate import simulate as run_scenario
 
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     seed = check_seed(sc.seed if seed is None else seed)

@@ -3,16 +3,33 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Any, Literal, cast
 
 from cassini_bayes._devices import jax_entry
-from cassini_bayes.api._inputs import (WHEEL_ERRORS, check_seed, choice, pulse_inputs,
-                                       sampler_settings, shows_progress, spacecraft_input,
-                                       telemetry_inputs)
+from cassini_bayes.api._inputs import (
+    WHEEL_ERRORS,
+    check_seed,
+    choice,
+    pulse_inputs,
+    sampler_settings,
+    shows_progress,
+    spacecraft_input,
+    telemetry_inputs,
+)
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import InputError, arg, as_flag
 from cassini_bayes.names import a_kind
+
+if TYPE_CHECKING:
+    from cassini_bayes.api._inputs import (
+        FitArg,
+        PulseLogsArg,
+        SpacecraftArg,
+        TelemetriesArg,
+        WheelErrors,
+    )
 
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
@@ -47,10 +64,11 @@ def thrust_baseline(events, spacecraft, mode: str,
     except Exception as e:  # the baseline must never sink the Bayesian fit
         return None, [f"baseline unavailable: {' '.join(str(e).split())}"]
     out, msgs = {}, []
-    fits = {"mean": [("F", est.fit_mean, None)],
-            "branch": [("F_Z", est.fit_z_thrusters, "mean"), ("F_Y", est.fit_y_mean, None)],
-            "thruster": [("F_Z", est.fit_z_thrusters, "each"),
-                         ("F_Y", est.fit_y_thrusters, "each")]}[mode]
+    by_mode: dict[str, list[tuple[str, Callable[..., Any], str | None]]] = {
+        "mean": [("F", est.fit_mean, None)],
+        "branch": [("F_Z", est.fit_z_thrusters, "mean"), ("F_Y", est.fit_y_mean, None)],
+        "thruster": [("F_Z", est.fit_z_thrusters, "each"), ("F_Y", est.fit_y_thrusters, "each")]}
+    fits = by_mode[mode]
     for name, fn, how in fits:
         try:
             f = fn(v, j, q)
@@ -153,11 +171,12 @@ def _inertia_knowledge(inertia_posterior, fix_inertia: bool):
 
 @jax_entry
 @shows_progress
-def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
-               inertia_posterior=None, fix_inertia: bool = False, seed: int = 0,
+def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: SpacecraftArg, *,
+               mode: Literal["mean", "branch", "thruster"] = "mean",
+               inertia_posterior: FitArg | None = None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
                target_accept: float = 0.9, robust: bool = True,
-               wheel_errors: str = "per_wheel", progress: bool = False) -> FitResult:
+               wheel_errors: WheelErrors = "per_wheel", progress: bool = False) -> FitResult:
     """Posterior of the thrust and the pulse time constants from biasing events; what
     ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
     and thrust).
@@ -193,7 +212,8 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
 
     from cassini_bayes.consistency import check_thrust_data
     from cassini_bayes.inference.progress import step
-    from cassini_bayes.inference.thrust import MODES, fit_thrust as sample_thrust
+    from cassini_bayes.inference.thrust import MODES
+    from cassini_bayes.inference.thrust import fit_thrust as sample_thrust
 
     seed = check_seed(seed)
     robust, fix_inertia = as_flag(robust, "robust"), as_flag(fix_inertia, "fix_inertia")
@@ -228,7 +248,7 @@ def fit_thrust(telemetry, pulses, spacecraft, *, mode: str = "mean",
                                 "spacecraft": sc_record, **inertia_input},
                         options={"mode": mode, "model": "robust" if robust else "idealised",
                                  "inertia": ("posterior" if inertia_posterior is not None
-                                             else "sampled" if "Ixx" in post.idata.posterior
+                                             else "sampled" if "Ixx" in cast(Any, post.idata).posterior
                                              else "fixed"),
                                  "wheel_errors": wheel_errors})
     return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,

@@ -56,7 +56,7 @@ from cassini_bayes.rundir import check_out
 
 ORDER = 60
 
-__all__ = ["register", "parse_options", "check_sampler_options"]
+__all__ = ["register", "parse_options"]
 
 
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
@@ -118,7 +118,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                              "--executor dask and no --scheduler")
         spec = ModelSpec.make(model, scenario_text,
                               scenario_source=str(scenario) if scenario else "<scenario>",
-                              **check_sampler_options(parse_options(options)))
+                              **_check_sampler_options(parse_options(options)))
 
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
@@ -171,7 +171,7 @@ _SAMPLER_RANGE = {"num_warmup": (0, MAX_DRAWS), "num_draws": (1, MAX_DRAWS),
                   "num_chains": (1, MAX_CHAINS), "thin": (1, MAX_DRAWS)}
 
 
-def check_sampler_options(options: dict) -> dict:
+def _check_sampler_options(options: dict) -> dict:
     """``options`` after checking the sampler sizes every model takes (``num_warmup >= 0``,
     ``num_draws``, ``num_chains``, ``thin >= 1`` integers, ``thin <= num_draws``, and the
     fits' upper limits)."""

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cassini_bayes.units import RPM_TO_RAD_S
+
 __all__ = ["CASSINI_T", "MEAN_WHEEL_INERTIA", "nongravitational_torque"]
 
 _S2, _S3, _S6 = np.sqrt(2.0), np.sqrt(3.0), np.sqrt(6.0)
@@ -31,4 +33,4 @@ def nongravitational_torque(delta_rates_rpm, duration_s, t_matrix=CASSINI_T,
     """
     d = np.asarray(delta_rates_rpm, float)
     # Feldman & Lee App. A: T = T_matrix (dw_RWA 2 pi / 60) 0.16 / T_Earth
-    return np.asarray(t_matrix, float) @ (d * 2.0 * np.pi / 60.0) * wheel_inertia_kgm2 / duration_s
+    return np.asarray(t_matrix, float) @ (d * RPM_TO_RAD_S) * wheel_inertia_kgm2 / duration_s

@@ -7,7 +7,7 @@ with the papers' numbers beside ours.
 
 To add a kind, add a module here (discovered automatically) with one decorated function::
 
-    from cassini_bayes.experiments._core import ExperimentOutput, check_fact, register
+    from cassini_bayes.experiments import ExperimentOutput, check_fact, register
 
     @register("thrust_table2", defaults={"draws": 1000}, quick={"draws": 50}, order=30)
     def thrust_table2(key, settings, ctx) -> ExperimentOutput:
@@ -17,26 +17,21 @@ To add a kind, add a module here (discovered automatically) with one decorated f
 and a file ``experiments/thrust_table2.toml`` with ``kind = "thrust_table2"``.
 """
 
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments._registry import ExperimentKind, register, registered_kinds
+from cassini_bayes.experiments._reproduce import ReproduceResult, discover_experiments, reproduce
+from cassini_bayes.experiments._results import (
     Check,
-    Experiment,
     ExperimentContext,
-    ExperimentKind,
     ExperimentOutput,
     FigureOut,
-    RunRecord,
     Table,
     check_fact,
-    experiment_from_dict,
-    experiment_key,
-    load_experiment,
+    convergence_check,
+    coverage_check,
     png,
-    register,
-    registered_kinds,
-    run_experiment,
-    run_into,
 )
-from cassini_bayes.experiments._reproduce import ReproduceResult, discover_experiments, reproduce
+from cassini_bayes.experiments._run import RunRecord, experiment_key, run_experiment, run_into
+from cassini_bayes.experiments._schema import Experiment, experiment_from_dict, load_experiment
 
 __all__ = [
     "Check",
@@ -45,10 +40,12 @@ __all__ = [
     "ExperimentKind",
     "ExperimentOutput",
     "FigureOut",
+    "ReproduceResult",
     "RunRecord",
     "Table",
-    "ReproduceResult",
     "check_fact",
+    "convergence_check",
+    "coverage_check",
     "discover_experiments",
     "experiment_from_dict",
     "experiment_key",

@@ -25,20 +25,20 @@ from cassini_bayes.report.html import (
     table,
 )
 
-__all__ = ["checks_table", "output_sections", "experiment_page", "reproduce_page", "verdict_badge"]
+__all__ = ["experiment_page", "reproduce_page"]
 
 
-def verdict_badge(passed: bool | None) -> str:
+def _verdict_badge(passed: bool | None) -> str:
     """``pass`` / ``fail`` pill; ``info`` for a number shown without a verdict of its own."""
     return badge("info" if passed is None else ("pass" if passed else "fail"), passed)
 
 
-def checks_table(checks: Sequence[Any], *, link: str | None = None) -> str:
+def _checks_table(checks: Sequence[Any], *, link: str | None = None) -> str:
     """Our value beside the paper's for each check, with its verdict."""
     rows, classes = [], []
     for c in checks:
-        row = [c.label, c.fact_id or "—", c.paper or "—", c.ours_text, Raw(verdict_badge(c.passed)),
-               c.note]
+        row = [c.label, c.fact_id or "—", c.paper or "—", c.ours_text,
+               Raw(_verdict_badge(c.passed)), c.note]
         if link is not None:
             row.append(Raw(f'<a href="{esc(link)}">report</a>'))
         rows.append(row)
@@ -50,11 +50,11 @@ def checks_table(checks: Sequence[Any], *, link: str | None = None) -> str:
     return table(headers, rows, left=2, classes=classes)
 
 
-def output_sections(output: Any, *, id_prefix: str = "") -> list:
+def _output_sections(output: Any, *, id_prefix: str = "") -> list:
     """Sections for an :class:`~cassini_bayes.experiments.ExperimentOutput`."""
     secs = []
     if output.checks:
-        secs.append(section("Paper vs ours", checks_table(output.checks), id=f"{id_prefix}checks"))
+        secs.append(section("Paper vs ours", _checks_table(output.checks), id=f"{id_prefix}checks"))
     for i, t in enumerate(output.tables):
         body = table(list(t.columns), [list(r) for r in t.rows])
         if t.note:
@@ -84,7 +84,7 @@ def experiment_page(exp: Any, output: Any, settings: Mapping[str, Any], seed: in
             f"<dt>time</dt><dd>{elapsed_s:.2f} s</dd>"
             f"<dt>version</dt><dd>cassini_bayes {esc(__version__)}</dd></dl>")
     header = meta + verdict + (paragraph(exp.description) if exp.description else "")
-    secs = output_sections(output)
+    secs = _output_sections(output)
     secs.append(section("Settings", preformatted(json.dumps(dict(settings), indent=2)),
                         id="settings"))
     return html_page(exp.title, secs, header=header,
@@ -106,7 +106,7 @@ def _fact_rows(statuses: Sequence[Any], kinds: tuple[str, ...]) -> tuple[list, l
             continue
         for name, c in by_fact.get(f.id, ()):
             label = c.label if c.label != f.description else f.description
-            rows.append([label, f.source, f.printed, c.ours_text, Raw(verdict_badge(c.passed)),
+            rows.append([label, f.source, f.printed, c.ours_text, Raw(_verdict_badge(c.passed)),
                          Raw(f'<a href="{esc(name)}/report.html">{esc(name)}</a>')])
             cls = "" if c.passed is None else ("good" if c.passed else "bad")
             classes.append(["", "", "", cls, "", ""])
@@ -163,7 +163,7 @@ def reproduce_page(result: Any, seed: int, quick: bool) -> str:
         parts = [badge("all pass" if n_f == 0 else f"{n_f} fail", n_f == 0),
                  f'<span class="note"> {s.record.elapsed_s:.2f} s</span>', link_html]
         if out.checks:
-            parts.append(checks_table(out.checks))
+            parts.append(_checks_table(out.checks))
         for t in out.tables:
             parts.append(f"<h3>{esc(t.title)}</h3>" + table(list(t.columns),
                                                              [list(r) for r in t.rows]))

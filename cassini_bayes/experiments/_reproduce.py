@@ -10,7 +10,6 @@ written atomically.
 
 from __future__ import annotations
 
-import json
 import os
 import time
 import tomllib
@@ -24,16 +23,12 @@ from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.analysis.paper_facts import PAPER_FACTS
 from cassini_bayes.errors import InputError
-from cassini_bayes.experiments._core import (
-    Experiment,
-    RunRecord,
-    experiment_from_dict,
-    experiment_key,
-    registered_kinds,
-    run_into,
-)
+from cassini_bayes.experiments._registry import registered_kinds
+from cassini_bayes.experiments._run import RunRecord, experiment_key, run_into
+from cassini_bayes.experiments._schema import Experiment, experiment_from_dict
+from cassini_bayes.files import json_text
 
-__all__ = ["ReproduceResult", "ExperimentStatus", "discover_experiments", "reproduce"]
+__all__ = ["ExperimentStatus", "ReproduceResult", "discover_experiments", "reproduce"]
 
 
 @dataclass(frozen=True)
@@ -172,5 +167,5 @@ def _write_summary(tmp: Path, result: ReproduceResult, seed: int, quick: bool) -
         "checks": rows,
         "uncovered_facts": sorted({f.id for f in PAPER_FACTS} - {r["fact_id"] for r in rows}),
     }
-    (tmp / "results.json").write_text(json.dumps(summary, indent=2) + "\n")
+    (tmp / "results.json").write_text(json_text(summary))
     (tmp / "report.html").write_text(reproduce_page(result, seed, quick), encoding="utf-8")

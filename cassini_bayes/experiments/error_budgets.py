@@ -37,7 +37,7 @@ import numpy as np
 
 from cassini_bayes.analysis.paper_facts import fact
 from cassini_bayes.estimators.baseline import fit_thrust_baseline
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
@@ -128,8 +128,11 @@ def _Tel(scenario, a):
 
 def _estimator(calibration: str, scenario, sim) -> Callable:
     """``error(tel, pulses, truth_params, assumed_inertia) -> float`` for a calibration."""
-    from cassini_bayes.estimators.baseline import (fit_inertia_baseline, fit_rwa4_baseline,
-                                                   fit_thrust_baseline)
+    from cassini_bayes.estimators.baseline import (
+        fit_inertia_baseline,
+        fit_rwa4_baseline,
+        fit_thrust_baseline,
+    )
     from cassini_bayes.estimators.inertia import table1_errors
 
     prior = scenario.prior

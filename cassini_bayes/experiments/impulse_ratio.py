@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from cassini_bayes.analysis.impulse_ratio import analyse_impulse_ratio, plot_impulse_ratio
 from cassini_bayes.analysis.paper_facts import TABLE2, fact
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,

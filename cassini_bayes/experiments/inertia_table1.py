@@ -7,22 +7,19 @@ inside the experiment's directory) beside the paper's least-squares estimate on 
 Table 1 is rebuilt: prediction, truth, least squares, posterior mean ± sd and 90 % interval, the
 errors of Eqs 12-13, the knowledge requirements (±10 %, ±75 kg m²) and the ±1 % accuracy budget.
 
-The helpers :func:`fit_seed`, :func:`sampler` and :func:`write_fit_run` are shared by the other
-fit-based experiments (thrust, RWA4 campaigns); a fit's run directory is written with the
-library's run writer and summary builders (:mod:`cassini_bayes.api`), so it has the files and
-``summary.json`` keys of ``cassini-bayes fit``.
+Each fit's run directory is written by the fit-based experiments' shared helpers
+(``experiments/_fits.py``), so it has the files and ``summary.json`` keys of ``cassini-bayes fit``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import jax
 import numpy as np
 
-from cassini_bayes import __version__
 from cassini_bayes.analysis.paper_facts import (
     INERTIA_2000_ESTIMATED,
     INERTIA_2000_PREDICTED,
@@ -30,7 +27,7 @@ from cassini_bayes.analysis.paper_facts import (
     TABLE1_PARAMS,
     fact,
 )
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
@@ -41,8 +38,15 @@ from cassini_bayes.experiments._core import (
     png,
     register,
 )
+from cassini_bayes.experiments._fits import (
+    check_sampler_settings,
+    fit_seed,
+    posterior_draws,
+    sampler,
+    write_fit_run,
+)
 
-__all__ = ["EPOCH_SCENARIOS", "fit_seed", "sampler", "write_fit_run", "inertia_table1"]
+__all__ = ["EPOCH_SCENARIOS", "inertia_table1"]
 
 # Table 1 column (or the March 2000 slew) -> shipped scenario under experiments/scenarios/
 EPOCH_SCENARIOS = {"pre_soi": "slews_pre_soi", "post_prm": "slews_post_prm",
@@ -50,76 +54,6 @@ EPOCH_SCENARIOS = {"pre_soi": "slews_pre_soi", "post_prm": "slews_post_prm",
 _EPOCH_LABEL = {"pre_soi": "Pre-SOI", "post_prm": "Post-PRM", "post_probe": "Post-PROBE",
                 "march_2000": "March 2000"}
 _MOMENTS = 3
-
-
-# --- helpers shared by the fit-based experiments ---------------------------------------------
-
-
-def fit_seed(key: jax.Array) -> tuple[int, jax.Array]:
-    """An integer seed drawn from ``key`` and the key ``jax.random.key(seed)`` made from it.
-
-    A sub-run's ``summary.json``/``config.toml`` record the integer, so the fit can be repeated
-    with ``cassini-bayes fit … --seed N`` on the sub-run's telemetry.
-    """
-    seed = int(jax.random.randint(key, (), 0, 2**31 - 1))
-    return seed, jax.random.key(seed)
-
-
-def sampler(settings: Mapping[str, Any]):
-    """:class:`~cassini_bayes.inference.runner.SamplerSettings` from ``chains/warmup/draws``."""
-    from cassini_bayes.inference.runner import SamplerSettings
-
-    return SamplerSettings(chains=int(settings["chains"]), warmup=int(settings["warmup"]),
-                           draws=int(settings["draws"]))
-
-
-def check_sampler_settings(settings: Mapping[str, Any], ctx) -> None:
-    """``InputError`` naming the experiment file for impossible sampler sizes."""
-    for k, lo in (("chains", 1), ("warmup", 10), ("draws", 10)):
-        if settings[k] < lo:
-            raise ctx.error(f"'settings.{k}' must be at least {lo}")
-
-
-def write_fit_run(path: Path, *, posterior, summary: Mapping[str, Any],
-                  config: Mapping[str, Any], telemetry=None, pulses=None) -> dict:
-    """Write one fit's run directory at ``path`` inside an experiment's (already temporary)
-    directory with the library's run writer (:func:`cassini_bayes.api.write_run_files`: the
-    files and ``summary.json`` keys of ``cassini-bayes fit``), plus the simulated
-    ``telemetry.csv``/``pulses.csv`` it was fitted to; returns the summary.
-
-    ``summary`` comes from the model's summary builder (:func:`cassini_bayes.api.
-    inertia_summary`, ``thrust_summary``, ``rwa4_summary``); ``config`` is completed with the
-    package version, the seed and the input files.
-    """
-    from cassini_bayes.api import write_run_files
-    from cassini_bayes.telemetry import write_pulses, write_telemetry
-
-    path.mkdir(parents=True, exist_ok=True)
-    inputs = {}
-    if telemetry is not None:
-        write_telemetry(path / "telemetry.csv", telemetry, force=True)
-        inputs["telemetry"] = [_relative_record(path, "telemetry.csv")]
-    if pulses is not None:
-        write_pulses(path / "pulses.csv", pulses, force=True)
-        inputs["pulses"] = _relative_record(path, "pulses.csv")
-    write_run_files(path, idata=posterior.idata, summary=summary,
-                    config={"version": __version__, "seed": summary["seed"], "inputs": inputs,
-                            **config})
-    return dict(summary)
-
-
-def _relative_record(run_dir: Path, name: str) -> dict[str, str]:
-    """``{"path": name, "sha256": …}``: the input file inside the run directory, by relative path
-    (the experiment directory is renamed into place after writing)."""
-    from cassini_bayes.rundir import file_record
-
-    return {"path": name, "sha256": file_record(run_dir / name)["sha256"]}
-
-
-def _draws(idata, names: Sequence[str]) -> np.ndarray:
-    """(n_draws, len(names)) posterior draws, chains stacked."""
-    post = idata.posterior
-    return np.stack([np.asarray(post[n].values).reshape(-1) for n in names], -1)
 
 
 # --- the experiment -------------------------------------------------------------------------
@@ -178,9 +112,9 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
     ``torque`` (constant external torque in the posterior model), ``chains/warmup/draws`` (NUTS),
     ``weak_ratio_min`` (expected Izz sd ratio Post-PRM / Post-PROBE, the weak-Z check).
     """
+    from cassini_bayes.api import collect_warnings, inertia_summary
     from cassini_bayes.estimators.baseline import fit_inertia_baseline
     from cassini_bayes.estimators.inertia import table1_errors
-    from cassini_bayes.api import collect_warnings, inertia_summary
     from cassini_bayes.inference.inertia import fit_inertia
     from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
     from cassini_bayes.simulate import load_scenario, simulate
@@ -212,7 +146,7 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
             # the Table 1 scenarios carry no sensor or wheel errors: the papers' idealised model
             post = fit_inertia(fkey, [tel], scenario.prior, torque=settings["torque"], robust=False,
                                settings=sampler(settings))
-        draws = _draws(post.idata, INERTIA_NAMES)
+        draws = posterior_draws(post.idata, INERTIA_NAMES)
         mean, sd = draws.mean(0), draws.std(0, ddof=1)
         q05, q95 = np.quantile(draws, [0.05, 0.95], axis=0)
         sub = Path("fits") / epoch

@@ -5,8 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassini_bayes.experiments._core import Check, ExperimentOutput, FigureOut, Table, \
-    check_fact, register
+from cassini_bayes.experiments import (
+    Check,
+    ExperimentOutput,
+    FigureOut,
+    Table,
+    check_fact,
+    register,
+)
 from cassini_bayes.ivp.chebyshev import coefficient_count
 from cassini_bayes.ivp.nbody import TITAN_RADIUS_M, Flyby
 
@@ -33,8 +39,12 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
     Deterministic: ``key`` is unused.
     """
     from cassini_bayes.ivp.study import run_flyby_study
-    from cassini_bayes.report.ivp import equioscillation_png, errors_png, \
-        most_uniform_segment, segment_errors_png
+    from cassini_bayes.report.ivp import (
+        equioscillation_png,
+        errors_png,
+        most_uniform_segment,
+        segment_errors_png,
+    )
 
     req = settings["requirement_urad"] * 1e-6
     if settings["months_days"] not in settings["conic_spans_days"]:

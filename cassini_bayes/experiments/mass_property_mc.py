@@ -15,7 +15,7 @@ from cassini_bayes.analysis.mass_property import (
     summarise_errors,
 )
 from cassini_bayes.analysis.paper_facts import TABLE1, TABLE1_PARAMS, fact
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,

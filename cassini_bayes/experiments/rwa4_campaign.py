@@ -26,7 +26,7 @@ import numpy as np
 
 from cassini_bayes.analysis.mass_property import ARTICULATION_CONE_RAD, RWA1_PHI_RAD
 from cassini_bayes.analysis.paper_facts import fact
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
@@ -35,7 +35,7 @@ from cassini_bayes.experiments._core import (
     png,
     register,
 )
-from cassini_bayes.experiments.inertia_table1 import (
+from cassini_bayes.experiments._fits import (
     check_sampler_settings,
     fit_seed,
     sampler,
@@ -91,8 +91,8 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
     """Simulate one run per articulation angle in ``phis_rad`` (RWA4 on the cone; one vmapped
     batch, each run its own key), take the least-squares axis of every run and the posterior of
     the first ``settings["posterior_runs"]``."""
-    from cassini_bayes.estimators.baseline import fit_rwa4_baseline
     from cassini_bayes.api import collect_warnings, rwa4_summary
+    from cassini_bayes.estimators.baseline import fit_rwa4_baseline
     from cassini_bayes.inference.rwa4 import U4_NAMES, detect_windows, fit_rwa4
     from cassini_bayes.simulate import simulate_batch, truth_params
 
@@ -346,8 +346,8 @@ def flight_test_scenario(scenario_name: str):
 def _flight_test(key, settings) -> dict[str, Any]:
     """The flight-test variant: RWA1's axis by Brown Eq 3 (least squares) and by the posterior
     (:func:`~cassini_bayes.inference.rwa4.fit_rwa4` with ``wheel="RWA1"``)."""
-    from cassini_bayes.inference.rwa4 import detect_windows, fit_rwa4
     from cassini_bayes.estimators.baseline import fit_rwa4_baseline
+    from cassini_bayes.inference.rwa4 import detect_windows, fit_rwa4
     from cassini_bayes.simulate import simulate
 
     scenario = flight_test_scenario(settings["scenario"])

@@ -25,7 +25,7 @@ import jax
 import numpy as np
 
 from cassini_bayes.analysis.paper_facts import TABLE2, fact
-from cassini_bayes.experiments._core import (
+from cassini_bayes.experiments import (
     Check,
     ExperimentOutput,
     FigureOut,
@@ -36,10 +36,10 @@ from cassini_bayes.experiments._core import (
     png,
     register,
 )
-from cassini_bayes.experiments.inertia_table1 import (
-    _draws,
+from cassini_bayes.experiments._fits import (
     check_sampler_settings,
     fit_seed,
+    posterior_draws,
     sampler,
     write_fit_run,
 )
@@ -132,8 +132,8 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         post = fit_thrust(fkey, events, sc, mode=settings["mode"], robust=False,  # clean events
                           settings=sampler(settings))
     fnames = list(post.problem.names)
-    fd = _draws(post.idata, fnames)
-    td = _draws(post.idata, TAU_NAMES)
+    fd = posterior_draws(post.idata, fnames)
+    td = posterior_draws(post.idata, TAU_NAMES)
     f_all = fd.mean(1)                                  # mean thrust of the mode's parameters
     share = tau_variance_share(f_all, td)
     f_mean, f_sd = float(f_all.mean()), float(f_all.std(ddof=1))
@@ -169,11 +169,11 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
                 warnings.simplefilter("ignore")
                 pe = fit_thrust(ekey, [ev], sc, mode="mean", robust=False,
                                 settings=sampler(settings))
-            f = _draws(pe.idata, ["F"])[:, 0]
+            f = posterior_draws(pe.idata, ["F"])[:, 0]
             results["events"][name].update(
                 post_mean_n=float(f.mean()), post_sd_n=float(f.std(ddof=1)),
                 post_q05_n=float(np.quantile(f, 0.05)), post_q95_n=float(np.quantile(f, 0.95)),
-                post_tau_fall_s=float(_draws(pe.idata, ["tau_fall"]).mean()),
+                post_tau_fall_s=float(posterior_draws(pe.idata, ["tau_fall"]).mean()),
                 post_converged=bool(pe.diagnostics.converged))
 
     rows = []

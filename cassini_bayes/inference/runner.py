@@ -12,14 +12,13 @@ NumPyro model whose data arrive as keyword arguments, prepares those arrays once
   by ``vmap``), cached per (model, settings, chain method) and called with the data as
   arguments: fitting new data of the same shapes never recompiles (tested by counting XLA
   compilations). ``numpyro.infer.MCMC`` is not used because its ``pmap`` path builds
-  a new program on every ``run`` (measured: 25 s of recompilation per fit on the 2-core machine),
+  a new program on every ``run`` (docs/performance.md, "The sampler loop"),
 * runs the chains ``"parallel"`` (``pmap``, one CPU device per chain) when the process has enough
   CPU devices, else ``"vectorized"`` (``vmap``: all chains in lock-step, each iteration as long as
   the deepest tree). The command line and the fit functions ask JAX for one CPU device per
   core, and at least 4 (the default chains; more threads than cores still beats lock-step),
-  before the backend starts (``jax_num_cpu_devices``, :func:`cassini_bayes.setup_jax`);
-  measured with benchmarks/bench_inertia.py on the 2-core machine, 4 × 2000 iterations: 1.8 s
-  parallel vs 3.1 s vectorized (loaded machine),
+  before the backend starts (``jax_num_cpu_devices``, :func:`cassini_bayes.setup_jax`):
+  parallel chains finish sooner than lock-step ones (docs/performance.md, "The sampler loop"),
 * shows a rich progress bar when asked, as a step of :mod:`cassini_bayes.inference.progress`:
   the loop runs in about ten calls of one program (:func:`_build_sampler`), so the bar needs no
   callback inside the compiled code and the same programs, all kept by the persistent
@@ -35,8 +34,8 @@ Model modules then add their own groups (``observed_data``, ``constant_data``, `
 see :func:`cassini_bayes.inference.inertia.fit_inertia` for the pattern to copy.
 
 Diagnostics (:func:`diagnostics`) come from ArviZ: rank-normalised split R-hat, bulk and tail ESS,
-divergences from ``sample_stats.diverging``. ``converged`` means ``max R-hat ≤ 1.01``,
-``min bulk ESS ≥ 400`` and no divergences (Vehtari et al. 2021 thresholds).
+divergences from ``sample_stats.diverging``, judged by the package's convergence rule
+(:mod:`cassini_bayes.diagnostics`).
 """
 
 from __future__ import annotations
@@ -54,6 +53,7 @@ from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
 
 from cassini_bayes._devices import request_host_devices, require_x64
+from cassini_bayes.diagnostics import ESS_BULK_MIN, R_HAT_MAX, Diagnostics
 from cassini_bayes.inference import progress
 from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
 
@@ -71,10 +71,6 @@ __all__ = [
     "request_host_devices",
     "clear_cache",
 ]
-
-R_HAT_MAX = 1.01
-ESS_BULK_MIN = 400.0
-
 
 class SamplerSettings(NamedTuple):
     """NUTS settings (all have the CLI's defaults).
@@ -97,41 +93,6 @@ class SamplerSettings(NamedTuple):
     max_tree_depth: int = 10
     chain_method: str | None = None
     progress: bool = False
-
-
-class Diagnostics(NamedTuple):
-    """Convergence diagnostics over the parameters asked for (ArviZ).
-
-    divergences : number of divergent transitions after warmup, all chains.
-    max_r_hat : largest rank-normalised split R-hat.
-    min_ess_bulk, min_ess_tail : smallest bulk / tail effective sample size.
-    converged : ``max_r_hat ≤ 1.01 and min_ess_bulk ≥ 400 and divergences == 0``.
-    worst : the parameter (element) with the largest R-hat, for messages.
-    """
-
-    divergences: int
-    max_r_hat: float
-    min_ess_bulk: float
-    min_ess_tail: float
-    converged: bool
-    worst: str
-
-    def to_dict(self) -> dict:
-        """The ``diagnostics`` entry of ``summary.json`` (docs/design.md §4.5) plus extras."""
-        return {"divergences": int(self.divergences), "max_r_hat": float(self.max_r_hat),
-                "min_ess_bulk": float(self.min_ess_bulk), "min_ess_tail": float(self.min_ess_tail),
-                "converged": bool(self.converged)}
-
-    def message(self) -> str:
-        """One line saying what failed (empty when converged)."""
-        bad = []
-        if self.max_r_hat > R_HAT_MAX or not np.isfinite(self.max_r_hat):
-            bad.append(f"max R-hat {self.max_r_hat:.3f} > {R_HAT_MAX} ({self.worst})")
-        if self.min_ess_bulk < ESS_BULK_MIN or not np.isfinite(self.min_ess_bulk):
-            bad.append(f"min bulk ESS {self.min_ess_bulk:.0f} < {ESS_BULK_MIN:.0f}")
-        if self.divergences:
-            bad.append(f"{self.divergences} divergent transitions")
-        return "; ".join(bad)
 
 
 def choose_chain_method(chains: int) -> str:
@@ -400,9 +361,10 @@ def _flat_min(ds) -> float:
     return float(np.min(np.where(np.isfinite(v), v, -np.inf)))
 
 
-def diagnostics(idata: arviz.InferenceData, var_names: Sequence[str] | None = None, *,
-                r_hat_max: float = R_HAT_MAX, ess_bulk_min: float = ESS_BULK_MIN) -> Diagnostics:
-    """R-hat, bulk/tail ESS (ArviZ) and divergences over ``var_names`` (default: all)."""
+def diagnostics(idata: arviz.InferenceData, var_names: Sequence[str] | None = None
+                ) -> Diagnostics:
+    """R-hat, bulk/tail ESS (ArviZ) and divergences over ``var_names`` (default: all), judged
+    by the package's rule (:mod:`cassini_bayes.diagnostics`)."""
     az = _arviz()
     names = list(var_names) if var_names is not None else None
     rhat = az.rhat(idata, var_names=names)
@@ -414,5 +376,4 @@ def diagnostics(idata: arviz.InferenceData, var_names: Sequence[str] | None = No
     div = 0
     if "sample_stats" in idata.groups() and "diverging" in idata.sample_stats:
         div = int(np.asarray(idata.sample_stats["diverging"]).sum())
-    ok = bool(np.isfinite(max_r) and max_r <= r_hat_max and min_b >= ess_bulk_min and div == 0)
-    return Diagnostics(div, max_r, min_b, min_t, ok, worst)
+    return Diagnostics.judge(div, max_r, min_b, min_t, worst)

@@ -23,15 +23,12 @@ import arviz as az
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes.files import finite_or_none as _num
+from cassini_bayes.files import json_clean
 
-__all__ = ["CONTRACTION_WEAK", "parameter_stats", "build_summary"]
+__all__ = ["CONTRACTION_WEAK", "build_summary"]
 
 CONTRACTION_WEAK = 0.5
-
-
-def _num(x) -> float | None:
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def _flat(idata, group: str, name: str) -> dict[str, np.ndarray]:
@@ -48,15 +45,7 @@ def _flat(idata, group: str, name: str) -> dict[str, np.ndarray]:
     return out
 
 
-def _json_ready(x):
-    if isinstance(x, dict):
-        return {k: _json_ready(v) for k, v in x.items()}
-    if isinstance(x, float):
-        return _num(x)
-    return x
-
-
-def parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, dict]:
+def _parameter_stats(idata: az.InferenceData, names: Sequence[str]) -> dict[str, dict]:
     """Per-element posterior statistics (ArviZ R-hat and ESS) of the variables ``names``."""
     out = {}
     for name in names:
@@ -100,7 +89,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
     kind : ``"inertia"``, ``"thrust"`` or ``"rwa4"``.
     idata : the run's InferenceData (``posterior``, and ``prior`` for the contraction).
     parameters : the calibrated parameters (e.g. ``Ixx … Iyz``), in order.
-    diagnostics : :class:`cassini_bayes.inference.runner.Diagnostics`.
+    diagnostics : :class:`cassini_bayes.diagnostics.Diagnostics`.
     baseline : least-squares estimate per parameter name, or ``None`` when unavailable.
     seed : the ``--seed`` the run's key was made from.
     nuisance : other variables to summarise under ``nuisance``.
@@ -108,7 +97,7 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
     extra : more top-level keys (e.g. ``direction`` for rwa4).
     adequacy : :class:`cassini_bayes.inference.adequacy.Adequacy` of the fit, or ``None``.
     """
-    params = parameter_stats(idata, parameters)
+    params = _parameter_stats(idata, parameters)
     weak = [k for k, v in params.items()
             if v.get("contraction") is not None and v["contraction"] < CONTRACTION_WEAK]
     out = {
@@ -120,12 +109,12 @@ def build_summary(kind: str, idata: az.InferenceData, *, parameters: Sequence[st
         "seed": int(seed),
         "version": __version__,
         "weakly_identified": weak,
-        "nuisance": parameter_stats(idata, nuisance),
+        "nuisance": _parameter_stats(idata, nuisance),
         "warnings": (_convergence_warning(diagnostics) + list(warnings)
                      + (adequacy.warnings() if adequacy is not None else [])),
     }
     if adequacy is not None:
-        out["adequacy"] = _json_ready(adequacy.to_dict())
+        out["adequacy"] = json_clean(adequacy.to_dict())
     if extra:
         out.update(extra)
     return out

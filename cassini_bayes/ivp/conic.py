@@ -33,6 +33,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
+from numpy.typing import ArrayLike
 
 __all__ = ["Conic", "ConicState", "goodyear_series", "fg_coefficients", "propagate_conic",
            "propagate_conic_unchecked", "solve_universal_anomaly"]
@@ -224,7 +225,7 @@ def _concrete(x) -> np.ndarray | None:
     return np.asarray(x, dtype=float)
 
 
-def propagate_conic(r0, v0, mu, dt) -> ConicState:
+def propagate_conic(r0: ArrayLike, v0: ArrayLike, mu: ArrayLike, dt: ArrayLike) -> ConicState:
     """Propagate ``(r0, v0)`` over ``dt`` on the conic about a body of parameter ``mu``
     (Lee Eqs 12-14, Goodyear's method).
 

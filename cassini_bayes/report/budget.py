@@ -11,7 +11,7 @@ keeps the paper's value.
 
 from __future__ import annotations
 
-__all__ = ["budget_rows", "budget_report_html", "BUDGET_NOTE"]
+__all__ = ["budget_report_html", "BUDGET_NOTE"]
 
 BUDGET_NOTE = ("Are the input runs fit to be combined? input_convergence and input_adequacy "
                "count the runs whose own summary.json says they did not converge or failed "
@@ -35,7 +35,7 @@ def _attribution(iv) -> str:
     return text
 
 
-def budget_rows(budget) -> tuple[list[str], list[list], list[list[str]]]:
+def _budget_rows(budget) -> tuple[list[str], list[list], list[list[str]]]:
     """Headers, cells and cell classes of the budget table
     (:class:`~cassini_bayes.analysis.posterior_budgets.PosteriorBudget`): one row per line, the
     budget named on its first line only."""
@@ -85,7 +85,7 @@ def budget_report_html(res) -> str:
                                            paragraph, section, table)
 
     s, bud = res.summary, res.budget
-    headers, rows, classes = budget_rows(bud)
+    headers, rows, classes = _budget_rows(bud)
     verdicts = [c[6] for c in rows if "pass" in str(c[6]) or "FAIL" in str(c[6])]
     failed = sum("FAIL" in str(v) for v in verdicts)
     call = (badge("WITHIN THE PAPERS' BUDGETS" if not failed else

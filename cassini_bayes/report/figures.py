@@ -31,7 +31,6 @@ __all__ = [
     "residuals_figure",
     "pulse_impulse_figure",
     "axis_sky_figure",
-    "axis_label",
     "tidy_ticks",
     "RWA1_AXIS",
     "ARTICULATION_CONE_DEG",
@@ -96,7 +95,7 @@ def _grid_figure(nrow: int, ncol: int, *, cell: tuple[float, float], left: float
     return fig, axes
 
 
-def axis_label(name: str, unit: str) -> str:
+def _axis_label(name: str, unit: str) -> str:
     """``"Ixx (kg m²)"``; a dimensionless quantity says so."""
     unit = unit if unit and unit not in ("–", "1") else "dimensionless"
     return f"{name} ({unit})"
@@ -193,7 +192,7 @@ def answer_figure(panels: Sequence[Panel]) -> Figure:
         ax.set_ylim(0, counts.max() * 1.35 if counts.max() > 0 else 1)
         d = max(0, 1 - math.floor(math.log10(sd))) if sd > 0 else 4   # 2 digits of the sd
         ax.set_title(f"{p.label} = {mean:.{d}f} ± {sd:.{d}f}", fontsize=9)
-        ax.set_xlabel(axis_label(p.label, p.unit), fontsize=8)
+        ax.set_xlabel(_axis_label(p.label, p.unit), fontsize=8)
         unit = p.unit if p.unit and p.unit not in ("–", "1") else ""
         ax.set_ylabel(f"density (1/{unit})" if unit else "density (dimensionless)", fontsize=8)
         ax.set_yticks([])  # a density's scale says nothing the x-axis does not
@@ -238,7 +237,7 @@ def trace_rank_figure(draws: Mapping[str, np.ndarray], units: Mapping[str, str])
             top = max(top, int(counts.max()))
         ax_r.axhline(x.shape[1] / RANK_BINS, color="#555555", linestyle="--", linewidth=0.8)
         unit = units.get(label, "")
-        ax_t.set_ylabel(axis_label(label, unit), fontsize=8)
+        ax_t.set_ylabel(_axis_label(label, unit), fontsize=8)
         ax_t.set_xlabel("iteration (draw)", fontsize=8)
         ax_r.set_xlabel(f"rank among all {total} draws (count)", fontsize=8)
         ax_r.set_ylabel("draws per bin (count)", fontsize=8)

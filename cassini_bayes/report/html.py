@@ -14,13 +14,9 @@ from __future__ import annotations
 
 import base64
 import html
-import os
-import tempfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
-from cassini_bayes._file_mode import default_file_mode
 
 __all__ = [
     "GENERATOR",
@@ -40,7 +36,6 @@ __all__ = [
     "page_header",
     "meta_list",
     "preformatted",
-    "write_atomic",
     "esc",
 ]
 
@@ -310,21 +305,3 @@ def page_header(badges: str, meta: str, warnings: Iterable[str] = ()) -> str:
 def preformatted(text: str) -> str:
     """Escaped text in a ``<pre>`` block (configuration files, logs)."""
     return f"<pre>{esc(text)}</pre>"
-
-
-def write_atomic(path: str | os.PathLike, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically: a temporary file beside it, then rename.
-
-    A reader never sees a half-written file; on error the old file (if any) is left untouched.
-    """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, default_file_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path

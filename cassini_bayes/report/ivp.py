@@ -27,7 +27,7 @@ def _time_unit(span_s: float) -> tuple[float, str]:
 
 
 def segment_errors_png(t_s: np.ndarray, err_rad: np.ndarray, bounds_s: np.ndarray,
-                       orders: Sequence[int], requirement_rad: float,
+                       orders: Sequence[int] | np.ndarray, requirement_rad: float,
                        samples: tuple[np.ndarray, np.ndarray] | None = None) -> bytes:
     """Angle between fitted and true vector (µrad) against time: the whole span on top (segment
     boundaries dotted), then one panel per segment (up to 12), each with the requirement."""

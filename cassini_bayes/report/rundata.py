@@ -1,5 +1,6 @@
 """Reading a run directory (docs/design.md §4.4) for the report: ``posterior.nc``, ``summary.json``,
-``config.toml``.
+``config.toml`` (the JSON and TOML files through :func:`cassini_bayes.rundir.read_run_file`, the
+reader of every run directory).
 
 ``posterior.nc`` is read with h5py straight into NumPy arrays (:class:`Group`, :class:`Var`):
 ArviZ and xarray are not imported to read it, which keeps ``cassini-bayes report DIR`` under a
@@ -11,25 +12,23 @@ Only ``posterior.nc`` is required. A missing ``summary.json`` costs the baseline
 kind is then recognised from the posterior's variable names); a missing ``config.toml`` costs the
 configuration listing. Anything present but unreadable is an
 :class:`~cassini_bayes.errors.InputError`, and so are files that belong to different runs
-(:func:`check_same_run`: a page must never put one run's title and numbers over another's draws).
+(:func:`_check_same_run`: a page must never put one run's title and numbers over another's draws).
 """
 
 from __future__ import annotations
 
-import json
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES, a_kind
+from cassini_bayes.rundir import read_run_file, run_command
 
 __all__ = ["Var", "Group", "RunData", "load_run", "read_groups", "flatten_draws",
-           "component_label", "KINDS", "check_same_run", "finite_or_none"]
+           "KINDS"]
 
 KINDS = ("inertia", "thrust", "rwa4")
 _FIT_COMMANDS = {f"fit {k}": k for k in KINDS}
@@ -212,7 +211,7 @@ def _infer_kind(names: set[str]) -> str:
     return "unknown"
 
 
-def check_same_run(run_dir: Path, posterior: Group, summary: dict, config: dict | None) -> None:
+def _check_same_run(run_dir: Path, posterior: Group, summary: dict, config: dict | None) -> None:
     """Refuse, naming the file, a run directory whose files come from different runs (one copied
     over from another run): the kind ``summary.json`` records against the draws in
     ``posterior.nc`` (their variable names) and against the command in ``config.toml``; the
@@ -266,8 +265,6 @@ def load_run(run_dir: str | Path) -> RunData:
         raise InputError(f"{run_dir}: run directory not found; pass the --out directory of a fit")
     nc = run_dir / "posterior.nc"
     if not nc.is_file():
-        from cassini_bayes.run_kind import run_command
-
         command = run_command(run_dir)
         if command is not None and command not in ("fit inertia", "fit thrust", "fit rwa4",
                                                    "fit wheel-axis"):
@@ -286,35 +283,27 @@ def load_run(run_dir: str | Path) -> RunData:
         raise InputError(f"{nc}: has no posterior group; re-run the fit that wrote it")
 
     notes: list[str] = []
-    summary: dict = {}
-    sj = run_dir / "summary.json"
-    if sj.is_file():
-        try:
-            summary = json.loads(sj.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as e:
-            raise InputError(f"{sj}: not valid JSON ({e}); re-run the fit or fix the file")
-        if not isinstance(summary, dict):
-            raise InputError(f"{sj}: expected a JSON object at the top level")
-    else:
+    summary = read_run_file(run_dir, "summary.json", strict=True)
+    if summary is None:
+        summary = {}
         notes.append("summary.json not found: baseline and truth columns are empty")
 
     config_text, config = None, None
     ct = run_dir / "config.toml"
     if ct.is_file():
         config_text = ct.read_text(encoding="utf-8", errors="replace")
-        try:
-            config = tomllib.loads(config_text)
-        except tomllib.TOMLDecodeError as e:
-            notes.append(f"config.toml is not valid TOML ({e})")
+        config = read_run_file(run_dir, "config.toml")
+        if config is None:
+            notes.append("config.toml is not valid TOML")
 
-    check_same_run(run_dir, groups["posterior"], summary, config)
+    _check_same_run(run_dir, groups["posterior"], summary, config)
     kind = summary.get("kind") or _infer_kind(set(groups["posterior"].vars))
     if kind not in KINDS:
         notes.append(f"unknown run kind {kind!r}: kind-specific sections are skipped")
     return RunData(run_dir.resolve(), groups, summary, config_text, str(kind), tuple(notes))
 
 
-def component_label(name: str, labels: tuple) -> str:
+def _component_label(name: str, labels: tuple) -> str:
     """A scalar component's label as ``summary.json`` writes it: ``"F"``, ``"H0[0,x]"``."""
     return f"{name}[{','.join(str(x) for x in labels)}]" if labels else name
 
@@ -332,7 +321,7 @@ def flatten_draws(group: Group | None, names) -> dict[str, np.ndarray]:
     Returns
     -------
     dict
-        ``label -> array (chain, draw)``; labels as ``summary.json``'s (:func:`component_label`).
+        ``label -> array (chain, draw)``; labels as ``summary.json``'s (:func:`_component_label`).
     """
     out: dict[str, np.ndarray] = {}
     if group is None:
@@ -351,14 +340,5 @@ def flatten_draws(group: Group | None, names) -> dict[str, np.ndarray]:
         labels = [group.labels(d) for d in extra]
         for idx in np.ndindex(*vals.shape[2:]):
             lab = tuple(labels[k][i] for k, i in enumerate(idx))
-            out[component_label(name, lab)] = vals[(slice(None), slice(None)) + idx]
+            out[_component_label(name, lab)] = vals[(slice(None), slice(None)) + idx]
     return out
-
-
-def finite_or_none(x: Any) -> float | None:
-    """``float(x)`` when it is a finite number, else ``None`` (JSON nulls, NaN, strings)."""
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return None
-    return v if math.isfinite(v) else None

@@ -27,18 +27,18 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cassini_bayes import names
+from cassini_bayes.diagnostics import Diagnostics
+from cassini_bayes.files import finite_or_none
 from cassini_bayes.names import F_NAMES, INERTIA_NAMES, TAU_NAMES, U4_NAMES
-from cassini_bayes.report.rundata import RunData, finite_or_none, flatten_draws
+from cassini_bayes.report.rundata import RunData, flatten_draws
 
 __all__ = [
-    "RHAT_MAX",
-    "ESS_MIN",
     "BFMI_MIN",
     "WEAK_CONTRACTION",
     "PRIOR_DOMINATED_CONTRACTION",
     "BUDGET_QUANTILE",
     "DiagnosticRow",
-    "Diagnostics",
+    "DiagnosticTable",
     "BudgetCheck",
     "ParameterRow",
     "parameter_names",
@@ -50,8 +50,6 @@ __all__ = [
     "lookup",
 ]
 
-RHAT_MAX = 1.01  # Vehtari et al. (2021) recommendation
-ESS_MIN = 400.0  # min bulk ESS >= 400: 100 per chain for 4 chains, Vehtari et al. (2021)
 BFMI_MIN = 0.3  # Betancourt (2016): E-BFMI below 0.3 indicates poor exploration
 WEAK_CONTRACTION = 0.5
 PRIOR_DOMINATED_CONTRACTION = 0.1
@@ -82,8 +80,8 @@ class DiagnosticRow(NamedTuple):
 
 
 @dataclass(frozen=True)
-class Diagnostics:
-    """Sampler diagnostics of a run.
+class DiagnosticTable:
+    """Sampler diagnostics of a run, per component and overall.
 
     Attributes
     ----------
@@ -99,8 +97,9 @@ class Diagnostics:
         Divergent transitions after warm-up (``None``: ``sample_stats.diverging`` absent).
     bfmi : numpy.ndarray or None
         Energy BFMI per chain; ``None`` without ``sample_stats.energy``.
-    max_r_hat, min_ess_bulk, min_ess_tail : float
-        Extremes over :attr:`rows`; NaN when not computable, e.g. one chain.
+    overall : Diagnostics
+        The extremes over :attr:`rows` (NaN when not computable, e.g. one chain) judged by the
+        fit's rule (:mod:`cassini_bayes.diagnostics`; BFMI is reported, not judged).
     converged_summary : bool or None
         ``summary.json``'s ``diagnostics.converged`` (the fit's verdict).
     computed : tuple of str
@@ -108,31 +107,20 @@ class Diagnostics:
     """
 
     rows: tuple[DiagnosticRow, ...]
-    sampler: dict
+    sampler: dict[str, int]
     chains: int
     draws: int
     divergences: int | None
     bfmi: np.ndarray | None
-    max_r_hat: float
-    min_ess_bulk: float
-    min_ess_tail: float
+    overall: Diagnostics
     converged_summary: bool | None
     computed: tuple[str, ...] = ()
-
-    @property
-    def converged_recomputed(self) -> bool:
-        """The same rule as the fit: R-hat, bulk ESS, no divergences (BFMI reported, not gating)."""
-        return (
-            (self.divergences or 0) == 0
-            and _le(self.max_r_hat, RHAT_MAX)
-            and _ge(self.min_ess_bulk, ESS_MIN)
-        )
 
     @property
     def converged(self) -> bool:
         """The fit's verdict when it wrote one, else the recomputed one."""
         if self.converged_summary is None:
-            return self.converged_recomputed
+            return self.overall.converged
         return self.converged_summary
 
 
@@ -175,14 +163,6 @@ class ParameterRow(NamedTuple):
     ess_bulk: float | None
     prior_mean: float | None = None  # the model file's prediction (the prior's centre)
     budget: BudgetCheck | None = None
-
-
-def _le(x: float, lim: float) -> bool:
-    return bool(np.isfinite(x) and x <= lim)
-
-
-def _ge(x: float, lim: float) -> bool:
-    return bool(np.isfinite(x) and x >= lim)
 
 
 def unit_of(label: str) -> str:
@@ -254,7 +234,7 @@ def energy_bfmi(energy: np.ndarray) -> np.ndarray:
     return np.square(np.diff(e, axis=1)).mean(axis=1) / np.var(e, axis=1)
 
 
-def diagnostics(run: RunData, param_names: list[str]) -> Diagnostics:
+def diagnostics(run: RunData, param_names: list[str]) -> DiagnosticTable:
     """Diagnostics of every judged posterior component (``param_names``: the parameters of
     interest); the fit's numbers from ``summary.json``, ArviZ for any it lacks."""
     post = run.posterior
@@ -311,16 +291,19 @@ def diagnostics(run: RunData, param_names: list[str]) -> Diagnostics:
         return float(f(xs)) if xs else float("nan")
 
     conv = (run.summary.get("diagnostics") or {}).get("converged")
-    return Diagnostics(
+    worst = max((r for r in rows if np.isfinite(r.r_hat)), key=lambda r: r.r_hat, default=None)
+    overall = Diagnostics.judge(divergences or 0, _ext(max, [r.r_hat for r in rows]),
+                                _ext(min, [r.ess_bulk for r in rows]),
+                                _ext(min, [r.ess_tail for r in rows]),
+                                worst.label if worst is not None else "")
+    return DiagnosticTable(
         rows=tuple(rows),
         sampler=sampler,
         chains=chains,
         draws=draws,
         divergences=divergences,
         bfmi=bfmi,
-        max_r_hat=_ext(max, [r.r_hat for r in rows]),
-        min_ess_bulk=_ext(min, [r.ess_bulk for r in rows]),
-        min_ess_tail=_ext(min, [r.ess_tail for r in rows]),
+        overall=overall,
         converged_summary=None if conv is None else bool(conv),
         computed=tuple(todo),
     )
@@ -462,7 +445,7 @@ def derived_rows(run: RunData) -> list[tuple[str, str, np.ndarray, BudgetCheck |
     return out
 
 
-def parameter_rows(run: RunData, param_names: list[str], diag: Diagnostics
+def parameter_rows(run: RunData, param_names: list[str], diag: DiagnosticTable
                    ) -> list[ParameterRow]:
     """The answer table: posterior summary, the model file's prediction and the prior sd, the
     papers' least squares (``baseline``), truth when known, contraction and budget."""

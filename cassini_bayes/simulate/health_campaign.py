@@ -23,6 +23,7 @@ these are uniform; the inertia errors are shared by all events, as in flight).
 from __future__ import annotations
 
 import copy
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,7 +81,7 @@ def _num(table: dict, key: str, src: str, lo: float, hi: float, default=None) ->
     return float(v)
 
 
-def load_campaign(path: str | Path) -> Campaign:
+def load_campaign(path: str | os.PathLike) -> Campaign:
     """Read a campaign TOML (a path, or the stem of a shipped one, e.g. ``health_control``)."""
     p = scenario_path(path, "campaign")
     d = read_toml(p, "campaign", "experiments/scenarios/")

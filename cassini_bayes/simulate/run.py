@@ -47,6 +47,7 @@ from cassini_bayes.simulate import controllers as ctl
 from cassini_bayes.simulate.scenario import Scenario, check_size
 from cassini_bayes.simulate.sensors import NoiseParams, measure, time_tags
 from cassini_bayes.telemetry import PulseLog, Telemetry
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_params", "simulate",
            "simulate_arrays", "simulate_batch", "pulse_log", "quiet_windows", "PULSE_RING",
@@ -217,8 +218,7 @@ def _config(s: Scenario) -> _Config:
 
 def _wheel_limits(s: Scenario) -> np.ndarray:
     """(2, k) the truth model's wheel limits: rate (rad/s) and motor torque (N m); inf: none."""
-    rpm_to_rad_s = 2.0 * np.pi / 60.0
-    return np.array([[w.max_speed_rpm * rpm_to_rad_s for w in s.truth.wheels],
+    return np.array([[w.max_speed_rpm * RPM_TO_RAD_S for w in s.truth.wheels],
                      [w.max_torque_nm for w in s.truth.wheels]], float)
 
 

@@ -70,17 +70,16 @@ from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_phy
                                       load_spacecraft, tilted_axis)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
 from cassini_bayes.telemetry import MAX_ROWS, OMEGA_ABS_MAX, WHEEL_RPM_MAX
+from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["Slew", "WheelRamp", "DeadbandChange", "PulseCommand", "Noise", "FlexMode", "Window",
            "RwaControl", "RcsControl", "Leak", "Scenario", "load_scenario", "scenario_from_dict",
            "scenario_path", "check_size", "MAX_STEPS", "MAX_SAMPLES"]
 
-RPM = 2.0 * np.pi / 60.0
 _UNIT_TOL = 1e-6
 MAX_STEPS = 2_000_000
-"""Most integration steps ``duration_s / dt_s`` of one scenario. Measured peak memory of
-``simulate`` is ~0.5 GB plus ~350 bytes per step (8 steps per sample), so ~1.2 GB at the limit
-(docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
+"""Most integration steps ``duration_s / dt_s`` of one scenario: ``simulate``'s memory grows with
+the steps (per-step cost: docs/limits.md); 2e6 steps are 69 h at the 1/8 s thruster step."""
 MAX_SAMPLES = MAX_ROWS
 """Most telemetry samples ``duration_s / sample_period_s + 1`` of one scenario: the telemetry file
 row limit :data:`cassini_bayes.telemetry.MAX_ROWS`, so every simulated file can be read back."""
@@ -583,7 +582,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         j = _wheel_index(truth, name, f"initial.wheel_rpm.{name}", src)
         if not on[j]:
             raise rpm.err(name, "gives a rate for a wheel that is not in 'initial.wheels_on'")
-        rho0[j] = rpm.num(name, hi=WHEEL_RPM_MAX) * RPM
+        rho0[j] = rpm.num(name, hi=WHEEL_RPM_MAX) * RPM_TO_RAD_S
 
     rc = top.sub("rwa_controller", {"bandwidth_rad_s", "damping", "believed_axis"})
     believed = prior.wheel_axes.copy()
@@ -651,7 +650,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
             raise r.err("wheel", "is not in 'initial.wheels_on'")
         t0 = r.num("t_start_s")
         _check_time(r, "t_start_s", t0, duration)
-        ramps.append(WheelRamp(j, t0, r.num("target_rpm", hi=WHEEL_RPM_MAX) * RPM,
+        ramps.append(WheelRamp(j, t0, r.num("target_rpm", hi=WHEEL_RPM_MAX) * RPM_TO_RAD_S,
                                r.num("torque_nm", positive=True, hi=10.0)))
     if ramps and control != "rcs":
         raise InputError("[[wheel_ramp]] needs 'run.control = \"rcs\"' (under RWA control the "
@@ -725,7 +724,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
     )
 
 
-def load_scenario(path: str | Path) -> Scenario:
+def load_scenario(path: str | os.PathLike) -> Scenario:
     """Load a scenario TOML (a path, or the stem of a file under ``experiments/scenarios/``)."""
     p = scenario_path(path)
     d = read_toml(p, "scenario", "experiments/scenarios/")

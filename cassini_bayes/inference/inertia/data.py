@@ -13,14 +13,19 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, UnidentifiableError
 from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
-from cassini_bayes.inference.inertia.gls import (full_prior, gls, information_ratio,
-                                                 set_robust_columns, sufficient_statistics,
-                                                 whitening)
+from cassini_bayes.inference.inertia.gls import (
+    full_prior,
+    gls,
+    information_ratio,
+    set_robust_columns,
+    sufficient_statistics,
+    whitening,
+)
 from cassini_bayes.inference.inertia.likelihood import _SYM
 from cassini_bayes.inference.inertia.prior import InertiaPrior, inertia_prior
 from cassini_bayes.inference.noise import ATTITUDE_FLOOR, RATE_FLOORS, floored, white_noise_sd
 from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout
-from cassini_bayes.inference.sensitivity import linear_sensitivity
+from cassini_bayes.inference.sensitivity import Sensitivity, linear_sensitivity
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.physics.momentum import regressor, wheel_momentum_body
 from cassini_bayes.spacecraft import Spacecraft
@@ -146,7 +151,7 @@ class InertiaProblem(NamedTuple):
     residual_data: dict
     robust: bool = False
     layout: object = None
-    sensitivity: object = None
+    sensitivity: Sensitivity | None = None
     robust_cols: np.ndarray | None = None
 
 

@@ -5,10 +5,11 @@ InferenceData with the residuals (:func:`fit_inertia`).
 from __future__ import annotations
 
 import warnings
-from typing import NamedTuple, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import numpy as np
 
+from cassini_bayes.diagnostics import Diagnostics
 from cassini_bayes.inference.idata import replace_groups
 from cassini_bayes.inference.inertia.data import InertiaProblem, prepare_inertia
 from cassini_bayes.inference.inertia.likelihood import momentum_residuals
@@ -29,8 +30,9 @@ def _warn_weak(problem: InertiaProblem) -> None:
 class InertiaPosterior(NamedTuple):
     """Result of :func:`fit_inertia`: the InferenceData, its diagnostics, the prepared problem."""
 
-    idata: object
-    diagnostics: object
+    idata: Any
+    """ArviZ InferenceData (its groups are attributes ArviZ sets at run time)."""
+    diagnostics: Diagnostics
     problem: InertiaProblem
 
 

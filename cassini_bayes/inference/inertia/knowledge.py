@@ -11,7 +11,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.prior import inertia_prior
-from cassini_bayes.names import INERTIA_NAMES, a_kind
+from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["InertiaGaussian", "inertia_from_run", "inertia_from_idata", "inertia_prior_gaussian"]
@@ -31,25 +31,10 @@ def inertia_from_run(run_dir: str | Path) -> InertiaGaussian:
     Reads ``RUN_DIR/posterior.nc`` (an earlier ``cassini-bayes fit inertia``). Raises
     :class:`InputError` when the file is missing or holds no inertia draws.
     """
-    import arviz as az
+    from cassini_bayes.rundir import read_posterior
 
-    from cassini_bayes.run_kind import run_kind
-
-    path = Path(run_dir) / "posterior.nc"
-    if not path.is_file():
-        raise InputError(f"{arg('inertia_posterior', run_dir)}: no posterior.nc there; give the "
-                         "run directory of an earlier 'cassini-bayes fit inertia'")
-    kind = run_kind(run_dir)
-    if kind not in (None, "inertia"):  # a thrust or RWA4 run may carry inertia draws too
-        raise InputError(f"{arg('inertia_posterior', run_dir)}: {a_kind(kind)} fit; give the run "
-                         "directory of a 'cassini-bayes fit inertia' (an inertia calibration "
-                         "from slews)")
-    try:
-        idata = az.from_netcdf(path)
-    except Exception as e:  # unreadable netCDF
-        raise InputError(f"{path}: cannot read it ({type(e).__name__}); give the run directory "
-                         "of an inertia fit") from None
-    return inertia_from_idata(idata, str(path))
+    idata = read_posterior(run_dir, "inertia", arg("inertia_posterior", run_dir))
+    return inertia_from_idata(idata, str(Path(run_dir) / "posterior.nc"))
 
 
 def inertia_from_idata(idata, source: str) -> InertiaGaussian:

@@ -4,11 +4,12 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from typing import Any, NamedTuple, Sequence
 
 import jax
 import numpy as np
 
+from cassini_bayes.diagnostics import Diagnostics
 from cassini_bayes.inference.idata import replace_groups
 from cassini_bayes.inference.inertia import InertiaGaussian
 from cassini_bayes.inference.rwa4.data import _DIM, Rwa4Problem, _no_nuisance, prepare_rwa4
@@ -69,8 +70,9 @@ class Rwa4Posterior(NamedTuple):
     """Result of :func:`fit_rwa4`: InferenceData, diagnostics, problem and the direction summary
     (``{"mean": [x, y, z], "cone_deg": {"50": …, "90": …, "95": …}}``)."""
 
-    idata: object
-    diagnostics: object
+    idata: Any
+    """ArviZ InferenceData (its groups are attributes ArviZ sets at run time)."""
+    diagnostics: Diagnostics
     problem: Rwa4Problem
     direction: dict
 
