@@ -638,8 +638,8 @@ def test_health_and_leak_figures_have_units():
     prob = np.zeros((t.size, len(HYPOTHESES)))
     prob[:, 0] = np.where(t < 600, 1.0, 0.0)
     prob[:, 1] = 1.0 - prob[:, 0]
-    leak = LeakPosterior(t, prob, 0.99, 660.0, 660.0, "Z1", 0.1, 0.002, np.array([-0.1, 0.08, 0.0]),
-                         600.0, np.full(3, 1e-3))
+    leak = LeakPosterior(t, prob, 0.99, 660.0, 660.0, "Z1", 0.1, 0.002, (0.097, 0.103),
+                         np.array([-0.1, 0.08, 0.0]), 600.0, 0.05, np.full(3, 1e-3))
     lee = ThresholdResult(1100.0, 0, 0, (1100.0,), ())
     assert _axes_problems(leak_figure(leak, lee, HYPOTHESES)) == []
 

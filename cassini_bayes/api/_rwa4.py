@@ -57,10 +57,13 @@ def wheel_block(post: Rwa4Posterior, spacecraft: Spacecraft | None = None) -> di
     pr = post.problem
     cone = None if pr.cone is None else {"axis": [float(x) for x in pr.cone.axis],
                                          "deg": pr.cone.angle_deg, "sd_deg": pr.cone.sd_deg}
-    w = None if spacecraft is None else spacecraft.wheel(pr.wheel)
-    ref = None if w is None or w.reference is None else {
-        "name": w.reference, "axis": [float(x) for x in spacecraft.wheel(w.reference).axis],
-        "tol_deg": w.reference_tol_deg}
+    ref = None
+    if spacecraft is not None:
+        w = spacecraft.wheel(pr.wheel)
+        if w.reference is not None:
+            ref = {"name": w.reference,
+                   "axis": [float(x) for x in spacecraft.wheel(w.reference).axis],
+                   "tol_deg": w.reference_tol_deg}
     return {"name": pr.wheel, "cone": cone, "reference": ref}
 
 
@@ -186,8 +189,9 @@ def fit_rwa4(telemetry: TelemetryArg, spacecraft: SpacecraftArg, *,
                      progress=progress)
 
 
-def _fit_axis(command: str, telemetry, spacecraft, *, wheel: str, method: str, windows,
-              prior: str, inertia_posterior, seed: int, chains: int, warmup: int, draws: int,
+def _fit_axis(command: str, telemetry: TelemetryArg, spacecraft: SpacecraftArg, *, wheel: str,
+              method: str, windows: Windows | None, prior: str,
+              inertia_posterior: FitArg | None, seed: int, chains: int, warmup: int, draws: int,
               target_accept: float, robust: bool, wheel_errors: str,
               progress: bool) -> FitResult:
     """The spin-axis fit behind :func:`fit_wheel_axis` and :func:`fit_rwa4` (``command``, the
