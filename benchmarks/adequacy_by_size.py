@@ -66,14 +66,16 @@ def run_one(case: str, rows: int, seed: int, settings, save: Path | None = None)
     """Simulate and fit one (case, size, seed); the adequacy block and the inertia."""
     import jax
     import numpy as np
-
     from coverage_robust_inertia import _errors
+
+    from cassini_bayes import setup_jax
     from cassini_bayes.inference.adequacy import inertia_adequacy
     from cassini_bayes.inference.inertia import fit_inertia, robust_sites
     from cassini_bayes.physics.momentum import INERTIA_NAMES
     from cassini_bayes.simulate import simulate_arrays
     from cassini_bayes.telemetry import Telemetry
 
+    setup_jax()
     sc = scenario(rows)
     k_err, k_fit, *k_files = jax.random.split(jax.random.key(7000 + seed), 4)
     tp, nz = _errors(k_err, sc, True)
@@ -125,7 +127,6 @@ def table(results: dict) -> str:
     and the fits failing any check, with the binomial 95 % bound ``3/n`` when none of ten or
     more does."""
     import numpy as np
-
     from adequacy_false_alarms import rates
 
     names = ["prior_data_conflict", "held_out", "residual_autocorrelation",

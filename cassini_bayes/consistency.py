@@ -16,8 +16,8 @@ likely cause) from relations the data must obey whatever the unit of a column:
    fit, near 0 or negative for a wrong reading) and, for the declared reading, their ratio (the
    body-rate unit: 57.3 for °/s).
 2. **Wheel units, signs and order vs momentum conservation** (:func:`wheel_momentum_scale`).
-   Between thruster firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` is constant
-   (Feldman & Lee Eqs 2-3). With the model's predicted inertia (known to ±10 %) the balance is
+   Between thruster firings the inertial momentum ``A(q)ᵀ (I ω + Σ J_k ρ_k g_k)`` changes only
+   by the external torque's impulse (Feldman & Lee Eqs 2-3; a constant torque is fitted). With the model's predicted inertia (known to ±10 %) the balance is
    fitted with the wheel momentum times a free scale ``κ``: ``κ ≈ 1`` for rpm as the file
    format wants, ``κ ≈ 60/(2π) = 9.55`` when the wheel columns hold rad/s (the wheel momentum
    read ×0.105). Where slews about several axes separate the wheels, it is fitted again with a free
@@ -126,10 +126,13 @@ _SEG_MIN_RAD = 1e-3    # … and at least this much
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
 _SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
 
-GYRO_WINDOW_S = 60.0
-"""Length of the windows of :func:`gyro_bias_estimate`, s."""
+GYRO_WINDOW_MIN_SAMPLES = 4
+"""Shortest window of :func:`gyro_bias_estimate`, samples; longer ones double from it."""
+GYRO_MIN_WINDOWS = 8
+"""Fewest quiet windows of one length that :func:`gyro_bias_estimate` uses (the standard error
+comes from their scatter)."""
 GYRO_WINDOW_TURN_RAD = 2e-3
-"""Windows turning more than this (by ∫ω dt) are left out of the gyro-bias estimate."""
+"""Windows whose attitude turns more than this (rad) are left out of the gyro-bias estimate."""
 GYRO_BIAS_Z = 5.0
 """A gyro bias is reported beyond this many prior sd and this many standard errors."""
 QUANTUM_LATTICE_TOL = 1e-3
@@ -185,7 +188,12 @@ spacecraft about one axis only."""
 RWA_METHOD_MIN_KNOWN = 2
 """The RWA method (Brown Eq 3) needs this many running wheels besides the one solved for."""
 CONTROL_WHEEL_RPM = 10.0
-"""A wheel whose rate changes by more than this over the record takes part in the control."""
+"""A wheel whose rate changes by more than this (rpm) over the record takes part in the control
+(a rate: a wheel sized to its spacecraft exchanges hundreds of rpm in a slew, whatever the size)
+…"""
+CONTROL_NOISE_SD = 10.0
+"""… and by more than this many times its own white noise (the range of white noise over
+thousands of samples is ~8 sd: a CubeSat's 1-rpm hall sensors)."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -330,46 +338,67 @@ class GyroBias(NamedTuple):
     bias : (3,) rad/s, body axes: what the rates read above the truth.
     se : (3,) rad/s, its standard error from the windows' scatter.
     windows : number of windows used.
+    window_s : their length, s.
     """
 
     bias: np.ndarray
     se: np.ndarray
     windows: int
+    window_s: float = 0.0
+
+
+def _quiet_windows(t: np.ndarray, q: np.ndarray, gaps: np.ndarray,
+                   length_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Consecutive gap-free windows ``(a, b)`` of ``length_s`` whose attitude turns by less than
+    :data:`GYRO_WINDOW_TURN_RAD` (sample indices)."""
+    edges = np.unique(np.searchsorted(t, np.arange(t[0], t[-1], length_s)))
+    a, b = edges[:-1], edges[1:]
+    keep = (b > a) & (gaps[a] == gaps[b])
+    a, b = a[keep], b[keep]
+    sign = np.where(np.sum(q[a] * q[b], axis=1) < 0, -1.0, 1.0)[:, None]
+    turn = 4.0 * np.arctan2(np.linalg.norm(q[b] - sign * q[a], axis=1),
+                            np.linalg.norm(q[b] + sign * q[a], axis=1))
+    quiet = turn < GYRO_WINDOW_TURN_RAD
+    return a[quiet], b[quiet]
 
 
 def gyro_bias_estimate(tel: Telemetry) -> GyroBias | None:
-    """Least-squares constant gyro bias ``b`` from quiet windows of :data:`GYRO_WINDOW_S`.
+    """Least-squares constant gyro bias ``b`` from windows where the attitude hardly turns.
 
     Per gap-free window ``(a, b)`` whose attitude turns by less than
     :data:`GYRO_WINDOW_TURN_RAD` (so the rotation vector and ``∫ω dt`` differ only by the bias,
     not by non-commuting turns or a rate-scale error): ``∫ω dt − rotvec(q_b q_a⁻¹) = b Δt +
     noise`` per body axis (a gyro reading ``ω + b`` integrates ``b Δt`` more than the attitude
-    turns; Brown Eq 2 kinematics). ``None`` with fewer than :data:`MIN_SEGMENTS` windows.
+    turns; Brown Eq 2 kinematics). The window length is the file's own: from
+    :data:`GYRO_WINDOW_MIN_SAMPLES` median sample steps, doubling, the length whose quiet windows
+    (at least :data:`GYRO_MIN_WINDOWS` of them) give the most precise estimate, ``N L²`` largest
+    (the attitude noise of each window's ends is fixed, the bias grows with ``L``): long rests
+    give long windows, a CubeSat's one-minute rests shorter ones. ``None`` when no length has
+    :data:`GYRO_MIN_WINDOWS` quiet windows.
     """
     t = np.asarray(tel.t, float)
     q = np.asarray(tel.q, float)
-    if t.size < 4 or t[-1] - t[0] < 2 * GYRO_WINDOW_S:
+    if t.size < 4:
         return None
-    edges = np.unique(np.searchsorted(t, np.arange(t[0], t[-1], GYRO_WINDOW_S)))
-    a, b = edges[:-1], edges[1:]
     gaps = _gaps_before(t)
-    keep = (b > a) & (gaps[a] == gaps[b])
-    a, b = a[keep], b[keep]
-    if a.size < MIN_SEGMENTS:
+    length = GYRO_WINDOW_MIN_SAMPLES * float(np.median(np.diff(t)))
+    best, best_score = None, 0.0
+    while GYRO_MIN_WINDOWS * length <= t[-1] - t[0]:
+        a, b = _quiet_windows(t, q, gaps, length)
+        if a.size >= GYRO_MIN_WINDOWS and a.size * length**2 > best_score:
+            best, best_score = (a, b, length), a.size * length**2
+        length *= 2.0
+    if best is None:
         return None
+    a, b, length = best
     integral = _integrated_rates(tel)
-    g = integral[b] - integral[a]
-    rot = np.asarray(_rotvecs_between(q[a], q[b]))
-    quiet = np.linalg.norm(rot, axis=1) < GYRO_WINDOW_TURN_RAD   # the attitude's turn: the
-    # rates' own integral carries the bias (a MEMS gyro's 1e-4 rad/s turns 6e-3 rad a minute)
-    if np.count_nonzero(quiet) < MIN_SEGMENTS:
-        return None
-    d, dt = (g - rot)[quiet], (t[b] - t[a])[quiet]
+    d = integral[b] - integral[a] - np.asarray(_rotvecs_between(q[a], q[b]))
+    dt = t[b] - t[a]
     ss = float(dt @ dt)
     bias = dt @ d / ss
     resid = d - dt[:, None] * bias
     se = np.sqrt(np.sum(resid**2, axis=0) / max(dt.size - 1, 1) / ss)
-    return GyroBias(bias, se, int(dt.size))
+    return GyroBias(bias, se, int(dt.size), length)
 
 
 def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
@@ -390,7 +419,7 @@ def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
         warnings.warn(f"{tel.source}: columns wx wy wz carry a constant gyro bias of about "
                       f"{axes} rad/s ({worst:.0f}x the [gyro] bias_sd_rad_s = {sd:.2g} of "
                       f"the model {spacecraft.name!r}, seen over {est.windows} quiet "
-                      f"{GYRO_WINDOW_S:g}-s windows): the fits' gyro prior under-states it; "
+                      f"{est.window_s:.3g}-s windows): the fits' gyro prior under-states it; "
                       "widen bias_sd_rad_s in the spacecraft model, or remove the bias",
                       GyroBiasWarning, stacklevel=2)
     return est
@@ -569,8 +598,8 @@ class WheelAxes(NamedTuple):
     Attributes
     ----------
     alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
-    conditioning : smallest over largest singular value of the balance's design, its columns
-        scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
+    conditioning : smallest over largest singular value of the balance's design (the wheels'
+        columns and the external torque's), its columns scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
         slew about one axis) and the vectors cannot be told apart; 0.3–0.5 for slews about
         three axes.
     vectors : per known wheel, ``w_k / J_k`` (body frame, per rpm-read rad/s): the model's axis
@@ -653,6 +682,7 @@ class _Balance(NamedTuple):
     known_cols: list[np.ndarray]    # per known wheel, (n, 3, 3): −ρ_k A(q)ᵀ e_j, de-meaned
     free: list[str]                 # the articulated wheels running
     free_cols: list[np.ndarray]     # per free wheel, its three columns
+    torque_cols: list[np.ndarray]   # a constant inertial torque's three columns: (t − t̄_s) e_j
     stretches: int
     noise_nms: float                # momentum noise of one sample (WheelAxes.noise_nms)
 
@@ -680,10 +710,12 @@ def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None
                   for n in known]
     free_cols = [-np.asarray(tel.wheel_rate(f), float)[keep][:, None] * a_t[:, :, j]
                  for f in free for j in range(3)]
+    t_keep = np.asarray(tel.t, float)[keep] - float(tel.t[0])
+    torque_cols = [t_keep[:, None] * np.eye(3)[j] for j in range(3)]
     lab = labels[keep]
     for s in good:
         m = lab == s
-        for x in [body, *known_cols, *free_cols]:
+        for x in [body, *known_cols, *free_cols, *torque_cols]:
             x[m] -= x[m].mean(0)
     s_w, s_r = RATE_NOISE_FLOORS
     i_max = float(np.linalg.eigvalsh(np.asarray(spacecraft.inertia, float))[-1])
@@ -691,7 +723,8 @@ def _balance(tel: Telemetry, spacecraft: Spacecraft, on_times: np.ndarray | None
     for n in names:
         rate = np.asarray(tel.wheel_rate(n), float)[keep]
         noise += (spacecraft.wheel(n).inertia * max(white_noise_sd(rate), s_r)) ** 2
-    return _Balance(body, known, known_cols, free, free_cols, len(good), float(np.sqrt(noise)))
+    return _Balance(body, known, known_cols, free, free_cols, torque_cols, len(good),
+                    float(np.sqrt(noise)))
 
 
 def _solve(design: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, float] | None:
@@ -710,6 +743,7 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     if not bal.known:
         return None
     cols = [c[:, :, j] for c in bal.known_cols for j in range(3)] + bal.free_cols
+    cols += bal.torque_cols
     design = np.stack([c.ravel() for c in cols], 1)
     solved = _solve(design, bal.body.ravel())
     if solved is None:
@@ -730,10 +764,12 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
 
     Per firing-free stretch ``s`` (thruster firings from ``on_times``, default the telemetry's)
 
-        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s``
+        ``A(q_t)ᵀ (I_pred ω_t + κ Σ_known J_k ρ_k,t g_k + ρ_f,t w) = H_s + T t``
 
     with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
-    from the model. Each articulated wheel (``free_wheels``, default the model's
+    from the model, and ``T`` a constant inertial external torque over the whole file (its
+    impulse over a long record is a sizeable part of what a small spacecraft's slews exchange:
+    the ESPA bus's 2e-5 N m over 22 minutes against 0.38 N m s). Each articulated wheel (``free_wheels``, default the model's
     ``articulated`` wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures,
     Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other
     wheel running ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
@@ -745,7 +781,7 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
     bal = _balance(tel, spacecraft, on_times, free_wheels)
     if bal is None:
         return None
-    cols = list(bal.free_cols)
+    cols = list(bal.free_cols) + bal.torque_cols
     if bal.known:
         axes = np.stack([spacecraft.wheel(n).axis for n in bal.known])
         js = np.array([spacecraft.wheel(n).inertia for n in bal.known])
@@ -985,7 +1021,8 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
       pairs (RCS-controlled drift).
     * ``rcs`` (Brown Eq 1): under RCS control the body drift takes up the wheel's momentum and
       the thrusters hold the attitude. When at least :data:`RWA_METHOD_MIN_KNOWN` other wheels
-      run and change by more than :data:`CONTROL_WHEEL_RPM` while no thruster fires (``on_*``
+      run and change by more than :data:`CONTROL_WHEEL_RPM` (and :data:`CONTROL_NOISE_SD` ×
+      their white noise) while no thruster fires (``on_*``
       columns flat or absent), the wheels carry the attitude control: RWA-controlled data.
     """
     others = [n for n in tel.active_wheels() if n.upper() != wheel.upper()]
@@ -999,7 +1036,10 @@ def check_rwa4_method(tel: Telemetry, method: str, wheel: str = "RWA4") -> None:
         return
     fired = tel.on_times is not None and bool(np.any(np.diff(tel.on_times, axis=0) > 0))
     span = {n: float(np.ptp(tel.wheel_rate(n))) / RPM_TO_RAD_S for n in others}
-    varying = [n for n, v in span.items() if v > CONTROL_WHEEL_RPM]
+    noise = {n: white_noise_sd(np.asarray(tel.wheel_rate(n), float)) / RPM_TO_RAD_S
+             for n in others}
+    varying = [n for n, v in span.items()
+               if v > max(CONTROL_WHEEL_RPM, CONTROL_NOISE_SD * noise[n])]
     if not fired and len(varying) >= RWA_METHOD_MIN_KNOWN:
         spans = ", ".join(f"{n} {span[n]:.0f} rpm" for n in varying)
         raise InputError(f"{arg('method', 'rcs')} needs RCS-controlled data (Brown Eq 1: the "

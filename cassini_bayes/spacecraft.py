@@ -30,6 +30,7 @@ from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
 
 __all__ = ["Wheel", "Thruster", "PulseConstants", "Knowledge", "Spacecraft", "wheel_tilt_basis",
+           "WHEEL_SPEED_NOMINAL_RPM",
            "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
            "eq16_moment_matrix",
            "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]
@@ -52,6 +53,11 @@ _UNIT_TOL = 1e-6
 COM_SD_DEFAULT_FRAC = 0.01
 """Default ``[center_of_mass] sd_m``: this fraction of the largest thruster position's length
 (Cassini: 3.6 cm of its 3.6 m arm), the centre of mass's knowledge scaled to the spacecraft."""
+WHEEL_SPEED_NOMINAL_RPM = 2000.0
+"""A wheel's top speed where its ``[[wheel]]`` entry gives no ``max_speed_rpm``, rpm, for
+:attr:`Spacecraft.momentum_capacity_nms` (Cassini's RWAs: 34 N m s at 0.16 kg m², Brown §I).
+A speed, not a size: wheels of any spacecraft run to 10³–10⁴ rpm, so the capacity scales with
+the wheels' spin inertia."""
 
 
 def wheel_tilt_basis(axis) -> np.ndarray:
@@ -236,6 +242,13 @@ class Spacecraft:
         return tuple(w.name for w in self.wheels)
 
     @property
+    def momentum_capacity_nms(self) -> float:
+        """The most angular momentum the wheels can hold together, N m s: ``Σ_k J_k ρ_max,k``
+        with ``ρ_max,k`` each wheel's ``max_speed_rpm`` (:data:`WHEEL_SPEED_NOMINAL_RPM` where
+        the model file gives none). The spacecraft's own momentum scale."""
+        return _capacity_nms(self.wheels)
+
+    @property
     def articulated_wheels(self) -> tuple[str, ...]:
         """Names of the wheels whose axis can move in flight (``articulated = true``)."""
         return tuple(w.name for w in self.wheels if w.articulated)
@@ -367,6 +380,13 @@ class Spacecraft:
         }
 
 
+def _capacity_nms(wheels: Sequence[Wheel]) -> float:
+    """:attr:`Spacecraft.momentum_capacity_nms` of ``wheels``, N m s."""
+    return float(sum(w.inertia * (w.max_speed_rpm if np.isfinite(w.max_speed_rpm)
+                                  else WHEEL_SPEED_NOMINAL_RPM) for w in wheels)
+                 * 2.0 * np.pi / 60.0)
+
+
 def _default_com_sd(thrusters: Sequence[Thruster]) -> float:
     """:data:`COM_SD_DEFAULT_FRAC` of the largest thruster position's length, m (0 without)."""
     if not thrusters:
@@ -420,6 +440,10 @@ WHEEL_SPEED_MAX_RPM = 1e5
 """Largest ``wheel.max_speed_rpm`` (CubeSat wheels run to ~1e4 rpm, Cassini's to ~2000)."""
 WHEEL_TORQUE_MAX_NM = 100.0
 """Largest ``wheel.max_torque_nm`` (CubeSat wheels give ~1e-3 N m, large CMGs ~1e2)."""
+TORQUE_HOLD_MIN_S = 60.0
+"""``[torque_knowledge] sd_nm`` (and ``rate_sd_nm_per_h``) are at most the wheels' momentum
+capacity over this time, N m: a torque that would fill the wheels within a minute is no
+disturbance of a wheel-controlled spacecraft, but a unit error (µN m written as N m)."""
 
 
 def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
@@ -576,7 +600,8 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
         name=_string(d, "name", "", src, Path(src).stem), inertia=inertia, moi_uncertainty=moi,
         poi_uncertainty=poi, wheels=wheels, thrusters=thrusters, pulse=PulseConstants(**kw),
         thrust=thrust, mass=mass, description=_string(d, "description", "", src, ""),
-        source=_string(d, "source", "", src, ""), knowledge=_knowledge(d, src),
+        source=_string(d, "source", "", src, ""),
+        knowledge=_knowledge(d, src, _capacity_nms(wheels)),
         com_m=com, com_sd_m=com_sd, eq16=eq16,
     )
 
@@ -701,9 +726,10 @@ def _nominal_thrust(table: dict, thrusters: Sequence[Thruster], eq16, src: str) 
     return float(np.mean([s.thrust_n for s in thrusters]))
 
 
-def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
-    """The optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections (one
-    sd each, ≥ 0)."""
+def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
+    """The optional ``[gyro]``, ``[wheel_knowledge]``, ``[telemetry_knowledge]`` and
+    ``[torque_knowledge]`` sections (one sd each, ≥ 0); the torques at most the wheels'
+    momentum ``capacity_nms`` over :data:`TORQUE_HOLD_MIN_S`."""
     base = Knowledge()
     kw = {}
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
@@ -721,10 +747,13 @@ def _knowledge(d: dict[str, Any], src: str) -> Knowledge:
         if kw[_WHEEL_KNOWLEDGE_KEYS[key]] >= 0.5:
             raise InputError(f"'wheel_knowledge.{key}' is a fraction (0.005 = 0.5 %), got "
                              f"{kw[_WHEEL_KNOWLEDGE_KEYS[key]]}", path=src)
+    hold = capacity_nms / TORQUE_HOLD_MIN_S
+    given = _table(d, "torque_knowledge", src)
     for key in ("sd_nm", "rate_sd_nm_per_h"):
-        if kw[_TORQUE_KNOWLEDGE_KEYS[key]] > 1e-2:
+        if key in given and kw[_TORQUE_KNOWLEDGE_KEYS[key]] > hold:
             raise InputError(f"'torque_knowledge.{key}' is a small external torque in N m "
-                             f"(<= 0.01; Cassini's is ~1.5e-5), got "
+                             f"(at most {hold:.3g}, what fills the wheels' {capacity_nms:.3g} "
+                             f"N m s in a minute; Cassini's is ~1.5e-5), got "
                              f"{kw[_TORQUE_KNOWLEDGE_KEYS[key]]}", path=src)
     if kw["wheel_axis_sd_deg"] > 10:
         raise InputError("'wheel_knowledge.axis_sd_deg' is a small misalignment in degrees "

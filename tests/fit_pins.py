@@ -63,9 +63,11 @@ def write_inputs(model: str, folder: Path) -> dict[str, Path]:
     """Simulate the model's scenario into ``folder``: ``{"telemetry": csv, "pulses": csv?}``."""
     import jax
 
+    from cassini_bayes import setup_jax
     from cassini_bayes.simulate import load_scenario, simulate
     from cassini_bayes.telemetry import write_pulses, write_telemetry
 
+    setup_jax()
     scenario, sim_key = RECIPES[model][:2]
     r = simulate(jax.random.key(sim_key), load_scenario(scenario))
     folder.mkdir(parents=True, exist_ok=True)
@@ -238,8 +240,9 @@ def _mc(mcse: float) -> dict:
 
 
 def _ess_rule() -> dict:
-    return {"compare": "coarse", "ratio": 5.0,
-            "why": "ESS of 300 draws; a sampler that stops mixing gives ESS < 10"}
+    return {"compare": "coarse", "ratio": 10.0,
+            "why": "ESS of 300 draws varies 7x between seeds (thrust's noise scales: 41 "
+                   "against 298); a sampler that stops mixing gives ESS < 10"}
 
 
 def _same_shape(value, rule):

@@ -120,10 +120,10 @@ def test_clean_data_same_answer_wider_intervals(sc, clean):
 
 def test_effects_at_zero_prior_recover_idealised(sc, clean, monkeypatch):
     """Knowledge sd 0 (torques included) pins every nuisance parameter: the robust fit is the
-    idealised one."""
+    idealised one (whose ``T_N`` prior is the same ``[torque_knowledge] sd_nm``, here 0)."""
     sc0 = replace(sc, knowledge=Knowledge(0.0, 0.0, 0.0, 0.0, wheel_common_inertia_sd_frac=0.0,
                                           torque_sd_nm=0.0, torque_rate_sd_nm_per_h=0.0))
-    m_i, s_i, _ = laplace(clean, sc)
+    m_i, s_i, _ = laplace(clean, sc0)
     m_r, s_r, _ = laplace(clean, sc0, robust=True)
     np.testing.assert_allclose(m_r, m_i, rtol=0, atol=1e-3 * s_i.min())
     np.testing.assert_allclose(s_r, s_i, rtol=1e-3)

@@ -96,12 +96,10 @@ def test_gyro_bias_shift_matches_refits(base, sc):
 
 
 def test_external_torque_shift_matches_refits(base, sc):
-    from cassini_bayes.inference.inertia import TORQUE_PRIOR_SD_NM
-
     moves = []
     for j in range(3):
         tq = np.array(TORQUE, float)
-        tq[j] += TORQUE_PRIOR_SD_NM
+        tq[j] += sc.knowledge.torque_sd_nm
         moved = make_slews(KEY, sc, h0=H0, torque=tq)
         moves.append(prep(moved, sc, torque=False).laplace_mean - base.laplace_mean)
     rss = np.sqrt(np.sum(np.square(moves), 0))

@@ -50,8 +50,10 @@ class TelemetryCheck:
     the first attitude; ``attitude`` and ``momentum`` the physics checks' results
     (:func:`cassini_bayes.consistency.check_telemetry_data`; ``None`` where not made) and
     ``physics`` what they established, in words; ``wheels``; ``thruster_source`` (``"on_*
-    columns"``, ``"pulse log FILE"`` or ``None`` when there is neither) and ``thrusters`` (those
-    that fired); ``quiet`` the quiet periods ``(t0, t1)`` s and the rules that made them
+    columns"``, ``"pulse log FILE"`` or ``None`` when there is neither), ``thrusters`` (those
+    that fired) and ``model_thrusters`` (the names the spacecraft model has, Cassini's without
+    one; empty for a spacecraft without thrusters); ``quiet`` the quiet periods ``(t0, t1)`` s
+    and the rules that made them
     (``min_quiet_s``, ``rate_max_rad_s``, ``wheel_tol_rpm``); ``n_pulses`` of the pulse log
     (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
     (:func:`cassini_bayes.consistency.quantised_rates`).
@@ -73,6 +75,7 @@ class TelemetryCheck:
     n_pulses: int | None
     notes: tuple[str, ...]
     quanta: tuple = ()
+    model_thrusters: tuple[str, ...] = ()
 
     @property
     def n(self) -> int:
@@ -231,4 +234,4 @@ def check_telemetry(telemetry, *, pulses=None, spacecraft=None, min_quiet_s: flo
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
         n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
-        quanta=quantised_rates(tel))
+        quanta=quantised_rates(tel), model_thrusters=tuple(tel.thruster_names))

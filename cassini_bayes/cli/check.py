@@ -41,12 +41,14 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
         if not w.on:
             wheels.add_row(w.name, "off (no data)", "", "", "")
             continue
-        wheels.add_row(w.name, "idle (rms ≤ 1 rpm: as off)" if w.idle else "on",
+        wheels.add_row(w.name, "idle (rms at its noise or ≤ 1 rpm: as off)" if w.idle else "on",
                        f"{w.min_rpm:.2f}", f"{w.max_rpm:.2f}",
                        f"{w.first_rpm:.2f} → {w.last_rpm:.2f}")
     console.print(wheels)
 
-    if c.thruster_source is None:
+    if c.thruster_source is None and not c.model_thrusters:
+        console.print("Thrusters: none in the spacecraft model")
+    elif c.thruster_source is None:
         console.print("Thrusters: no on_* columns and no pulse log (thrust fits need --pulses)")
     elif c.thrusters:
         thr = Table(title=f"Thrusters (from {escape(c.thruster_source)})", title_justify="left")

@@ -20,8 +20,8 @@ Every effect is small, so it enters the momentum model to first order, and linea
 * **body-fixed external torque** ``T_B`` (N m, per file; beside the inertial ``T_N`` of the
   idealised model): the inertial momentum gains ``∫ A(q_s)ᵀ ds T_B``, so the body residual gains
   ``−A(q_t) C_t T_B`` with ``C_t = ∫_{t_0}^{t} A(q_s)ᵀ ds`` (trapezoidal). Prior sd as ``T_N``
-  (Feldman & Lee App. A: 15 µN m per axis); over a short slew the two are nearly the same
-  torque, and the priors share it out.
+  (``[torque_knowledge] sd_nm``; default the Feldman & Lee App. A bound, 15 µN m per axis); over
+  a short slew the two are nearly the same torque, and the priors share it out.
 
 * **a shared wheel spin-inertia error** ``c_s`` (per wheel, the default, when the model file's
   ``[wheel_knowledge] common_inertia_sd_frac`` is above zero): every wheel's scale is
@@ -65,8 +65,6 @@ __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt
            "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
            "site_prior_sd", "prior_wheel_errors"]
 
-BODY_TORQUE_PRIOR_SD_NM = 15e-6  # N m per axis, as the inertial T_N (Feldman & Lee App. A)
-"""The default external-torque prior sd (``Knowledge.torque_sd_nm``)."""
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
 # Models of the wheel spin-inertia error: one scale per wheel (default) or one common scale.
 WHEEL_ERRORS = ("per_wheel", "common")

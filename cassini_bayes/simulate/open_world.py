@@ -47,14 +47,11 @@ LAWS = ("uniform", "student_t3", "laplace")
 scaled by ``sd / √3`` (the t(3) variance is 3), Laplace with scale ``sd / √2``."""
 WIDEN = 1.5
 """Default ratio of a drawn error's sd to the fit's prior sd."""
-TORQUE_SD_NM = 15e-6
-"""Scale of the external torques per axis, N m: Feldman & Lee App. A bound for March 2000 (the
-robust fits' prior sd)."""
 SLIP_PROB = 0.002
 """Chance that a telemetry sample is stale: it repeats its previous or next sample's data."""
 FLEX_FREQ_HZ = (0.1, 1.0)        # Cassini's RPWS antennas 0.13 Hz, magnetometer boom 0.7 Hz
 FLEX_DAMPING = (0.002, 0.01)     # ζ 0.2-1 % (Feldman & Lee §II)
-FLEX_COUPLING_SQ = (5.0, 40.0)   # |δ|², kg m²; the `_real` scenarios assume 14
+FLEX_SHARE = (1e-3, 7e-3)        # δᵀ I⁻¹ δ; Cassini's |δ|² 5-40 kg m² (the `_real` scenarios 14)
 _MAX_PHASE = 0.45                # 2π f dt below the scenario's 0.5 limit
 # Which effects each law draws (a fixed assignment: every effect has a non-Normal family).
 EFFECT_LAWS = {"gyro_bias_rad_s": "student_t3", "gyro_scale_factor": "laplace",
@@ -132,15 +129,14 @@ def _inertia(rng, prior, record: dict) -> dict[str, float]:
 
 def _flex(rng, inertia: np.ndarray, dt_s: float, record: dict) -> dict:
     """A flexible mode: log-uniform frequency and damping, an isotropic coupling direction with
-    ``|δ|²`` uniform on :data:`FLEX_COUPLING_SQ` (scaled down if ``δᵀ I⁻¹ δ`` would pass 0.1)."""
+    the share of the inertia it carries, ``δᵀ I⁻¹ δ``, uniform on :data:`FLEX_SHARE`: relative
+    to the spacecraft (an appendage's share of its inertia, not kg m²)."""
     f_hi = min(FLEX_FREQ_HZ[1], _MAX_PHASE / (2.0 * math.pi * dt_s))
     f = float(np.exp(rng.uniform(math.log(FLEX_FREQ_HZ[0]), math.log(f_hi))))
     zeta = float(np.exp(rng.uniform(*np.log(FLEX_DAMPING))))
     u = rng.standard_normal(3)
-    delta = u / np.linalg.norm(u) * math.sqrt(rng.uniform(*FLEX_COUPLING_SQ))
-    share = float(delta @ np.linalg.solve(inertia, delta))
-    if share > 0.1:
-        delta *= math.sqrt(0.1 / share)
+    share = rng.uniform(*FLEX_SHARE)
+    delta = u * math.sqrt(share / float(u @ np.linalg.solve(inertia, u)))
     out = {"freq_hz": f, "damping": zeta, "coupling": delta.tolist()}
     record["flex_mode"] = {"law": "log-uniform freq and damping, isotropic coupling",
                            "freq_range_hz": [FLEX_FREQ_HZ[0], f_hi], **out}
@@ -149,7 +145,7 @@ def _flex(rng, inertia: np.ndarray, dt_s: float, record: dict) -> dict:
 
 def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
                     widen: float = WIDEN, draw_inertia: bool = False,
-                    solved_wheel: str | None = None, torque_sd_nm: float = TORQUE_SD_NM,
+                    solved_wheel: str | None = None, torque_sd_nm: float | None = None,
                     slip_prob: float = SLIP_PROB) -> OpenWorld:
     """Draw an open-world truth for the scenario ``base`` (see the module docstring).
 
@@ -159,14 +155,16 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     widen : each error's sd over its prior sd (the prior model's ``Knowledge``).
     draw_inertia : draw the true inertia from the prior model's knowledge box (thrust, RWA4).
     solved_wheel : a wheel whose axis the fit solves for (RWA4): not tilted.
-    torque_sd_nm : prior sd of the external torques per axis, N m (drawn ``widen`` × wider);
-        the inertial torque also drifts, by up to this much over the run (unmodelled).
+    torque_sd_nm : scale of the external torques per axis, N m (drawn ``widen`` × wider; default
+        the prior model's ``[torque_knowledge] sd_nm``, the robust fits' prior sd); the inertial
+        torque also drifts, by up to this much over the run (unmodelled).
     slip_prob : chance per sample of a stale sample (±1 sample slip).
     """
     rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
     d = base_scenario(base)
     nominal = scenario_from_dict(d, src=str(d.get("name", "<scenario>")))
     prior, kn = nominal.prior, nominal.prior.knowledge
+    torque_sd_nm = kn.torque_sd_nm if torque_sd_nm is None else torque_sd_nm
     truth = d.setdefault("truth", {})
     noise = d.setdefault("noise", {})
     for k in ("wheel_inertia_scale", "wheel_inertia_error_sd",

@@ -39,6 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from cassini_bayes._devices import require_x64
 from cassini_bayes.physics import dynamics
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.pulse import pulse_impulse_until
@@ -53,6 +54,11 @@ __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_param
 
 PULSE_RING = 6           # pulses remembered per thruster (older tails are < 1e-8 of a pulse)
 _TRACES = [0]            # incremented each time the core is traced (compile-once test)
+QUIET_TORQUE_KNOWLEDGE = 10.0
+"""A wheel is busy (biasing) in :func:`quiet_windows` while its motor torque exceeds this many
+times the truth model's ``[torque_knowledge] sd_nm``: more than holding the attitude against the
+environment takes (Cassini: 1.5e-4 N m)."""
+_IMPULSE_RTOL = 1e-9      # a thruster fires while its impulse grows by this × the run's largest step
 
 
 def trace_count() -> int:
@@ -454,6 +460,7 @@ def _prepared(s: Scenario):
 def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = None,
                     noise: NoiseParams | None = None) -> SimArrays:
     """One run as raw arrays (compiled once per scenario shape); ``truth``: the file's."""
+    require_x64("simulate")
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
     plan, carr = _prepared(scenario)
@@ -477,6 +484,7 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     -------
     :class:`SimArrays` with a leading batch axis.
     """
+    require_x64("simulate")
     batched = truth is not None
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
@@ -526,9 +534,10 @@ def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -
 
 def quiet_windows(result: SimResult, settle_s: float = 120.0,
                   min_length_s: float = 120.0) -> list[tuple[float, float]]:
-    """Quiet windows ``[(t0, t1), …]`` of a run: no slew commanded, no wheel biasing
-    (wheel torques below 1e-4 N m), no thruster impulse, at least ``settle_s`` after any of them,
-    and at least ``min_length_s`` long. Computed from the truth."""
+    """Quiet windows ``[(t0, t1), …]`` of a run: no slew commanded, no wheel biasing (wheel
+    torques below :data:`QUIET_TORQUE_KNOWLEDGE` × the model's external-torque knowledge), no
+    thruster impulse, at least ``settle_s`` after any of them, and at least ``min_length_s``
+    long. Computed from the truth."""
     a, s = result.arrays, result.scenario
     t = np.asarray(a.t)
     active = np.zeros(t.size, bool)
@@ -537,8 +546,9 @@ def quiet_windows(result: SimResult, settle_s: float = 120.0,
     j = np.asarray(result.params.wheel_inertias)
     rho = np.nan_to_num(np.asarray(a.wheel_rates))
     torque = np.abs(np.diff(rho, axis=0)) * j / np.diff(t)[:, None]
-    busy = np.any(torque > 1e-4, axis=1)
-    imp = np.any(np.abs(np.diff(np.asarray(a.thruster_impulse), axis=0)) > 1e-12, axis=1)
+    busy = np.any(torque > QUIET_TORQUE_KNOWLEDGE * s.truth.knowledge.torque_sd_nm, axis=1)
+    step = np.abs(np.diff(np.asarray(a.thruster_impulse), axis=0))
+    imp = np.any(step > _IMPULSE_RTOL * step.max(initial=0.0), axis=1)
     active[1:] |= busy | imp
     active[:-1] |= busy | imp
     # grow the activity by the settling time

@@ -67,8 +67,6 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
     integrated out under their prior; the shared ones (``π``, gyro scale, wheel tilts) are tested
     with :func:`gaussian_held_out`.
     """
-    from cassini_bayes.inference.inertia import H0_PRIOR_SD_NMS, TORQUE_PRIOR_SD_NM
-
     name = "held_out"
     data = problem.data
     fmat = np.asarray(data.fmat)
@@ -78,8 +76,7 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
     gvec = np.asarray(data.gvec)
     theta = np.asarray(data.theta_star)
     nu_sd = np.zeros(0) if data.nu_sd is None else np.asarray(data.nu_sd)
-    per_file = np.r_[np.full(3, H0_PRIOR_SD_NMS),
-                     np.full(3, TORQUE_PRIOR_SD_NM)][:6 if problem.torque else 3]
+    per_file = np.asarray(data.file_sd)[:6 if problem.torque else 3]
     sd = np.r_[np.asarray(data.pi_sd), np.tile(per_file, n_files), nu_sd]
     if sd.size != fmat.shape[1]:
         return not_applicable(name, threshold, "the inertia model's parameter layout is not the "

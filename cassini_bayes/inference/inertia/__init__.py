@@ -42,8 +42,9 @@ the wheel scales relative to the common one, ``δ_k = (c_k − c)/(1 + c)``, whi
 posterior sd carries it (prior sd ``√(σ_s² + σ_J²/K)``: 0.58 % for three wheels at the default
 0.5 % shared and 0.5 % each; 0.5 % in the common model), while the ``δ_k`` are learned from
 slews about several axes. The constant external torque ``T_N``
-is in both models (``torque=True``), prior sd 15 µN m per axis (Feldman & Lee App. A bound;
-Brown quotes solar/gas torques of the same few-µN m order).
+is in both models (``torque=True``), prior sd the model file's ``[torque_knowledge] sd_nm``
+per axis (default 15 µN m, the Feldman & Lee App. A bound; Brown quotes solar/gas torques of the
+same few-µN m order).
 
 Physical inertia by construction
 --------------------------------
@@ -62,8 +63,11 @@ Prior, stated in the physical parameters
   design budget, not a measured error; Table 1 shows a flight product error (Post-PRM ``Ixz``,
   −102 kg m²) beyond ±75, which a 2σ or 3σ reading would call a 2.7σ/4σ event. A 1σ prior is
   still informative where the slews are not (Post-PRM ``Izz``) and negligible where they are.
-* ``H_0 ~ Normal(0, 100 N m s)`` per axis: the four wheels hold at most 4 × 34 N m s (Brown §I).
-* ``T_N ~ Normal(0, 15 µN m)`` per axis: Feldman & Lee App. A bound for March 2000.
+* ``H_0 ~ Normal(0, C)`` per axis, ``C`` the wheels' momentum capacity ``Σ_k J_k ρ_max,k``
+  (:attr:`~cassini_bayes.spacecraft.Spacecraft.momentum_capacity_nms`; Cassini's four wheels
+  hold 4 × 34 N m s, Brown §I): relative to the spacecraft, as every prior scale here.
+* ``T_N ~ Normal(0, [torque_knowledge] sd_nm)`` per axis (default 15 µN m: Feldman & Lee App. A
+  bound for March 2000).
 * Noise: ``σ_j = s_f σ*_j`` (``j`` = ω, ρ, θ) with an unknown overall scale per file,
   ``log s_f ~ N(0, 1)``, and relative levels ``σ*`` fixed by empirical Bayes (below).
 
@@ -105,16 +109,13 @@ from cassini_bayes.inference.inertia.knowledge import (InertiaGaussian, inertia_
                                                        inertia_from_run, inertia_prior_gaussian)
 from cassini_bayes.inference.inertia.likelihood import momentum_residuals, noise_covariance
 from cassini_bayes.inference.inertia.model import inertia_model, problem_model
-from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_NAMES,
-                                                   NOISE_PRIOR_LOG_SD, TORQUE_PRIOR_SD_NM,
+from cassini_bayes.inference.inertia.prior import (NOISE_NAMES, NOISE_PRIOR_LOG_SD,
                                                    InertiaPrior, cholesky_params_from_pi,
                                                    inertia_prior, is_physical,
                                                    pi_from_cholesky_params, sample_prior)
 from cassini_bayes.names import INERTIA_NAMES
 
 __all__ = [
-    "H0_PRIOR_SD_NMS",
-    "TORQUE_PRIOR_SD_NM",
     "NOISE_PRIOR_LOG_SD",
     "NOISE_NAMES",
     "INERTIA_NAMES",

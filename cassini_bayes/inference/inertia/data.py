@@ -76,6 +76,8 @@ class InertiaData(NamedTuple):
     theta_star : (P,) the linearisation point (the GLS mode).
     centre, tril : (P,), (P, P) the sampler's whitening ``θ = centre + tril z``.
     pi_mean, pi_sd : (6,) the prior of ``π`` (kg m²).
+    file_sd : (6,) the prior sd of each file's ``H_0`` (N m s) and ``T_N`` (N m) per axis
+        (:attr:`~cassini_bayes.inference.inertia.prior.InertiaPrior.file_sd`).
     log_noise : (F, 3) log empirical-Bayes noise levels (rad/s, rad/s, rad).
     nu_sd, nu_weights : the robust nuisance's prior sds (R,) and the wheel block's weights of the
         common scale; ``None`` in the idealised model.
@@ -90,6 +92,7 @@ class InertiaData(NamedTuple):
     tril: object
     pi_mean: object
     pi_sd: object
+    file_sd: object
     log_noise: object
     nu_sd: object = None
     nu_weights: object = None
@@ -348,7 +351,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
 
     data = InertiaData(fmat=fmat, gvec=gvec, q_star=q_star, n_obs=n_obs, theta_star=theta,
                        centre=centre, tril=tril, pi_mean=setup.prior.mean, pi_sd=setup.prior.sd,
-                       log_noise=log_s, nu_sd=setup.layout.sd if robust else None,
+                       file_sd=setup.prior.file_sd, log_noise=log_s, nu_sd=setup.layout.sd if robust else None,
                        nu_weights=setup.layout.scale_weights if robust else None)
     data = jax.device_put(jax.tree.map(np.asarray, data))
     return InertiaProblem(

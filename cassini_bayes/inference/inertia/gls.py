@@ -16,8 +16,7 @@ import jax
 import numpy as np
 
 from cassini_bayes.errors import UnidentifiableError
-from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_PRIOR_LOG_SD,
-                                                   TORQUE_PRIOR_SD_NM, cholesky_params_from_pi,
+from cassini_bayes.inference.inertia.prior import (NOISE_PRIOR_LOG_SD, cholesky_params_from_pi,
                                                    _inertia_matrix, is_physical,
                                                    pi_from_cholesky_params)
 from cassini_bayes.inference.nuisance import robust_columns
@@ -73,8 +72,7 @@ def _weights(fd: dict, f: int, th_full, ls, prior_mean):
 def full_prior(setup, n_files: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """sd, precision and mean of the full vector's prior (a zero sd pins the effect at zero)."""
     prior, layout = setup.prior, setup.layout
-    full_sd = np.r_[prior.sd, np.tile(np.r_[np.full(3, H0_PRIOR_SD_NMS),
-                                            np.full(3, TORQUE_PRIOR_SD_NM)], n_files), layout.sd]
+    full_sd = np.r_[prior.sd, np.tile(prior.file_sd, n_files), layout.sd]
     full_prec = 1.0 / np.maximum(full_sd, 1e-300)**2
     full_prec = np.minimum(full_prec, 1e30)
     full_mean = np.r_[prior.mean, np.zeros(setup.p_full - 6)]

@@ -13,8 +13,7 @@ import numpyro
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
-from cassini_bayes.inference.inertia.prior import (H0_PRIOR_SD_NMS, NOISE_NAMES,
-                                                   TORQUE_PRIOR_SD_NM, _log_jacobian,
+from cassini_bayes.inference.inertia.prior import (NOISE_NAMES, _log_jacobian,
                                                    pi_from_cholesky_params)
 from cassini_bayes.names import INERTIA_NAMES
 
@@ -35,8 +34,8 @@ def _unpack(theta, n_files: int, torque: bool):
 
 def _model(data: InertiaData, *, torque: bool, per_wheel: bool = True, common: bool = False,
            n_torque_sets: int = 1):
-    (fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, log_noise, nu_sd,
-     nu_weights) = data
+    (fmat, gvec, q_star, n_obs, theta_star, centre, tril, pi_mean, pi_sd, file_sd, log_noise,
+     nu_sd, nu_weights) = data
     n_files = log_noise.shape[0]
     p_tot = centre.shape[0]
     z = numpyro.sample("z", dist.ImproperUniform(constraints.real_vector, (), (p_tot,)))
@@ -63,9 +62,9 @@ def _model(data: InertiaData, *, torque: bool, per_wheel: bool = True, common: b
     # Jacobian, the log-Cholesky map's is added here, and (π̃, H̃_0, T̃_N) → (π, H_0, T_N) at
     # fixed c contributes (6 + 3F [+ 3F]) log(1 + c).
     log_prior = (jnp.sum(dist.Normal(pi_mean, pi_sd).log_prob(pi)) + _log_jacobian(lp)
-                 + jnp.sum(dist.Normal(0.0, H0_PRIOR_SD_NMS).log_prob(h0)))
+                 + jnp.sum(dist.Normal(0.0, file_sd[None, :3]).log_prob(h0)))
     if torque:
-        log_prior += jnp.sum(dist.Normal(0.0, TORQUE_PRIOR_SD_NM).log_prob(tq))
+        log_prior += jnp.sum(dist.Normal(0.0, file_sd[None, 3:]).log_prob(tq))
     if nu_sd is not None:
         log_prior += (6 + (6 if torque else 3) * n_files) * jnp.log1p(c)
         # Robust nuisance ν ~ N(0, sd from the spacecraft model's knowledge); see nuisance.py.

@@ -19,12 +19,10 @@ from cassini_bayes.names import INERTIA_NAMES, INERTIA_NOISE_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 
-__all__ = ["H0_PRIOR_SD_NMS", "TORQUE_PRIOR_SD_NM", "NOISE_PRIOR_LOG_SD", "NOISE_NAMES",
+__all__ = ["NOISE_PRIOR_LOG_SD", "NOISE_NAMES",
            "pi_from_cholesky_params", "cholesky_params_from_pi", "is_physical", "InertiaPrior",
            "inertia_prior", "sample_prior"]
 
-H0_PRIOR_SD_NMS = 100.0       # N m s per axis: 4 wheels × 34 N m s capacity (Brown §I)
-TORQUE_PRIOR_SD_NM = 15e-6    # N m per axis: Feldman & Lee App. A, < 15 µN m (March 2000)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 NOISE_NAMES = INERTIA_NOISE_NAMES
 
@@ -80,23 +78,35 @@ def _log_jacobian(lp):
 
 
 class InertiaPrior(NamedTuple):
-    """The stated prior on ``π`` (kg m²), before truncation to physical tensors.
+    """The stated prior of the inertia model, from the spacecraft model.
 
-    ``mean`` (6,) the spacecraft model's predicted tensor; ``sd`` (6,) its knowledge requirement
-    as one standard deviation: ``moi_uncertainty × moment`` for Ixx, Iyy, Izz and
-    ``poi_uncertainty`` for Ixy, Ixz, Iyz.
+    ``mean`` (6,) the predicted tensor (kg m²); ``sd`` (6,) its knowledge requirement as one
+    standard deviation: ``moi_uncertainty × moment`` for Ixx, Iyy, Izz and ``poi_uncertainty``
+    for Ixy, Ixz, Iyz (``π`` is truncated to physical tensors). ``h0_sd``: each file's inertial
+    momentum ``H_0`` per axis, N m s, the wheels' momentum capacity
+    (:attr:`~cassini_bayes.spacecraft.Spacecraft.momentum_capacity_nms`): the momentum a
+    spacecraft under wheel control carries. ``torque_sd``: the external torque ``T_N`` per axis,
+    N m, the model file's ``[torque_knowledge] sd_nm``.
     """
 
     mean: np.ndarray
     sd: np.ndarray
+    h0_sd: float
+    torque_sd: float
+
+    @property
+    def file_sd(self) -> np.ndarray:
+        """(6,) prior sd of one file's ``(H_0, T_N)``: N m s, N m."""
+        return np.r_[np.full(3, self.h0_sd), np.full(3, self.torque_sd)]
 
 
 def inertia_prior(spacecraft: Spacecraft) -> InertiaPrior:
-    """Prior of the inertia entries from a spacecraft model (see the module docstring)."""
+    """Prior of the inertia model from a spacecraft model (see :class:`InertiaPrior`)."""
     mean = np.asarray(_inertia_vector(np.asarray(spacecraft.inertia, float)), float)
     sd = np.concatenate([spacecraft.moi_uncertainty * mean[:3],
                          np.full(3, spacecraft.poi_uncertainty)])
-    return InertiaPrior(mean, sd)
+    return InertiaPrior(mean, sd, spacecraft.momentum_capacity_nms,
+                        spacecraft.knowledge.torque_sd_nm)
 
 
 def _pi_normals(key_pi, r, n: int):
@@ -152,9 +162,9 @@ def sample_prior(key, prior: InertiaPrior, n: int, *, n_files: int = 1, torque: 
                          "spacecraft model's inertia and its uncertainties")
     pi = np.concatenate(kept)[:n]
     out = {name: pi[:, i] for i, name in enumerate(INERTIA_NAMES)}
-    out["H0"] = H0_PRIOR_SD_NMS * np.asarray(draws["H0"])
+    out["H0"] = prior.h0_sd * np.asarray(draws["H0"])
     if torque:
-        out["T_N"] = TORQUE_PRIOR_SD_NM * np.asarray(draws["T_N"])
+        out["T_N"] = prior.torque_sd * np.asarray(draws["T_N"])
     if log_noise is not None:
         log_scale = NOISE_PRIOR_LOG_SD * np.asarray(draws["noise"])
         out["noise_scale"] = np.exp(log_scale)

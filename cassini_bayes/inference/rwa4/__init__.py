@@ -58,8 +58,8 @@ Priors
   ``m`` the smallest eigenvalue of the second moment ``½ tr(I) 1 − I`` (positive exactly for
   positive-definite tensors obeying the triangle inequalities), ``s`` half its value at the
   prior mean. The factor is 0 for unphysical tensors, 1 − 3e-4 at the mean, 0.63 half-way to
-  the boundary: a stated softening of the truncation near the boundary, which NUTS needs (see
-  "Sampler coordinates").
+  the boundary: a stated softening of the truncation near the boundary, which NUTS needed
+  while the RCS chart kept the boundary at a finite distance (``docs/robust/README.md``).
 
 Sampler coordinates
 -------------------
@@ -77,32 +77,30 @@ cut (−∞) makes NUTS diverge (69 of 4000 transitions on ``rwa4_rwa``).
   construction, the boundary at infinity; the prior density through the map's Jacobian, times
   the physical factor, which is ``≈ (m/s)³`` there: linear in ``log m``, so smooth in ``ζ``).
 * RCS method: the pair's balance is ``J₄ R (z + u)`` with ``z = R⁻¹(M π + Δk)/J₄`` (``R`` the
-  change of ``⟨ρ₄ Aᵀ⟩``, ``M π`` that of ``⟨Aᵀ I ω⟩``): the data fix ``z = −u``, i.e. ``|z| = 1``
-  (a curved ellipsoid in ``π``) and the direction of ``z`` (another sphere). In Cartesian ``π``
-  and ``u`` this is a narrow curved ridge that NUTS cannot follow (checked: whitened axes of the
-  earlier ``x = R u`` construction dropped by −1200 log-units at ±1 instead of −0.5). So the
-  three combinations ``z`` of ``ξ`` are sampled in polar form, ``z = −e^ρ g(v_z)`` with the same
-  chart ``g``, plus the three prior-only complements ``w``: ``θ = (v, ρ, v_z, w)``, Jacobian
-  ``e^{3ρ} (1 + |v_z|²)^(−3/2)``; the constraint becomes ``ρ ≈ 0``, ``v_z ≈ v``, linear. Here
-  ``π`` is linear in ``θ`` and the boundary is at a finite distance, where the physical factor
-  turns trajectories back. It matters: the ridge ``v_z ≈ v`` moves ``u`` and ``ξ`` together (a
-  3σ move of the axis along it is several prior σ of ``ξ``), so the axis posterior is limited by
-  the inertia prior and the boundary, and NUTS reaches the factor's barrier in many fits. The
-  first factor, ``1 − exp(−m/s)`` with ``s`` = ¼ of the mean's margin, is ``≈ m/s`` near the
-  boundary: a log barrier whose curvature at a turning point of energy ``K`` grows as ``e^{2K}``
-  (1004 divergences in a 208-replicate SBC; 37 on ten of its divergent replicates refitted).
-  The cubic factor with ``s`` = ½ grows as ``e^{2K/3}``: 1 on the same ten (2 × 300 draws
-  each; :func:`_log_physical_factor`), and 7 single divergences in the 208-replicate SBC
-  (``docs/sbc/rwa4``). A map sending the boundary to infinity along rays from the prior mean
-  (tried) bends the narrow ridge wherever it compresses (a whitened axis fell to −848 at −3):
-  229 on the ten.
+  change of ``⟨ρ₄ Aᵀ⟩``, ``M π`` that of ``⟨Aᵀ I ω⟩``), ``z = a + K ξ`` linear: the data fix
+  ``z = −u``, i.e. ``|z| = 1`` and the direction of ``z``. In Cartesian ``π`` and ``u`` this is a
+  narrow curved ridge that NUTS cannot follow, so the chart makes the two constraints
+  coordinates: ``θ = (δ, ρ, y)`` with ``ρ = log|z|`` and ``u = g(v_z + δ)``, ``v_z`` the chart
+  coordinates of ``−z``; the data say ``ρ ≈ 0``, ``δ ≈ 0``, linearly. Along the ridge ``u`` and
+  ``ξ`` move together (the axis is limited by the inertia prior), into the physical boundary;
+  the five coordinates ``y`` therefore cover exactly the physical tensors, the boundary at
+  infinity. ``π`` is a positive multiple of ``ξ − ξ_a`` (``ξ_a = −L⁻¹μ``, zero inertia, where
+  ``z = z_a``): writing ``z − z_a = t ζ(s)`` (``ζ`` the gnomonic chart about ``−u0``, ``t > 0``
+  set by ``|z| = e^ρ``) and the prior-only complements ``w − w_a = t ω/√(1 + |s|²)``,
+  ``π = (t/√(1 + |s|²)) P [1; s; ω]``, so the physical tensors are one convex region
+  ``A(x) ≻ 0`` of ``x = (s, ω)`` (``A`` affine: the second moment of ``P [1; x]``), whatever
+  ``ρ`` and ``δ``. A radial map from the prior mean's ``x`` (:func:`~cassini_bayes.inference.
+  rwa4.model._radial`), the identity up to half-way to the wall along each ray, sends ``y ∈ R⁵``
+  onto it; beyond the knee the density falls exponentially in ``y``, a slope instead of the
+  physical factor's log barrier, which NUTS's leapfrog steps jumped over (divergences).
+  Jacobian ``(1 + |v|²)^(−3/2) · t² e^{2ρ}/(t + z_a·ζ) (1 + |s|²)^(−3/2) · (t/√(1 + |s|²))³`` times
+  the radial map's. The chart needs ``|z_a| < ½ |a|`` (``z_a = 0`` for RWA4 alone; other wheels
+  running move it), else the RWA chart is used.
 
 Finally the sampler sees ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a Laplace
 approximation (:func:`cassini_bayes.inference.laplace.laplace`). The density is exact in ``θ``;
-the affine map only conditions the geometry. Check (``rwa4_rcs``, seed 21): along every whitened
-axis the log density at ±1, ±3 is within 0.5 of the Gaussian −0.5, −4.5. On SBC replicates the
-physical factor's barrier shows at ±3 (up to 6.7 below −4.5 on six replicates, within 0.11 at
-±1): a soft, finite wall, no cliff.
+the affine map only conditions the geometry (measured: ``docs/robust/README.md``, "RWA4 RCS
+chart").
 """
 
 from cassini_bayes.inference.rwa4.data import (MAX_SD_DIRECTION_DEG, METHODS, Rwa4Data,

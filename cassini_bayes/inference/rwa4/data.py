@@ -19,7 +19,7 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import (ATTITUDE_FLOOR, RATE_FLOORS, floored, rate_noise_levels,
                                            white_noise_sd)
 from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
-from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
+from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL
 from cassini_bayes.inference.rwa4.prior import (CONE_ANGLE_DEG, CONE_SD_DEG, PRIORS,
                                                 _margin_scale)
 from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
@@ -54,7 +54,8 @@ class Rwa4Data(NamedTuple):
     margin_scale : the physical-inertia factor's scale (:func:`_margin_scale`).
     cone_weight, cone_angle, cone_sd : the articulation-cone prior (weight 0 or 1; rad).
     lp_centre, lp_tril : the RWA chart's log-Cholesky inertia coordinates.
-    z_offset, q_inv : the RCS chart's balance map (``None`` in the RWA chart).
+    rcs_apex, rcs_pi, rcs_centre, rcs_scale, rcs_walls : the RCS chart
+        (:func:`_rcs_chart`; ``None`` in the RWA chart).
     centre, tril : the sampler's whitening ``θ = centre + tril w`` (``None`` until the Laplace
         step has run).
     """
@@ -80,8 +81,11 @@ class Rwa4Data(NamedTuple):
     cone_sd: object
     lp_centre: object
     lp_tril: object
-    z_offset: object = None
-    q_inv: object = None
+    rcs_apex: object = None
+    rcs_pi: object = None
+    rcs_centre: object = None
+    rcs_scale: object = None
+    rcs_walls: object = None
     centre: object = None
     tril: object = None
 
@@ -233,6 +237,54 @@ def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
     return a, np.linalg.inv(np.concatenate([k, vt[3:]], 0))
 
 
+def _second_moment(pi) -> np.ndarray:
+    """``½ tr(I) 1 − I`` (3, 3) kg m² of ``π`` (6,), linear in ``π``; positive definite exactly
+    for physical tensors (:func:`~cassini_bayes.inference.rwa4.prior._physical_margin`)."""
+    i_m = np.asarray(inertia_matrix(jnp.asarray(pi, float)))
+    return 0.5 * np.trace(i_m) * np.eye(3) - i_m
+
+
+def _rcs_chart(a: np.ndarray, q_inv: np.ndarray, u0: np.ndarray, basis: np.ndarray,
+               pi_mean: np.ndarray, pi_chol: np.ndarray) -> dict | None:
+    """The RCS chart's arrays (module docstring, "Sampler coordinates"), from the balance map
+    ``z = a + K ξ`` (:func:`_balance_map`), the axis chart ``u0``/``basis`` and the prior.
+
+    ``π`` is a positive multiple of ``ξ − ξ_a`` (``ξ_a = −L⁻¹μ``, zero inertia), i.e. of
+    ``[z − z_a; w − w_a]``: with ``z − z_a = t ζ(s)``, ``ζ(s) = −(u0 + Eᵀs)/√(1 + |s|²)``, and
+    ``w − w_a = t ω/√(1 + |s|²)``, ``π = (t/√(1 + |s|²)) P [1; s; ω]``, so the physical region
+    of ``x = (s, ω)`` is one convex set ``A(x) = ½ tr(P [1; x]) 1 − P [1; x] ≻ 0``, whatever
+    ``|z|``. Returns ``rcs_apex`` (``z_a``, 3), ``rcs_pi`` (``P``, 6 × 6), ``rcs_centre``
+    (``c``, ``x`` at the prior mean), ``rcs_scale`` (``C``, the Cholesky factor of the prior
+    covariance of ``x`` there) and ``rcs_walls`` (``W_k = L_c⁻¹ A_lin(C e_k) L_c⁻ᵀ``, 5 × 3 × 3,
+    ``A(c) = L_c L_cᵀ``). ``None`` when ``|z_a| ≥ ½ |a|``: the ray from ``z_a`` must meet the
+    sphere ``|z| ≈ 1`` once.
+    """
+    q = np.linalg.inv(q_inv)
+    xi_apex = -np.linalg.solve(pi_chol, pi_mean)
+    z_apex, w_apex = a + q[:3] @ xi_apex, q[3:] @ xi_apex
+    if not np.linalg.norm(z_apex) < 0.5 * np.linalg.norm(a):
+        return None
+    to_pi = pi_chol @ q_inv
+    p_mat = to_pi @ np.block([[-u0[:, None], -basis.T, np.zeros((3, 3))],
+                              [np.zeros((3, 3)), np.eye(3)]])
+
+    def x_of_xi(xi):
+        z, w = a + q[:3] @ xi, q[3:] @ xi
+        t = jnp.linalg.norm(z - z_apex)
+        zeta = (z - z_apex) / t
+        s = (basis @ -zeta) / (u0 @ -zeta)
+        return jnp.concatenate([s, (w - w_apex) * jnp.sqrt(1.0 + jnp.sum(s**2)) / t])
+
+    centre = np.asarray(x_of_xi(jnp.zeros(6)))
+    jac = np.asarray(jax.jacfwd(x_of_xi)(jnp.zeros(6)))
+    scale = np.linalg.cholesky(jac @ jac.T)
+    a_lin = np.stack([_second_moment(p_mat[:, 1:] @ scale[:, k]) for k in range(5)])
+    l_c = np.linalg.cholesky(_second_moment(p_mat @ np.concatenate([[1.0], centre])))
+    walls = np.linalg.solve(l_c, np.linalg.solve(l_c, a_lin).transpose(0, 2, 1))
+    return dict(rcs_apex=z_apex, rcs_pi=p_mat, rcs_centre=centre, rcs_scale=scale,
+                rcs_walls=0.5 * (walls + walls.transpose(0, 2, 1)))
+
+
 def _inertia_prior(inertia: InertiaGaussian | None, spacecraft: Spacecraft):
     """The Gaussian inertia prior (default the spacecraft model's knowledge), its source
     (``"spacecraft"`` or ``"posterior"``), mean (6,) kg m² and Cholesky factor (6, 6)."""
@@ -250,8 +302,9 @@ def _inertia_prior(inertia: InertiaGaussian | None, spacecraft: Spacecraft):
 
 def _chart(kw: dict, method: str, data: dict, inertia: InertiaGaussian, i_mean: np.ndarray,
            i_chol: np.ndarray) -> tuple[str, np.ndarray]:
-    """Add the chart's arrays to ``kw``; the chart (``"rcs"`` when the RCS balance map exists,
-    else ``"rwa"``) and the sampler's starting point (module docstring)."""
+    """Add the chart's arrays to ``kw``; the chart (``"rcs"`` when the RCS balance map and its
+    chart exist, :func:`_balance_map`, :func:`_rcs_chart`; else ``"rwa"``) and the sampler's
+    starting point (module docstring)."""
     theta0 = np.zeros(_DIM)
     chart = "rwa"
     lp_c = cholesky_params_from_pi(i_mean)
@@ -259,13 +312,25 @@ def _chart(kw: dict, method: str, data: dict, inertia: InertiaGaussian, i_mean: 
     cov_lp = np.linalg.solve(jac, np.linalg.solve(jac, np.asarray(inertia.cov)).T)
     kw["lp_centre"] = jnp.asarray(lp_c)
     kw["lp_tril"] = jnp.asarray(np.linalg.cholesky(0.5 * (cov_lp + cov_lp.T)))
-    if method == "rcs":
-        bal = _balance_map(data, i_mean, i_chol)
-        if bal is not None:
-            chart = "rcs"
-            kw["z_offset"], kw["q_inv"] = jnp.asarray(bal[0]), jnp.asarray(bal[1])
-            theta0[2] = np.log(np.linalg.norm(bal[0]))
+    bal = _balance_map(data, i_mean, i_chol) if method == "rcs" else None
+    arrays = None if bal is None else _rcs_chart(*bal, np.asarray(kw["u0"]),
+                                                 np.asarray(kw["basis"]), i_mean, i_chol)
+    if arrays is not None:
+        chart = "rcs"
+        kw.update({k: jnp.asarray(v) for k, v in arrays.items()})
+        # θ = 0: δ = 0 and |z| = 1, the data's values; x at the prior mean (its direction)
     return chart, theta0
+
+
+def _sd_direction_deg(chart: str, centre, tril, kw: Rwa4Data) -> float:
+    """The Laplace approximation's largest angular sd (deg) of the axis: its gnomonic chart
+    coordinates ``v`` are linearised in ``θ`` at the mode (``v = θ[:2]`` in the RWA chart)."""
+    def v_of(theta):
+        u = _PHYSICAL[chart](theta, kw)[0]
+        return (kw.basis @ u) / (kw.u0 @ u)
+
+    jac = np.asarray(jax.jacfwd(v_of)(jnp.asarray(centre))) @ np.asarray(tril)
+    return float(np.degrees(np.sqrt(np.linalg.eigvalsh(jac @ jac.T)[-1])))
 
 
 def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
@@ -355,8 +420,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
     kw = Rwa4Data(**kw)
     centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
-    cov_v = (tril @ tril.T)[:2, :2]
-    sd_dir = float(np.degrees(np.sqrt(np.linalg.eigvalsh(cov_v)[-1])))
+    sd_dir = _sd_direction_deg(chart, centre, tril, kw)
     if not sd_dir < MAX_SD_DIRECTION_DEG:
         raise InputError(f"the data determine the {wheel} axis only to ±{sd_dir:.3g}° "
                          f"(Laplace sd > {MAX_SD_DIRECTION_DEG:g}°): no excitation between the "

@@ -43,16 +43,61 @@ def _physical_rwa(theta, kw):
                        + _log_physical_factor(pi, kw.margin_scale))
 
 
+_KNEE = 0.5          # the RCS chart's radial map is the identity up to this fraction of the way
+_BOX_DIM = 5         # to the nearest wall of the physical region of (s, ω)
+_Q_MAX = 12.0        # beyond, 1 − tanh(q) < 1e-10 would not resolve the wall: density 0 there
+
+
+def _radial(y, kw):
+    """The RCS chart's radial map ``y`` (5,) → ``x = (s, ω)`` (5,) inside the physical region,
+    boundary at infinity, and ``log|det ∂x/∂y|``.
+
+    ``x = c + C y φ(f)/f`` with ``f = λ_max(−Σ_k y_k W_k)`` the fraction of the way from the
+    centre ``c`` to the wall along the ray (:func:`~cassini_bayes.inference.rwa4.data._rcs_chart`:
+    the region is convex and ``A(c + C y) = L_c (1 + Σ_k y_k W_k) L_cᵀ``), ``φ(f) = f`` up to
+    ``_KNEE``, then ``_KNEE + (1 − _KNEE) tanh((f − _KNEE)/(1 − _KNEE))`` (twice differentiable,
+    → 1 at infinity). A radial map's Jacobian is ``(φ(f)/f)^(n−1) φ'(f)``. Where ``tanh`` no
+    longer resolves the wall (``_Q_MAX``, ~100 log-units below the knee) the density is 0.
+    """
+    def fraction(y):
+        return jnp.linalg.eigvalsh(-jnp.einsum("k,kab->ab", y, kw.rcs_walls))[-1]
+
+    # the branch from an undifferentiated value: at y = 0 the eigenvalues are degenerate and
+    # their derivatives not finite; where the map is the identity f is evaluated elsewhere
+    over = jax.lax.stop_gradient(fraction(y)) > _KNEE
+    f = fraction(jnp.where(over, y, jnp.eye(_BOX_DIM)[0]))
+    q = jnp.where(over, (f - _KNEE) / (1.0 - _KNEE), 0.0)
+    ratio = jnp.where(over, (_KNEE + (1.0 - _KNEE) * jnp.tanh(q)) / jnp.where(over, f, 1.0), 1.0)
+    log_sech2 = jnp.where(q < _Q_MAX, -2.0 * (q + jnp.log1p(jnp.exp(-2.0 * q)) - jnp.log(2.0)),
+                          -jnp.inf)
+    x = kw.rcs_centre + kw.rcs_scale @ (y * ratio)
+    return x, (_BOX_DIM - 1) * jnp.log(ratio) + log_sech2
+
+
 def _physical_rcs(theta, kw):
-    """As :func:`_physical_rwa` for ``θ = (v (2), log|z| (1), v_z (2), w (3))``: ``z = −|z|
-    g(v_z)`` with the chart ``g`` of ``u``, ``ξ = Q⁻¹ [z − a; w]`` (:func:`_balance_map`)."""
-    u, log_jac = _gnomonic(theta[:2], kw)
-    z_dir, log_jac_z = _gnomonic(theta[3:5], kw)
-    z = -jnp.exp(theta[2]) * z_dir
-    xi = kw.q_inv @ jnp.concatenate([z - kw.z_offset, theta[5:8]])
-    pi = kw.pi_mean + kw.pi_chol @ xi
-    # d³z = |z|³ d log|z| dΩ; π linear in ξ: the physical truncation is an explicit factor
-    return u, pi, xi, (log_jac + log_jac_z + 3.0 * theta[2]
+    """As :func:`_physical_rwa` for ``θ = (δ (2), log|z| (1), y (5))`` (module docstring,
+    "Sampler coordinates"): ``x = (s, ω)`` from ``y`` (:func:`_radial`); ``z = z_a + t ζ(s)``
+    on the ray from the zero-inertia point ``z_a`` in the direction ``ζ(s)`` of the gnomonic
+    chart about ``−u0``, ``|z| = e^ρ``; ``π = (t/√(1 + |s|²)) P [1; x]``; the axis
+    ``u = g(v_z + δ)`` with ``v_z`` the chart of ``−z``."""
+    delta, rho, y = theta[:2], theta[2], theta[3:8]
+    x, log_jac_box = _radial(y, kw)
+    s = x[:2]
+    q2 = 1.0 + jnp.sum(s**2)
+    zeta = -(kw.u0 + s @ kw.basis) / jnp.sqrt(q2)
+    b = kw.rcs_apex @ zeta
+    root = jnp.sqrt(b**2 - jnp.sum(kw.rcs_apex**2) + jnp.exp(2.0 * rho))
+    t = root - b                                   # |z − z_a|: the positive root of |z| = e^ρ
+    z = kw.rcs_apex + t * zeta
+    v_z = (kw.basis @ z) / (kw.u0 @ z)
+    u, log_jac_u = _gnomonic(v_z + delta, kw)
+    scale = t / jnp.sqrt(q2)
+    pi = scale * (kw.rcs_pi @ jnp.concatenate([jnp.ones(1), x]))
+    xi = jax.scipy.linalg.solve_triangular(kw.pi_chol, pi - kw.pi_mean, lower=True)
+    # d³z = t² dt dΩ(ζ), dt/dρ = e^{2ρ}/root, dΩ = (1 + |s|²)^(−3/2) ds; w = w_a + scale ω;
+    # π linear in (z, w): the physical truncation is an explicit factor
+    log_jac_z = 2.0 * jnp.log(t) + 2.0 * rho - jnp.log(root) - 1.5 * jnp.log(q2)
+    return u, pi, xi, (log_jac_u + log_jac_z + 3.0 * jnp.log(scale) + log_jac_box
                        + _log_physical_factor(pi, kw.margin_scale))
 
 

@@ -106,4 +106,15 @@ def _check_windows(tel: Telemetry, pairs, method: str) -> list:
                 raise InputError(f"thrusters fire inside window {w[0]:.10g}:{w[1]:.10g} s; "
                                  "momentum is not conserved there: choose a quiet window",
                                  path=tel.source)
+        for a, b in pairs:   # Brown §III: no firing from the start of Time A to the end of B
+            lo, hi = min(a[0], b[0]), max(a[1], b[1])
+            m = (t >= lo) & (t <= hi)
+            fired = np.flatnonzero(np.any(np.diff(tel.on_times[m], axis=0) > 0, axis=1))
+            if fired.size:
+                t_fire = float(t[m][fired[0] + 1])
+                raise InputError(f"thrusters fire at {t_fire:.10g} s, between Time A "
+                                 f"{a[0]:.10g}:{a[1]:.10g} s and Time B {b[0]:.10g}:{b[1]:.10g} s; "
+                                 "momentum is not conserved across the pair: give windows "
+                                 "with no firing from the start of A to the end of B",
+                                 path=tel.source)
     return pairs

@@ -1,0 +1,215 @@
+"""The same spacecraft at a fraction of its size gives the same verdicts and the same relative
+posterior: no threshold or prior scale is in one spacecraft's absolute units
+(docs/model_file.md, "Thresholds relative to the spacecraft").
+
+A shipped model and scenario are scaled by ``s``: the inertia, its products' knowledge, the
+wheels' spin inertias and motor-torque limits, the thrust, the external torques and the model
+file's ``[torque_knowledge]`` all by ``s``. The same manoeuvre is flown (the controller's
+inertia is the model's, so its torques scale too), so the rates, the attitude and every sensor
+noise (gyro, star tracker, tachometers: rates and angles) stay as they are, while every momentum
+and torque is ``s`` times the original. Simulated with the same key, both files must then give
+
+* ``check``: the same physics verdicts and statistics (momenta divided by ``s``), the same quiet
+  periods and idle wheels;
+* ``fit inertia`` (robust): the same deterministic part to rounding (the Laplace mean and sd of
+  each inertia entry divided by ``s``, the information ratios, the priors: ``H_0`` and ``T_N``
+  prior sd and the nuisance priors ``s`` times the original where they are momenta or torques),
+  the same adequacy and convergence verdicts, and posterior means and sds over ``s`` equal within
+  Monte Carlo error. The chains do not stay together: the scaled sufficient statistics differ in
+  the last bits and NUTS trajectories amplify that, so the sampled numbers agree as two seeds do.
+
+Tolerances: deterministic numbers at rtol 1e-6 (they agree to ~1e-11; a threshold or prior put
+back in absolute units moves them by 1e-4 or more); sampled means within 5 combined Monte Carlo
+standard errors and sds within 5 combined MCSE of the sd (a false failure ~1e-6 per number if the
+MCSE estimates hold; 12 numbers).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+
+import arviz as az
+import numpy as np
+import pytest
+import tomli_w
+
+import cassini_bayes as cb
+from cassini_bayes._paths import MODELS_DIR, SCENARIOS_DIR
+from cassini_bayes.names import INERTIA_NAMES
+from cassini_bayes.simulate import scenario_from_dict
+
+RTOL = 1e-6
+K_MCSE = 5.0
+
+# (model, scenario, scale, sampler settings); the CubeSat cannot shrink: its scaled wheels would
+# fall below the model file's smallest spin inertia (docs/limits.md)
+CASES = [
+    pytest.param(("cassini_post_probe", "slews_post_probe", 1e-4,
+                  {"chains": 2, "warmup": 100, "draws": 100}), id="cassini-1e-4"),
+    pytest.param(("espa_bus", "slews_espa_bus", 1e-2,
+                  {"chains": 4, "warmup": 500, "draws": 500}), id="espa-1e-2",
+                 marks=pytest.mark.slow),
+]
+
+
+def scaled_model(name: str, s: float) -> dict:
+    """The shipped model ``name`` as a model-file dict with every mass property, torque and
+    momentum scaled by ``s`` (rates, angles and fractions unchanged)."""
+    d = cb.load_spacecraft(MODELS_DIR / f"{name}.toml").to_dict()
+    for k in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "poi_uncertainty"):
+        d["inertia"][k] *= s
+    for w in d["wheel"]:
+        w["inertia"] *= s
+        if "max_torque_nm" in w:
+            w["max_torque_nm"] *= s
+    for x in d.get("thruster", []):
+        if "F" in x:
+            x["F"] *= s
+    if "thrust" in d:
+        d["thrust"]["F"] *= s
+    d["torque_knowledge"] = {k: v * s for k, v in d["torque_knowledge"].items()}
+    return d
+
+
+def scaled_scenario(name: str, s: float, model_path: str) -> dict:
+    """The shipped scenario ``name`` flying the model at ``model_path``, its true inertia and
+    external torques scaled by ``s``."""
+    d = tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
+    d = copy.deepcopy(d)
+    d["truth"]["model"] = d["prior"]["model"] = model_path
+    truth = d["truth"]
+    truth["inertia"] = {k: v * s for k, v in truth["inertia"].items()}
+    for k in ("external_torque_inertial_nm", "external_torque_body_nm",
+              "external_torque_inertial_rate_nm_s"):
+        if k in truth:
+            truth[k] = [v * s for v in truth[k]]
+    for ramp in d.get("wheel_ramp", []):
+        ramp["torque_nm"] *= s
+    return d
+
+
+@pytest.fixture(scope="module", params=CASES)
+def pair(request, tmp_path_factory):
+    """Per scale (1 and ``s``): the model path, the telemetry, ``check``'s result and the fit."""
+    model, scenario, s, settings = request.param
+    tmp = tmp_path_factory.mktemp("scaled")
+    out = {"s": s}
+    for scale in (1.0, s):
+        path = tmp / f"{model}_{scale:g}.toml"
+        path.write_text(tomli_w.dumps(scaled_model(model, scale)))
+        sc = scenario_from_dict(scaled_scenario(scenario, scale, str(path)), f"{scenario}")
+        tel = cb.simulate(sc, seed=11).telemetry
+        check = cb.check_telemetry(tel, spacecraft=str(path))
+        fit = cb.fit_inertia(tel, str(path), seed=5, **settings)
+        out[scale] = {"path": path, "model": cb.load_spacecraft(path), "tel": tel,
+                      "check": check, "fit": fit}
+    return out
+
+
+def _close(a, b, what: str, rtol: float = RTOL) -> None:
+    np.testing.assert_allclose(np.asarray(a, float), np.asarray(b, float), rtol=rtol,
+                               atol=0.0, err_msg=what)
+
+
+def test_the_scaled_spacecraft_flies_the_same_manoeuvre(pair):
+    """Rates and attitude agree to rounding: the scaling is the one intended."""
+    s = pair["s"]
+    a, b = pair[1.0], pair[s]
+    assert b["model"].momentum_capacity_nms == pytest.approx(s * a["model"].momentum_capacity_nms,
+                                                             rel=1e-12)
+    np.testing.assert_allclose(b["tel"].omega, a["tel"].omega, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(b["tel"].q, a["tel"].q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.nan_to_num(b["tel"].wheel_rates),
+                               np.nan_to_num(a["tel"].wheel_rates), rtol=0, atol=1e-9)
+
+
+def test_check_gives_the_same_verdicts(pair):
+    s = pair["s"]
+    a, b = pair[1.0]["check"], pair[s]["check"]
+    assert b.physics == a.physics
+    assert b.quiet == a.quiet
+    assert [w.idle for w in b.wheels] == [w.idle for w in a.wheels]
+    assert b.notes == a.notes
+    _close(b.attitude.alignment, a.attitude.alignment, "attitude alignment")
+    ma, mb = a.momentum, b.momentum
+    _close([mb.scale, mb.alignment], [ma.scale, ma.alignment], "momentum scale, alignment")
+    xa, xb = ma.axes, mb.axes
+    assert xb.judged == xa.judged
+    _close([xb.alignment, xb.conditioning], [xa.alignment, xa.conditioning], "free axes")
+    _close([xb.swing_nms / s, xb.noise_nms / s], [xa.swing_nms, xa.noise_nms], "swing, noise")
+    for name in xa.vectors:
+        _close(xb.vectors[name], xa.vectors[name], f"{name}'s momentum per rad/s / J", 1e-5)
+
+
+def _damaged(tel) -> dict:
+    """Damaged copies of ``tel`` that the free-axis momentum balance refuses: the first wheel's
+    tachometer halving its scale mid-record, and (where a wheel crosses zero) one reporting
+    |rpm| without direction."""
+    from dataclasses import replace
+
+    rates = np.array(tel.wheel_rates)
+    halved = rates.copy()
+    halved[tel.t > 0.5 * (tel.t[0] + tel.t[-1]), 0] *= 0.5
+    out = {"scale halves": replace(tel, wheel_rates=halved)}
+    crossing = [j for j in range(rates.shape[1])
+                if np.any(rates[:, j] < 0) and np.any(rates[:, j] > 0)]
+    if crossing:
+        unsigned = rates.copy()
+        unsigned[:, crossing[0]] = np.abs(unsigned[:, crossing[0]])
+        out["unsigned"] = replace(tel, wheel_rates=unsigned)
+    return out
+
+
+def test_check_refuses_the_same_damaged_files(pair):
+    """The free-axis balance is judged where the body swings by 100 × the momentum noise: both
+    scales refuse the same damaged files in the same words and numbers."""
+    from cassini_bayes.errors import InputError
+
+    messages: dict[float, dict[str, str]] = {}
+    for scale in (1.0, pair["s"]):
+        messages[scale] = {}
+        for what, tel in _damaged(pair[scale]["tel"]).items():
+            with pytest.raises(InputError, match="do not balance the body's") as err:
+                cb.check_telemetry(tel, spacecraft=str(pair[scale]["path"]))
+            messages[scale][what] = str(err.value)
+    assert messages[pair["s"]] == messages[1.0]
+
+
+def test_the_priors_scale(pair):
+    """``H_0``, ``T_N`` and the robust torques' prior sd are ``s`` times the original; the gyro,
+    wheel-scale and tilt priors (rates, fractions, angles) are the same."""
+    s = pair["s"]
+    pa, pb = pair[1.0]["fit"].posterior.problem, pair[s]["fit"].posterior.problem
+    _close(pb.prior.mean / s, pa.prior.mean, "prior mean")
+    _close(pb.prior.sd / s, pa.prior.sd, "prior sd")
+    _close(pb.prior.file_sd / s, pa.prior.file_sd, "H_0 and T_N prior sd")
+    la, lb = pa.layout, pb.layout
+    torques = np.zeros(la.size, bool)
+    for effect in la.torque_effects:
+        torques[la.slices[effect]] = True
+    _close(lb.sd[torques] / s, la.sd[torques], "robust torque priors")
+    _close(lb.sd[~torques], la.sd[~torques], "gyro, wheel-scale and tilt priors")
+
+
+def test_fit_gives_the_same_relative_posterior(pair):
+    s = pair["s"]
+    fa, fb = pair[1.0]["fit"], pair[s]["fit"]
+    pa, pb = fa.posterior.problem, fb.posterior.problem
+    _close(pb.laplace_mean / s, pa.laplace_mean, "Laplace mean / s")
+    _close(pb.laplace_sd / s, pa.laplace_sd, "Laplace sd / s")
+    _close(pb.information_ratio, pa.information_ratio, "information ratio", 1e-5)
+    assert pb.weak_directions == pa.weak_directions
+    _close(pb.noise_eb, pa.noise_eb, "empirical-Bayes noise levels (rates, angles)")
+    sa, sb = fa.summary(), fb.summary()
+    assert sb["diagnostics"]["converged"] == sa["diagnostics"]["converged"]
+    assert sb["adequacy"]["ok"] == sa["adequacy"]["ok"]
+    assert ({k: c["ok"] for k, c in sb["adequacy"]["checks"].items()}
+            == {k: c["ok"] for k, c in sa["adequacy"]["checks"].items()})
+    for name in INERTIA_NAMES:
+        xa = fa.idata.posterior[name].values
+        xb = fb.idata.posterior[name].values / s
+        mc_mean = np.hypot(float(az.mcse(xa, method="mean")), float(az.mcse(xb, method="mean")))
+        mc_sd = np.hypot(float(az.mcse(xa, method="sd")), float(az.mcse(xb, method="sd")))
+        assert abs(xb.mean() - xa.mean()) <= K_MCSE * mc_mean, (name, xa.mean(), xb.mean())
+        assert abs(xb.std() - xa.std()) <= K_MCSE * mc_sd, (name, xa.std(), xb.std())
