@@ -58,7 +58,9 @@ def _prediction_block(p, names=INERTIA_NAMES) -> dict:
            "max_ratio_data": float(np.max(p.ratio_data)),
            "worst": names[int(np.argmax(p.ratio))],
            "worst_data": names[int(np.argmax(p.ratio_data))],
-           "wheel_common_scale_sd": p.c_sd, "duration_s": p.duration_s}
+           "wheel_common_scale_sd": p.c_sd, "duration_s": p.duration_s,
+           "sites": {n: {"sd": float(sd), "prior_sd": float(pr)}
+                     for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd)}}
     if p.usage:
         out["usage"] = dict(p.usage)
         out["limits_ok"] = bool(all(v <= 1.0 for v in p.usage.values()))
@@ -77,6 +79,13 @@ def format_table(p, title: str) -> str:
                  f"{p.floor_ratio[worst]:.3f} is the wheels' common spin-inertia scale (sd "
                  f"{100 * p.c_sd:.2f} %), which no manoeuvre informs; 'data part': the sd with "
                  "that scale known")
+    rest = [i for i, n in enumerate(p.sites) if n not in INERTIA_NAMES]
+    if rest:
+        lines.append(f"{'robust model, other parameters (SI)':36s} {'predicted sd':>13s} "
+                     f"{'prior sd':>10s} {'sd/prior':>9s}")
+        for i in rest:
+            lines.append(f"{p.sites[i]:36s} {p.site_sd[i]:13.4g} {p.site_prior_sd[i]:10.4g} "
+                         f"{p.site_sd[i] / p.site_prior_sd[i]:9.3f}")
     if p.usage:
         lines.append("limits used (largest fraction on the simulated telemetry): " + ", ".join(
             f"{k} {v:.2f}" for k, v in p.usage.items()))

@@ -19,7 +19,7 @@ from cassini_bayes.physics.momentum import inertia_vector
 from cassini_bayes.plan import checks
 from cassini_bayes.plan.budgets import inertia_budgets
 from cassini_bayes.plan.flight import no_noise
-from cassini_bayes.plan.inertia import inertia_model, noise_sigmas, predict
+from cassini_bayes.plan.inertia import inertia_model, noise_sigmas, predict_sites
 from cassini_bayes.plan.limits import Limits
 from cassini_bayes.simulate import run as _run
 from cassini_bayes.simulate.scenario import Scenario
@@ -36,6 +36,9 @@ class InertiaPrediction(NamedTuple):
     prior_sd : the model file's knowledge. usage : largest fraction of each limit on the
     simulated telemetry (empty without limits). duration_s : the scenario's length.
     pi : (6,) the true inertia the prediction is linearised at, kg m².
+    sites, site_sd, site_prior_sd : every site of the robust fit (inertia, ``H_0``, ``T_N`` and
+    each nuisance parameter, :func:`cassini_bayes.plan.inertia.site_labels`), its predicted
+    posterior sd and its prior sd (SI).
     t, omega, wheel_rpm : the noise-free flight at the telemetry samples (s, rad/s, rpm; idle
     wheels NaN), for the report's figure; wheel_names their names.
     """
@@ -52,6 +55,9 @@ class InertiaPrediction(NamedTuple):
     omega: np.ndarray
     wheel_rpm: np.ndarray
     wheel_names: tuple[str, ...] = ()
+    sites: tuple[str, ...] = ()
+    site_sd: np.ndarray = np.zeros(0)
+    site_prior_sd: np.ndarray = np.zeros(0)
 
     @property
     def ratio(self) -> np.ndarray:
@@ -84,8 +90,10 @@ def evaluate_inertia(s: Scenario, limits: Limits | None = None) -> InertiaPredic
     n = s.noise
     sigma = noise_sigmas(n.gyro_rad_s, n.tach_noise_rpm, n.tach_quantum_rpm, n.star_tracker_rad)
     pi = np.asarray(inertia_vector(s.truth.inertia), float)
-    pred = jax.tree_util.tree_map(np.asarray, predict(
-        model, arr, pi, arr.h_inertial[0], np.asarray(s.external_torque_inertial_nm), sigma))
+    tn = np.asarray(s.external_torque_inertial_nm, float)
+    pred, labels, site_sd, site_prior = predict_sites(model, arr, pi, arr.h_inertial[0], tn,
+                                                      sigma)
+    pred = jax.tree_util.tree_map(np.asarray, pred)
     usage = {}
     if limits is not None:
         on = np.asarray(s.wheels_on, float)
@@ -95,7 +103,8 @@ def evaluate_inertia(s: Scenario, limits: Limits | None = None) -> InertiaPredic
     rpm = np.where(np.asarray(s.wheels_on)[None, :], arr.wheel_rates * 30.0 / np.pi, np.nan)
     return InertiaPrediction(pred.sd, pred.sd_data, float(pred.c_sd), inertia_budgets(s.prior),
                              prior, usage, s.duration_s, pi, arr.t, arr.omega, rpm,
-                             tuple(s.wheel_names))
+                             tuple(s.wheel_names), labels, np.asarray(site_sd),
+                             np.asarray(site_prior))
 
 
 def inertia_model_prior_sd(s: Scenario) -> np.ndarray:

@@ -33,6 +33,7 @@ from cassini_bayes.frames import dcm
 from cassini_bayes.inference.inertia.data import Setup, _setup
 from cassini_bayes.inference.inertia.gls import full_prior
 from cassini_bayes.inference.noise import ATTITUDE_FLOOR, RATE_FLOORS
+from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import Telemetry
@@ -159,16 +160,102 @@ class PredictedInertia(NamedTuple):
 def posterior_sd(model: InertiaModel, info_full, pi) -> PredictedInertia:
     """Laplace sd of ``π`` from the full information (``gls.whitening``'s formula, in JAX)."""
     setup = model.setup
-    fit_map = setup.fit_map
     active = setup.active
-    info = (fit_map.T @ info_full @ fit_map)[np.ix_(active, active)]
-    cov = jnp.linalg.inv(info + jnp.diag(model.prior_prec))
+    cov = posterior_cov(model, info_full)
     w_act = np.searchsorted(active, setup.w_index)
     weights = setup.layout.scale_weights
     c_var = weights @ cov[np.ix_(w_act, w_act)] @ weights
     var = jnp.diag(cov)[:6]
     return PredictedInertia(jnp.sqrt(var + jnp.asarray(pi) ** 2 * c_var), jnp.sqrt(var),
                             jnp.sqrt(c_var))
+
+
+AXES = ("x", "y", "z")
+
+
+def _site_names(model: InertiaModel) -> list[tuple[str, str]]:
+    """``(site, label)`` per entry of :func:`site_values`, in order (one file)."""
+    lay = model.setup.layout
+    out = [(n, n) for n in INERTIA_NAMES]
+    out += [("H0", f"H0_{a}") for a in AXES] + [("T_N", f"T_N_{a}") for a in AXES]
+    sl = lay.slices
+    if "gyro_bias" in sl:
+        out += [("gyro_bias", f"gyro_bias_{a}") for a in AXES]
+    if "gyro_scale" in sl:
+        out += [("gyro_scale", f"gyro_scale_{a}") for a in AXES]
+    if "wheel_inertia" in sl:
+        names = lay.scale_wheels or ("all",)
+        out += [("wheel_scale", f"wheel_scale_{w}") for w in names]
+    if lay.has_common:
+        out.append(("wheel_scale_common", "wheel_scale_common"))
+    if "wheel_axes" in sl:
+        out += [("wheel_tilt", f"wheel_tilt_{w}_{m + 1}") for w in lay.wheels for m in range(2)]
+    for eff, site in (("body_torque", "T_body"), ("inertial_torque", "T_inertial"),
+                      ("torque_rate", "T_N_rate")):
+        if eff in sl:
+            out += [(site, f"{site}_{a}") for a in AXES]
+    return out
+
+
+def site_values(model: InertiaModel, theta):
+    """The robust fit's posterior sites (``inference.inertia.model``'s deterministics, one file)
+    from its active parameter vector ``θ`` (the fit's coordinates: ``π̃``, ``H̃_0``, ``T̃_N``, ``ν``
+    with the wheel block of ``fit_map``), flattened in the order of :func:`site_labels`.
+
+    The physical values are ``(1 + c)`` times what the likelihood sees for ``π``, ``H_0``,
+    ``T_N`` and the torques, ``c = ωᵀ w`` the wheels' common spin-inertia scale; the per-wheel
+    scales are ``d_k = m + (1 + c)(d̃_k − m) [+ c_s]``, ``m`` their mean (the model's mapping).
+    """
+    setup = model.setup
+    lay = setup.layout
+    full = jnp.zeros(setup.p_full).at[np.asarray(setup.active)].set(theta)
+    pi_t, h0, tn, nu = full[:6], full[6:9], full[9:12], full[12:]
+    sl = lay.slices
+    one = 1.0
+    parts = []
+    if "wheel_inertia" in sl:
+        w = nu[lay.wheel_block]
+        c = jnp.asarray(lay.scale_weights) @ w
+        one = 1.0 + c
+    parts += [one * pi_t, one * h0, one * tn]
+    for eff in ("gyro_bias", "gyro_scale"):
+        if eff in sl:
+            parts.append(nu[sl[eff]])
+    if "wheel_inertia" in sl:
+        d = nu[sl["wheel_inertia"]]
+        m = jnp.mean(d)
+        common = nu[sl["wheel_inertia_common"]] if lay.has_common else 0.0
+        parts.append(m + one * (d - m) + common)
+        if lay.has_common:
+            parts.append(common)
+    if "wheel_axes" in sl:
+        parts.append(nu[sl["wheel_axes"]])
+    for eff in ("body_torque", "inertial_torque", "torque_rate"):
+        if eff in sl:
+            parts.append(one * nu[sl[eff]])
+    return jnp.concatenate([jnp.atleast_1d(p) for p in parts])
+
+
+def site_labels(model: InertiaModel) -> tuple[str, ...]:
+    """Labels of :func:`site_values`' entries (``Ixx``, ``H0_x``, ``wheel_tilt_RWA1_2``, …)."""
+    return tuple(label for _, label in _site_names(model))
+
+
+def posterior_cov(model: InertiaModel, info_full) -> jax.Array:
+    """Laplace covariance of the active parameters (the fit's coordinates, ``fit_map``)."""
+    setup = model.setup
+    active = setup.active
+    info = (setup.fit_map.T @ info_full @ setup.fit_map)[np.ix_(active, active)]
+    return jnp.linalg.inv(info + jnp.diag(model.prior_prec))
+
+
+def site_sd(model: InertiaModel, cov, point):
+    """(predicted sd, prior sd) of every site of :func:`site_values` by the delta method at the
+    active parameter vector ``point`` (the truth): ``J Σ Jᵀ``, ``J = ∂sites/∂θ``."""
+    jac = jax.jacfwd(lambda th: site_values(model, th))(jnp.asarray(point, float))
+    post = jnp.sqrt(jnp.einsum("ip,pq,iq->i", jac, cov, jac))
+    prior = jnp.sqrt(jnp.einsum("ip,p,ip->i", jac, 1.0 / jnp.asarray(model.prior_prec), jac))
+    return post, prior
 
 
 def predict(model: InertiaModel, arrays, pi, h0, tn, sigma) -> PredictedInertia:
@@ -178,3 +265,33 @@ def predict(model: InertiaModel, arrays, pi, h0, tn, sigma) -> PredictedInertia:
     info = information(model, arrays.t, arrays.q, arrays.omega, arrays.wheel_rates,
                        jnp.asarray(pi), jnp.asarray(h0), jnp.asarray(tn), jnp.asarray(sigma))
     return posterior_sd(model, info, pi)
+
+
+def predict_sites(model: InertiaModel, arrays, pi, h0, tn, sigma):
+    """``(inertia, labels, sd, prior_sd)``: :func:`predict`'s :class:`PredictedInertia`, and
+    the predicted posterior sd and the prior sd of every site of the robust fit
+    (:func:`site_values`: inertia, momentum, torques and every nuisance parameter, SI),
+    linearised at the truth ``π``, ``H_0 = h0``, ``T_N = tn``, nuisances zero; arguments as
+    :func:`information`."""
+    info = information(model, arrays.t, arrays.q, arrays.omega, arrays.wheel_rates,
+                       jnp.asarray(pi), jnp.asarray(h0), jnp.asarray(tn), jnp.asarray(sigma))
+    point = np.zeros(model.setup.p_full)
+    point[:6], point[6:9], point[9:12] = np.asarray(pi), np.asarray(h0), np.asarray(tn)
+    sd, prior = site_sd(model, posterior_cov(model, info), point[model.setup.active])
+    return posterior_sd(model, info, pi), site_labels(model), sd, prior
+
+
+def fitted_site_sd(model: InertiaModel, posterior) -> np.ndarray:
+    """Posterior sd of every site of a robust fit of one file (``posterior[name]``: draws of
+    shape (chain, draw, ...), e.g. an ArviZ posterior group) in the order of
+    :func:`site_labels`: what :func:`predict_sites` predicts."""
+    cols = []
+    for name in dict.fromkeys(site for site, _ in _site_names(model)):
+        v = np.asarray(posterior[name].values if hasattr(posterior[name], "values")
+                       else posterior[name])
+        cols.append(v.reshape(v.shape[0] * v.shape[1], -1))
+    d = np.concatenate(cols, 1)
+    if d.shape[1] != len(_site_names(model)):
+        raise ValueError(f"the posterior has {d.shape[1]} site entries, the model "
+                         f"{len(_site_names(model))}: not a robust fit of one file")
+    return d.std(0)
