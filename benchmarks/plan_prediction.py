@@ -22,23 +22,19 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ("slews_espa_bus", "slews_cubesat_12u", "slews_post_prm")
-SITES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "H0", "T_N", "gyro_bias", "gyro_scale",
-         "wheel_scale", "wheel_scale_common", "wheel_tilt", "T_body", "T_inertial", "T_N_rate")
+INERTIA = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
-def _fitted_sd(posterior, labels) -> "list[float]":
-    """Posterior sd of every site, flattened in the order of ``labels``
-    (:func:`cassini_bayes.plan.inertia.site_labels`)."""
+def _fitted_sd_data(posterior) -> list[float]:
+    """Posterior sd of ``π̃ = π/(1 + c)`` (the data part: the wheels' common spin-inertia scale
+    ``c`` divided out), ``c`` the mean over the wheels of each draw's total scale ``c_k``
+    (``inference.inertia.model``: the mean of ``d_k`` is ``m``, so mean ``c_k = m + c_s = c``)."""
     import numpy as np
 
-    cols = []
-    for name in SITES:
-        if name in posterior:
-            v = np.asarray(posterior[name].values)
-            cols.append(v.reshape(v.shape[0] * v.shape[1], -1))
-    d = np.concatenate(cols, 1)
-    assert d.shape[1] == len(labels), (d.shape, len(labels))
-    return d.std(0).tolist()
+    c = np.asarray(posterior["wheel_scale"].values)
+    c = c.reshape(c.shape[0] * c.shape[1], -1).mean(1)
+    pi = np.stack([np.asarray(posterior[n].values).ravel() for n in INERTIA], 1)
+    return (pi / (1.0 + c[:, None])).std(0).tolist()
 
 
 def run(scenario_name: str, seeds: int, settings) -> dict:
@@ -46,7 +42,8 @@ def run(scenario_name: str, seeds: int, settings) -> dict:
     import numpy as np
 
     from cassini_bayes.inference.inertia import fit_inertia
-    from cassini_bayes.plan.evaluate import evaluate_inertia
+    from cassini_bayes.plan.evaluate import evaluate_inertia, wheels_on
+    from cassini_bayes.plan.inertia import fitted_site_sd, inertia_model
     from cassini_bayes.simulate import load_scenario, simulate_arrays
     from cassini_bayes.telemetry import Telemetry
 
@@ -54,7 +51,7 @@ def run(scenario_name: str, seeds: int, settings) -> dict:
     t0 = time.perf_counter()
     pred = evaluate_inertia(s)
     t_pred = time.perf_counter() - t0
-    labels = list(pred.sites)
+    model = inertia_model(s.prior, wheels_on(s))
     fits = []
     for seed in range(seeds):
         k_sim, k_fit = jax.random.split(jax.random.key(7000 + seed))
@@ -66,7 +63,8 @@ def run(scenario_name: str, seeds: int, settings) -> dict:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             post = fit_inertia(k_fit, [tel], s.prior, settings=settings, prior_draws=0)
-        fits.append({"seed": seed, "sd": _fitted_sd(post.idata.posterior, labels),
+        fits.append({"seed": seed, "sd": fitted_site_sd(model, post.idata.posterior).tolist(),
+                     "sd_data": _fitted_sd_data(post.idata.posterior),
                      "r_hat": float(post.diagnostics.max_r_hat),
                      "divergences": int(post.diagnostics.divergences),
                      "seconds": time.perf_counter() - t0})
@@ -78,16 +76,21 @@ def run(scenario_name: str, seeds: int, settings) -> dict:
                       "fitted_median": float(np.median(sd[:, i])),
                       "ratio_median": float(np.median(ratio[:, i])),
                       "ratio_min": float(ratio[:, i].min()), "ratio_max": float(ratio[:, i].max())}
-                for i, lab in enumerate(labels)}
+                for i, lab in enumerate(pred.sites)}
     # sites the data inform (posterior sd below 0.9 of the prior): where the prediction matters
-    informed = [i for i in range(len(labels)) if pred.site_sd[i] < 0.9 * pred.site_prior_sd[i]]
+    informed = [i for i in range(len(pred.sites)) if pred.site_sd[i] < 0.9 * pred.site_prior_sd[i]]
+    sd_data = np.array([f["sd_data"] for f in fits])
+    data_part = {n: {"predicted": float(pred.sd_data[i]),
+                     "fitted_median": float(np.median(sd_data[:, i])),
+                     "ratio_median": float(np.median(sd_data[:, i] / pred.sd_data[i]))}
+                 for i, n in enumerate(INERTIA)}
     med = np.median(ratio, 0)
     return {"scenario": scenario_name, "seeds": seeds, "predict_seconds": t_pred,
-            "sites": per_site, "fits": fits,
+            "sites": per_site, "data_part": data_part, "fits": fits,
             "worst_ratio_all": float(med[np.argmax(np.abs(np.log(med)))]),
             "worst_ratio_informed": float(med[informed][np.argmax(np.abs(np.log(med[informed])))]),
             "within_10pct": int(np.sum(np.abs(med - 1) <= 0.10)),
-            "within_20pct": int(np.sum(np.abs(med - 1) <= 0.20)), "n_sites": len(labels),
+            "within_20pct": int(np.sum(np.abs(med - 1) <= 0.20)), "n_sites": len(pred.sites),
             "n_informed": len(informed)}
 
 
@@ -118,6 +121,9 @@ def main(argv=None) -> None:
             print(f"  {lab:22s} pred {v['predicted']:10.4g}  fit {v['fitted_median']:10.4g}  "
                   f"ratio {v['ratio_median']:.3f} ({v['ratio_min']:.3f}–{v['ratio_max']:.3f})"
                   f"  prior {v['prior']:.4g}")
+        for lab, v in r["data_part"].items():
+            print(f"  {lab + ' data part':22s} pred {v['predicted']:10.4g}  "
+                  f"fit {v['fitted_median']:10.4g}  ratio {v['ratio_median']:.3f}")
         if a.json:
             a.json.parent.mkdir(parents=True, exist_ok=True)
             a.json.write_text(json.dumps(out, indent=1))
