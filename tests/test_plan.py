@@ -80,15 +80,15 @@ def test_every_site_of_the_robust_model_is_predicted():
 def test_weak_z_slews_are_predicted_weak_on_z():
     """Feldman & Lee's Post-PRM slews turn only 1° about Z (Fig. B2); against the Post-Probe
     slews (30° about each axis) the prediction, before any fit, makes the Z products several
-    times less certain (the data part: the wheels' common scale known) and Izz at least 1.5×,
-    while the X–Y product is not."""
+    times less certain (the data part: the wheels' common scale known) and Izz at least 1.5×;
+    each Z entry loses at least 1.5× more than Ixx and Iyy do (docs/planning.md, "Weak Z")."""
     from cassini_bayes.plan.evaluate import evaluate_inertia
 
     prm = evaluate_inertia(load_scenario("slews_post_prm"))
     probe = evaluate_inertia(load_scenario("slews_post_probe"))
     r = dict(zip(("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"), prm.sd_data / probe.sd_data))
     assert r["Ixz"] > 3.0 and r["Iyz"] > 3.0 and r["Izz"] > 1.5, r
-    assert r["Ixz"] > 1.5 * r["Ixy"] and r["Iyz"] > 1.5 * r["Ixy"], r
+    assert min(r["Izz"], r["Ixz"], r["Iyz"]) > 1.5 * max(r["Ixx"], r["Iyy"]), r
 
 
 def test_noise_levels_of_the_sensors():
@@ -257,9 +257,8 @@ def test_plan_inertia_writes_a_scenario_that_flies_within_its_limits(run_cli, tm
 def test_prediction_matches_nuts_fits_of_noisy_data():
     """One noisy replicate of the ESPA slews fitted by NUTS (4 × 400 draws): every site's
     posterior sd (inertia, momentum, torques, each nuisance) within 20 % of the prediction.
-    Measured: 0.94–1.06 (docs/planning.md); the sd of 1600 draws has ~3 % Monte Carlo error,
-    so a false failure needs a 6-sigma draw; a prediction with the noise levels doubled fails
-    (the informed sites' ratio falls to ~0.5)."""
+    The sd of 1600 draws has ~3 % Monte Carlo error, so a false failure needs a 6-sigma draw;
+    a prediction with the noise levels doubled fails on 21 of the 37 sites (docs/planning.md)."""
     import cassini_bayes
     from cassini_bayes.inference.inertia import fit_inertia
     from cassini_bayes.inference.runner import SamplerSettings
