@@ -226,6 +226,10 @@ def test_plan_evaluate_prints_the_table(run_cli, tmp_path):
     assert p["Ixx"]["budget"] == pytest.approx(0.01 * 26.4)
     assert p["Ixy"]["budget"] == pytest.approx(0.5) and p["Ixy"]["prior_sd"] == 0.5
     assert all(0 < p[n]["sd_data"] <= p[n]["sd"] < p[n]["prior_sd"] for n in p)
+    sites = s["prediction"]["sites"]
+    assert len(sites) == 37 and "wheel_tilt_RW4_2" in sites and "wheel_tilt_RW4_2" in out
+    assert all(0 < v["sd"] <= v["prior_sd"] * (1 + 1e-9) for v in sites.values())
+    assert "gyro_bias_x" in (tmp_path / "ev" / "report.html").read_text()
     assert (tmp_path / "ev" / "report.html").stat().st_size > 10_000
 
 

@@ -101,6 +101,25 @@ def _answer_table(blocks: list[tuple[str, Mapping]]) -> str:
     return table(heads, rows, classes=classes)
 
 
+def _sites_table(blocks: list[tuple[str, Mapping]]) -> str:
+    """Per parameter of the robust model other than the inertia (SI): each block's predicted sd,
+    then the prior sd."""
+    first = blocks[0][1].get("sites", {})
+    names = [n for n in first if n not in INERTIA_NAMES]
+    rows = []
+    for n in names:
+        row = [n]
+        for _, b in blocks:
+            q = b.get("sites", {}).get(n)
+            row += ["–" if q is None else _fmt(q["sd"]),
+                    "–" if q is None else f"{q['sd'] / q['prior_sd']:.3f}"]
+        rows.append(row + [_fmt(first[n]["prior_sd"])])
+    heads = ["parameter"]
+    for name, _ in blocks:
+        heads += [f"{name}: sd (SI)", f"{name}: sd/prior"]
+    return table(heads + ["prior sd (SI)"], rows)
+
+
 def _usage_table(blocks: list[tuple[str, Mapping]]) -> str:
     names = sorted({k for _, b in blocks for k in b.get("usage", {})})
     rows, classes = [], []
@@ -151,7 +170,11 @@ def plan_report(summary: Mapping, plan) -> str:
                       "on the flight simulated without noise, nuisance parameters included); "
                       "data part: the same with the wheels' common spin-inertia scale known "
                       "(no manoeuvre informs it); budget: ±1 % of each moment (Feldman & Lee "
-                      "§VI), the model file's product knowledge for the products.", note=True)]),
+                      "§VI), the model file's product knowledge for the products.", note=True),
+            _sites_table(blocks),
+            paragraph("The other parameters of the robust model: momentum H0 (N m s), "
+                      "torques (N m, N m/s), gyro bias (rad/s) and scale factor, wheel "
+                      "spin-inertia scales, wheel-axis tilts (rad).", note=True)]),
         section("Manoeuvre", [figure(png, "Body rates and wheel speeds of the plan and the "
                                           "comparison, simulated without noise; dashed: the "
                                           "limits."), slews]),
@@ -171,7 +194,8 @@ def evaluation_report(summary: Mapping, prediction, limits=None) -> str:
     header = page_header(badges, f"cassini-bayes {__version__} plan evaluate · "
                                  f"{summary['scenario']} · {summary['spacecraft']}")
     png = png_bytes(manoeuvre_figure([(summary["scenario"], prediction)], limits))
-    sections = [section("Predicted posterior", [_answer_table([("scenario", p)])]),
+    sections = [section("Predicted posterior", [_answer_table([("scenario", p)]),
+                                                 _sites_table([("scenario", p)])]),
                 section("Manoeuvre", [figure(png, "Body rates and wheel speeds simulated "
                                                   "without noise.")])]
     if "usage" in p:
