@@ -236,13 +236,17 @@ def test_plan_evaluate_prints_the_table(run_cli, tmp_path):
 @pytest.mark.slow
 def test_plan_inertia_writes_a_scenario_that_flies_within_its_limits(run_cli, tmp_path):
     """``plan inertia`` with a short search: the written scenario simulates, and on its noisy
-    telemetry every limit holds; the summary's prediction is that scenario's."""
+    telemetry every limit holds; a goal the limits cannot reach is said, with the best reached;
+    the written plan evaluates."""
     code, _, err = run_cli("plan", "inertia", "--spacecraft", "espa_bus", "--limits",
-                             "espa_bus", "--slews", "3", "--max-iter", "4", "--out",
-                             tmp_path / "p")
+                             "espa_bus", "--slews", "3", "--max-iter", "4", "--goal", "0.1",
+                             "--out", tmp_path / "p")
     assert code == 0, err
     s = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert s["plan"]["limits_ok"] and len(s["slews"]) >= 1
+    # the wheels' common-scale floor (0.56 of the budget) forbids 0.1: said, with the best reached
+    assert s["goal"] == {"value": 0.1, "reached": False}
+    assert any("cannot reach the goal" in w for w in s["warnings"])
     code, _, err = run_cli("simulate", tmp_path / "p" / "scenario.toml", "--out", tmp_path / "sim",
                            "--seed", "3")
     assert code == 0, err
