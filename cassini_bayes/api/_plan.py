@@ -152,9 +152,10 @@ class PlanEvaluation:
 
 @jax_entry
 def evaluate_plan(scenario, *, spacecraft=None, limits=None) -> PlanEvaluation:
-    """Predicted posterior sd of every inertia parameter for the manoeuvre of a scenario, robust
-    nuisance parameters included: the Laplace approximation of the robust fit on the scenario's
-    telemetry simulated without noise (docs/planning.md).
+    """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
+    torques and each nuisance parameter) for the manoeuvre of a scenario: the Laplace
+    approximation of the robust fit on the scenario's telemetry simulated without noise
+    (docs/planning.md).
 
     Parameters
     ----------

@@ -1,9 +1,9 @@
 """``cassini-bayes plan evaluate|inertia``: plan a calibration before it flies (docs/planning.md).
 
 * ``plan evaluate SCENARIO.toml [--spacecraft M.toml] [--limits L.toml] [--out DIR]`` prints the
-  predicted posterior sd of each inertia parameter (robust nuisance parameters included) beside
-  the papers' budget and the model file's prior sd; with ``--out``, ``summary.json``,
-  ``config.toml`` and ``report.html``.
+  predicted posterior sd of every parameter of the robust inertia fit (the inertia beside the
+  papers' budget; the momentum, torques and each nuisance parameter beside the model file's prior
+  sd); with ``--out``, ``summary.json``, ``config.toml`` and ``report.html``.
 * ``plan inertia --spacecraft M.toml --limits L.toml --out DIR`` chooses slews within the
   limits (:func:`cassini_bayes.api.plan_inertia`) and writes ``DIR/scenario.toml`` (the plan:
   ``cassini-bayes simulate`` runs it), ``summary.json``, ``config.toml`` and ``report.html``.
