@@ -66,6 +66,7 @@ __all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "InputError", "setup_jax", "request_host_devices",
     "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
+    "evaluate_plan", "plan_inertia",
 ]
 
 def _api() -> _types.ModuleType:

@@ -1,0 +1,383 @@
+"""Planning a calibration before it flies: :func:`evaluate_plan` and :func:`plan_inertia`, what
+``cassini-bayes plan evaluate`` and ``cassini-bayes plan inertia`` compute (docs/planning.md)."""
+
+from __future__ import annotations
+
+import os
+import sys
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cassini_bayes import __version__
+from cassini_bayes._devices import jax_entry
+from cassini_bayes.errors import InputError, arg
+from cassini_bayes.names import INERTIA_NAMES
+
+__all__ = ["PlanEvaluation", "PlanResult", "evaluate_plan", "plan_inertia"]
+
+FLOOR_SHARE = 0.95
+"""A plan whose largest ratio is within this share of its knowledge floor is said to be set by
+that floor (warnings)."""
+
+
+def _model_reference(path: Path) -> str:
+    """How a written scenario names a model file: ``models/NAME.toml`` for a shipped one (found
+    from any directory), else its absolute path."""
+    from cassini_bayes._paths import DATA_DIR
+
+    p = path.resolve()
+    try:
+        return p.relative_to(Path(DATA_DIR).resolve()).as_posix()
+    except ValueError:
+        return str(p)
+
+
+def _spacecraft_path(spacecraft) -> Path:
+    from cassini_bayes._paths import model_path
+    from cassini_bayes.spacecraft import Spacecraft
+
+    if isinstance(spacecraft, Spacecraft) or not isinstance(spacecraft, (str, os.PathLike)) \
+            or not str(spacecraft):
+        raise InputError(f"{arg('spacecraft')}: a plan is written as a scenario that names its "
+                         "model file: give a model .toml path or a shipped model's name "
+                         "(e.g. 'cassini_post_prm')")
+    return model_path(spacecraft)
+
+
+def _prediction_block(p, names=INERTIA_NAMES) -> dict:
+    """A prediction as summary.json holds it (kg m²; ratios are sd / budget)."""
+    params = {n: {"sd": float(p.sd[i]), "sd_data": float(p.sd_data[i]),
+                  "budget": float(p.budget[i]), "prior_sd": float(p.prior_sd[i]),
+                  "ratio": float(p.ratio[i]), "ratio_data": float(p.ratio_data[i])}
+              for i, n in enumerate(names)}
+    out = {"parameters": params, "max_ratio": float(np.max(p.ratio)),
+           "max_ratio_data": float(np.max(p.ratio_data)),
+           "worst": names[int(np.argmax(p.ratio))],
+           "worst_data": names[int(np.argmax(p.ratio_data))],
+           "wheel_common_scale_sd": p.c_sd, "duration_s": p.duration_s,
+           "sites": {n: {"sd": float(sd), "prior_sd": float(pr)}
+                     for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd)}}
+    if p.usage:
+        out["usage"] = dict(p.usage)
+        out["limits_ok"] = bool(all(v <= 1.0 for v in p.usage.values()))
+    return out
+
+
+def format_table(p, title: str) -> str:
+    """The predicted sd of each parameter beside its budget and prior sd, as printed."""
+    lines = [title, (f"{'':5s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
+                     f"{'prior sd':>10s} {'data part':>10s}   (kg m^2)")]
+    for i, n in enumerate(INERTIA_NAMES):
+        lines.append(f"{n:5s} {p.sd[i]:13.4g} {p.ratio[i]:10.3f} {p.budget[i]:10.4g} "
+                     f"{p.prior_sd[i]:10.4g} {p.sd_data[i]:10.4g}")
+    worst = int(np.argmax(p.ratio))
+    lines.append(f"largest sd/budget {p.ratio[worst]:.3f} ({INERTIA_NAMES[worst]}); of it, "
+                 f"{p.floor_ratio[worst]:.3f} is the wheels' common spin-inertia scale (sd "
+                 f"{100 * p.c_sd:.2f} %), which no manoeuvre informs; 'data part': the sd with "
+                 "that scale known")
+    rest = [i for i, n in enumerate(p.sites) if n not in INERTIA_NAMES]
+    if rest:
+        lines.append(f"{'robust model, other parameters (SI)':36s} {'predicted sd':>13s} "
+                     f"{'prior sd':>10s} {'sd/prior':>9s}")
+        for i in rest:
+            lines.append(f"{p.sites[i]:36s} {p.site_sd[i]:13.4g} {p.site_prior_sd[i]:10.4g} "
+                         f"{p.site_sd[i] / p.site_prior_sd[i]:9.3f}")
+    if p.usage:
+        lines.append("limits used (largest fraction on the simulated telemetry): " + ", ".join(
+            f"{k} {v:.2f}" for k, v in p.usage.items()))
+    return "\n".join(lines)
+
+
+def _write_dir(out, *, force: bool, files: dict[str, str | bytes], summary: dict,
+               config: dict, inputs=()) -> Path:
+    """Write a planning run directory atomically: the text ``files`` and summary/config."""
+    from cassini_bayes.rundir import RunDir, write_config, write_summary
+
+    with RunDir(out, force=force, inputs=inputs) as rd:
+        for name, text in files.items():
+            target = rd.path / name
+            if isinstance(text, bytes):
+                target.write_bytes(text)
+            else:
+                target.write_text(text, encoding="utf-8")
+        write_summary(rd.path, summary)
+        write_config(rd.path, config)
+    return rd.final
+
+
+@dataclass(frozen=True)
+class PlanEvaluation:
+    """The predicted posterior of a planned manoeuvre (``cassini-bayes plan evaluate``).
+
+    Attributes
+    ----------
+    prediction : :class:`~cassini_bayes.plan.evaluate.InertiaPrediction` (kg m²).
+    scenario : the evaluated scenario (:class:`~cassini_bayes.simulate.Scenario`).
+    config : inputs and options (``config.toml``).
+    """
+
+    prediction: Any
+    scenario: Any
+    config: dict
+    limits: Any = None
+    _summary: dict = field(default_factory=dict, repr=False)
+    _inputs: tuple[Path, ...] = field(default=(), repr=False)
+
+    def summary(self) -> dict:
+        """``summary.json``: per parameter the predicted sd, its data part, budget, prior sd
+        and their ratios; the limits used when limits were given."""
+        import copy
+
+        return copy.deepcopy(self._summary)
+
+    def table(self) -> str:
+        """The printed table (:func:`format_table`)."""
+        return format_table(self.prediction,
+                            f"predicted posterior of the robust inertia fit: {self.scenario.name}"
+                            f" ({self.scenario.duration_s:g} s)")
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``summary.json``, ``config.toml`` and ``report.html`` into ``out``
+        (atomically; ``force`` replaces only a directory cassini-bayes wrote)."""
+        from cassini_bayes.report.plan import evaluation_report
+
+        html = evaluation_report(self._summary, self.prediction, self.limits)
+        return _write_dir(out, force=force, files={"report.html": html},
+                          summary=self._summary, config=self.config, inputs=self._inputs)
+
+
+@jax_entry
+def evaluate_plan(scenario, *, spacecraft=None, limits=None) -> PlanEvaluation:
+    """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
+    torques and each nuisance parameter) for the manoeuvre of a scenario: the Laplace
+    approximation of the robust fit on the scenario's telemetry simulated without noise
+    (docs/planning.md).
+
+    Parameters
+    ----------
+    scenario : a scenario TOML path or shipped name (``"slews_post_prm"``), or a loaded
+        :class:`~cassini_bayes.simulate.Scenario`.
+    spacecraft : the model file the fit would be given (its prior and wheels; default the
+        scenario's ``[prior] model``): a path or shipped name.
+    limits : optional limits file (path or shipped name): the table then shows the share of
+        each limit the manoeuvre uses on its simulated telemetry.
+    """
+    from dataclasses import replace
+
+    from cassini_bayes.plan.evaluate import evaluate_inertia
+    from cassini_bayes.plan.limits import load_limits
+    from cassini_bayes.simulate import Scenario, load_scenario
+    from cassini_bayes.simulate.scenario import scenario_path
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    inputs: list[Path] = []
+    if isinstance(scenario, Scenario):
+        s = scenario
+    else:
+        p = scenario_path(scenario)
+        s = load_scenario(p)
+        inputs.append(p)
+    if not s.slews:
+        raise InputError(f"scenario {s.name!r} has no [[slew]]: an inertia calibration is "
+                         "planned from RWA slews", path=s.source)
+    sc_path = s.prior_model_path
+    if spacecraft is not None:
+        sc_file = _spacecraft_path(spacecraft)
+        prior = load_spacecraft(sc_file)
+        if prior.wheel_names != s.truth.wheel_names:
+            raise InputError(f"{arg('spacecraft', spacecraft)}: its wheels "
+                             f"({', '.join(prior.wheel_names)}) are not the scenario's "
+                             f"({', '.join(s.truth.wheel_names)})")
+        s = replace(s, prior=prior, prior_model_path=str(sc_file))
+        sc_path = str(sc_file)
+        inputs.append(sc_file)
+    lim = None
+    if limits is not None:
+        lim, _ = load_limits(limits, sc_path)
+        inputs.append(Path(lim.source))
+    pred = evaluate_inertia(s, lim)
+    summary = {"kind": "plan", "command": "plan evaluate", "calibration": "inertia",
+               "version": __version__, "scenario": s.name, "spacecraft": sc_path,
+               "limits": None if lim is None else lim.to_dict(),
+               "prediction": _prediction_block(pred)}
+    config = {"command": "plan evaluate", "version": __version__,
+              "inputs": {"scenario": s.source, "spacecraft": sc_path,
+                         "limits": None if lim is None else lim.source}}
+    return PlanEvaluation(pred, s, config, lim, summary, tuple(inputs))
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A planned calibration (``cassini-bayes plan inertia``).
+
+    Attributes
+    ----------
+    plan : :class:`~cassini_bayes.plan.planner.InertiaPlan`: the scenario dict, its predicted
+        posterior and the comparison's.
+    config : inputs and options (``config.toml``).
+    """
+
+    plan: Any
+    config: dict
+    _summary: dict = field(repr=False)
+    _inputs: tuple[Path, ...] = field(default=(), repr=False)
+
+    @property
+    def scenario(self) -> dict:
+        """The plan as a scenario dict (``scenario.toml``)."""
+        return self.plan.scenario
+
+    @property
+    def warnings(self) -> list[str]:
+        """Lines on what the plan cannot reach or does not respect."""
+        return list(self._summary["warnings"])
+
+    def summary(self) -> dict:
+        """``summary.json``: the slews, the predicted posterior of the plan and of the
+        comparison, the improvement, the limits used and the search."""
+        import copy
+
+        return copy.deepcopy(self._summary)
+
+    def table(self) -> str:
+        """The printed tables of the plan and its comparison."""
+        p = self.plan
+        return "\n\n".join([format_table(p.prediction, f"plan ({len(p.scenario['slew'])} slews)"),
+                            format_table(p.baseline, p.baseline_name)])
+
+    def scenario_toml(self) -> str:
+        """The plan as scenario TOML text (``cassini-bayes simulate`` runs it)."""
+        import tomli_w
+
+        head = ("# Planned by cassini-bayes plan inertia (docs/planning.md): "
+                f"{self.plan.limits.name}, target {self.plan.target}\n")
+        return head + tomli_w.dumps(self.plan.scenario)
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``scenario.toml`` (the plan), ``summary.json``, ``config.toml`` and
+        ``report.html`` (the manoeuvre against time, the limits as lines, the predicted sd
+        beside the comparison) into ``out``, atomically."""
+        from cassini_bayes.report.plan import plan_report
+
+        files = {"scenario.toml": self.scenario_toml(),
+                 "report.html": plan_report(self._summary, self.plan)}
+        if self.plan.baseline_scenario is not None:
+            import tomli_w
+
+            files["papers_scenario.toml"] = tomli_w.dumps(self.plan.baseline_scenario)
+        return _write_dir(out, force=force, files=files, summary=self._summary,
+                          config=self.config, inputs=self._inputs)
+
+
+def _plan_warnings(plan, goal: float | None) -> list[str]:
+    """What the plan cannot reach (the goal, the knowledge floor) or does not respect."""
+    out = []
+    p = plan.prediction
+    value = float(np.max(p.ratio if plan.target == "max_ratio" else p.ratio_data))
+    if goal is not None and value > goal:
+        out.append(f"the limits cannot reach the goal {plan.target} <= {goal:g}: the best plan "
+                   f"found reaches {value:.3f} "
+                   f"({INERTIA_NAMES[int(np.argmax(p.ratio))]})")
+    floor = p.floor_ratio
+    worst = int(np.argmax(p.ratio))
+    if plan.target == "max_ratio" and floor[worst] >= FLOOR_SHARE * p.ratio[worst]:
+        out.append(f"the largest sd/budget ({p.ratio[worst]:.3f}, {INERTIA_NAMES[worst]}) is "
+                   f"set by the wheels' common spin-inertia knowledge ({100 * p.c_sd:.2f} % "
+                   f"alone gives {floor[worst]:.3f}), which no manoeuvre informs: better "
+                   "knowledge of the wheels, not another manoeuvre, would lower it")
+    bad = {k: v for k, v in p.usage.items() if v > 1.0}
+    if bad:
+        out.append("the plan exceeds limits on its simulated telemetry: " + ", ".join(
+            f"{k} {v:.3f} of the limit" for k, v in bad.items()))
+    return out
+
+
+@jax_entry
+def plan_inertia(spacecraft, limits, *, target: str = "max_ratio", slews=None, baseline=None,
+                 goal: float | None = None, max_iter: int = 60,
+                 progress: bool = False) -> PlanResult:
+    """Plan an inertia calibration: the slews within ``limits`` that minimise ``target``, by
+    gradients through the simulator and the robust model's predicted posterior
+    (docs/planning.md).
+
+    Parameters
+    ----------
+    spacecraft : the model file (path or shipped name): the plan's truth and the fit's prior.
+    limits : the limits file (path or shipped name, ``experiments/limits/``).
+    target : ``"max_ratio"`` (the largest predicted sd over its budget) or
+        ``"max_ratio_data"`` (the same without the wheels' common spin-inertia scale, which no
+        manoeuvre informs).
+    slews : number of slews (an int or a list to search); default a search over 3, 4, 6, 8.
+    baseline : scenario to compare with (path or shipped name); default Feldman & Lee's six
+        slews within the same limits.
+    goal : the value of ``target`` wanted; a plan that cannot reach it says so (a warning and
+        ``summary()["goal"]["reached"] = False``) with the best it reaches.
+    max_iter : L-BFGS iterations per slew count.
+    progress : print the optimiser's steps on stderr.
+    """
+    from cassini_bayes.plan.limits import load_limits
+    from cassini_bayes.plan.optimise import TARGETS
+    from cassini_bayes.plan.planner import plan_inertia_slews
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    if target not in TARGETS:
+        raise InputError(f"{arg('target', target)}: choose one of {', '.join(TARGETS)}")
+    if goal is not None and (isinstance(goal, bool) or not isinstance(goal, (int, float))
+                             or not np.isfinite(goal) or goal <= 0):
+        raise InputError(f"{arg('goal', goal)}: give a positive number (sd over budget)")
+    if isinstance(max_iter, bool) or not isinstance(max_iter, int) or max_iter < 1:
+        raise InputError(f"{arg('max_iter', max_iter)}: give a positive whole number")
+    counts = None
+    if slews is not None:
+        counts = [slews] if isinstance(slews, int) and not isinstance(slews, bool) else slews
+        if not isinstance(counts, (list, tuple)) or not counts or any(
+                isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 24
+                for n in counts):
+            raise InputError(f"{arg('slews', slews)}: give a number of slews from 1 to 24, or "
+                             "a list of them")
+    sc_file = _spacecraft_path(spacecraft)
+    ref = _model_reference(sc_file)
+    lim, base = load_limits(limits, ref)
+    inputs = [sc_file, Path(lim.source)]
+    bl = None
+    if baseline is not None:
+        bp = scenario_path(baseline)
+        bl = load_scenario(bp)
+        inputs.append(bp)
+    say = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else None
+    plan = plan_inertia_slews(lim, base, ref, target=target, counts=counts, baseline=bl,
+                              max_iter=max_iter, progress=say)
+    pred, base_pred = plan.prediction, plan.baseline
+    warns = _plan_warnings(plan, goal)
+    value = float(np.max(pred.ratio if target == "max_ratio" else pred.ratio_data))
+    summary = {
+        "kind": "plan", "command": "plan inertia", "calibration": "inertia",
+        "version": __version__, "spacecraft": ref, "limits_file": lim.source,
+        "limits": lim.to_dict(), "target": target, "target_value": value,
+        "goal": None if goal is None else {"value": goal, "reached": value <= goal},
+        "slews": plan.scenario["slew"],
+        "plan": _prediction_block(pred),
+        "baseline": {"name": plan.baseline_name, **_prediction_block(base_pred)},
+        "improvement": {"max_ratio": float(np.max(base_pred.ratio) / np.max(pred.ratio)),
+                        "max_ratio_data": float(np.max(base_pred.ratio_data)
+                                                / np.max(pred.ratio_data))},
+        "floor_ratio": dict(zip(INERTIA_NAMES, pred.floor_ratio.tolist())),
+        "search": [{"slews": r.n, "objective": r.objective,
+                    "max_ratio_planning_step": float(np.exp(r.max_log_ratio)),
+                    "penalty": r.penalty, "iterations": r.iterations,
+                    "evaluations": r.evaluations, "seconds": r.seconds}
+                   for r in plan.search],
+        "warnings": warns}
+    config = {"command": "plan inertia", "version": __version__,
+              "inputs": {"spacecraft": str(sc_file), "limits": lim.source,
+                         "baseline": None if bl is None else bl.source},
+              "options": {"target": target, "slews": counts, "goal": goal,
+                          "max_iter": max_iter}}
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    return PlanResult(plan, config, summary, tuple(inputs))

@@ -1,0 +1,92 @@
+"""``cassini-bayes plan evaluate|inertia``: plan a calibration before it flies (docs/planning.md).
+
+* ``plan evaluate SCENARIO.toml [--spacecraft M.toml] [--limits L.toml] [--out DIR]`` prints the
+  predicted posterior sd of every parameter of the robust inertia fit (the inertia beside the
+  papers' budget; the momentum, torques and each nuisance parameter beside the model file's prior
+  sd); with ``--out``, ``summary.json``, ``config.toml`` and ``report.html``.
+* ``plan inertia --spacecraft M.toml --limits L.toml --out DIR`` chooses slews within the
+  limits (:func:`cassini_bayes.api.plan_inertia`) and writes ``DIR/scenario.toml`` (the plan:
+  ``cassini-bayes simulate`` runs it), ``summary.json``, ``config.toml`` and ``report.html``.
+"""
+
+# ruff: noqa: B008  (typer declares options as argument defaults)
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import typer
+
+from cassini_bayes.cli._console import escape, stderr_console
+from cassini_bayes.rundir import check_out
+
+ORDER = 75
+
+
+def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
+    plan = typer.Typer(help="Plan a calibration before it flies: predicted posterior sd, "
+                            "optimised manoeuvres.", no_args_is_help=True)
+    app.add_typer(plan, name="plan")
+
+    @plan.command("evaluate")
+    def evaluate_cmd(
+        scenario: Path = typer.Argument(..., help="Scenario TOML with [[slew]]s, or a shipped "
+                                                  "scenario's name (slews_post_prm)."),
+        spacecraft: str | None = typer.Option(None, "--spacecraft", help="Model TOML the fit "
+                                              "would be given (default the scenario's prior)."),
+        limits: str | None = typer.Option(None, "--limits", help="Limits TOML: also show the "
+                                          "share of each limit used."),
+        out: Path | None = typer.Option(None, "--out", help="Also write summary.json and "
+                                        "report.html here (atomically)."),
+        force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                                   "cassini-bayes wrote."),
+    ) -> None:
+        """Predicted posterior sd of a scenario's manoeuvre, beside budgets and priors."""
+        from cassini_bayes.api import evaluate_plan
+
+        if out is not None:
+            check_out(out, force=force, inputs=[scenario])
+        res = evaluate_plan(str(scenario), spacecraft=spacecraft, limits=limits)
+        typer.echo(res.table())
+        if out is not None:
+            res.save(out, force=force)
+            stderr_console().print(f"[green]✓[/green] → {escape(str(out))}")
+
+    @plan.command("inertia")
+    def inertia_cmd(
+        spacecraft: str = typer.Option(..., "--spacecraft", help="Spacecraft model TOML (the "
+                                       "plan's truth and the fit's prior)."),
+        limits: str = typer.Option(..., "--limits", help="Limits TOML (experiments/limits/)."),
+        out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
+        target: str = typer.Option("max_ratio", "--target", help="max_ratio (largest sd over "
+                                   "its budget) or max_ratio_data (without the wheels' common "
+                                   "scale)."),
+        slews: list[int] | None = typer.Option(None, "--slews", min=1, max=24,
+                                               help="Number of slews (repeat to search "
+                                                    "several; default 3 4 6 8)."),
+        baseline: str | None = typer.Option(None, "--baseline", help="Scenario to compare with "
+                                            "(default Feldman & Lee's six slews)."),
+        goal: float | None = typer.Option(None, "--goal", min=0.0, help="Target value wanted; "
+                                          "a plan that cannot reach it says so."),
+        max_iter: int = typer.Option(60, "--max-iter", min=1, max=10_000,
+                                     help="L-BFGS iterations per slew count."),
+        force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                                   "cassini-bayes wrote."),
+    ) -> None:
+        """Choose the slews of an inertia calibration within limits (gradients through the
+        simulator); write the plan as a scenario, with its report."""
+        console = stderr_console()
+        from cassini_bayes.api import plan_inertia
+
+        check_out(out, force=force)
+        t0 = time.perf_counter()
+        res = plan_inertia(spacecraft, limits, target=target, slews=slews or None,
+                           baseline=baseline, goal=goal, max_iter=max_iter, progress=True)
+        res.save(out, force=force)
+        typer.echo(res.table())
+        s = res.summary()
+        ok = s["plan"].get("limits_ok", True) and (s["goal"] is None or s["goal"]["reached"])
+        mark = "[green]✓[/green]" if ok else "[yellow]![/yellow]"
+        console.print(f"{mark} {len(s['slews'])} slews, {s['target']} {s['target_value']:.3f} "
+                      f"(comparison ×{s['improvement'][s['target']]:.2f}) in "
+                      f"{time.perf_counter() - t0:.0f} s → {escape(str(out))}")

@@ -1,0 +1,1 @@
+"""Planning calibrations before they fly (docs/planning.md)."""
