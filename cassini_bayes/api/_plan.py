@@ -6,9 +6,10 @@ from __future__ import annotations
 import os
 import sys
 import warnings
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -16,6 +17,12 @@ from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.names import INERTIA_NAMES
+
+if TYPE_CHECKING:
+    from cassini_bayes.simulate import Scenario
+
+PathArg = str | os.PathLike
+"""A file path or a shipped file's name."""
 
 __all__ = ["PlanEvaluation", "PlanResult", "evaluate_plan", "plan_inertia"]
 
@@ -36,7 +43,7 @@ def _model_reference(path: Path) -> str:
         return str(p)
 
 
-def _spacecraft_path(spacecraft) -> Path:
+def _spacecraft_path(spacecraft: Any) -> Path:
     from cassini_bayes._paths import model_path
     from cassini_bayes.spacecraft import Spacecraft
 
@@ -48,7 +55,7 @@ def _spacecraft_path(spacecraft) -> Path:
     return model_path(spacecraft)
 
 
-def _prediction_block(p, names=INERTIA_NAMES) -> dict:
+def _prediction_block(p: Any, names: Sequence[str] = INERTIA_NAMES) -> dict:
     """A prediction as summary.json holds it (kg m²; ratios are sd / budget)."""
     params = {n: {"sd": float(p.sd[i]), "sd_data": float(p.sd_data[i]),
                   "budget": float(p.budget[i]), "prior_sd": float(p.prior_sd[i]),
@@ -67,7 +74,7 @@ def _prediction_block(p, names=INERTIA_NAMES) -> dict:
     return out
 
 
-def format_table(p, title: str) -> str:
+def format_table(p: Any, title: str) -> str:
     """The predicted sd of each parameter beside its budget and prior sd, as printed."""
     lines = [title, (f"{'':5s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
                      f"{'prior sd':>10s} {'data part':>10s}   (kg m^2)")]
@@ -92,8 +99,8 @@ def format_table(p, title: str) -> str:
     return "\n".join(lines)
 
 
-def _write_dir(out, *, force: bool, files: dict[str, str | bytes], summary: dict,
-               config: dict, inputs=()) -> Path:
+def _write_dir(out: PathArg, *, force: bool, files: Mapping[str, str | bytes], summary: dict,
+               config: dict, inputs: Sequence[Any] = ()) -> Path:
     """Write a planning run directory atomically: the text ``files`` and summary/config."""
     from cassini_bayes.rundir import RunDir, write_config, write_summary
 
@@ -151,7 +158,8 @@ class PlanEvaluation:
 
 
 @jax_entry
-def evaluate_plan(scenario, *, spacecraft=None, limits=None) -> PlanEvaluation:
+def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = None,
+                  limits: PathArg | None = None) -> PlanEvaluation:
     """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
     torques and each nuisance parameter) for the manoeuvre of a scenario: the Laplace
     approximation of the robust fit on the scenario's telemetry simulated without noise
@@ -273,7 +281,7 @@ class PlanResult:
                           config=self.config, inputs=self._inputs)
 
 
-def _plan_warnings(plan, goal: float | None) -> list[str]:
+def _plan_warnings(plan: Any, goal: float | None) -> list[str]:
     """What the plan cannot reach (the goal, the knowledge floor) or does not respect."""
     out = []
     p = plan.prediction
@@ -297,7 +305,9 @@ def _plan_warnings(plan, goal: float | None) -> list[str]:
 
 
 @jax_entry
-def plan_inertia(spacecraft, limits, *, target: str = "max_ratio", slews=None, baseline=None,
+def plan_inertia(spacecraft: PathArg, limits: PathArg, *,
+                 target: Literal["max_ratio", "max_ratio_data"] = "max_ratio",
+                 slews: int | Sequence[int] | None = None, baseline: PathArg | None = None,
                  goal: float | None = None, max_iter: int = 60,
                  progress: bool = False) -> PlanResult:
     """Plan an inertia calibration: the slews within ``limits`` that minimise ``target``, by
