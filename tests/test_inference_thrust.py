@@ -813,4 +813,3 @@ def test_thrusters_that_cannot_torque_the_data_are_refused():
                                          r".*Y.* cannot torque") as e:
         prepare_thrust([(r.telemetry, r.pulses)], bad)
     assert "\n" not in str(e.value)
-
