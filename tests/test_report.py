@@ -267,7 +267,7 @@ def test_the_first_table_is_the_answer(reports, kind):
     assert "<details><summary>Per-variable diagnostics" in per_variable
     if kind == "inertia":     # the model file's prediction and the budgets of the moments
         assert float(by_name["Ixx"]["model file (prior mean)"]) == 7403.0
-        assert by_name["Ixx"]["papers' budget"] == "±1 % (000 §VI)"
+        assert by_name["Ixx"]["papers' budget"] == "±1 % (Feldman & Lee §VI)"
         assert by_name["Ixx"]["verdict"] in ("pass", "FAIL")
         assert by_name["Ixy"]["papers' budget"] == "–"
         assert any(k.startswith("worst moment") for k in by_name)

@@ -16,7 +16,7 @@ Two kinds of rows:
 The tables the analyses need as inputs (Feldman & Lee Table 1 and Table 2, the FSDS pulse mix) are
 kept here too, as plain constants, so that the numbers come from one place.
 
-Sources: ``000`` = Feldman & Lee (2006), ``004`` = Brown (2012), ``003`` = Lee.
+Sources: Feldman & Lee (2006), Brown (2012), Lee; each with the section or table.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class PaperFact:
     value : the printed value (in ``unit``).
     decimals : printed precision, decimal places (``None`` for a budget without one).
     unit : unit of ``value`` ("" for ratios).
-    source : paper and section, e.g. ``"000 §V"``.
+    source : paper and section, e.g. ``"Feldman & Lee §V"``.
     kind : ``"value"`` (match at printed precision), ``"budget"`` (stay within the bound) or
         ``"reference"`` (shown beside ours, no pass/fail).
     comparator : for budgets, ``"<="`` or ``"<"``: ``ours <comparator> value`` passes.
@@ -152,50 +152,50 @@ def _rows() -> tuple[PaperFact, ...]:
     rows = [
         # Feldman & Lee (2006) §V: impulse ratio of the pulse model
         PaperFact("R_125ms_tf65", "impulse ratio R, 125 ms pulse, τf = 65 ms, τr = 20 ms", 1.395, 3,
-                  "", "000 §V"),
+                  "", "Feldman & Lee §V"),
         PaperFact("R_250ms_tf65", "impulse ratio R, 250 ms pulse, τf = 65 ms, τr = 20 ms", 1.198, 3,
-                  "", "000 §V"),
+                  "", "Feldman & Lee §V"),
         PaperFact("R_125ms_tf40", "impulse ratio R, 125 ms pulse, τf = 40 ms, τr = 20 ms", 1.195, 3,
-                  "", "000 §V"),
+                  "", "Feldman & Lee §V"),
         PaperFact("fsds_mix_on_time_s", "FSDS Y2 total on-time (133×125 + 16×250 + 500 + 750 ms)",
-                  21.875, 3, "s", "000 §V"),
-        PaperFact("R_fsds_mix", "impulse ratio R of the FSDS pulse mix", 1.3406, 4, "", "000 §V"),
+                  21.875, 3, "s", "Feldman & Lee §V"),
+        PaperFact("R_fsds_mix", "impulse ratio R of the FSDS pulse mix", 1.3406, 4, "", "Feldman & Lee §V"),
         PaperFact("F_fsds_corrected", "FSDS thrust corrected for pulse dynamics, 0.98 / R", 0.731,
-                  3, "N", "000 §V"),
+                  3, "N", "Feldman & Lee §V"),
         PaperFact("thrust_accuracy_pct", "thrust calibration accuracy", 10.0, 0, "%",
-                  "000 §V, §VI", kind="budget"),
-        PaperFact("inertia_accuracy_pct", "inertia calibration accuracy", 1.0, 0, "%", "000 §VI",
+                  "Feldman & Lee §V, §VI", kind="budget"),
+        PaperFact("inertia_accuracy_pct", "inertia calibration accuracy", 1.0, 0, "%", "Feldman & Lee §VI",
                   kind="budget"),
         # Brown (2012) §III.B: RWA4 spin axis by the RCS method
         PaperFact("rwa4_rcs_mean_deg", "RCS method, mean axis error over 10 testbed runs", 0.4, 1,
-                  "deg", "004 §III.B", kind="reference"),
+                  "deg", "Brown §III.B", kind="reference"),
         PaperFact("rwa4_rcs_worst_deg", "RCS method, worst axis error over 10 testbed runs", 1.4, 1,
-                  "deg", "004 §III.B", kind="reference"),
+                  "deg", "Brown §III.B", kind="reference"),
         PaperFact("rwa4_mass_property_deg",
                   "extra RWA4 axis error from mass-property uncertainty (Monte Carlo)", 1.5, 1,
-                  "deg", "004 §III.B", kind="budget"),
+                  "deg", "Brown §III.B", kind="budget"),
         PaperFact("rwa4_rcs_total_deg", "RCS method total: testbed worst + mass properties", 3.0, 0,
-                  "deg", "004 §III.B", kind="budget", comparator="<"),
+                  "deg", "Brown §III.B", kind="budget", comparator="<"),
         # Brown (2012) §III.C: RWA method
         PaperFact("rwa4_rwa_worst_deg", "RWA method, worst axis error over 12 testbed runs", 0.8, 1,
-                  "deg", "004 §III.C", kind="budget"),
+                  "deg", "Brown §III.C", kind="budget"),
         PaperFact("rwa4_rwa_mean_deg", "RWA method, mean axis error over 12 testbed runs", 0.5, 1,
-                  "deg", "004 §III.C", kind="budget", comparator="<"),
+                  "deg", "Brown §III.C", kind="budget", comparator="<"),
         PaperFact("rwa4_rwa_flight_deg",
                   "RWA method flight test, RWA1 solved with RWA2, RWA3 known",
-                  0.41, 2, "deg", "004 §III.C", kind="reference"),
+                  0.41, 2, "deg", "Brown §III.C", kind="reference"),
         PaperFact("rwa4_rwa_expected_deg", "RWA method expected accuracy", 1.0, 0, "deg",
-                  "004 §III.C", kind="budget"),
+                  "Brown §III.C", kind="budget"),
         PaperFact("rwa4_four_wheel_from_rwa3_deg", "2003 four-wheel calibration: RWA4 from RWA3",
-                  0.53, 2, "deg", "004 §III.A"),
+                  0.53, 2, "deg", "Brown §III.A"),
         # Lee, pointing error budget, Table 2 (3σ RSS)
         PaperFact("lee_pointing_rss_x_mrad", "pointing budget RSS, X (3σ)", 1.18, 2, "mrad",
-                  "003 Table 2"),
+                  "Lee Table 2"),
         PaperFact("lee_pointing_rss_z_mrad", "pointing budget RSS, Z (3σ)", 0.23, 2, "mrad",
-                  "003 Table 2"),
+                  "Lee Table 2"),
         # Lee §3.3: the inertial vector propagator's modelling accuracy
         PaperFact("ivp_modelling_error_urad", "IVP modelling error (direction of a propagated "
-                  "vector)", 40.0, 0, "µrad", "003 §3.3.2, Table 2", kind="budget"),
+                  "vector)", 40.0, 0, "µrad", "Lee §3.3.2, Table 2", kind="budget"),
     ]
     # Feldman & Lee (2006) Table 2: adjusted thrusts
     for i, day in enumerate(TABLE2["day"]):
@@ -203,7 +203,7 @@ def _rows() -> tuple[PaperFact, ...]:
             rows.append(PaperFact(
                 f"table2_day{day:03d}_tf{tf}",
                 f"Table 2, day {day}: thrust adjusted with τf = {tf} ms",
-                TABLE2[col][i], 3, "N", "000 Table 2"))
+                TABLE2[col][i], 3, "N", "Feldman & Lee Table 2"))
     # Feldman & Lee (2006) Table 1: errors of the predictions (Eq 12 %, Eq 13 kg m^2)
     for epoch, cols in TABLE1.items():
         for name, err in zip(TABLE1_PARAMS, cols["err"]):
@@ -211,7 +211,7 @@ def _rows() -> tuple[PaperFact, ...]:
             rows.append(PaperFact(
                 f"table1_{epoch}_{name}_err", f"Table 1, {epoch.replace('_', '-')}: {name} error "
                 f"({'Eq 12' if moment else 'Eq 13'})", float(err), 2 if moment else 0,
-                "%" if moment else "kg m^2", "000 Table 1"))
+                "%" if moment else "kg m^2", "Feldman & Lee Table 1"))
     return tuple(rows)
 
 

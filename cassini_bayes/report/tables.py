@@ -131,7 +131,7 @@ class BudgetCheck(NamedTuple):
     ----------
     fact_id : the :data:`~cassini_bayes.analysis.paper_facts.PAPER_FACTS` row.
     bound : the paper's bound as printed (``"≤ 1 %"``).
-    source : where the paper states it (``"000 §VI"``).
+    source : where the paper states it (``"Feldman & Lee §VI"``).
     error_q95 : the error's 95th percentile over the posterior draws, in the bound's unit.
     unit : that unit.
     passed : whether ``error_q95`` is within the bound.
@@ -386,8 +386,8 @@ def budget_check(label: str, draws: np.ndarray) -> BudgetCheck | None:
     """The papers' budget of one calibrated quantity, judged on its posterior draws (module
     docstring); ``None`` for a quantity the papers give no budget for.
 
-    A moment of inertia: Feldman & Lee Eq 12, ``100 |Î − I| / I`` against ±1 % (000 §VI); a
-    thrust (any parameter in newtons): ``100 |F̂ − F| / F`` against ±10 % (000 §V, §VI).
+    A moment of inertia: Feldman & Lee Eq 12, ``100 |Î − I| / I`` against ±1 % (Feldman & Lee §VI); a
+    thrust (any parameter in newtons): ``100 |F̂ − F| / F`` against ±10 % (Feldman & Lee §V, §VI).
     """
     from cassini_bayes.analysis import budget_lines as bl
 
