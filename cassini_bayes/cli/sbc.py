@@ -27,13 +27,16 @@ replaces a previous result — only a directory this package wrote
 ``--set KEY=VALUE`` (repeatable) passes a model option: sampler sizes (``num_warmup``,
 ``num_draws``, ``num_chains``, ``thin``) or a model's mis-specification switch (e.g. ``thrust``:
 ``pulse_dynamics=false``; ``rwa4``: ``rwa4_inertia_factor=1.2``; ``inertia``:
-``wheel_inertia_factor=1.05``); ``VALUE`` is read as a TOML value (``300``, ``1.2``, ``false``,
+``wheel_inertia_factor=1.05``) or a model variant (``inertia``: ``robust=true``, the robust model
+``fit inertia`` uses by default, every nuisance truth drawn from its prior; docs/sbc/
+inertia_robust/); ``VALUE`` is read as a TOML value (``300``, ``1.2``, ``false``,
 ``"cone"``) and falls back to a plain string. The campaigns of the issue's acceptance run on a
 16-core machine as, e.g.::
 
     cassini-bayes sbc thrust -n 208 --batch 4 --executor dask --workers 16 --out sbc-thrust
     cassini-bayes sbc rwa4 -n 208 --batch 4 --executor dask --workers 16 --out sbc-rwa4
     cassini-bayes sbc inertia -n 208 --batch 16 --out sbc-inertia
+    cassini-bayes sbc inertia -n 208 --batch 16 --set robust=true --out sbc-inertia-robust
 
 (the inertia and toy models are fitted by one vmapped NUTS program per batch; the thrust and
 RWA4 fits are not vectorised across replicates: a local Dask cluster of one single-threaded worker
