@@ -191,6 +191,7 @@ def _check_sampler_options(options: dict) -> dict:
 
 def _print_summary(summary: dict, out: Path) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     t = Table(title=f"SBC {summary['model']}: {summary['replicates']} replicates, "
@@ -199,7 +200,7 @@ def _print_summary(summary: dict, out: Path) -> None:
         t.add_column(col, justify="left" if col == "parameter" else "right")
     for name, p in summary["parameters"].items():
         cov = p["coverage"]
-        t.add_row(name, f"{p['chi2']['p_value']:.3g}", f"{p['ecdf']['p_value']:.3g}",
+        t.add_row(escape(name), f"{p['chi2']['p_value']:.3g}", f"{p['ecdf']['p_value']:.3g}",
                   *(f"{cov[k]['observed']:.3f}" for k in ("50", "80", "90", "95")))
     console = Console()
     console.print(t)
