@@ -9,14 +9,17 @@ replicates on Cassini and on the ESPA bus) are in docs/sbc/inertia_robust*/.
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 import pytest
 
-import jax
-
 from cassini_bayes.analysis.campaign import replicate_keys, run_campaign
-from cassini_bayes.analysis.sbc_models import (INERTIA_SCENARIO, ModelSpec, build_model,
-                                               robust_inertia_truth)
+from cassini_bayes.analysis.sbc_models import (
+    INERTIA_SCENARIO,
+    ModelSpec,
+    build_model,
+    robust_inertia_truth,
+)
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate.scenario import load_scenario
 
@@ -110,7 +113,7 @@ def test_robust_truth_reaches_the_simulator():
             assert abs(coef[0] - params[f"gyro_scale[{a}]"][i]) < 5 * se[0]
             assert abs(coef[1] - params[f"gyro_bias[{a}]"][i]) < 5 * se[1]
     sc = load_scenario(INERTIA_SCENARIO)
-    tp, nz = with_errors(sc, truth_params(sc), noise_params(sc),
+    tp, _ = with_errors(sc, truth_params(sc), noise_params(sc),
                          wheel_scale={"RWA1": 0.01, "RWA4": 0.02},
                          wheel_tilt_rad={"RWA2": (1e-3, -2e-3)})
     j = np.asarray(tp.wheel_inertias)

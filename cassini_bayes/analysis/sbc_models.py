@@ -480,8 +480,12 @@ def _inertia(spec: ModelSpec) -> SbcModel:
     """
     import numpy as np
 
-    from cassini_bayes.inference.inertia import (INERTIA_NAMES, inertia_model, inertia_prior,
-                                                 prepare_inertia)
+    from cassini_bayes.inference.inertia import (
+        INERTIA_NAMES,
+        inertia_model,
+        inertia_prior,
+        prepare_inertia,
+    )
     from cassini_bayes.inference.inertia import sample_prior as inertia_sample_prior
     from cassini_bayes.inference.nuisance import nuisance_layout
     from cassini_bayes.simulate.run import noise_params, simulate_batch, truth_params, with_errors
