@@ -94,6 +94,7 @@ __all__ = [
     "registered_models",
     "build_model",
     "nuts_fit",
+    "robust_inertia_truth",
 ]
 
 
