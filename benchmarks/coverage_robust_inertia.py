@@ -48,12 +48,10 @@ def _errors(key, scenario, drawn: bool):
     """True parameters and noise of one seed: the scenario's, with the gyro and wheel errors
     redrawn from the prior model's knowledge when ``drawn``."""
     import jax
-    import jax.numpy as jnp
     import numpy as np
 
     from cassini_bayes.inference.nuisance import prior_wheel_errors
-    from cassini_bayes.simulate import noise_params, truth_params
-    from cassini_bayes.spacecraft import tilted_axis
+    from cassini_bayes.simulate import noise_params, truth_params, with_errors
 
     tp, nz = truth_params(scenario), noise_params(scenario)
     if not drawn:
@@ -65,14 +63,10 @@ def _errors(key, scenario, drawn: bool):
     scale = kn.gyro_scale_factor_sd * jax.random.normal(k_s, (3,))
     c = prior_wheel_errors(prior, k_c)            # c_s + d_k per wheel
     tilt = np.deg2rad(kn.wheel_axis_sd_deg) * np.asarray(jax.random.normal(k_a, (n_w, 2)))
-    axes = np.array(tp.wheel_axes)
-    for j, w in enumerate(prior.wheels):
-        if not w.articulated or np.allclose(axes[j], w.axis):  # a re-articulated wheel stays put
-            axes[j] = tilted_axis(w.axis, tilt[j])
-    on = np.asarray(scenario.wheels_on, float)
-    tp = tp._replace(wheel_axes=jnp.asarray(axes),
-                     wheel_inertias=jnp.asarray(prior.wheel_inertias * (1.0 + c) * on))
-    return tp, nz._replace(gyro_bias_rad_s=bias, gyro_scale_factor=scale)
+    names = [w.name for w in prior.wheels]
+    return with_errors(scenario, tp, nz, wheel_scale=dict(zip(names, c)),
+                       wheel_tilt_rad=dict(zip(names, tilt)), gyro_bias_rad_s=bias,
+                       gyro_scale_factor=scale)
 
 
 def _run_one(job) -> dict:

@@ -48,6 +48,8 @@ Registered here (the simulator models' default scenarios are shipped files under
     own prior (:func:`cassini_bayes.inference.inertia.sample_prior`). ``--scenario`` takes a
     simulator scenario TOML (default :data:`INERTIA_SCENARIO`: three one-axis slews, one hour).
     Vectorised: the package's data preparation per replicate, then one vmapped NUTS program.
+    ``--set robust=true``: the robust model (the CLI fit's default), every nuisance truth drawn
+    from its prior and flown (:func:`robust_inertia_truth`).
 ``thrust``
     Mean thrust and pulse time constants (:func:`cassini_bayes.inference.thrust.fit_thrust`,
     mode ``mean``) on a short RCS-controlled wheel-biasing event (:data:`THRUST_SCENARIO`); truth
@@ -92,6 +94,7 @@ __all__ = [
     "registered_models",
     "build_model",
     "nuts_fit",
+    "robust_inertia_truth",
 ]
 
 
@@ -391,7 +394,58 @@ def _toy(spec: ModelSpec) -> SbcModel:
 INERTIA_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_inertia_slews.toml"
 
 _INERTIA_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "torque",
-                 "wheel_inertia_factor"}
+                 "wheel_inertia_factor", "robust", "rank_nuisance"}
+_AXES = ("x", "y", "z")
+
+
+def _nuisance_names(wheels: tuple[str, ...]) -> tuple[str, ...]:
+    """The robust inertia model's ranked nuisance scalars: gyro scale factor and bias per axis
+    (one file) and each active wheel's spin-inertia scale ``c_k``."""
+    return (tuple(f"gyro_scale[{a}]" for a in _AXES) + tuple(f"gyro_bias[{a}]" for a in _AXES)
+            + tuple(f"wheel_scale[{w}]" for w in wheels))
+
+
+def _nuisance_scalars(sites: Mapping[str, Any], wheels: tuple[str, ...]) -> dict[str, Any]:
+    """:func:`_nuisance_names` from the sites ``gyro_scale`` (..., 3), ``gyro_bias``
+    (..., 1, 3) and ``wheel_scale`` (..., K) of one file's draws or prior draws."""
+    out = {f"gyro_scale[{a}]": sites["gyro_scale"][..., i] for i, a in enumerate(_AXES)}
+    out.update({f"gyro_bias[{a}]": sites["gyro_bias"][..., 0, i] for i, a in enumerate(_AXES)})
+    out.update({f"wheel_scale[{w}]": sites["wheel_scale"][..., k] for k, w in enumerate(wheels)})
+    return out
+
+
+def robust_inertia_truth(key, scenario, *, torque: bool = True) -> dict[str, Any]:
+    """One draw of every parameter of the robust inertia model from its own prior, for
+    ``scenario``'s ``[prior]`` spacecraft and active wheels (one telemetry file).
+
+    :func:`~cassini_bayes.inference.inertia.sample_prior` with the model's nuisance layout
+    (:func:`~cassini_bayes.inference.nuisance.nuisance_layout`, as
+    :func:`~cassini_bayes.inference.inertia.prepare_inertia` builds it): ``Ixx … Iyz``, ``T_N``
+    and, for the one file, ``gyro_bias`` (3,) rad/s, ``gyro_scale`` (3,), ``wheel_scale`` (K,)
+    each wheel's total ``c_k = c_s + d_k``, ``wheel_scale_common`` (the shared ``c_s``, when the
+    model has it), ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m and, with ``torque``,
+    ``T_N_rate`` (3,) N m/s; and ``wheels``, the K wheel names. The same function the fit's
+    ``prior`` group uses, so the truth's prior is the model's.
+    """
+    import numpy as np
+
+    from cassini_bayes.inference.inertia import inertia_prior, sample_prior
+    from cassini_bayes.inference.nuisance import nuisance_layout
+
+    layout = nuisance_layout(scenario.prior, 1, _active_wheels(scenario), torque_rate=torque)
+    d = sample_prior(key, inertia_prior(scenario.prior), 1, torque=torque, layout=layout)
+    out = {n: np.asarray(v)[0] for n, v in d.items()}
+    for site in ("gyro_bias", "T_body", "T_N_rate", "T_N", "H0"):
+        if site in out:
+            out[site] = out[site][0]                        # the one file
+    out["wheels"] = layout.wheels
+    return out
+
+
+def _active_wheels(scenario) -> tuple[str, ...]:
+    """The wheels the scenario runs, in its order (the robust model's nuisance wheels)."""
+    return tuple(scenario.prior.wheel(n).name
+                 for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on)
 
 
 @register("inertia")
@@ -409,60 +463,130 @@ def _inertia(spec: ModelSpec) -> SbcModel:
     sufficient statistics, Laplace whitening; NumPy), then one ``jax.vmap`` over the batch of the
     package's NUTS program on those statistics (:func:`nuts_fit` on
     :func:`~cassini_bayes.inference.inertia.inertia_model`): the same draws ``fit_inertia`` gives
-    with the same key, all replicates of a batch in one compiled call. Options:
-    ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``torque`` (True), and
-    ``wheel_inertia_factor`` (1.0): the simulator's wheel spin inertias times this factor while
-    the fit keeps the model's — a deliberate mis-specification (the wheel/spacecraft inertia
-    scale, Psiaki 2005) that SBC must detect.
+    with the same key, all replicates of a batch in one compiled call.
+
+    ``robust=True`` checks the robust model instead (``fit inertia``'s default): each replicate
+    also draws every nuisance parameter from that model's prior (:func:`robust_inertia_truth`:
+    gyro bias and scale factor, each wheel's spin-inertia scale with the shared part, wheel-axis
+    tilts, body-fixed torque, the inertial torque's rate), flies the slews with them
+    (:func:`~cassini_bayes.simulate.with_errors`, the torques into the truth) and fits the robust
+    model; with ``rank_nuisance`` (default True) the gyro scale factors and biases and each
+    wheel's scale ``c_k`` are ranked beside the inertia (:func:`_nuisance_names`).
+
+    Options: ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``torque``
+    (True), ``robust`` (False), ``rank_nuisance`` (True), and ``wheel_inertia_factor`` (1.0): the
+    simulator's wheel spin inertias times this factor while the fit keeps the model's — a
+    deliberate mis-specification (the wheel/spacecraft inertia scale, Psiaki 2005) that SBC must
+    detect.
     """
     import numpy as np
 
-    from cassini_bayes.inference.inertia import (INERTIA_NAMES, inertia_model, inertia_prior,
-                                                 prepare_inertia)
+    from cassini_bayes.inference.inertia import (
+        INERTIA_NAMES,
+        inertia_model,
+        inertia_prior,
+        prepare_inertia,
+    )
     from cassini_bayes.inference.inertia import sample_prior as inertia_sample_prior
-    from cassini_bayes.simulate.run import simulate_batch, truth_params
+    from cassini_bayes.inference.nuisance import nuisance_layout
+    from cassini_bayes.simulate.run import noise_params, simulate_batch, truth_params, with_errors
 
     scenario = _scenario(spec, INERTIA_SCENARIO)
     opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "torque": True,
-            "wheel_inertia_factor": 1.0, **dict(spec.options)}
+            "wheel_inertia_factor": 1.0, "robust": False, **dict(spec.options)}
     _check_options("inertia", opts, _INERTIA_KEYS)
-    names = tuple(INERTIA_NAMES)
-    prior = inertia_prior(scenario.prior)
-    base = truth_params(scenario)
+    robust = bool(opts["robust"])
+    if robust:
+        opts.setdefault("rank_nuisance", True)
+    elif opts.get("rank_nuisance"):
+        raise InputError("inertia SBC option rank_nuisance needs robust=true (the idealised "
+                         "model has no nuisance parameters)")
     torque = bool(opts["torque"])
+    wheels = _active_wheels(scenario)
+    extra = _nuisance_names(wheels) if robust and opts["rank_nuisance"] else ()
+    names = tuple(INERTIA_NAMES) + extra
+    prior = inertia_prior(scenario.prior)
+    base, base_noise = truth_params(scenario), noise_params(scenario)
+    factor = float(opts["wheel_inertia_factor"])
+    if robust:
+        layout = nuisance_layout(scenario.prior, 1, wheels, torque_rate=torque)
+        model = inertia_model(torque, True, layout.wheel_errors, common=layout.has_common,
+                              torque_rate=torque)
+    else:
+        model = inertia_model(torque, False)
 
     def draw_truth(key):
+        if robust:
+            return robust_inertia_truth(key, scenario, torque=torque)
         d = inertia_sample_prior(key, prior, 1, torque=torque)
-        pi = np.array([d[n][0] for n in names])
-        tq = d["T_N"][0, 0] if torque else np.zeros(3)
-        return pi, tq
+        return {**{n: d[n][0] for n in INERTIA_NAMES},
+                "T_N": d["T_N"][0, 0] if torque else np.zeros(3)}
+
+    def ranked(d):
+        out = {n: d[n] for n in INERTIA_NAMES}
+        if extra:
+            out.update(_nuisance_scalars({"gyro_scale": d["gyro_scale"],
+                                          "gyro_bias": d["gyro_bias"][None],
+                                          "wheel_scale": d["wheel_scale"]}, wheels))
+        return out
 
     def prior_sample(key):
-        pi, _ = draw_truth(key)
-        return dict(zip(names, pi))
+        return ranked(draw_truth(key))
+
+    def one_truth(d):
+        """The simulator's truth and noise of one drawn replicate."""
+        zero = np.zeros(3)
+        tp = base._replace(inertia=jnp.asarray([d[n] for n in INERTIA_NAMES]),
+                           torque_inertial_nm=jnp.asarray(d.get("T_N", zero)))
+        nz = base_noise
+        if robust:
+            tp = tp._replace(torque_body_nm=jnp.asarray(d["T_body"]),
+                             torque_inertial_rate_nm_s=jnp.asarray(d.get("T_N_rate", zero)))
+            tp, nz = with_errors(scenario, tp, nz,
+                                 wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),
+                                 wheel_tilt_rad=dict(zip(d["wheels"], d["wheel_tilt"])),
+                                 gyro_bias_rad_s=d["gyro_bias"], gyro_scale_factor=d["gyro_scale"])
+        return tp._replace(wheel_inertias=tp.wheel_inertias * factor), nz
 
     def simulate_batch_fn(prior_keys, sim_keys):
         drawn = [draw_truth(k) for k in prior_keys]
-        pi = np.stack([d[0] for d in drawn])
-        tq = np.stack([d[1] for d in drawn])
-        tiled = _tiled_truth(base, pi.shape[0])
-        truth = tiled._replace(
-            inertia=jnp.asarray(pi), torque_inertial_nm=jnp.asarray(tq),
-            wheel_inertias=tiled.wheel_inertias * float(opts["wheel_inertia_factor"]))
-        return dict(zip(names, pi.T)), simulate_batch(sim_keys, scenario, truth)
+        pairs = [one_truth(d) for d in drawn]
+        stack = functools.partial(jax.tree.map, lambda *xs: jnp.stack([jnp.asarray(x)
+                                                                       for x in xs]))
+        truth = stack(*[p[0] for p in pairs])
+        if robust:
+            arrays = simulate_batch(sim_keys, scenario, truth, stack(*[p[1] for p in pairs]),
+                                    noise_batched=True)
+        else:
+            arrays = simulate_batch(sim_keys, scenario, truth)
+        params = [ranked(d) for d in drawn]
+        return {n: np.array([p[n] for p in params]) for n in names}, arrays
 
     def simulate(key, params):
         raise NotImplementedError("the inertia adapter simulates in batches (simulate_batch)")
 
     def prepare(arrays):
         tel = _telemetry(arrays, scenario, "<sbc inertia replicate>")
-        return {"data": prepare_inertia([tel], scenario.prior, torque=torque, robust=False).data}
+        problem = prepare_inertia([tel], scenario.prior, torque=torque, robust=robust)
+        if robust and problem.layout.wheels != wheels:
+            raise RuntimeError(f"replicate's active wheels {problem.layout.wheels} are not the "
+                               f"scenario's {wheels}")
+        return {"data": problem.data}
 
-    fit = nuts_fit(inertia_model(torque, False), names, _sampler_settings(opts))
+    sites = tuple(INERTIA_NAMES) + (("gyro_scale", "gyro_bias", "wheel_scale") if extra else ())
+    site_fit = nuts_fit(model, sites, _sampler_settings(opts))
+
+    def fit(key, kwargs):
+        out = site_fit(key, kwargs)
+        draws = {n: out.draws[n] for n in INERTIA_NAMES}
+        if extra:
+            draws.update(_nuisance_scalars(out.draws, wheels))
+        return SbcFit(draws, out.n_divergent)
+
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}
-    return SbcModel("inertia", names, prior_sample, simulate, fit, vectorized=True,
-                    settings=record, rhat_max=1.05, simulate_batch=simulate_batch_fn,
-                    prepare=prepare)
+    return SbcModel("inertia", names, prior_sample, simulate, fit if extra else site_fit,
+                    vectorized=True, settings=record, rhat_max=1.05,
+                    simulate_batch=simulate_batch_fn, prepare=prepare)
 
 
 # ---------------------------------------------------------------------------- shared helpers

@@ -27,13 +27,16 @@ replaces a previous result — only a directory this package wrote
 ``--set KEY=VALUE`` (repeatable) passes a model option: sampler sizes (``num_warmup``,
 ``num_draws``, ``num_chains``, ``thin``) or a model's mis-specification switch (e.g. ``thrust``:
 ``pulse_dynamics=false``; ``rwa4``: ``rwa4_inertia_factor=1.2``; ``inertia``:
-``wheel_inertia_factor=1.05``); ``VALUE`` is read as a TOML value (``300``, ``1.2``, ``false``,
+``wheel_inertia_factor=1.05``) or a model variant (``inertia``: ``robust=true``, the robust model
+``fit inertia`` uses by default, every nuisance truth drawn from its prior; docs/sbc/
+inertia_robust/); ``VALUE`` is read as a TOML value (``300``, ``1.2``, ``false``,
 ``"cone"``) and falls back to a plain string. The campaigns of the issue's acceptance run on a
 16-core machine as, e.g.::
 
     cassini-bayes sbc thrust -n 208 --batch 4 --executor dask --workers 16 --out sbc-thrust
     cassini-bayes sbc rwa4 -n 208 --batch 4 --executor dask --workers 16 --out sbc-rwa4
     cassini-bayes sbc inertia -n 208 --batch 16 --out sbc-inertia
+    cassini-bayes sbc inertia -n 208 --batch 16 --set robust=true --out sbc-inertia-robust
 
 (the inertia and toy models are fitted by one vmapped NUTS program per batch; the thrust and
 RWA4 fits are not vectorised across replicates: a local Dask cluster of one single-threaded worker
@@ -188,6 +191,7 @@ def _check_sampler_options(options: dict) -> dict:
 
 def _print_summary(summary: dict, out: Path) -> None:
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
 
     t = Table(title=f"SBC {summary['model']}: {summary['replicates']} replicates, "
@@ -196,7 +200,7 @@ def _print_summary(summary: dict, out: Path) -> None:
         t.add_column(col, justify="left" if col == "parameter" else "right")
     for name, p in summary["parameters"].items():
         cov = p["coverage"]
-        t.add_row(name, f"{p['chi2']['p_value']:.3g}", f"{p['ecdf']['p_value']:.3g}",
+        t.add_row(escape(name), f"{p['chi2']['p_value']:.3g}", f"{p['ecdf']['p_value']:.3g}",
                   *(f"{cov[k]['observed']:.3f}" for k in ("50", "80", "90", "95")))
     console = Console()
     console.print(t)

@@ -6,7 +6,8 @@ Public API (re-exported from the private modules):
 * :func:`simulate` ``(key, scenario) -> SimResult`` — truth, noisy telemetry, pulse log;
 * :func:`simulate_batch` ``(keys, scenario, truth=None) -> SimArrays`` — replicates in one
   compiled, vmapped call (truth parameters may be batched too, for SBC);
-* :class:`TruthParams`, :func:`truth_params`, :func:`quiet_windows`;
+* :class:`TruthParams`, :func:`truth_params`, :func:`quiet_windows`, :func:`with_errors` (sensor
+  and wheel errors of the robust models' nuisance, for closed-world campaigns);
 * :class:`FlexMode` — the optional flexible/slosh mode (hybrid coordinates).
 """
 
@@ -23,6 +24,7 @@ from cassini_bayes.simulate.run import (
     simulate_batch,
     trace_count,
     truth_params,
+    with_errors,
 )
 from cassini_bayes.simulate.scenario import (FlexMode, Noise, Scenario, load_scenario,
                                             scenario_from_dict)
@@ -47,4 +49,5 @@ __all__ = [
     "simulate_batch",
     "trace_count",
     "truth_params",
+    "with_errors",
 ]

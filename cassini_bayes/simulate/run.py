@@ -46,12 +46,13 @@ from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.simulate import controllers as ctl
 from cassini_bayes.simulate.scenario import Scenario, check_size
 from cassini_bayes.simulate.sensors import NoiseParams, measure, time_tags
+from cassini_bayes.spacecraft import tilted_axis
 from cassini_bayes.telemetry import PulseLog, Telemetry
 from cassini_bayes.units import RPM_TO_RAD_S
 
 __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_params", "simulate",
            "simulate_arrays", "simulate_batch", "pulse_log", "quiet_windows", "PULSE_RING",
-           "trace_count"]
+           "trace_count", "with_errors"]
 
 PULSE_RING = 6           # pulses remembered per thruster (older tails are < 1e-8 of a pulse)
 _TRACES = [0]            # incremented each time the core is traced (compile-once test)
@@ -430,15 +431,15 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
 _core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))
 
 
-def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched):
+def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched, noise_batched=False):
     # A shared truth stays unbatched: its mass properties are then hoisted out of the vmapped
     # loop, ~10x faster than carrying one copy per replicate.
     axes = 0 if truth_batched else None
-    return jax.vmap(_simulate_core, in_axes=(0, axes, None, None, None, None))(
-        keys, truth, noise, plan, carr, cfg)
+    return jax.vmap(_simulate_core, in_axes=(0, axes, 0 if noise_batched else None, None,
+                                             None, None))(keys, truth, noise, plan, carr, cfg)
 
 
-_batch_jit = jax.jit(_batch_core, static_argnames=("cfg", "truth_batched"))
+_batch_jit = jax.jit(_batch_core, static_argnames=("cfg", "truth_batched", "noise_batched"))
 
 
 _PREPARED: dict[int, tuple] = {}   # id(scenario) → (scenario, plan, controller arrays), a few
@@ -468,7 +469,7 @@ def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = 
 
 
 def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = None,
-                   noise: NoiseParams | None = None) -> SimArrays:
+                   noise: NoiseParams | None = None, *, noise_batched: bool = False) -> SimArrays:
     """Replicates of a scenario as one compiled, vmapped call.
 
     Parameters
@@ -478,7 +479,8 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     truth : optional :class:`TruthParams` with a leading batch axis (b, ...) to vary the true
         parameters per replicate (e.g. prior draws for SBC); default: the scenario's, shared.
         New draws of the same shape reuse the compiled program (no recompilation).
-    noise : optional noise levels (shared).
+    noise : optional noise levels and sensor errors, shared; with ``noise_batched`` every field
+        has a leading batch axis (b, ...), one set per replicate (e.g. gyro biases drawn for SBC).
 
     Returns
     -------
@@ -490,7 +492,41 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     noise = noise_params(scenario) if noise is None else noise
     plan, carr = _prepared(scenario)
     return _batch_jit(keys, truth, noise, plan, carr, cfg=_config(scenario),
-                      truth_batched=batched)
+                      truth_batched=batched, noise_batched=noise_batched)
+
+
+def with_errors(scenario: Scenario, truth: TruthParams, noise: NoiseParams, *,
+                wheel_scale: dict | None = None, wheel_tilt_rad: dict | None = None,
+                gyro_bias_rad_s=None, gyro_scale_factor=None) -> tuple[TruthParams, NoiseParams]:
+    """``truth`` and ``noise`` of one run with the sensor and wheel errors the robust models'
+    nuisance parameters describe (:mod:`cassini_bayes.inference.nuisance`), relative to the
+    ``[prior]`` model, the reference those parameters are errors of.
+
+    ``wheel_scale`` (wheel name → ``c_k``): that wheel's true spin inertia is ``(1 + c_k) J_k``
+    with ``J_k`` the prior model's (zero while the wheel is off); ``wheel_tilt_rad`` (name →
+    ``(a_k1, a_k2)``): its true axis is the prior model's tilted along
+    :func:`~cassini_bayes.spacecraft.wheel_tilt_basis` (an articulated wheel the scenario has moved
+    off its model axis stays where the scenario put it); ``gyro_bias_rad_s`` (3,) and
+    ``gyro_scale_factor`` (3,): ``ω_meas = (1 + s) ω + b + noise``. Wheels not named keep the
+    scenario's truth. NumPy, one run: the campaigns stack the results over replicates.
+    """
+    prior = scenario.prior
+    on = dict(zip(scenario.wheel_names, scenario.wheels_on))
+    axes = np.array(truth.wheel_axes, float)
+    inertias = np.array(truth.wheel_inertias, float)
+    for name, c in (wheel_scale or {}).items():
+        k = scenario.wheel_names.index(name)
+        inertias[k] = prior.wheel(name).inertia * (1.0 + float(c)) * float(on[name])
+    for name, tilt in (wheel_tilt_rad or {}).items():
+        k, w = scenario.wheel_names.index(name), prior.wheel(name)
+        if not w.articulated or np.allclose(axes[k], w.axis):
+            axes[k] = tilted_axis(w.axis, tilt)
+    truth = truth._replace(wheel_axes=jnp.asarray(axes), wheel_inertias=jnp.asarray(inertias))
+    if gyro_bias_rad_s is not None:
+        noise = noise._replace(gyro_bias_rad_s=jnp.asarray(gyro_bias_rad_s, float))
+    if gyro_scale_factor is not None:
+        noise = noise._replace(gyro_scale_factor=jnp.asarray(gyro_scale_factor, float))
+    return truth, noise
 
 
 def _telemetry(s: Scenario, t, q, w, rho, on_times, source) -> Telemetry:
