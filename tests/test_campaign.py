@@ -306,3 +306,20 @@ def test_failed_preparations_are_counted_not_fatal(tmp_path):
     ok = ~res.failed
     assert np.all(np.isfinite(res.draws[ok])) and np.all(res.ess[ok] > 50)
     assert sbc.chi2_uniformity(res.rank[ok, 0], res.n_draws, bins=4).p_value > 1e-3
+
+
+def test_a_failed_scheduler_leaves_dask_as_it_was():
+    """A malformed --scheduler is an InputError, and the half-made client does not stay dask's
+    global scheduler (later ArviZ/xarray work in the process would try to reach it)."""
+    import dask
+    from distributed.client import _get_global_client
+
+    from cassini_bayes.analysis.campaign import _dask_client
+    from cassini_bayes.errors import InputError
+
+    before = dask.config.get("scheduler", None)
+    with pytest.raises(InputError, match="cannot reach the Dask scheduler"):
+        with _dask_client("not an address", None, False, 2.0):
+            pass
+    assert dask.config.get("scheduler", None) == before
+    assert _get_global_client() is None

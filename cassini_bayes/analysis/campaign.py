@@ -404,14 +404,18 @@ def _dask_client(scheduler: str | None, n_workers: int | None, processes: bool,
     except ImportError:
         raise InputError("the dask executor needs dask.distributed: "
                          "pip install 'dask[distributed]'") from None
+    # set_as_default=False: a client that fails (a malformed or unreachable address) must not
+    # stay dask's global scheduler, which later xarray/ArviZ work in the process would use;
+    # one that connects is the current client only while the campaign runs
     if scheduler:
         try:
-            client = Client(scheduler, timeout=f"{timeout_s}s")
+            client = Client(scheduler, timeout=f"{timeout_s}s", set_as_default=False)
         except (OSError, TimeoutError, ValueError) as e:  # unreachable, or a malformed address
             raise InputError(f"cannot reach the Dask scheduler at {scheduler!r} ({e}); check the "
                              "address or omit --scheduler for a local cluster") from None
         try:
-            yield client
+            with client.as_current():
+                yield client
         finally:
             client.close()
         return
