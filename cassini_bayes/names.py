@@ -6,7 +6,9 @@ Pure constants: any layer may import this module.
 
 from __future__ import annotations
 
-__all__ = ["INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
+import numpy as np
+
+__all__ = ["axis_label", "INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
            "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
@@ -51,3 +53,14 @@ def a_kind(kind: str) -> str:
     from cassini_bayes.errors import with_article
 
     return with_article("RWA4" if kind == "rwa4" else str(kind))
+
+
+def axis_label(v, digits: int = 4) -> str:
+    """``+Z`` (or ``−X`` …) for a body axis of either sign, else the vector to ``digits``
+    significant figures: how verdicts and reports name a cone axis."""
+    v = np.asarray(v, float)
+    for k, c in enumerate("XYZ"):
+        for sign, mark in ((1.0, "+"), (-1.0, "−")):
+            if np.allclose(v, sign * np.eye(3)[k], atol=1e-9):
+                return mark + c
+    return "[" + ", ".join(f"{x:.{digits}g}" for x in v) + "]"

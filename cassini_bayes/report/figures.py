@@ -22,6 +22,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
+from cassini_bayes.names import axis_label
+
 __all__ = [
     "DPI",
     "png_bytes",
@@ -423,14 +425,6 @@ def _cone_panel(ax, xy, marks, cones, lim, rings, title, m, east, north) -> None
     tidy_ticks(ax, x=5, y=5)
 
 
-def _vec_label(v: np.ndarray) -> str:
-    """``+Z`` for a body axis (either sign), else the vector."""
-    for k, c in enumerate("XYZ"):
-        for sign, mark in ((1.0, "+"), (-1.0, "−")):
-            if np.allclose(v, sign * np.eye(3)[k], atol=1e-9):
-                return mark + c
-    return "[" + ", ".join(f"{x:.3g}" for x in v) + "]"
-
 
 def axis_sky_figure(
     draws: np.ndarray,
@@ -496,7 +490,7 @@ def axis_sky_figure(
         jump = np.flatnonzero(np.abs(np.diff(ring[:, 0])) > 180.0) + 1   # the azimuth wraps
         ring = np.insert(ring, jump, np.nan, axis=0)
         ax_g.plot(ring[:, 0], ring[:, 1], color="#888888", linewidth=1, linestyle=":",
-                  label=f"articulation cone ({c_deg:.2f}° from {_vec_label(c_axis)})")
+                  label=f"articulation cone ({c_deg:.2f}° from {axis_label(c_axis, 3)})")
     ax_g.scatter(ae[:, 0], ae[:, 1], s=4, color=POST_COLOR, alpha=0.5, label="posterior draws")
     for name, v, mk, col in marks:
         p = _ae(v)[0]

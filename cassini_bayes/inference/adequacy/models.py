@@ -16,6 +16,7 @@ from cassini_bayes.inference.adequacy.held_out import inertia_held_out
 from cassini_bayes.inference.adequacy.prior_conflict import common_wheel_scale, prior_data_conflict
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation, residual_regression
 from cassini_bayes.inference.nuisance import site_prior_sd as nuisance_prior_sd
+from cassini_bayes.names import axis_label
 
 
 def _residual_checks(idata, covariates: np.ndarray | None, names: Sequence[str] | None,
@@ -111,15 +112,6 @@ def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
 CONE_OFFSET_MAX_DEG = 10.0  # farthest the fitted axis may sit from the articulation cone
 
 
-def _axis_label(axis: np.ndarray) -> str:
-    """``+Z`` for a body axis (either sign), else the vector."""
-    for k, c in enumerate("XYZ"):
-        for sign, mark in ((1.0, "+"), (-1.0, "−")):
-            if np.allclose(axis, sign * np.eye(3)[k], atol=1e-12):
-                return mark + c
-    return "[" + ", ".join(f"{x:.4g}" for x in axis) + "]"
-
-
 def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check:
     """Is the fitted spin axis where the wheel can point? A wheel whose model entry gives an
     articulation cone (``post.problem.cone``; Cassini's RWA4: 54.74° from +Z at any
@@ -139,7 +131,7 @@ def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check
     polar = float(np.degrees(np.arccos(cos)))
     offset = abs(polar - problem.cone.angle_deg)
     return _check("articulation_cone", offset, threshold_deg,
-                  note=f"axis {polar:.1f}° from {_axis_label(problem.cone.axis)}; the wheels' "
+                  note=f"axis {polar:.1f}° from {axis_label(problem.cone.axis)}; the wheels' "
                   f"cone is at {problem.cone.angle_deg:.2f}°"
                   + ("; a wheel-rate sign flipped in the file points the axis to the antipode, "
                      "and windows that hold part of the spin-up turn it (check the windows)"
