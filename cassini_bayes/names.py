@@ -6,8 +6,6 @@ Pure constants: any layer may import this module.
 
 from __future__ import annotations
 
-import numpy as np
-
 __all__ = ["axis_label", "INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
            "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
 
@@ -58,6 +56,8 @@ def a_kind(kind: str) -> str:
 def axis_label(v, digits: int = 4) -> str:
     """``+Z`` (or ``−X`` …) for a body axis of either sign, else the vector to ``digits``
     significant figures: how verdicts and reports name a cone axis."""
+    import numpy as np   # here: the command line imports names.py before it needs NumPy
+
     v = np.asarray(v, float)
     for k, c in enumerate("XYZ"):
         for sign, mark in ((1.0, "+"), (-1.0, "−")):
