@@ -13,10 +13,11 @@ backend starts. When a caller has already run JAX code the request comes too lat
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any, TypeVar, cast
 
 DEFAULT_CHAINS = 4
@@ -94,6 +95,19 @@ def require_x64(what: str) -> None:
 _F = TypeVar("_F", bound=Callable[..., Any])
 
 
+@contextlib.contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """NumPy's BLAS (OpenBLAS, MKL) on one thread while the package computes, as before after.
+
+    The package's NumPy linear algebra is many small products (thousands of rows, tens of
+    columns) between JAX programs: BLAS threads cost more to start and spin than they save, and
+    take the cores that XLA's sampling threads need."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
 def jax_entry(fn: _F) -> _F:
     """Decorate a public function that computes with JAX: :func:`setup_jax` first, so that
     whichever the caller runs first (a simulation, a check, a fit) computes in 64-bit and the
@@ -101,7 +115,8 @@ def jax_entry(fn: _F) -> _F:
     @functools.wraps(fn)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         setup_jax()
-        return fn(*args, **kwargs)
+        with one_blas_thread():
+            return fn(*args, **kwargs)
 
     return cast(_F, wrapper)
 

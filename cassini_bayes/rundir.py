@@ -238,7 +238,9 @@ def read_posterior(run_dir: str | os.PathLike, kind: str | None = None,
     ``where`` (default the directory), when the directory or the file is missing, the run is a
     fit of another ``kind`` than asked (a thrust run carries inertia draws too), or the file
     cannot be read."""
-    import arviz as az
+    from cassini_bayes._arviz import load_arviz
+
+    az = load_arviz()
 
     run_dir = Path(run_dir)
     where = where or str(run_dir)

@@ -267,6 +267,45 @@ def test_the_command_line_and_a_fit_up_to_its_sampler_import_nothing_heavy():
     assert fit == "[]"
 
 
+def test_arviz_is_imported_without_compiling_numba(tmp_path):
+    """The package's ArviZ import keeps an installed numba away from ArviZ (which would compile a
+    numba ufunc at import), and numba stays importable afterwards. A stand-in ``numba`` on the
+    path records whether it was imported."""
+    fake = tmp_path / "numba"
+    fake.mkdir()
+    (fake / "__init__.py").write_text("import os\nopen(os.environ['MARK'], 'a').write('x')\n")
+    mark = tmp_path / "imported"
+    code = ("import sys\n"
+            "from cassini_bayes._arviz import load_arviz\n"
+            "az = load_arviz()\n"
+            "print(az.utils.Numba.numba_flag, 'numba' in sys.modules)\n"
+            "import numba\n")
+    import os
+
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
+           "MARK": str(mark)}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                         check=True).stdout
+    assert out.split() == ["False", "False"]
+    assert mark.read_text() == "x"       # imported once, by the script, after ArviZ
+
+
+def test_the_fits_run_numpys_blas_on_one_thread():
+    """Inside a computing API function NumPy's BLAS runs one thread; the caller's setting is back
+    afterwards."""
+    from threadpoolctl import threadpool_info
+
+    from cassini_bayes._devices import jax_entry
+
+    before = [d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"]
+    if not before:
+        pytest.skip("no BLAS thread pool loaded")
+    inside = jax_entry(lambda: [d["num_threads"] for d in threadpool_info()
+                                if d["user_api"] == "blas"])()
+    assert inside == [1] * len(before)
+    assert [d["num_threads"] for d in threadpool_info() if d["user_api"] == "blas"] == before
+
+
 _FIT_MISSING_FILE = ("import warnings, cassini_bayes as cb\n"
                      "with warnings.catch_warnings(record=True) as w:\n"
                      "    warnings.simplefilter('always')\n"

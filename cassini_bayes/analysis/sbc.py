@@ -463,7 +463,9 @@ def plot_ecdf_difference(result: SbcResult):
     -------
     matplotlib.figure.Figure
     """
-    import arviz as az
+    from cassini_bayes._arviz import load_arviz
+
+    az = load_arviz()
 
     fig, axes = _grid(len(result.names))
     L = result.n_draws

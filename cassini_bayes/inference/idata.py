@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import warnings
 
-__all__ = ["replace_groups", "quiet_arviz_shape_warnings"]
+__all__ = ["replace_groups"]
 
 
 def replace_groups(idata, groups: dict) -> None:
@@ -17,16 +17,3 @@ def replace_groups(idata, groups: dict) -> None:
                 del idata[name]
         idata.add_groups(groups)
 
-
-def quiet_arviz_shape_warnings() -> None:
-    """Silence ArviZ's log line "Shape validation failed" (a one-chain run: its R-hat is
-    undefined, which ``summary.json`` and the command's result line say in words). ArviZ logs
-    through its own ``Logger`` object, not one of the ``logging`` module's, so it is reached
-    through the package."""
-    import logging
-
-    import arviz
-
-    log = getattr(arviz, "_log", None)
-    if isinstance(log, logging.Logger):
-        log.setLevel(logging.ERROR)

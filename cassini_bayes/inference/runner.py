@@ -52,10 +52,10 @@ from numpyro.infer import Predictive
 from numpyro.infer.hmc import hmc
 from numpyro.infer.util import constrain_fn, potential_energy
 
+from cassini_bayes._arviz import load_arviz
 from cassini_bayes._devices import request_host_devices, require_x64
 from cassini_bayes.diagnostics import ESS_BULK_MIN, R_HAT_MAX, Diagnostics
 from cassini_bayes.inference import progress
-from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
 
 if TYPE_CHECKING:
     import arviz
@@ -257,16 +257,6 @@ def _sampler_for(model: Callable, s: SamplerSettings, method: str) -> _Sampler:
     return fn
 
 
-def _arviz():
-    """ArviZ, imported when a posterior exists (its import, matplotlib included, is most of a
-    command's start-up), its shape-validation log line silenced (one-chain runs: the summary
-    says R-hat is undefined)."""
-    import arviz
-
-    quiet_arviz_shape_warnings()
-    return arviz
-
-
 def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
              settings: SamplerSettings = SamplerSettings(),
              coords: Mapping[str, Sequence] | None = None,
@@ -318,7 +308,7 @@ def run_nuts(key, model: Callable, *, model_kwargs: Mapping[str, object],
         samples, stats = _run_chains(fn, s, keys, init_z, kwargs)
     posterior = {k: np.asarray(v) for k, v in samples.items()}
     sample_stats = {k: np.asarray(v) for k, v in stats.items()}
-    az = _arviz()
+    az = load_arviz()
     idata = az.from_dict(posterior=posterior, sample_stats=sample_stats,
                          coords=dict(coords or {}),
                          dims={k: v for k, v in (dims or {}).items() if k in posterior})
@@ -365,7 +355,7 @@ def diagnostics(idata: arviz.InferenceData, var_names: Sequence[str] | None = No
                 ) -> Diagnostics:
     """R-hat, bulk/tail ESS (ArviZ) and divergences over ``var_names`` (default: all), judged
     by the package's rule (:mod:`cassini_bayes.diagnostics`)."""
-    az = _arviz()
+    az = load_arviz()
     names = list(var_names) if var_names is not None else None
     rhat = az.rhat(idata, var_names=names)
     ess_b = az.ess(idata, var_names=names, method="bulk")

@@ -19,14 +19,16 @@ from __future__ import annotations
 import math
 from typing import Mapping, Sequence
 
-import arviz as az
 import numpy as np
 
 from cassini_bayes import __version__
+from cassini_bayes._arviz import load_arviz
 from cassini_bayes.files import finite_or_none as _num
 from cassini_bayes.files import json_clean
 
 __all__ = ["CONTRACTION_WEAK", "build_summary"]
+
+az = load_arviz()
 
 CONTRACTION_WEAK = 0.5
 

@@ -208,11 +208,9 @@ def _judged_names(run: RunData) -> set[str] | None:
 
 def _arviz_stats(draws: dict[str, np.ndarray]) -> dict[str, tuple[float, float, float]]:
     """R-hat, bulk and tail ESS of each (chain, draw) array, computed by ArviZ."""
-    import arviz as az
+    from cassini_bayes._arviz import load_arviz
 
-    from cassini_bayes.inference.idata import quiet_arviz_shape_warnings
-
-    quiet_arviz_shape_warnings()
+    az = load_arviz()
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
