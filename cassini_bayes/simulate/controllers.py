@@ -50,9 +50,9 @@ COMMAND_RESOLUTION_S = 0.125  # thruster and articulation command resolution (Br
 MIN_PULSE_S = 0.125           # smallest RCS pulse (Feldman & Lee §V: 125-ms pulses)
 
 SET_SIZE_MAX = 4              # most thrusters fired together for one axis and sign
-_OFF_AXIS_MAX = 0.25          # a set's off-axis torque is at most this × its on-axis torque
-_USABLE_MIN = 0.05            # ... and its on-axis torque at least this × the strongest thruster's
-_FORCE_FREE = 0.05            # a couple: net force at most this × the set's summed thrust
+_OFF_AXIS_MAX = 0.5           # a set's off-axis torque is at most this × its on-axis torque
+_USABLE_MIN = 0.05            # each thruster's on-axis torque at least this × the strongest one's
+_FORCE_FREE = 0.1             # a couple: net force at most this × the set's summed thrust
 _SEARCH_MAX = 32              # most thrusters of one branch the exhaustive search takes
 
 
@@ -63,13 +63,13 @@ def thruster_sets(sc: Spacecraft) -> np.ndarray:
     Search over every set of up to :data:`SET_SIZE_MAX` thrusters of the first branch listed
     (the others are backups), torque ``τ = Σ F_s Q_s`` (Feldman & Lee Eq 16) and net force
     ``f = Σ F_s d_s`` at the model's nominal thrusts. A set is usable for an axis and sign when
-    its on-axis torque ``τ_on`` is positive, at least 5 % of the strongest thruster's torque, and
-    its off-axis torque ``|τ_off| ≤ 0.25 τ_on``. Score ``τ_on − |τ_off| − σ_e |f|`` (``σ_e`` the
+    each of its thrusters turns the spacecraft that way by at least 5 % of the strongest
+    thruster's torque (no passengers) and its off-axis torque ``|τ_off| ≤ 0.5 τ_on``. Score ``τ_on − |τ_off| − σ_e |f|`` (``σ_e`` the
     centre-of-mass knowledge: the torque the net force may add); ties go to the smaller net
-    force, then to fewer thrusters, then to the thrusters listed first. An axis whose best set is
-    a force-free couple (``|f| ≤ 5 %`` of its summed thrust) keeps those thrusters; the other
-    axes choose among the remaining thrusters when those give a usable set: Cassini's Y-facing
-    couples turn about Z, its Z-facing thrusters about X and Y (Feldman & Lee §II).
+    force, then to fewer thrusters, then to the thrusters listed first. An axis whose best sets
+    both ways are force-free couples (``|f| ≤ 10 %`` of the summed thrust) keeps those thrusters;
+    the other axes choose among the remaining thrusters when those give a usable set: Cassini's
+    Y-facing couples turn about Z, its Z-facing thrusters about X and Y (Feldman & Lee §II).
     Raises :class:`InputError` naming the model and the axis when no set is usable.
     """
     m = len(sc.thrusters)
@@ -96,7 +96,8 @@ def thruster_sets(sc: Spacecraft) -> np.ndarray:
             for j, sign in enumerate((1.0, -1.0)):
                 on = sign * tau[ax]
                 off = float(np.linalg.norm(np.delete(tau, ax)))
-                if not (on > 0 and on >= _USABLE_MIN * scale and off <= _OFF_AXIS_MAX * on):
+                if not (np.min(sign * torque[ax, c]) >= _USABLE_MIN * scale
+                        and off <= _OFF_AXIS_MAX * on):
                     continue
                 score = on - off - sc.com_sd_m * f_norm
                 key = (-round(score / scale, 9), round(f_norm / thrust, 9), len(c), c)
@@ -110,10 +111,11 @@ def thruster_sets(sc: Spacecraft) -> np.ndarray:
                                  f"{SET_SIZE_MAX} of its thrusters gives torque mostly about "
                                  "that axis; check the thrusters' positions and directions")
             best[ax, j].sort(key=lambda e: e[0])
-    couples = {k for (ax, j), cands in best.items() if cands[0][2] for k in cands[0][1]}
+    coupled = [ax for ax in range(3) if best[ax, 0][0][2] and best[ax, 1][0][2]]
+    couples = {k for ax in coupled for j in range(2) for k in best[ax, j][0][1]}
     for (ax, j), cands in best.items():
         chosen = cands[0][1]
-        if not cands[0][2]:
+        if ax not in coupled:
             free = [c for _, c, _ in cands if not couples.intersection(c)]
             chosen = free[0] if free else chosen
         masks[ax, j, idx[list(chosen)]] = 1.0
