@@ -294,7 +294,7 @@ class Spacecraft:
     def eq16_layout(self) -> bool:
         """Whether the thrusters are Cassini's eight in the layout of Feldman & Lee Eq 16 (the
         names ``Z1 … Y4`` in order, its directions and position signs, one height per group):
-        what the RCS dead-band controller's thruster pairs and the thrust fits assume."""
+        what the thrust fit, the leak monitor and the health fit assume."""
         if self.thruster_names != THRUSTER_NAMES:
             return False
         pos = np.stack([s.position for s in self.thrusters])

@@ -429,7 +429,10 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
     axes = cons.wheel_momentum_scale(tel, sc, tel.on_times).axes
     if axes is not None and axes.judged:     # slews about several axes: every wheel on its own
         known = list(axes.vectors)
-        with pytest.raises(InputError, match="its sign looks flipped"):
+        # one running wheel (wheel_axis_espa_bus_rcs): its flip may show first as the balance's
+        # scale κ ≈ −1
+        flip = "its sign looks flipped" + ("" if len(known) > 1 else r"|wheel momentum -[0-9.]+x")
+        with pytest.raises(InputError, match=flip):
             cons.check_telemetry_data(_flipped(tel, known[0]), sc, log)
         if len(known) > 1:
             with pytest.raises(InputError, match="check the column order"):

@@ -10,12 +10,10 @@ import pytest
 
 from cassini_bayes.estimators import fit_axis_rcs, fit_thrust_baseline
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
-from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
 from cassini_bayes.physics.momentum import inertial_momentum, wheel_momentum_body
 from cassini_bayes.physics.pulse import mix_ratio, pulse_impulse
 from cassini_bayes.simulate import (load_scenario, scenario_from_dict, simulate, simulate_batch,
                                     trace_count, truth_params)
-from cassini_bayes.simulate.controllers import AXIS_PAIRS, pair_matrix
 from cassini_bayes.telemetry import cumulative_on_times
 
 WIDTHS = (0.125, 0.25, 0.5, 0.75)
@@ -59,17 +57,6 @@ def _h_inertial(res):
     hw = wheel_momentum_body(np.nan_to_num(tr.wheel_rates), np.asarray(res.params.wheel_axes),
                              np.asarray(res.params.wheel_inertias))
     return np.asarray(inertial_momentum(tr.q, tr.omega, s.truth.inertia, hw))
-
-
-def test_pair_table_signs():
-    """Feldman & Lee §II: Y2+Y4 turn about +Z, Y1+Y3 about −Z; Z thrusters for X and Y."""
-    q = np.asarray(moment_matrix(1.234, 1.580, 2.880, 3.019))
-    for (axis, sign), idx in AXIS_PAIRS.items():
-        torque = q[:, list(idx)].sum(1)
-        i = "xyz".index(axis)
-        assert sign * torque[i] > 1.0
-        assert np.all(np.abs(np.delete(torque, i)) < 1e-12)
-    assert pair_matrix().sum() == 12
 
 
 def test_single_pulse_impulse_equals_closed_form(pulses_run):

@@ -10,7 +10,8 @@
   elsewhere). It uses the controller's inertia (the prediction), not the truth.
 * :func:`rcs_commands` — the RCS dead-band controller: per-axis phase-plane switching
   ``s = θ + τ_r (ω − ω_cmd)`` against the dead-band, pulses of 125 ms and up at the 1/8 s command
-  resolution, the thruster pairs of Feldman & Lee §II/§V (Z-facing thrusters for X and Y,
+  resolution, firing for each axis and sign the thruster set :func:`thruster_sets` chose from the
+  model's geometry (on Cassini the pairs of Feldman & Lee §II/§V: Z-facing thrusters for X and Y,
   ``{Y2, Y4}`` for +Z, ``{Y1, Y3}`` for −Z).
 
 All JAX functions are pure and traceable; units SI (rad, rad/s, N m, s).
@@ -18,17 +19,24 @@ All JAX functions are pure and traceable; units SI (rad, rad/s, N m, s).
 
 from __future__ import annotations
 
+from itertools import combinations
+from typing import TYPE_CHECKING
+
 import numpy as np
 import jax.numpy as jnp
 from jax import Array
 
+from cassini_bayes.errors import InputError
 from cassini_bayes.frames import quat_conjugate, quat_multiply, quat_to_rotvec
+
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = [
     "COMMAND_RESOLUTION_S",
     "MIN_PULSE_S",
-    "AXIS_PAIRS",
-    "pair_matrix",
+    "SET_SIZE_MAX",
+    "thruster_sets",
     "slew_profile",
     "command_profile",
     "attitude_error",
@@ -41,18 +49,77 @@ __all__ = [
 COMMAND_RESOLUTION_S = 0.125  # thruster and articulation command resolution (Brown §I: 1/8 s)
 MIN_PULSE_S = 0.125           # smallest RCS pulse (Feldman & Lee §V: 125-ms pulses)
 
-# Thrusters per axis and sign, indices into Z1 Z2 Z3 Z4 Y1 Y2 Y3 Y4 (Feldman & Lee §II, Eq 16):
-# +X: Z3 Z4, −X: Z1 Z2, +Y: Z1 Z4, −Y: Z2 Z3, +Z: Y2 Y4, −Z: Y1 Y3.
-AXIS_PAIRS = {("x", +1): (2, 3), ("x", -1): (0, 1), ("y", +1): (0, 3), ("y", -1): (1, 2),
-              ("z", +1): (5, 7), ("z", -1): (4, 6)}
+SET_SIZE_MAX = 4              # most thrusters fired together for one axis and sign
+_OFF_AXIS_MAX = 0.5           # a set's off-axis torque is at most this × its on-axis torque
+_USABLE_MIN = 0.05            # each thruster's on-axis torque at least this × the strongest one's
+_FORCE_FREE = 0.1             # a couple: net force at most this × the set's summed thrust
+_SEARCH_MAX = 32              # most thrusters of one branch the exhaustive search takes
 
 
-def pair_matrix() -> np.ndarray:
-    """(3, 2, 8) 0/1 masks: ``[axis, 0]`` fires for + torque, ``[axis, 1]`` for − torque."""
-    m = np.zeros((3, 2, 8))
-    for (ax, sign), idx in AXIS_PAIRS.items():
-        m["xyz".index(ax), 0 if sign > 0 else 1, list(idx)] = 1.0
-    return m
+def thruster_sets(sc: Spacecraft) -> np.ndarray:
+    """(3, 2, m) 0/1 masks of the thrusters the RCS controller fires: ``[axis, 0]`` for + torque
+    about that body axis, ``[axis, 1]`` for − torque; chosen from the model's geometry.
+
+    Search over every set of up to :data:`SET_SIZE_MAX` thrusters of the first branch listed
+    (the others are backups), torque ``τ = Σ F_s Q_s`` (Feldman & Lee Eq 16) and net force
+    ``f = Σ F_s d_s`` at the model's nominal thrusts. A set is usable for an axis and sign when
+    each of its thrusters turns the spacecraft that way by at least 5 % of the strongest
+    thruster's torque (no passengers) and its off-axis torque ``|τ_off| ≤ 0.5 τ_on``. Score ``τ_on − |τ_off| − σ_e |f|`` (``σ_e`` the
+    centre-of-mass knowledge: the torque the net force may add); ties go to the smaller net
+    force, then to fewer thrusters, then to the thrusters listed first. An axis whose best sets
+    both ways are force-free couples (``|f| ≤ 10 %`` of the summed thrust) keeps those thrusters;
+    the other axes choose among the remaining thrusters when those give a usable set: Cassini's
+    Y-facing couples turn about Z, its Z-facing thrusters about X and Y (Feldman & Lee §II).
+    Raises :class:`InputError` naming the model and the axis when no set is usable.
+    """
+    m = len(sc.thrusters)
+    branches = [t.branch for t in sc.thrusters]
+    idx = np.array([k for k in range(m) if branches[k] == branches[0]], int)
+    if idx.size > _SEARCH_MAX:
+        raise InputError(f"the RCS controller searches thruster sets among at most {_SEARCH_MAX} "
+                         f"thrusters of one branch; the spacecraft model {sc.name!r} has "
+                         f"{idx.size} in branch {branches[0]!r}: split them into branches")
+    force = sc.thrust_per_thruster[idx]
+    torque = sc.moment_matrix[:, idx] * force            # (3, n) N m per thruster
+    push = np.stack([sc.thrusters[k].direction for k in idx], 1) * force   # (3, n) N
+    scale = float(np.max(np.linalg.norm(torque, axis=0), initial=0.0))
+    arm = np.stack([sc.thrusters[k].position for k in idx]) - sc.com_m
+    if not scale > 1e-9 * float(np.max(np.linalg.norm(arm, axis=1) * force, initial=0.0)):
+        scale = np.inf                                  # every force through the centre of mass
+    subsets = [c for r in range(1, min(SET_SIZE_MAX, idx.size) + 1)
+               for c in combinations(range(idx.size), r)]
+    best: dict[tuple[int, int], list] = {}
+    for c in subsets:
+        tau, f = torque[:, c].sum(1), push[:, c].sum(1)
+        f_norm, thrust = float(np.linalg.norm(f)), float(force[list(c)].sum())
+        for ax in range(3):
+            for j, sign in enumerate((1.0, -1.0)):
+                on = sign * tau[ax]
+                off = float(np.linalg.norm(np.delete(tau, ax)))
+                if not (np.min(sign * torque[ax, c]) >= _USABLE_MIN * scale
+                        and off <= _OFF_AXIS_MAX * on):
+                    continue
+                score = on - off - sc.com_sd_m * f_norm
+                key = (-round(score / scale, 9), round(f_norm / thrust, 9), len(c), c)
+                best.setdefault((ax, j), []).append((key, c, f_norm <= _FORCE_FREE * thrust))
+    masks = np.zeros((3, 2, m))
+    for ax in range(3):
+        for j in range(2):
+            if (ax, j) not in best:
+                raise InputError(f"the RCS controller cannot turn the spacecraft model "
+                                 f"{sc.name!r} about {'+-'[j]}{'XYZ'[ax]}: no set of up to "
+                                 f"{SET_SIZE_MAX} of its thrusters gives torque mostly about "
+                                 "that axis; check the thrusters' positions and directions")
+            best[ax, j].sort(key=lambda e: e[0])
+    coupled = [ax for ax in range(3) if best[ax, 0][0][2] and best[ax, 1][0][2]]
+    couples = {k for ax in coupled for j in range(2) for k in best[ax, j][0][1]}
+    for (ax, j), cands in best.items():
+        chosen = cands[0][1]
+        if ax not in coupled:
+            free = [c for _, c, _ in cands if not couples.intersection(c)]
+            chosen = free[0] if free else chosen
+        masks[ax, j, idx[list(chosen)]] = 1.0
+    return masks
 
 
 def slew_profile(t_s, t0_s: float, angle_rad: float, rate_rad_s: float, accel_rad_s2: float):
@@ -163,15 +230,16 @@ def limit_wheel_torques(u: Array, wheel_rates: Array, rate_max_rad_s: Array,
 
 
 def rcs_commands(q: Array, omega: Array, cmd: Array, deadband_rad: Array,
-                 free: Array, pairs: Array, rate_gain_s: float, width_gain_s_per_rad: float,
+                 free: Array, sets: Array, rate_gain_s: float, width_gain_s_per_rad: float,
                  max_units: int) -> Array:
     """Pulse widths in units of 1/8 s (m,) commanded now by the RCS dead-band controller.
 
-    Per axis ``s = θ + τ_r (ω − ω_cmd)``; beyond ``+db`` the pair for negative torque fires, beyond
-    ``−db`` the pair for positive torque, with width ``0.125 s + k_w (|s| − db)`` rounded down to
-    the 1/8 s resolution and limited to ``max_units``. An axis fires only when every thruster of
-    its pair is free (its previous pulse done and the minimum off-time past, ``free``); a thruster
-    asked for by two axes gets the longer width.
+    Per axis ``s = θ + τ_r (ω − ω_cmd)``; beyond ``+db`` the set for negative torque fires, beyond
+    ``−db`` the set for positive torque (``sets``: :func:`thruster_sets`), with width
+    ``0.125 s + k_w (|s| − db)`` rounded down to the 1/8 s resolution and limited to
+    ``max_units``. An axis fires only when every thruster of its set is free (its previous pulse
+    done and the minimum off-time past, ``free``); a thruster asked for by two axes gets the
+    longer width.
     """
     theta = attitude_error(q, cmd[:4])
     s = theta + rate_gain_s * (omega - cmd[4:7])
@@ -180,9 +248,9 @@ def rcs_commands(q: Array, omega: Array, cmd: Array, deadband_rad: Array,
                                    / COMMAND_RESOLUTION_S), 1, max_units)
     want_pos = s < -deadband_rad            # error negative → push positive
     want_neg = s > deadband_rad
-    # (3, 2, 8) masks; choose the pair per axis
-    sel = jnp.where(want_pos[:, None], pairs[:, 0], 0.0) + jnp.where(want_neg[:, None],
-                                                                      pairs[:, 1], 0.0)
+    # (3, 2, m) masks; choose the set per axis
+    sel = jnp.where(want_pos[:, None], sets[:, 0], 0.0) + jnp.where(want_neg[:, None],
+                                                                     sets[:, 1], 0.0)
     ok = jnp.all(jnp.where(sel > 0, free[None, :], True), axis=1)        # (3,)
     per_axis = sel * (units * ok)[:, None]                               # (3, 8)
     return jnp.max(per_axis, axis=0)

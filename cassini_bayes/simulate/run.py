@@ -15,7 +15,7 @@ the RCS controller on the 1/8 s command grid). Each thruster keeps a ring of its
 the step, ``F [g(t+dt − t_on) − g(t − t_on)]`` with ``g`` = :func:`pulse_impulse_until`.
 The controllers see the true state (the on-board attitude estimate is taken as perfect; its
 errors are far below the star-tracker noise put on the telemetry), while they use the *prior*
-model's inertia and the *believed* wheel axes. Sensor noise is added to the samples afterwards,
+model's inertia and thruster sets and the *believed* wheel axes. Sensor noise is added to the samples afterwards,
 so the noisy telemetry and the truth come from one trajectory; with time-tag jitter the noisy
 telemetry carries the jittered times (``SimArrays.t_meas``), the truth the true ones.
 
@@ -278,8 +278,8 @@ def _controller_arrays(s: Scenario) -> dict[str, Array]:
         "axes_pinv": jnp.asarray(np.linalg.pinv(believed.T)),
         "wheel_j_ctrl": jnp.asarray(s.prior.wheel_inertias * on),
         "q_matrix": jnp.asarray(s.truth.moment_matrix),
-        "pairs": jnp.asarray(ctl.pair_matrix() if s.truth.eq16_layout
-                             else np.zeros((3, 2, len(s.truth.thrusters)))),
+        "sets": jnp.asarray(ctl.thruster_sets(s.prior) if s.control == "rcs"
+                            else np.zeros((3, 2, len(s.truth.thrusters)))),
         "wheel_rate_max": jnp.asarray(limits[0]),
         "wheel_torque_max": jnp.asarray(limits[1]),
         "q0": jnp.asarray(s.q0),
@@ -345,7 +345,7 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
             if cfg.control == "rcs":
                 free = t >= free_at - 1e-9
                 auto = ctl.rcs_commands(state.q, omega, cmd, row[10 + m:13 + m], free,
-                                        carr["pairs"],
+                                        carr["sets"],
                                         cfg.rate_gain_s, cfg.width_gain, cfg.max_units)
                 units = jnp.maximum(units, auto)
             fire = units > 0

@@ -20,7 +20,9 @@ noise and the seed. Unknown keys, missing required values and impossible values 
                 ~ N(0, σ²) independently from the scenario's seed, added to the fixed ones):
                 true J_k = scale × (1 + e_k) × the model file's,
                 wheel_axis_tilt_deg = {RWA1 = [a1, a2], …} (true axes tilted along
-                ``spacecraft.wheel_tilt_basis``; the prior model keeps the nominal ones)
+                ``spacecraft.wheel_tilt_basis``; the prior model keeps the nominal ones),
+                center_of_mass_offset_m = [3] (true centre of mass minus the model file's, m:
+                the thrusters' true torques, Feldman & Lee Eq 16)
     [prior]     model = "…" (required)
     [initial]   wheels_on = ["RWA1", …] (required), q = [q1, q2, q3, q4], rates_rad_s = [3],
                 wheel_rpm = {RWA1 = …}
@@ -41,9 +43,10 @@ noise and the seed. Unknown keys, missing required values and impossible values 
                 t_start_s: from ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a stuck-open valve leaking
                 ``f`` of thruster ``k``'s thrust, Lee §3.2; off when the section is absent)
 
-Thrusters: RCS control (``control = "rcs"``) needs Cassini's eight thrusters in the layout of
-Feldman & Lee Eq 16 (its thruster pairs per axis); open-loop ``[[pulse]]`` and ``[leak]`` take any
-thruster of the truth model; a model without thrusters flies RWA slews only. Wheels: any number;
+Thrusters: RCS control (``control = "rcs"``) flies any model whose thrusters can turn it about
+each body axis both ways (the sets of :func:`~cassini_bayes.simulate.controllers.thruster_sets`,
+from the prior model's geometry); open-loop ``[[pulse]]`` and ``[leak]`` take any thruster of the
+truth model; a model without thrusters flies RWA slews only. Wheels: any number;
 the RWA controller allocates torque with the pseudo-inverse of the believed axes, and the truth
 model's optional ``max_speed_rpm`` / ``max_torque_nm`` limit each wheel.
 
@@ -66,9 +69,10 @@ import numpy as np
 from cassini_bayes._paths import DATA_DIR, SCENARIOS_DIR, input_path
 from cassini_bayes._toml import is_numbers, read_toml
 from cassini_bayes.errors import InputError
-from cassini_bayes.spacecraft import (TAU_MAX, THRUST_MAX, Spacecraft, check_physical_inertia,
-                                      load_spacecraft, tilted_axis)
-from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration
+from cassini_bayes.spacecraft import (LENGTH_MAX, TAU_MAX, THRUST_MAX, Spacecraft,
+                                      check_physical_inertia, load_spacecraft, tilted_axis)
+from cassini_bayes.simulate.controllers import (COMMAND_RESOLUTION_S, MIN_PULSE_S, slew_duration,
+                                                thruster_sets)
 from cassini_bayes.telemetry import MAX_ROWS, OMEGA_ABS_MAX, WHEEL_RPM_MAX
 from cassini_bayes.units import RPM_TO_RAD_S
 
@@ -505,7 +509,7 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
                            "tau_fall_s", "rwa4_axis", "external_torque_inertial_nm",
                            "external_torque_body_nm", "external_torque_inertial_rate_nm_s",
                            "wheel_inertia_scale", "wheel_axis_tilt_deg", "wheel_inertia_errors",
-                           "wheel_inertia_error_sd"},
+                           "wheel_inertia_error_sd", "center_of_mass_offset_m"},
                     required=True)
     truth, truth_path = _model(tr.str_("model"), "truth.model", src)
     ti = tr.sub("inertia", {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"})
@@ -553,6 +557,13 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
             axis = tilted_axis(axis, np.deg2rad(a))
         wheels.append(replace(w, axis=axis, inertia=w.inertia * j_scale * (1.0 + e)))
     truth = replace(truth, wheels=tuple(wheels))
+    if tr.has("center_of_mass_offset_m"):
+        if not m:
+            raise tr.err("center_of_mass_offset_m", f"moves the centre of mass the thrusters "
+                                                    f"turn about, but the truth model "
+                                                    f"{truth.name!r} has no thrusters")
+        truth = replace(truth, com_m=truth.com_m + tr.vec("center_of_mass_offset_m",
+                                                          hi=LENGTH_MAX))
     ext_n = tr.vec("external_torque_inertial_nm", default=np.zeros(3))
     ext_b = tr.vec("external_torque_body_nm", default=np.zeros(3))
     ext_rate = tr.vec("external_torque_inertial_rate_nm_s", default=np.zeros(3))
@@ -637,11 +648,14 @@ def scenario_from_dict(d: dict[str, Any], src: str = "<scenario>") -> Scenario:
         slews.append(s)
     if slews and control != "rwa":
         raise InputError("[[slew]] needs 'run.control = \"rwa\"'", path=src)
-    if control == "rcs" and not truth.eq16_layout:
-        have = ", ".join(truth.thruster_names) or "no thrusters"
-        raise run.err("control", f"= \"rcs\" needs Cassini's eight thrusters in the layout of "
-                                 f"Feldman & Lee Eq 16 (its thruster pairs per axis); the truth "
-                                 f"model {truth.name!r} has {have}")
+    if control == "rcs":
+        if not truth.thrusters:
+            raise run.err("control", f"= \"rcs\" needs thrusters; the truth model "
+                                     f"{truth.name!r} has none: fly it with control = \"rwa\"")
+        try:
+            thruster_sets(prior)
+        except InputError as e:
+            raise InputError(f"'run.control' = \"rcs\": {e}", path=src) from None
 
     ramps = []
     for r in top.items("wheel_ramp", {"wheel", "t_start_s", "target_rpm", "torque_nm"}):
