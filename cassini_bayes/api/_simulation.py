@@ -52,6 +52,9 @@ def truth_document(result: SimResult, seed: int) -> dict:
                       if "RWA4" in s.wheel_names else None),
         "believed_axes": [list(a) for a in s.rwa.believed_axes],
         "thrust_n": dict(zip(s.truth.thruster_names, map(float, np.asarray(p.thrust_n)))),
+        # the thrust fit's com_x, com_y, com_z: the true centre of mass minus the prior model's
+        "center_of_mass_offset_m": ([float(x) for x in s.truth.com_m - s.prior.com_m]
+                                    if s.truth.thrusters else None),
         "tau_delay_s": float(p.tau_s[0]),
         "tau_rise_s": float(p.tau_s[1]),
         "tau_fall_s": float(p.tau_s[2]),
