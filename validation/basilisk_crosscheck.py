@@ -101,13 +101,14 @@ class Plant:
     total angular momentum.
     """
 
-    def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None):
+    def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None, mass_kg=2500.0,
+                 tag="cassini"):
         self.dt = dt_s
         self.sim = SimulationBaseClass.SimBaseClass()
         proc = self.sim.CreateNewProcess("proc")
         proc.addTask(self.sim.CreateNewTask("dyn", macros.sec2nano(dt_s)))
         self.sc = spacecraft.Spacecraft()
-        self.sc.ModelTag = "cassini"
+        self.sc.ModelTag = tag
         self.wheels = wheels          # list of (name, axis, Js, rpm0)
         i_hub = np.array(inertia, dtype=float)
         factory = simIncludeRW.rwFactory()
@@ -117,7 +118,7 @@ class Plant:
                            rWB_B=[0.0, 0.0, 0.0], useMaxTorque=False, label=name[:5])
             jt = 0.5 * js            # simIncludeRW's transverse inertia for a custom wheel
             i_hub -= js * np.outer(g, g) + jt * (np.eye(3) - np.outer(g, g))
-        self.sc.hub.mHub = 2500.0
+        self.sc.hub.mHub = float(mass_kg)
         self.sc.hub.r_BcB_B = [[0.0], [0.0], [0.0]]
         self.sc.hub.IHubPntBc_B = i_hub.tolist()
         self.sc.hub.sigma_BNInit = [[v] for v in q0_sigma]
@@ -195,22 +196,34 @@ def check_convention(sigmas) -> float:
 # sampling, noise and files
 
 class Recorder:
-    """Noisy telemetry samples in the package's units (Brown Eq 2 quaternion, rad/s, rpm)."""
+    """Noisy telemetry samples in the package's units (Brown Eq 2 quaternion, rad/s, rpm).
 
-    def __init__(self, wheel_cols, seed):
+    The sensor model of ``cassini_bayes.simulate.sensors``: ``ω_meas = (1 + s) ω + b + noise``
+    (``gyro_scale`` s, ``gyro_bias`` b, per axis), the star tracker a small body-side rotation,
+    the tachometer white noise then quantised to ``tach_quantum_rpm`` (0: not quantised).
+    """
+
+    def __init__(self, wheel_cols, seed, noise=None, gyro_bias=0.0, gyro_scale=0.0):
         self.rng = np.random.default_rng(seed)
         self.wheel_cols = wheel_cols
+        self.noise = {"tach_quantum_rpm": 0.0, **(noise or NOISE)}
+        self.gyro_bias = np.broadcast_to(np.asarray(gyro_bias, float), (3,))
+        self.gyro_scale = np.broadcast_to(np.asarray(gyro_scale, float), (3,))
         self.rows, self.sigmas, self.truth_rows = [], [], []
 
     def sample(self, t, sigma, omega, rho):
         q = quat_from_mrp(sigma)
-        dth = NOISE["star_tracker_rad"] * self.rng.standard_normal(3)
+        dth = self.noise["star_tracker_rad"] * self.rng.standard_normal(3)
         # small rotation on the body side, A_meas = R(dth) A (as cassini_bayes.simulate.sensors)
         c = rbk.PRV2C(dth) if np.linalg.norm(dth) > 0 else np.eye(3)
         b = rbk.C2EP(c @ rbk.MRP2C(sigma))
         qm = np.array([b[1], b[2], b[3], b[0]])
-        wm = omega + NOISE["gyro_rad_s"] * self.rng.standard_normal(3)
-        rpm = rho * RPM + NOISE["tach_rpm"] * self.rng.standard_normal(len(rho))
+        wm = ((1.0 + self.gyro_scale) * omega + self.gyro_bias
+              + self.noise["gyro_rad_s"] * self.rng.standard_normal(3))
+        rpm = rho * RPM + self.noise["tach_rpm"] * self.rng.standard_normal(len(rho))
+        quantum = self.noise["tach_quantum_rpm"]
+        if quantum > 0:
+            rpm = np.round(rpm / quantum) * quantum
         self.rows.append([t, *qm, *wm, *rpm])
         self.truth_rows.append([t, *q, *omega, *(rho * RPM)])
         self.sigmas.append(sigma)
