@@ -95,10 +95,12 @@ class Plant:
     """A Basilisk simulation of the spacecraft, stepped from Python.
 
     ``inertia`` is the TRUE total inertia about the centre of mass with the wheels locked (the
-    ``I`` of Feldman & Lee Eq 2). Basilisk's balanced wheels add ``Js g gᵀ + Jt (1 − g gᵀ)`` to
-    the hub (wheels at the centre of mass, so no parallel-axis term); the hub gets the rest so the
-    total is exactly ``inertia``. :func:`plant_momentum_check` verifies this from Basilisk's own
-    total angular momentum.
+    ``I`` of Feldman & Lee Eq 2), given to Basilisk as the hub's inertia unchanged: Basilisk's
+    balanced-wheel dynamics conserve ``I_hub ω + Σ Js Ω g`` with ``Ω`` the wheel rate relative
+    to the body, which is Eq 2 with ``I = I_hub`` (measured: a hub of ``I − Σ Js g gᵀ`` left
+    Eq 2 with ``I`` off by exactly ``Σ Js g gᵀ ω``; no parallel-axis term, the wheels sit at the
+    centre of mass).
+    :func:`plant_momentum_check` verifies it on every case from Basilisk's own total momentum.
     """
 
     def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None, mass_kg=2500.0,
@@ -110,17 +112,14 @@ class Plant:
         self.sc = spacecraft.Spacecraft()
         self.sc.ModelTag = tag
         self.wheels = wheels          # list of (name, axis, Js, rpm0)
-        i_hub = np.array(inertia, dtype=float)
         factory = simIncludeRW.rwFactory()
         for name, axis, js, rpm0 in wheels:
             g = np.asarray(axis) / np.linalg.norm(axis)
             factory.create("custom", list(g), Js=float(js), Omega=float(rpm0),
                            rWB_B=[0.0, 0.0, 0.0], useMaxTorque=False, label=name[:5])
-            jt = 0.5 * js            # simIncludeRW's transverse inertia for a custom wheel
-            i_hub -= js * np.outer(g, g) + jt * (np.eye(3) - np.outer(g, g))
         self.sc.hub.mHub = float(mass_kg)
         self.sc.hub.r_BcB_B = [[0.0], [0.0], [0.0]]
-        self.sc.hub.IHubPntBc_B = i_hub.tolist()
+        self.sc.hub.IHubPntBc_B = np.asarray(inertia, float).tolist()
         self.sc.hub.sigma_BNInit = [[v] for v in q0_sigma]
         self.sc.hub.omega_BN_BInit = [[v] for v in omega0]
         self.rw = reactionWheelStateEffector.ReactionWheelStateEffector()
