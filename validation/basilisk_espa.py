@@ -425,7 +425,7 @@ def main(argv=None):
                 if rc == 0:
                     at = json.loads((ev / "summary.json").read_text())
                     by = {r["param"]: r for r in cmp_rows}
-                    for name, p in at["plan"]["sites"].items():
+                    for name, p in at["prediction"]["sites"].items():
                         if name in by and p.get("sd"):
                             by[name]["predicted_sd_at_truth"] = p["sd"]
                             by[name]["ratio_at_truth"] = by[name]["achieved_sd"] / p["sd"]
