@@ -144,7 +144,7 @@ def command(t, c_r0n, slews):
 
 
 def read_scenario(path: Path) -> dict:
-    """The parts of a package scenario TOML Basilisk flies: run, initial, controller, slews, noise."""
+    """What Basilisk flies from a package scenario TOML: run, initial, controller, slews, noise."""
     s = tomllib.loads(Path(path).read_text())
     slews = [(float(x["t_start_s"]), np.asarray(x["axis"], float) / np.linalg.norm(x["axis"]),
               np.radians(float(x["angle_deg"])), 1e-3 * float(x["rate_mrad_s"]),
@@ -310,6 +310,38 @@ def scenario_at_truth(plan_scenario: Path, truth: Truth, model_path: Path, out: 
     return out
 
 
+def compare_with_plan(plan_dir: Path, scen_path: Path, fit: Path, d: Path, truth: Truth,
+                      model_path: Path, wheels_on, log) -> dict:
+    """The plan case's table: achieved sd against the plan's prediction and the same at the truth.
+
+    The prediction at the Basilisk truth (``plan evaluate`` on :func:`scenario_at_truth`)
+    separates the linearisation point (the truth is a few per cent and 1° from the file) from
+    the approximation.
+    """
+    plan_s = json.loads((plan_dir / "summary.json").read_text())
+    rows = sd_comparison(plan_s, fit, truth.model, wheels_on)
+    rc, text = bx.cli("plan", "evaluate",
+                      scenario_at_truth(scen_path, truth, model_path, d / "scenario_at_truth.toml"),
+                      "--out", d / "plan_at_truth", "--force", log=log)
+    if rc == 0:
+        at = json.loads((d / "plan_at_truth" / "summary.json").read_text())
+        by = {r["param"]: r for r in rows}
+        for name, p in at["prediction"]["sites"].items():
+            if name in by and p.get("sd"):
+                by[name]["predicted_sd_at_truth"] = p["sd"]
+                by[name]["ratio_at_truth"] = by[name]["achieved_sd"] / p["sd"]
+    else:
+        print(f"[plan] plan evaluate at the truth exit {rc}: {text[-500:]}")
+    n_ok = sum(r["within_25pct"] for r in rows)
+    print(f"   achieved posterior sd / plan's predicted sd: {n_ok}/{len(rows)} sites within ±25 %")
+    for r in rows:
+        print(f"   {r['param']:>18} predicted {r['predicted_sd']:.4g} achieved "
+              f"{r['achieved_sd']:.4g} ratio {r['ratio']:.3f} "
+              f"{'ok' if r['within_25pct'] else 'OUTSIDE ±25 %'}; predicted at the truth: ratio "
+              f"{r.get('ratio_at_truth', float('nan')):.3f}")
+    return {"plan_vs_achieved": rows, "plan_slews": plan_s["slews"]}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "basilisk_espa")
@@ -320,7 +352,8 @@ def main(argv=None):
     ap.add_argument("--axis-scenario", type=Path,
                     default=ROOT / "experiments" / "scenarios" / "wheel_axis_espa_bus.toml")
     ap.add_argument("--wheel", default="RW2", help="the wheel whose axis is 1° off and fitted")
-    ap.add_argument("--limits", type=Path, default=ROOT / "experiments" / "limits" / "espa_bus.toml")
+    ap.add_argument("--limits", type=Path,
+                    default=ROOT / "experiments" / "limits" / "espa_bus.toml")
     ap.add_argument("--plan", type=Path, default=None,
                     help="an existing `plan inertia` run directory (default: plan now)")
     ap.add_argument("--plan-args", default="",
@@ -411,34 +444,8 @@ def main(argv=None):
                                                    for r in rows[:3])
                   + f"; 90 % coverage {res['coverage']:.2f}")
             if case == "plan":
-                plan_s = json.loads((plan_dir / "summary.json").read_text())
-                cmp_rows = sd_comparison(plan_s, fit, model, info["wheels_on"])
-                res["plan_vs_achieved"] = cmp_rows
-                res["plan_slews"] = plan_s["slews"]
-                # the same prediction at the Basilisk truth: separates the linearisation point
-                # (the truth is a few per cent and 1° from the file) from the approximation
-                ev = d / "plan_at_truth"
-                rc, text = bx.cli("plan", "evaluate",
-                                  scenario_at_truth(scen_path, truth, a.model,
-                                                    d / "scenario_at_truth.toml"),
-                                  "--out", ev, "--force", log=log)
-                if rc == 0:
-                    at = json.loads((ev / "summary.json").read_text())
-                    by = {r["param"]: r for r in cmp_rows}
-                    for name, p in at["prediction"]["sites"].items():
-                        if name in by and p.get("sd"):
-                            by[name]["predicted_sd_at_truth"] = p["sd"]
-                            by[name]["ratio_at_truth"] = by[name]["achieved_sd"] / p["sd"]
-                else:
-                    print(f"[plan] plan evaluate at the truth exit {rc}: {text[-500:]}")
-                n_ok = sum(r["within_25pct"] for r in cmp_rows)
-                print(f"   achieved posterior sd / plan's predicted sd: {n_ok}/{len(cmp_rows)} "
-                      f"sites within ±25 %")
-                for r in cmp_rows:
-                    print(f"   {r['param']:>18} predicted {r['predicted_sd']:.4g} achieved "
-                          f"{r['achieved_sd']:.4g} ratio {r['ratio']:.3f} "
-                          f"{'ok' if r['within_25pct'] else 'OUTSIDE ±25 %'}; predicted at "
-                          f"the truth: ratio {r.get('ratio_at_truth', float('nan')):.3f}")
+                res.update(compare_with_plan(plan_dir, scen_path, fit, d, truth, a.model,
+                                             info["wheels_on"], log))
         results[case] = res
         (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
         (a.out / "commands.log").write_text("\n\n".join(log))
