@@ -391,7 +391,7 @@ def run_rcs(model, out: Path, seed: int):
     return truth
 
 
-def ramp_tables():
+def ramp_tables(taus=None):
     """Basilisk on/off ramp tables: a delay then a first-order rise; a first-order decay.
 
     This is Basilisk's piecewise-linear ramp model filled with the manufacturer's time constants,
@@ -402,7 +402,8 @@ def ramp_tables():
     zero-thrust point of the table, so the leading delay segment is skipped and the delivered
     profile rises from the command (see :func:`basilisk_pulse_impulse`).
     """
-    td, tr, tf = TAU["tau_delay"], TAU["tau_rise"], TAU["tau_fall"]
+    taus = taus or TAU                     # s: tau_delay, tau_rise, tau_fall
+    td, tr, tf = taus["tau_delay"], taus["tau_rise"], taus["tau_fall"]
     on = [(td, 0.0)] + [(td + s, 1.0 - np.exp(-s / tr)) for s in np.linspace(tr / 10, 8 * tr, 80)]
     off = [(s, np.exp(-s / tf)) for s in np.linspace(tf / 10, 8 * tf, 80)]
     return on, off
@@ -458,16 +459,18 @@ def single_pulse_check(model, widths=(0.125, 0.5), steps=(0.005, 0.001)):
     return rows
 
 
-def thruster_configs(model):
+def thruster_configs(model, f_true_n=F_TRUE, taus=None):
+    """Basilisk thrusters at the model file's positions (from its centre of mass) and directions,
+    steady thrust ``f_true_n`` (N), ramps of :func:`ramp_tables` at ``taus`` (default TAU)."""
     pos = np.stack([s.position for s in model.thrusters]) - np.asarray(model.com_m)[None, :]
     dirs = np.stack([s.direction for s in model.thrusters])
-    on, off = ramp_tables()
+    on, off = ramp_tables(taus)
     cfgs = []
     for p, d in zip(pos, dirs):
         c = thrusterDynamicEffector.THRSimConfig()
         c.thrLoc_B = [[v] for v in p]
         c.thrDir_B = [[v] for v in d]       # force on the spacecraft (Basilisk computes r x F)
-        c.MaxThrust = F_TRUE
+        c.MaxThrust = float(f_true_n)
         c.steadyIsp = 0.0                   # no mass-flow torques
         c.MinOnTime = 0.0
         for table, attr in ((on, "ThrusterOnRamp"), (off, "ThrusterOffRamp")):

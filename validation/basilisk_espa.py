@@ -11,6 +11,8 @@ files under an RWA attitude controller that knows only the model file:
 * ``wheel-axis``  Brown §III.C's RWA calibration of one wheel (default
                   ``experiments/scenarios/wheel_axis_espa_bus.toml``, RW2 at 3000 rpm, four slew
                   pairs) -> ``fit wheel-axis --wheel RW2 --method rwa`` (windows detected);
+* ``bias``        a wheel-biasing event under RCS dead-band control (the model's thrusters,
+                  Basilisk's ramp model) -> ``check --pulses`` and ``fit thrust``;
 * ``plan``        ``cassini-bayes plan inertia`` within a limits file, then its written
                   ``scenario.toml`` flown in Basilisk -> ``fit inertia`` at the default sampler,
                   and the achieved posterior sd against the plan's prediction, per parameter.
@@ -228,6 +230,102 @@ def fly(truth: Truth, scen: dict, out: Path, seed: int, case: str) -> dict:
     return result
 
 
+# Wheel-biasing event: the wheels spun from rest to these fractions of their speed limit by a
+# motor torque of BIAS_TORQUE_FRAC of its limit while RCS pulses hold the attitude (a momentum
+# change of about 0.6 of one wheel's capacity on the ESPA bus).
+BIAS_TARGET_FRAC = (-0.42, -0.17, 0.08, -0.25)
+BIAS_TORQUE_FRAC = 0.1
+F_SCALE = 1.04                                           # true steady thrust / the file's
+
+
+def fly_bias(truth: Truth, out: Path, seed: int, noise: dict) -> dict:
+    """A wheel-biasing event under a dead-band RCS controller, in the files ``fit thrust`` reads.
+
+    Thrusters from the model's ``[[thruster]]`` entries, steady thrust ``F_SCALE`` × the file's,
+    Basilisk ramp tables at the file's ``[pulse]`` constants (Basilisk's own on/off model, see
+    ``basilisk_crosscheck.ramp_tables``). Controller per axis: ``s = θ + τ ω`` against a
+    dead-band, the thruster pair whose torque lies best along the axis (``thruster_pairs`` on the
+    file's moment matrix), widths in 1/8 s from 125 ms, a minimum off-time; the dead-band and
+    ``τ`` are set from one minimum pulse's rate kick on the file's inertia, so it does not chatter.
+    """
+    model = truth.model
+    names = [w.name for w in model.wheels]
+    wheels = [(n, truth.wheels[n][0], truth.wheels[n][1], 0.0) for n in names]
+    rho_max = np.array([model.wheel(n).max_speed_rpm / RPM for n in names])
+    targets = np.array([BIAS_TARGET_FRAC[k % 4] for k in range(len(names))]) * rho_max
+    u_bias = BIAS_TORQUE_FRAC * np.array([model.wheel(n).max_torque_nm for n in names])
+    qm = model.moment_matrix * np.asarray(model.thrust_per_thruster)[None, :]     # N m per thruster
+    pairs = bx.thruster_pairs(qm)
+    i_ctrl = np.asarray(model.inertia, float)
+    # rate kick of one 125 ms pair on each axis (rad/s), from the file: sets dead-band and τ
+    kick = max(np.abs(np.linalg.solve(i_ctrl, qm[:, list(pairs[(ax, 1)])].sum(1) * 0.125))[ax]
+               for ax in range(3))
+    rate_gain, deadband = 1.5, 1.5 * 1.5 * kick           # τ kick < 2 × dead-band: no chatter
+    width_gain, wmax, min_off, quantum = 0.5 / deadband, 0.375, 1.0, 0.125
+    taus = {"tau_delay": model.pulse.tau_delay, "tau_rise": model.pulse.tau_rise,
+            "tau_fall": model.pulse.tau_fall}
+    f_true = F_SCALE * np.asarray(model.thrust_per_thruster)
+    cfgs = [bx.thruster_configs(model, f, taus)[k] for k, f in enumerate(f_true)]
+    duration, dt_ctrl, dt_dyn, dt_tel, t_bias = 360.0, 0.125, 0.002, 1.0, 60.0
+    q0 = (0.05, -0.1, 0.2, 0.9733961166965892)
+    sigma0 = rbk.EP2MRP([q0[3], q0[0], q0[1], q0[2]])
+    c0 = rbk.MRP2C(sigma0)
+    plant = bx.Plant(truth.inertia, wheels, dt_dyn, sigma0, [0.0, 0.0, 0.0], thrusters=cfgs,
+                     mass_kg=model.mass if np.isfinite(model.mass) else 100.0, tag=model.name)
+    rec = bx.Recorder([n.lower() for n in names], seed, noise=noise, gyro_bias=truth.gyro_bias,
+                      gyro_scale=truth.gyro_scale)
+    tnames = model.thruster_names
+    pulses, busy_until = [], 0.0
+    n_steps, tel_every = int(round(duration / dt_ctrl)), int(round(dt_tel / dt_ctrl))
+    for k in range(n_steps):
+        t = k * dt_ctrl
+        sigma, omega, rho = plant.state()
+        if k % tel_every == 0:
+            rec.sample(t, sigma, omega, rho)
+        u = np.where((t >= t_bias) & (np.abs(rho) < np.abs(targets)), u_bias * np.sign(targets),
+                     0.0)
+        fire = None
+        if t >= busy_until:
+            err = np.asarray(rbk.C2PRV(rbk.MRP2C(sigma) @ c0.T)) + rate_gain * omega
+            widths = np.zeros(len(tnames))
+            for ax in range(3):
+                excess = abs(err[ax]) - deadband
+                if excess > 0:
+                    wdt = np.clip(np.ceil(width_gain * excess / quantum) * quantum, quantum, wmax)
+                    for j in pairs[(ax, -int(np.sign(err[ax])))]:
+                        widths[j] = max(widths[j], wdt)
+            if widths.any():
+                fire = widths
+                pulses += [(t, tnames[j], widths[j]) for j in range(len(tnames)) if widths[j] > 0]
+                busy_until = t + widths.max() + min_off
+        plant.step((k + 1) * dt_ctrl, u, truth.torque_n, fire)
+    sigma, omega, rho = plant.state()
+    rec.sample(n_steps * dt_ctrl, sigma, omega, rho)
+    out.mkdir(parents=True, exist_ok=True)
+    rec.write(out / "telemetry.csv")
+    bx.write_pulses(out / "pulses.csv", pulses)
+    delivered = {}                                  # impulse per newton by commanded width, s
+    for j, recd in enumerate(plant.thr_logs):
+        f = np.array(recd.thrustForce)
+        tt = np.array(recd.times()) * 1e-9
+        for t_on, name, width in pulses:
+            if name == tnames[j]:
+                m = (tt > t_on) & (tt <= t_on + width + 1.0)
+                delivered.setdefault(f"{width:.3f}", []).append(
+                    float(np.sum(f[m]) * dt_dyn / f_true[j]))
+    info = {"case": "bias", "model": model.name, **truth.as_dict(), "F_n": f_true.tolist(),
+            **taus, "tau_note": "Basilisk ramp-table constants (delay + first-order rise/decay),"
+            " not Feldman & Lee's §V profile; Basilisk skips the table's delay",
+            "wheel_targets_rpm": (targets * RPM).tolist(), "n_pulses": len(pulses),
+            "deadband_rad": deadband, "rate_gain_s": rate_gain,
+            "impulse_per_newton_by_width": {w: {"count": len(v), "basilisk_s": float(np.mean(v))}
+                                            for w, v in sorted(delivered.items())},
+            "convention_check": bx.check_convention(rec.sigmas),
+            "momentum_check_note": "thrusters fire: momentum not conserved, no check"}
+    (out / "truth.json").write_text(json.dumps(info, indent=2))
+    return info
+
+
 # ----------------------------------------------------------------------------------------------
 # fits and tables
 
@@ -342,6 +440,29 @@ def compare_with_plan(plan_dir: Path, scen_path: Path, fit: Path, d: Path, truth
     return {"plan_vs_achieved": rows, "plan_slews": plan_s["slews"]}
 
 
+def run_bias_case(truth: Truth, d: Path, a, sampler, log) -> dict:
+    """Fly the biasing event, ``check`` its files, and try ``fit thrust`` on them."""
+    t1 = time.time()
+    info = fly_bias(truth, d, a.seed, read_scenario(a.slews_scenario)["noise"])
+    print(f"[bias] Basilisk flew a biasing event ({info['n_pulses']} pulses, dead-band "
+          f"{1e3 * info['deadband_rad']:.1f} mrad) in {time.time() - t1:.0f} s; impulse per "
+          f"newton by width: " + ", ".join(f"{w} s x{v['count']}: {v['basilisk_s']:.4f} s"
+                                          for w, v in info["impulse_per_newton_by_width"].items()))
+    files = [d / "telemetry.csv", "--pulses", d / "pulses.csv", "--spacecraft", a.model]
+    rc, text = bx.cli("check", *files, log=log)
+    print(f"[bias] check exit {rc}" + ("" if rc == 0 else f": {text[-800:]}"))
+    res = {"truth": info, "check_exit": rc}
+    if a.no_fit:
+        return res
+    rc, text = bx.cli("fit", "thrust", "--telemetry", *files, "--out", d / "fit", *sampler,
+                      log=log)
+    res["fit_exit"] = rc
+    print(f"[bias] fit thrust exit {rc}: {text[-600:]}")
+    if (d / "fit" / "summary.json").exists():
+        res["summary"] = json.loads((d / "fit" / "summary.json").read_text())
+    return res
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "basilisk_espa")
@@ -389,6 +510,9 @@ def main(argv=None):
                     print(text[-2000:])
                     continue
             scen_path = plan_dir / "scenario.toml"
+        elif case == "bias":
+            results[case] = run_bias_case(truth, d, a, sampler, log)
+            continue
         else:
             scen_path = a.slews_scenario if case == "slews" else a.axis_scenario
         scen = read_scenario(scen_path)
