@@ -95,31 +95,31 @@ class Plant:
     """A Basilisk simulation of the spacecraft, stepped from Python.
 
     ``inertia`` is the TRUE total inertia about the centre of mass with the wheels locked (the
-    ``I`` of Feldman & Lee Eq 2). Basilisk's balanced wheels add ``Js g gᵀ + Jt (1 − g gᵀ)`` to
-    the hub (wheels at the centre of mass, so no parallel-axis term); the hub gets the rest so the
-    total is exactly ``inertia``. :func:`plant_momentum_check` verifies this from Basilisk's own
-    total angular momentum.
+    ``I`` of Feldman & Lee Eq 2), given to Basilisk as the hub's inertia unchanged: Basilisk's
+    balanced-wheel dynamics conserve ``I_hub ω + Σ Js Ω g`` with ``Ω`` the wheel rate relative
+    to the body, which is Eq 2 with ``I = I_hub`` (measured: a hub of ``I − Σ Js g gᵀ`` left
+    Eq 2 with ``I`` off by exactly ``Σ Js g gᵀ ω``; no parallel-axis term, the wheels sit at the
+    centre of mass).
+    :func:`plant_momentum_check` verifies it on every case from Basilisk's own total momentum.
     """
 
-    def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None):
+    def __init__(self, inertia, wheels, dt_s, q0_sigma, omega0, thrusters=None, mass_kg=2500.0,
+                 tag="cassini"):
         self.dt = dt_s
         self.sim = SimulationBaseClass.SimBaseClass()
         proc = self.sim.CreateNewProcess("proc")
         proc.addTask(self.sim.CreateNewTask("dyn", macros.sec2nano(dt_s)))
         self.sc = spacecraft.Spacecraft()
-        self.sc.ModelTag = "cassini"
+        self.sc.ModelTag = tag
         self.wheels = wheels          # list of (name, axis, Js, rpm0)
-        i_hub = np.array(inertia, dtype=float)
         factory = simIncludeRW.rwFactory()
         for name, axis, js, rpm0 in wheels:
             g = np.asarray(axis) / np.linalg.norm(axis)
             factory.create("custom", list(g), Js=float(js), Omega=float(rpm0),
                            rWB_B=[0.0, 0.0, 0.0], useMaxTorque=False, label=name[:5])
-            jt = 0.5 * js            # simIncludeRW's transverse inertia for a custom wheel
-            i_hub -= js * np.outer(g, g) + jt * (np.eye(3) - np.outer(g, g))
-        self.sc.hub.mHub = 2500.0
+        self.sc.hub.mHub = float(mass_kg)
         self.sc.hub.r_BcB_B = [[0.0], [0.0], [0.0]]
-        self.sc.hub.IHubPntBc_B = i_hub.tolist()
+        self.sc.hub.IHubPntBc_B = np.asarray(inertia, float).tolist()
         self.sc.hub.sigma_BNInit = [[v] for v in q0_sigma]
         self.sc.hub.omega_BN_BInit = [[v] for v in omega0]
         self.rw = reactionWheelStateEffector.ReactionWheelStateEffector()
@@ -195,22 +195,34 @@ def check_convention(sigmas) -> float:
 # sampling, noise and files
 
 class Recorder:
-    """Noisy telemetry samples in the package's units (Brown Eq 2 quaternion, rad/s, rpm)."""
+    """Noisy telemetry samples in the package's units (Brown Eq 2 quaternion, rad/s, rpm).
 
-    def __init__(self, wheel_cols, seed):
+    The sensor model of ``cassini_bayes.simulate.sensors``: ``ω_meas = (1 + s) ω + b + noise``
+    (``gyro_scale`` s, ``gyro_bias`` b, per axis), the star tracker a small body-side rotation,
+    the tachometer white noise then quantised to ``tach_quantum_rpm`` (0: not quantised).
+    """
+
+    def __init__(self, wheel_cols, seed, noise=None, gyro_bias=0.0, gyro_scale=0.0):
         self.rng = np.random.default_rng(seed)
         self.wheel_cols = wheel_cols
+        self.noise = {"tach_quantum_rpm": 0.0, **(noise or NOISE)}
+        self.gyro_bias = np.broadcast_to(np.asarray(gyro_bias, float), (3,))
+        self.gyro_scale = np.broadcast_to(np.asarray(gyro_scale, float), (3,))
         self.rows, self.sigmas, self.truth_rows = [], [], []
 
     def sample(self, t, sigma, omega, rho):
         q = quat_from_mrp(sigma)
-        dth = NOISE["star_tracker_rad"] * self.rng.standard_normal(3)
+        dth = self.noise["star_tracker_rad"] * self.rng.standard_normal(3)
         # small rotation on the body side, A_meas = R(dth) A (as cassini_bayes.simulate.sensors)
         c = rbk.PRV2C(dth) if np.linalg.norm(dth) > 0 else np.eye(3)
         b = rbk.C2EP(c @ rbk.MRP2C(sigma))
         qm = np.array([b[1], b[2], b[3], b[0]])
-        wm = omega + NOISE["gyro_rad_s"] * self.rng.standard_normal(3)
-        rpm = rho * RPM + NOISE["tach_rpm"] * self.rng.standard_normal(len(rho))
+        wm = ((1.0 + self.gyro_scale) * omega + self.gyro_bias
+              + self.noise["gyro_rad_s"] * self.rng.standard_normal(3))
+        rpm = rho * RPM + self.noise["tach_rpm"] * self.rng.standard_normal(len(rho))
+        quantum = self.noise["tach_quantum_rpm"]
+        if quantum > 0:
+            rpm = np.round(rpm / quantum) * quantum
         self.rows.append([t, *qm, *wm, *rpm])
         self.truth_rows.append([t, *q, *omega, *(rho * RPM)])
         self.sigmas.append(sigma)
@@ -379,7 +391,7 @@ def run_rcs(model, out: Path, seed: int):
     return truth
 
 
-def ramp_tables():
+def ramp_tables(taus=None):
     """Basilisk on/off ramp tables: a delay then a first-order rise; a first-order decay.
 
     This is Basilisk's piecewise-linear ramp model filled with the manufacturer's time constants,
@@ -390,7 +402,8 @@ def ramp_tables():
     zero-thrust point of the table, so the leading delay segment is skipped and the delivered
     profile rises from the command (see :func:`basilisk_pulse_impulse`).
     """
-    td, tr, tf = TAU["tau_delay"], TAU["tau_rise"], TAU["tau_fall"]
+    taus = taus or TAU                     # s: tau_delay, tau_rise, tau_fall
+    td, tr, tf = taus["tau_delay"], taus["tau_rise"], taus["tau_fall"]
     on = [(td, 0.0)] + [(td + s, 1.0 - np.exp(-s / tr)) for s in np.linspace(tr / 10, 8 * tr, 80)]
     off = [(s, np.exp(-s / tf)) for s in np.linspace(tf / 10, 8 * tf, 80)]
     return on, off
@@ -446,16 +459,18 @@ def single_pulse_check(model, widths=(0.125, 0.5), steps=(0.005, 0.001)):
     return rows
 
 
-def thruster_configs(model):
+def thruster_configs(model, f_true_n=F_TRUE, taus=None):
+    """Basilisk thrusters at the model file's positions (from its centre of mass) and directions,
+    steady thrust ``f_true_n`` (N), ramps of :func:`ramp_tables` at ``taus`` (default TAU)."""
     pos = np.stack([s.position for s in model.thrusters]) - np.asarray(model.com_m)[None, :]
     dirs = np.stack([s.direction for s in model.thrusters])
-    on, off = ramp_tables()
+    on, off = ramp_tables(taus)
     cfgs = []
     for p, d in zip(pos, dirs):
         c = thrusterDynamicEffector.THRSimConfig()
         c.thrLoc_B = [[v] for v in p]
         c.thrDir_B = [[v] for v in d]       # force on the spacecraft (Basilisk computes r x F)
-        c.MaxThrust = F_TRUE
+        c.MaxThrust = float(f_true_n)
         c.steadyIsp = 0.0                   # no mass-flow torques
         c.MinOnTime = 0.0
         for table, attr in ((on, "ThrusterOnRamp"), (off, "ThrusterOffRamp")):
