@@ -17,8 +17,12 @@ import jax  # noqa: E402
 import pytest  # noqa: E402
 
 import cassini_bayes  # noqa: E402
+import cassini_bayes._arviz  # noqa: E402
 
 cassini_bayes.setup_jax()  # 64-bit and the cache above, as every entry point of the package
+# ArviZ as the package imports it (numba hidden: ArviZ 0.23's numba path of mcse(method="sd")
+# fails under NumPy 2), before any test module imports it
+cassini_bayes._arviz.load_arviz()
 
 jax.config.update("jax_numpy_rank_promotion", "raise")
 
