@@ -34,6 +34,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
+from cassini_bayes.estimators.thrust import combination_label
+
 __all__ = ["ThrustDesign", "thrust_design", "INFORMATION_MIN", "CONTRACTION_MIN",
            "IN_SUBSPACE_MIN", "combination_label"]
 
@@ -97,18 +99,6 @@ class ThrustDesign(NamedTuple):
                      "direction lies in the thrust subspace whose linearised contraction is "
                      f">= {CONTRACTION_MIN:g}; the others' identified combinations are listed"),
         }
-
-
-def combination_label(weights, names: Sequence[str]) -> str:
-    """``"0.5 F[Y1] + 0.5 F[Y3]"``: a combination's weights as text (3 significant digits)."""
-    out = ""
-    for w, n in zip(weights, names):
-        if not w:
-            continue
-        term = f"{abs(w):.3g} F[{n}]"
-        out += (term if w > 0 else f"-{term}") if not out else (
-            f" + {term}" if w > 0 else f" - {term}")
-    return out
 
 
 def _rref(rows: np.ndarray, tol: float = 1e-8) -> np.ndarray:
