@@ -197,3 +197,20 @@ def test_espa_per_thruster_fit_recovers_thrusts_and_centre_of_mass():
     mean = fit_thrust(jax.random.key(11), [ev], scenario.prior, mode="mean", settings=settings)
     f1 = float(mean.idata.posterior["F"].mean())
     assert np.sum(np.abs(f1 / truth - 1) > 0.01) >= 4
+
+
+def test_report_section_shows_the_design_and_the_combinations():
+    """report: the thrust-design section of a per-thruster run lists the rank, the identified
+    thrusters, each combination with its posterior and an untold centre-of-mass axis; runs of
+    the other modes (no ``thrust_design``) have no such section."""
+    from cassini_bayes.report._sections import thrust_design_section
+
+    d = _design(_cassini(lzy=0.0), CASSINI_FIRINGS).to_dict()
+    for c in d["combinations"]:
+        c["posterior"] = {"mean": 0.7012, "sd": 0.0031, "q05": 0.696, "q95": 0.706}
+    d["com_told"] = {"com_x": True, "com_y": True, "com_z": False}
+    html = str(thrust_design_section({"thrust_design": d}))
+    assert "rank 8 of 11" in html and "Z1, Z2, Z3, Z4" in html
+    assert "0.5 F[Y1] + 0.5 F[Y3]" in html and "0.7012" in html
+    assert "com_z not told" in html
+    assert thrust_design_section({"parameters": {}}) is None
