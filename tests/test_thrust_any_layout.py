@@ -214,3 +214,26 @@ def test_report_section_shows_the_design_and_the_combinations():
     assert "0.5 F[Y1] + 0.5 F[Y3]" in html and "0.7012" in html
     assert "com_z not told" in html
     assert thrust_design_section({"parameters": {}}) is None
+
+
+def test_combination_draws_are_the_weighted_thrusts():
+    """fit_thrust adds ``F_combination`` along ``combination`` to the posterior and the prior:
+    each draw's ``Σ_s w_s F_s`` with the design's weights, labelled by them (exact)."""
+    from types import SimpleNamespace
+
+    import arviz as az
+
+    from cassini_bayes.inference.thrust.fit import _add_combinations
+
+    d = _design(_cassini(lzy=0.0), CASSINI_FIRINGS)
+    rng = np.random.default_rng(4)
+    post, prior = rng.uniform(0.6, 0.8, (2, 5, 8)), rng.uniform(0.5, 1.0, (1, 7, 8))
+    idata = az.from_dict(posterior={"F": post}, prior={"F": prior}, dims={"F": ["thruster"]},
+                         coords={"thruster": list(d.thrusters)})
+    _add_combinations(idata, SimpleNamespace(design=d, thrusters=d.thrusters))
+    got = idata.posterior["F_combination"]
+    assert list(got.combination.values) == ["0.5 F[Y1] + 0.5 F[Y3]", "0.5 F[Y2] + 0.5 F[Y4]"]
+    np.testing.assert_allclose(got.values[..., 0], 0.5 * (post[..., 4] + post[..., 6]),
+                               rtol=1e-14)
+    np.testing.assert_allclose(idata.prior["F_combination"].values[..., 1],
+                               0.5 * (prior[..., 5] + prior[..., 7]), rtol=1e-14)

@@ -142,8 +142,10 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     from cassini_bayes.physics.momentum import INERTIA_NAMES
 
     names = list(thrust_names(mode))
+    if "F_combination" in post.idata.posterior:      # mode thruster, thrusters told in combination
+        names.append("F_combination")
     if mode == "thruster":
-        names += ["F_combination"] * ("F_combination" in post.idata.posterior) + list(COM_NAMES)
+        names += list(COM_NAMES)
     names += list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
     if "Ixx" in post.idata.posterior:   # the inertia was sampled

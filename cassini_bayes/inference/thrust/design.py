@@ -91,7 +91,7 @@ class ThrustDesign(NamedTuple):
             "combinations": [{"label": combination_label(w, self.thrusters),
                               "weights": {n: float(x) for n, x in zip(self.thrusters, w) if x}}
                              for w in self.combinations],
-            "com_contraction": {f"com_{a}": float(c)
+            "com_contraction": {f"com_{a}": max(float(c), 0.0)
                                 for a, c in zip("xyz", self.com_contraction)},
             "rule": (f"rank: singular values >= {INFORMATION_MIN:g} of the prior-whitened, "
                      "noise-whitened impulse design (Feldman & Lee Eq 17 linearised at the prior "
