@@ -131,9 +131,9 @@ def child(args) -> dict:
 
     problem = post.problem
     kw = problem.data
-    n_f, sample_inertia = len(problem.names), problem.inertia is not None
+    n_f, n_c, sample_inertia = problem.n_f, problem.n_c, problem.inertia is not None
     vg = jax.jit(jax.value_and_grad(
-        lambda w, kw: _log_density(kw.centre + kw.tril @ w, kw, n_f, sample_inertia)))
+        lambda w, kw: _log_density(kw.centre + kw.tril @ w, kw, n_f, n_c, sample_inertia)))
     w = jax.device_put(np.zeros(kw.centre.shape[0]))
     jax.block_until_ready(vg(w, kw))
     best_c = best_w = float("inf")

@@ -44,8 +44,8 @@ def _mode_f(tel, pulses, spacecraft, inertia) -> tuple[float, float]:
     data = prepare_thrust([(tel, pulses)], spacecraft, mode="mean", inertia=inertia,
                           robust=True).data
     centre = jnp.asarray(data.centre)
-    thrust = float(_physical(centre, data, 1, True)[0][0])
-    grad = jax.grad(lambda th: _physical(th, data, 1, True)[0][0])(centre)
+    thrust = float(_physical(centre, data, 1, 0, True).thrust[0])
+    grad = jax.grad(lambda th: _physical(th, data, 1, 0, True).thrust[0])(centre)
     return thrust, float(np.linalg.norm(np.asarray(grad) @ np.asarray(data.tril)))
 
 

@@ -52,7 +52,7 @@ def test_sparse_pulse_impulse_equals_dense():
     order = np.random.default_rng(1).permutation(t_on.size)
     slot = np.searchsorted(t, t_on)
     k = int(np.ceil((0.75 + 0.02 + 1.5) / 1.0)) + 1
-    layout = pulse_layout(t, t_on[order], thr[order], width[order], slot[order], k)
+    layout = pulse_layout(t, t_on[order], thr[order], width[order], slot[order], k, 8)
     for tau in [(0.005, 0.020, 0.065), (0.003, 0.015, 0.090)]:
         dense = impulse_from_pulses(t, t_on, thr, width, *tau)
         np.testing.assert_allclose(_impulse_per_thruster(layout, tau), np.asarray(dense),
@@ -73,7 +73,7 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
                                          jnp.asarray(h))).transpose(0, 2, 1)
     none = np.zeros((0, 3, n))
     return EventData(t=t, omega=omega, h_wheels=h, mask=np.ones(n), t_on=t_on, thruster=thr,
-                     width=width, slot=slot, pulses=pulse_layout(t, t_on, thr, width, slot, 2),
+                     width=width, slot=slot, pulses=pulse_layout(t, t_on, thr, width, slot, 2, 8),
                      wheel_cov=wheel_cov, nu_cols=none, time_tag_rates=np.asarray(rates),
                      rank_one=RankOneRows(np.arange(n), (np.zeros((0, n)),) * 3),
                      lhs_wheels=basis[0],
@@ -356,6 +356,9 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
     n_f = len(problem.names)
     assert kw.nu_sd.shape[0] > 0 and len(set(problem.n_samples)) == 2
 
+    def _args(p):
+        return p.inertia, p.per_thruster, p.tau, p.log_sigma
+
     def fast(pi, f8, tau, log_sigma, ev=kw.events):
         st = jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None))(
             pi, f8, (tau[0], tau[1], tau[2]), log_sigma, ev, kw.q_matrix)
@@ -367,7 +370,7 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
 
     def at(lik):
         return jax.jit(jax.value_and_grad(
-            lambda theta: lik(*[_physical(theta, kw, n_f, True)[k] for k in (4, 1, 2, 3)])))
+            lambda theta: lik(*_args(_physical(theta, kw, n_f, 0, True)))))
 
     rng = np.random.default_rng(8)
     fast_vg, dense_vg = at(fast), at(dense)
@@ -382,7 +385,7 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
     top = int(np.argmax(np.abs(tag).max(0)))
     bumped = kw.events._replace(time_tag_rates=kw.events.time_tag_rates.at[0, :, top].multiply(
         1.0 + 1e-4))
-    x = [_physical(theta, kw, n_f, True)[k] for k in (4, 1, 2, 3)]
+    x = _args(_physical(theta, kw, n_f, 0, True))
     assert float(fast(*x, ev=bumped)) != pytest.approx(float(dense(*x)), rel=1e-9)
 
 
@@ -511,7 +514,7 @@ def test_pulse_on_at_the_first_sample_is_modelled_after_it_with_a_warning(monkey
 def test_names_and_modes():
     assert thrust_names("mean") == ("F",)
     assert thrust_names("branch") == ("F_Z", "F_Y")
-    assert thrust_names("thruster")[0] == "F_Z1" and thrust_names("thruster")[-1] == "F_Y4"
+    assert thrust_names("thruster") == ("F",)     # along the model's thrusters: F[Z1] …
     assert TAU_NAMES == ("tau_delay", "tau_rise", "tau_fall")
     with pytest.raises(InputError, match="mode="):
         thrust_names("per-day")
@@ -640,12 +643,13 @@ def test_unfired_thrusters_are_prior_dominated(fsds):
     post = fit_thrust(jax.random.key(2), [ev], sc.prior, mode="thruster", robust=False,
                       settings=_settings())
     assert list(post.problem.fired) == [False] * 5 + [True, False, True]
-    for name in ("F_Z1", "F_Z2", "F_Z3", "F_Z4", "F_Y1", "F_Y3"):
-        sd = np.log(post.idata.posterior[name].values.ravel()).std()
+    f_all = post.idata.posterior["F"]
+    for name in ("Z1", "Z2", "Z3", "Z4", "Y1", "Y3"):
+        sd = np.log(f_all.sel(thruster=name).values.ravel()).std()
         # prior sd of log F is 0.3; the sd of ~1600 draws is within ±15 % of it (≫ 3σ)
         assert 1.0 - sd / THRUST_PRIOR_LOG_SD == pytest.approx(0.0, abs=0.15)
-    for name in ("F_Y2", "F_Y4"):
-        f = post.idata.posterior[name].values.ravel()
+    for name in ("Y2", "Y4"):
+        f = f_all.sel(thruster=name).values.ravel()
         assert f.std() < 0.1 * THRUST_PRIOR_LOG_SD * f.mean()
         assert abs(f.mean() - 0.75) / 0.75 < 0.10
 

@@ -34,10 +34,13 @@ if TYPE_CHECKING:
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
 
-def thrust_baseline(events, spacecraft, mode: str,
-                    inertia=None) -> tuple[dict | None, list[str]]:
+def thrust_baseline(events, spacecraft, mode: str, inertia=None,
+                    combinations=None) -> tuple[dict | None, list[str]]:
     """Feldman & Lee's least squares (Eqs 19-23) with the pulse-dynamics correction at the
     spacecraft model's nominal time constants, all events stacked; ``None`` when unavailable.
+    Mode ``thruster`` (any layout): one thrust per thruster from all three rows of Eq 17
+    (:func:`~cassini_bayes.estimators.thrust.fit_per_thruster`), and the Bayesian fit's
+    identified ``combinations`` (C, M) where the thrusters fire only in them.
     The inertia is the model's prediction, or the mean of ``inertia`` (an inertia posterior's
     :class:`~cassini_bayes.inference.thrust.InertiaGaussian`) when given, as the RWA4 baseline
     does."""
@@ -57,17 +60,24 @@ def thrust_baseline(events, spacecraft, mode: str,
             h = wheel_momentum(tel, spacecraft)
             v, j = est.regression_inputs(tel.t, tel.omega, h, i_body,
                                          pulses=(log.t_on, log.thruster, log.width),
-                                         tau=(p.tau_delay, p.tau_rise, p.tau_fall))
+                                         tau=(p.tau_delay, p.tau_rise, p.tau_fall),
+                                         n_thrusters=len(spacecraft.thrusters))
             vs.append(v)
             js.append(j)
         v, j = np.concatenate(vs), np.concatenate(js)
     except Exception as e:  # the baseline must never sink the Bayesian fit
         return None, [f"baseline unavailable: {' '.join(str(e).split())}"]
     out, msgs = {}, []
+    if mode == "thruster":
+        try:
+            f = est.fit_per_thruster(v, j, q, spacecraft.thruster_names, combinations)
+        except Exception as e:
+            return None, [f"baseline unavailable: {' '.join(str(e).split())}"]
+        return ({n: float(x) for n, x in zip(f.names, f.estimate)} or None,
+                [f"baseline: {w}" for w in f.warnings])
     by_mode: dict[str, list[tuple[str, Callable[..., Any], str | None]]] = {
         "mean": [("F", est.fit_mean, None)],
-        "branch": [("F_Z", est.fit_z_thrusters, "mean"), ("F_Y", est.fit_y_mean, None)],
-        "thruster": [("F_Z", est.fit_z_thrusters, "each"), ("F_Y", est.fit_y_thrusters, "each")]}
+        "branch": [("F_Z", est.fit_z_thrusters, "mean"), ("F_Y", est.fit_y_mean, None)]}
     fits = by_mode[mode]
     for name, fn, how in fits:
         try:
@@ -75,9 +85,7 @@ def thrust_baseline(events, spacecraft, mode: str,
         except Exception as e:
             msgs.append(f"baseline {name}: {' '.join(str(e).split())}")
             continue
-        if how == "each":
-            out.update({n: float(x) for n, x in zip(f.names, f.estimate)})
-        elif how == "mean":
+        if how == "mean":
             out[name] = float(np.mean(f.estimate))
         else:
             out[name] = float(f.estimate[0])
@@ -101,27 +109,44 @@ def thrust_sensitivity(post) -> dict:
         v = np.asarray(post_ds[name].values, float)
         return v.reshape(v.shape[0] * v.shape[1], -1)
 
-    names = list(post.problem.names) + list(TAU_NAMES)
-    targets = {n: flat(n)[:, 0] for n in names}
+    pb = post.problem
+    targets = {}
+    for n in pb.names:
+        x = flat(n)
+        if x.shape[1] == 1:
+            targets[n] = x[:, 0]
+        else:                        # mode thruster: F along the thrusters
+            targets.update({f"{n}[{s}]": x[:, i] for i, s in enumerate(pb.thrusters)})
+    thrust_labels = list(targets)
+    targets.update({n: flat(n)[:, 0] for n in TAU_NAMES})
     prior_sd = site_prior_sd(layout)
     groups = {e: (flat(EFFECTS[e]), prior_sd[EFFECTS[e]])
               for e in layout.slices if EFFECTS[e] in post_ds}
-    units = {n: ("N" if n.startswith("F") else "s") for n in names}
+    units = {n: ("N" if n in thrust_labels else "s") for n in targets}
     return posterior_sensitivity(targets, groups, units)
 
 
 def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: str,
                    baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of a thrust posterior (``ThrustPosterior``): parameters (thrust and
-    ``tau_*``), baseline, diagnostics, adequacy, nuisance, ``mode``, ``model``,
-    ``wheel_errors`` and (robust fits) ``sensitivity``."""
+    ``tau_*``; mode ``thruster``: ``F[<name>]`` per thruster, ``com_x``, ``com_y``, ``com_z``
+    and ``F_combination[<label>]`` per identified combination), baseline, diagnostics,
+    adequacy, nuisance, ``mode``, ``model``, ``wheel_errors``, (robust fits) ``sensitivity``
+    and (mode ``thruster``) ``thrust_design``: the impulse design's rank, singular values,
+    identified thrusters, combinations with their weights, and whether the centre of mass is
+    told by the events (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`)."""
     from cassini_bayes.inference.adequacy import thrust_adequacy
     from cassini_bayes.inference.nuisance import EFFECTS
-    from cassini_bayes.inference.summary import build_summary
-    from cassini_bayes.inference.thrust import TAU_NAMES, thrust_names
+    from cassini_bayes.inference.summary import CONTRACTION_WEAK, build_summary
+    from cassini_bayes.inference.thrust import COM_NAMES, TAU_NAMES, thrust_names
     from cassini_bayes.physics.momentum import INERTIA_NAMES
 
-    names = list(thrust_names(mode)) + list(TAU_NAMES)
+    names = list(thrust_names(mode))
+    if "F_combination" in post.idata.posterior:      # mode thruster, thrusters told in combination
+        names.append("F_combination")
+    if mode == "thruster":
+        names += list(COM_NAMES)
+    names += list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
     if "Ixx" in post.idata.posterior:   # the inertia was sampled
         nuisance += list(INERTIA_NAMES)
@@ -137,6 +162,22 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     summary["wheel_errors"] = wheel_errors if robust else None
     if robust:
         summary["sensitivity"] = thrust_sensitivity(post)
+    design = post.problem.design
+    if design is not None:
+        block = design.to_dict()
+        params = summary["parameters"]
+        for c in block["combinations"]:
+            c["posterior"] = params.get(f"F_combination[{c['label']}]")
+        block["com_told"] = {n: (params.get(n) or {}).get("contraction") is not None
+                             and params[n]["contraction"] >= CONTRACTION_WEAK
+                             for n in COM_NAMES}
+        summary["thrust_design"] = block
+        quiet = [n for n, told in block["com_told"].items() if not told]
+        if quiet:
+            summary["warnings"].append(
+                f"{', '.join(quiet)}: the events do not tell the centre of mass along these axes "
+                f"(posterior/prior contraction < {CONTRACTION_WEAK:g}; only firings with a net "
+                "force move it): prior-dominated, from [center_of_mass] sd_m")
     return summary
 
 
@@ -190,8 +231,11 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
         ``telemetry``.
     spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, a model TOML path or a shipped
         model's name.
-    mode : ``"mean"`` (``F``), ``"branch"`` (``F_Z``, ``F_Y``) or ``"thruster"``
-        (``F_Z1 … F_Y4``), thrust in N.
+    mode : ``"mean"`` (``F``, one thrust for all thrusters: the papers' Eq 23), ``"branch"``
+        (``F_Z``, ``F_Y``; Cassini's eight thrusters of Eq 16) or ``"thruster"`` (``F[<name>]``
+        per thruster of any layout with the centre-of-mass offset ``com_x``, ``com_y``,
+        ``com_z`` in m, and the identified combinations where the events do not separate the
+        thrusters; ``summary["thrust_design"]``), thrust in N.
     inertia_posterior : an inertia fit (its :class:`FitResult` or run directory): its posterior
         becomes the inertia prior (default: the spacecraft model's inertia and its stated
         uncertainty).
@@ -221,7 +265,8 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
-    sc.require_thrusters("fit thrust", eq16=True)
+    sc.require_thrusters("fit thrust" + (" --mode branch" if mode == "branch" else ""),
+                         eq16=(mode == "branch"))
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, fix_inertia)
     tels, tel_records, tel_paths = telemetry_inputs(telemetry, spacecraft=sc)
     logs, log_records, log_paths = pulse_inputs(pulses, spacecraft=sc)
@@ -239,7 +284,9 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
         post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
                              robust=robust, wheel_errors=wheel_errors)
     with step("summaries, baseline and adequacy checks"):
-        baseline, base_warns = thrust_baseline(events, sc, mode, inertia)
+        design = post.problem.design
+        baseline, base_warns = thrust_baseline(
+            events, sc, mode, inertia, None if design is None else design.combinations)
         summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
                                  wheel_errors=wheel_errors, baseline=baseline,
                                  warnings=list(dict.fromkeys(check_warns + warns + base_warns)))

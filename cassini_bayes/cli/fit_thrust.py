@@ -24,8 +24,10 @@ def fit_thrust_cmd(
                                       "(t_on, thruster, width), in the order of --telemetry."),
     spacecraft: str = typer.Option(..., "--spacecraft", help="Spacecraft model TOML."),
     out: Path = OUT,
-    mode: str = typer.Option("mean", "--mode", help="mean (F), branch (F_Z, F_Y) or thruster "
-                             "(F_Z1 ... F_Y4)."),
+    mode: str = typer.Option("mean", "--mode", help="mean (one F for all thrusters, the "
+                             "papers' Eq 23), branch (F_Z, F_Y; Cassini's Eq 16 layout) or "
+                             "thruster (F[<name>] per thruster of any layout, the centre-of-mass "
+                             "offset com_x/y/z and the identified combinations)."),
     inertia_posterior: Path = typer.Option(None, "--inertia-posterior", help="Run directory of "
                                            "an inertia fit: its posterior becomes the inertia "
                                            "prior (default: the spacecraft model's inertia and "

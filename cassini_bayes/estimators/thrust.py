@@ -10,6 +10,13 @@ is linear in the thrusts. The paper stacks it four ways:
 * :func:`fit_y_mean` — the mean Y thrust (Eq 22);
 * :func:`fit_mean` — one thrust for all eight (Eq 23).
 
+Eqs 19-22 assume Cassini's eight thrusters in the layout of Eq 16 (``Z1..Z4`` first, then
+``Y1..Y4``). For any other layout, :func:`fit_per_thruster` stacks all three rows of Eq 17 with one
+unknown per thruster that fired (Eq 17 with ``J_s = F_s j_s``): each thruster whose own direction
+lies in the row space of the stacked design gets its thrust, and combinations given by the caller
+(the Bayesian fit's identified combinations) get theirs when they lie in it; the rest are not
+estimated.
+
 Each takes ``v`` (N, 3), the left side ``I Δω + ΔH_RWA + ΔG`` (N m s), and ``j`` (N, 8), the
 accumulated impulse per newton of thrust (s) — either the cumulative on-times ``Δτ`` (the paper's
 Eq 17) or, with the pulse-dynamics correction, the actual per-newton impulse of the pulse log
@@ -20,7 +27,7 @@ other correction, dividing the plain estimate by the impulse ratio ``R`` (Table 
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, Sequence
 
 import jax
 import numpy as np
@@ -32,11 +39,11 @@ from cassini_bayes.physics.impulse import (impulse_from_on_times,
                                            system_xyz, system_z, system_zz, system_zzz)
 
 __all__ = ["ThrustFit", "regression_inputs", "fit_z_thrusters", "fit_y_thrusters", "fit_y_pairs",
-           "fit_y_mean", "fit_mean", "ratio_corrected"]
+           "fit_y_mean", "fit_mean", "fit_per_thruster", "combination_label", "ratio_corrected"]
 
 
 _lhs = jax.jit(impulse_lhs)
-_pulse_impulse = jax.jit(impulse_from_pulses)
+_pulse_impulse = jax.jit(impulse_from_pulses, static_argnames="n_thrusters")
 
 
 class ThrustFit(NamedTuple):
@@ -62,13 +69,14 @@ class ThrustFit(NamedTuple):
 
 
 def regression_inputs(t, omega, h_wheels_body, inertia, on_times=None, pulses=None,
-                      tau=None):
+                      tau=None, n_thrusters: int = 8):
     """``(v, j)`` for the thrust regressions from telemetry.
 
     Parameters
     ----------
     t : (n,) s. omega : (n, 3) rad/s. h_wheels_body : (n, 3) N m s. inertia : (3, 3) kg m².
-    on_times : (n, 8) cumulative on-times (s): ``j = Δτ`` (Feldman & Lee Eq 17).
+    on_times : (n, M) cumulative on-times (s): ``j = Δτ`` (Feldman & Lee Eq 17).
+    n_thrusters : M, the spacecraft's thrusters (pulse-log indices run over them).
     pulses : ``(t_on, thruster, width)`` arrays of a pulse log, with ``tau = (τd, τr, τf)`` in s:
         ``j`` = actual per-newton impulse delivered by each ``t_i`` (pulse-dynamics correction).
         Without ``tau`` the pulses are taken as instantaneous (``j`` = commanded on-time elapsed).
@@ -80,10 +88,10 @@ def regression_inputs(t, omega, h_wheels_body, inertia, on_times=None, pulses=No
         tt = np.asarray(t, float)
         if tau is None:  # instantaneous pulses: commanded on-time elapsed by t_i (Eq 17)
             elapsed = np.clip(tt[:, None] - t_on[None, :], 0.0, width[None, :])
-            j = elapsed @ (thr[:, None] == np.arange(8)[None, :]).astype(float)
+            j = elapsed @ (thr[:, None] == np.arange(n_thrusters)[None, :]).astype(float)
             j = j - j[:1]
         else:
-            j = _pulse_impulse(tt, t_on, thr, width, *tau)
+            j = _pulse_impulse(tt, t_on, thr, width, *tau, n_thrusters=n_thrusters)
     elif on_times is not None:
         j = impulse_from_on_times(np.asarray(on_times, float))
     else:
@@ -137,6 +145,84 @@ def fit_mean(v, j, q_matrix) -> ThrustFit:
     """One thrust (N) for all eight thrusters, Feldman & Lee Eq 23."""
     u, y = system_xyz(v, j, q_matrix)
     return _fit(u, y, ("F",), [tuple(range(8))], "no thruster fired")
+
+
+def combination_label(weights, names: Sequence[str]) -> str:
+    """``"0.5 F[Y1] + 0.5 F[Y3]"``: a combination's weights as text (3 significant digits)."""
+    out = ""
+    for w, n in zip(weights, names):
+        if not w:
+            continue
+        term = f"{abs(w):.3g} F[{n}]"
+        out += (term if w > 0 else f"-{term}") if not out else (
+            f" + {term}" if w > 0 else f" - {term}")
+    return out
+
+
+def fit_per_thruster(v, j, q_matrix, names, combinations=None) -> ThrustFit:
+    """One thrust per thruster (N) from all three rows of Feldman & Lee Eq 17, any layout.
+
+    ``v`` (N, 3) N m s and ``j`` (N, M) s as for the other regressions, ``q_matrix`` (3, M) m,
+    ``names`` (M,) the thrusters' names, ``combinations`` (C, M) optional weights of thrust
+    combinations. The unknowns are the thrusters that fired; the stacked design
+    ``U[(i, k), s] = Q_ks j_s(t_i)`` is solved by its pseudo-inverse (relative singular-value
+    cut :data:`~cassini_bayes.estimators.lstsq.RANK_RTOL`, columns scaled to unit length). A
+    thruster is estimated (``F[<name>]``) when its unit vector lies in the design's row space
+    (to 1e-6), a combination (``F_combination[<label>]``) when its weights do; the others
+    are named in ``warnings``. Raises :class:`~cassini_bayes.errors.UnidentifiableError` when
+    nothing is estimable (no thruster fired)."""
+    from cassini_bayes.errors import UnidentifiableError
+    from cassini_bayes.estimators.lstsq import RANK_RTOL
+
+    j = np.asarray(j, float)
+    v = np.asarray(v, float)
+    q = np.asarray(q_matrix, float)
+    m = q.shape[1]
+    u = (j[:, None, :] * q[None, :, :]).reshape(-1, m)                 # Feldman & Lee Eq 17
+    y = v.reshape(-1)
+    if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
+        raise InputError("the least-squares system for the thrusts has NaN/inf entries; "
+                         "remove the bad rows from the input")
+    scale = np.linalg.norm(u, axis=0)
+    fired = scale > 0
+    if not fired.any():
+        raise UnidentifiableError("no thruster fired: no thrust can be estimated")
+    a = u[:, fired] / scale[fired]
+    uu, sv, vt = np.linalg.svd(a, full_matrices=False)
+    rank = int(np.sum(sv > RANK_RTOL * sv[0]))
+    x = vt[:rank].T @ ((uu[:, :rank].T @ y) / sv[:rank])
+    f = np.full(m, np.nan)
+    f[fired] = x / scale[fired]                                          # minimum-norm solution
+    row = vt[:rank]                                                      # row space, scaled units
+    residual = y - u[:, fired] @ f[fired]
+
+    def estimable(w):
+        ws = np.asarray(w, float)[fired] / scale[fired]                 # the weights in scaled units
+        n = np.linalg.norm(ws)
+        return n > 0 and not np.any(np.asarray(w, float)[~fired]) and (
+            np.linalg.norm(ws - row.T @ (row @ ws)) <= 1e-6 * n)
+
+    est, labels, per, notes = [], [], np.full(m, np.nan), []
+    for s in range(m):
+        w = np.eye(m)[s]
+        if fired[s] and estimable(w):
+            est.append(f[s])
+            labels.append(f"F[{names[s]}]")
+            per[s] = f[s]
+    missing = [names[s] for s in range(m) if fired[s] and np.isnan(per[s])]
+    for w in (np.zeros((0, m)) if combinations is None else np.asarray(combinations, float)):
+        label = combination_label(w, names)
+        if estimable(w):
+            est.append(float(np.nansum(w * np.where(np.isnan(f), 0.0, f))))
+            labels.append(f"F_combination[{label}]")
+        else:
+            notes.append(f"combination {label} is not estimable by least squares")
+    if missing:
+        notes.append(f"thrusters {', '.join(missing)} fire only in combinations the data cannot "
+                     "separate; their thrusts are not estimated one by one")
+    cond = float(sv[0] / sv[rank - 1]) if rank else float("inf")
+    return ThrustFit(np.asarray(est, float), tuple(labels), per,
+                     float(np.sqrt(np.mean(residual**2))), rank, cond, tuple(notes))
 
 
 def ratio_corrected(thrust_plain_n, ratio):

@@ -53,6 +53,41 @@ def pulses_section(run: RunData, fig) -> Section:
     return section("Per-pulse impulses", body, id="pulses")
 
 
+def thrust_design_section(summary: dict) -> Section | None:
+    """What the events tell about each thruster (``summary["thrust_design"]`` of ``fit thrust
+    --mode thruster``): the impulse design's rank and singular values, the thrusters identified
+    one by one, the identified combinations of the others with their posterior, and whether
+    the centre of mass is told (docs/thrust_any_layout.md). ``None`` for the other modes."""
+    d = summary.get("thrust_design")
+    if not d:
+        return None
+    sv = ", ".join(f"{x:.3g}" for x in d["singular_values"])
+    body = [paragraph(
+        f"Impulse design (Feldman & Lee Eq 17 linearised at the prior's centre, prior- and "
+        f"noise-whitened): rank {d['rank']} of {d['parameters']} (singular values ≥ 1: the data "
+        f"know the direction at least as well as the prior; {sv}); {d['thrust_rank']} of "
+        f"{len(d['thrusters'])} thrust directions identified. Identified one by one: "
+        f"{', '.join(d['identified']) or 'none'}."
+        + (f" Never fired: {', '.join(d['not_fired'])}." if d["not_fired"] else ""))]
+    if d["combinations"]:
+        rows = []
+        for c in d["combinations"]:
+            p = c.get("posterior") or {}
+            rows.append([c["label"], fmt(p.get("mean"), 4), fmt(p.get("sd"), 4),
+                         fmt(p.get("q05"), 4), fmt(p.get("q95"), 4)])
+        body.append(paragraph("The other thrusters are told only in these combinations "
+                              "(weights of the thrusts, N per N):"))
+        body.append(table(["combination", "mean N", "sd N", "5 %", "95 %"], rows))
+    told = d.get("com_told") or {}
+    quiet = [n for n, ok in told.items() if not ok]
+    body.append(paragraph(
+        "Centre of mass (com_x, com_y, com_z: true minus the model file's): "
+        + ("told by the events on every axis." if not quiet else
+           f"{', '.join(quiet)} not told by the events (no net-force firings along them): "
+           "prior-dominated.")))
+    return section("What the events tell about each thruster", body, id="thrust-design")
+
+
 def residuals_section(run: RunData, fig) -> Section:
     if not run.has_group("residuals"):
         return section("Residuals",

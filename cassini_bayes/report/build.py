@@ -26,6 +26,7 @@ from cassini_bayes.report._sections import (
     diagnostics_section,
     pulses_section,
     residuals_section,
+    thrust_design_section,
 )
 from cassini_bayes.report.adequacy import adequacy_section
 from cassini_bayes.report.html import (
@@ -95,6 +96,7 @@ def render_report(run: RunData, *, display_dir: str | Path | None = None) -> str
 
     sections = [answer_section(run, names, rows, derived, fig)]
     if run.kind == "thrust":
+        sections += [s for s in [thrust_design_section(run.summary)] if s is not None]
         sections.append(pulses_section(run, fig))
     sections += [adequacy_section(run.summary), residuals_section(run, fig)]
     from cassini_bayes.report.sensitivity import sensitivity_section

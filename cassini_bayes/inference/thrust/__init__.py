@@ -12,8 +12,26 @@ where ``j_s(t_i)`` is the *actual* impulse per newton that thruster ``s`` has de
 :mod:`cassini_bayes.physics.pulse` (Feldman & Lee §V closed form once the pulse has decayed), so
 the likelihood depends on the time constants directly rather than through the paper's ratio
 ``R``. The time constants are shared by all events (same thrusters, same valves); the thrust is
-one mean ``F`` (Eq 23), one per branch ``F_Z``/``F_Y``, or one per thruster ``F_Z1 … F_Y4``
-(Eqs 19-20), shared by the events too (pool only events of one epoch).
+one mean ``F`` (Eq 23, the papers' reproduction), one per branch ``F_Z``/``F_Y`` (Cassini's
+layout of Eq 16), or one per thruster of any layout (mode ``thruster``, "Per-thruster model"
+below), shared by the events too (pool only events of one epoch).
+
+Per-thruster model (mode ``thruster``, any thruster layout)
+-----------------------------------------------------------
+``F`` has one entry per thruster of the model file (``summary.json``: ``F[<name>]``), each
+``log F_s ~ Normal(log F_pred,s, 0.3)`` about its own ``F`` or the model's ``[thrust]``; ``Q`` is
+built from each thruster's position and direction about the sampled centre of mass,
+``Q_s = (r_s − e − δ) × d_s`` (Feldman & Lee Eq 16 for any layout), ``δ`` = (``com_x``,
+``com_y``, ``com_z``) m the true centre of mass minus the model file's, ``δ_k ~ Normal(0,
+[center_of_mass] sd_m)``. Only firings with a net force (``Σ F_s d_s j_s ≠ 0``) tell ``δ``. The
+sampler's thrust and offset coordinates are the prior-whitened ``(log F, δ)`` rotated into the
+singular directions of the linearised impulse design
+(:mod:`~cassini_bayes.inference.thrust.design`): the combinations the events determine are
+coordinate axes, those they leave at the prior the others, with nothing named by hand. The
+design's rank, the thrusters identified one by one and the identified combinations of the others
+(Cassini's Y pairs fired together, with the Y thrusters in the centre of mass's plane, give the
+pair means of Eq 21) are on ``ThrustProblem.design``; ``F_combination`` (N) along
+``combination`` holds each combination's posterior.
 
 Error model (why the cumulative form, with a free offset)
 ---------------------------------------------------------
@@ -165,11 +183,12 @@ from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.thrust.coords import (A_LOG_SCALE, C_SCALE_S, long_pulse_excess,
                                                    rise_deficit)
 from cassini_bayes.inference.thrust.data import ThrustData, ThrustProblem, prepare_thrust
+from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.fit import RESIDUAL_DRAWS, ThrustPosterior, fit_thrust
 from cassini_bayes.inference.thrust.likelihood import (thruster_impulse, impulse_residuals,
                                                        pulse_layout, time_tag_rates)
 from cassini_bayes.inference.thrust.model import thrust_model
-from cassini_bayes.inference.thrust.prior import (CONTRACTION_UNIDENTIFIED, MODES,
+from cassini_bayes.inference.thrust.prior import (COM_NAMES, CONTRACTION_UNIDENTIFIED, MODES,
                                                   NOISE_PRIOR_LOG_SD, PRIOR_CONFLICT_MASS,
                                                   THRUST_PRIOR_LOG_SD, TauIdentificationWarning,
                                                   TauPrior, draw_tau_prior, resolve_inertia,
@@ -197,6 +216,8 @@ __all__ = [
     "CONTRACTION_UNIDENTIFIED",
     "PRIOR_CONFLICT_MASS",
     "thrust_names",
+    "COM_NAMES",
+    "ThrustDesign", "thrust_design",
     "ThrustData", "ThrustProblem",
     "prepare_thrust",
     "pulse_layout",

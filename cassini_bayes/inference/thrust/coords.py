@@ -5,6 +5,8 @@ parameters, with the prior carried over by the Jacobians (:mod:`cassini_bayes.in
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 import numpyro.distributions as dist
@@ -17,15 +19,17 @@ C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler 
 A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
 
 
-def _unpack(theta, n_f: int, n_ev: int, sample_inertia: bool):
-    """Split the sampler vector into ``f_z`` (n_f,), ``tau_z`` (3,) = ``(s_z, a_z, c_z)``,
-    ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
+def _unpack(theta, n_f: int, n_c: int, n_ev: int, sample_inertia: bool):
+    """Split the sampler vector into ``f_z`` (n_f,), ``com_z`` (n_c,), ``tau_z`` (3,) =
+    ``(s_z, a_z, c_z)``, ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
-    tau_z = theta[n_f:n_f + 3]
-    noise_z = theta[n_f + 3:n_f + 3 + n_ev]
-    k = n_f + 3 + n_ev
+    com_z = theta[n_f:n_f + n_c]
+    k = n_f + n_c
+    tau_z = theta[k:k + 3]
+    noise_z = theta[k + 3:k + 3 + n_ev]
+    k += 3 + n_ev
     inertia_z = theta[k:k + 6] if sample_inertia else None
-    return f_z, tau_z, noise_z, inertia_z
+    return f_z, com_z, tau_z, noise_z, inertia_z
 
 
 def long_pulse_excess(tau_delay, tau_rise, tau_fall):
@@ -106,15 +110,40 @@ def _tau_from_z(tau_z, kw):
     return jnp.stack([t_d, t_r, t_f]), log_prior
 
 
-def _physical(theta, kw, n_f: int, sample_inertia: bool):
-    """Physical parameters of the non-dimensional vector: thrust (n_f,) N, its (8,) spread over
-    the thrusters, ``τ`` (3,) s, ``log σ`` (E, 2) and ``π`` (6,) kg m²."""
+class Physical(NamedTuple):
+    """The physical parameters at a sampler vector (:func:`_physical`)."""
+
+    thrust: jax.Array       # (n_f,) N, one per thrust parameter
+    per_thruster: jax.Array  # (M,) N, each thruster's thrust
+    q_matrix: jax.Array     # (3, M) m, torque per newton about the sampled centre of mass
+    com: jax.Array          # (n_c,) m, centre of mass, true minus the model file's
+    tau: jax.Array          # (3,) s
+    log_sigma: jax.Array    # (E, 2) log rad/s
+    inertia: jax.Array      # (6,) kg m²
+
+
+def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
+    """Physical parameters of the non-dimensional vector (:class:`Physical`).
+
+    Per-thruster model (``kw.f_basis`` given): the prior-whitened deviations of ``log F`` (n_f)
+    and of the centre of mass (``n_c`` = 3) are the sampler's coordinates rotated by the
+    orthogonal ``f_basis`` into the impulse design's singular directions
+    (:func:`~cassini_bayes.inference.thrust.design.thrust_design`), so the prior stays
+    ``N(0, 1)`` in the sampler's coordinates. The torque per newton about the sampled centre of
+    mass is ``(r_s − e − δ) × d_s = Q_s − δ × d_s`` (Feldman & Lee Eq 16 with the offset ``δ``).
+    """
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
+    q = kw.q_matrix
+    com = com_z
+    if kw.f_basis is not None:
+        x = kw.f_basis @ jnp.concatenate([f_z, com_z])
+        f_z, com = x[:n_f], kw.com_sd * x[n_f:]
+        q = q - jnp.cross(com[:, None], kw.d_matrix, axis=0)     # Feldman & Lee Eq 16, r − e − δ
     thrust = jnp.exp(kw.f_mu + THRUST_PRIOR_LOG_SD * f_z)
     tau, _ = _tau_from_z(tau_z, kw)
     log_sigma = kw.log_noise_hat + _NOISE_STEP * noise_z[:, None]
     pi = kw.inertia_mean
     if sample_inertia:
         pi = pi + kw.inertia_tril @ inertia_z
-    return thrust, thrust[kw.f_index], tau, log_sigma, pi
+    return Physical(thrust, thrust[kw.f_index], q, com, tau, log_sigma, pi)

@@ -18,10 +18,13 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
 from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
-                                                       time_tag_rates, time_tag_rows)
-from cassini_bayes.inference.thrust.model import _laplace_density
-from cassini_bayes.inference.thrust.prior import TauPrior, _thrust_index, tau_prior, thrust_names
+                                                       thruster_impulse, time_tag_rates,
+                                                       time_tag_rows)
+from cassini_bayes.inference.thrust.model import _laplace_density, thrust_sizes
+from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, _thrust_index,
+                                                  tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
@@ -48,15 +51,21 @@ class ThrustData(NamedTuple):
     events : :class:`~cassini_bayes.inference.thrust.likelihood.EventData`, each field with a
         leading event axis (E), padded to common lengths.
     log_noise_hat : (E, 2) log data noise levels (σ_ω, σ_ρ rad/s).
-    q_matrix : (3, 8) m, torque per newton of each thruster (Feldman & Lee Eq 16).
+    q_matrix : (3, M) m, torque per newton of each of the M thrusters about the model file's
+        centre of mass (Feldman & Lee Eq 16).
     tau_delay_scale, tau_mu, tau_sd, a_mu, c_mu : the pulse time constants' prior and the
         sampler's centres of the rise deficit and the long-pulse excess, s (coords.py).
-    f_mu : log predicted thrust; f_index : (8,) int, each thruster's thrust parameter.
+    f_mu : log predicted thrust (per thruster in mode ``thruster``); f_index : (M,) int, each
+        thruster's thrust parameter.
     inertia_mean, inertia_tril : (6,) kg m² and (6, 6): the inertia (its prior when sampled;
         ``inertia_tril`` zero when fixed).
     nu_sd : (R,) prior sds of the robust nuisance (R = 0 when idealised).
     centre, tril : the sampler's whitening ``θ = centre + tril w`` (``None`` until the Laplace
         step has run).
+    f_basis, com_sd, d_matrix : mode ``thruster`` only (else ``None``): the orthogonal
+        (M + 3, M + 3) rotation of the prior-whitened ``(log F, δ)`` into the impulse design's
+        singular directions (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`),
+        the centre of mass's prior sd (m) and the thrusters' unit directions (3, M).
     """
 
     events: EventData
@@ -74,6 +83,9 @@ class ThrustData(NamedTuple):
     nu_sd: object
     centre: object = None
     tril: object = None
+    f_basis: object = None
+    com_sd: object = None
+    d_matrix: object = None
 
 
 class ThrustProblem(NamedTuple):
@@ -83,23 +95,26 @@ class ThrustProblem(NamedTuple):
     ----------
     data : :class:`ThrustData`, the arrays of :func:`thrust_model`.
     mode : ``"mean"``, ``"branch"`` or ``"thruster"``.
-    names : thrust parameter names of the mode.
-    thrust_pred : predicted thrust (prior centre), N.
+    names : thrust sites of the mode (``F`` along ``thrusters`` in mode ``thruster``).
+    thrust_pred : predicted thrust (prior centre), N; (M,) per thruster in mode ``thruster``.
     tau : :class:`TauPrior`.
     inertia : :class:`InertiaGaussian` when the inertia is sampled, else ``None``.
     inertia_fixed : (3, 3) kg m² used when not sampled.
     sources : ``(telemetry, pulses)`` file names per event.
     n_samples, n_pulses : per event.
-    fired : (8,) bool, thrusters with at least one pulse in any event.
+    fired : (M,) bool, thrusters with at least one pulse in any event.
     noise_hat : (E, 2) data noise levels (σ_ω rad/s, σ_ρ rad/s).
     layout : the nuisance layout (:class:`~cassini_bayes.inference.nuisance.NuisanceLayout`)
         of the robust model, ``None`` for the idealised one.
+    thrusters : the spacecraft's thruster names (M).
+    design : :class:`~cassini_bayes.inference.thrust.design.ThrustDesign` in mode
+        ``thruster``, else ``None``.
     """
 
     data: ThrustData
     mode: str
     names: tuple[str, ...]
-    thrust_pred: float
+    thrust_pred: float | np.ndarray
     tau: TauPrior
     inertia: InertiaGaussian | None
     inertia_fixed: np.ndarray
@@ -109,6 +124,18 @@ class ThrustProblem(NamedTuple):
     fired: np.ndarray
     noise_hat: np.ndarray
     layout: object = None
+    thrusters: tuple[str, ...] = ()
+    design: ThrustDesign | None = None
+
+    @property
+    def n_f(self) -> int:
+        """Number of thrust parameters the sampler sees."""
+        return thrust_sizes(self.mode, self.data)[0]
+
+    @property
+    def n_c(self) -> int:
+        """Number of centre-of-mass coordinates the sampler sees (3 in mode ``thruster``)."""
+        return thrust_sizes(self.mode, self.data)[1]
 
 
 def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
@@ -215,7 +242,7 @@ def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
                    layout, i_lin: np.ndarray, robust: bool) -> tuple[dict, np.ndarray, np.ndarray]:
     """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
-    thrusters that fired (8,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
+    thrusters that fired (M,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
     inertia the robust columns are linear around."""
     n_max = max(t.n for t in tels)
     # pulse arrays padded to a multiple of _PULSE_BUCKET: events whose pulse counts differ a
@@ -236,7 +263,7 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
     slot = np.full((n_ev, m_max), n_max)
     wcov = np.zeros((n_ev, 3, 3))
     noise = np.zeros((n_ev, 2))
-    fired = np.zeros(8, bool)
+    fired = np.zeros(len(spacecraft.thrusters), bool)
     n_nu = layout.size if robust else 0
     nu_cols = np.zeros((n_ev, n_max, 3, n_nu))
     for e, (tel, log) in enumerate(zip(tels, logs)):
@@ -268,14 +295,18 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
 
 # every event's time-tag columns, one XLA program (run eagerly, the vmapped forward-mode
 # derivative compiles some seventy one-operation programs)
-_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None)))
+_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None, None)),
+                          static_argnums=3)
+# each event's impulse per newton of every thruster (M, n) at given time constants
+_impulse_per_newton = jax.jit(jax.vmap(
+    lambda lay, eye, tau: thruster_impulse(lay, eye, *tau), in_axes=(0, None, None)))
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
 
 
 def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
     """The samples of each event that keep a time-tag term (:func:`time_tag_rows`), padded to a
     common count (a multiple of :data:`_PULSE_BUCKET`, as the pulses are): their indices and
-    nuisance columns (:class:`RankOneRows`) and their rates (E, 8, p). Padding rows have zero
+    nuisance columns (:class:`RankOneRows`) and their rates (E, M, p). Padding rows have zero
     rates, which the likelihood's algebra leaves out exactly."""
     keep = []
     for e in range(rates.shape[0]):
@@ -284,7 +315,7 @@ def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, 
         keep.append(np.flatnonzero(time_tag_rows(rates[e], torque, noise_sd, kw["mask"][e])))
     p_max = max(1, -(-max(k.size for k in keep) // _PULSE_BUCKET) * _PULSE_BUCKET)
     rows = np.zeros((len(keep), p_max), int)
-    tag = np.zeros((len(keep), 8, p_max))
+    tag = np.zeros((len(keep), rates.shape[1], p_max))
     n_ev, n_nu = kw["nu_cols"].shape[:2]
     cols = np.zeros((n_ev, 3, n_nu, p_max))
     for e, k in enumerate(keep):
@@ -310,8 +341,10 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         unknown mode, too few samples.
     """
     names = thrust_names(mode)
+    spacecraft.require_thrusters("thrust calibration", eq16=(mode == "branch"))
     tels, logs = _checked_events(events)
     n_ev = len(tels)
+    n_thr = len(spacecraft.thrusters)
     i_fixed = np.asarray(spacecraft.inertia, float)
     i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
     for tel, log in zip(tels, logs):
@@ -321,6 +354,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
                              wheel_errors=wheel_errors)
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust)
     q_mat = spacecraft.moment_matrix
+    per_thruster = mode == "thruster"
+    thrust_pred = spacecraft.thrust_per_thruster if per_thruster else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
     if inertia is not None:
         tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
@@ -330,12 +365,23 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
     k_slots = kw.pop("k_slots")
     layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
-                            k_slots) for e in range(n_ev)]
+                            k_slots, n_thr) for e in range(n_ev)]
     layout_e = PulseLayout(*(np.stack(x) for x in zip(*layouts)))
-    rates = np.asarray(_time_tag_rates(jax.device_put(layout_e),
-                                       tuple(jax.device_put(x) for x in tp.median()),
-                                       jax.device_put(sd_t)))
-    rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * spacecraft.thrust, noise, i_lin)
+    tau_med = tuple(jax.device_put(x) for x in tp.median())
+    rates = np.asarray(_time_tag_rates(jax.device_put(layout_e), tau_med, jax.device_put(sd_t),
+                                       n_thr))
+    rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * thrust_pred, noise, i_lin)
+    design, extra = None, {}
+    if per_thruster:
+        j = np.asarray(_impulse_per_newton(jax.device_put(layout_e),
+                                           jax.device_put(np.eye(n_thr)), tau_med))
+        b_cov = (noise[:, 0, None, None]**2 * (i_lin @ i_lin)[None]
+                 + noise[:, 1, None, None]**2 * kw["wheel_cov"])
+        dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
+        design = thrust_design(j, kw["mask"], q_mat, dirs, thrust_pred, b_cov,
+                               THRUST_PRIOR_LOG_SD, spacecraft.com_sd_m,
+                               spacecraft.thruster_names, fired)
+        extra = dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
     basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
     basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
     nu_cols = kw.pop("nu_cols")
@@ -349,19 +395,20 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     kw, derived, rest = jax.device_put((kw, derived, dict(
         q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
         a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
-        f_mu=np.log(spacecraft.thrust), f_index=_thrust_index(mode), inertia_mean=i_mean,
-        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0))))
+        f_mu=np.log(thrust_pred), f_index=_thrust_index(mode, n_thr), inertia_mean=i_mean,
+        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
     kw.update(rest)
     data = ThrustData(events=events, **kw)
-    n_f = len(names)
-    dim = n_f + 3 + n_ev + (6 if inertia is not None else 0)
-    centre, tril = laplace(_laplace_density(n_f, inertia is not None), np.zeros(dim), data)
+    n_f, n_c = thrust_sizes(mode, data)
+    dim = n_f + n_c + 3 + n_ev + (6 if inertia is not None else 0)
+    centre, tril = laplace(_laplace_density(n_f, n_c, inertia is not None), np.zeros(dim), data)
     data = data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
     return ThrustProblem(
-        data=data, mode=mode, names=names, thrust_pred=float(spacecraft.thrust), tau=tp,
+        data=data, mode=mode, names=names, thrust_pred=thrust_pred, tau=tp,
         inertia=inertia, inertia_fixed=i_fixed,
         sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
-        fired=fired, noise_hat=noise, layout=layout if robust else None)
+        fired=fired, noise_hat=noise, layout=layout if robust else None,
+        thrusters=spacecraft.thruster_names, design=design)

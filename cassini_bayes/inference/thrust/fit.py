@@ -17,11 +17,12 @@ from cassini_bayes.inference.nuisance import split_nuisance
 from cassini_bayes.inference.thrust.data import ThrustProblem, prepare_thrust
 from cassini_bayes.inference.thrust.likelihood import impulse_residuals
 from cassini_bayes.inference.thrust.model import _nuisance_sampler, thrust_model
-from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauIdentificationWarning,
+from cassini_bayes.inference.thrust.prior import (COM_NAMES, THRUST_PRIOR_LOG_SD,
+                                                  TauIdentificationWarning,
                                                   resolve_inertia, sample_thrust_prior,
                                                   tau_identification)
 from cassini_bayes.inference.thrust.pulses import pulse_impulses
-from cassini_bayes.names import EFFECTS, INERTIA_NAMES, TAU_NAMES, THRUSTER_NAMES
+from cassini_bayes.names import EFFECTS, INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import Spacecraft
@@ -51,7 +52,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     n_chain, n_draw, dim = w.shape
     n_nu = kw.nu_sd.shape[0]
     eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
-    nu = np.asarray(_nuisance_sampler(len(problem.names), sample_inertia)(
+    nu = np.asarray(_nuisance_sampler(problem.n_f, problem.n_c, sample_inertia)(
         jnp.asarray(w.reshape(-1, dim)), eps, kw))
     for site, v in split_nuisance(nu.reshape(n_chain, n_draw, n_nu), problem.layout).items():
         site_dims = tuple(dims.get(site, ()))
@@ -60,6 +61,27 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
             coords={"chain": idata.posterior.chain, "draw": idata.posterior.draw,
                     **{d: coords[d] for d in site_dims}})
     return nu
+
+
+def _add_combinations(idata, problem: ThrustProblem) -> None:
+    """Add ``F_combination`` (N) along ``combination`` to the posterior and prior groups: each
+    identified combination ``Σ_s w_s F_s`` of thrusters the events do not separate
+    (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`)."""
+    import xarray as xr
+
+    from cassini_bayes.inference.thrust.design import combination_label
+
+    w = problem.design.combinations
+    labels = [combination_label(row, problem.thrusters) for row in w]
+    for group in ("posterior", "prior"):
+        if group not in idata.groups():
+            continue
+        ds = getattr(idata, group)
+        c = np.tensordot(np.asarray(ds["F"].values, float), w.T, 1)
+        ds["F_combination"] = xr.DataArray(
+            c, dims=("chain", "draw", "combination"),
+            coords={"chain": ds.chain, "draw": ds.draw, "combination": labels},
+            attrs={"units": "N"})
 
 
 RESIDUAL_DRAWS = 100
@@ -82,6 +104,7 @@ def _posterior_mean_residuals(problem: ThrustProblem, post, sample_inertia: bool
     n_s = flat(problem.names[0]).shape[0]
     pick = np.unique(np.linspace(0, n_s - 1, min(RESIDUAL_DRAWS, n_s)).astype(int))
     f = np.concatenate([flat(n) for n in problem.names], 1)
+    com = (np.concatenate([flat(n) for n in COM_NAMES], 1) if problem.n_c else None)
     tau = np.concatenate([flat(n) for n in TAU_NAMES], 1)
     sig = np.stack([flat("sigma_omega"), flat("sigma_rho")], -1)          # (S, E, 2)
     pi = np.concatenate([flat(n) for n in INERTIA_NAMES], 1) if sample_inertia else None
@@ -89,7 +112,8 @@ def _posterior_mean_residuals(problem: ThrustProblem, post, sample_inertia: bool
     for i in pick:
         total = total + impulse_residuals(problem, f[i], tau[i], sig[i],
                                           None if pi is None else pi[i],
-                                          None if nu_draws is None else nu_draws[i])
+                                          None if nu_draws is None else nu_draws[i],
+                                          None if com is None else com[i])
     return total / pick.size
 
 
@@ -121,12 +145,13 @@ def _data_groups(problem: ThrustProblem, d: np.ndarray) -> dict:
         {"tau_delay_prior_scale": ((), problem.tau.delay_scale, {"units": "s"}),
          "tau_prior_log_mean": ("tau_lognormal", problem.tau.log_mean),
          "tau_prior_log_sd": ("tau_lognormal", problem.tau.log_sd),
-         "thrust_prior_median": ((), problem.thrust_pred, {"units": "N"}),
+         "thrust_prior_median": (("thruster",) if np.ndim(problem.thrust_pred) else (),
+                                 problem.thrust_pred, {"units": "N"}),
          "thrust_prior_log_sd": ((), THRUST_PRIOR_LOG_SD),
          "fired": ("thruster", problem.fired.astype(int)),
          "n_pulses": ("event", problem.n_pulses),
          "noise_hat": (("event", "noise"), problem.noise_hat)},
-        coords={"tau_lognormal": list(TAU_NAMES[1:]), "thruster": list(THRUSTER_NAMES),
+        coords={"tau_lognormal": list(TAU_NAMES[1:]), "thruster": list(problem.thrusters),
                 "event": np.arange(n_ev), "noise": ["omega", "rho"]})
     return {"observed_data": observed, "constant_data": constant, "residuals": residuals}
 
@@ -143,7 +168,10 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     events : ``(telemetry, pulse log)`` per biasing event; they share ``τ`` and the thrust.
     spacecraft : model giving the predicted thrust, time-constant ranges, geometry of Eq 16,
         wheels and the inertia's prediction and knowledge.
-    mode : ``"mean"`` (``F``), ``"branch"`` (``F_Z``, ``F_Y``) or ``"thruster"`` (``F_Z1 … F_Y4``).
+    mode : ``"mean"`` (``F``, one thrust for all thrusters), ``"branch"`` (``F_Z``, ``F_Y``,
+        Cassini's eight of Eq 16) or ``"thruster"`` (``F`` along ``thruster``, one per thruster
+        of any layout, with the centre-of-mass offset ``com_x``, ``com_y``, ``com_z``; the
+        combinations the events identify: ``problem.design``).
     inertia : how the spacecraft inertia enters. An :class:`InertiaGaussian` (e.g.
         :func:`inertia_from_run`, an inertia fit's posterior) or ``"prior"`` (the model file's
         knowledge, :func:`inertia_prior_gaussian`): sampled jointly. ``"fixed"``: held at the
@@ -188,15 +216,17 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     with step("preparing: events, Laplace approximation (mode and curvature)"):
         problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust,
                                  wheel_errors=wheel_errors)
-    unfired = [s for s, f in zip(THRUSTER_NAMES, problem.fired) if not f]
+    unfired = [s for s, f in zip(problem.thrusters, problem.fired) if not f]
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
                       "prior-dominated", stacklevel=2)
     kw = problem.data
     n_ev = len(problem.sources)
     sample_inertia = inertia is not None
-    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw.centre.shape[0])}
-    dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"]}
+    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw.centre.shape[0]),
+              "thruster": list(problem.thrusters)}
+    dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"],
+            **({"F": ["thruster"]} if mode == "thruster" else {})}
     if robust:
         coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
                        "tilt": ["u1", "u2"]})
@@ -209,6 +239,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
+    if problem.design is not None and problem.design.combinations.size:
+        _add_combinations(idata, problem)
     with step("nuisance draws and residuals"):
         nu_draws = None
         if robust:
@@ -220,7 +252,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                    | {"pulse_impulses": pulse_impulses(problem, post, nu_draws)})
     for line in tau_identification(post, problem.tau):
         warnings.warn(line, TauIdentificationWarning, stacklevel=2)
-    names = list(problem.names) + list(TAU_NAMES) + ["sigma_omega", "sigma_rho"]
+    names = (list(problem.names) + list(COM_NAMES[:problem.n_c]) + list(TAU_NAMES)
+             + ["sigma_omega", "sigma_rho"])
     if sample_inertia:
         names += list(INERTIA_NAMES)
     if robust:

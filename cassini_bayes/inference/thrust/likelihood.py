@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
 __all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "time_tag_rates",
-           "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals"]
+           "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals", "moment_matrix_at"]
 
 
 class EventData(NamedTuple):
@@ -34,13 +34,13 @@ class EventData(NamedTuple):
     h_wheels: jax.Array        # (n, 3) N m s wheel momentum, body axes
     mask: jax.Array            # (n,) 1 for a sample, 0 for padding
     t_on: jax.Array            # (m,) s pulse commands
-    thruster: jax.Array        # (m,) int index into THRUSTER_NAMES
+    thruster: jax.Array        # (m,) int index into the spacecraft's thrusters
     width: jax.Array           # (m,) s commanded widths (0: padding, no impulse)
     slot: jax.Array            # (m,) index of each pulse's first sample (n: padding, dropped)
     pulses: PulseLayout        # where the pulses act (:func:`pulse_layout`)
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (R, 3, n) columns of the robust nuisance ν (0 on padding)
-    time_tag_rates: jax.Array  # (8, p) s, σ_t ∂j/∂t per thruster at ``rank_one.rows``
+    time_tag_rates: jax.Array  # (M, p) s, σ_t ∂j/∂t per thruster at ``rank_one.rows``
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
@@ -56,14 +56,14 @@ class PulseLayout(NamedTuple):
 
     dt: jax.Array        # (m, K) s, each transient sample's time after the command
     width: jax.Array     # (m,) s commanded widths (0: padding, no impulse)
-    thruster: jax.Array  # (m,) int index into THRUSTER_NAMES
-    at: jax.Array        # (m, K) int, flat index thruster·n + sample into (8, n); 8 n: none
+    thruster: jax.Array  # (m,) int index into the spacecraft's M thrusters
+    at: jax.Array        # (m, K) int, flat index thruster·n + sample into (M, n); M n: none
     settled: jax.Array   # (n,) int, how many pulses have settled by each sample
 
 
-def pulse_layout(t, t_on, thruster, width, slot, k: int) -> PulseLayout:
+def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> PulseLayout:
     """:class:`PulseLayout` (NumPy) of pulses commanded at ``t_on`` (m,) s on ``thruster`` (m,)
-    with widths ``width`` (m,) s, first sample at or after the command ``slot`` (m,) (``n``:
+    (indices into the spacecraft's ``n_thrusters`` thrusters) with widths ``width`` (m,) s, first sample at or after the command ``slot`` (m,) (``n``:
     none), on samples ``t`` (n,) s, ``k`` transient samples per pulse."""
     t = np.asarray(t, float)
     n = t.size
@@ -72,7 +72,7 @@ def pulse_layout(t, t_on, thruster, width, slot, k: int) -> PulseLayout:
     rows = slot[:, None] + np.arange(k)[None, :]
     row_ok = rows < n
     dt = np.where(row_ok, t[np.minimum(rows, n - 1)] - t_on[:, None], 0.0)
-    at = np.where(row_ok, np.asarray(thruster)[order][:, None] * n + rows, 8 * n)
+    at = np.where(row_ok, np.asarray(thruster)[order][:, None] * n + rows, n_thrusters * n)
     settled = np.searchsorted(slot + k, np.arange(n), side="right")
     return PulseLayout(dt, np.asarray(width, float)[order], np.asarray(thruster)[order], at,
                        settled)
@@ -80,7 +80,7 @@ def pulse_layout(t, t_on, thruster, width, slot, k: int) -> PulseLayout:
 
 def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     """The thrusters' accumulated angular impulse ``Q (F ⊙ j(t_i))`` (3, n) N m s, one axis per
-    row (Feldman & Lee Eq 17, right side): ``q_f = Q diag(F)`` (3, 8) N m per thruster (Eq 16
+    row (Feldman & Lee Eq 17, right side): ``q_f = Q diag(F)`` (3, M) N m per thruster (Eq 16
     times the thrust), ``j`` the actual impulse per newton of the pulse log — the sparse form of
     :func:`~cassini_bayes.physics.impulse.impulse_from_pulses`.
 
@@ -97,14 +97,15 @@ def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     qcol = q_f[:, layout.thruster]                                    # (3, m)
     settled = jnp.cumsum(qcol * full[None, :], 1)
     settled = jnp.concatenate([jnp.zeros_like(settled[:, :1]), settled], 1)[:, layout.settled]
-    transient = jnp.zeros(8 * n).at[layout.at].add(until, mode="drop").reshape(8, n)
+    m = q_f.shape[1]
+    transient = jnp.zeros(m * n).at[layout.at].add(until, mode="drop").reshape(m, n)
     return settled + q_f @ transient
 
 
 def _event_residual(pi, q_f, tau, ev: EventData):
     """``r = V(t_i) − Q (F ⊙ j(t_i))`` (3, n) N m s: Feldman & Lee Eq 17, left minus right;
     ``V`` from its basis in the inertia ``pi`` (6,) kg m²
-    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`), ``q_f = Q diag(F)`` (3, 8)."""
+    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`), ``q_f = Q diag(F)`` (3, M)."""
     # Feldman & Lee Eq 17 (left); six fused multiply-adds, where a product with the (6, 3 n)
     # basis copied it into the layout of XLA's matrix-vector kernel at every gradient
     v = ev.lhs_wheels
@@ -113,7 +114,7 @@ def _event_residual(pi, q_f, tau, ev: EventData):
     return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
-def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, q_matrix):
+def _event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``; ``pi``
     (6,) kg m² the inertia.
 
@@ -135,7 +136,7 @@ def _event_loglik(pi, f8, tau, log_sigma, ev: EventData, q_matrix):
     inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
     """
     inertia = inertia_matrix(pi)
-    q_f = q_matrix * f8[None, :]
+    q_f = q_matrix * f_m[None, :]
     r = _event_residual(pi, q_f, tau, ev)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
                          q_f @ ev.time_tag_rates, ev.mask, ev.rank_one, ev.nu_cols, ev.nu_stats)
@@ -164,8 +165,8 @@ TAG_RELATIVE_SD = 1e-10
 fraction of its white-noise sd at the data's noise levels (:func:`time_tag_rows`)."""
 
 
-def time_tag_rates(layout: PulseLayout, tau, time_tag_sd):
-    """(8, n) s: ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
+def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
+    """(M, n) s (``M = n_thrusters``): ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
     newton at each sample (module docstring, "Robust model"): the thrust profile
     (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
     :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples,
@@ -181,13 +182,14 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd):
     (``benchmarks/time_tag_bias.py``), the bias the open-world campaigns measured."""
     n = layout.settled.shape[0]
     rate = thrust_profile(layout.dt, layout.width[:, None], *tau)
-    return time_tag_sd * jnp.zeros(8 * n).at[layout.at].add(rate, mode="drop").reshape(8, n)
+    m = n_thrusters
+    return time_tag_sd * jnp.zeros(m * n).at[layout.at].add(rate, mode="drop").reshape(m, n)
 
 
 def time_tag_rows(rates, torque, noise_sd, mask) -> np.ndarray:
     """(n,) bool: the samples whose time-tag term the likelihood keeps (NumPy, data only).
 
-    ``rates`` (8, n) s (:func:`time_tag_rates`), ``torque`` (3, 8) N m the thrusters' torques at
+    ``rates`` (M, n) s (:func:`time_tag_rates`), ``torque`` (3, M) N m the thrusters' torques at
     the predicted thrust, ``noise_sd`` the smallest white-noise sd of one sample's left side at
     the data's noise levels (N m s). A pulse's rate decays as ``e^{−t/τf}`` after its command
     ends but stays above zero for every sample up to :class:`PulseLayout`'s ``K`` transient
@@ -201,9 +203,9 @@ def time_tag_rows(rates, torque, noise_sd, mask) -> np.ndarray:
 
 
 @jax.jit
-def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, q_matrix):
+def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix):
     i_m = inertia_matrix(pi)
-    q_f = q_matrix * f8[None, :]
+    q_f = q_matrix * f_m[None, :]
 
     def one(log_sigma, ev):
         r = _event_residual(pi, q_f, tau, ev) - jnp.tensordot(nu, ev.nu_cols, 1)
@@ -216,18 +218,28 @@ def _residuals_jit(pi, f8, tau, log_sigma, nu, ev: EventData, q_matrix):
     return jax.vmap(one)(log_sigma, ev)
 
 
+def moment_matrix_at(kw, com=None) -> np.ndarray:
+    """(3, M) m: the torque per newton of each thruster about the model file's centre of mass
+    moved by ``com`` (3,) m (``None``: not moved), ``Q_s − δ × d_s`` (Feldman & Lee Eq 16)."""
+    q = np.asarray(kw.q_matrix, float)
+    if com is None or kw.d_matrix is None:
+        return q
+    return q - np.cross(np.asarray(com, float)[:, None], np.asarray(kw.d_matrix, float), axis=0)
+
+
 def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
-                      nu=None) -> np.ndarray:
+                      nu=None, com=None) -> np.ndarray:
     """Offset-free residuals ``V − Q (F ⊙ j) − cols ν − b̂`` (E, n_max, 3) N m s at given
     parameters (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2), robust
-    nuisance ``nu`` (R,), default 0); padded rows are 0."""
+    nuisance ``nu`` (R,), default 0, centre-of-mass offset ``com`` (3,) m of the per-thruster
+    model, default 0); padded rows are 0."""
     kw = problem.data
     idx = np.asarray(kw.f_index)
-    f8 = np.asarray(thrust, float)[idx]
+    f_m = np.asarray(thrust, float).ravel()[idx]
     pi = np.asarray(kw.inertia_mean) if pi is None else np.asarray(pi, float)
     nu = np.zeros(kw.nu_sd.shape[0]) if nu is None else np.asarray(nu, float)
-    d = _residuals_jit(jax.device_put(pi), jax.device_put(f8),
+    d = _residuals_jit(jax.device_put(pi), jax.device_put(f_m),
                        tuple(jax.device_put(float(x)) for x in tau),
                        jnp.log(jax.device_put(np.asarray(sigma, float))), jax.device_put(nu),
-                       kw.events, kw.q_matrix)
+                       kw.events, jax.device_put(moment_matrix_at(kw, com)))
     return np.swapaxes(np.asarray(d), 1, 2) * np.asarray(kw.events.mask)[..., None]

@@ -17,29 +17,35 @@ from cassini_bayes.inference.gaussian import (OffsetMarginal, nuisance_log_margi
                                               nuisance_marginal)
 from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpack
 from cassini_bayes.inference.thrust.likelihood import _event_loglik
-from cassini_bayes.inference.thrust.prior import _NOISE_STEP, NOISE_PRIOR_LOG_SD, thrust_names
+from cassini_bayes.inference.thrust.prior import (_NOISE_STEP, COM_NAMES, NOISE_PRIOR_LOG_SD,
+                                                  thrust_names)
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 
-__all__ = ["thrust_model"]
+__all__ = ["thrust_model", "thrust_sizes"]
 
-def _event_stats(theta, kw, n_f: int, sample_inertia: bool) -> OffsetMarginal:
+def _event_stats(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
-    _, f8, tau, log_sigma, pi = _physical(theta, kw, n_f, sample_inertia)
+    p = _physical(theta, kw, n_f, n_c, sample_inertia)
     return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None))(
-        pi, f8, (tau[0], tau[1], tau[2]), log_sigma, kw.events, kw.q_matrix)
+        p.inertia, p.per_thruster, (p.tau[0], p.tau[1], p.tau[2]), p.log_sigma, kw.events,
+        p.q_matrix)
 
 
-def _log_density(theta, kw, n_f: int, sample_inertia: bool):
+def _log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring);
-    the offsets and the robust model's nuisance ``ν`` are integrated out exactly."""
+    the offsets and the robust model's nuisance ``ν`` are integrated out exactly. The thrust and
+    centre-of-mass coordinates are ``N(0, 1)`` a priori (a rotation of the prior-whitened
+    ``log F`` and offset keeps them so, :func:`~cassini_bayes.inference.thrust.coords._physical`)."""
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_ev, sample_inertia)
+    f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
     _, log_prior_tau = _tau_from_z(tau_z, kw)
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
+    if n_c:
+        log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(com_z))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
-    st = _event_stats(theta, kw, n_f, sample_inertia)
+    st = _event_stats(theta, kw, n_f, n_c, sample_inertia)
     out = log_prior + jnp.sum(st.loglik)
     if kw.nu_sd.shape[0]:
         out += nuisance_log_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
@@ -47,14 +53,14 @@ def _log_density(theta, kw, n_f: int, sample_inertia: bool):
 
 
 @lru_cache(maxsize=None)
-def _nuisance_sampler(n_f: int, sample_inertia: bool):
+def _nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
     """Jitted ``(w (S, P), eps (S, R), kw) -> ν (S, R)``: a draw of ``ν`` from its exact Gaussian
     conditional given each draw of the sampled parameters (:func:`nuisance_marginal`), so that
     ``(θ, ν)`` are draws of the joint posterior. Batched to bound the memory (``n × 3 × R`` per
     draw)."""
     def one(args, kw):
         w, eps = args
-        st = _event_stats(kw.centre + kw.tril @ w, kw, n_f, sample_inertia)
+        st = _event_stats(kw.centre + kw.tril @ w, kw, n_f, n_c, sample_inertia)
         _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
         z = mean + jax.scipy.linalg.solve_triangular(chol.T, eps, lower=False)
         return kw.nu_sd * z
@@ -67,30 +73,44 @@ def _nuisance_sampler(n_f: int, sample_inertia: bool):
 
 
 @lru_cache(maxsize=None)
-def _laplace_density(n_f: int, sample_inertia: bool):
+def _laplace_density(n_f: int, n_c: int, sample_inertia: bool):
     """``f(θ, kw)`` for :func:`~cassini_bayes.inference.laplace.laplace`, one function object
     per layout so that its compiled derivatives are reused."""
     def f(theta, kw):
-        return _log_density(theta, kw, n_f, sample_inertia)
+        return _log_density(theta, kw, n_f, n_c, sample_inertia)
 
     return f
 
 
-def _model(kw, *, names: tuple[str, ...], sample_inertia: bool):
+def thrust_sizes(mode: str, kw) -> tuple[int, int]:
+    """``(n_f, n_c)``: the thrust parameters and centre-of-mass coordinates the sampler sees
+    (static: from the mode and the number of thrusters, the columns of ``kw.q_matrix``)."""
+    if mode == "thruster":
+        return kw.q_matrix.shape[1], 3
+    return len(thrust_names(mode)), 0
+
+
+def _model(kw, *, mode: str, sample_inertia: bool):
+    n_f, n_c = thrust_sizes(mode, kw)
     w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), kw.centre.shape))
     theta = kw.centre + kw.tril @ w
-    numpyro.factor("log_density", _log_density(theta, kw, len(names), sample_inertia))
-    thrust, _, tau, log_sigma, pi = _physical(theta, kw, len(names), sample_inertia)
-    for i, name in enumerate(names):
-        numpyro.deterministic(name, thrust[i])
+    numpyro.factor("log_density", _log_density(theta, kw, n_f, n_c, sample_inertia))
+    p = _physical(theta, kw, n_f, n_c, sample_inertia)
+    if mode == "thruster":
+        numpyro.deterministic("F", p.thrust)
+        for i, name in enumerate(COM_NAMES):
+            numpyro.deterministic(name, p.com[i])
+    else:
+        for i, name in enumerate(thrust_names(mode)):
+            numpyro.deterministic(name, p.thrust[i])
     for i, name in enumerate(TAU_NAMES):
-        numpyro.deterministic(name, tau[i])
-    sig = jnp.exp(log_sigma)
+        numpyro.deterministic(name, p.tau[i])
+    sig = jnp.exp(p.log_sigma)
     numpyro.deterministic("sigma_omega", sig[:, 0])
     numpyro.deterministic("sigma_rho", sig[:, 1])
     if sample_inertia:
         for i, name in enumerate(INERTIA_NAMES):
-            numpyro.deterministic(name, pi[i])
+            numpyro.deterministic(name, p.inertia[i])
 
 
 @lru_cache(maxsize=None)
@@ -98,14 +118,15 @@ def thrust_model(mode: str, sample_inertia: bool = False):
     """The NumPyro model (one function object per mode, so compiled samplers are reused).
 
     Call it with ``data=ThrustProblem.data``. Posterior sites: the thrust names of the mode
-    (N), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
+    (N; mode ``"thruster"``: ``F`` along the spacecraft's thrusters and the centre-of-mass
+    offset ``com_x``, ``com_y``, ``com_z``, m), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
     rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``
     (the robust model's nuisance ``ν`` is integrated out; :func:`fit_thrust` adds its draws).
     """
-    names = thrust_names(mode)
+    thrust_names(mode)    # an unknown mode is refused here
 
     def model(data):
-        return _model(data, names=names, sample_inertia=sample_inertia)
+        return _model(data, mode=mode, sample_inertia=sample_inertia)
 
     model.__name__ = f"thrust_model_{mode}_{'inertia' if sample_inertia else 'fixed'}"
     return model

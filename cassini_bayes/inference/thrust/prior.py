@@ -14,7 +14,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_prior_gaussian
-from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES, THRUSTER_NAMES
+from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.spacecraft import Spacecraft
 
 if TYPE_CHECKING:
@@ -23,9 +23,12 @@ if TYPE_CHECKING:
 __all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inertia", "TauPrior",
            "tau_prior", "CONTRACTION_UNIDENTIFIED", "PRIOR_CONFLICT_MASS",
            "TauIdentificationWarning", "tau_identification", "draw_tau_prior", "thrust_names",
-           "sample_thrust_prior"]
+           "sample_thrust_prior", "COM_NAMES"]
 
 MODES = ("mean", "branch", "thruster")
+COM_NAMES = ("com_x", "com_y", "com_z")
+"""Sites of the per-thruster model's centre-of-mass offset, m: the true centre of mass minus the
+model file's (``[center_of_mass]``), body axes."""
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 _NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
@@ -137,20 +140,21 @@ def draw_tau_prior(key, prior: TauPrior, shape: tuple[int, ...] = ()):
 
 
 def thrust_names(mode: str) -> tuple[str, ...]:
-    """Names of the thrust parameters of a mode: ``F``; ``F_Z, F_Y``; ``F_Z1 … F_Y4``."""
-    if mode == "mean":
+    """Posterior sites of the thrust of a mode: ``F``; ``F_Z, F_Y`` (Cassini's branches);
+    ``F`` along the dimension ``thruster`` (one per thruster of the model, summarised as
+    ``F[<name>]``)."""
+    if mode in ("mean", "thruster"):
         return ("F",)
     if mode == "branch":
         return ("F_Z", "F_Y")
-    if mode == "thruster":
-        return tuple(f"F_{s}" for s in THRUSTER_NAMES)
     raise InputError(f"{arg('mode', mode, cli_quote=True)}: choose one of {', '.join(MODES)}")
 
 
-def _thrust_index(mode: str) -> np.ndarray:
-    """(8,) index of the thrust parameter that drives each thruster."""
-    return {"mean": np.zeros(8, int), "branch": _BRANCH_INDEX,
-            "thruster": np.arange(8)}[mode]
+def _thrust_index(mode: str, n_thrusters: int) -> np.ndarray:
+    """(M,) index of the thrust parameter that drives each thruster (``branch``: Cassini's eight
+    of Feldman & Lee Eq 16, Z1..Z4 then Y1..Y4)."""
+    return {"mean": lambda: np.zeros(n_thrusters, int), "branch": lambda: _BRANCH_INDEX,
+            "thruster": lambda: np.arange(n_thrusters)}[mode]()
 
 
 def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.ndarray]:
@@ -158,11 +162,17 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     k_f, k_t, k_s, k_i = jax.random.split(key, 4)
     kw = problem.data
     n_ev = kw.log_noise_hat.shape[0]
-    f_z = jax.random.normal(k_f, (n, len(problem.names)))
+    n_f = problem.n_f
+    f_z = jax.random.normal(k_f, (n, n_f + (3 if problem.mode == "thruster" else 0)))
     noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
-    thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z))
+    thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z[:, :n_f]))
     tau = np.asarray(draw_tau_prior(k_t, problem.tau, (n,)))
-    out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
+    if problem.mode == "thruster":
+        out = {"F": thrust}
+        com = float(kw.com_sd) * np.asarray(f_z[:, n_f:])
+        out.update({name: com[:, i] for i, name in enumerate(COM_NAMES)})
+    else:
+        out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
     out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
     sig = np.exp(np.asarray(kw.log_noise_hat)[None] + _NOISE_STEP * np.asarray(noise_z))
     out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]

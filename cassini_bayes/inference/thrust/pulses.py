@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES, THRUSTER_NAMES
+from cassini_bayes.inference.thrust.likelihood import moment_matrix_at
+from cassini_bayes.inference.thrust.prior import COM_NAMES
+from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.pulse import pulse_impulse
 
@@ -77,11 +79,13 @@ def pulse_impulses(problem, post, nu_draws=None):
     kw = problem.data
     ev = kw.events
     k = int(np.asarray(ev.pulses.dt).shape[-1])                          # K transient samples
-    q = np.asarray(kw.q_matrix, float)                                   # (3, 8) m
+    com = (np.concatenate([_flat(post, n) for n in COM_NAMES], 1).mean(0) if problem.n_c
+           else None)
+    q = moment_matrix_at(kw, com)                                        # (3, M) m
     f = np.concatenate([_flat(post, n) for n in problem.names], 1)
     n_s = f.shape[0]
     pick = np.unique(np.linspace(0, n_s - 1, min(IMPULSE_DRAWS, n_s)).astype(int))
-    f8 = f[pick][:, np.asarray(kw.f_index)]                             # (S, 8) N
+    f_m = f[pick][:, np.asarray(kw.f_index)]                            # (S, M) N
     tau = np.concatenate([_flat(post, n) for n in TAU_NAMES], 1)[pick]  # (S, 3) s
     sampled = all(n in post for n in INERTIA_NAMES)
     pi = (np.concatenate([_flat(post, n) for n in INERTIA_NAMES], 1).mean(0) if sampled
@@ -112,7 +116,7 @@ def pulse_impulses(problem, post, nu_draws=None):
         for a, b, idx in groups:
             cols = [col[i] for i in idx]
             # Σ_p Q_s F_s I_p per draw: (S, 3) N m s
-            pred = (imp[:, cols] * f8[:, thr[idx]]) @ q[:, thr[idx]].T
+            pred = (imp[:, cols] * f_m[:, thr[idx]]) @ q[:, thr[idx]].T
             u = pred.mean(0)
             norm = np.linalg.norm(u)
             if not norm > 0:
@@ -120,7 +124,8 @@ def pulse_impulses(problem, post, nu_draws=None):
             u = u / norm
             rows["t"].append(float(t_on[idx].min()))
             rows["event"].append(e)
-            rows["thrusters"].append("+".join(THRUSTER_NAMES[s] for s in sorted(set(thr[idx]))))
+            rows["thrusters"].append("+".join(problem.thrusters[s]
+                                              for s in sorted(set(thr[idx]))))
             rows["n_pulses"].append(len(idx))
             rows["on_time"].append(float(width[idx].sum()))
             rows["measured"].append(float((v[b] - v[a]) @ u))
