@@ -7,7 +7,7 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["axis_label", "INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
+           "COM_NAMES", "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
@@ -21,6 +21,9 @@ TAU_NAMES = ("tau_delay", "tau_rise", "tau_fall")
 """Pulse time constants (s)."""
 U4_NAMES = ("u4_x", "u4_y", "u4_z")
 """Components of the solved wheel's spin axis (body axes)."""
+COM_NAMES = ("com_x", "com_y", "com_z")
+"""The per-thruster thrust model's centre-of-mass offset, m: the true centre of mass minus the
+model file's (``[center_of_mass]``), body axes."""
 INERTIA_NOISE_NAMES = ("sigma_omega", "sigma_rho", "sigma_theta")
 """White-noise levels of the inertia model: gyro (rad/s), wheel rate (rad/s), attitude (rad)."""
 EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
@@ -31,8 +34,8 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
 
 
 def unit_of(name: str) -> str | None:
-    """SI unit of a calibration parameter's site (``"kg m^2"``, ``"N"``, ``"s"``, ``"1"`` for
-    the axis components); ``None`` for any other site."""
+    """SI unit of a calibration parameter's site (``"kg m^2"``, ``"N"``, ``"s"``, ``"m"``, ``"1"``
+    for the axis components); ``None`` for any other site."""
     if name in INERTIA_NAMES:
         return "kg m^2"
     if name == "F" or name.startswith("F_"):   # F, F_Z1 … F_Y4, the branch sites F_Z, F_Y
@@ -41,6 +44,8 @@ def unit_of(name: str) -> str | None:
         return "s"
     if name in U4_NAMES:
         return "1"
+    if name in COM_NAMES:
+        return "m"
     return None
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_prior_gaussian
-from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
+from cassini_bayes.names import COM_NAMES, INERTIA_NAMES, TAU_NAMES
 from cassini_bayes.spacecraft import Spacecraft
 
 if TYPE_CHECKING:
@@ -26,9 +26,6 @@ __all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inerti
            "sample_thrust_prior", "COM_NAMES"]
 
 MODES = ("mean", "branch", "thruster")
-COM_NAMES = ("com_x", "com_y", "com_z")
-"""Sites of the per-thruster model's centre-of-mass offset, m: the true centre of mass minus the
-model file's (``[center_of_mass]``), body axes."""
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 _NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
