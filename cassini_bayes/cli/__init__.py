@@ -48,13 +48,15 @@ from cassini_bayes.errors import InputError, Interrupted, NotConvergedError, com
 
 app = typer.Typer(
     name="cassini-bayes",
-    help="Bayesian in-flight calibration of Cassini: inertia tensor, thrusters, RWA4 spin axis.",
+    help="Bayesian in-flight calibration of a spacecraft: inertia tensor, thrusters, a wheel's "
+         "spin axis (Cassini and any spacecraft model file).",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
 groups: dict[str, typer.Typer] = {
-    "fit": typer.Typer(help="Fit a posterior: inertia, thrust or rwa4.", no_args_is_help=True),
+    "fit": typer.Typer(help="Fit a posterior: inertia, thrust, wheel-axis (rwa4: Cassini's RWA4).",
+                       no_args_is_help=True),
 }
 app.add_typer(groups["fit"], name="fit")
 
