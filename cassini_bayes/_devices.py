@@ -29,10 +29,9 @@ _state = {"late": False, "warned": False}
 
 def request_host_devices(n: int | None = None) -> None:
     """Ask JAX for ``n`` CPU devices; by default one per core and at least one per default chain
-    (4), so the default chains run ``"parallel"`` (pmap) even on a 2-core machine: there 4 chains
-    on 4 devices (threads) sampled a robust thrust fit of ``biasing_day028_real`` in 40 s, 4
-    chains vectorised on 2 devices in 77 s (lock-step: every iteration waits for the deepest
-    tree).
+    (4), so the default chains run ``"parallel"`` (pmap) even on a 2-core machine: vectorised
+    chains run in lock-step, every iteration waiting for the deepest tree (about half the speed,
+    docs/performance.md).
 
     Only effective before JAX initialises its backend; harmless afterwards. Leaves an explicit
     ``--xla_force_host_platform_device_count`` in ``XLA_FLAGS`` alone.
