@@ -57,10 +57,12 @@ Registered here (the simulator models' default scenarios are shipped files under
     ``tau_s``. Mis-specification: ``pulse_dynamics=False`` (ideal rectangular pulses simulated),
     ``thrust_factor``.
 ``rwa4``
-    RWA4 spin axis and inertia by Brown's RCS method (:func:`cassini_bayes.inference.rwa4.
-    fit_rwa4`) on a short spin-up with widened dead-bands (:data:`RWA4_SCENARIO`); truth ``u4``
-    uniform on the sphere (or the cone prior) into ``TruthParams.wheel_axes`` and the inertia
-    from its prior. Mis-specification: ``rwa4_inertia_factor``.
+    A wheel's spin axis and the inertia (:func:`cassini_bayes.inference.rwa4.fit_rwa4`; options
+    ``wheel``, default RWA4, and ``method``, default Brown's RCS method) on a short spin-up with
+    widened dead-bands (:data:`RWA4_SCENARIO`); truth ``u4`` uniform on the sphere (or the cone
+    prior) into ``TruthParams.wheel_axes`` and the inertia from its prior. ``--set robust=true``:
+    the robust model, every nuisance truth drawn from its prior and flown
+    (:func:`robust_rwa4_truth`). Mis-specification: ``rwa4_inertia_factor``.
 
 The thrust and RWA4 fits prepare their data (a Laplace step) in NumPy/SciPy inside
 ``fit_thrust``/``fit_rwa4`` and are not traceable: they run one replicate after the other
@@ -893,7 +895,8 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     settings = _sampler_settings(opts)
 
     def draw(key):
-        k_a, k_n = jax.random.split(key)
+        # the idealised model's truths keep their key (its campaign in docs/sbc/rwa4/ reruns)
+        k_a, k_n = jax.random.split(key) if robust else (key, None)
         u, pi = _draw_rwa4_truth(k_a, ip.mean, ip.sd, cone)
         d = dict(zip(U4_NAMES + tuple(INERTIA_NAMES), np.concatenate([u, pi])))
         if robust:
