@@ -11,7 +11,9 @@ Detection (per sample, then runs of at least ``min_duration_s``): with a centred
 of ``smooth_s`` seconds (converted to samples with the median sample spacing; at least a
 sample's two neighbours, however coarse the sampling),
 
-- ``max |ω| ≤ rate_max`` (rad/s) over the window,
+- ``max |ω| ≤ rate_max`` (rad/s) over the window; by default a third of the file's top rate
+  (:data:`QUIET_RATE_FRACTION`): quiet is relative to the spacecraft's own slews, not to one
+  spacecraft's rates,
 - ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored),
 - no cumulative thruster on-time grows within the window (when the telemetry has on-times).
 
@@ -34,10 +36,15 @@ from numpy.lib.stride_tricks import sliding_window_view
 from cassini_bayes.errors import InputError
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry, white_noise_sd
 
-__all__ = ["quiet_mask", "quiet_periods", "slew_windows", "split_slews", "parse_window",
+__all__ = ["quiet_mask", "quiet_periods", "top_rate", "QUIET_RATE_FRACTION", "QUIET_NOISE_SD", "slew_windows", "split_slews", "parse_window",
            "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
+
+QUIET_RATE_FRACTION = 1.0 / 3.0
+"""A quiet sample's body rate is at most this fraction of the file's top rate (:func:`top_rate`):
+a slew coasting at its top rate with the wheels steady is not a rest. Cassini's slews at 2-3
+mrad/s give the 1 mrad/s of the papers' quiet windows; the ESPA bus's 15 mrad/s slews 5 mrad/s."""
 
 QUIET_NOISE_SD = 8.0
 """The quiet tolerances are at least this many white-noise sds of the file's own rates: the range
@@ -54,6 +61,15 @@ def _moving_range(x: np.ndarray, half: int) -> np.ndarray:
     return view.max(axis=-1) - view.min(axis=-1)
 
 
+def top_rate(rate: np.ndarray, half: int) -> float:
+    """The file's top body rate, rad/s: the largest moving median of ``|ω|`` over samples
+    ``i − half … i + half`` (a slew's coast rate; a lone spike or gap sample does not count)."""
+    if half == 0 or rate.size == 0:
+        return float(np.max(rate, initial=0.0))
+    padded = np.pad(rate, (half, half), mode="edge")
+    return float(np.max(np.median(sliding_window_view(padded, 2 * half + 1), axis=-1)))
+
+
 def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
     if half == 0:
         return x
@@ -64,7 +80,7 @@ def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
 def quiet_mask(
     tel: Telemetry,
     *,
-    rate_max: float = 1e-3,
+    rate_max: float | None = None,
     wheel_tol_rpm: float = 2.0,
     smooth_s: float = 10.0,
 ) -> np.ndarray:
@@ -74,8 +90,10 @@ def quiet_mask(
     ----------
     tel : the telemetry.
     rate_max : largest body-rate magnitude of a quiet sample, rad/s (at least
-        :data:`QUIET_NOISE_SD` × the rates' white noise). The default 1 mrad/s admits Brown's
-        RCS-method drift (~0.3 mrad/s) and excludes slews in progress.
+        :data:`QUIET_NOISE_SD` × the rates' white noise); default :data:`QUIET_RATE_FRACTION` ×
+        the file's top rate (:func:`top_rate`), which excludes slews in progress whatever the
+        spacecraft's slew rates; ``inf``: no rate rule (a free drift is quiet, as Brown's
+        RCS-method Time B needs).
     wheel_tol_rpm : largest change of any running wheel's rate within the window, rpm (at least
         :data:`QUIET_NOISE_SD` × that wheel's white noise).
     smooth_s : width of the centred moving window, s.
@@ -90,6 +108,8 @@ def quiet_mask(
     half = max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
     omega = np.asarray(tel.omega, dtype=float)
     rate = np.linalg.norm(omega, axis=1)
+    if rate_max is None:
+        rate_max = QUIET_RATE_FRACTION * top_rate(rate, half)
     quiet = _moving_max(rate, half) <= max(rate_max, QUIET_NOISE_SD * white_noise_sd(omega))
     rates = np.asarray(tel.wheel_rates, dtype=float)
     running = np.all(np.isfinite(rates), axis=0)
@@ -121,7 +141,7 @@ def quiet_periods(
     tel: Telemetry,
     *,
     min_duration_s: float = 60.0,
-    rate_max: float = 1e-3,
+    rate_max: float | None = None,
     wheel_tol_rpm: float = 2.0,
     smooth_s: float = 10.0,
 ) -> list[Window]:

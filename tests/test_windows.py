@@ -169,3 +169,68 @@ def test_window_a_few_ms_past_the_data_is_clamped_with_a_warning():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert clamp_window((1.0, 999.001), t, "w") == (1.0, 999.001)
+
+
+def _coast(k: float) -> Telemetry:
+    """The synthetic series with the wheels held steady and the slews' body rates times ``k``
+    (sensor noise unchanged): only the body-rate rule can tell a slew from a rest."""
+    tel, _ = _series()
+    rates = np.asarray(tel.wheel_rates, float).copy()
+    rates[:, :2] = rates[:1, :2] + np.random.default_rng(4).normal(0, 0.2 * RPM_TO_RAD_S,
+                                                                    rates[:, :2].shape)
+    noise = tel.omega - np.where(np.abs(tel.omega) > 5e-5, tel.omega, 0.0)
+    signal = tel.omega - noise
+    return Telemetry(tel.t, tel.q, k * signal + noise, rates, source=f"coast x{k:g}")
+
+
+def test_quiet_rate_is_relative_to_the_files_slews():
+    """A spacecraft slewing 30 times faster (60 mrad/s, the same noise) has the same quiet
+    periods under the default rule (a third of the file's top rate), to within a sample; the old
+    absolute 1 mrad/s moves every edge of the fast file by ~10 s (the slews' sine ramps cross it
+    earlier), so the test can fail."""
+    slow, fast = _coast(1.0), _coast(30.0)
+    a, b = quiet_periods(slow, min_duration_s=60.0), quiet_periods(fast, min_duration_s=60.0)
+    assert len(a) == len(b) == 3
+    np.testing.assert_allclose(np.ravel(a), np.ravel(b), atol=DT + 1e-9)
+    old = quiet_periods(fast, min_duration_s=60.0, rate_max=1e-3)
+    assert np.max(np.abs(np.ravel(old) - np.ravel(a))) > 5.0
+
+
+def test_free_drift_is_quiet_without_a_rate_rule():
+    """``rate_max=inf`` (Brown's RCS Time B: a free drift) keeps only the wheel and thruster
+    rules: with steady wheels the whole file is one quiet period."""
+    assert quiet_periods(_coast(30.0), min_duration_s=60.0, rate_max=np.inf) == [(0.0, 1300.0)]
+
+
+@pytest.mark.parametrize("scenario, model, wheel, s", [
+    ("rwa4_rcs", "cassini_pre_soi", "RWA4", 1e-4),
+    ("wheel_axis_espa_bus_rcs", "espa_bus", "RW2", 1e-2),   # 1e-4 puts its wheels below 1e-6 kg m²
+])
+def test_rcs_windows_detected_and_scale_free(scenario, model, wheel, s, tmp_path):
+    """Brown's RCS-method Time A / Time B are detected on Cassini (the windows the flight-data
+    audit and the pinned fit use: 0-417 s and 723-1237 s) and on the ESPA bus, whose Time B
+    drifts at 22 mrad/s, beyond any Cassini-sized rate rule (1 mrad/s finds no Time B); and
+    the same spacecraft scaled by ``s`` in inertia, wheel inertias and torques (the same
+    manoeuvre, tests/test_scale_free.py) gives the same windows."""
+    import tomli_w
+    from test_scale_free import scaled_model, scaled_scenario
+
+    import cassini_bayes as cb
+    from cassini_bayes.inference.rwa4 import detect_windows
+    from cassini_bayes.simulate import scenario_from_dict
+
+    found = []
+    for scale in (1.0, s):
+        path = tmp_path / f"{model}_{scale:g}.toml"
+        path.write_text(tomli_w.dumps(scaled_model(model, scale)))
+        sc = scenario_from_dict(scaled_scenario(scenario, scale, str(path)), scenario)
+        tel = cb.simulate(sc, seed=sc.seed).telemetry
+        found.append(detect_windows(tel, "rcs", wheel=wheel))
+    assert found[0] == found[1]
+    (a, b), = found[0]
+    if wheel == "RWA4":
+        assert (a, b) == ((0.0, 417.0), (723.0, 1237.0))
+    else:
+        assert 30.0 <= a[1] - a[0] and a[1] < 62.0            # before the spin-up at 62 s
+        assert 73.0 < b[0] <= 85.0 and b[1] >= 110.0           # after it, holding 85-110 s
+        assert len(quiet_periods(tel, min_duration_s=30.0, rate_max=1e-3)) < 2

@@ -57,10 +57,12 @@ Registered here (the simulator models' default scenarios are shipped files under
     ``tau_s``. Mis-specification: ``pulse_dynamics=False`` (ideal rectangular pulses simulated),
     ``thrust_factor``.
 ``rwa4``
-    RWA4 spin axis and inertia by Brown's RCS method (:func:`cassini_bayes.inference.rwa4.
-    fit_rwa4`) on a short spin-up with widened dead-bands (:data:`RWA4_SCENARIO`); truth ``u4``
-    uniform on the sphere (or the cone prior) into ``TruthParams.wheel_axes`` and the inertia
-    from its prior. Mis-specification: ``rwa4_inertia_factor``.
+    A wheel's spin axis and the inertia (:func:`cassini_bayes.inference.rwa4.fit_rwa4`; options
+    ``wheel``, default RWA4, and ``method``, default Brown's RCS method) on a short spin-up with
+    widened dead-bands (:data:`RWA4_SCENARIO`); truth ``u4`` uniform on the sphere (or the cone
+    prior) into ``TruthParams.wheel_axes`` and the inertia from its prior. ``--set robust=true``:
+    the robust model, every nuisance truth drawn from its prior and flown
+    (:func:`robust_rwa4_truth`). Mis-specification: ``rwa4_inertia_factor``.
 
 The thrust and RWA4 fits prepare their data (a Laplace step) in NumPy/SciPy inside
 ``fit_thrust``/``fit_rwa4`` and are not traceable: they run one replicate after the other
@@ -95,6 +97,7 @@ __all__ = [
     "build_model",
     "nuts_fit",
     "robust_inertia_truth",
+    "robust_rwa4_truth",
 ]
 
 
@@ -765,7 +768,34 @@ def _thrust(spec: ModelSpec) -> SbcModel:
 RWA4_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_rwa4_rcs.toml"
 
 _RWA4_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "prior", "rank_inertia",
-              "rwa4_inertia_factor"}
+              "rwa4_inertia_factor", "robust", "wheel", "method"}
+
+
+def robust_rwa4_truth(key, spacecraft, wheel: str, known) -> dict[str, Any]:
+    """One draw of the robust spin-axis model's nuisance vector ``ν`` from its own prior, split
+    into named effects (:func:`~cassini_bayes.inference.nuisance.split_nuisance`).
+
+    The layout is the one :func:`~cassini_bayes.inference.rwa4.prepare_rwa4` builds for one file
+    with the ``known`` running wheels and the solved ``wheel`` (each with its own spin-inertia
+    scale, tilts for the known ones, body-fixed and inertial torques and the inertial torque's
+    rate); its prior is independent zero-mean Normal with sds ``layout.sd``, so the draw is
+    ``layout.sd · N(0, 1)``. Returns the sites of :func:`split_nuisance` of the one file (the
+    file axis dropped) plus ``scale_wheels`` and ``tilt_wheels``, the wheel names of
+    ``wheel_scale`` and ``wheel_tilt``.
+    """
+    import numpy as np
+
+    from cassini_bayes.inference.nuisance import nuisance_layout, split_nuisance
+
+    known = tuple(known)
+    layout = nuisance_layout(spacecraft, 1, known, wheel_errors="per_wheel",
+                             scaled=known + (wheel,), inertial_torque=True, torque_rate=True)
+    nu = layout.sd * np.asarray(jax.random.normal(key, (layout.size,)))
+    out = split_nuisance(nu, layout)
+    for site in ("gyro_bias", "T_body", "T_inertial", "T_N_rate"):
+        out[site] = np.asarray(out[site])[0]                    # the one file
+    out["scale_wheels"], out["tilt_wheels"] = layout.scale_wheels, layout.wheels
+    return out
 
 
 def _draw_rwa4_truth(key, mean, sd, cone):
@@ -794,86 +824,129 @@ def _draw_rwa4_truth(key, mean, sd, cone):
 
 @register("rwa4")
 def _rwa4(spec: ModelSpec) -> SbcModel:
-    """RWA4 spin axis by Brown's RCS method: prior truth, simulator, NUTS.
+    """A wheel's spin axis by Brown's RCS or RWA method: prior truth, simulator, NUTS.
 
     Truth per replicate, from the prior :func:`~cassini_bayes.inference.rwa4.fit_rwa4` states:
-    ``u4`` uniform on the sphere (option ``prior="cone"``: the articulation-cone prior) and the
-    inertia ``π ~ Normal(predicted, knowledge sd²)`` times the model's smooth physical factor
-    (:func:`~cassini_bayes.inference.inertia.inertia_prior` of the ``[prior]`` model; see
-    :func:`_draw_rwa4_truth`). They go into ``TruthParams.wheel_axes`` (RWA4's row) and
-    ``inertia``; the rest is the scenario's. Data: the scenario (default :data:`RWA4_SCENARIO`)
-    through :func:`~cassini_bayes.simulate.run.simulate_batch`. Fit: ``fit_rwa4(method="rcs",
-    robust=False)`` (the simulator draws no nuisance errors: SBC checks the idealised model)
-    with the scenario's ``A``/``B`` windows as the pair (detected from quiet periods when the
-    scenario names none).
+    ``u4`` (the solved wheel's axis) uniform on the sphere (option ``prior="cone"``: the
+    articulation-cone prior) and the inertia ``π ~ Normal(predicted, knowledge sd²)`` times the
+    model's smooth physical factor (:func:`~cassini_bayes.inference.inertia.inertia_prior` of the
+    ``[prior]`` model; see :func:`_draw_rwa4_truth`). They go into ``TruthParams.wheel_axes``
+    (the wheel's row) and ``inertia``; the rest is the scenario's. Data: the scenario (default
+    :data:`RWA4_SCENARIO`) through :func:`~cassini_bayes.simulate.run.simulate_batch`. Fit:
+    ``fit_rwa4(method=method, wheel=wheel, robust=robust)`` with the scenario's ``A``/``B``
+    windows as the pair (detected from quiet periods when the scenario names none).
 
-    Ranked: ``u4_x u4_y u4_z`` and, with ``rank_inertia`` (default True), ``Ixx … Iyz``.
+    ``robust=True`` checks the robust model (``fit wheel-axis``'s default): each replicate also
+    draws every nuisance effect that model integrates out from its prior
+    (:func:`robust_rwa4_truth`: gyro bias and scale factor, each running wheel's spin-inertia
+    scale, the solved wheel's included, the known wheels' axis tilts, body-fixed and inertial
+    torques, the inertial torque's rate) and flies them (:func:`~cassini_bayes.simulate.
+    with_errors`, the torques into the truth). Every other truth (noise levels, the known wheels'
+    nominal axes) is the scenario's, so a scenario used here must not add errors of its own
+    beyond those the prior draws (they are all replaced).
+
+    Ranked: ``u4_x u4_y u4_z`` and, with ``rank_inertia`` (default True), ``Ixx … Iyz`` (the
+    nuisance is integrated out analytically, so it has no draws to rank).
     Options: ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``prior``
-    (``uniform``), and a deliberate mis-specification SBC must detect: ``rwa4_inertia_factor``
-    multiplies RWA4's spin inertia in the simulator while the fit keeps the model's (the spin-up
-    momentum ``J4 Δρ4`` is then mis-stated, which the fit can only absorb in the inertia).
+    (``uniform``), ``robust`` (False), ``wheel`` (``RWA4``), ``method`` (``rcs``), and a
+    deliberate mis-specification SBC must detect: ``rwa4_inertia_factor`` multiplies the solved
+    wheel's spin inertia in the simulator while the fit keeps the model's (the spin-up momentum
+    ``J4 Δρ4`` is then mis-stated, which the fit can only absorb in the inertia).
     """
     import numpy as np
 
     from cassini_bayes.inference.inertia import INERTIA_NAMES, inertia_prior
-    from cassini_bayes.inference.rwa4 import PRIORS, U4_NAMES, fit_rwa4
-    from cassini_bayes.simulate.run import simulate_batch, truth_params
+    from cassini_bayes.inference.rwa4 import METHODS, PRIORS, U4_NAMES, fit_rwa4
+    from cassini_bayes.simulate.run import noise_params, simulate_batch, truth_params, with_errors
 
     scenario = _scenario(spec, RWA4_SCENARIO)
     opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3,
             "prior": "uniform", "rank_inertia": True, "rwa4_inertia_factor": 1.0,
-            **dict(spec.options)}
+            "robust": False, "wheel": "RWA4", "method": "rcs", **dict(spec.options)}
     _check_options("rwa4", opts, _RWA4_KEYS)
     if opts["prior"] not in PRIORS:
         raise InputError(f"rwa4 SBC option prior={opts['prior']!r}: choose one of "
                          f"{', '.join(PRIORS)}")
-    if "RWA4" not in scenario.wheel_names:
-        raise InputError("the rwa4 SBC scenario has no RWA4", path=spec.scenario_source)
-    k4 = scenario.wheel_names.index("RWA4")
-    if not scenario.wheels_on[k4]:
-        raise InputError("the rwa4 SBC scenario must run RWA4 ([initial] wheels_on)",
+    if opts["method"] not in METHODS:
+        raise InputError(f"rwa4 SBC option method={opts['method']!r}: choose one of "
+                         f"{', '.join(METHODS)}")
+    wheel, method, robust = str(opts["wheel"]), str(opts["method"]), bool(opts["robust"])
+    if wheel not in scenario.wheel_names:
+        raise InputError(f"rwa4 SBC option wheel={wheel!r}: the scenario has no such wheel "
+                         f"(its wheels: {', '.join(scenario.wheel_names)})",
                          path=spec.scenario_source)
+    k4 = scenario.wheel_names.index(wheel)
+    if not scenario.wheels_on[k4]:
+        raise InputError(f"the rwa4 SBC scenario must run {wheel} ([initial] wheels_on)",
+                         path=spec.scenario_source)
+    known = tuple(n for n, on in zip(scenario.wheel_names, scenario.wheels_on)
+                  if on and n != wheel)
     wins = {w.name: (w.t0_s, w.t1_s) for w in scenario.windows}
     pairs = [(wins["A"], wins["B"])] if {"A", "B"} <= set(wins) else None
     names = tuple(U4_NAMES) + (tuple(INERTIA_NAMES) if opts["rank_inertia"] else ())
     spacecraft = scenario.prior
     ip = inertia_prior(spacecraft)
-    cone = spacecraft.wheel("RWA4").cone if opts["prior"] == "cone" else None
+    cone = spacecraft.wheel(wheel).cone if opts["prior"] == "cone" else None
     if opts["prior"] == "cone" and cone is None:
-        raise InputError("rwa4 SBC option prior='cone': the prior model gives RWA4 no "
+        raise InputError(f"rwa4 SBC option prior='cone': the prior model gives {wheel} no "
                          "articulation cone ('cone_axis', 'cone_deg')", path=spec.scenario_source)
-    base = truth_params(scenario)
-    factor = np.ones(len(scenario.wheel_names))
-    factor[k4] = float(opts["rwa4_inertia_factor"])
+    base, base_noise = truth_params(scenario), noise_params(scenario)
+    factor = float(opts["rwa4_inertia_factor"])
     settings = _sampler_settings(opts)
 
     def draw(key):
-        u, pi = _draw_rwa4_truth(key, ip.mean, ip.sd, cone)
-        return dict(zip(U4_NAMES + tuple(INERTIA_NAMES), np.concatenate([u, pi])))
+        # the idealised model's truths keep their key (its campaign in docs/sbc/rwa4/ reruns)
+        k_a, k_n = jax.random.split(key) if robust else (key, None)
+        u, pi = _draw_rwa4_truth(k_a, ip.mean, ip.sd, cone)
+        d = dict(zip(U4_NAMES + tuple(INERTIA_NAMES), np.concatenate([u, pi])))
+        if robust:
+            d["nuisance"] = robust_rwa4_truth(k_n, spacecraft, wheel, known)
+        return d
 
     def prior_sample(key):
         d = draw(key)
         return {n: d[n] for n in names}
 
+    def one_truth(d):
+        """The simulator's truth and noise of one drawn replicate."""
+        tp = base._replace(inertia=jnp.asarray([d[n] for n in INERTIA_NAMES]))
+        nz = base_noise
+        if robust:
+            nu = d["nuisance"]
+            tp = tp._replace(torque_body_nm=jnp.asarray(nu["T_body"]),
+                             torque_inertial_nm=jnp.asarray(nu["T_inertial"]),
+                             torque_inertial_rate_nm_s=jnp.asarray(nu["T_N_rate"]))
+            tp, nz = with_errors(scenario, tp, nz,
+                                 wheel_scale=dict(zip(nu["scale_wheels"], nu["wheel_scale"])),
+                                 wheel_tilt_rad=dict(zip(nu["tilt_wheels"], nu["wheel_tilt"])),
+                                 gyro_bias_rad_s=nu["gyro_bias"],
+                                 gyro_scale_factor=nu["gyro_scale"])
+        u = jnp.asarray([d[n] for n in U4_NAMES])
+        return tp._replace(wheel_axes=jnp.asarray(tp.wheel_axes).at[k4].set(u),
+                           wheel_inertias=jnp.asarray(tp.wheel_inertias).at[k4].multiply(
+                               factor)), nz
+
     def simulate_batch_fn(prior_keys, sim_keys):
         drawn = [draw(k) for k in prior_keys]
-        u = np.stack([[d[n] for n in U4_NAMES] for d in drawn])
-        pi = np.stack([[d[n] for n in INERTIA_NAMES] for d in drawn])
-        tiled = _tiled_truth(base, len(drawn))
-        truth = tiled._replace(
-            inertia=jnp.asarray(pi), wheel_axes=tiled.wheel_axes.at[:, k4].set(jnp.asarray(u)),
-            wheel_inertias=tiled.wheel_inertias * jnp.asarray(factor)[None, :])
+        flown = [one_truth(d) for d in drawn]
+        stack = functools.partial(jax.tree.map, lambda *xs: jnp.stack([jnp.asarray(x)
+                                                                       for x in xs]))
+        arrays = simulate_batch(sim_keys, scenario, stack(*[f[0] for f in flown]),
+                                stack(*[f[1] for f in flown]), noise_batched=True)
         params = {n: np.array([d[n] for d in drawn]) for n in names}
-        return params, simulate_batch(sim_keys, scenario, truth)
+        return params, arrays
 
     def simulate(key, params):
         raise NotImplementedError("the rwa4 adapter simulates in batches (simulate_batch)")
 
     @_quiet
     def fit(key, arrays):
-        tel = _telemetry(arrays, scenario, "<sbc rwa4 replicate>")
-        post = fit_rwa4(key, tel, spacecraft, method="rcs", pairs=pairs, prior=opts["prior"],
-                        settings=settings, prior_draws=0, robust=False)
+        tel = _telemetry(arrays, scenario, f"<sbc rwa4 replicate, {wheel}>")
+        post = fit_rwa4(key, tel, spacecraft, method=method, pairs=pairs, prior=opts["prior"],
+                        settings=settings, prior_draws=0, wheel=wheel, robust=robust)
+        if robust and post.problem.layout.wheels != known:
+            raise RuntimeError(f"replicate's known wheels {post.problem.layout.wheels} are not "
+                               f"the scenario's {known}")
         return _posterior_draws(post.idata, names)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}

@@ -10,9 +10,12 @@ from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 from cassini_bayes.windows import clamp_window
 
-__all__ = ["MIN_SPIN_CHANGE_RPM", "WHEEL", "Window", "detect_windows"]
+__all__ = ["MIN_SPIN_CHANGE_RPM", "RCS_MIN_QUIET_S", "WHEEL", "Window", "detect_windows"]
 
 MIN_SPIN_CHANGE_RPM = 10.0   # smaller spin changes between A and B cannot calibrate the axis
+RCS_MIN_QUIET_S = 30.0
+"""Shortest RCS-method Time A / Time B, s: the drift after the spin-up lasts until the widened
+dead-band is reached, dead-band × I / (J Δρ) — 45 s on the ESPA bus (2000 rpm, 22 mrad/s)."""
 WHEEL = "RWA4"               # the wheel solved for by default
 
 Window = tuple[float, float]
@@ -43,7 +46,10 @@ def detect_windows(tel: Telemetry, method: str,
     quiet_periods`).
 
     * RCS: the two consecutive quiet periods across the largest change of ``wheel``'s median
-      rate.
+      rate, with no body-rate rule and at least :data:`RCS_MIN_QUIET_S` long: Brown's Time B is
+      a free drift at ``J Δρ / I`` (Brown Eq 1: the body rates carry the balance), 0.3 mrad/s on
+      Cassini and 22 mrad/s on the ESPA bus; what makes it quiet is the wheels holding their
+      rates and no thruster firing.
     * RWA: consecutive quiet periods paired in order, ``(Q0, Q1), (Q2, Q3), …`` — Brown's "Time A"
       before and "Time B" after the first slew of each slew pair.
 
@@ -52,16 +58,20 @@ def detect_windows(tel: Telemetry, method: str,
     InputError
         Fewer than two quiet periods; for RCS, no spin change of ``MIN_SPIN_CHANGE_RPM``.
     """
-    from cassini_bayes.windows import quiet_periods
+    from cassini_bayes.windows import QUIET_RATE_FRACTION, quiet_periods
 
     wheel = _wheel_name(tel, wheel) if method == "rcs" else wheel
 
-    quiet = quiet_periods(tel)
+    if method == "rcs":
+        quiet = quiet_periods(tel, rate_max=np.inf, min_duration_s=RCS_MIN_QUIET_S)
+        rule = f"≥ {RCS_MIN_QUIET_S:g} s"
+    else:
+        quiet = quiet_periods(tel)
+        rule = f"≥ 60 s, |ω| ≤ {QUIET_RATE_FRACTION:.2g} × the file's top rate"
     if len(quiet) < 2:
-        raise InputError(f"found {len(quiet)} quiet period(s) (≥ 60 s, |ω| ≤ 1 mrad/s, wheels "
-                         "steady, no thruster firing); the spin-axis calibration needs a Time A "
-                         "and a Time B: give them with " + _WINDOWS_HINT(),
-                         path=tel.source)
+        raise InputError(f"found {len(quiet)} quiet period(s) ({rule}, wheels steady, no "
+                         "thruster firing); the spin-axis calibration needs a Time A and a "
+                         "Time B: give them with " + _WINDOWS_HINT(), path=tel.source)
     if method == "rcs":
         rpm = np.array([_median_rpm(tel, w, wheel) for w in quiet])
         jumps = np.abs(np.diff(rpm))
