@@ -113,7 +113,7 @@ def _axis_block(p: Any) -> dict:
                      for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd)},
            "windows_s": [[float(a[0]), float(a[1]), float(b[0]), float(b[1])] for a, b in p.pairs],
            "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
-           "duration_s": p.duration_s}
+           "duration_s": p.duration_s, "variance_shares": dict(p.shares)}
     if p.usage:
         out["usage"] = dict(p.usage)
         out["limits_ok"] = bool(all(v <= 1.0 for v in p.usage.values()))
@@ -130,7 +130,10 @@ def format_axis_table(p: Any, title: str) -> str:
              f"{'':6s} {'predicted sd':>13s} {'prior sd':>10s} {'sd/prior':>9s}"]
     for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd):
         lines.append(f"{n:6s} {sd:13.4g} {pr:10.4g} {sd / pr:9.3f}")
-    lines.append(f"windows (Time A | Time B, s): " + "; ".join(
+    if p.shares:
+        lines.append("share of the axis variance each effect carries (1 - var with it known / "
+                     "var): " + ", ".join(f"{k} {v:.2f}" for k, v in p.shares.items()))
+    lines.append("windows (Time A | Time B, s): " + "; ".join(
         f"{a[0]:.0f}-{a[1]:.0f} | {b[0]:.0f}-{b[1]:.0f}" for a, b in p.pairs))
     if p.usage:
         lines.append("limits used (largest fraction on the simulated telemetry): " + ", ".join(

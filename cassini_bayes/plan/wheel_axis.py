@@ -43,6 +43,7 @@ __all__ = [
     "AxisPrediction",
     "axis_budget_deg",
     "cone_radii",
+    "effect_shares",
     "evaluate_wheel_axis",
     "noise_free_telemetry",
     "predict_axis",
@@ -72,8 +73,9 @@ class AxisPrediction(NamedTuple):
     sd_direction_deg : the direction's largest angular sd; cone_deg : the radii of the cones
     about the mean holding 50/90/95 % (deg), as :func:`~cassini_bayes.inference.sphere.
     direction_summary` reports a fit's. budget_deg : Brown's expected accuracy.
-    pairs : the Time A / Time B windows (s) the fit detects. noise : (3,) the noise levels used
-    (rad/s, rad/s, rad). usage : the largest fraction of each limit on the simulated telemetry
+    pairs : the Time A / Time B windows (s) the fit uses. noise : (3,) the noise levels used
+    (rad/s, rad/s, rad). shares : the share of the axis's predicted variance each robust effect
+    carries (:func:`effect_shares`). usage : the largest fraction of each limit on the simulated telemetry
     (empty without limits). duration_s; t, omega, wheel_rpm, wheel_names : the noise-free flight
     (s, rad/s, rpm with idle wheels NaN) for the report's figure.
     """
@@ -96,6 +98,7 @@ class AxisPrediction(NamedTuple):
     omega: np.ndarray
     wheel_rpm: np.ndarray
     wheel_names: tuple[str, ...] = ()
+    shares: dict = {}
 
 
 def scenario_noise(s: Scenario) -> np.ndarray:
@@ -181,6 +184,41 @@ def predict_axis(problem, sigmas) -> _Laplace:
     return _Laplace(np.asarray(centre), cov, jac @ cov @ jac.T, u, jt @ cov @ jt.T)
 
 
+def _tangent_var(problem, kw, centre, jt_of) -> float:
+    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
+
+    hess = -np.asarray(jax.hessian(_LOG_DENSITY[problem.chart])(jnp.asarray(centre), kw))
+    jt = jt_of
+    return float(np.trace(jt @ np.linalg.solve(0.5 * (hess + hess.T), jt.T)))
+
+
+def effect_shares(problem, sigmas, lap: _Laplace) -> dict[str, float]:
+    """Share of the axis's predicted tangent-plane variance (its trace) each robust effect of
+    the fit's layout carries: ``1 − var(effect known)/var``, the effect known meaning its prior
+    sd set to 0 at the same mode; ``"sensor noise"``: the variance left with every effect
+    known, over the whole. Says which error a manoeuvre is limited by (the shares need not add
+    to 1: the effects are correlated in the data)."""
+    from cassini_bayes.inference.rwa4.model import _PHYSICAL
+
+    kw = problem.data._replace(log_noise_hat=jnp.log(jnp.asarray(sigmas, float)))
+    physical = _PHYSICAL[problem.chart]
+    basis = np.asarray(_tangent_basis(lap.axis))
+    jt = basis @ np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(jnp.asarray(lap.centre)))
+    total = float(np.trace(lap.tangent_cov))
+    sd = np.asarray(kw.nu_sd, float)
+    out = {}
+    for effect, sl in problem.layout.slices.items():
+        if sd[sl].size == 0:
+            continue
+        known = sd.copy()
+        known[sl] = 0.0
+        out[effect] = 1.0 - _tangent_var(problem, kw._replace(nu_sd=jnp.asarray(known)),
+                                         lap.centre, jt) / total
+    out["sensor noise"] = _tangent_var(problem, kw._replace(nu_sd=jnp.zeros_like(kw.nu_sd)),
+                                       lap.centre, jt) / total
+    return out
+
+
 def _tangent_basis(u: np.ndarray) -> np.ndarray:
     from cassini_bayes.inference.rwa4.data import _tangent_basis as basis
 
@@ -188,11 +226,16 @@ def _tangent_basis(u: np.ndarray) -> np.ndarray:
 
 
 def prior_site_sd(problem) -> np.ndarray:
-    """(9,) prior sd of ``u4_x … Iyz`` (the fit's stated prior, fixed-key draws)."""
+    """(9,) prior sd of ``u4_x … Iyz``: the inertia prior's Gaussian sd (its physical factor
+    is 1 − 3e-4 at the mean), ``1/√3`` per component for the uniform axis prior, fixed-key
+    draws for the cone prior."""
+    inertia = np.sqrt(np.diag(np.asarray(problem.inertia.cov, float)))
+    if problem.prior == "uniform":
+        return np.concatenate([np.full(3, 1.0 / np.sqrt(3.0)), inertia])
     from cassini_bayes.inference.rwa4 import sample_rwa4_prior
 
     d = sample_rwa4_prior(jax.random.key(0), problem, _PRIOR_DRAWS)
-    return np.array([np.std(d[n]) for n in AXIS_SITES])
+    return np.concatenate([[np.std(d[n]) for n in U4_NAMES], inertia])
 
 
 def evaluate_wheel_axis(s: Scenario, wheel: str | None = None, limits: Limits | None = None,
@@ -224,4 +267,5 @@ def evaluate_wheel_axis(s: Scenario, wheel: str | None = None, limits: Limits | 
         sd_direction_deg=float(np.degrees(np.sqrt(ev[-1]))), cone_deg=cone_radii(lap.tangent_cov),
         budget_deg=axis_budget_deg(), pairs=tuple(problem.pairs), noise=np.asarray(sig),
         usage=usage, duration_s=s.duration_s, t=np.asarray(arr.t), omega=np.asarray(arr.omega),
-        wheel_rpm=rpm, wheel_names=tuple(s.wheel_names))
+        wheel_rpm=rpm, wheel_names=tuple(s.wheel_names),
+        shares=effect_shares(problem, sig, lap) if problem.robust else {})

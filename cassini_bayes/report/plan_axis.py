@@ -80,10 +80,10 @@ def axis_plan_report(summary: Mapping, plan) -> str:
     windows = table(["window", "from (s)", "to (s)"],
                     [[w["name"], f"{w['t0_s']:.0f}", f"{w['t1_s']:.0f}"]
                      for w in summary["windows"]])
-    search = table(["pairs", "angle (°)", "wheel fraction", "phase (°)", "largest sd (°)",
-                    "limits ok", "seconds"],
-                   [[str(r["pairs"]), f"{r['angle_deg']:g}", f"{r['wheel_fraction']:g}",
-                     f"{r['phase_deg']:g}",
+    search = table(["pairs", "angle (°)", "rest factor", "wheel fraction", "phase (°)",
+                    "largest sd (°)", "limits ok", "seconds"],
+                   [[str(r["pairs"]), f"{r['angle_deg']:g}", f"{r['rest_factor']:g}",
+                     f"{r['wheel_fraction']:g}", f"{r['phase_deg']:g}",
                      "–" if r["sd_direction_deg"] is None else f"{r['sd_direction_deg']:.4g}",
                      str(r.get("limits_ok", False)), f"{r['seconds']:.0f}"]
                     for r in summary["search"]])
