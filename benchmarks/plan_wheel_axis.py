@@ -52,24 +52,27 @@ def _fitted(post, true_axis, truth_pi) -> dict:
             "divergences": int(post.diagnostics.divergences)}
 
 
-def run(name: str, seeds: int, settings, first: int = 0) -> dict:
+def run(name: str, seeds: int, settings, first: int = 0, wheel: str | None = None) -> dict:
     import jax
     import numpy as np
 
     from cassini_bayes.inference.rwa4 import fit_rwa4
     from cassini_bayes.physics.momentum import inertia_vector
+    from cassini_bayes.plan.axis_planner import scenario_pairs
     from cassini_bayes.plan.wheel_axis import AXIS_SITES, evaluate_wheel_axis
     from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
     from cassini_bayes.simulate.open_world import apply_time_tags, base_scenario, draw_open_world
 
     s = load_scenario(name)
+    base = base_scenario(name)
+    names = {w.get("name") for w in base.get("window", [])}
+    planned = scenario_pairs(base) if {"A1", "B1"} <= names else None   # a plan's windows
     t0 = time.perf_counter()
-    pred = evaluate_wheel_axis(s)
+    pred = evaluate_wheel_axis(s, wheel, pairs=planned)
     t_pred = time.perf_counter() - t0
     wheel = pred.wheel
     print(f"{name}: predicted in {t_pred:.0f} s, sd_dir {pred.sd_direction_deg:.4f} deg",
           file=sys.stderr, flush=True)
-    base = base_scenario(name)
     own_tilt = base.get("truth", {}).get("wheel_axis_tilt_deg", {}).get(wheel)
     fits = []
     for seed in range(first, first + seeds):
@@ -121,6 +124,8 @@ def main(argv=None) -> None:
     ap.add_argument("--scenarios", nargs="+", default=["wheel_axis_espa_bus", "rwa4_rwa"])
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--wheel", default=None, help="the wheel solved for (default: the one "
+                    "whose true axis is off the model's, else RWA4)")
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
     ap.add_argument("--draws", type=int, default=300)
@@ -137,8 +142,9 @@ def main(argv=None) -> None:
                                target_accept=RWA4_TARGET_ACCEPT)
     a.out.mkdir(parents=True, exist_ok=True)
     for name in a.scenarios:
-        r = run(name, a.seeds, settings, a.first_seed)
-        path = a.out / f"wheel_axis_{name}.json"
+        r = run(name, a.seeds, settings, a.first_seed, a.wheel)
+        stem = Path(name).parent.name if name.endswith(".toml") else name
+        path = a.out / f"wheel_axis_{stem}.json"
         path.write_text(json.dumps(r, indent=1) + "\n", encoding="utf-8")
         print(f"{name}: sd_dir ratio median {r['sd_direction_ratio_median']:.3f}, cone90 "
               f"coverage {r['coverage_cone90']:.2f}, sites "

@@ -516,9 +516,9 @@ class WheelAxisPlanResult:
         p = self.plan
         c = p.choice
         return "\n\n".join([
-            format_axis_table(p.prediction, f"plan ({c.pairs} slew pairs of "
-                              f"{self._summary['slews'][0]['angle_deg']:g} deg, {p.wheel} at "
-                              f"{c.wheel_fraction:g} of its limit)"),
+            format_axis_table(p.prediction, f"plan ({c.pairs} slew pairs, {c.family} axes, "
+                              f"angle {c.angle_deg:g} deg; {p.wheel} at "
+                              f"{self._summary['wheel_rpm'].get(p.wheel, 0.0):.0f} rpm)"),
             format_axis_table(p.baseline, p.baseline_name)])
 
     def scenario_toml(self) -> str:

@@ -84,10 +84,10 @@ __all__ = [
 PAIR_COUNTS = (2, 4, 6)
 ANGLES_DEG = (45.0, 90.0)
 AXIS_FAMILIES = ("brown", "body", "perpendicular")
-WHEEL_FRACTIONS = (0.8, 0.5)
+WHEEL_FRACTIONS = (0.8, 0.65, 0.5)
 """Stage 2's bias speeds of the solved wheel, fractions of its speed (and momentum) limit
 (stage 1 keeps the limits file's speed)."""
-REST_FACTORS = (1.0, 2.0)
+REST_FACTORS = (1.0, 1.5, 2.0)
 """Stage 2's rests as multiples of the shortest (:func:`min_window_s`); stage 1 shares the
 duration equally."""
 SETTLE_BANDWIDTHS = 6.0
@@ -179,7 +179,7 @@ def _timeline(limits: Limits, base: Scenario, axes_angles: list[tuple[np.ndarray
         out.append({"t_start_s": float(t), "axis": [float(x) for x in e],
                     "angle_deg": float(ang), "rate_mrad_s": r * 1e3, "accel_mrad_s2": a * 1e3})
         t += d + w
-        quiet.append((t - w + settle, t))
+        quiet.append((t - w + settle, min(t, limits.duration_s)))
     return out, float(w), quiet
 
 
@@ -312,10 +312,10 @@ def plan_axis(limits: Limits, base: Scenario, spacecraft_path: str, wheel: str, 
                          f"limits (windows of at least {min_window_s(limits, base):.0f} s, "
                          "wheels within their margins on the simulated flight)",
                          path=limits.source)
-    for f in REST_FACTORS[1:]:
+    for f in REST_FACTORS:
         consider(best[1]._replace(rest_factor=f))
     c0 = best[1]
-    for f in WHEEL_FRACTIONS[1:]:
+    for f in WHEEL_FRACTIONS:
         consider(c0._replace(wheel_fraction=f))
     c1 = best[1]
     if c1.family == "perpendicular":
