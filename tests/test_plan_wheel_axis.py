@@ -119,14 +119,14 @@ def test_planned_manoeuvre_flies_within_its_limits(tmp_path):
 
 
 def test_plan_evaluate_wheel_axis_prints_the_cones(run_cli, tmp_path):
-    """``plan evaluate --wheel``: the axis's cones beside Brown's 1°, a row per site, the
-    windows; summary.json and report.html written."""
+    """``plan evaluate --wheel`` (with ``--spacecraft``): the axis's cones beside Brown's 1°, a
+    row per site, the windows; summary.json and report.html written."""
     import tomli_w
 
     p = tmp_path / "short.toml"
     p.write_text(tomli_w.dumps(_short_espa()))
-    code, out, err = run_cli("plan", "evaluate", p, "--wheel", "RW2", "--limits",
-                             "wheel_axis_espa_bus", "--out", tmp_path / "ev")
+    code, out, err = run_cli("plan", "evaluate", p, "--wheel", "RW2", "--spacecraft", "espa_bus",
+                             "--limits", "wheel_axis_espa_bus", "--out", tmp_path / "ev")
     assert code == 0, err
     for word in ("RW2 axis", "90 %", "u4_x", "Iyz", "windows", "wheel_speed"):
         assert word in out

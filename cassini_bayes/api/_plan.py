@@ -271,18 +271,19 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     sc_path = s.prior_model_path
     if spacecraft is not None:
         sc_file = _spacecraft_path(spacecraft)
-        prior = load_spacecraft(sc_file)
-        if prior.wheel_names != s.truth.wheel_names:
+        model = load_spacecraft(sc_file)
+        if model.wheel_names != s.truth.wheel_names:
             raise InputError(f"{arg('spacecraft', spacecraft)}: its wheels "
-                             f"({', '.join(prior.wheel_names)}) are not the scenario's "
+                             f"({', '.join(model.wheel_names)}) are not the scenario's "
                              f"({', '.join(s.truth.wheel_names)})")
-        s = replace(s, prior=prior, prior_model_path=str(sc_file))
+        s = replace(s, prior=model, prior_model_path=str(sc_file))
         sc_path = str(sc_file)
         inputs.append(sc_file)
     lim = None
     if limits is not None:
         lim, _ = load_limits(limits, sc_path)
         inputs.append(Path(lim.source))
+    pred: Any
     if calibration == "wheel-axis":
         from cassini_bayes.plan.wheel_axis import evaluate_wheel_axis
 
