@@ -247,7 +247,8 @@ def brown_slews(limits: Limits, base: Scenario, spacecraft_path: str) -> dict:
             break
     else:
         raise InputError(f"'limits.duration_s' = {limits.duration_s:g} s cannot hold Brown's "
-                         "eight slews with their windows", path=limits.source)
+                         "eight slews with their windows, the comparison: give another "
+                         "(--baseline SCENARIO)", path=limits.source)
     d = base_scenario_dict(limits, spacecraft_path)
     d["name"] = f"brown_{limits.name}"
     d["description"] = ("Brown's RWA-method slews (Z -45/+45, X +60/-60, Y +90/-90, multi-axis "
@@ -277,6 +278,7 @@ def plan_axis(limits: Limits, base: Scenario, spacecraft_path: str, wheel: str, 
     counts = PAIR_COUNTS if pairs is None else tuple(pairs)
     rows: list[dict] = []
     best: tuple[float, AxisChoice, dict, AxisPrediction] | None = None
+    over: list[tuple[float, AxisChoice, dict]] = []       # candidates beyond a limit's margin
 
     def consider(c: AxisChoice):
         nonlocal best
@@ -301,6 +303,8 @@ def plan_axis(limits: Limits, base: Scenario, spacecraft_path: str, wheel: str, 
                      + ("" if ok else " (limits exceeded)"))
         if ok and (best is None or p.sd_direction_deg < best[0]):
             best = (p.sd_direction_deg, c, d, p)
+        if not ok:
+            over.append((max(p.usage.values()), c, p.usage))
 
     for n in counts:
         for ang in ANGLES_DEG:
@@ -308,9 +312,15 @@ def plan_axis(limits: Limits, base: Scenario, spacecraft_path: str, wheel: str, 
                 for fam in AXIS_FAMILIES:
                     consider(AxisChoice(n, ang, fam))
     if best is None:
+        near = ""
+        if over:
+            _, c, use = min(over, key=lambda x: x[0])
+            near = (f"; the nearest, {c.pairs} pairs of {c.angle_deg:g}° ({c.family}), uses "
+                    + ", ".join(f"{k} {v:.2f}" for k, v in use.items()) + " of the limits")
         raise InputError(f"no manoeuvre of {', '.join(map(str, counts))} slew pairs fits the "
                          f"limits (windows of at least {min_window_s(limits, base):.0f} s, "
-                         "wheels within their margins on the simulated flight)",
+                         f"body rates within the limits and wheels within "
+                         f"{checks.WHEEL_MARGIN:g} of theirs on the simulated flight){near}",
                          path=limits.source)
     for f in REST_FACTORS:
         consider(best[1]._replace(rest_factor=f))
