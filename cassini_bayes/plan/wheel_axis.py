@@ -46,6 +46,7 @@ __all__ = [
     "effect_shares",
     "evaluate_wheel_axis",
     "noise_free_telemetry",
+    "planned_pairs",
     "predict_axis",
     "scenario_noise",
     "solved_wheel",
@@ -238,14 +239,27 @@ def prior_site_sd(problem) -> np.ndarray:
     return np.concatenate([[np.std(d[n]) for n in U4_NAMES], inertia])
 
 
+def planned_pairs(s: Scenario) -> list | None:
+    """The Time A / Time B pairs a plan wrote into its scenario (``[[window]]`` named ``A1``,
+    ``B1``, ``A2``, …), or ``None`` when it has none."""
+    w = {x.name: (x.t0_s, x.t1_s) for x in s.windows}
+    n = 0
+    while f"A{n + 1}" in w and f"B{n + 1}" in w:
+        n += 1
+    return [(w[f"A{i + 1}"], w[f"B{i + 1}"]) for i in range(n)] or None
+
+
 def evaluate_wheel_axis(s: Scenario, wheel: str | None = None, limits: Limits | None = None,
                         *, prior: str = "uniform", pairs=None) -> AxisPrediction:
     """Predicted posterior of the robust RWA-method wheel-axis fit of scenario ``s`` (module
     docstring): ``wheel`` the wheel solved for (default :func:`solved_wheel`), ``prior`` the
-    fit's axis prior, ``pairs`` its windows (default: detected as the fit detects them)."""
+    fit's axis prior, ``pairs`` its windows (default: a plan's own, :func:`planned_pairs`, else
+    detected as the fit detects them)."""
     from cassini_bayes.inference.rwa4 import prepare_rwa4
 
     wheel = solved_wheel(s, wheel)
+    if pairs is None:
+        pairs = planned_pairs(s)
     sim, tel = noise_free_telemetry(s)
     problem = prepare_rwa4(tel, s.prior, method="rwa", pairs=pairs, prior=prior, wheel=wheel)
     sig = scenario_noise(s)
