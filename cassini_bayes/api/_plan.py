@@ -24,7 +24,11 @@ if TYPE_CHECKING:
 PathArg = str | os.PathLike
 """A file path or a shipped file's name."""
 
-__all__ = ["PlanEvaluation", "PlanResult", "evaluate_plan", "plan_inertia"]
+__all__ = ["PlanEvaluation", "PlanResult", "WheelAxisPlanResult", "evaluate_plan", "plan_inertia",
+           "plan_wheel_axis"]
+
+CALIBRATIONS = ("inertia", "wheel-axis")
+"""What ``plan evaluate`` predicts: the robust inertia fit, or the RWA-method wheel-axis fit."""
 
 FLOOR_SHARE = 0.95
 """A plan whose largest ratio is within this share of its knowledge floor is said to be set by
@@ -99,6 +103,50 @@ def format_table(p: Any, title: str) -> str:
     return "\n".join(lines)
 
 
+def _axis_block(p: Any) -> dict:
+    """A wheel-axis prediction as summary.json holds it (unit-vector components, kg m², deg)."""
+    out = {"wheel": p.wheel, "axis": [float(x) for x in p.axis],
+           "true_axis": [float(x) for x in p.true_axis],
+           "sd_direction_deg": p.sd_direction_deg, "cone_deg": dict(p.cone_deg),
+           "budget_deg": p.budget_deg, "cone90_over_budget": p.cone_deg["90"] / p.budget_deg,
+           "sites": {n: {"sd": float(sd), "prior_sd": float(pr)}
+                     for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd)},
+           "windows_s": [[float(a[0]), float(a[1]), float(b[0]), float(b[1])] for a, b in p.pairs],
+           "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
+           "duration_s": p.duration_s, "variance_shares": dict(p.shares)}
+    if p.usage:
+        out["usage"] = dict(p.usage)
+        out["limits_ok"] = bool(all(v <= 1.0 for v in p.usage.values()))
+    return out
+
+
+def format_axis_table(p: Any, title: str) -> str:
+    """The predicted spread of the axis and the sd of each site, as printed."""
+    c = p.cone_deg
+    lines = [title,
+             f"{p.wheel} axis: largest angular sd {p.sd_direction_deg:.4g} deg; cones "
+             f"50/90/95 % {c['50']:.3g}/{c['90']:.3g}/{c['95']:.3g} deg (90 % cone over Brown's "
+             f"expected {p.budget_deg:g} deg: {c['90'] / p.budget_deg:.3f})",
+             f"{'':6s} {'predicted sd':>13s} {'prior sd':>10s} {'sd/prior':>9s}"]
+    for n, sd, pr in zip(p.sites, p.site_sd, p.site_prior_sd):
+        lines.append(f"{n:6s} {sd:13.4g} {pr:10.4g} {sd / pr:9.3f}")
+    if p.shares:
+        lines.append("share of the axis variance each effect carries (1 - var with it known / "
+                     "var): " + ", ".join(f"{k} {v:.2f}" for k, v in p.shares.items()))
+    lines.append("windows (Time A | Time B, s): " + "; ".join(
+        f"{a[0]:.0f}-{a[1]:.0f} | {b[0]:.0f}-{b[1]:.0f}" for a, b in p.pairs))
+    if p.usage:
+        lines.append("limits used (largest fraction on the simulated telemetry): " + ", ".join(
+            f"{k} {v:.2f}" for k, v in p.usage.items()))
+    return "\n".join(lines)
+
+
+def window_options(pairs: Sequence[Any]) -> str:
+    """The windows as ``fit wheel-axis`` options (``--window-a T0:T1 --window-b T0:T1`` …)."""
+    return " ".join(f"--window-a {a[0]:.10g}:{a[1]:.10g} --window-b {b[0]:.10g}:{b[1]:.10g}"
+                    for a, b in pairs)
+
+
 def _write_dir(out: PathArg, *, force: bool, files: Mapping[str, str | bytes], summary: dict,
                config: dict, inputs: Sequence[Any] = ()) -> Path:
     """Write a planning run directory atomically: the text ``files`` and summary/config."""
@@ -142,7 +190,12 @@ class PlanEvaluation:
         return copy.deepcopy(self._summary)
 
     def table(self) -> str:
-        """The printed table (:func:`format_table`)."""
+        """The printed table (:func:`format_table`, or :func:`format_axis_table` for a
+        wheel-axis prediction)."""
+        if self.config.get("options", {}).get("calibration") == "wheel-axis":
+            return format_axis_table(self.prediction, "predicted posterior of the robust "
+                                     f"wheel-axis fit (RWA method): {self.scenario.name} "
+                                     f"({self.scenario.duration_s:g} s)")
         return format_table(self.prediction,
                             f"predicted posterior of the robust inertia fit: {self.scenario.name}"
                             f" ({self.scenario.duration_s:g} s)")
@@ -150,7 +203,10 @@ class PlanEvaluation:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml`` and ``report.html`` into ``out``
         (atomically; ``force`` replaces only a directory cassini-bayes wrote)."""
-        from cassini_bayes.report.plan import evaluation_report
+        if self.config.get("options", {}).get("calibration") == "wheel-axis":
+            from cassini_bayes.report.plan_axis import axis_evaluation_report as evaluation_report
+        else:
+            from cassini_bayes.report.plan import evaluation_report
 
         html = evaluation_report(self._summary, self.prediction, self.limits)
         return _write_dir(out, force=force, files={"report.html": html},
@@ -159,10 +215,14 @@ class PlanEvaluation:
 
 @jax_entry
 def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = None,
-                  limits: PathArg | None = None) -> PlanEvaluation:
+                  limits: PathArg | None = None,
+                  calibration: Literal["inertia", "wheel-axis"] | None = None,
+                  wheel: str | None = None,
+                  prior: Literal["uniform", "cone"] = "uniform") -> PlanEvaluation:
     """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
-    torques and each nuisance parameter) for the manoeuvre of a scenario: the Laplace
-    approximation of the robust fit on the scenario's telemetry simulated without noise
+    torques and each nuisance parameter), or of the RWA-method wheel-axis fit (the axis and the
+    inertia, the nuisances integrated out), for the manoeuvre of a scenario: the Laplace
+    approximation of the fit on the scenario's telemetry simulated without noise
     (docs/planning.md).
 
     Parameters
@@ -173,6 +233,11 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
         scenario's ``[prior] model``): a path or shipped name.
     limits : optional limits file (path or shipped name): the table then shows the share of
         each limit the manoeuvre uses on its simulated telemetry.
+    calibration : ``"inertia"`` or ``"wheel-axis"``; default ``"wheel-axis"`` when ``wheel``
+        is given, else ``"inertia"``.
+    wheel : the wheel whose axis is calibrated (default: the one running wheel whose true axis
+        differs from the model file's, else RWA4).
+    prior : the wheel-axis fit's axis prior (``"uniform"`` or ``"cone"``).
     """
     from dataclasses import replace
 
@@ -182,6 +247,16 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     from cassini_bayes.simulate.scenario import scenario_path
     from cassini_bayes.spacecraft import load_spacecraft
 
+    if calibration is None:
+        calibration = "wheel-axis" if wheel is not None else "inertia"
+    if calibration not in CALIBRATIONS:
+        raise InputError(f"{arg('calibration', calibration)}: choose one of "
+                         f"{', '.join(CALIBRATIONS)}")
+    if wheel is not None and calibration != "wheel-axis":
+        raise InputError(f"{arg('wheel', wheel)}: a wheel is chosen for a wheel-axis "
+                         "calibration only (--calibration wheel-axis)")
+    if prior not in ("uniform", "cone"):
+        raise InputError(f"{arg('prior', prior)}: choose uniform or cone")
     inputs: list[Path] = []
     if isinstance(scenario, Scenario):
         s = scenario
@@ -189,32 +264,43 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
         p = scenario_path(scenario)
         s = load_scenario(p)
         inputs.append(p)
-    if not s.slews:
-        raise InputError(f"scenario {s.name!r} has no [[slew]]: an inertia calibration is "
-                         "planned from RWA slews", path=s.source)
+    if not s.slews or s.control != "rwa":
+        raise InputError(f"scenario {s.name!r} has no RWA-controlled [[slew]]: an "
+                         f"{'inertia' if calibration == 'inertia' else 'RWA-method wheel-axis'} "
+                         "calibration is planned from RWA slews", path=s.source)
     sc_path = s.prior_model_path
     if spacecraft is not None:
         sc_file = _spacecraft_path(spacecraft)
-        prior = load_spacecraft(sc_file)
-        if prior.wheel_names != s.truth.wheel_names:
+        model = load_spacecraft(sc_file)
+        if model.wheel_names != s.truth.wheel_names:
             raise InputError(f"{arg('spacecraft', spacecraft)}: its wheels "
-                             f"({', '.join(prior.wheel_names)}) are not the scenario's "
+                             f"({', '.join(model.wheel_names)}) are not the scenario's "
                              f"({', '.join(s.truth.wheel_names)})")
-        s = replace(s, prior=prior, prior_model_path=str(sc_file))
+        s = replace(s, prior=model, prior_model_path=str(sc_file))
         sc_path = str(sc_file)
         inputs.append(sc_file)
     lim = None
     if limits is not None:
         lim, _ = load_limits(limits, sc_path)
         inputs.append(Path(lim.source))
-    pred = evaluate_inertia(s, lim)
-    summary = {"kind": "plan", "command": "plan evaluate", "calibration": "inertia",
+    pred: Any
+    if calibration == "wheel-axis":
+        from cassini_bayes.plan.wheel_axis import evaluate_wheel_axis
+
+        pred = evaluate_wheel_axis(s, wheel, lim, prior=prior)
+        block = _axis_block(pred)
+        block["fit_windows"] = window_options(pred.pairs)
+    else:
+        pred = evaluate_inertia(s, lim)
+        block = _prediction_block(pred)
+    summary = {"kind": "plan", "command": "plan evaluate", "calibration": calibration,
                "version": __version__, "scenario": s.name, "spacecraft": sc_path,
                "limits": None if lim is None else lim.to_dict(),
-               "prediction": _prediction_block(pred)}
+               "prediction": block}
     config = {"command": "plan evaluate", "version": __version__,
               "inputs": {"scenario": s.source, "spacecraft": sc_path,
-                         "limits": None if lim is None else lim.source}}
+                         "limits": None if lim is None else lim.source},
+              "options": {"calibration": calibration, "wheel": wheel, "prior": prior}}
     return PlanEvaluation(pred, s, config, lim, summary, tuple(inputs))
 
 
@@ -391,3 +477,160 @@ def plan_inertia(spacecraft: PathArg, limits: PathArg, *,
     for w in warns:
         warnings.warn(w, stacklevel=2)
     return PlanResult(plan, config, summary, tuple(inputs))
+
+
+@dataclass(frozen=True)
+class WheelAxisPlanResult:
+    """A planned wheel-axis calibration (``cassini-bayes plan wheel-axis``).
+
+    Attributes
+    ----------
+    plan : :class:`~cassini_bayes.plan.axis_planner.AxisPlan`: the scenario dict, its predicted
+        posterior, the choice, the comparison's prediction and the search.
+    config : inputs and options (``config.toml``).
+    """
+
+    plan: Any
+    config: dict
+    _summary: dict = field(repr=False)
+    _inputs: tuple[Path, ...] = field(default=(), repr=False)
+
+    @property
+    def scenario(self) -> dict:
+        """The plan as a scenario dict (``scenario.toml``)."""
+        return self.plan.scenario
+
+    @property
+    def warnings(self) -> list[str]:
+        """Lines on what the plan cannot reach or does not respect."""
+        return list(self._summary["warnings"])
+
+    def summary(self) -> dict:
+        """``summary.json``: the choice, the slews and windows, the predicted posterior of the
+        plan and of the comparison, the improvement, the limits used and the search."""
+        import copy
+
+        return copy.deepcopy(self._summary)
+
+    def table(self) -> str:
+        """The printed tables of the plan and its comparison."""
+        p = self.plan
+        c = p.choice
+        return "\n\n".join([
+            format_axis_table(p.prediction, f"plan ({c.pairs} slew pairs, {c.family} axes, "
+                              f"angle {c.angle_deg:g} deg; {p.wheel} at "
+                              f"{self._summary['wheel_rpm'].get(p.wheel, 0.0):.0f} rpm)"),
+            format_axis_table(p.baseline, p.baseline_name)])
+
+    def scenario_toml(self) -> str:
+        """The plan as scenario TOML text (``cassini-bayes simulate`` runs it)."""
+        import tomli_w
+
+        head = ("# Planned by cassini-bayes plan wheel-axis (docs/planning.md): "
+                f"{self.plan.limits.name}, wheel {self.plan.wheel}; fit it with\n"
+                f"# fit wheel-axis --wheel {self.plan.wheel} --method rwa "
+                f"{window_options(self.plan.prediction.pairs)}\n")
+        return head + tomli_w.dumps(self.plan.scenario)
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``scenario.toml`` (the plan), ``summary.json``, ``config.toml`` and
+        ``report.html`` (the manoeuvre against time, the limits as lines, the predicted spread
+        beside the comparison's) into ``out``, atomically."""
+        from cassini_bayes.report.plan_axis import axis_plan_report
+
+        files = {"scenario.toml": self.scenario_toml(),
+                 "report.html": axis_plan_report(self._summary, self.plan)}
+        if self.plan.baseline_scenario is not None:
+            import tomli_w
+
+            files["papers_scenario.toml"] = tomli_w.dumps(self.plan.baseline_scenario)
+        return _write_dir(out, force=force, files=files, summary=self._summary,
+                          config=self.config, inputs=self._inputs)
+
+
+@jax_entry
+def plan_wheel_axis(spacecraft: PathArg, limits: PathArg, *, wheel: str,
+                    prior: Literal["uniform", "cone"] = "uniform",
+                    pairs: int | Sequence[int] | None = None, baseline: PathArg | None = None,
+                    goal_deg: float | None = None,
+                    progress: bool = False) -> WheelAxisPlanResult:
+    """Plan a wheel's spin-axis calibration by Brown's RWA method: the slew pairs, windows and
+    the wheel's bias speed within ``limits`` that minimise the predicted largest angular sd of
+    the axis (a documented search, docs/planning.md).
+
+    Parameters
+    ----------
+    spacecraft : the model file (path or shipped name): the plan's truth and the fit's prior.
+    limits : the limits file (path or shipped name, ``experiments/limits/``).
+    wheel : the wheel whose axis is calibrated (one of the limits file's running wheels).
+    prior : the fit's axis prior (``"uniform"`` or ``"cone"``).
+    pairs : number of slew pairs (an int or a list to search); default 2, 3, 4.
+    baseline : scenario to compare with; default Brown's slews within the same limits.
+    goal_deg : the 90 % cone wanted (deg); a plan that cannot reach it says so.
+    progress : print the search's steps on stderr.
+    """
+    from cassini_bayes.plan.axis_planner import plan_axis
+    from cassini_bayes.plan.limits import load_limits
+    from cassini_bayes.plan.wheel_axis import solved_wheel
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    if prior not in ("uniform", "cone"):
+        raise InputError(f"{arg('prior', prior)}: choose uniform or cone")
+    if goal_deg is not None and (isinstance(goal_deg, bool)
+                                 or not isinstance(goal_deg, (int, float))
+                                 or not np.isfinite(goal_deg) or goal_deg <= 0):
+        raise InputError(f"{arg('goal_deg', goal_deg)}: give a positive angle (deg)")
+    counts = None
+    if pairs is not None:
+        counts = [pairs] if isinstance(pairs, int) and not isinstance(pairs, bool) else pairs
+        if not isinstance(counts, (list, tuple)) or not counts or any(
+                isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= 12
+                for n in counts):
+            raise InputError(f"{arg('pairs', pairs)}: give a number of slew pairs from 2 to 12 "
+                             "(one pair leaves the axis unseen along its slew axis), or a list")
+    sc_file = _spacecraft_path(spacecraft)
+    ref = _model_reference(sc_file)
+    lim, base = load_limits(limits, ref)
+    wheel = solved_wheel(base, wheel)
+    inputs = [sc_file, Path(lim.source)]
+    bl = None
+    if baseline is not None:
+        bp = scenario_path(baseline)
+        bl = load_scenario(bp)
+        inputs.append(bp)
+    say = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else None
+    plan = plan_axis(lim, base, ref, wheel, prior=prior, pairs=counts, baseline=bl,
+                     progress=say)
+    pred, base_pred = plan.prediction, plan.baseline
+    warns = []
+    if goal_deg is not None and pred.cone_deg["90"] > goal_deg:
+        warns.append(f"the limits cannot reach the goal of a {goal_deg:g}° 90 % cone: the best "
+                     f"plan found reaches {pred.cone_deg['90']:.3g}°")
+    bad = {k: v for k, v in pred.usage.items() if v > 1.0}
+    if bad:
+        warns.append("the plan exceeds limits on its simulated telemetry: " + ", ".join(
+            f"{k} {v:.3f} of the limit" for k, v in bad.items()))
+    summary = {
+        "kind": "plan", "command": "plan wheel-axis", "calibration": "wheel-axis",
+        "version": __version__, "spacecraft": ref, "limits_file": lim.source,
+        "limits": lim.to_dict(), "wheel": wheel, "prior": prior,
+        "choice": plan.choice._asdict(),
+        "wheel_rpm": plan.scenario["initial"]["wheel_rpm"],
+        "slews": plan.scenario["slew"], "windows": plan.scenario["window"],
+        "fit_windows": window_options(pred.pairs),
+        "plan": _axis_block(pred),
+        "baseline": {"name": plan.baseline_name, **_axis_block(base_pred)},
+        "improvement": {"sd_direction": base_pred.sd_direction_deg / pred.sd_direction_deg,
+                        "cone90": base_pred.cone_deg["90"] / pred.cone_deg["90"]},
+        "goal": None if goal_deg is None else {"cone90_deg": goal_deg,
+                                               "reached": pred.cone_deg["90"] <= goal_deg},
+        "search": list(plan.search), "warnings": warns}
+    config = {"command": "plan wheel-axis", "version": __version__,
+              "inputs": {"spacecraft": str(sc_file), "limits": lim.source,
+                         "baseline": None if bl is None else bl.source},
+              "options": {"wheel": wheel, "prior": prior, "pairs": counts,
+                          "goal_deg": goal_deg}}
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    return WheelAxisPlanResult(plan, config, summary, tuple(inputs))

@@ -1,9 +1,14 @@
-"""``cassini-bayes plan evaluate|inertia``: plan a calibration before it flies (docs/planning.md).
+"""``cassini-bayes plan evaluate|inertia|wheel-axis``: plan a calibration before it flies
+(docs/planning.md).
 
 * ``plan evaluate SCENARIO.toml [--spacecraft M.toml] [--limits L.toml] [--out DIR]`` prints the
   predicted posterior sd of every parameter of the robust inertia fit (the inertia beside the
   papers' budget; the momentum, torques and each nuisance parameter beside the model file's prior
-  sd); with ``--out``, ``summary.json``, ``config.toml`` and ``report.html``.
+  sd); with ``--calibration wheel-axis`` (or ``--wheel NAME``) the RWA-method wheel-axis fit's
+  (the axis's cones and sd, the inertia); with ``--out``, ``summary.json``, ``config.toml`` and
+  ``report.html``.
+* ``plan wheel-axis --spacecraft M.toml --wheel NAME --limits L.toml --out DIR`` chooses the
+  slew pairs, windows and the wheel's bias speed (:func:`cassini_bayes.api.plan_wheel_axis`).
 * ``plan inertia --spacecraft M.toml --limits L.toml --out DIR`` chooses slews within the
   limits (:func:`cassini_bayes.api.plan_inertia`) and writes ``DIR/scenario.toml`` (the plan:
   ``cassini-bayes simulate`` runs it), ``summary.json``, ``config.toml`` and ``report.html``.
@@ -38,6 +43,13 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                           "share of each limit used."),
         out: Path | None = typer.Option(None, "--out", help="Also write summary.json and "
                                         "report.html here (atomically)."),
+        calibration: str | None = typer.Option(None, "--calibration", help="inertia (default) "
+                                               "or wheel-axis (the RWA-method fit)."),
+        wheel: str | None = typer.Option(None, "--wheel", help="Wheel whose axis is calibrated "
+                                         "(implies --calibration wheel-axis; default the one "
+                                         "whose true axis is off the model's, else RWA4)."),
+        prior: str = typer.Option("uniform", "--prior", help="Wheel-axis fit's axis prior: "
+                                  "uniform or cone."),
         force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
                                    "cassini-bayes wrote."),
     ) -> None:
@@ -46,7 +58,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
 
         if out is not None:
             check_out(out, force=force, inputs=[scenario])
-        res = evaluate_plan(str(scenario), spacecraft=spacecraft, limits=limits)
+        res = evaluate_plan(str(scenario), spacecraft=spacecraft, limits=limits,
+                            calibration=calibration, wheel=wheel, prior=prior)
         typer.echo(res.table())
         if out is not None:
             res.save(out, force=force)
@@ -89,4 +102,44 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         mark = "[green]✓[/green]" if ok else "[yellow]![/yellow]"
         console.print(f"{mark} {len(s['slews'])} slews, {s['target']} {s['target_value']:.3f} "
                       f"(comparison ×{s['improvement'][s['target']]:.2f}) in "
+                      f"{time.perf_counter() - t0:.0f} s → {escape(str(out))}")
+
+    @plan.command("wheel-axis")
+    def wheel_axis_cmd(
+        spacecraft: str = typer.Option(..., "--spacecraft", help="Spacecraft model TOML (the "
+                                       "plan's truth and the fit's prior)."),
+        wheel: str = typer.Option(..., "--wheel", help="The wheel whose axis is calibrated."),
+        limits: str = typer.Option(..., "--limits", help="Limits TOML (experiments/limits/)."),
+        out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
+        pairs: list[int] | None = typer.Option(None, "--pairs", min=2, max=12,
+                                               help="Number of slew pairs (repeat to search "
+                                                    "several; default 2 3 4)."),
+        prior: str = typer.Option("uniform", "--prior", help="The fit's axis prior: uniform or "
+                                  "cone."),
+        baseline: str | None = typer.Option(None, "--baseline", help="Scenario to compare with "
+                                            "(default Brown's slews within the limits)."),
+        goal_deg: float | None = typer.Option(None, "--goal-deg", min=0.0, help="90 % cone "
+                                              "wanted (deg); a plan that cannot reach it says "
+                                              "so."),
+        force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                                   "cassini-bayes wrote."),
+    ) -> None:
+        """Choose the slew pairs, windows and bias speed of a wheel-axis calibration (RWA
+        method) within limits; write the plan as a scenario, with its report."""
+        console = stderr_console()
+        from cassini_bayes.api import plan_wheel_axis
+
+        check_out(out, force=force)
+        t0 = time.perf_counter()
+        res = plan_wheel_axis(spacecraft, limits, wheel=wheel, prior=prior,
+                              pairs=pairs or None, baseline=baseline, goal_deg=goal_deg,
+                              progress=True)
+        res.save(out, force=force)
+        typer.echo(res.table())
+        s = res.summary()
+        ok = s["plan"].get("limits_ok", True) and (s["goal"] is None or s["goal"]["reached"])
+        mark = "[green]✓[/green]" if ok else "[yellow]![/yellow]"
+        console.print(f"{mark} {s['choice']['pairs']} slew pairs, 90 % cone "
+                      f"{s['plan']['cone_deg']['90']:.3g}° (comparison "
+                      f"×{s['improvement']['sd_direction']:.2f}) in "
                       f"{time.perf_counter() - t0:.0f} s → {escape(str(out))}")
