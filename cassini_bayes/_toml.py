@@ -13,6 +13,8 @@ from cassini_bayes.errors import InputError, with_article
 
 MAX_TOML_BYTES = 1_000_000
 """Largest accepted model or scenario file (1 MB; the shipped ones are under 10 kB)."""
+UNIT_TOL = 1e-6
+"""How far from 1 the norm of a unit vector in a file may be."""
 
 
 def read_toml(path: Path, what: str, where: str) -> dict[str, Any]:
@@ -50,3 +52,108 @@ def is_numbers(v: Any) -> bool:
     return isinstance(v, (list, tuple)) and all(
         isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
         for x in v)
+
+
+class TomlTable:
+    """Typed, key-checked access to one TOML table; every error names the file and the key.
+
+    ``where`` is the table's dotted prefix (``"truth."``, ``"slew[2]."``, ``""`` at the top);
+    ``allowed`` its keys (any other is an error); ``number_max`` the largest magnitude a number
+    may have unless a reader gives its own bound (sub-tables inherit it).
+    """
+
+    def __init__(self, table: Any, where: str, src: str, allowed: set[str], *,
+                 number_max: float = np.inf):
+        if not isinstance(table, dict):
+            raise InputError(f"'{where.rstrip('.')}' must be a table", path=src)
+        self.table, self.where, self.src = table, where, src
+        self.number_max = number_max
+        for key in table:
+            if key not in allowed:
+                raise InputError(f"unknown key '{where}{key}'; allowed: "
+                                 f"{', '.join(sorted(allowed))}", path=src)
+
+    def err(self, key: str, msg: str) -> InputError:
+        """An :class:`InputError` ``'table.key' msg`` naming the file."""
+        return InputError(f"'{self.where}{key}' {msg}", path=self.src)
+
+    def has(self, key: str) -> bool:
+        return key in self.table
+
+    def _missing(self, key: str) -> InputError:
+        return InputError(f"missing required key '{self.where}{key}'", path=self.src)
+
+    def num(self, key: str, default: float | None = None, *, positive: bool = False,
+            nonneg: bool = False, hi: float | None = None) -> float:
+        """A finite number of magnitude at most ``hi`` (else ``number_max``); ``default`` when
+        the key is absent (``None``: required)."""
+        if key not in self.table:
+            if default is None:
+                raise self._missing(key)
+            return float(default)
+        v = self.table[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            raise self.err(key, f"must be a finite number, got {v!r}")
+        bound = self.number_max if hi is None else hi
+        if abs(v) > bound:
+            raise self.err(key, f"= {v:g} is beyond the physical limit {bound:g} in magnitude; "
+                                "check the value and its unit (docs/limits.md)")
+        if positive and v <= 0:
+            raise self.err(key, f"must be positive, got {v}")
+        if nonneg and v < 0:
+            raise self.err(key, f"must not be negative, got {v}")
+        return float(v)
+
+    def vec(self, key: str, n: int = 3, default: Any = None, *, unit: bool = False,
+            nonneg: bool = False, hi: float | None = None) -> np.ndarray:
+        """A list of ``n`` finite numbers, each of magnitude at most ``hi`` (else
+        ``number_max``); ``unit``: of norm 1 within 1e-6."""
+        if key not in self.table:
+            if default is None:
+                raise self._missing(key)
+            return np.asarray(default, float)
+        v = self.table[key]
+        if not is_numbers(v):
+            raise self.err(key, f"must be a list of {n} numbers, got {v!r}")
+        a = np.asarray(v, float)
+        if a.shape != (n,) or not np.all(np.isfinite(a)):
+            raise self.err(key, f"must be a list of {n} finite numbers, got {v!r}")
+        bound = self.number_max if hi is None else hi
+        if np.any(np.abs(a) > bound):
+            raise self.err(key, f"has an entry beyond the physical limit {bound:g} in magnitude, "
+                                f"got {v!r}; check the values and their unit (docs/limits.md)")
+        if unit and abs(np.linalg.norm(a) - 1.0) > UNIT_TOL:
+            raise self.err(key, f"must be a unit vector (|v| = {np.linalg.norm(a):.6f}); "
+                                "normalise it")
+        if nonneg and np.any(a < 0):
+            raise self.err(key, f"must not have negative entries, got {v!r}")
+        return a
+
+    def string(self, key: str, default: str | None = None) -> str:
+        """A string; ``default`` when the key is absent (``None``: required)."""
+        if key not in self.table:
+            if default is None:
+                raise self._missing(key)
+            return default
+        v = self.table[key]
+        if not isinstance(v, str):
+            raise self.err(key, f"must be a string, got {v!r}")
+        return v
+
+    def sub(self, key: str, allowed: set[str], required: bool = False) -> TomlTable:
+        """The sub-table ``[where.key]`` (empty when absent and not ``required``)."""
+        if key not in self.table:
+            if required:
+                raise InputError(f"missing required section [{self.where}{key}]", path=self.src)
+            return TomlTable({}, f"{self.where}{key}.", self.src, allowed,
+                             number_max=self.number_max)
+        return TomlTable(self.table[key], f"{self.where}{key}.", self.src, allowed,
+                         number_max=self.number_max)
+
+    def items(self, key: str, allowed: set[str]) -> list[TomlTable]:
+        """The tables of the array ``[[where.key]]`` (none when absent)."""
+        v = self.table.get(key, [])
+        if not isinstance(v, list):
+            raise self.err(key, "must be an array of tables ([[...]])")
+        return [TomlTable(x, f"{self.where}{key}[{i}].", self.src, allowed,
+                          number_max=self.number_max) for i, x in enumerate(v)]
