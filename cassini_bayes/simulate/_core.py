@@ -188,7 +188,7 @@ _core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))
 
 def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched, noise_batched=False):
     # A shared truth stays unbatched: its mass properties are then hoisted out of the vmapped
-    # loop, ~10x faster than carrying one copy per replicate.
+    # loop (the speed-up: docs/design.md, benchmarks).
     axes = 0 if truth_batched else None
     return jax.vmap(_simulate_core, in_axes=(0, axes, 0 if noise_batched else None, None,
                                              None, None))(keys, truth, noise, plan, carr, cfg)
