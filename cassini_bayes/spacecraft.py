@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from cassini_bayes._paths import model_path
-from cassini_bayes._toml import is_numbers, read_toml
+from cassini_bayes._toml import UNIT_TOL, TomlTable, read_toml
 from cassini_bayes.errors import InputError, as_path
 from cassini_bayes.names import THRUSTER_NAMES
 from cassini_bayes.units import RPM_TO_RAD_S
@@ -52,7 +52,6 @@ _EQ16_SIGNS_XY = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]] * 2, dtype=float)
 _EQ16_DIRECTIONS = np.array([[0, 0, -1]] * 4 + [[0, -1, 0], [0, -1, 0], [0, 1, 0], [0, 1, 0]],
                             dtype=float)
 
-_UNIT_TOL = 1e-6
 COM_SD_DEFAULT_FRAC = 0.01
 """Default ``[center_of_mass] sd_m``: this fraction of the largest thruster position's length
 (Cassini: 3.6 cm of its 3.6 m arm), the centre of mass's knowledge scaled to the spacecraft."""
@@ -474,80 +473,6 @@ capacity over this time, N m: a torque that would fill the wheels within a minut
 disturbance of a wheel-controlled spacecraft, but a unit error (µN m written as N m)."""
 
 
-def _check_keys(table: dict, allowed: set[str], where: str, src: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise InputError(f"unknown key '{where}{key}'; allowed: {', '.join(sorted(allowed))}",
-                             path=src)
-
-
-def _table(d: dict, key: str, src: str, *, required: bool = False) -> dict:
-    """The sub-table ``[key]`` ({} when absent and optional); anything else is an error."""
-    if key not in d:
-        if required:
-            raise InputError(f"missing required section [{key}]", path=src)
-        return {}
-    v = d[key]
-    if not isinstance(v, dict):
-        raise InputError(f"'{key}' must be a table [{key}], got {v!r}; write it as a [{key}] "
-                         "section", path=src)
-    return v
-
-
-def _string(d: dict, key: str, where: str, src: str, default: str | None = None) -> str:
-    if key not in d:
-        if default is None:
-            raise InputError(f"missing required key '{where}{key}'", path=src)
-        return default
-    v = d[key]
-    if not isinstance(v, str):
-        raise InputError(f"'{where}{key}' must be a string (in quotes), got {v!r}", path=src)
-    return v
-
-
-def _number(table: dict, key: str, where: str, src: str, default=None,
-            lo: float | None = None, hi: float | None = None, unit: str = "",
-            open_lo: bool = True) -> float:
-    """A finite number, optionally in ``(lo, hi]`` (``[lo, hi]`` with ``open_lo=False``)."""
-    if key not in table:
-        if default is None:
-            raise InputError(f"missing required key '{where}{key}'", path=src)
-        return float(default)
-    v = table[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
-        raise InputError(f"'{where}{key}' must be a finite number, got {v!r}", path=src)
-    v = float(v)
-    below = lo is not None and (v <= lo if open_lo else v < lo)
-    if below or (hi is not None and v > hi):
-        rng = f"{'(' if open_lo else '['}{lo:g}, {hi:g}]" if hi is not None else f"> {lo:g}"
-        sign = " (it must be positive)" if lo == 0 and v <= 0 else ""
-        raise InputError(f"'{where}{key}' = {v:g} {unit} is outside the physical range {rng} "
-                         f"{unit}{sign}; check the value and its unit (docs/limits.md)", path=src)
-    return v
-
-
-def _vector(value, key: str, src: str, bound: float = LENGTH_MAX) -> np.ndarray:
-    """A list of 3 finite numbers, each of magnitude ≤ ``bound``."""
-    if not is_numbers(value) or len(value) != 3:
-        raise InputError(f"'{key}' must be a list of 3 numbers, got {value!r}", path=src)
-    v = np.asarray(value, float)
-    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > bound):
-        raise InputError(f"'{key}' must be 3 finite numbers of magnitude <= {bound:g}, got "
-                         f"{value!r}", path=src)
-    return v
-
-
-def _pair(table: dict, key: str, where: str, src: str, default: tuple[float, float],
-          hi: float) -> tuple[float, float]:
-    """``[low, high]`` with ``0 < low < high ≤ hi``."""
-    v = table.get(key, list(default))
-    ok = is_numbers(v) and len(v) == 2
-    if not ok or not (0 < v[0] < v[1] <= hi):
-        raise InputError(f"'{where}{key}' must be [low, high] with 0 < low < high <= {hi:g} (s), "
-                         f"got {v!r}", path=src)
-    return float(v[0]), float(v[1])
-
-
 def check_physical_inertia(inertia: np.ndarray, what: str, src: str) -> None:
     """Raise unless ``inertia`` is a finite, symmetric positive definite tensor within
     :data:`INERTIA_MAX` that obeys the triangle inequalities."""
@@ -574,62 +499,56 @@ def spacecraft_from_dict(d: dict[str, Any], src: str = "<spacecraft>") -> Spacec
     constants above, documented in docs/limits.md); any failure is one :class:`InputError` line
     naming ``src`` and the key.
     """
-    _check_keys(d, _TOP_KEYS, "", src)
-    ti = _table(d, "inertia", src, required=True)
-    _check_keys(ti, _INERTIA_KEYS, "inertia.", src)
-    xx, yy, zz = (_number(ti, k, "inertia.", src, lo=0.0, hi=INERTIA_MAX, unit="kg m^2")
+    top = TomlTable(d, "", src, _TOP_KEYS)
+    inertia_t = top.sub("inertia", _INERTIA_KEYS, required=True)
+    xx, yy, zz = (inertia_t.in_range(k, lo=0.0, hi=INERTIA_MAX, unit="kg m^2")
                   for k in ("Ixx", "Iyy", "Izz"))
-    xy, xz, yz = (_number(ti, k, "inertia.", src, lo=-INERTIA_MAX, hi=INERTIA_MAX,
-                          unit="kg m^2", open_lo=False) for k in ("Ixy", "Ixz", "Iyz"))
+    xy, xz, yz = (inertia_t.in_range(k, lo=-INERTIA_MAX, hi=INERTIA_MAX, unit="kg m^2",
+                                     open_lo=False) for k in ("Ixy", "Ixz", "Iyz"))
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     check_physical_inertia(inertia, "[inertia]", src)
-    moi = _number(ti, "moi_uncertainty", "inertia.", src, 0.10)
-    poi = _number(ti, "poi_uncertainty", "inertia.", src, POI_DEFAULT_FRAC * max(xx, yy, zz),
-                  lo=0.0, hi=INERTIA_MAX, unit="kg m^2")
+    moi = inertia_t.num("moi_uncertainty", 0.10)
+    poi = inertia_t.in_range("poi_uncertainty", POI_DEFAULT_FRAC * max(xx, yy, zz), lo=0.0,
+                             hi=INERTIA_MAX, unit="kg m^2")
     if not 0 < moi < 1:
         raise InputError(f"'inertia.moi_uncertainty' is a fraction in (0, 1), got {moi}", path=src)
 
-    wheels = _wheels(d, src)
-    thrusters, eq16, com = _thrusters(d, src)
-    com_t = _table(d, "center_of_mass", src)
-    _check_keys(com_t, _COM_KEYS, "center_of_mass.", src)
-    if "offset_m" in com_t:
+    wheels = _wheels(top)
+    thrusters, eq16, com = _thrusters(top)
+    com_t = top.sub("center_of_mass", _COM_KEYS)
+    if com_t.has("offset_m"):
         if eq16 is not None:
             raise InputError("give the centre of mass once: '[thrusters] com' (Eq 16 shorthand) "
                              "or 'center_of_mass.offset_m', not both", path=src)
-        com = _vector(com_t["offset_m"], "center_of_mass.offset_m", src)
-    com_sd = _number(com_t, "sd_m", "center_of_mass.", src, _default_com_sd(thrusters), lo=0.0,
-                     hi=LENGTH_MAX, unit="m", open_lo=False)
+        com = com_t.vec("offset_m", hi=LENGTH_MAX)
+    com_sd = com_t.in_range("sd_m", _default_com_sd(thrusters), lo=0.0, hi=LENGTH_MAX, unit="m",
+                            open_lo=False)
 
-    tp = _table(d, "pulse", src)
-    thrust_t = _table(d, "thrust", src)
     if not thrusters:
-        for key, table in (("pulse", tp), ("thrust", thrust_t)):
+        for key in ("pulse", "thrust"):
             if key in d:
                 raise InputError(f"[{key}] describes thrusters, but the model has none (no "
                                  "[[thruster]] entries); remove it or add the thrusters",
                                  path=src)
-    _check_keys(tp, _PULSE_KEYS, "pulse.", src)
+    pulse_t = top.sub("pulse", _PULSE_KEYS)
     base = PulseConstants()
     kw = {}
     for k in ("tau_delay", "tau_rise", "tau_fall"):
-        kw[k] = _number(tp, k, "pulse.", src, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
+        kw[k] = pulse_t.in_range(k, getattr(base, k), lo=0.0, hi=TAU_MAX, unit="s")
         rk = k + "_range"
-        kw[rk] = _pair(tp, rk, "pulse.", src, getattr(base, rk), TAU_MAX)
-    kw["tau_log_sd_min"] = _number(tp, "tau_log_sd_min", "pulse.", src, base.tau_log_sd_min,
-                                   lo=0.0, hi=TAU_LOG_SD_MAX)
-    _check_keys(thrust_t, {"F"}, "thrust.", src)
-    thrust = _nominal_thrust(thrust_t, thrusters, eq16, src)
-    mass_t = _table(d, "mass", src)
-    _check_keys(mass_t, {"kg"}, "mass.", src)
-    mass = (_number(mass_t, "kg", "mass.", src, lo=0.0, hi=MASS_MAX, unit="kg") if mass_t
+        kw[rk] = pulse_t.interval(rk, getattr(base, rk), TAU_MAX)
+    kw["tau_log_sd_min"] = pulse_t.in_range("tau_log_sd_min", base.tau_log_sd_min, lo=0.0,
+                                            hi=TAU_LOG_SD_MAX)
+    thrust = _nominal_thrust(top.sub("thrust", {"F"}), thrusters, eq16)
+    mass_t = top.sub("mass", {"kg"})
+    mass = (mass_t.in_range("kg", lo=0.0, hi=MASS_MAX, unit="kg") if mass_t.table
             else float("nan"))
     return Spacecraft(
-        name=_string(d, "name", "", src, Path(src).stem), inertia=inertia, moi_uncertainty=moi,
+        name=top.string("name", Path(src).stem), inertia=inertia, moi_uncertainty=moi,
         poi_uncertainty=poi, wheels=wheels, thrusters=thrusters, pulse=PulseConstants(**kw),
-        thrust=thrust, mass=mass, description=_string(d, "description", "", src, ""),
-        source=_string(d, "source", "", src, ""),
-        knowledge=_knowledge(d, src, _capacity_nms(wheels)),
+        thrust=thrust, mass=mass, description=top.string("description", ""),
+        source=top.string("source", ""),
+        knowledge=_knowledge(top, _capacity_nms(wheels)),
         com_m=com, com_sd_m=com_sd, eq16=eq16,
     )
 
@@ -654,51 +573,43 @@ def _unique(names: Sequence[str], what: str, src: str) -> None:
         seen[n.upper()] = i
 
 
-def _unit(value, key: str, label: str, src: str) -> np.ndarray:
-    """A unit 3-vector (within 1e-6), else an InputError naming ``key`` and ``label``."""
-    v = _vector(value, key, src)
+def _unit(table: TomlTable, key: str, label: str) -> np.ndarray:
+    """``table[key]``, a unit 3-vector (within :data:`~cassini_bayes._toml.UNIT_TOL`),
+    normalised; else an InputError naming the key and ``label``."""
+    v = table.vec(key, hi=LENGTH_MAX)
+    name = table.where + key
     norm = float(np.linalg.norm(v))
     if norm == 0:
-        raise InputError(f"'{key}' of {label} is zero; it must be a unit vector", path=src)
-    if abs(norm - 1) > _UNIT_TOL:
-        raise InputError(f"'{key}' of {label} must be a unit vector (|v| = {norm:.6f}); "
-                         "normalise it", path=src)
+        raise InputError(f"'{name}' of {label} is zero; it must be a unit vector", path=table.src)
+    if abs(norm - 1) > UNIT_TOL:
+        raise InputError(f"'{name}' of {label} must be a unit vector (|v| = {norm:.6f}); "
+                         "normalise it", path=table.src)
     return v / norm
 
 
-def _wheels(d: dict[str, Any], src: str) -> tuple[Wheel, ...]:
+def _wheels(top: TomlTable) -> tuple[Wheel, ...]:
     """The ``[[wheel]]`` entries, checked (unique names, unit axes, limits)."""
-    wheels_raw = d.get("wheel", [])
-    if not isinstance(wheels_raw, list) or not all(isinstance(w, dict) for w in wheels_raw):
-        raise InputError("'wheel' must be an array of tables, one [[wheel]] section per wheel",
-                         path=src)
-    if not wheels_raw:
+    src = top.src
+    entries = top.items("wheel", _WHEEL_KEYS, per="wheel")
+    if not entries:
         raise InputError("at least one [[wheel]] is required", path=src)
     wheels = []
-    for i, w in enumerate(wheels_raw):
-        where = f"wheel[{i}]."
-        _check_keys(w, _WHEEL_KEYS, where, src)
-        name = _column_name(_string(w, "name", where, src), where, "wheel", src).upper()
-        if "axis" not in w:
-            raise InputError(f"missing required key '{where}axis'", path=src)
-        axis = _unit(w["axis"], where + "axis", f"wheel {name}", src)
-        j = _number(w, "inertia", where, src, lo=WHEEL_INERTIA_RANGE[0],
-                    hi=WHEEL_INERTIA_RANGE[1], unit="kg m^2", open_lo=False)
+    for w in entries:
+        name = _column_name(w.string("name"), w.where, "wheel", src).upper()
+        axis = _unit(w, "axis", f"wheel {name}")
+        j = w.in_range("inertia", lo=WHEEL_INERTIA_RANGE[0], hi=WHEEL_INERTIA_RANGE[1],
+                       unit="kg m^2", open_lo=False)
         sd = None
-        if "inertia_sd_frac" in w:
-            sd = _number(w, "inertia_sd_frac", where, src)
+        if w.has("inertia_sd_frac"):
+            sd = w.num("inertia_sd_frac")
             if not 0 <= sd < 0.5:
-                raise InputError(f"'{where}inertia_sd_frac' is a fraction in [0, 0.5) (0.005 = "
-                                 f"0.5 %), got {sd}", path=src)
-        speed = _number(w, "max_speed_rpm", where, src, np.inf, lo=0.0, hi=WHEEL_SPEED_MAX_RPM,
-                        unit="rpm") if "max_speed_rpm" in w else float("inf")
-        torque = _number(w, "max_torque_nm", where, src, np.inf, lo=0.0, hi=WHEEL_TORQUE_MAX_NM,
-                         unit="N m") if "max_torque_nm" in w else float("inf")
-        art = w.get("articulated", False)
-        if not isinstance(art, bool):
-            raise InputError(f"'{where}articulated' must be true or false, got {art!r}", path=src)
-        wheels.append(Wheel(name, axis, j, sd, speed, torque, art, _cone(w, where, name, src),
-                            *_reference(w, where, name, src)))
+                raise w.err("inertia_sd_frac", f"is a fraction in [0, 0.5) (0.005 = 0.5 %), got "
+                                               f"{sd}")
+        speed = w.in_range("max_speed_rpm", np.inf, lo=0.0, hi=WHEEL_SPEED_MAX_RPM, unit="rpm")
+        torque = w.in_range("max_torque_nm", np.inf, lo=0.0, hi=WHEEL_TORQUE_MAX_NM, unit="N m")
+        articulated = w.flag("articulated", False)
+        wheels.append(Wheel(name, axis, j, sd, speed, torque, articulated, _cone(w, name),
+                            *_reference(w, name)))
     _unique([w.name for w in wheels], "wheel", src)
     names = {w.name for w in wheels}
     for i, w in enumerate(wheels):
@@ -708,99 +619,93 @@ def _wheels(d: dict[str, Any], src: str) -> tuple[Wheel, ...]:
     return tuple(wheels)
 
 
-def _cone(w: dict, where: str, name: str, src: str) -> WheelCone | None:
+def _cone(w: TomlTable, name: str) -> WheelCone | None:
     """The wheel's articulation cone (``cone_axis``, ``cone_deg``, optional ``cone_sd_deg``), or
     ``None`` when the entry gives none; the axis and the angle come together."""
-    given = [k for k in ("cone_axis", "cone_deg", "cone_sd_deg") if k in w]
+    where = w.where
+    given = [k for k in ("cone_axis", "cone_deg", "cone_sd_deg") if w.has(k)]
     if not given:
         return None
-    if "cone_axis" not in w or "cone_deg" not in w:
-        missing = "cone_axis" if "cone_axis" not in w else "cone_deg"
+    if not w.has("cone_axis") or not w.has("cone_deg"):
+        missing = "cone_axis" if not w.has("cone_axis") else "cone_deg"
         raise InputError(f"'{where}{given[0]}' needs '{where}{missing}' too (wheel {name}: the "
-                         "articulation cone is an axis and an angle from it)", path=src)
-    axis = _unit(w["cone_axis"], where + "cone_axis", f"wheel {name}", src)
-    angle = _number(w, "cone_deg", where, src, lo=0.0, hi=180.0, unit="deg")
-    sd = _number(w, "cone_sd_deg", where, src, 1.0, lo=0.0, hi=30.0, unit="deg")
+                         "articulation cone is an axis and an angle from it)", path=w.src)
+    axis = _unit(w, "cone_axis", f"wheel {name}")
+    angle = w.in_range("cone_deg", lo=0.0, hi=180.0, unit="deg")
+    sd = w.in_range("cone_sd_deg", 1.0, lo=0.0, hi=30.0, unit="deg")
     return WheelCone(axis, angle, sd)
 
 
-def _reference(w: dict, where: str, name: str, src: str) -> tuple[str | None, float | None]:
+def _reference(w: TomlTable, name: str) -> tuple[str | None, float | None]:
     """The wheel's reference wheel and tolerance (deg), or ``(None, None)``; both or neither."""
-    if "reference" not in w and "reference_tol_deg" not in w:
+    where = w.where
+    if not w.has("reference") and not w.has("reference_tol_deg"):
         return None, None
-    if "reference" not in w or "reference_tol_deg" not in w:
-        missing = "reference" if "reference" not in w else "reference_tol_deg"
+    if not w.has("reference") or not w.has("reference_tol_deg"):
+        missing = "reference" if not w.has("reference") else "reference_tol_deg"
         raise InputError(f"wheel {name}: '{where}reference' and '{where}reference_tol_deg' come "
-                         f"together; add '{where}{missing}'", path=src)
-    ref = _string(w, "reference", where, src).upper()
-    return ref, _number(w, "reference_tol_deg", where, src, lo=0.0, hi=180.0, unit="deg")
+                         f"together; add '{where}{missing}'", path=w.src)
+    ref = w.string("reference").upper()
+    return ref, w.in_range("reference_tol_deg", lo=0.0, hi=180.0, unit="deg")
 
 
-def _thrusters(d: dict[str, Any], src: str
+def _thrusters(top: TomlTable
                ) -> tuple[tuple[Thruster, ...], tuple[float, float, float, float] | None,
                           np.ndarray]:
     """``(thrusters, Eq 16 lever arms or None, centre of mass (3,) m)`` from ``[[thruster]]``
     entries or Cassini's ``[thrusters]`` shorthand (none: a spacecraft without thrusters)."""
-    if "thrusters" in d and "thruster" in d:
+    if top.has("thrusters") and top.has("thruster"):
         raise InputError("give the thrusters once: [[thruster]] entries or the [thrusters] "
-                         "shorthand of Feldman & Lee Eq 16, not both", path=src)
-    if "thrusters" in d:
-        tt = _table(d, "thrusters", src)
-        _check_keys(tt, _EQ16_KEYS, "thrusters.", src)
-        arms = tuple(_number(tt, k, "thrusters.", src, lo=0.0, hi=LENGTH_MAX, unit="m")
+                         "shorthand of Feldman & Lee Eq 16, not both", path=top.src)
+    if top.has("thrusters"):
+        eq16_t = top.sub("thrusters", _EQ16_KEYS)
+        arms = tuple(eq16_t.in_range(k, lo=0.0, hi=LENGTH_MAX, unit="m")
                      for k in ("Lx", "Ly", "Lzy", "Lzz"))
-        com = _vector(tt.get("com", [0.0, 0.0, 0.0]), "thrusters.com", src)
+        com = eq16_t.vec("com", default=[0.0, 0.0, 0.0], hi=LENGTH_MAX)
         return eq16_thrusters(*arms), arms, com
-    raw = d.get("thruster", [])
-    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
-        raise InputError("'thruster' must be an array of tables, one [[thruster]] section per "
-                         "thruster", path=src)
     out = []
-    for i, x in enumerate(raw):
-        where = f"thruster[{i}]."
-        _check_keys(x, _THRUSTER_ENTRY_KEYS, where, src)
-        name = _column_name(_string(x, "name", where, src), where, "thruster", src)
+    for x in top.items("thruster", _THRUSTER_ENTRY_KEYS, per="thruster"):
+        name = _column_name(x.string("name"), x.where, "thruster", x.src)
         for key in ("position", "direction"):
-            if key not in x:
-                raise InputError(f"missing required key '{where}{key}' (thruster {name})",
-                                 path=src)
-        pos = _vector(x["position"], where + "position", src)
-        direction = _unit(x["direction"], where + "direction", f"thruster {name}", src)
-        f = (_number(x, "F", where, src, lo=0.0, hi=THRUST_MAX, unit="N") if "F" in x
-             else None)
-        out.append(Thruster(name, pos, direction, f, _string(x, "branch", where, src, "")))
-    _unique([s.name for s in out], "thruster", src)
+            if not x.has(key):
+                raise InputError(f"missing required key '{x.where}{key}' (thruster {name})",
+                                 path=x.src)
+        pos = x.vec("position", hi=LENGTH_MAX)
+        direction = _unit(x, "direction", f"thruster {name}")
+        f = x.in_range("F", lo=0.0, hi=THRUST_MAX, unit="N") if x.has("F") else None
+        out.append(Thruster(name, pos, direction, f, x.string("branch", "")))
+    _unique([s.name for s in out], "thruster", top.src)
     return tuple(out), None, np.zeros(3)
 
 
-def _nominal_thrust(table: dict, thrusters: Sequence[Thruster], eq16, src: str) -> float:
+def _nominal_thrust(thrust_t: TomlTable, thrusters: Sequence[Thruster], eq16) -> float:
     """The model's nominal thrust per thruster, N: ``[thrust] F``; without it Cassini's 0.75 N for
     the Eq 16 shorthand, the mean of the per-thruster ``F`` for ``[[thruster]]`` entries (each
     must then have one); NaN without thrusters."""
     if not thrusters:
         return float("nan")
-    if "F" in table or eq16 is not None:
-        return _number(table, "F", "thrust.", src, 0.75, lo=0.0, hi=THRUST_MAX, unit="N")
+    if thrust_t.has("F") or eq16 is not None:
+        return thrust_t.in_range("F", 0.75, lo=0.0, hi=THRUST_MAX, unit="N")
     missing = [s.name for s in thrusters if s.thrust_n is None]
     if missing:
         raise InputError(f"thruster {missing[0]} has no thrust: give 'F' (N) in its [[thruster]] "
-                         "entry or the model's [thrust] F", path=src)
+                         "entry or the model's [thrust] F", path=thrust_t.src)
     return float(np.mean([s.thrust_n for s in thrusters]))
 
 
-def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
+def _knowledge(top: TomlTable, capacity_nms: float) -> Knowledge:
     """The optional ``[gyro]``, ``[wheel_knowledge]``, ``[telemetry_knowledge]`` and
     ``[torque_knowledge]`` sections (one sd each, ≥ 0); the torques at most the wheels'
     momentum ``capacity_nms`` over :data:`TORQUE_HOLD_MIN_S`."""
+    src = top.src
     base = Knowledge()
     kw = {}
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
                           ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS),
                           ("torque_knowledge", _TORQUE_KNOWLEDGE_KEYS)):
-        table = _table(d, section, src)
-        _check_keys(table, set(keys), f"{section}.", src)
+        table = top.sub(section, set(keys))
         for key, attr in keys.items():
-            v = _number(table, key, f"{section}.", src, getattr(base, attr))
+            v = table.num(key, getattr(base, attr))
             if v < 0:
                 raise InputError(f"'{section}.{key}' is a standard deviation and must be >= 0, "
                                  f"got {v}", path=src)
@@ -810,9 +715,9 @@ def _knowledge(d: dict[str, Any], src: str, capacity_nms: float) -> Knowledge:
             raise InputError(f"'wheel_knowledge.{key}' is a fraction (0.005 = 0.5 %), got "
                              f"{kw[_WHEEL_KNOWLEDGE_KEYS[key]]}", path=src)
     hold = capacity_nms / TORQUE_HOLD_MIN_S
-    given = _table(d, "torque_knowledge", src)
+    given = top.sub("torque_knowledge", set(_TORQUE_KNOWLEDGE_KEYS))
     for key in ("sd_nm", "rate_sd_nm_per_h"):
-        if key in given and kw[_TORQUE_KNOWLEDGE_KEYS[key]] > hold:
+        if given.has(key) and kw[_TORQUE_KNOWLEDGE_KEYS[key]] > hold:
             raise InputError(f"'torque_knowledge.{key}' is a small external torque in N m "
                              f"(at most {hold:.3g}, what fills the wheels' {capacity_nms:.3g} "
                              f"N m s in a minute; Cassini's is ~1.5e-5), got "

@@ -14,18 +14,18 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from cassini_bayes._paths import EXPERIMENTS_DIR, input_path, not_utf8
+from cassini_bayes._paths import EXPERIMENTS_DIR, input_path
+from cassini_bayes._toml import TomlTable, check_keys, read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments._registry import ExperimentKind, registered_kinds
 
-_TOP_KEYS = ("kind", "title", "description", "settings", "run")
-_RUN_KEYS = ("name", "seed", "quick", "version")
+_TOP_KEYS = {"kind", "title", "description", "settings", "run"}
+_RUN_KEYS = {"name", "seed", "quick", "version"}
 
 
 @dataclass(frozen=True)
@@ -87,10 +87,7 @@ def _check_value(key: str, value: Any, default: Any, choices: tuple | None, src:
     elif isinstance(default, dict):  # a sub-table: known keys only, defaults filled in
         ok = isinstance(value, dict)
         if ok:
-            for k in value:
-                if k not in default:
-                    raise InputError(f"unknown key '{where}.{k}'; allowed: "
-                                     f"{', '.join(sorted(default))}", path=src)
+            check_keys(value, set(default), f"{where}.", src)
             value = {k: _check_value(f"{key}.{k}", value[k], d, None, src) if k in value else d
                      for k, d in default.items()}
     else:  # pragma: no cover - kinds only use TOML types
@@ -110,9 +107,7 @@ def experiment_from_dict(d: Mapping[str, Any], src: str = "<experiment>",
         raise InputError(f"the config.toml of a '{d['command']}' run, not an experiment file; "
                          "re-run a fit with its own command and options (config.toml records "
                          "them), or give an experiments/*.toml file", path=src)
-    for key in d:
-        if key not in _TOP_KEYS:
-            raise InputError(f"unknown key '{key}'; allowed: {', '.join(_TOP_KEYS)}", path=src)
+    top = TomlTable(dict(d), "", src, _TOP_KEYS)
     kinds = registered_kinds()
     if "kind" not in d:
         raise InputError(f"missing required key 'kind'; one of: {', '.join(sorted(kinds))}",
@@ -122,32 +117,18 @@ def experiment_from_dict(d: Mapping[str, Any], src: str = "<experiment>",
         raise InputError(f"unknown experiment kind {kind_name!r}; registered kinds: "
                          f"{', '.join(sorted(kinds))}", path=src)
     kind = kinds[kind_name]
-    settings_in = d.get("settings", {})
-    if not isinstance(settings_in, dict):
-        raise InputError("'settings' must be a table ([settings])", path=src)
+    settings_in = top.sub("settings", set(kind.defaults), note=f" for kind {kind_name!r}").table
     settings = dict(kind.defaults)
     for key, value in settings_in.items():
-        if key not in kind.defaults:
-            raise InputError(f"unknown key 'settings.{key}' for kind {kind_name!r}; allowed: "
-                             f"{', '.join(sorted(kind.defaults))}", path=src)
         settings[key] = _check_value(key, value, kind.defaults[key], kind.choices.get(key), src)
-    run = d.get("run", {})
-    if not isinstance(run, dict):
-        raise InputError("'run' must be a table ([run])", path=src)
-    for key in run:
-        if key not in _RUN_KEYS:
-            raise InputError(f"unknown key 'run.{key}'; allowed: {', '.join(_RUN_KEYS)}", path=src)
-    seed = run.get("seed")
+    run = top.sub("run", _RUN_KEYS)
+    seed = run.table.get("seed")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-        raise InputError(f"'run.seed' must be a non-negative integer, got {seed!r}", path=src)
-    for key in ("title", "description"):
-        if key in d and not isinstance(d[key], str):
-            raise InputError(f"'{key}' must be a string", path=src)
-    if "name" in run and not isinstance(run["name"], str):
-        raise InputError("'run.name' must be a string", path=src)
-    return Experiment(name=run.get("name") or name or Path(src).stem, kind=kind,
-                      title=d.get("title", kind.description or kind_name),
-                      description=d.get("description", ""), settings=settings, source=src,
+        raise run.err("seed", f"must be a non-negative integer, got {seed!r}")
+    title = top.string("title", kind.description or kind_name)
+    description = top.string("description", "")
+    return Experiment(name=run.string("name", "") or name or Path(src).stem, kind=kind,
+                      title=title, description=description, settings=settings, source=src,
                       seed=seed)
 
 
@@ -158,11 +139,6 @@ def load_experiment(path: str | os.PathLike) -> Experiment:
         p = p / "config.toml"
     else:   # a file, or a shipped experiment's bare name
         p = input_path(path, "experiment", EXPERIMENTS_DIR)
-    try:
-        d = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as e:
-        raise InputError(f"not valid TOML: {e}", path=str(p)) from None
-    except UnicodeDecodeError:
-        raise InputError(not_utf8(p, "experiment TOML"), path=str(p)) from None
+    d = read_toml(p, "experiment", "experiments/")
     name = p.parent.name if p.name == "config.toml" else p.stem
     return experiment_from_dict(d, str(p), name=name)
