@@ -13,6 +13,7 @@ from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.report.figures import png_bytes, tidy_ticks
 from cassini_bayes.report.html import (
     badge,
+    details,
     figure,
     html_page,
     page_header,
@@ -103,7 +104,7 @@ def _answer_table(blocks: list[tuple[str, Mapping]]) -> str:
 
 def _sites_table(blocks: list[tuple[str, Mapping]]) -> str:
     """Per parameter of the robust model other than the inertia (SI): each block's predicted sd,
-    then the prior sd."""
+    then the prior sd; folded below the answer, as a fit report folds its nuisances."""
     first = blocks[0][1].get("sites", {})
     names = [n for n in first if n not in INERTIA_NAMES]
     rows = []
@@ -117,7 +118,8 @@ def _sites_table(blocks: list[tuple[str, Mapping]]) -> str:
     heads = ["parameter"]
     for name, _ in blocks:
         heads += [f"{name}: sd (SI)", f"{name}: sd/prior"]
-    return table(heads + ["prior sd (SI)"], rows)
+    return details(f"The other {len(rows)} parameters of the robust model (nuisances)",
+                   table(heads + ["prior sd (SI)"], rows))
 
 
 def _usage_table(blocks: list[tuple[str, Mapping]]) -> str:
