@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from cassini_bayes._paths import EXPERIMENTS_DIR, input_path
-from cassini_bayes._toml import is_numbers, read_toml
+from cassini_bayes._toml import TomlTable, read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate.controllers import MIN_PULSE_S
 from cassini_bayes.simulate.scenario import Scenario, scenario_from_dict
@@ -117,22 +117,6 @@ def limits_path(name: str | os.PathLike) -> Path:
     return input_path(name, "limits", LIMITS_DIR)
 
 
-def _num(t: dict, key: str, src: str, *, default=None, positive=True) -> float:
-    where = f"'limits.{key}'"
-    if key not in t:
-        if default is None:
-            raise InputError(f"missing required key {where}", path=src)
-        return float(default)
-    v = t[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
-        raise InputError(f"{where} must be a finite number, got {v!r}", path=src)
-    if positive and v <= 0:
-        raise InputError(f"{where} = {v} must be positive", path=src)
-    if not positive and v < 0:
-        raise InputError(f"{where} = {v} must not be negative", path=src)
-    return float(v)
-
-
 def base_scenario_dict(limits: Limits, spacecraft_path: str) -> dict[str, Any]:
     """A scenario dict without slews: the limits file's sections, ``control = "rwa"``, the
     duration, and the spacecraft model as truth and prior (what a plan is flown on)."""
@@ -173,37 +157,29 @@ def _fibonacci(n: int) -> np.ndarray:
 
 def limits_from_dict(d: dict[str, Any], spacecraft_path: str,
                      src: str = "<limits>") -> tuple[Limits, Scenario]:
-    """Check a limits dict against the spacecraft of the model file ``spacecraft_path``; returns the limits and the base scenario
-    (:func:`base_scenario_dict`, loaded: its own keys are checked as a scenario's)."""
+    """Check a limits dict against the spacecraft of the model file ``spacecraft_path``; returns
+    the limits and the base scenario (:func:`base_scenario_dict`, loaded: its own keys are
+    checked as a scenario's)."""
     if not isinstance(d, dict):
         raise InputError("a limits file is a TOML table", path=src)
-    for key in d:
-        if key not in _TOP:
-            raise InputError(f"unknown key '{key}'; allowed: {', '.join(sorted(_TOP))}",
-                             path=src)
-    t = d.get("limits")
-    if not isinstance(t, dict):
+    top = TomlTable(d, "", src, _TOP)
+    if not top.has("limits"):
         raise InputError("missing table [limits] (duration_s, max_body_rate_mrad_s, "
                          "max_wheel_rpm, max_wheel_torque_nm, ...)", path=src)
-    for key in t:
-        if key not in _LIMIT_KEYS:
-            raise InputError(f"unknown key 'limits.{key}'; allowed: "
-                             f"{', '.join(sorted(_LIMIT_KEYS))}", path=src)
+    t = top.sub("limits", _LIMIT_KEYS)
     for key in _REQUIRED:
-        _num(t, key, src)
+        t.num(key, positive=True)
     axis_rate = np.full(3, np.inf)
-    if "max_axis_rate_mrad_s" in t:
-        v = t["max_axis_rate_mrad_s"]
-        if not is_numbers(v) or len(v) != 3 or not np.all(np.isfinite(v)):
-            raise InputError(f"'limits.max_axis_rate_mrad_s' must be a list of 3 finite numbers "
-                             f"(mrad/s about X, Y, Z), got {v!r}", path=src)
-        if np.any(np.asarray(v, float) <= 0):
-            raise InputError(f"'limits.max_axis_rate_mrad_s' = {v} must be positive", path=src)
-        axis_rate = np.asarray(v, float) * 1e-3
-    min_pulse = _num(t, "min_pulse_s", src, default=MIN_PULSE_S)
+    if t.has("max_axis_rate_mrad_s"):
+        v = t.vec("max_axis_rate_mrad_s")
+        if np.any(v <= 0):
+            raise t.err("max_axis_rate_mrad_s", f"= {list(v)} must be positive (mrad/s about X, "
+                                                "Y, Z)")
+        axis_rate = v * 1e-3
+    min_pulse = t.num("min_pulse_s", MIN_PULSE_S, positive=True)
     if min_pulse < MIN_PULSE_S - 1e-12:
-        raise InputError(f"'limits.min_pulse_s' = {min_pulse} s is below the {MIN_PULSE_S} s "
-                         "command grid of the thrusters", path=src)
+        raise t.err("min_pulse_s", f"= {min_pulse} s is below the {MIN_PULSE_S} s command grid "
+                                   "of the thrusters")
     sections = {k: copy.deepcopy(d[k]) for k in ("run", "initial", "noise", "rwa_controller")
                 if k in d}
     for k in ("run", "initial"):
@@ -216,19 +192,24 @@ def limits_from_dict(d: dict[str, Any], spacecraft_path: str,
                          "duration is 'limits.duration_s')", path=src)
     lim = Limits(
         name=str(d.get("name", Path(src).stem)), description=str(d.get("description", "")),
-        source=src, duration_s=_num(t, "duration_s", src),
-        quiet_s=_num(t, "quiet_s", src, default=0.0, positive=False),
-        rate_max_rad_s=_num(t, "max_body_rate_mrad_s", src) * 1e-3,
+        source=src, duration_s=t.num("duration_s", positive=True),
+        quiet_s=t.num("quiet_s", 0.0, nonneg=True),
+        rate_max_rad_s=t.num("max_body_rate_mrad_s", positive=True) * 1e-3,
         axis_rate_max_rad_s=tuple(float(x) for x in axis_rate),
-        accel_max_rad_s2=_num(t, "max_body_accel_mrad_s2", src, default=np.inf) * 1e-3,
-        slew_max_rad=np.deg2rad(_num(t, "max_slew_deg", src, default=np.inf)),
-        wheel_rate_max_rad_s=_num(t, "max_wheel_rpm", src) * np.pi / 30.0,
-        wheel_torque_max_nm=_num(t, "max_wheel_torque_nm", src),
-        wheel_momentum_max_nms=_num(t, "max_wheel_momentum_nms", src, default=np.inf),
+        accel_max_rad_s2=_optional(t, "max_body_accel_mrad_s2") * 1e-3,
+        slew_max_rad=np.deg2rad(_optional(t, "max_slew_deg")),
+        wheel_rate_max_rad_s=t.num("max_wheel_rpm", positive=True) * np.pi / 30.0,
+        wheel_torque_max_nm=t.num("max_wheel_torque_nm", positive=True),
+        wheel_momentum_max_nms=_optional(t, "max_wheel_momentum_nms"),
         min_pulse_s=min_pulse, sections=sections)
     base = scenario_from_dict(base_scenario_dict(lim, spacecraft_path), src)
     _check_consistency(lim, base, src)
     return lim, base
+
+
+def _optional(t: TomlTable, key: str) -> float:
+    """An optional positive limit; infinite (no limit) when the key is absent."""
+    return t.num(key, positive=True) if t.has(key) else np.inf
 
 
 def _check_consistency(lim: Limits, base: Scenario, src: str) -> None:
