@@ -48,9 +48,10 @@ class LeakResult:
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
-        probabilities of ``none`` and each of the model's thrusters, e.g. ``none, Z1 … Y4``) and ``report.html`` (the answer first, the
-        adequacy verdict, self-contained) into ``out`` atomically; returns it. ``force``
-        replaces only a directory cassini-bayes wrote."""
+        probabilities of ``none`` and each of the model's thrusters, e.g. ``none, Z1 … Y4``)
+        and ``report.html`` (the answer first, the adequacy verdict, self-contained) into
+        ``out`` atomically; returns it. ``force`` replaces only a directory cassini-bayes
+        wrote."""
         from cassini_bayes.report.leak import leak_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 

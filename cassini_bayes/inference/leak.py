@@ -49,8 +49,8 @@ Identifiability: a leak is told by its torque direction ``Q[:, k]``. On Cassini 
 ``Q`` are parallel, so every thruster's leak is distinct; the antiparallel pairs Z1/Z3, Z2/Z4,
 Y1/Y4 and Y2/Y3 are told apart only by the sign of ``f`` (a leak only adds thrust). On another
 layout two thrusters with parallel columns (same sign) cannot be told apart: their posterior
-splits between them and neither is isolated. A leak that starts at the stretch's first sample looks like an external torque;
-the torque prior (µN m) against leak torques of mN m resolves it. The thrust-error term can mimic
+splits between them and neither is isolated. A leak that starts at the stretch's first sample
+looks like an external torque; the torque prior (µN m) against leak torques of mN m resolves it. The thrust-error term can mimic
 a leak only through the thruster that fights it, and only at the cost of a ~100 % thrust error.
 """
 
@@ -152,6 +152,7 @@ class LeakPosterior:
     last check) given all the data, and ``torque_nm`` (3,) its mean torque, N m.
     onset_s, onset_sd_s : posterior mean and sd of its onset, s.
     noise_sd_nms : (3,) white-noise sd per axis, N m s.
+    hypotheses : the order of ``prob``'s columns (:attr:`LeakInputs.hypotheses`).
     """
 
     t_check: np.ndarray
