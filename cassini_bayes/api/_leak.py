@@ -1,7 +1,9 @@
 """Thruster-leak monitoring of one telemetry stretch: :func:`monitor_leak` (docs/leak.md).
 
-The Bayesian monitor (:mod:`cassini_bayes.inference.leak`) and Lee's threshold monitor
-(:func:`cassini_bayes.estimators.leak.threshold_monitor`) on the same residual momentum; what
+The Bayesian monitor (:mod:`cassini_bayes.inference.leak`), for any thruster set of the model
+file, and Lee's threshold monitor (:func:`cassini_bayes.estimators.leak.threshold_monitor`) on the
+same residual momentum where the thrusters are Cassini's eight of Feldman & Lee Eq 16 (its Eq 11
+correction pairs them by name and its 50 N m s threshold is Cassini's); what
 ``cassini-bayes monitor leak`` runs.
 """
 
@@ -23,28 +25,33 @@ if TYPE_CHECKING:
     from cassini_bayes.estimators.leak import ThresholdResult
     from cassini_bayes.inference.leak import LeakPosterior
 
-__all__ = ["LeakResult", "monitor_leak"]
+__all__ = ["LeakResult", "monitor_leak", "LEE_LAYOUT_ONLY"]
+
+LEE_LAYOUT_ONLY = ("Lee's threshold monitor applies to Cassini's eight thrusters in the layout "
+                   "of Feldman & Lee Eq 16 (its Eq 11 correction pairs Z1..Y4, its R_T is "
+                   "Cassini's); only the Bayesian monitor ran")
 
 
 @dataclass(frozen=True)
 class LeakResult:
     """Both monitors on one stretch: the Bayesian ``posterior``
     (:class:`~cassini_bayes.inference.leak.LeakPosterior`), Lee's ``lee``
-    (:class:`~cassini_bayes.estimators.leak.ThresholdResult`), the ``summary`` (``summary.json``)
-    and ``config`` (``config.toml``) dicts, and the input ``files``."""
+    (:class:`~cassini_bayes.estimators.leak.ThresholdResult`; ``None`` when the thrusters are not
+    Cassini's Eq 16 layout), the ``summary`` (``summary.json``) and ``config`` (``config.toml``)
+    dicts, and the input ``files``."""
 
     posterior: LeakPosterior
-    lee: ThresholdResult
+    lee: ThresholdResult | None
     summary: dict
     config: dict
     files: tuple
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
-        probabilities of ``none, Z1 … Y4``) and ``report.html`` (the answer first, the
-        adequacy verdict, self-contained) into ``out`` atomically; returns it. ``force``
-        replaces only a directory cassini-bayes wrote."""
-        from cassini_bayes.inference.leak import HYPOTHESES
+        probabilities of ``none`` and each of the model's thrusters, e.g. ``none, Z1 … Y4``)
+        and ``report.html`` (the answer first, the adequacy verdict, self-contained) into
+        ``out`` atomically; returns it. ``force`` replaces only a directory cassini-bayes
+        wrote."""
         from cassini_bayes.report.leak import leak_report_html
         from cassini_bayes.rundir import RunDir, write_config, write_summary
 
@@ -54,7 +61,8 @@ class LeakResult:
             write_config(rd.path, self.config)
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",
-                       header="t_s," + ",".join(f"p_{h}" for h in HYPOTHESES), comments="")
+                       header="t_s," + ",".join(f"p_{h}" for h in self.posterior.hypotheses),
+                       comments="")
             (rd.path / "report.html").write_text(page, encoding="utf-8")
         return rd.final
 
@@ -71,8 +79,9 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
                  p_detect: float = 0.99, sample_step_s: float = 60.0,
                  check_step_s: float = 60.0, eta: float = 0.05,
                  threshold_nms: float = 50.0, t_limit_h: float = 10.0) -> LeakResult:
-    """Posterior probability of a leak per thruster over one telemetry stretch, beside Lee's
-    threshold monitor.
+    """Posterior probability of a leak per thruster over one telemetry stretch, for the model's
+    thrusters, beside Lee's threshold monitor where they are Cassini's eight (Feldman & Lee
+    Eq 16; for another layout ``summary["lee"]`` says it does not apply and ``lee`` is ``None``).
 
     Parameters
     ----------
@@ -81,11 +90,12 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
         :class:`~cassini_bayes.spacecraft.Spacecraft`.
     pulses : a pulse-log CSV path or a :class:`~cassini_bayes.telemetry.PulseLog` (else the
         telemetry's on-times times the model's thrust).
-    prior_leak : prior probability of a leak in the stretch (shared by the eight thrusters).
+    prior_leak : prior probability of a leak in the stretch (shared by the model's thrusters).
     p_detect : the alarm level of ``P(leak)`` (and of one thruster's probability, isolation).
     sample_step_s, check_step_s : spacing of the residual samples used and of the checks, s.
     eta : thruster-to-thruster thrust variation, fraction (Lee Eq 11).
-    threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours).
+    threshold_nms, t_limit_h : Lee's ``R_T`` (N m s) and ``T_limit`` (hours); Cassini's layout
+        only.
     """
     from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
     from cassini_bayes.api._result import collect_warnings
@@ -93,7 +103,6 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
     from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
     from cassini_bayes.inference.leak_adequacy import leak_adequacy
-    from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
     # the Bayesian monitor checks its own settings (leak_posterior); these are Lee's
     for value, option, argument in ((threshold_nms, "--threshold", "threshold_nms"),
@@ -102,7 +111,7 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
     if eta < 0:
         raise InputError(f"must not be negative, got {eta}", path=spelled("--eta", "eta"))
     sc, sc_record, sc_files = spacecraft_input(spacecraft)
-    sc.require_thrusters("the leak monitor", eq16=True)
+    sc.require_thrusters("the leak monitor")
     tels, tel_records, tel_files = telemetry_inputs(telemetry, spacecraft=sc)
     if len(tels) != 1:
         raise InputError(f"got {len(tels)} telemetry inputs; the monitor reads one stretch",
@@ -118,17 +127,21 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
         inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, p_detect=p_detect)
-    lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix, r_t_nms=threshold_nms,
-                            t_limit_s=t_limit_h * 3600.0, eta=eta)
+    lee, lee_summary = None, {"applies": False, "reason": LEE_LAYOUT_ONLY}
+    if sc.eq16_layout:
+        lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix,
+                                r_t_nms=threshold_nms, t_limit_s=t_limit_h * 3600.0, eta=eta)
+        lee_summary = {
+            "applies": True, "detection_time_s": lee.detection_time_s,
+            "axis": None if lee.axis is None else "XYZ"[lee.axis],
+            "thruster": None if lee.thruster is None else inp.thruster_names[lee.thruster],
+            "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
+            "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta}
     summary = {
         "command": "monitor leak", "version": __version__,
         "t_start_s": float(inp.t[0]), "t_end_s": float(inp.t[-1]),
         "bayes": post.summary(),
-        "lee": {"detection_time_s": lee.detection_time_s,
-                "axis": None if lee.axis is None else "XYZ"[lee.axis],
-                "thruster": None if lee.thruster is None else THRUSTER_NAMES[lee.thruster],
-                "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
-                "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta},
+        "lee": lee_summary,
         "residual_end_nms": [float(x) for x in inp.residual[-1]],
         "warnings": warns,
     }

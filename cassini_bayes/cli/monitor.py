@@ -2,8 +2,9 @@
 
 Runs :func:`cassini_bayes.api.monitor_leak` (the Bayesian thruster-leak monitor and Lee's
 threshold monitor over one telemetry stretch) and writes, atomically, ``DIR/summary.json`` (the
-posterior probability of each hypothesis ``none, Z1 … Y4`` at the last sample, the detection time and
-thruster of both monitors, the leak fraction and torque), ``DIR/probabilities.csv`` (the
+posterior probability of each hypothesis, ``none`` and each of the model's thrusters, at the last
+sample, the detection time and thruster of both monitors — Lee's where the thrusters are
+Cassini's Eq 16 layout — the leak fraction and torque), ``DIR/probabilities.csv`` (the
 probabilities at every check), ``DIR/report.html`` (the adequacy verdict and both monitors)
 and ``DIR/config.toml`` (inputs with their SHA-256, settings, version); ``summary.json`` carries
 the ``adequacy`` verdict and ``--strict`` exits 3 when it failed. docs/leak.md describes the
@@ -51,7 +52,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         t_limit: float = typer.Option(10.0, "--t-limit", help="Lee's T_limit, hours."),
         strict: bool = STRICT_ADEQUACY,
     ) -> None:
-        """Posterior probability of a leak per thruster, beside Lee's threshold monitor."""
+        """Posterior probability of a leak per thruster, beside Lee's threshold monitor (Cassini's
+        thruster layout only)."""
         console = stderr_console()
         t0 = time.perf_counter()
         from cassini_bayes.api import monitor_leak
@@ -69,9 +71,10 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                 if b["thruster"] else "leak, thruster not isolated" if b["detection_time_s"]
                 else "no leak")
         mark = "[green]✓[/green]" if not failed_checks(res.summary) else "[red]✗[/red]"
-        console.print(f"{mark} P(leak) = {b['p_leak']:.3g}: {said}; Lee: "
-                      + (f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
-                         if lee["thruster"] else "no trigger")
+        lee_said = ("not run (Cassini's thruster layout only)" if not lee["applies"]
+                    else f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
+                    if lee["thruster"] else "no trigger")
+        console.print(f"{mark} P(leak) = {b['p_leak']:.3g}: {said}; Lee: {lee_said}"
                       + f"{verdict_text(res.summary)} (run took "
                       f"{time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
         enforce_adequacy(res.summary, out, strict=strict, what="the monitor's model does not "

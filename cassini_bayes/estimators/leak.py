@@ -3,7 +3,9 @@
 The residual momentum ``R(t) = ∫ (I ω̇ + ω × (I ω + H) − T_RWA − T_PMS^f) dt`` (Eq 10) grows when a
 thruster leaks. With the wheels' reaction torque ``T_RWA = −Ḣ_RWA`` it integrates to
 ``R(t) = I Δω + ΔH_RWA + ΔG − Q J(t)``: the left side of Feldman & Lee Eq 17 minus the modelled
-thruster angular impulse. The correction for thruster-to-thruster variation is Eq 11.
+thruster angular impulse, for any thruster set. The correction for thruster-to-thruster
+variation (Eq 11) and the threshold monitor are Cassini's: Eq 11 pairs the eight thrusters of
+Feldman & Lee Eq 16 by name and arm, and ``R_T`` is in Cassini's momentum.
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ def residual_momentum(t_s, omega_rad_s, inertia, h_wheels_body, q_matrix,
                       impulse_ns) -> np.ndarray:
     """Residual momentum ``R(t_i)`` (N m s), (n, 3), Lee Eq 10.
 
-    ``impulse_ns`` (n, 8): modelled accumulated thruster impulses (N s, e.g. ``F Δτ``);
-    ``q_matrix`` (3, 8) moment matrix (m). Other arguments as in
+    ``impulse_ns`` (n, m): modelled accumulated thruster impulses (N s, e.g. ``F Δτ``);
+    ``q_matrix`` (3, m) moment matrix (m). Other arguments as in
     :func:`cassini_bayes.physics.impulse.impulse_lhs`.
     """
     v = _lhs(np.asarray(t_s, float), np.asarray(omega_rad_s, float), np.asarray(inertia),

@@ -14,10 +14,11 @@ hypothesis ``k`` (thruster ``k`` leaks a fraction ``f`` of its thrust from ``t_L
   and with 0.1 ten times wider (:data:`TORQUE_SCALES`): a torque several ``σ_T`` off the model
   file's knowledge is then an unusual torque, not a leak that started with the stretch (with a
   normal prior alone one of 7 σ_T raised a false alarm, docs/leak.md);
-* ``δ_j`` the fractional thrust error of thruster ``j`` (thruster-to-thruster variation, the
-  Bayesian counterpart of Lee Eq 11), prior ``N(0, η²)``, η = 0.05 as Lee's launch value, times
-  the modelled impulse ``J_j(t)`` (N s) and the moment arm ``Q[:, j]`` (Feldman & Lee Eq 16);
-* the leak column ``F Q[:, k] (t − t_L)_+``: a 10 % Z1 leak at 1 N is (−0.158, +0.123, 0) N m;
+* ``δ_j`` the fractional thrust error of thruster ``j`` of the model's ``m`` (thruster-to-thruster
+  variation, the Bayesian counterpart of Lee Eq 11), prior ``N(0, η²)``, η = 0.05 as Lee's launch
+  value, times the modelled impulse ``J_j(t)`` (N s) and the moment arm ``Q[:, j]`` (Feldman & Lee
+  Eq 16, column ``(r_j − e) × d_j`` of any thruster set);
+* the leak column ``F_k Q[:, k] (t − t_L)_+``: a 10 % Z1 leak at 1 N is (−0.158, +0.123, 0) N m;
 * ``e_i`` white noise, per axis, its sd from the data (median absolute deviation of the second
   differences ÷ √6, blind to a leak's slope; the larger of the levels of the raw rows and of the rows used). ``R`` is an
   *integral* of the torque residual, but its noise is not a random walk: ``I Δω`` and
@@ -42,12 +43,14 @@ g tanh w`` (``a`` the Gram terms of ``P, O``, ``p`` the fraction's precision wit
 ``b, g`` the scores of ``f`` and ``D`` in its sd): a bounded integrand with one peak or trough,
 taken by Gauss-Legendre quadrature adapted to it (its error against adaptive quadrature:
 docs/leak.md). Every quantity for all cells and check times comes from
-cumulative sums; the running (sequential) monitor costs O(n + checks × cells × 8) integrals.
+cumulative sums; the running (sequential) monitor costs O(n + checks × cells × m) integrals.
 
-Identifiability: no two columns of ``Q`` are parallel, so every thruster's leak is distinct; the
-antiparallel pairs Z1/Z3, Z2/Z4, Y1/Y4 and Y2/Y3 are told apart only by the sign of ``f`` (a leak
-only adds thrust). A leak that starts at the stretch's first sample looks like an external torque;
-the torque prior (µN m) against leak torques of mN m resolves it. The thrust-error term can mimic
+Identifiability: a leak is told by its torque direction ``Q[:, k]``. On Cassini no two columns of
+``Q`` are parallel, so every thruster's leak is distinct; the antiparallel pairs Z1/Z3, Z2/Z4,
+Y1/Y4 and Y2/Y3 are told apart only by the sign of ``f`` (a leak only adds thrust). On another
+layout two thrusters with parallel columns (same sign) cannot be told apart: their posterior
+splits between them and neither is isolated. A leak that starts at the stretch's first sample
+looks like an external torque; the torque prior (µN m) against leak torques of mN m resolves it. The thrust-error term can mimic
 a leak only through the thruster that fights it, and only at the cost of a ~100 % thrust error.
 """
 
@@ -73,6 +76,8 @@ __all__ = ["LeakInputs", "LeakPosterior", "leak_inputs", "leak_posterior", "HYPO
            "FRACTION_SCALES", "OFFSET_SD_NMS", "SAMPLE_STEP_S", "TORQUE_SCALES"]
 
 HYPOTHESES = ("none",) + THRUSTER_NAMES
+"""Cassini's hypotheses (the Eq 16 layout); a run's own are :attr:`LeakInputs.hypotheses`:
+``none`` and the model's thruster names."""
 FRACTION_SCALES = 10.0 ** np.arange(-4.0, 0.01, 0.5)
 """Scales of the half-normal mixture prior on the leak fraction (fractions of the thrust)."""
 TORQUE_SCALES = ((1.0, 0.9), (10.0, 0.1))
@@ -99,10 +104,12 @@ class LeakInputs:
     """A stretch's residual momentum and modelled impulses.
 
     t : (n,) s. residual : (n, 3) ``R`` of Lee Eq 10, N m s, from the first sample.
-    impulse : (n, 8) modelled accumulated thruster impulses ``J`` from the first sample, N s.
-    q_matrix : (3, 8) moment matrix, m. thrust_n : (8,) modelled thrust per thruster, N.
+    impulse : (n, m) modelled accumulated thruster impulses ``J`` from the first sample, N s.
+    q_matrix : (3, m) moment matrix, m. thrust_n : (m,) modelled thrust per thruster, N.
     torque_sd_nm : prior sd of the external torque per axis, N m.
     source : the telemetry it came from, for error messages.
+    thruster_names : (m,) the thrusters' names, in the order of the columns (Cassini's
+        ``Z1 … Y4`` by default).
     """
 
     t: np.ndarray
@@ -112,14 +119,31 @@ class LeakInputs:
     thrust_n: np.ndarray
     torque_sd_nm: float
     source: str = "<telemetry>"
+    thruster_names: tuple[str, ...] = THRUSTER_NAMES
+
+    def __post_init__(self):
+        m = len(self.thruster_names)
+        shapes = {"impulse": (np.shape(self.impulse)[1:], (m,)),
+                  "q_matrix": (np.shape(self.q_matrix), (3, m)),
+                  "thrust_n": (np.shape(self.thrust_n), (m,))}
+        for name, (got, want) in shapes.items():
+            if tuple(got) != want:
+                raise ValueError(f"LeakInputs.{name} has shape {got}, not {want} for the "
+                                 f"{m} thrusters {', '.join(self.thruster_names)}")
+
+    @property
+    def hypotheses(self) -> tuple[str, ...]:
+        """``none`` and one leak per thruster, the order of the monitor's probabilities."""
+        return ("none",) + tuple(self.thruster_names)
 
 
 @dataclass(frozen=True)
 class LeakPosterior:
     """The running monitor's output.
 
-    t_check : (c,) times of the checks, s. prob : (c, 9) posterior probability of
-    ``HYPOTHESES`` (``none, Z1 … Y4``) given the data up to each check.
+    t_check : (c,) times of the checks, s. prob : (c, m + 1) posterior probability of
+    ``hypotheses`` (``none`` and the model's thrusters, e.g. ``none, Z1 … Y4``) given the data
+    up to each check.
     detection_time_s : first check with ``P(leak) ≥ p_detect`` (``None``: never).
     isolation_time_s : first check with one thruster's ``P ≥ p_detect`` (``None``: never), and
     ``thruster`` that thruster (``None``: none isolated).
@@ -128,6 +152,7 @@ class LeakPosterior:
     last check) given all the data, and ``torque_nm`` (3,) its mean torque, N m.
     onset_s, onset_sd_s : posterior mean and sd of its onset, s.
     noise_sd_nms : (3,) white-noise sd per axis, N m s.
+    hypotheses : the order of ``prob``'s columns (:attr:`LeakInputs.hypotheses`).
     """
 
     t_check: np.ndarray
@@ -143,6 +168,7 @@ class LeakPosterior:
     onset_s: float
     onset_sd_s: float
     noise_sd_nms: np.ndarray
+    hypotheses: tuple[str, ...] = HYPOTHESES
 
     @property
     def p_leak(self) -> np.ndarray:
@@ -153,7 +179,7 @@ class LeakPosterior:
         """JSON-able summary (the last check's probabilities, the detection)."""
         last = self.prob[-1]
         return {
-            "p_hypothesis": {h: float(p) for h, p in zip(HYPOTHESES, last)},
+            "p_hypothesis": {h: float(p) for h, p in zip(self.hypotheses, last)},
             "p_leak": float(1.0 - last[0]),
             "p_detect": self.p_detect,
             "detection_time_s": self.detection_time_s,
@@ -171,9 +197,9 @@ class LeakPosterior:
 
 
 def _impulses(tel: Telemetry, pulses: PulseLog | None, sc: Spacecraft) -> np.ndarray:
-    """Modelled impulses (n, 8), N s, from the first sample: the pulse log under the model's
+    """Modelled impulses (n, m), N s, from the first sample: the pulse log under the model's
     pulse shape (:func:`~cassini_bayes.physics.pulse.pulse_impulse_until`), else the telemetry's
-    on-times times the model thrust (Feldman & Lee Eq 17).
+    on-times, each times its thruster's model thrust (Feldman & Lee Eq 17).
 
     A pulse has delivered all of its impulse ``_TAIL_TAUS`` fall times after its end (the rest is
     below e⁻⁴⁰), so each sample sums the finished pulses (a cumulative sum) and evaluates the
@@ -184,17 +210,17 @@ def _impulses(tel: Telemetry, pulses: PulseLog | None, sc: Spacecraft) -> np.nda
         if tel.on_times is None:
             raise InputError("has neither on-times nor a pulse log; pass --pulses",
                              path=tel.source)
-        return np.asarray(impulse_from_on_times(tel.on_times, sc.thrust))
-    p = sc.pulse
+        return np.asarray(impulse_from_on_times(tel.on_times, sc.thrust_per_thruster))
+    p, thrust = sc.pulse, sc.thrust_per_thruster
     t_on, k, w = (np.asarray(a) for a in (pulses.t_on, pulses.thruster, pulses.width))
 
-    def delivered(dt, width):
+    def delivered(dt, width, which):
         return np.asarray(pulse_impulse_until(dt, width, p.tau_delay, p.tau_rise, p.tau_fall),
-                          float) * sc.thrust
+                          float) * thrust[which]
 
     end = t_on + w + p.tau_delay + _TAIL_TAUS * p.tau_fall
-    j = np.zeros((t.size, 8))
-    full = delivered(end - t_on, w)
+    j = np.zeros((t.size, thrust.size))
+    full = delivered(end - t_on, w, k)
     first_done = np.searchsorted(t, end, side="left")       # first sample after each pulse ends
     np.add.at(j, (first_done[first_done < t.size], k[first_done < t.size]),
               full[first_done < t.size])
@@ -203,7 +229,7 @@ def _impulses(tel: Telemetry, pulses: PulseLog | None, sc: Spacecraft) -> np.nda
     count = np.maximum(first_done - first, 0)
     rows = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
     which = np.repeat(np.arange(t_on.size), count)
-    np.add.at(j, (rows, k[which]), delivered(t[rows] - t_on[which], w[which]))
+    np.add.at(j, (rows, k[which]), delivered(t[rows] - t_on[which], w[which], k[which]))
     return j - j[:1]
 
 
@@ -221,8 +247,8 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
     q = spacecraft.moment_matrix
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
-    return LeakInputs(np.asarray(tel.t, float), r, j, q, np.full(8, float(spacecraft.thrust)),
-                      spacecraft.knowledge.torque_sd_nm, tel.source)
+    return LeakInputs(np.asarray(tel.t, float), r, j, q, spacecraft.thrust_per_thruster,
+                      spacecraft.knowledge.torque_sd_nm, tel.source, spacecraft.thruster_names)
 
 
 def _noise_sd(r: np.ndarray) -> np.ndarray:
@@ -279,14 +305,14 @@ class _Sums:
         t = inp.t - inp.t[0]
         n = t.size
         y, q = inp.residual, inp.q_matrix
-        # nuisance columns (n, 3 axes, p0): r_0 (3), T (3), δ_j Q[:, j] J_j (8)
+        # nuisance columns (n, 3 axes, p0): r_0 (3), T (3), δ_j Q[:, j] J_j (m)
         eye = np.eye(3)
         cols = np.concatenate([np.broadcast_to(eye, (n, 3, 3)), t[:, None, None] * eye[None],
                                q[None, :, :] * inp.impulse[:, None, :]], axis=2)
         # one nuisance prior precision per component of the torque's scale mixture
         self.prior_prec = [1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
                                        np.full(3, (scale * max(inp.torque_sd_nm, 1e-12)) ** 2),
-                                       np.full(8, max(eta, 1e-12) ** 2)]
+                                       np.full(q.shape[1], max(eta, 1e-12) ** 2)]
                            for scale, _ in TORQUE_SCALES]
         self.log_w = np.log([w for _, w in TORQUE_SCALES])
         self.t, self.y = t, y
@@ -296,7 +322,7 @@ class _Sums:
         self.n1, self.nt = _cum(cols), _cum(t[:, None, None] * cols)
         self.y1, self.yt = _cum(y), _cum(t[:, None] * y)
         self.c1, self.ct, self.ctt = _cum(np.ones(n)), _cum(t), _cum(t * t)
-        self.u = q * inp.thrust_n[None, :]              # (3, 8): torque per unit fraction, N m
+        self.u = q * inp.thrust_n[None, :]              # (3, m): torque per unit fraction, N m
 
     def noise_sd(self, c: int) -> np.ndarray:
         """White-noise sd per axis (N m s) from the data up to row ``c``: the larger of the
@@ -320,7 +346,7 @@ class _Sums:
         yh = self.yt[e] - self.yt[cell] - tr[:, None] * y1
         lu = lam[:, None] * self.u
         lu2 = np.einsum("ak,ak->k", lu, self.u)
-        g_p = np.einsum("ak,lap->lkp", lu, nh)          # Nᵀ Λ P, Nᵀ Λ O: (cells, 8, p0)
+        g_p = np.einsum("ak,lap->lkp", lu, nh)          # Nᵀ Λ P, Nᵀ Λ O: (cells, m, p0)
         g_o = np.einsum("ak,lap->lkp", lu, n1)
         z_p0 = np.einsum("ak,la->lk", lu, yh)           # Pᵀ Λ y, Oᵀ Λ y
         z_o0 = np.einsum("ak,la->lk", lu, y1)
@@ -481,7 +507,7 @@ def _segment_logsumexp(idx, v, size):
 @dataclass
 class _Check:
     """The evidence at one check: per cell (onset in ``[t_ref − width, t_ref)``), thruster,
-    torque component and fraction scale (axes ``(cells, 8, torques, scales)``), the Gram terms of
+    torque component and fraction scale (axes ``(cells, m, torques, scales)``), the Gram terms of
     the leak's columns ``P = F Q[:, k] (t − t_ref)₊`` and ``O = F Q[:, k] 1(t ≥ t_ref)`` and their
     scores, nuisances integrated; ``log_prior`` the torque components' posterior weights under
     no leak; ``rule`` the onset quadrature."""
@@ -522,10 +548,11 @@ class _Check:
         # every easy cell, and per thruster the hard cell of largest bound, exactly; then the
         # hard cells within rule.prune_nats of that thruster's evidence
         self.log_bf = np.full(self.const.shape, -np.inf)
-        hard = np.moveaxis(np.where(self.easy, -np.inf, upper), 1, 0).reshape(8, -1)
+        m = self.const.shape[1]
+        hard = np.moveaxis(np.where(self.easy, -np.inf, upper), 1, 0).reshape(m, -1)
         first = np.zeros(hard.shape, bool)
         top_k = np.argmax(hard, axis=1)
-        first[np.arange(8), top_k] = np.isfinite(hard[np.arange(8), top_k])
+        first[np.arange(m), top_k] = np.isfinite(hard[np.arange(m), top_k])
         first = np.moveaxis(first.reshape(np.moveaxis(upper, 1, 0).shape), 0, 1)
         self._integrate(self.easy | first)
         bound = (logsumexp(self.log_bf, axis=(0, 2, 3)) - self.rule.prune_nats
@@ -545,7 +572,7 @@ class _Check:
         return _nodes(f(self.b), f(self.g), f(self.r0), f(self.r1), f(self.easy), self.rule)
 
     def log_evidence(self) -> np.ndarray:
-        """(8,) log Bayes factor of each thruster's leak against none (onset uniform over the
+        """(m,) log Bayes factor of each thruster's leak against none (onset uniform over the
         data seen, fraction scales equally weighted)."""
         return logsumexp(self.log_bf, axis=(0, 2, 3)) - np.log(FRACTION_SCALES.size)
 
@@ -618,7 +645,8 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
     """Run the Bayesian monitor over a stretch, as it would run on board: the residual taken
     every ``sample_step_s`` (:data:`SAMPLE_STEP_S`); a check every ``check_step_s`` (and at the
     last sample) sees only the data up to it, the onset uniform over that part of the stretch;
-    ``prior_leak``: prior probability of a leak in the stretch. Detection: the first check with
+    ``prior_leak``: prior probability of a leak in the stretch, split evenly over the ``m``
+    thrusters. Detection: the first check with
     ``P(leak) ≥ p_detect``; isolation: the first with one thruster's ``P ≥ p_detect`` (that
     thruster is the answer). ``_rule``: the onset quadrature (a finer one measures its error)."""
     for name, flag, v in (("prior_leak", "--prior-leak", prior_leak),
@@ -641,14 +669,14 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
         raise InputError(f"has {n} rows {sample_step_s:g} s apart; the leak monitor needs at "
                          "least 3", path=inp.source)
     sums = _Sums(inp, eta, raw)
-    t = sums.t
+    t, m = sums.t, len(inp.thruster_names)
     checks = np.unique(np.r_[np.searchsorted(t, np.arange(check_step_s, t[-1], check_step_s)),
                              n - 1])
     checks = checks[checks >= 2]
     prob, det, iso = [], None, None
     for i, c in enumerate(checks):
         ev = sums.check(c, _rule)
-        log_post = np.r_[np.log1p(-prior_leak), np.log(prior_leak / 8.0) + ev.log_evidence()]
+        log_post = np.r_[np.log1p(-prior_leak), np.log(prior_leak / m) + ev.log_evidence()]
         prob.append(np.exp(log_post - logsumexp(log_post)))
         if det is None and 1.0 - prob[-1][0] >= p_detect:
             det = i
@@ -665,8 +693,8 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
         t_check=t_check, prob=prob, p_detect=p_detect,
         detection_time_s=None if det is None else float(t_check[det]),
         isolation_time_s=None if iso is None else float(t_check[iso]),
-        thruster=None if iso is None else THRUSTER_NAMES[k],
+        thruster=None if iso is None else inp.thruster_names[k],
         fraction_mean=fm, fraction_sd=fs, fraction_interval=(f05, f95),
         torque_nm=fm * sums.u[:, k], onset_s=float(inp.t[0] + om),
         onset_sd_s=float(np.sqrt(max(np.sum(weight * (onset - om) ** 2), 0.0))),
-        noise_sd_nms=sums.noise_sd(n - 1))
+        noise_sd_nms=sums.noise_sd(n - 1), hypotheses=inp.hypotheses)

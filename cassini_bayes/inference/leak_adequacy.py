@@ -34,14 +34,13 @@ from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHO
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation
 from cassini_bayes.inference.leak import (OFFSET_SD_NMS, TORQUE_SCALES, LeakInputs,
                                           LeakPosterior, _thinned)
-from cassini_bayes.physics.impulse import THRUSTER_NAMES
 
 __all__ = ["leak_adequacy", "nuisance_posterior"]
 
 
 def _design(t: np.ndarray, impulse: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """(n, 3, 14) the nuisance columns of the monitor: offset ``r_0`` (3), torque ``T`` (3),
-    thrust errors ``δ_j Q[:, j] J_j`` (8) (Lee Eq 10-11)."""
+    """(n, 3, 6 + m) the nuisance columns of the monitor: offset ``r_0`` (3), torque ``T`` (3),
+    thrust errors ``δ_j Q[:, j] J_j`` of the ``m`` thrusters (Lee Eq 10-11)."""
     n = t.size
     eye = np.eye(3)
     return np.concatenate([np.broadcast_to(eye, (n, 3, 3)), t[:, None, None] * eye[None],
@@ -51,20 +50,21 @@ def _design(t: np.ndarray, impulse: np.ndarray, q: np.ndarray) -> np.ndarray:
 def nuisance_posterior(cols: np.ndarray, y: np.ndarray, noise_sd: np.ndarray,
                        torque_sd_nm: float, eta: float, extra_sd=()):
     """Posterior of the monitor's nuisance parameters given rows ``y`` (n, 3) and design
-    ``cols`` (n, 3, 14 + e), under the component of the torque's prior mixture that the data
+    ``cols`` (n, 3, 6 + m + e), under the component of the torque's prior mixture that the data
     favour (the larger evidence; the mixture's mean would average two fits and fit neither);
-    ``extra_sd`` the prior sds of ``e`` more columns after the monitor's 14 (a leak's).
+    ``extra_sd`` the prior sds of ``e`` more columns after the monitor's 6 + m (a leak's).
 
-    Returns ``(mean (14 + e,), p_eff)``: the posterior mean and the effective number of
+    Returns ``(mean (6 + m + e,), p_eff)``: the posterior mean and the effective number of
     parameters (the trace of the hat matrix)."""
     lam = 1.0 / np.asarray(noise_sd, float) ** 2
     nn = np.einsum("iap,a,iaq->pq", cols, lam, cols)
     b = np.einsum("iap,a,ia->p", cols, lam, y)
     means, traces, log_z = [], [], []
+    n_thrusters = cols.shape[-1] - 6 - len(extra_sd)
     for (scale, weight) in TORQUE_SCALES:
         prec = 1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
                            np.full(3, (scale * max(torque_sd_nm, 1e-12)) ** 2),
-                           np.full(8, max(eta, 1e-12) ** 2), np.asarray(extra_sd) ** 2]
+                           np.full(n_thrusters, max(eta, 1e-12) ** 2), np.asarray(extra_sd) ** 2]
         a = np.diag(prec) + nn
         m = np.linalg.solve(a, b)
         means.append(m)
@@ -95,17 +95,16 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
     cols = _design(t, used.impulse, used.q_matrix)
     sd = np.asarray(post.noise_sd_nms, float)
     torque_sd_nm = used.torque_sd_nm
-    last = post.prob[-1]
+    last, names, p0 = post.prob[-1], used.thruster_names, cols.shape[-1]
     if np.argmax(last) > 0:      # a leak is the most probable answer: fit it with the rest
-        k = (THRUSTER_NAMES.index(post.thruster) if post.thruster
-             else int(np.argmax(last[1:])))
+        k = names.index(post.thruster) if post.thruster else int(np.argmax(last[1:]))
         torque = used.thrust_n[k] * used.q_matrix[:, k]                 # N m per unit fraction
         def fit_at(onset: float):
             leak = (np.maximum(used.t - onset, 0.0)[:, None] * torque[None, :])[..., None]
             c2 = np.concatenate([cols, leak], axis=2)
             m, p_eff = nuisance_posterior(c2, y, sd, torque_sd_nm, eta, extra_sd=(1.0,))
             e = y - np.einsum("iap,p->ia", c2, m)
-            return float(np.sum((e / sd[None, :]) ** 2)), m[:14], p_eff, e, onset, m[14]
+            return float(np.sum((e / sd[None, :]) ** 2)), m[:p0], p_eff, e, onset, m[p0]
 
         # the onset: a scan over ± two sample steps, then the best point refined within its
         # neighbours (the χ² is smooth in the onset between the rows)
@@ -118,7 +117,7 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
                                        options={"xatol": 1e-3})
         best = min((fit_at(x) for x in (grid[i], float(res.x))), key=lambda r: r[0])
         chi2, mean, p_eff, e, onset, frac = best
-        hyp = (f"a leak of {THRUSTER_NAMES[k]}, {100 * frac:.3g} % from {onset:.0f} s (the "
+        hyp = (f"a leak of {names[k]}, {100 * frac:.3g} % from {onset:.0f} s (the "
                f"monitor's estimate {100 * post.fraction_mean:.3g} % from {post.onset_s:.0f} s)")
     else:
         mean, p_eff = nuisance_posterior(cols, y, sd, torque_sd_nm, eta)
@@ -132,9 +131,9 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
                  + " N m s against the assumed noise " + ", ".join(f"{s_:.3g}" for s_ in sd))
     torque_sd = used.torque_sd_nm * np.sqrt(sum(w * s * s for s, w in TORQUE_SCALES))
     z = np.r_[np.abs(mean[3:6]) / max(torque_sd, 1e-300), np.abs(mean[6:]) / max(eta, 1e-300)]
-    names = [f"torque[{a}]" for a in "XYZ"] + [f"thrust_error[{n}]" for n in THRUSTER_NAMES]
+    labels = [f"torque[{a}]" for a in "XYZ"] + [f"thrust_error[{n}]" for n in names]
     j = int(np.argmax(z))
-    conflict = _check("prior_data_conflict", float(z[j]), PRIOR_CONFLICT_SD, names[j],
+    conflict = _check("prior_data_conflict", float(z[j]), PRIOR_CONFLICT_SD, labels[j],
                       f"torque {', '.join(f'{x * 1e6:.3g}' for x in mean[3:6])} µN m (prior sd "
                       f"{torque_sd * 1e6:.3g}); thrust errors up to "
                       f"{100 * np.max(np.abs(mean[6:])):.3g} % (prior sd {100 * eta:.3g} %), "

@@ -1,6 +1,7 @@
 """The thruster-leak report (``report.html`` of ``monitor leak``): the answer first — is a
-thruster leaking, which, since when, how much — beside Lee's threshold monitor and his
-requirement, then each hypothesis's probability against time, the adequacy verdict and the
+thruster leaking, which, since when, how much — beside Lee's threshold monitor (a "–" column
+where the thrusters are not Cassini's Eq 16 layout, to which it applies) and his requirement,
+then each hypothesis's probability against time, the adequacy verdict and the
 inputs.
 """
 
@@ -22,7 +23,8 @@ LEAK_NOTE = ("Self-checks of the Bayesian monitor's model on this stretch, under
 
 def leak_figure(post, lee, hypotheses) -> Figure:
     """Posterior probability of each hypothesis (``none`` and one leaking thruster each) at
-    every check, the alarm level, and the detection times of both monitors."""
+    every check, the alarm level, and the detection times of both monitors (``lee`` ``None``:
+    the Bayesian monitor's alone)."""
     from cassini_bayes.report.figures import CHAIN_COLORS, tidy_ticks
 
     fig = Figure(figsize=(11.0, 3.6))
@@ -41,7 +43,8 @@ def leak_figure(post, lee, hypotheses) -> Figure:
     ax.axhline(post.p_detect, color="firebrick", linewidth=0.8, linestyle=":",
                label=f"alarm level {post.p_detect:g}")
     for t, name, style in ((post.detection_time_s, "Bayesian detection", "-"),
-                           (lee.detection_time_s, "Lee's threshold detection", "-.")):
+                           (None if lee is None else lee.detection_time_s,
+                            "Lee's threshold detection", "-.")):
         if t is not None:
             ax.axvline(t / scale, color="#222222", linestyle=style, linewidth=0.9, label=name)
     ax.set_ylim(-0.02, 1.02)
@@ -71,7 +74,6 @@ def leak_report_html(res) -> str:
     (:class:`~cassini_bayes.api.LeakResult`): the answer table and the figure, each hypothesis,
     the adequacy verdict, the inputs."""
     from cassini_bayes import __version__
-    from cassini_bayes.inference.leak import HYPOTHESES
     from cassini_bayes.report.adequacy import adequacy_section
     from cassini_bayes.report.build import verdict_badges
     from cassini_bayes.report.figures import png_bytes
@@ -80,6 +82,12 @@ def leak_report_html(res) -> str:
 
     s, post, lee = res.summary, res.posterior, res.lee
     b, lee_s = s["bayes"], s["lee"]
+    hypotheses = post.hypotheses
+    lee_on = lee_s.get("applies", True)
+
+    def lee_cell(value):
+        return (value or "none") if lee_on else "–"
+
     leaking = b["detection_time_s"] is not None
     torque = np.asarray(b["torque_nm"], float)
     req_cells, req_cls = ["–", "–"], ["", ""]
@@ -90,16 +98,16 @@ def leak_report_html(res) -> str:
         req_cells = [f"{built:.3g} N m s (isolate before {ISOLATE_BEFORE_NMS:g} N m s, Lee §3.2)",
                      Raw(badge("pass" if ok else "FAIL", ok))]
         req_cls = ["good" if ok else "bad", ""]
-    most = max((h for h in HYPOTHESES if h != "none"), key=lambda h: b["p_hypothesis"][h])
+    most = max((h for h in hypotheses if h != "none"), key=lambda h: b["p_hypothesis"][h])
     who = b["thruster"] or most
     rows = [
         ["P(a leak in the stretch)", "–", f"{b['p_leak']:.4f}", "–", "–", "–"],
         ["leaking thruster", "–",
          f"{b['thruster'] or 'none isolated'} (P {b['p_hypothesis'][who]:.4f})",
-         lee_s["thruster"] or "none", "–", "–"],
-        ["detection time", "s", _t(b["detection_time_s"]), _t(lee_s["detection_time_s"]),
-         "–", "–"],
-        ["detection axis", "–", "–", lee_s["axis"] or "–", "–", "–"],
+         lee_cell(lee_s.get("thruster")), "–", "–"],
+        ["detection time", "s", _t(b["detection_time_s"]),
+         _t(lee_s["detection_time_s"]) if lee_on else "–", "–", "–"],
+        ["detection axis", "–", "–", (lee_s["axis"] or "–") if lee_on else "–", "–", "–"],
         ["isolation time", "s", _t(b["isolation_time_s"]), "–", *req_cells],
         [f"leak fraction of {who}'s thrust", "%",
          _pm(100 * b["fraction_mean"], 100 * b["fraction_sd"]), "–", "–", "–"],
@@ -125,19 +133,21 @@ def leak_report_html(res) -> str:
                          f"{s['command']} · cassini-bayes {__version__} · [{s['t_start_s']:.0f}, "
                          f"{s['t_end_s']:.0f}] s · {b['n_checks']} checks · alarm at P ≥ "
                          f"{b['p_detect']:g}", s.get("warnings") or [])
-    fig = figure(png_bytes(leak_figure(post, lee, HYPOTHESES)),
+    fig = figure(png_bytes(leak_figure(post, lee, hypotheses)),
                  "Posterior probability of each hypothesis given the data up to each check "
                  "(thrusters that never reach 1 % not drawn), the alarm level, and when each "
                  "monitor detected the leak.", alt="leak probabilities")
+    lee_text = (f"Lee's monitor: the residual momentum against R_T = "
+                f"{lee_s['threshold_nms']:g} N m s within T_limit = "
+                f"{lee_s['t_limit_s'] / 3600:g} h, thrust variation η = {lee_s['eta']:g} "
+                "(Lee §3.2, Eq 11). " if lee_on else f"{lee_s['reason']} (its column: –). ")
     sections = [
         section("Answer", [answer, paragraph(
-            "The Bayesian monitor: the posterior of no leak or a leak of one thruster from an "
-            "unknown onset (docs/leak.md); detection when P(leak) reaches the alarm level, "
-            "isolation when one thruster's probability does. Lee's monitor: the residual "
-            f"momentum against R_T = {lee_s['threshold_nms']:g} N m s within T_limit = "
-            f"{lee_s['t_limit_s'] / 3600:g} h, thrust variation η = {lee_s['eta']:g} (Lee §3.2, "
-            "Eq 11). Requirement: the momentum the leak's torque builds up on its worst axis "
-            "between the onset and the isolation.",
+            "The Bayesian monitor: the posterior of no leak or a leak of one of the model's "
+            f"{len(hypotheses) - 1} thrusters from an unknown onset (docs/leak.md); detection "
+            "when P(leak) reaches the alarm level, isolation when one thruster's probability "
+            "does. " + lee_text + "Requirement: the momentum the leak's torque builds up on its "
+            "worst axis between the onset and the isolation.",
             note=True), fig], id="answer"),
         adequacy_section(s, LEAK_NOTE),
         section("Hypotheses", per, id="hypotheses"),
