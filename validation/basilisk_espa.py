@@ -514,6 +514,7 @@ def run_bias_case(truth: Truth, d: Path, a, log) -> dict:
     res.update(rows=rows, diagnostics=dg, adequacy=s.get("adequacy"),
                thrust_design=s.get("thrust_design"), warnings=s.get("warnings"),
                tau={k: s["parameters"].get(k) for k in ("tau_delay", "tau_rise", "tau_fall")},
+               nuisance=s.get("nuisance"),
                coverage=float(np.mean([r["covered"] for r in rows])) if rows else None,
                max_abs_thrust_error_pct=max((abs(r["rel_error_pct"]) for r in rows
                                              if "rel_error_pct" in r), default=None))
