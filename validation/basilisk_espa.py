@@ -249,7 +249,8 @@ def fly_bias(truth: Truth, out: Path, seed: int, noise: dict, dt_tel: float = 1.
 
     Thrusters from the model's ``[[thruster]]`` entries, steady thrust ``F_SCALES`` × the file's,
     at the file's positions taken from the true centre of mass (``COM_OFFSET_M`` off the file's),
-    telemetry every ``dt_tel`` s (a multiple of the 0.125 s control step), Basilisk ramp tables at the file's ``[pulse]`` constants (Basilisk's own on/off model, see
+    telemetry every ``dt_tel`` s (a multiple of the 0.125 s control step), Basilisk ramp tables
+    at the file's ``[pulse]`` constants (Basilisk's own on/off model, see
     ``basilisk_crosscheck.ramp_tables``). Controller per axis: ``s = θ + τ ω`` against a
     dead-band, the thruster pair whose torque lies best along the axis (``thruster_pairs`` on the
     file's moment matrix), widths in 1/8 s from 125 ms, a minimum off-time; the dead-band and
