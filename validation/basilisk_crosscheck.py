@@ -459,10 +459,15 @@ def single_pulse_check(model, widths=(0.125, 0.5), steps=(0.005, 0.001)):
     return rows
 
 
-def thruster_configs(model, f_true_n=F_TRUE, taus=None):
-    """Basilisk thrusters at the model file's positions (from its centre of mass) and directions,
-    steady thrust ``f_true_n`` (N), ramps of :func:`ramp_tables` at ``taus`` (default TAU)."""
-    pos = np.stack([s.position for s in model.thrusters]) - np.asarray(model.com_m)[None, :]
+def thruster_configs(model, f_true_n=F_TRUE, taus=None, com_offset_m=(0.0, 0.0, 0.0)):
+    """Basilisk thrusters at the model file's positions and directions, steady thrust
+    ``f_true_n`` (N), ramps of :func:`ramp_tables` at ``taus`` (default TAU).
+
+    Positions are taken from the TRUE centre of mass (Basilisk's body origin, ``r_BcB_B = 0``):
+    the file's centre of mass plus ``com_offset_m`` (m, true minus the file's).
+    """
+    com_true = np.asarray(model.com_m, float) + np.asarray(com_offset_m, float)
+    pos = np.stack([s.position for s in model.thrusters]) - com_true[None, :]
     dirs = np.stack([s.direction for s in model.thrusters])
     on, off = ramp_tables(taus)
     cfgs = []

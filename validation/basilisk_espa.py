@@ -68,8 +68,9 @@ GYRO_SCALE_FRAC = np.array([0.4, -0.6, 0.2])             # × gyro.scale_factor_
 class Truth:
     """The spacecraft Basilisk flies: the model file with the departures above."""
 
-    def __init__(self, model, tilted_wheel: str):
+    def __init__(self, model, tilted_wheel: str, tilt_deg=TILT_DEG):
         self.model = model
+        self.tilt_deg = tuple(float(v) for v in tilt_deg)
         i = np.array(model.inertia, dtype=float)
         i[np.diag_indices(3)] *= MOMENT_SCALE
         for (r, c), f in zip(((0, 1), (0, 2), (1, 2)), PRODUCT_OFFSET_FRAC):
@@ -81,7 +82,7 @@ class Truth:
         for k, w in enumerate(model.wheels):
             axis = np.asarray(w.axis, float)
             if w.name == self.tilted_wheel:
-                axis = tilted_axis(axis, np.radians(TILT_DEG))
+                axis = tilted_axis(axis, np.radians(self.tilt_deg))
             self.wheels[w.name] = (axis, w.inertia * WHEEL_SCALE[k % len(WHEEL_SCALE)])
         ga = np.asarray(model.wheel(tilted_wheel).axis, float)
         ta = self.wheels[self.tilted_wheel][0]
@@ -235,14 +236,21 @@ def fly(truth: Truth, scen: dict, out: Path, seed: int, case: str) -> dict:
 # change of about 0.6 of one wheel's capacity on the ESPA bus).
 BIAS_TARGET_FRAC = (-0.42, -0.17, 0.08, -0.25)
 BIAS_TORQUE_FRAC = 0.1
-F_SCALE = 1.04                                           # true steady thrust / the file's
+# True steady thrust / the file's, per thruster (cycled over the model's thrusters): ±4 %, the
+# spread of the package's scenario pulses_espa_bus. The true centre of mass is 1 cm from the
+# file's (m, true minus the file's; the offset of models/espa_bus_com_offset.toml, 2 × the ESPA
+# file's sd_m): Basilisk's thruster positions are taken from the true centre of mass.
+F_SCALES = (1.03, 0.97, 1.04, 0.96, 0.98, 1.02, 0.965, 1.035)
+COM_OFFSET_M = (0.006, -0.008, 0.0)
 
 
-def fly_bias(truth: Truth, out: Path, seed: int, noise: dict) -> dict:
+def fly_bias(truth: Truth, out: Path, seed: int, noise: dict, dt_tel: float = 1.0) -> dict:
     """A wheel-biasing event under a dead-band RCS controller, in the files ``fit thrust`` reads.
 
-    Thrusters from the model's ``[[thruster]]`` entries, steady thrust ``F_SCALE`` × the file's,
-    Basilisk ramp tables at the file's ``[pulse]`` constants (Basilisk's own on/off model, see
+    Thrusters from the model's ``[[thruster]]`` entries, steady thrust ``F_SCALES`` × the file's,
+    at the file's positions taken from the true centre of mass (``COM_OFFSET_M`` off the file's),
+    telemetry every ``dt_tel`` s (a multiple of the 0.125 s control step), Basilisk ramp tables
+    at the file's ``[pulse]`` constants (Basilisk's own on/off model, see
     ``basilisk_crosscheck.ramp_tables``). Controller per axis: ``s = θ + τ ω`` against a
     dead-band, the thruster pair whose torque lies best along the axis (``thruster_pairs`` on the
     file's moment matrix), widths in 1/8 s from 125 ms, a minimum off-time; the dead-band and
@@ -264,9 +272,10 @@ def fly_bias(truth: Truth, out: Path, seed: int, noise: dict) -> dict:
     width_gain, wmax, min_off, quantum = 0.5 / deadband, 0.375, 1.0, 0.125
     taus = {"tau_delay": model.pulse.tau_delay, "tau_rise": model.pulse.tau_rise,
             "tau_fall": model.pulse.tau_fall}
-    f_true = F_SCALE * np.asarray(model.thrust_per_thruster)
-    cfgs = [bx.thruster_configs(model, f, taus)[k] for k, f in enumerate(f_true)]
-    duration, dt_ctrl, dt_dyn, dt_tel, t_bias = 360.0, 0.125, 0.002, 1.0, 60.0
+    scales = np.array([F_SCALES[k % len(F_SCALES)] for k in range(len(model.thrusters))])
+    f_true = scales * np.asarray(model.thrust_per_thruster)
+    cfgs = [bx.thruster_configs(model, f, taus, COM_OFFSET_M)[k] for k, f in enumerate(f_true)]
+    duration, dt_ctrl, dt_dyn, t_bias = 360.0, 0.125, 0.002, 60.0
     q0 = (0.05, -0.1, 0.2, 0.9733961166965892)
     sigma0 = rbk.EP2MRP([q0[3], q0[0], q0[1], q0[2]])
     c0 = rbk.MRP2C(sigma0)
@@ -313,7 +322,10 @@ def fly_bias(truth: Truth, out: Path, seed: int, noise: dict) -> dict:
                 m = (tt > t_on) & (tt <= t_on + width + 1.0)
                 delivered.setdefault(f"{width:.3f}", []).append(
                     float(np.sum(f[m]) * dt_dyn / f_true[j]))
-    info = {"case": "bias", "model": model.name, **truth.as_dict(), "F_n": f_true.tolist(),
+    info = {"case": "bias", "model": model.name, **truth.as_dict(),
+            "F_n": dict(zip(tnames, f_true.tolist())), "com_offset_m": list(COM_OFFSET_M),
+            "sample_period_s": dt_tel,
+            "pulses_per_thruster": {n: sum(p[1] == n for p in pulses) for n in tnames},
             **taus, "tau_note": "Basilisk ramp-table constants (delay + first-order rise/decay),"
             " not Feldman & Lee's §V profile; Basilisk skips the table's delay",
             "wheel_targets_rpm": (targets * RPM).tolist(), "n_pulses": len(pulses),
@@ -399,7 +411,7 @@ def scenario_at_truth(plan_scenario: Path, truth: Truth, model_path: Path, out: 
     tr["inertia"] = {k: float(v) for k, v in bx.inertia_dict(truth.inertia).items()}
     tr["wheel_inertia_errors"] = [WHEEL_SCALE[k % len(WHEEL_SCALE)] - 1.0
                                   for k in range(len(model.wheels))]
-    tr["wheel_axis_tilt_deg"] = {truth.tilted_wheel: list(TILT_DEG)}
+    tr["wheel_axis_tilt_deg"] = {truth.tilted_wheel: list(truth.tilt_deg)}
     tr["external_torque_inertial_nm"] = truth.torque_n.tolist()
     s["noise"]["gyro_bias_rad_s"] = truth.gyro_bias.tolist()
     s["noise"]["gyro_scale_factor"] = truth.gyro_scale.tolist()
@@ -440,12 +452,46 @@ def compare_with_plan(plan_dir: Path, scen_path: Path, fit: Path, d: Path, truth
     return {"plan_vs_achieved": rows, "plan_slews": plan_s["slews"]}
 
 
-def run_bias_case(truth: Truth, d: Path, a, sampler, log) -> dict:
-    """Fly the biasing event, ``check`` its files, and try ``fit thrust`` on them."""
+def thrust_rows(summary: dict, info: dict) -> list:
+    """Estimate vs Basilisk's truth for every thrust entry ``fit thrust --mode thruster`` reports.
+
+    Entries: ``F[<name>]`` of each identified thruster, ``F_combination[<label>]`` of each
+    identified combination (truth ``Σ w F_true``, the design's weights in newtons) and the
+    centre-of-mass offset ``com_x/y/z`` (truth ``COM_OFFSET_M``). The time constants are not
+    entries: Basilisk's ramp (delay skipped, first-order rise and decay) is not Feldman & Lee's
+    §V profile, so it has no true ``τ`` of the fit's model.
+    """
+    params, design = summary["parameters"], summary.get("thrust_design") or {}
+    f_true = info["F_n"]
+    entries = [(f"F[{n}]", f_true[n], "thrust") for n in design.get("identified", [])]
+    entries += [(f"F_combination[{c['label']}]",
+                 sum(w * f_true[n] for n, w in c["weights"].items()), "combination")
+                for c in design.get("combinations", [])]
+    entries += [(n, v, "com") for n, v in zip(("com_x", "com_y", "com_z"), info["com_offset_m"])]
+    rows = []
+    for name, true, kind in entries:
+        p = params.get(name)
+        if p is None:
+            continue
+        err = p["mean"] - true
+        row = {"param": name, "kind": kind, "truth": true, "mean": p["mean"], "sd": p["sd"],
+               "q05": p["q05"], "q95": p["q95"], "covered": p["q05"] <= true <= p["q95"],
+               "error": err, "r_hat": p.get("r_hat"), "contraction": p.get("contraction")}
+        if kind != "com":
+            row["rel_error_pct"] = 100.0 * err / true
+            row["within_3pct"] = abs(err) <= 0.03 * abs(true)
+        rows.append(row)
+    return rows
+
+
+def run_bias_case(truth: Truth, d: Path, a, log) -> dict:
+    """Fly the biasing event, ``check`` its files, fit ``fit thrust --mode thruster`` on them
+    (sampler ``--bias-sampler``, default the CLI's) and compare with Basilisk's truth."""
     t1 = time.time()
-    info = fly_bias(truth, d, a.seed, read_scenario(a.slews_scenario)["noise"])
-    print(f"[bias] Basilisk flew a biasing event ({info['n_pulses']} pulses, dead-band "
-          f"{1e3 * info['deadband_rad']:.1f} mrad) in {time.time() - t1:.0f} s; impulse per "
+    info = fly_bias(truth, d, a.seed, read_scenario(a.slews_scenario)["noise"], a.bias_period)
+    print(f"[bias] Basilisk flew a biasing event ({info['n_pulses']} pulses "
+          f"{info['pulses_per_thruster']}, dead-band {1e3 * info['deadband_rad']:.1f} mrad, "
+          f"telemetry every {a.bias_period:g} s) in {time.time() - t1:.0f} s; impulse per "
           f"newton by width: " + ", ".join(f"{w} s x{v['count']}: {v['basilisk_s']:.4f} s"
                                           for w, v in info["impulse_per_newton_by_width"].items()))
     files = [d / "telemetry.csv", "--pulses", d / "pulses.csv", "--spacecraft", a.model]
@@ -454,12 +500,38 @@ def run_bias_case(truth: Truth, d: Path, a, sampler, log) -> dict:
     res = {"truth": info, "check_exit": rc}
     if a.no_fit:
         return res
-    rc, text = bx.cli("fit", "thrust", "--telemetry", *files, "--out", d / "fit", *sampler,
-                      log=log)
-    res["fit_exit"] = rc
-    print(f"[bias] fit thrust exit {rc}: {text[-600:]}")
-    if (d / "fit" / "summary.json").exists():
-        res["summary"] = json.loads((d / "fit" / "summary.json").read_text())
+    t1 = time.time()
+    rc, text = bx.cli("fit", "thrust", "--telemetry", *files, "--mode", "thruster", "--out",
+                      d / "fit", *a.bias_sampler.split(), "--seed", a.seed, "--force", log=log)
+    res.update(fit_exit=rc, fit_wall_s=time.time() - t1,
+               fit_command_sampler=a.bias_sampler or "CLI defaults")
+    print(f"[bias] fit thrust --mode thruster exit {rc} ({res['fit_wall_s']:.0f} s)")
+    if not (d / "fit" / "summary.json").exists():
+        print(text[-2000:])
+        return res
+    s = json.loads((d / "fit" / "summary.json").read_text())
+    rows = thrust_rows(s, info)
+    dg = s["diagnostics"]
+    res.update(rows=rows, diagnostics=dg, adequacy=s.get("adequacy"),
+               thrust_design=s.get("thrust_design"), warnings=s.get("warnings"),
+               tau={k: s["parameters"].get(k) for k in ("tau_delay", "tau_rise", "tau_fall")},
+               nuisance=s.get("nuisance"),
+               coverage=float(np.mean([r["covered"] for r in rows])) if rows else None,
+               max_abs_thrust_error_pct=max((abs(r["rel_error_pct"]) for r in rows
+                                             if "rel_error_pct" in r), default=None))
+    td = s.get("thrust_design") or {}
+    print(f"\n== fit thrust --mode thruster (Basilisk ESPA bias, {a.bias_period:g} s telemetry)\n"
+          f"   design: rank {td.get('rank')} of {td.get('parameters')}, identified "
+          f"{td.get('identified')}, combinations {[c['label'] for c in td.get('combinations', [])]}"
+          f", not fired {td.get('not_fired')}, com contraction {td.get('com_contraction')}")
+    for r in rows:
+        e = (f"{r['rel_error_pct']:+.2f} %" if "rel_error_pct" in r
+             else f"{1e3 * r['error']:+.2f} mm")
+        print(f"   {r['param']:>34} truth {r['truth']:.5g} mean {r['mean']:.5g} sd {r['sd']:.3g} "
+              f"error {e} covered {r['covered']} r_hat {r['r_hat']}")
+    print(f"   coverage {res['coverage']}; max |thrust error| {res['max_abs_thrust_error_pct']} %; "
+          f"divergences {dg.get('divergences')}, max r_hat {dg.get('max_r_hat')}, converged "
+          f"{dg.get('converged')}; adequacy ok {(s.get('adequacy') or {}).get('ok')}")
     return res
 
 
@@ -473,6 +545,10 @@ def main(argv=None):
     ap.add_argument("--axis-scenario", type=Path,
                     default=ROOT / "experiments" / "scenarios" / "wheel_axis_espa_bus.toml")
     ap.add_argument("--wheel", default="RW2", help="the wheel whose axis is 1° off and fitted")
+    ap.add_argument("--tilt-deg", default=",".join(f"{v:g}" for v in TILT_DEG),
+                    help="the --wheel's true tilt along wheel_tilt_basis (deg, 'u1,u2'); the "
+                    "bias case's thrust fit holds the axes to the file's axis_sd_deg, so fly it "
+                    "inside that knowledge (e.g. 0.16,-0.12: 0.2° on the ESPA bus)")
     ap.add_argument("--limits", type=Path,
                     default=ROOT / "experiments" / "limits" / "espa_bus.toml")
     ap.add_argument("--plan", type=Path, default=None,
@@ -484,11 +560,15 @@ def main(argv=None):
     ap.add_argument("--draws", type=int, default=1000)
     ap.add_argument("--plan-sampler", default="",
                     help="sampler arguments of the plan case's fit (default: the CLI's defaults)")
+    ap.add_argument("--bias-sampler", default="",
+                    help="sampler arguments of the bias case's fit (default: the CLI's defaults)")
+    ap.add_argument("--bias-period", type=float, default=1.0,
+                    help="telemetry sample period of the bias case (s, a multiple of 0.125)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-fit", action="store_true", help="simulate and check only")
     a = ap.parse_args(argv)
     model = load_spacecraft(a.model)
-    truth = Truth(model, a.wheel)
+    truth = Truth(model, a.wheel, [float(v) for v in a.tilt_deg.split(",")])
     print(f"cassini_bayes {cassini_bayes.__version__}; model {model.name}; truth: "
           f"{json.dumps(bx.inertia_dict(truth.inertia))}; {truth.tilted_wheel} "
           f"{truth.tilt_angle_deg:.3f}° off the file")
@@ -511,7 +591,9 @@ def main(argv=None):
                     continue
             scen_path = plan_dir / "scenario.toml"
         elif case == "bias":
-            results[case] = run_bias_case(truth, d, a, sampler, log)
+            results[case] = run_bias_case(truth, d, a, log)
+            (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
+            (a.out / "commands.log").write_text("\n\n".join(log))
             continue
         else:
             scen_path = a.slews_scenario if case == "slews" else a.axis_scenario
