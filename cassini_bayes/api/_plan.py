@@ -305,15 +305,9 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
 
 
 @dataclass(frozen=True)
-class PlanResult:
-    """A planned calibration (``cassini-bayes plan inertia``).
-
-    Attributes
-    ----------
-    plan : :class:`~cassini_bayes.plan.planner.InertiaPlan`: the scenario dict, its predicted
-        posterior and the comparison's.
-    config : inputs and options (``config.toml``).
-    """
+class _PlannedRun:
+    """What a planner returns: the plan, its ``config.toml`` and ``summary.json``, and the run
+    directory ``save`` writes (a subclass gives the report and the scenario's header)."""
 
     plan: Any
     config: dict
@@ -331,11 +325,41 @@ class PlanResult:
         return list(self._summary["warnings"])
 
     def summary(self) -> dict:
-        """``summary.json``: the slews, the predicted posterior of the plan and of the
-        comparison, the improvement, the limits used and the search."""
+        """``summary.json`` (a copy)."""
         import copy
 
         return copy.deepcopy(self._summary)
+
+    def scenario_toml(self) -> str:
+        raise NotImplementedError
+
+    def _report(self) -> str:
+        raise NotImplementedError
+
+    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+        """Write ``scenario.toml`` (the plan), ``summary.json``, ``config.toml`` and
+        ``report.html`` (the manoeuvre against time, the limits as lines, the prediction beside
+        the comparison's) into ``out``, atomically."""
+        files = {"scenario.toml": self.scenario_toml(), "report.html": self._report()}
+        if self.plan.baseline_scenario is not None:
+            import tomli_w
+
+            files["papers_scenario.toml"] = tomli_w.dumps(self.plan.baseline_scenario)
+        return _write_dir(out, force=force, files=files, summary=self._summary,
+                          config=self.config, inputs=self._inputs)
+
+
+@dataclass(frozen=True)
+class PlanResult(_PlannedRun):
+    """A planned calibration (``cassini-bayes plan inertia``).
+
+    Attributes
+    ----------
+    plan : :class:`~cassini_bayes.plan.planner.InertiaPlan`: the scenario dict, its predicted
+        posterior and the comparison's.
+    config : inputs and options (``config.toml``).
+    """
+
 
     def table(self) -> str:
         """The printed tables of the plan and its comparison."""
@@ -351,20 +375,10 @@ class PlanResult:
                 f"{self.plan.limits.name}, target {self.plan.target}\n")
         return head + tomli_w.dumps(self.plan.scenario)
 
-    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``scenario.toml`` (the plan), ``summary.json``, ``config.toml`` and
-        ``report.html`` (the manoeuvre against time, the limits as lines, the predicted sd
-        beside the comparison) into ``out``, atomically."""
+    def _report(self) -> str:
         from cassini_bayes.report.plan import plan_report
 
-        files = {"scenario.toml": self.scenario_toml(),
-                 "report.html": plan_report(self._summary, self.plan)}
-        if self.plan.baseline_scenario is not None:
-            import tomli_w
-
-            files["papers_scenario.toml"] = tomli_w.dumps(self.plan.baseline_scenario)
-        return _write_dir(out, force=force, files=files, summary=self._summary,
-                          config=self.config, inputs=self._inputs)
+        return plan_report(self._summary, self.plan)
 
 
 def _plan_warnings(plan: Any, goal: float | None) -> list[str]:
@@ -480,7 +494,7 @@ def plan_inertia(spacecraft: PathArg, limits: PathArg, *,
 
 
 @dataclass(frozen=True)
-class WheelAxisPlanResult:
+class WheelAxisPlanResult(_PlannedRun):
     """A planned wheel-axis calibration (``cassini-bayes plan wheel-axis``).
 
     Attributes
@@ -490,27 +504,6 @@ class WheelAxisPlanResult:
     config : inputs and options (``config.toml``).
     """
 
-    plan: Any
-    config: dict
-    _summary: dict = field(repr=False)
-    _inputs: tuple[Path, ...] = field(default=(), repr=False)
-
-    @property
-    def scenario(self) -> dict:
-        """The plan as a scenario dict (``scenario.toml``)."""
-        return self.plan.scenario
-
-    @property
-    def warnings(self) -> list[str]:
-        """Lines on what the plan cannot reach or does not respect."""
-        return list(self._summary["warnings"])
-
-    def summary(self) -> dict:
-        """``summary.json``: the choice, the slews and windows, the predicted posterior of the
-        plan and of the comparison, the improvement, the limits used and the search."""
-        import copy
-
-        return copy.deepcopy(self._summary)
 
     def table(self) -> str:
         """The printed tables of the plan and its comparison."""
@@ -532,20 +525,10 @@ class WheelAxisPlanResult:
                 f"{window_options(self.plan.prediction.pairs)}\n")
         return head + tomli_w.dumps(self.plan.scenario)
 
-    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``scenario.toml`` (the plan), ``summary.json``, ``config.toml`` and
-        ``report.html`` (the manoeuvre against time, the limits as lines, the predicted spread
-        beside the comparison's) into ``out``, atomically."""
+    def _report(self) -> str:
         from cassini_bayes.report.plan_axis import axis_plan_report
 
-        files = {"scenario.toml": self.scenario_toml(),
-                 "report.html": axis_plan_report(self._summary, self.plan)}
-        if self.plan.baseline_scenario is not None:
-            import tomli_w
-
-            files["papers_scenario.toml"] = tomli_w.dumps(self.plan.baseline_scenario)
-        return _write_dir(out, force=force, files=files, summary=self._summary,
-                          config=self.config, inputs=self._inputs)
+        return axis_plan_report(self._summary, self.plan)
 
 
 @jax_entry
