@@ -57,8 +57,8 @@ SYSTEMS = ("pkg_cold", "pkg_warm", "pkg_robust_warm", "pymc_cold", "pymc_warm", 
            "numpyro", "pymc_same", "nutpie_same", "numpyro_same")
 SETTINGS = {"chains": 4, "warmup": 1000, "draws": 1000}
 
-# ``cassini-bayes ARGS`` in-process as the console script runs it, timing the sampler (``run_nuts``) and the JAX trace, lower
-# and compile/load durations that fall inside it
+# ``cassini-bayes ARGS`` in-process as the console script runs it, timing the sampler
+# (``run_nuts``) and the JAX trace, lower and compile/load durations that fall inside it
 _PKG_CHILD = """
 import json, sys, time
 t_start = time.perf_counter()
