@@ -15,7 +15,9 @@ not the model. :func:`draw_open_world` draws them instead
   thrust fit does not);
 * and, with ``draw_inertia`` (thrust and RWA4 fits, which take the inertia from the model file's
   knowledge), a true inertia uniform on the model file's ``±moi_uncertainty`` moments and
-  ``±poi_uncertainty`` products about its prediction.
+  ``±poi_uncertainty`` products about its prediction;
+* and, with ``draw_thrusters`` (per-thruster thrust fits), each thruster's thrust, the valve
+  time constants and the centre of mass's offset.
 
 Everything drawn is in :attr:`OpenWorld.record` (JSON-ready, ``truth.json`` style). The errors the
 simulator knows go into the scenario dict's ``[truth]``, ``[noise]`` and ``[flex_mode]`` keys
@@ -49,6 +51,8 @@ WIDEN = 1.5
 """Default ratio of a drawn error's sd to the fit's prior sd."""
 SLIP_PROB = 0.002
 """Chance that a telemetry sample is stale: it repeats its previous or next sample's data."""
+THRUST_SPREAD = 0.05
+"""Half-width of the true thrusts' uniform spread about their nominal, a fraction."""
 FLEX_FREQ_HZ = (0.1, 1.0)        # Cassini's RPWS antennas 0.13 Hz, magnetometer boom 0.7 Hz
 FLEX_DAMPING = (0.002, 0.01)     # ζ 0.2-1 % (Feldman & Lee §II)
 FLEX_SHARE = (1e-3, 7e-3)        # δᵀ I⁻¹ δ; Cassini's |δ|² 5-40 kg m² (the `_real` scenarios 14)
@@ -127,6 +131,28 @@ def _inertia(rng, prior, record: dict) -> dict[str, float]:
     raise InputError("no physical inertia in 100 draws from the model file's knowledge box")
 
 
+def _thrusters(rng, prior, widen: float, record: dict) -> dict[str, Any]:
+    """The thrusters' truth: each steady thrust uniform on ±:data:`THRUST_SPREAD` of its
+    nominal (a new set's acceptance-test spread; the fit's log-thrust prior is far wider), each
+    valve time constant uniform on the model file's test range, and the centre of mass off the
+    model file's by a Laplace draw per axis of sd ``widen`` × ``[center_of_mass] sd_m``."""
+    if not prior.thrusters:
+        raise InputError(f"the model {prior.name!r} has no thrusters to draw")
+    f0 = prior.thrust_per_thruster
+    f = f0 * (1.0 + rng.uniform(-THRUST_SPREAD, THRUST_SPREAD, f0.size))
+    taus = {k: float(rng.uniform(*getattr(prior.pulse, f"{k}_range")))
+            for k in ("tau_delay", "tau_rise", "tau_fall")}
+    com = draw_law(rng, "laplace", widen * prior.com_sd_m, 3)
+    record["thrusters"] = {"law": f"uniform ±{THRUST_SPREAD:g} of nominal",
+                           "names": [t.name for t in prior.thrusters], "values": f.tolist(),
+                           "tau_law": "uniform on the model file's range", **taus,
+                           "center_of_mass_offset_m": {"law": "laplace",
+                                                       "sd": widen * prior.com_sd_m,
+                                                       "values": com.tolist()}}
+    return {"thrust_n": f.tolist(), "center_of_mass_offset_m": com.tolist(),
+            **{f"{k}_s": v for k, v in taus.items()}}
+
+
 def _flex(rng, inertia: np.ndarray, dt_s: float, record: dict) -> dict:
     """A flexible mode: log-uniform frequency and damping, an isotropic coupling direction with
     the share of the inertia it carries, ``δᵀ I⁻¹ δ``, uniform on :data:`FLEX_SHARE`: relative
@@ -146,7 +172,7 @@ def _flex(rng, inertia: np.ndarray, dt_s: float, record: dict) -> dict:
 def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
                     widen: float = WIDEN, draw_inertia: bool = False,
                     solved_wheel: str | None = None, torque_sd_nm: float | None = None,
-                    slip_prob: float = SLIP_PROB) -> OpenWorld:
+                    slip_prob: float = SLIP_PROB, draw_thrusters: bool = False) -> OpenWorld:
     """Draw an open-world truth for the scenario ``base`` (see the module docstring).
 
     base : scenario dict (as read from TOML) or a scenario name/path; its own sensor-error,
@@ -159,6 +185,9 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
         the prior model's ``[torque_knowledge] sd_nm``, the robust fits' prior sd); the inertial
         torque also drifts, by up to this much over the run (unmodelled).
     slip_prob : chance per sample of a stale sample (±1 sample slip).
+    draw_thrusters : also draw the thrusters' truth (:func:`_thrusters`: each thruster's thrust,
+        the valve time constants and the centre of mass), for per-thruster thrust fits. Drawn
+        after every other effect, so the other draws do not depend on it.
     """
     rng = np.random.default_rng(rng) if not isinstance(rng, np.random.Generator) else rng
     d = base_scenario(base)
@@ -208,6 +237,8 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     slip[-1] = min(slip[-1], 0)
     rec["slips"] = {"prob": slip_prob, "index": np.flatnonzero(slip).tolist(),
                     "shift": slip[slip != 0].tolist()}
+    if draw_thrusters:
+        truth.update(_thrusters(rng, prior, widen, rec))
     return OpenWorld(d, rec, tt, slip)
 
 
