@@ -31,9 +31,9 @@ Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``d
 ``day028_first_order`` (first-order valve); per thruster ``espa_bias`` (the ESPA bus's RCS
 biasing event, ``fit_thrust(mode="thruster")``, the thrusts, time constants and centre of mass
 drawn too: ``draw_open_world(draw_thrusters=True)``; scored on the identified thrusts and
-combinations, ``com_*`` and the time constants, budget every thrust within 3 %); RWA4 ``rwa4_rcs``, ``rwa4_rwa`` and
-``rwa4_rcs_calibrated`` (the RCS method given an inertia calibration's posterior instead of the
-model file's ±10 %, :data:`CALIBRATED_SD`).
+combinations, ``com_*`` and the time constants, budget every thrust within 3 %); RWA4
+``rwa4_rcs``, ``rwa4_rwa`` and ``rwa4_rcs_calibrated`` (the RCS method given an inertia
+calibration's posterior instead of the model file's ±10 %, :data:`CALIBRATED_SD`).
 """
 
 from __future__ import annotations

@@ -168,3 +168,25 @@ def test_without_switches_off_only_the_named_effects():
     assert off.record["off"] == ["drift", "flex", "slips"]
     with pytest.raises(InputError, match="unknown effect"):
         without(ow, ["sloshing"])
+
+
+def test_thrusters_drawn_after_every_other_effect():
+    """``draw_thrusters``: thrusts within ±5 % of nominal, time constants in the model file's
+    ranges, the centre of mass moved; every other draw as without it; a model without
+    thrusters is refused."""
+    a = draw_open_world("biasing_espa_bus", 3)
+    b = draw_open_world("biasing_espa_bus", 3, draw_thrusters=True)
+    for k, v in _flat(a.record).items():
+        np.testing.assert_array_equal(_flat(b.record)[k], v, err_msg=k)
+    sc = scenario_from_dict(b.scenario, src="espa")
+    f0 = sc.prior.thrust_per_thruster
+    f = np.asarray(b.scenario["truth"]["thrust_n"])
+    assert f.shape == f0.shape and np.all(np.abs(f / f0 - 1.0) <= 0.05)
+    assert not np.allclose(f, f0)
+    for k in ("tau_delay", "tau_rise", "tau_fall"):
+        lo, hi = getattr(sc.prior.pulse, f"{k}_range")
+        assert lo <= b.scenario["truth"][f"{k}_s"] <= hi
+    offset = np.asarray(sc.truth.com_m) - np.asarray(sc.prior.com_m)
+    np.testing.assert_allclose(offset, b.record["thrusters"]["center_of_mass_offset_m"]["values"])
+    with pytest.raises(InputError, match="no thrusters"):
+        draw_open_world("slews_cubesat_12u", 3, draw_thrusters=True)
