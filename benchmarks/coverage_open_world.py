@@ -25,7 +25,9 @@ the table of an existing file without fitting.
 the model's stated sd). ``--off`` switches effects off (``EFFECTS_OFF``) with every other draw
 unchanged: a campaign with ``--off drift`` on the same seeds shows what the drifting torque
 alone costs. Keep one
-``--out`` file per setting: resuming does not compare options (each line records its own).
+``--out`` file per setting: ``FILE.manifest.json`` beside it records the command, commit,
+versions, machine and options of every run that appended to it, and a run with other options
+is refused.
 
 Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``day028``,
 ``day028_first_order`` (first-order valve); per thruster ``espa_bias`` (the ESPA bus's RCS
@@ -326,6 +328,9 @@ def main(argv=None) -> None:
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
                                               "off", "torque_sd_nm", "target_accept",
                                               "time_tag_scale")}
+        from _provenance import start
+
+        start(args.out, opts, argv)
         done = {(r["family"], r["seed"]) for r in rows}
         t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):

@@ -151,6 +151,7 @@ def test_campaign_script_end_to_end(tmp_path, capsys):
     assert rows[0]["drawn"]["wheel_inertia_errors"]["law"] == "uniform"
     mod.main(args)
     assert len(out.read_text().splitlines()) == 1
+    assert len(json.loads((tmp_path / "ow.jsonl.manifest.json").read_text())["runs"]) == 2
     assert "post_prm" in capsys.readouterr().out
 
 

@@ -1,0 +1,67 @@
+"""Provenance of a benchmark's records: a manifest beside them (command, commit, versions,
+machine, options, dates), and a refusal to append records made with other options."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _commit() -> str | None:
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True,
+                             text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain",
+                                "--untracked-files=no"], capture_output=True, text=True,
+                               check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return out + ("+uncommitted" if dirty else "")
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def manifest_path(records: Path) -> Path:
+    """``records.manifest.json`` beside the records file."""
+    return records.with_name(records.name + ".manifest.json")
+
+
+def start(records: Path, options: dict, argv: list[str] | None = None) -> dict:
+    """Write (or, on a resumed run, extend) the manifest of ``records``; exit with a one-line
+    message if the records were made with other ``options``."""
+    path = manifest_path(records)
+    now = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    run = {"command": " ".join([Path(sys.argv[0]).name, *(sys.argv[1:] if argv is None
+                                                          else argv)]),
+           "commit": _commit(), "started": now,
+           "versions": {p: metadata.version(p) for p in ("cassini-bayes", "jax", "numpyro")},
+           "machine": f"{_cpu()}, {os.cpu_count()} cores", "load_average": os.getloadavg()[0]}
+    if path.exists():
+        man = json.loads(path.read_text())
+        if man.get("options") != json.loads(json.dumps(options)):
+            sys.exit(f"{records}: made with other options ({path}); use another --out")
+        man["runs"].append(run)
+    else:
+        if records.exists() and records.stat().st_size:
+            sys.exit(f"{records}: records without a manifest; use another --out")
+        man = {"records": records.name, "options": options, "runs": [run]}
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(man, indent=1) + "\n")
+    os.replace(tmp, path)
+    return man
