@@ -226,12 +226,13 @@ def _padded(log, t_end: float):
             np.r_[width, np.zeros(extra)])
 
 
-def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, channels, fired, f, xw, w, a_inv):
+def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, channels, fired, f, xw, w_fit, a_inv):
     """One-sd changes of the weighted least-squares estimate (p,) for each time constant off by
-    ``tau_sd_frac`` and each wheel's spin inertia off by its ``inertia_sd_frac``."""
+    ``tau_sd_frac`` and each wheel's spin inertia off by its ``inertia_sd_frac``: the change of
+    ``f = A⁻¹ Xᵀ W v`` at the fit's own weights ``w_fit`` (the weights of its last pass)."""
     from cassini_bayes.estimators.baseline import wheel_geometry
 
-    sw = np.sqrt(w)[None, :, None]
+    sw = np.sqrt(w_fit)[None, :, None]
     t = np.asarray(tel.t, float)
     log = _padded(log, t[-1])
     out = []
@@ -241,7 +242,7 @@ def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, channels, fired, f, xw, w,
         tp = tau.copy()
         tp[i] *= 1.0 + tau_sd_frac
         jp = np.asarray(_impulse(t, *log, *tp, n_thrusters=len(channels.thrusters)))
-        dx = (channel_design(jp, q, channels)[:, :, fired] - xw / sw) * sw   # weighted change
+        dx = channel_design(jp, q, channels)[:, :, fired] * sw - xw   # weighted change
         out.append(-a_inv @ np.einsum("tap,taq,q->p", xw, dx, f))
     axes, inertias = wheel_geometry(tel, sc)
     rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
@@ -251,7 +252,7 @@ def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, channels, fired, f, xw, w,
         if not np.any(rates[:, k]) or not sd:
             continue
         h = np.outer(rates[:, k] * inertias[k] * sd, axes[k])     # the wheel's momentum × sd
-        dv = np.asarray(_lhs(t, omega, np.zeros((3, 3)), h)) * np.sqrt(w)[None, :]
+        dv = np.asarray(_lhs(t, omega, np.zeros((3, 3)), h)) * np.sqrt(w_fit)[None, :]
         out.append(a_inv @ np.einsum("tap,ta->p", xw, dv))
     return out
 
@@ -379,7 +380,7 @@ def event_summary(tel, pulses, spacecraft, *, channels: HealthChannels | None = 
     a_inv = np.linalg.inv(a)
     cov_f = residual_cov(x, e, w_fit, w, a, lags)
     for g in _sensitivities(tel, des.log, spacecraft, des.tau, tau_sd_frac, q, ch, fired, f, xw,
-                            w, a_inv):
+                            w_fit, a_inv):
         cov_f += np.outer(g, g)
     idx = np.flatnonzero(fired[:k_ch])
     f, cov_f = f[:idx.size], cov_f[:idx.size, :idx.size]    # the splits are nuisance
