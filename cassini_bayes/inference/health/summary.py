@@ -40,8 +40,9 @@ spacecraft model's (shared by all events).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import jax
 import numpy as np
@@ -51,6 +52,10 @@ from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.estimators.thrust import combination_label, regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
 from cassini_bayes.telemetry import pulses_in_span
+
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["HealthChannels", "health_channels", "event_channels", "EventSummary",
            "EventDesign", "event_summary", "event_design", "channel_design", "weighted_fit",
@@ -118,7 +123,8 @@ class HealthChannels:
         return cols
 
 
-def health_channels(impulses, thrusters, q_matrix) -> HealthChannels:
+def health_channels(impulses: Sequence[np.ndarray], thrusters: Sequence[str],
+                    q_matrix: np.ndarray) -> HealthChannels:
     """The channels of events whose per-newton impulses are ``impulses`` ((n_e, M) s each, as
     :func:`~cassini_bayes.estimators.thrust.regression_inputs` gives them): thrusters with the
     same impulse in every event share a channel (module docstring); thrusters that never fire
@@ -157,7 +163,8 @@ def health_channels(impulses, thrusters, q_matrix) -> HealthChannels:
                           tuple(n for n, f in zip(names, fired) if not f))
 
 
-def event_channels(events, spacecraft) -> HealthChannels:
+def event_channels(events: Sequence[tuple[Telemetry, PulseLog]],
+                   spacecraft: Spacecraft) -> HealthChannels:
     """:func:`health_channels` of ``events``, ``(telemetry, pulse log)`` pairs, under the
     spacecraft model (its time constants give the impulses)."""
     return health_channels([_inputs(tel, log, spacecraft)[1] for tel, log in events],
