@@ -122,3 +122,22 @@ def test_espa_campaign_file_and_bad_campaigns(tmp_path):
         p.write_text(text)
         with pytest.raises(InputError, match=message):
             load_campaign(p)
+
+
+def test_an_event_firing_a_set_alike_is_one_error_line(espa_event):
+    """Channels the other events fire apart but this event fires alike, more of them than their
+    torques' directions can tell apart (a set of four ESPA thrusters fired together and alone),
+    make the event's design singular: one line naming them, not a traceback."""
+    from cassini_bayes.telemetry import PulseLog
+
+    sim = espa_event
+    p = sim.pulses
+    first = p.thruster == 0
+    t_on, width = p.t_on[first], p.width[first]
+    log = PulseLog(np.concatenate([t_on] * 4), np.repeat(np.array([0, 1, 6, 7]), t_on.size),
+                   np.concatenate([width] * 4), "pulses.csv")
+    sc = sim.prior
+    channels = health_channels([np.eye(8)], sc.thruster_names, sc.moment_matrix)  # all apart
+    with pytest.raises(InputError, match=r"cannot tell its thrust channels apart \(F\[A1\], "
+                                         r"F\[A2\], F\[F3\], F\[F4\] fire alike"):
+        event_summary(sim.telemetry, log, sc, channels=channels)

@@ -323,7 +323,38 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
         raise InputError(f"identifies no thrust channel (pulses per channel "
                          f"{dict(zip(channels.names, n_pulses.tolist()))}, {n} samples)",
                          path=getattr(tel, "source", "telemetry"))
+    _check_rank(x, j, channels, n_pulses, getattr(tel, "source", "telemetry"))
     return EventDesign(v, j, x, fired, n_pulses, q, log, tau, channels)
+
+
+_RANK_COND_MAX = 1e10
+"""An event's design is rank-deficient when its column-scaled condition number exceeds this."""
+
+
+def _check_rank(x: np.ndarray, j: np.ndarray, channels: HealthChannels, n_pulses: np.ndarray,
+                source: str) -> None:
+    """Refuse, in one line, an event whose fired columns are dependent: channels that the other
+    events fire apart fire alike here, more of them than their torques' directions can tell
+    apart (e.g. a whole thruster set of four with no other firing)."""
+    a = np.einsum("tap,taq->pq", x, x)
+    d = np.sqrt(np.diag(a))
+    if np.all(d > 0) and np.linalg.cond(a / np.outer(d, d)) < _RANK_COND_MAX:
+        return
+    fired = [k for k in range(len(channels.groups)) if n_pulses[k] > 0]
+    alike: list[list[int]] = []
+    for k in fired:
+        jk = j[:, channels.groups[k][0]]
+        for g in alike:
+            jg = j[:, channels.groups[g[0]][0]]
+            if np.allclose(jk, jg, rtol=0.0, atol=_SAME_RTOL * max(np.max(np.abs(jg)), 1e-300)):
+                g.append(k)
+                break
+        else:
+            alike.append([k])
+    named = "; ".join(", ".join(channels.names[k] for k in g) for g in alike if len(g) > 1)
+    raise InputError(f"cannot tell its thrust channels apart ({named or 'their firings'} fire "
+                     "alike in this event, apart in others); fit this event's health with "
+                     "events that fire them alike too, or leave it out", path=source)
 
 
 def weighted_fit(x: np.ndarray, v: np.ndarray, w: np.ndarray | None = None):
