@@ -141,3 +141,26 @@ def test_an_event_firing_a_set_alike_is_one_error_line(espa_event):
     with pytest.raises(InputError, match=r"cannot tell its thrust channels apart \(F\[A1\], "
                                          r"F\[A2\], F\[F3\], F\[F4\] fire alike"):
         event_summary(sim.telemetry, log, sc, channels=channels)
+
+
+def test_cassinis_channels_are_the_papers_columns():
+    """Cassini's channels from its firings give Feldman & Lee's columns exactly: ``Z1 … Z4`` one
+    each (Eq 19), the pair sums ``Q_Y1 J + Q_Y3 J``, ``Q_Y2 J + Q_Y4 J`` (Eq 21), then the pair
+    splits ``Q_Y1 J − Q_Y3 J``, ``Q_Y2 J − Q_Y4 J`` (the X-row term Eq 18 drops), bit for bit."""
+    from cassini_bayes.inference.health.summary import channel_design
+    from cassini_bayes.spacecraft import load_spacecraft
+
+    sc = load_spacecraft("cassini_post_probe")
+    q = sc.moment_matrix
+    rng = np.random.default_rng(1)
+    z = np.cumsum(rng.uniform(0, 0.1, (40, 4)), axis=0)
+    y = np.cumsum(rng.uniform(0, 0.1, (40, 2)), axis=0)
+    j = np.c_[z, y[:, 0], y[:, 1], y[:, 0], y[:, 1]]                 # Y1, Y3 and Y2, Y4 alike
+    ch = health_channels([j], sc.thruster_names, q)
+
+    def col(s):
+        return q[:, s][None, :] * j[:, s:s + 1]
+
+    want = [col(0), col(1), col(2), col(3), col(4) + col(6), col(5) + col(7),
+            col(4) - col(6), col(5) - col(7)]
+    np.testing.assert_array_equal(channel_design(j, q, ch), np.stack(want, axis=-1))
