@@ -49,7 +49,7 @@ MODELS = ("cassini_post_probe", "cassini_pre_soi")
 def _health(seed: int, campaign: str, n_events: int) -> dict:
     """{model: {check: statistic}} of one campaign."""
     from cassini_bayes.api._simulation import simulate
-    from cassini_bayes.inference.health import HealthPrior, event_summary
+    from cassini_bayes.inference.health import HealthPrior, event_channels, event_summary
     from cassini_bayes.inference.health.adequacy import health_adequacy, inertia_probe
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
     from cassini_bayes.spacecraft import load_spacecraft
@@ -61,7 +61,8 @@ def _health(seed: int, campaign: str, n_events: int) -> dict:
     out = {}
     for model in MODELS:
         sc = load_spacecraft(model)
-        summaries = [event_summary(s.telemetry, s.pulses, sc) for s in sims]
+        channels = event_channels([(s.telemetry, s.pulses) for s in sims], sc)
+        summaries = [event_summary(s.telemetry, s.pulses, sc, channels=channels) for s in sims]
         probes = [inertia_probe(s.telemetry, s.pulses, sc, m) for s, m in zip(sims, summaries)]
         ad = health_adequacy(dates, summaries, probes, HealthPrior(nominal_thrust_n=sc.thrust),
                              [f"event_{k:03d}" for k in range(len(sims))])

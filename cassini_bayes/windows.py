@@ -14,7 +14,8 @@ sample's two neighbours, however coarse the sampling),
 - ``max |ω| ≤ rate_max`` (rad/s) over the window; by default a third of the file's top rate
   (:data:`QUIET_RATE_FRACTION`): quiet is relative to the spacecraft's own slews, not to one
   spacecraft's rates,
-- ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored),
+- ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored); by
+  default :data:`QUIET_WHEEL_TOL_RPM`,
 - no cumulative thruster on-time grows within the window (when the telemetry has on-times).
 
 Both tolerances are at least :data:`QUIET_NOISE_SD` times the white noise of the file's own
@@ -36,7 +37,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from cassini_bayes.errors import InputError
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry, white_noise_sd
 
-__all__ = ["quiet_mask", "quiet_periods", "top_rate", "QUIET_RATE_FRACTION", "QUIET_NOISE_SD", "slew_windows", "split_slews", "parse_window",
+__all__ = ["quiet_mask", "quiet_periods", "quiet_rate_max", "top_rate", "QUIET_RATE_FRACTION",
+           "QUIET_NOISE_SD", "QUIET_WHEEL_TOL_RPM", "slew_windows", "split_slews", "parse_window",
            "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
@@ -50,6 +52,13 @@ QUIET_NOISE_SD = 8.0
 """The quiet tolerances are at least this many white-noise sds of the file's own rates: the range
 of a window's worth of white noise (10-40 samples) is ~4 sd, beyond 8 sd less than once in 10⁵
 windows (7.4 sd at 1e-4 for 41 samples)."""
+
+
+QUIET_WHEEL_TOL_RPM = 2.0
+"""The default largest change of a running wheel's rate within a quiet window, rpm, raised to
+:data:`QUIET_NOISE_SD` × the wheel's own white noise (which scales it for coarse sensors). An
+absolute constant (docs/limits.md): it keeps the papers' quiet windows and the pinned wheel-axis
+fits; a wheel whose slew ramps change it by less over the window needs ``--wheel-tol``."""
 
 
 def _moving_range(x: np.ndarray, half: int) -> np.ndarray:
@@ -77,11 +86,31 @@ def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
     return sliding_window_view(padded, 2 * half + 1).max(axis=-1)
 
 
+def _half(t: np.ndarray, smooth_s: float) -> int:
+    """Half the moving window in samples: at least the neighbours, however coarse the sampling
+    (at 0.1 Hz half a 10-s window rounds to no sample, and a wheel spin-up inside a "quiet"
+    window turned the RWA4 axis to its antipode, flight-data audit)."""
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    return max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
+
+
+def quiet_rate_max(tel: Telemetry, rate_max: float | None = None,
+                   smooth_s: float = 10.0) -> float:
+    """The body-rate bound of a quiet sample that :func:`quiet_mask` applies, rad/s:
+    ``rate_max`` (default :data:`QUIET_RATE_FRACTION` × :func:`top_rate`), at least
+    :data:`QUIET_NOISE_SD` × the rates' white noise."""
+    t = np.asarray(tel.t, dtype=float)
+    omega = np.asarray(tel.omega, dtype=float)
+    if rate_max is None:
+        rate_max = QUIET_RATE_FRACTION * top_rate(np.linalg.norm(omega, axis=1), _half(t, smooth_s))
+    return float(max(rate_max, QUIET_NOISE_SD * white_noise_sd(omega)))
+
+
 def quiet_mask(
     tel: Telemetry,
     *,
     rate_max: float | None = None,
-    wheel_tol_rpm: float = 2.0,
+    wheel_tol_rpm: float = QUIET_WHEEL_TOL_RPM,
     smooth_s: float = 10.0,
 ) -> np.ndarray:
     """Boolean (n,) mask of quiescent samples (criteria in the module docstring).
@@ -102,15 +131,9 @@ def quiet_mask(
     n = t.shape[0]
     if n < 2:
         return np.zeros(n, dtype=bool)
-    dt = float(np.median(np.diff(t)))
-    # at least the neighbours: at 0.1 Hz half a 10-s window rounds to no sample, and a wheel
-    # spin-up inside a "quiet" window turned the RWA4 axis to its antipode (flight-data audit)
-    half = max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
-    omega = np.asarray(tel.omega, dtype=float)
-    rate = np.linalg.norm(omega, axis=1)
-    if rate_max is None:
-        rate_max = QUIET_RATE_FRACTION * top_rate(rate, half)
-    quiet = _moving_max(rate, half) <= max(rate_max, QUIET_NOISE_SD * white_noise_sd(omega))
+    half = _half(t, smooth_s)
+    rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
+    quiet = _moving_max(rate, half) <= quiet_rate_max(tel, rate_max, smooth_s)
     rates = np.asarray(tel.wheel_rates, dtype=float)
     running = np.all(np.isfinite(rates), axis=0)
     if np.any(running):
@@ -142,7 +165,7 @@ def quiet_periods(
     *,
     min_duration_s: float = 60.0,
     rate_max: float | None = None,
-    wheel_tol_rpm: float = 2.0,
+    wheel_tol_rpm: float = QUIET_WHEEL_TOL_RPM,
     smooth_s: float = 10.0,
 ) -> list[Window]:
     """Quiet periods of at least ``min_duration_s`` seconds, as ``(t0, t1)`` sample times, s.

@@ -19,6 +19,8 @@ from cassini_bayes.inference.health.changepoint import SCATTER_GRID
 from test_health import _synthetic
 
 LABELS = [f"event_{k:03d}" for k in range(40)]
+NAMES = ["F[Z1]", "F[Z2]", "F[Z3]", "F[Z4]", "F_combination[0.5 F[Y1] + 0.5 F[Y3]]",
+         "F_combination[0.5 F[Y2] + 0.5 F[Y4]]"]
 
 
 def _probes(shift: np.ndarray, sd: np.ndarray) -> list[InertiaProbe]:
@@ -33,12 +35,13 @@ def test_inertia_conflict_ignores_a_shared_shift_and_names_an_odd_event():
     sd = np.full((10, 6), 0.01)
     shift = 0.05 + 0.002 * rng.standard_normal((10, 6))           # shared 5 %, scatter 0.2 sd
     shift[:, 5] = np.nan                                            # a channel no event reports
-    c = inertia_conflict(_probes(shift, sd), LABELS)
+    c = inertia_conflict(_probes(shift, sd), LABELS, NAMES)
     assert c.ok and c.statistic < 1.0                               # observed 0.45
     shift[6, 2] += 0.08
-    c = inertia_conflict(_probes(shift, sd), LABELS)
-    assert not c.ok and c.statistic > 6.0 and c.parameter == "event_006 Z3"
-    assert inertia_conflict(_probes(np.full((3, 6), np.nan), sd[:3]), LABELS).statistic is None
+    c = inertia_conflict(_probes(shift, sd), LABELS, NAMES)
+    assert not c.ok and c.statistic > 6.0 and c.parameter == "event_006 F[Z3]"
+    assert inertia_conflict(_probes(np.full((3, 6), np.nan), sd[:3]), LABELS,
+                            NAMES).statistic is None
 
 
 def test_predictive_cdf_matches_exact_draws():
@@ -70,12 +73,12 @@ def test_held_out_passes_a_clean_campaign_and_names_an_outlier():
     prior = HealthPrior()
     for drop in (0.07, 0.0):
         t, y, s = _synthetic(1, drop=drop)
-        assert held_out_events(t, y, s, prior, LABELS).statistic < 2.0
+        assert held_out_events(t, y, s, prior, LABELS, NAMES).statistic < 2.0
     t, y, s = _synthetic(1, drop=0.07)
     y[5, 4] += 12 * np.hypot(s[5, 4], SCATTER_GRID[-1])
-    c = held_out_events(t, y, s, prior, LABELS)
-    assert not c.ok and c.statistic > 4.0 and c.parameter == "event_005 Y13"
-    assert held_out_events(t[:2], y[:2], s[:2], prior, LABELS).statistic is None
+    c = held_out_events(t, y, s, prior, LABELS, NAMES)
+    assert not c.ok and c.statistic > 4.0 and c.parameter == f"event_005 {NAMES[4]}"
+    assert held_out_events(t[:2], y[:2], s[:2], prior, LABELS, NAMES).statistic is None
 
 
 @pytest.fixture(scope="module")
@@ -128,4 +131,4 @@ def test_an_event_without_body_motion_gives_no_probe(tmp_path):
     sc = load_spacecraft("cassini_post_probe")
     pr = inertia_probe(tel, log, sc, event_summary(tel, log, sc))
     assert np.all(np.isnan(pr.shift)) and np.all(np.isnan(pr.moments))
-    assert inertia_conflict([pr, pr], LABELS).statistic is None
+    assert inertia_conflict([pr, pr], LABELS, NAMES).statistic is None

@@ -7,8 +7,8 @@ simulates the model's own data, and ranks the truth under the exact posterior:
 * :func:`changepoint_sbc` — the change-point model of
   :mod:`cassini_bayes.inference.health.changepoint` on a fixed design (the event dates, standard
   errors and missing channels of one simulated campaign); ranks among ``n_draws`` exact draws of
-  ``b_Z3``, ``d_Z3``, ``d_Z4``, ``d_Y13``, ``sigma_Z3`` and ``tau*`` (the change date, or a
-  sentinel after the last event when there is none; ties broken at random);
+  every channel's ``b``, ``d`` and ``sigma`` (:func:`changepoint_names`) and ``tau*`` (the
+  change date, or a sentinel after the last event when there is none; ties broken at random);
 * :func:`leak_sbc` — the Bayesian leak monitor of :mod:`cassini_bayes.inference.leak` on
   synthetic residuals drawn from its own model (offset, torque, thrust errors, white noise, a
   leak of a thruster drawn uniformly with the half-normal-mixture fraction and an onset uniform
@@ -28,17 +28,25 @@ from scipy.special import log_ndtr
 
 from cassini_bayes.analysis.sbc import SbcResult, ranks, sbc_result
 
-__all__ = ["changepoint_sbc", "leak_sbc", "LeakSbc", "calibration_table", "CP_NAMES",
+__all__ = ["changepoint_sbc", "changepoint_names", "leak_sbc", "LeakSbc", "calibration_table",
            "LEAK_NAMES"]
 
-CP_NAMES = ("b_Z3", "d_Z3", "d_Z4", "d_Y13", "sigma_Z3", "tau_star")
+_CP_QUANTITIES = ("b", "d", "sigma")
+
+
+def changepoint_names(channels) -> tuple[str, ...]:
+    """The SBC parameters of the change-point model on ``channels`` (names): ``b[<channel>]``,
+    ``d[<channel>]``, ``sigma[<channel>]`` per channel, then ``tau_star``."""
+    return tuple(f"{a}[{c}]" for c in channels for a in _CP_QUANTITIES) + ("tau_star",)
+
+
 LEAK_NAMES = ("fraction", "onset")
 
 
 def changepoint_sbc(seed: int, n_replicates: int, dates, se, n_draws: int = 99,
-                    prior=None) -> SbcResult:
-    """SBC of the change-point model on the design ``dates`` (N,), ``se`` (N, 6) (NaN:
-    missing)."""
+                    prior=None, channels=None) -> SbcResult:
+    """SBC of the change-point model on the design ``dates`` (N,), ``se`` (N, K) (NaN:
+    missing); ``channels`` (K,) their names (default ``channel 0`` …)."""
     from cassini_bayes.inference.health import HealthPrior, health_posterior
     from cassini_bayes.inference.health.changepoint import SCATTER_GRID
 
@@ -47,28 +55,29 @@ def changepoint_sbc(seed: int, n_replicates: int, dates, se, n_draws: int = 99,
     t = np.asarray(dates, float)
     s = np.asarray(se, float)
     sentinel = t[-1] + 1.0
-    cols = {"b_Z3": ("b", 2), "d_Z3": ("d", 2), "d_Z4": ("d", 3), "d_Y13": ("d", 4),
-            "sigma_Z3": ("sigma", 2)}
+    k_ch = s.shape[-1]
+    names = tuple(f"channel {k}" for k in range(k_ch)) if channels is None else tuple(channels)
+    cols = [(a, k) for k in range(k_ch) for a in _CP_QUANTITIES]
     truth, draws = [], []
     for _ in range(n_replicates):
         change = rng.uniform() < prior.p_change
         tau = rng.uniform(t[0], t[-1]) if change else np.nan
-        step = change & (rng.uniform(size=6) < prior.p_channel)
-        d = np.where(step, rng.normal(0.0, prior.step_sd, 6), 0.0)
-        b = np.log(prior.nominal_thrust_n) + rng.normal(0.0, prior.baseline_sd, 6)
-        sig = SCATTER_GRID[rng.integers(0, SCATTER_GRID.size, 6)]
+        step = change & (rng.uniform(size=k_ch) < prior.p_channel)
+        d = np.where(step, rng.normal(0.0, prior.step_sd, k_ch), 0.0)
+        b = np.log(prior.nominal_thrust_n) + rng.normal(0.0, prior.baseline_sd, k_ch)
+        sig = SCATTER_GRID[rng.integers(0, SCATTER_GRID.size, k_ch)]
         after = (t >= tau)[:, None] if change else np.zeros((t.size, 1), bool)
         y = b + d * after + rng.normal(size=s.shape) * np.sqrt(s ** 2 + sig ** 2)
         y = np.where(np.isfinite(s), y, np.nan)
         post = health_posterior(t, y, s, prior)
         dr = post.draws(rng, n_draws)
         tv = {"b": b, "d": d, "sigma": sig}
-        truth.append([tv[a][k] for a, k in cols.values()] + [tau if change else sentinel])
-        draws.append([dr[a][:, k] for a, k in cols.values()]
+        truth.append([tv[a][k] for a, k in cols] + [tau if change else sentinel])
+        draws.append([dr[a][:, k] for a, k in cols]
                      + [np.where(dr["change"], dr["tau"], sentinel)])
     truth, draws = np.array(truth), np.array(draws)                 # (R, P), (R, P, L)
     r = np.asarray(ranks(jax.random.key(seed), draws, truth))
-    return sbc_result(CP_NAMES, r, n_draws)
+    return sbc_result(changepoint_names(names), r, n_draws)
 
 
 class LeakSbc(NamedTuple):

@@ -60,8 +60,9 @@ class TelemetryCheck:
     columns"``, ``"pulse log FILE"`` or ``None`` when there is neither), ``thrusters`` (those
     that fired) and ``model_thrusters`` (the names the spacecraft model has, Cassini's without
     one; empty for a spacecraft without thrusters); ``quiet`` the quiet periods ``(t0, t1)`` s
-    and the rules that made them
-    (``min_quiet_s``, ``rate_max_rad_s``, ``wheel_tol_rpm``); ``n_pulses`` of the pulse log
+    and the rules that made them (``min_quiet_s``; ``rate_max_rad_s`` the body-rate bound
+    applied, rad/s, and ``rate_rule`` where it came from; ``wheel_tol_rpm`` the wheel bound
+    before its noise floor); ``n_pulses`` of the pulse log
     (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
     (:func:`cassini_bayes.consistency.quantised_rates`).
     """
@@ -83,6 +84,7 @@ class TelemetryCheck:
     notes: tuple[str, ...]
     quanta: tuple = ()
     model_thrusters: tuple[str, ...] = ()
+    rate_rule: str = "given"
 
     @property
     def n(self) -> int:
@@ -155,7 +157,7 @@ def _pulse_count(on: np.ndarray) -> int:
 @jax_entry
 def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
                     spacecraft: SpacecraftArg | None = None, min_quiet_s: float = 60.0,
-                    rate_max_rad_s: float = 1e-3, wheel_tol_rpm: float = 2.0,
+                    rate_max_rad_s: float | None = None, wheel_tol_rpm: float | None = None,
                     check_units: bool = True) -> TelemetryCheck:
     """Validate a telemetry file (and pulse log) and say what it holds.
 
@@ -170,7 +172,11 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         checked by momentum conservation.
     min_quiet_s, rate_max_rad_s, wheel_tol_rpm : a quiet period is at least ``min_quiet_s``
         long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
-        and no thruster firing (:func:`cassini_bayes.windows.quiet_periods`).
+        and no thruster firing: the rule ``fit wheel-axis`` detects its windows with
+        (:func:`cassini_bayes.windows.quiet_periods`). By default the rate bound is a third of
+        the file's top rate and the wheel bound
+        :data:`~cassini_bayes.windows.QUIET_WHEEL_TOL_RPM`, each at least 8 sd of the file's own
+        noise; given values override them (still floored by the noise).
     check_units : the rad/s-vs-rpm and deg/s heuristics (off for wheels idling below 12 rpm).
 
     Raises
@@ -188,9 +194,13 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
     from cassini_bayes.windows import quiet_periods
 
+    from cassini_bayes.windows import QUIET_WHEEL_TOL_RPM, quiet_rate_max
+
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
                                     (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
                                     (wheel_tol_rpm, "--wheel-tol", "wheel_tol_rpm")):
+        if value is None and argument != "min_quiet_s":
+            continue
         if (isinstance(value, bool) or not isinstance(value, (int, float))
                 or not 0 < value < float("inf")):
             raise InputError(f"must be a positive finite number, got {value!r}",
@@ -236,8 +246,9 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
                      if log is not None and source != "on_* columns"
                      else _pulse_count(on))
             thrusters.append(ThrusterStats(name, count, total))
+    wheel_tol = QUIET_WHEEL_TOL_RPM if wheel_tol_rpm is None else float(wheel_tol_rpm)
     quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,
-                          wheel_tol_rpm=wheel_tol_rpm)
+                          wheel_tol_rpm=wheel_tol)
     return TelemetryCheck(
         t=np.asarray(tel.t, float),
         max_rate_rad_s=float(np.linalg.norm(tel.omega, axis=1).max()),
@@ -246,6 +257,7 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         physics=_physics_line(attitude, momentum, sc),
         wheels=tuple(wheels), thruster_source=source, thrusters=tuple(thrusters),
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
-        rate_max_rad_s=rate_max_rad_s, wheel_tol_rpm=wheel_tol_rpm,
+        rate_max_rad_s=quiet_rate_max(tel, rate_max_rad_s), wheel_tol_rpm=wheel_tol,
+        rate_rule="given" if rate_max_rad_s is not None else "a third of the file's top rate",
         n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
         quanta=quantised_rates(tel), model_thrusters=tuple(tel.thruster_names))

@@ -28,6 +28,8 @@ EventsArg: TypeAlias = ("str | os.PathLike | Sequence[str | os.PathLike | "
 
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import SpacecraftArg
+    from cassini_bayes.inference.health import HealthChannels
+    from cassini_bayes.spacecraft import Spacecraft
     from cassini_bayes.inference.adequacy import Adequacy
     from cassini_bayes.inference.health.changepoint import HealthPosterior
 
@@ -36,7 +38,11 @@ __all__ = ["HealthResult", "fit_health", "read_event_list", "simulate_health_cam
 
 HEALTH_FRACTION = 0.05
 """Default loss reported: ``P(thrust more than 5 % below its first calibration)``."""
-_BRANCHES = {"Z3|Z4": (2, 3)}
+CHANNEL_RULE = ("thrusters whose per-newton impulse is the same in every event (they always fire "
+                "together) share a channel, their mean thrust (Feldman & Lee Eq 21: only their "
+                "sum is told by the firings); a thruster fired apart from all others is its own "
+                "channel (Eq 19); the split within a channel moves the torque only through the "
+                "moment arms and is a nuisance, not reported")
 
 
 @dataclass(frozen=True)
@@ -156,7 +162,8 @@ def fit_health(events: EventsArg, spacecraft: SpacecraftArg, *, fraction: float 
     from cassini_bayes.api._inputs import spacecraft_input
     from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_thrust_data
-    from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
+    from cassini_bayes.inference.health import (HealthPrior, event_channels, event_summary,
+                                                health_posterior)
     from cassini_bayes.inference.health.adequacy import health_adequacy, inertia_probe
     from cassini_bayes.inference.health.summary import TAU_SD_FRAC, left_out_channels
     from cassini_bayes.rundir import file_record
@@ -167,23 +174,28 @@ def fit_health(events: EventsArg, spacecraft: SpacecraftArg, *, fraction: float 
         raise InputError(f"{arg('fraction')} must lie strictly between 0 and 1, got {fraction}")
     tau_sd = TAU_SD_FRAC if tau_sd_frac is None else number("tau_sd_frac", tau_sd_frac, lo=0.0)
     sc, sc_record, _ = spacecraft_input(spacecraft)
-    sc.require_thrusters("fit health", eq16=True)
+    sc.require_thrusters("fit health")
     files = read_event_list(events)
-    summaries, probes = [], []
+    summaries, probes, data = [], [], []
     with collect_warnings() as warns:   # (every input left out is one: summary.json says it)
         for day, tel_path, log_path in files:
             tel = read_telemetry(tel_path, spacecraft=sc)
             log = read_pulses(log_path, spacecraft=sc)
             check_thrust_data([(tel, log)], sc)   # as fit thrust: units, pulse log vs on_*
-            summaries.append(event_summary(tel, log, sc, tau_sd_frac=tau_sd))
+            data.append((tel, log))
+        channels = event_channels(data, sc)       # the same channels in every event
+        for tel, log in data:
+            summaries.append(event_summary(tel, log, sc, channels=channels, tau_sd_frac=tau_sd))
             probes.append(inertia_probe(tel, log, sc, summaries[-1]))
     prior = HealthPrior(p_change=p_change, p_channel=p_channel, step_sd=step_sd,
-                        nominal_thrust_n=float(sc.thrust)).check()
+                        nominal_thrust_n=tuple(float(x) for x in
+                                               channels.weights @ sc.thrust_per_thruster)).check()
     post = health_posterior([f[0] for f in files], np.array([s.log_thrust for s in summaries]),
-                            np.array([np.sqrt(np.diag(s.cov)) for s in summaries]), prior)
+                            np.array([np.sqrt(np.diag(s.cov)) for s in summaries]), prior,
+                            channels=channels.names)
     adequacy = health_adequacy([f[0] for f in files], summaries, probes, prior,
                                [_event_label(d, t) for d, t, _ in files])
-    summary = health_summary(post, fraction, adequacy)
+    summary = health_summary(post, fraction, adequacy, channels=channels, spacecraft=sc)
     summary["warnings"] = (warns + left_out_channels(summaries, [f[0] for f in files])
                            + summary.get("warnings", []))
     config = {"command": "fit health", "version": __version__,
@@ -201,22 +213,23 @@ def _event_label(day: float, telemetry: Path) -> str:
     return f"{name} (day {day:g})"
 
 
-def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | None = None
-                   ) -> dict:
-    """``summary.json`` of a health fit: the change probability and date, per channel the step
-    and ``P(down by more than fraction)`` at the last event, and the ``adequacy`` verdict
+def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | None = None, *,
+                   channels: HealthChannels | None = None,
+                   spacecraft: Spacecraft | None = None) -> dict:
+    """``summary.json`` of a health fit: the change probability and date, per channel (named
+    as the thrust fit names thrusts and combinations) the step and ``P(down by more than
+    fraction)`` at the last event, the same for any channel and, where the model file names
+    more than one thruster ``branch``, for each branch's channels, and the ``adequacy`` verdict
     (:func:`~cassini_bayes.inference.health.adequacy.health_adequacy`) with a warning per
-    failed check."""
-    from cassini_bayes.inference.health import CHANNELS
-
+    failed check. ``channels`` and ``spacecraft`` add each channel's thrusters."""
     lo, hi = post.change_date_interval(0.9)
     med = float(post.change_date_quantiles([0.5])[0])
     rng = np.random.default_rng(0)
     dr = post.draws(rng, 4000)
-    channels = {}
-    for k, name in enumerate(CHANNELS):
+    out = {}
+    for k, name in enumerate(post.channels):
         ratio = np.exp(dr["d"][:, k])
-        channels[name] = {
+        out[name] = {
             "p_down_last": float(post.p_down([k], fraction)[-1]),
             "ratio_last_mean": float(ratio.mean()),
             "ratio_last_90": [float(x) for x in np.quantile(ratio, [0.05, 0.95])],
@@ -224,6 +237,17 @@ def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | 
                                          / max(post.p_change, 1e-300)),
             "n_events": int(np.isfinite(post.y[:, k]).sum()),
         }
+        if channels is not None:
+            out[name]["weights"] = {channels.thrusters[s]: 1.0 / len(channels.groups[k])
+                                    for s in channels.groups[k]}
+        if channels is not None and spacecraft is not None:
+            br = {spacecraft.thrusters[s].branch for s in channels.groups[k]}
+            out[name]["branch"] = br.pop() if len(br) == 1 else ""
+    groups = {"any": list(range(len(post.channels)))}
+    branches = sorted({c["branch"] for c in out.values() if c.get("branch")})
+    if len(branches) > 1:
+        groups.update({f"branch {b}": [k for k, c in enumerate(out.values())
+                                       if c.get("branch") == b] for b in branches})
     return {
         "command": "fit health", "version": __version__, "model": "change point",
         "n_events": int(post.dates.size), "first_date_days": float(post.dates[0]),
@@ -232,11 +256,10 @@ def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | 
         "change_date_days": {"median": med, "interval_90": [lo, hi],
                              "note": "given a change; uniform within the interval between "
                                      "the two events around it"},
-        "channels": channels,
-        "p_down_last": {b: float(post.p_down(list(ks), fraction)[-1])
-                        for b, ks in _BRANCHES.items()},
-        "y_pairs": "Y13 and Y24 are the pair means (F_Y1+F_Y3)/2, (F_Y2+F_Y4)/2 (Feldman & Lee "
-                   "Eq 21); the split within a pair is not identifiable and not reported",
+        "channels": out,
+        "channel_rule": CHANNEL_RULE,
+        **({} if channels is None else {"not_fired": list(channels.not_fired)}),
+        "p_down_last": {b: float(post.p_down(ks, fraction)[-1]) for b, ks in groups.items()},
         "prior": {"p_change": post.prior.p_change, "p_channel": post.prior.p_channel,
                   "step_sd": post.prior.step_sd, "baseline_sd": post.prior.baseline_sd},
         **({} if adequacy is None else {"adequacy": adequacy.to_dict(),
@@ -246,16 +269,19 @@ def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | 
 
 def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
     """``health.csv``: per event its date, each channel's estimate (N) and log sd, and the
-    posterior ``P(down)`` per channel and for Z3 or Z4 at its date."""
-    from cassini_bayes.inference.health import CHANNELS
-
+    posterior ``P(down)`` per channel and per group of ``summary.json``'s ``p_down_last`` (any
+    channel, each branch) at its date."""
     post = res.posterior
+    names = post.channels
     order = np.argsort([f[0] for f in res.files], kind="stable")
-    p = [post.p_down([k], res.fraction) for k in range(len(CHANNELS))]
-    p_b = {b: post.p_down(list(ks), res.fraction) for b, ks in _BRANCHES.items()}
-    header = (["date_days", "telemetry"] + [f"thrust_{c}_n" for c in CHANNELS]
-              + [f"sd_log_{c}" for c in CHANNELS] + [f"p_down_{c}" for c in CHANNELS]
-              + [f"p_down_{b.replace('|', '_or_')}" for b in _BRANCHES])
+    p = [post.p_down([k], res.fraction) for k in range(len(names))]
+    groups = res.summary.get("p_down_last") or {"any": None}
+    p_b = {b: post.p_down(list(range(len(names))) if b == "any" else
+                          [names.index(c) for c in _branch_members(res.summary, b)], res.fraction)
+           for b in groups}
+    header = (["date_days", "telemetry"] + [f"thrust_{c}_n" for c in names]
+              + [f"sd_log_{c}" for c in names] + [f"p_down_{c}" for c in names]
+              + [f"p_down_{b.replace(' ', '_')}" for b in p_b])
     rows = []
     for e, i in enumerate(order):
         rows.append([float(post.dates[e]), str(res.files[i][1])]
@@ -265,14 +291,19 @@ def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
     return header, rows
 
 
-def band_table(post: HealthPosterior, n_grid: int = 200, n_draws: int = 4000) -> tuple[list[str], list[list]]:
+def _branch_members(summary: dict, group: str) -> list[str]:
+    """The channels of a ``p_down_last`` group (``branch <b>``) of ``summary.json``."""
+    b = group.removeprefix("branch ")
+    return [c for c, v in summary["channels"].items() if v.get("branch") == b]
+
+
+def band_table(post: HealthPosterior, n_grid: int = 200,
+               n_draws: int = 4000) -> tuple[list[str], list[list]]:
     """``thrust_bands.csv``: on a grid of dates, each channel's thrust relative to its first
     calibration, posterior 5/25/50/75/95 % quantiles (from exact draws, seed 0)."""
-    from cassini_bayes.inference.health import CHANNELS
-
     grid = np.linspace(post.dates[0], post.dates[-1], n_grid)
     q = post.relative_thrust_bands(grid, np.random.default_rng(0), n_draws, _QUANTS)
-    header = ["date_days"] + [f"{c}_q{int(p * 100):02d}" for c in CHANNELS for p in _QUANTS]
+    header = ["date_days"] + [f"{c}_q{int(p * 100):02d}" for c in post.channels for p in _QUANTS]
     rows = [[float(grid[i])] + [float(x) for x in q[:, i].ravel()] for i in range(grid.size)]
     return header, rows
 
@@ -281,15 +312,14 @@ _QUANTS = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
 @jax_entry
-def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike, *, seed: int | None = None,
-                             force: bool = False) -> Path:
+def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike, *,
+                             seed: int | None = None, force: bool = False) -> Path:
     """Simulate a thruster-health campaign (a campaign TOML path or shipped name, e.g.
     ``"health_degradation"``) into ``out``: one folder per event (``telemetry.csv``,
     ``pulses.csv``, ``truth.json``), ``events.csv`` (the event list :func:`fit_health` reads)
     and ``truth.json`` (dates, true thrusts, the degradation); atomically."""
     from cassini_bayes.api._inputs import check_seed
     from cassini_bayes.api._simulation import simulate
-    from cassini_bayes.physics.impulse import THRUSTER_NAMES
     from cassini_bayes.rundir import RunDir
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
     from cassini_bayes.telemetry import write_pulses, write_telemetry
@@ -314,10 +344,10 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
         truth = {"scenario": camp.name, "scenario_file": camp.source, "version": __version__,
                  "seed": seed, "description": camp.description,
                  "dates_days": [ev.date_days for ev in events],
-                 "thrust_n": [dict(zip(THRUSTER_NAMES, map(float, ev.thrust_n)))
+                 "thrust_n": [dict(zip(camp.thrusters, map(float, ev.thrust_n)))
                               for ev in events],
                  "degradation": (None if not camp.degraded else
-                                 {"thrusters": [THRUSTER_NAMES[i] for i in camp.degraded],
+                                 {"thrusters": [camp.thrusters[i] for i in camp.degraded],
                                   "fraction": camp.degradation_fraction,
                                   "day": camp.degradation_day})}
         (rd.path / "truth.json").write_text(json.dumps(truth, indent=2) + "\n")
@@ -326,18 +356,21 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
 
 def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """In memory, without files: ``(dates (N,), log thrust (N, 6), sd (N, 6))`` of a simulated
-    campaign's events (what the benchmark and the tests feed :func:`health_posterior`)."""
+    """In memory, without files: ``(dates (N,), log thrust (N, K), sd (N, K))`` of a simulated
+    campaign's events on the channels of all its events (what the benchmark and the tests feed
+    :func:`health_posterior`)."""
     from cassini_bayes.api._simulation import simulate
-    from cassini_bayes.inference.health import event_summary
+    from cassini_bayes.inference.health import event_channels, event_summary
     from cassini_bayes.inference.health.summary import TAU_SD_FRAC
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
 
     camp = campaign if not isinstance(campaign, (str, os.PathLike)) else load_campaign(campaign)
     ys, ss, ds = [], [], []
-    for ev in campaign_events(camp, seed):
-        sim = simulate(ev.scenario)
-        sm = event_summary(sim.telemetry, sim.pulses, sim.prior,
+    events = campaign_events(camp, seed)
+    sims = [simulate(ev.scenario) for ev in events]
+    channels = event_channels([(sim.telemetry, sim.pulses) for sim in sims], sims[0].prior)
+    for ev, sim in zip(events, sims):
+        sm = event_summary(sim.telemetry, sim.pulses, sim.prior, channels=channels,
                            tau_sd_frac=TAU_SD_FRAC if tau_sd_frac is None else tau_sd_frac)
         ys.append(sm.log_thrust)
         ss.append(np.sqrt(np.diag(sm.cov)))

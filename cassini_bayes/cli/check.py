@@ -71,8 +71,9 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
                       "between them")
     else:
         console.print(f"Quiet periods: none of at least {c.min_quiet_s:g} s")
-    console.print(f"  quiet means |ω| ≤ {c.rate_max_rad_s * 1e3:g} mrad/s, running wheels "
-                  f"within {c.wheel_tol_rpm:g} rpm over 10 s, no thruster firing")
+    console.print(f"  quiet means |ω| ≤ {c.rate_max_rad_s * 1e3:.3g} mrad/s ({c.rate_rule}, at "
+                  f"least 8 noise sd), running wheels within {c.wheel_tol_rpm:g} rpm (at least 8 "
+                  "noise sd) over 10 s, no thruster firing")
     if c.n_pulses is not None:
         console.print(f"[bold]{escape(str(pulses))}[/bold]: valid pulse log, "
                       f"{c.n_pulses} pulses")
@@ -87,10 +88,12 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         pulses: Path | None = typer.Option(None, "--pulses", help="Pulse log CSV to validate "
                                            "and use for the thruster on-times."),
         min_quiet: float = typer.Option(60.0, "--min-quiet", help="Shortest quiet period, s."),
-        rate_max: float = typer.Option(1e-3, "--rate-max",
-                                       help="Largest body rate of a quiet sample, rad/s."),
-        wheel_tol: float = typer.Option(2.0, "--wheel-tol",
-                                        help="Largest wheel-rate change in a quiet stretch, rpm."),
+        rate_max: float | None = typer.Option(
+            None, "--rate-max", help="Largest body rate of a quiet sample, rad/s [default: a "
+            "third of the file's top rate, at least 8 sd of its gyro noise]."),
+        wheel_tol: float | None = typer.Option(
+            None, "--wheel-tol", help="Largest wheel-rate change in a quiet stretch, rpm "
+            "[default: 2, at least 8 sd of each wheel's noise]."),
         spacecraft: str | None = typer.Option(None, "--spacecraft", help="Spacecraft model "
                                               "TOML: also check the wheel units against "
                                               "momentum conservation."),

@@ -62,9 +62,11 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
             console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         lo, hi = s["change_date_days"]["interval_90"]
         mark = "[green]✓[/green]" if not failed_checks(s) else "[red]✗[/red]"
+        worst = max(s["channels"], key=lambda c: s["channels"][c]["p_down_last"])
         console.print(f"{mark} {s['n_events']} events: P(change) = {s['p_change']:.3f}"
-                      f" (90 % date [{lo:.0f}, {hi:.0f}] d), P(Z3 or Z4 > {fraction:.0%} down) "
-                      f"= {s['p_down_last']['Z3|Z4']:.3f}{verdict_text(s)}, "
+                      f" (90 % date [{lo:.0f}, {hi:.0f}] d), P(a channel > {fraction:.0%} down) "
+                      f"= {s['p_down_last']['any']:.3f} (most: {escape(worst)} "
+                      f"{s['channels'][worst]['p_down_last']:.3f}){verdict_text(s)}, "
                       f"{time.perf_counter() - t0:.1f} s → {escape(str(out))}")
         enforce_adequacy(s, out, strict=strict, what="the spacecraft model does not fit the "
                          "events", hint="check the spacecraft model's epoch (its inertia) and "

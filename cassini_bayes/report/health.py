@@ -25,20 +25,25 @@ HEALTH_NOTE = ("Self-checks of the health fit that need no truth. inertia_confli
 
 
 def plot_health(post, fraction: float = 0.05, n_grid: int = 300) -> Figure:
-    """One panel per channel (``Z1 … Z4``, ``Y13``, ``Y24``): the thrust relative to the first
+    """One panel per channel (the fit's channels, e.g. Cassini's ``F[Z1]`` … and its Y-pair
+    means): the thrust relative to the first
     calibration, posterior median with 50 % and 90 % bands (exact draws, seed 0), each event's
     estimate over the posterior baseline (±1 sd), the ``1 − fraction`` line, and below each
     panel's title the posterior ``P(down by more than fraction)`` at the last event."""
-    from cassini_bayes.inference.health import CHANNELS
     from cassini_bayes.report.figures import tidy_ticks
 
     grid = np.linspace(post.dates[0], post.dates[-1], n_grid)
     q = post.relative_thrust_bands(grid, np.random.default_rng(0), 4000,
                                    (0.05, 0.25, 0.5, 0.75, 0.95))
     base = post.draws(np.random.default_rng(1), 2000)["b"].mean(axis=0)   # first calibration
-    fig = Figure(figsize=(11.0, 6.6))
-    axes = fig.subplots(2, 3, sharex=True).ravel()
-    for k, (ax, name) in enumerate(zip(axes, CHANNELS)):
+    k_ch = len(post.channels)
+    ncol = min(k_ch, 3 if k_ch <= 6 else 4)
+    nrow = -(-k_ch // ncol)
+    fig = Figure(figsize=(3.7 * ncol, 3.3 * nrow))
+    axes = np.atleast_1d(fig.subplots(nrow, ncol, sharex=True, squeeze=False).ravel())
+    for ax in axes[k_ch:]:
+        ax.set_visible(False)
+    for k, (ax, name) in enumerate(zip(axes, post.channels)):
         ax.fill_between(grid, q[k, :, 0], q[k, :, 4], color="#9ecae1", lw=0, label="90 %")
         ax.fill_between(grid, q[k, :, 1], q[k, :, 3], color="#4292c6", lw=0, label="50 %")
         ax.plot(grid, q[k, :, 2], color="#08306b", lw=1.2, label="median")
@@ -48,7 +53,7 @@ def plot_health(post, fraction: float = 0.05, n_grid: int = 300) -> Figure:
                     color="0.3", ms=4, lw=0.6, label="event estimate")
         ax.axhline(1.0 - fraction, color="firebrick", lw=0.8, ls="--")
         p = post.p_down([k], fraction)[-1]
-        ax.set_title(f"{name}: P(>{fraction:.0%} down) = {p:.3f}", fontsize=9)
+        ax.set_title(f"{name}\nP(>{fraction:.0%} down) = {p:.3f}", fontsize=8)
         ax.set_ylim(0.85, 1.1)
         ax.grid(alpha=0.3)
         ax.set_xlabel("days after the first event (d)", fontsize=8)
@@ -59,7 +64,8 @@ def plot_health(post, fraction: float = 0.05, n_grid: int = 300) -> Figure:
     lo, hi = post.change_date_interval(0.9)
     fig.suptitle(f"Thruster health: P(change) = {post.p_change:.3f}; change date 90 % interval "
                  f"[{lo:.0f}, {hi:.0f}] d (given a change)", fontsize=10)
-    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=0.9, wspace=0.32, hspace=0.42)
+    fig.subplots_adjust(left=0.07, right=0.98, bottom=0.09, top=1.0 - 0.55 / (3.3 * nrow),
+                        wspace=0.32, hspace=0.5)
     return fig
 
 
@@ -78,7 +84,6 @@ def health_report_html(res, png: bytes) -> str:
     (:class:`~cassini_bayes.api.HealthResult`) with ``png``, the figure of :func:`plot_health`:
     the answer table and the figure, the adequacy verdict, the change point, the events."""
     from cassini_bayes import __version__
-    from cassini_bayes.inference.health import CHANNELS
     from cassini_bayes.report.adequacy import adequacy_section
     from cassini_bayes.report.build import verdict_badges
     from cassini_bayes.report.html import (Raw, badge, details, figure, html_page, page_header,
@@ -86,9 +91,10 @@ def health_report_html(res, png: bytes) -> str:
 
     post, s, frac = res.posterior, res.summary, res.fraction
     first = np.exp(post.draws(np.random.default_rng(1), 2000)["b"])    # N, first calibration
-    nominal = float(post.prior.nominal_thrust_n)
+    nominal = np.broadcast_to(np.asarray(post.prior.nominal_thrust_n, float),
+                              (len(post.channels),))
     rows, classes, calls = [], [], []
-    for k, name in enumerate(CHANNELS):
+    for k, name in enumerate(post.channels):
         c = s["channels"][name]
         ok = np.flatnonzero(np.isfinite(post.y[:, k]))
         ls = (f"{np.exp(post.y[ok[-1], k] - post.y[ok[0], k]):.3f}" if ok.size > 1 else "–")
@@ -98,7 +104,7 @@ def health_report_html(res, png: bytes) -> str:
         lo, hi = c["ratio_last_90"]
         rows.append([name, "ratio", f"{c['ratio_last_mean']:.3f}", f"[{lo:.3f}, {hi:.3f}]", ls,
                      f"{c['p_down_last']:.3f}", f"{first[:, k].mean():.3f} [{f_lo:.3f}, "
-                     f"{f_hi:.3f}]", f"{nominal:.3f}", str(c["n_events"]),
+                     f"{f_hi:.3f}]", f"{nominal[k]:.3f}", str(c["n_events"]),
                      Raw(badge(word, good))])
         classes.append([""] * 5 + ["bad" if good is False else ("good" if good else "warn")]
                        + [""] * 4)
@@ -111,8 +117,8 @@ def health_report_html(res, png: bytes) -> str:
         ["P(a change in the span)", "–", f"{s['p_change']:.3f}"],
         ["change date, median (given a change)", "d", f"{s['change_date_days']['median']:.0f}"],
         ["change date, 90 % interval (given a change)", "d", f"[{lo:.0f}, {hi:.0f}]"],
-        ["P(Z3 or Z4 more than {:.0%} down at the last event)".format(frac), "–",
-         f"{s['p_down_last']['Z3|Z4']:.3f}" if "Z3|Z4" in s.get("p_down_last", {}) else "–"],
+        *[[f"P({'any channel' if g == 'any' else g} more than {frac:.0%} down at the last "
+            "event)", "–", f"{p:.3f}"] for g, p in s.get("p_down_last", {}).items()],
         *[[f"P({name} stepped | a change)", "–", f"{c['p_step_given_change']:.3f}"]
           for name, c in s["channels"].items()],
         ["events", "–", f"{s['n_events']} over [{s['first_date_days']:.0f}, "
@@ -133,9 +139,10 @@ def health_report_html(res, png: bytes) -> str:
         section("Answer", [answer, paragraph(
             "Verdict: DOWN when P(more than the fraction below the first calibration) ≥ 0.95 at "
             "the last event, healthy when ≤ 0.05, else undecided. Least squares: each event's "
-            "weighted least squares of Feldman & Lee Eqs 19-21 (the Y pairs as their means, "
-            "Eq 21). Model file: the spacecraft model's predicted thrust, the prior's centre of "
-            "the baselines. docs/health.md.", note=True), fig], id="answer"),
+            "weighted least squares of Feldman & Lee Eqs 17-21 (thrusters that always fire "
+            "together as their mean, Eq 21). Model file: the spacecraft model's predicted "
+            "thrust, the prior's centre of the baselines. docs/health.md.", note=True), fig],
+                id="answer"),
         adequacy_section(s, HEALTH_NOTE),
         section("Change point", change, id="change"),
         section("Events", details(f"{len(res.files)} events", events), id="events"),

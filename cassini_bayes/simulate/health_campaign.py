@@ -6,14 +6,19 @@ the events differ::
     name, description, seed, event = "health_event.toml"   (relative to the campaign file,
                   else a shipped scenario's name)
     [campaign]    n_events, span_days, date_jitter (0..1 of the mean spacing),
-                  wheel_rpm = [lo, hi] (each wheel's biasing target: |rpm| uniform, random sign),
-                  thrust_n (nominal true thrust, N)
+                  wheel_rpm = [lo, hi] (each wheel's biasing target: |rpm| uniform, random sign;
+                  at most the model's wheel speed limit), thrust_n (nominal true thrust of every
+                  thruster, N; default each thruster's own in the event's truth model)
     [errors]      thrust_offset_frac (per campaign and thruster, uniform on ±),
                   thrust_scatter_frac (per event and thruster: sd of a uniform scatter),
                   tau_scatter_frac (per event: sd of a uniform scatter of each time constant),
                   inertia_error_frac (per campaign: sd of each principal moment's error),
                   wheel_inertia_error_sd (per campaign and wheel: sd of the spin-inertia error)
-    [degradation] thrusters = ["Z3", "Z4"], fraction (0..1 lost), day (after the first event)
+    [degradation] thrusters = names of the truth model's thrusters (e.g. ["Z3", "Z4"]),
+                  fraction (0..1 lost), day (after the first event)
+
+The file is read through :class:`~cassini_bayes._toml.TomlTable` (every key checked, every error
+naming the file and the key); any spacecraft model with thrusters flies it.
 
 :func:`campaign_events` turns a campaign and a seed into the event scenarios and their dates; the
 errors are drawn here, independently of what the health model assumes (its scatter is Gaussian,
@@ -29,9 +34,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cassini_bayes._toml import read_toml
+from cassini_bayes._toml import TomlTable, read_toml
 from cassini_bayes.errors import InputError
-from cassini_bayes.physics.impulse import THRUSTER_NAMES
+from cassini_bayes.spacecraft import WHEEL_SPEED_NOMINAL_RPM
 from cassini_bayes.simulate.scenario import Scenario, scenario_from_dict, scenario_path
 
 __all__ = ["Campaign", "CampaignEvent", "load_campaign", "campaign_events"]
@@ -54,7 +59,7 @@ class Campaign:
     span_days: float
     date_jitter: float
     wheel_rpm: tuple[float, float]
-    thrust_n: float
+    thrust_n: np.ndarray
     thrust_offset_frac: float
     thrust_scatter_frac: float
     tau_scatter_frac: float
@@ -63,22 +68,24 @@ class Campaign:
     degraded: tuple[int, ...] = ()
     degradation_fraction: float = 0.0
     degradation_day: float | None = None
+    thrusters: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
 class CampaignEvent:
-    """One event: its date (days after the first event), scenario and true thrusts (8,), N."""
+    """One event: its date (days after the first event), scenario and true thrusts (M,), N
+    (the truth model's thrusters in order)."""
 
     date_days: float
     scenario: Scenario
     thrust_n: np.ndarray
 
 
-def _num(table: dict, key: str, src: str, lo: float, hi: float, default=None) -> float:
-    v = table.get(key, default)
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
-        raise InputError(f"'{key}' must be a number in [{lo}, {hi}], got {v!r}", path=src)
-    return float(v)
+_ALLOWED = {"name", "description", "seed", "event", "campaign", "errors", "degradation"}
+_CAMPAIGN_KEYS = {"n_events", "span_days", "date_jitter", "wheel_rpm", "thrust_n"}
+_ERROR_KEYS = {"thrust_offset_frac", "thrust_scatter_frac", "tau_scatter_frac",
+               "inertia_error_frac", "wheel_inertia_error_sd"}
+_DEGRADATION_KEYS = {"thrusters", "fraction", "day"}
 
 
 def load_campaign(path: str | os.PathLike) -> Campaign:
@@ -89,50 +96,65 @@ def load_campaign(path: str | os.PathLike) -> Campaign:
     if "campaign" not in d and "run" in d:
         raise InputError("a scenario file, not a thruster-health campaign: simulate it with "
                          "'cassini-bayes simulate FILE --out DIR'", path=src)
-    allowed = {"name", "description", "seed", "event", "campaign", "errors", "degradation"}
-    for key in d:
-        if key not in allowed:
-            raise InputError(f"unknown key '{key}'; allowed: {', '.join(sorted(allowed))}",
-                             path=src)
+    top = TomlTable(d, "", src, _ALLOWED)
     if "campaign" not in d or "event" not in d:
         raise InputError("a campaign needs 'event = \"TEMPLATE.toml\"' and a [campaign] table",
                          path=src)
-    ev = Path(str(d["event"]))
+    ev = Path(top.string("event"))
     ev = p.parent / ev if not ev.is_absolute() and (p.parent / ev).exists() else ev
     template = read_toml(scenario_path(ev, "event scenario"), "event scenario",
                          "experiments/scenarios/")
-    c, e = d["campaign"], d.get("errors", {})
+    truth0 = scenario_from_dict(template, str(ev))
+    model = truth0.truth
+    names = model.thruster_names
+    if not names:
+        raise InputError(f"the event's truth model {model.name!r} has no thrusters; a health "
+                         "campaign's events are biasing events", path=src)
+    c = top.sub("campaign", _CAMPAIGN_KEYS, required=True)
+    e = top.sub("errors", _ERROR_KEYS)
     seed = d.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2**63:
         raise InputError(f"'seed' must be an integer in 0 .. 2**63 - 1 (as --seed), got "
                          f"{seed!r}", path=src)
-    rpm = c.get("wheel_rpm", [300.0, 900.0])
-    if not (isinstance(rpm, list) and len(rpm) == 2 and 0 <= rpm[0] <= rpm[1] <= 3000):
-        raise InputError("'campaign.wheel_rpm' must be [lo, hi] rpm with 0 <= lo <= hi <= 3000",
-                         path=src)
-    n = int(_num(c, "n_events", src, 2, 1000))
+    top_rpm = min(w.max_speed_rpm if np.isfinite(w.max_speed_rpm) else WHEEL_SPEED_NOMINAL_RPM
+                  for w in model.wheels)
+    rpm = c.table.get("wheel_rpm", [300.0, 900.0])
+    if not (isinstance(rpm, list) and len(rpm) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in rpm)
+            and 0 <= rpm[0] <= rpm[1] <= top_rpm):
+        raise c.err("wheel_rpm", f"must be [lo, hi] rpm with 0 <= lo <= hi <= {top_rpm:g} (the "
+                                 f"truth model's wheel speed limit), got {rpm!r}")
+    n = int(c.in_range("n_events", lo=2, hi=1000, open_lo=False))
+    if c.has("thrust_n"):
+        thrust = np.full(len(names), c.in_range("thrust_n", lo=0.0, unit="N"))
+    else:
+        thrust = model.thrust_per_thruster
     kw = {}
     if "degradation" in d:
-        g = d["degradation"]
-        names = [str(x).upper() for x in g.get("thrusters", [])]
-        if not names or any(x not in THRUSTER_NAMES for x in names):
-            raise InputError(f"'degradation.thrusters' must list thrusters of "
-                             f"{', '.join(THRUSTER_NAMES)}, got {g.get('thrusters')!r}", path=src)
-        kw = {"degraded": tuple(THRUSTER_NAMES.index(x) for x in names),
-              "degradation_fraction": _num(g, "fraction", src, 0.0, 0.9),
-              "degradation_day": _num(g, "day", src, 0.0, 1e5)}
+        g = top.sub("degradation", _DEGRADATION_KEYS)
+        want = g.table.get("thrusters", [])
+        upper = [x.upper() for x in names]
+        if (not isinstance(want, list) or not want
+                or any(str(x).upper() not in upper for x in want)):
+            raise g.err("thrusters", f"must list thrusters of the truth model {model.name!r} "
+                                     f"({', '.join(names)}), got {want!r}")
+        kw = {"degraded": tuple(upper.index(str(x).upper()) for x in want),
+              "degradation_fraction": g.in_range("fraction", lo=0.0, hi=0.9, open_lo=False),
+              "degradation_day": g.in_range("day", lo=0.0, hi=1e5, open_lo=False, unit="d")}
     return Campaign(
-        name=str(d.get("name", p.stem)), description=str(d.get("description", "")), seed=seed,
+        name=top.string("name", p.stem), description=top.string("description", ""), seed=seed,
         source=src, event_template=template, event_source=str(ev), n_events=n,
-        span_days=_num(c, "span_days", src, 1.0, 1e5), date_jitter=_num(c, "date_jitter", src,
-                                                                         0.0, 1.0, 0.0),
-        wheel_rpm=(float(rpm[0]), float(rpm[1])),
-        thrust_n=_num(c, "thrust_n", src, 0.01, 10.0, 0.699),
-        thrust_offset_frac=_num(e, "thrust_offset_frac", src, 0.0, 0.3, 0.0),
-        thrust_scatter_frac=_num(e, "thrust_scatter_frac", src, 0.0, 0.1, 0.0),
-        tau_scatter_frac=_num(e, "tau_scatter_frac", src, 0.0, 0.3, 0.0),
-        inertia_error_frac=_num(e, "inertia_error_frac", src, 0.0, 0.1, 0.0),
-        wheel_inertia_error_sd=_num(e, "wheel_inertia_error_sd", src, 0.0, 0.03, 0.0), **kw)
+        span_days=c.in_range("span_days", lo=1.0, hi=1e5, open_lo=False, unit="d"),
+        date_jitter=c.in_range("date_jitter", 0.0, lo=0.0, hi=1.0, open_lo=False),
+        wheel_rpm=(float(rpm[0]), float(rpm[1])), thrust_n=thrust,
+        thrust_offset_frac=e.in_range("thrust_offset_frac", 0.0, lo=0.0, hi=0.3, open_lo=False),
+        thrust_scatter_frac=e.in_range("thrust_scatter_frac", 0.0, lo=0.0, hi=0.1,
+                                       open_lo=False),
+        tau_scatter_frac=e.in_range("tau_scatter_frac", 0.0, lo=0.0, hi=0.3, open_lo=False),
+        inertia_error_frac=e.in_range("inertia_error_frac", 0.0, lo=0.0, hi=0.1, open_lo=False),
+        wheel_inertia_error_sd=e.in_range("wheel_inertia_error_sd", 0.0, lo=0.0, hi=0.03,
+                                          open_lo=False),
+        thrusters=names, **kw)
 
 
 def _uniform(rng, sd: float, size=None):
@@ -150,7 +172,8 @@ def campaign_events(campaign: Campaign, seed: int) -> list[CampaignEvent]:
                                                        c.n_events)
     dates = np.sort(np.clip(dates, 0.0, c.span_days))
     dates -= dates[0]                                           # the first calibration is day 0
-    offset = 1.0 + rng.uniform(-c.thrust_offset_frac, c.thrust_offset_frac, 8)
+    m = len(c.thrusters)
+    offset = 1.0 + rng.uniform(-c.thrust_offset_frac, c.thrust_offset_frac, m)
     tmpl = c.event_template
     truth0 = scenario_from_dict(tmpl, c.event_source)
     i0 = np.asarray(truth0.truth.inertia)
@@ -166,7 +189,7 @@ def campaign_events(campaign: Campaign, seed: int) -> list[CampaignEvent]:
     events = []
     for k, day in enumerate(dates):
         d = copy.deepcopy(tmpl)
-        thrust = c.thrust_n * offset * (1.0 + _uniform(rng, c.thrust_scatter_frac, 8))
+        thrust = c.thrust_n * offset * (1.0 + _uniform(rng, c.thrust_scatter_frac, m))
         if c.degraded and day >= c.degradation_day:
             thrust[list(c.degraded)] *= 1.0 - c.degradation_fraction
         tau = tau0 * (1.0 + _uniform(rng, c.tau_scatter_frac, 3))

@@ -36,8 +36,8 @@ from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHO
                                                     not_applicable)
 from cassini_bayes.inference.health.changepoint import (SCATTER_GRID, HealthPrior,
                                                         health_posterior)
-from cassini_bayes.inference.health.summary import (CHANNELS, EventSummary, event_design,
-                                                    newey_west_lags, residual_cov, weighted_fit)
+from cassini_bayes.inference.health.summary import (EventSummary, event_design, newey_west_lags,
+                                                    residual_cov, weighted_fit)
 from cassini_bayes.physics.impulse import impulse_lhs_basis
 
 __all__ = ["InertiaProbe", "inertia_probe", "inertia_conflict", "held_out_events",
@@ -50,10 +50,10 @@ _basis = jax.jit(impulse_lhs_basis)
 class InertiaProbe(NamedTuple):
     """What one event says about the model's inertia.
 
-    shift : (6,) relative change of each reported channel's thrust, ``(F_model − F_own) /
+    shift : (K,) relative change of each reported channel's thrust, ``(F_model − F_own) /
         F_model``, from the model file's inertia to the event's own principal moments (NaN where
         the channel is not reported).
-    own_sd : (6,) the sd of the event's log thrust with its own moments: the summary's, with its
+    own_sd : (K,) the sd of the event's log thrust with its own moments: the summary's, with its
         Newey-West part replaced by the own-inertia fit's (the time-constant and wheel terms
         kept).
     moments : (3,) the event's principal moments relative to the model's, ``I_own / I_model − 1``.
@@ -73,7 +73,7 @@ def inertia_probe(tel, pulses, spacecraft, summary: EventSummary, *,
                   lags: int | None = None) -> InertiaProbe:
     """The event refitted with its principal moments free (:class:`InertiaProbe`), with the
     per-axis weights of the summary's own fit so that only the added columns differ."""
-    des = event_design(tel, pulses, spacecraft)
+    des = event_design(tel, pulses, spacecraft, channels=summary.channels)
     basis = np.asarray(_basis(np.asarray(tel.t, float), np.asarray(tel.omega, float),
                               np.asarray(wheel_momentum(tel, spacecraft), float)))
     inertia = np.asarray(spacecraft.inertia, float)
@@ -85,18 +85,19 @@ def inertia_probe(tel, pulses, spacecraft, summary: EventSummary, *,
     lags = newey_west_lags(des.v.shape[0]) if lags is None else int(lags)
     f0, w_fit, a0, e0, rms = weighted_fit(des.x, des.v)
     w = 1.0 / np.maximum(rms, 1e-12) ** 2                  # the scores' weights, as the summary
+    k_ch = len(summary.channels)
     if not _separable(x1, w_fit):     # body rates too quiet to tell the moments from thrust
-        nan6, nan3 = np.full(6, np.nan), np.full(3, np.nan)
-        return InertiaProbe(nan6, nan6, nan3, nan3)
+        nan_k, nan3 = np.full(k_ch, np.nan), np.full(3, np.nan)
+        return InertiaProbe(nan_k, nan_k, nan3, nan3)
     f1, _, a1, e1, _ = weighted_fit(x1, des.v, w_fit)
     nw0 = np.sqrt(np.diag(residual_cov(des.x, e0, w_fit, w, a0, lags)))
     cov1 = residual_cov(x1, e1, w_fit, w, a1, lags)
     nw1 = np.sqrt(np.diag(cov1))
-    idx = np.flatnonzero(des.fired[:6])
+    idx = np.flatnonzero(des.fired[:k_ch])
     p = idx.size
     rep = np.isfinite(summary.log_thrust[idx])
     k = idx[rep]
-    shift, own_sd = np.full(6, np.nan), np.full(6, np.nan)
+    shift, own_sd = np.full(k_ch, np.nan), np.full(k_ch, np.nan)
     f = np.abs(f0[:p][rep])
     shift[k] = (f0[:p] - f1[:p])[rep] / f0[:p][rep]
     s2 = np.diag(summary.cov)[k]
@@ -116,11 +117,11 @@ def _separable(x: np.ndarray, w: np.ndarray, max_cond: float = 1e10) -> bool:
 
 
 def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
-                     threshold: float = PRIOR_CONFLICT_SD) -> Check:
+                     channels: Sequence[str], threshold: float = PRIOR_CONFLICT_SD) -> Check:
     """``max_ek |Δ_ek − Δ̄_k| / s_ek`` (module docstring): the part of each event's thrust
     change under its own inertia that the events do not share, in the sd ``s_ek`` of the
     event's thrust under its own inertia; ``Δ̄_k`` the precision-weighted mean over the events
-    of channel ``k``."""
+    of channel ``k`` (``channels`` names them)."""
     name = "inertia_conflict"
     shift = np.array([p.shift for p in probes], float)
     se = np.array([p.own_sd for p in probes], float)
@@ -137,12 +138,12 @@ def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
     pooled = np.sum(wm * np.nan_to_num(mom), axis=0) / np.maximum(np.sum(wm, axis=0), 1e-300)
     note = ("the events' own principal moments differ from the model's by " + ", ".join(
         f"{n} {100 * x:+.1f} %" for n, x in zip(MOMENT_NAMES, pooled))
-        + f"; {labels[e]} {CHANNELS[k]}: thrust {-100 * shift[e, k]:+.2g} % under its own "
+        + f"; {labels[e]} {channels[k]}: thrust {-100 * shift[e, k]:+.2g} % under its own "
         f"inertia (events' shared part {-100 * shared[k]:+.2g} %), sd {100 * se[e, k]:.2g} %")
     if z[e, k] > threshold:
         note += ("; the health model takes the model's inertia as exact up to a shared scale: "
                  "give the spacecraft model of the events' epoch (fit inertia calibrates it)")
-    return _check(name, float(z[e, k]), threshold, f"{labels[e]} {CHANNELS[k]}", note)
+    return _check(name, float(z[e, k]), threshold, f"{labels[e]} {channels[k]}", note)
 
 
 def predictive_cdf(post, date_days: float, log_thrust: float, se: float, k: int) -> float:
@@ -171,9 +172,10 @@ def predictive_cdf(post, date_days: float, log_thrust: float, se: float, k: int)
 
 
 def held_out_events(dates_days, log_thrust, se, prior: HealthPrior, labels: Sequence[str],
-                    threshold: float = Z_THRESHOLD) -> Check:
+                    channels: Sequence[str], threshold: float = Z_THRESHOLD) -> Check:
     """Leave one event out (module docstring): the normal deviate of the smallest
-    Bonferroni-adjusted two-sided predictive tail probability over events and channels."""
+    Bonferroni-adjusted two-sided predictive tail probability over events and channels
+    (``channels`` names them)."""
     name = "held_out"
     t = np.asarray(dates_days, float)
     y, s = np.asarray(log_thrust, float), np.asarray(se, float)
@@ -194,7 +196,7 @@ def held_out_events(dates_days, log_thrust, se, prior: HealthPrior, labels: Sequ
     e, k = np.unravel_index(int(np.nanargmax(z)), z.shape)
     p = 2.0 * stats.norm.sf(z[e, k])
     return _check(name, normal_deviate(min(p * n_tests, 1.0)), threshold,
-                  f"{labels[e]} {CHANNELS[k]}",
+                  f"{labels[e]} {channels[k]}",
                   f"largest |z| {z[e, k]:.2f} of {n_tests} event channels, each against the "
                   "others' change-point posterior")
 
@@ -205,5 +207,6 @@ def health_adequacy(dates_days, summaries: Sequence[EventSummary],
     """The checks of a health fit (module docstring); ``labels`` name the events."""
     y = np.array([s.log_thrust for s in summaries])
     se = np.array([np.sqrt(np.diag(s.cov)) for s in summaries])
-    return Adequacy((inertia_conflict(probes, labels),
-                     held_out_events(dates_days, y, se, prior, labels)))
+    names = summaries[0].channels.names
+    return Adequacy((inertia_conflict(probes, labels, names),
+                     held_out_events(dates_days, y, se, prior, labels, names)))

@@ -1,13 +1,16 @@
 """Exact change-point posterior of per-channel thrust over many events.
 
-Model (channel ``k`` = ``Z1 … Z4, Y13, Y24``; event ``e`` at date ``t_e``, days after the first)::
+Model (channel ``k``, one of the events' thrust channels,
+:func:`~cassini_bayes.inference.health.summary.health_channels`; event ``e`` at date ``t_e``, days
+after the first)::
 
     y_ek = b_k + d_k · 1[t_e ≥ τ] + ε_ek,     ε_ek ~ N(0, s_ek² + σ_k²)
 
 * ``y_ek`` the event's log thrust estimate and ``s_ek`` its standard error
   (:func:`~cassini_bayes.inference.health.summary.event_summary`; missing where the event does not
   identify the channel);
-* ``b_k ~ N(log F_nominal, 0.5²)``: the channel's log thrust at the first calibration, *including*
+* ``b_k ~ N(log F_nominal,k, 0.5²)`` (``F_nominal,k`` the model file's thrust of the channel's
+  thrusters, their mean): the channel's log thrust at the first calibration, *including*
   every error shared by all events (the spacecraft inertia, a common wheel-inertia scale, a
   time-constant error scale all events' estimates alike). Health is judged on ``d_k``, the log of
   the ratio to the first calibration, in which they cancel;
@@ -50,14 +53,15 @@ class HealthPrior:
 
     p_change : probability of one change within the events' span. p_channel : probability that
     a channel steps at the change. step_sd : sd of a stepping channel's log step ``d_k``.
-    baseline_sd : sd of each ``b_k`` about ``log(nominal_thrust_n)``.
+    baseline_sd : sd of each ``b_k`` about ``log(nominal_thrust_n)``. nominal_thrust_n : the
+    channels' predicted thrust, N: one for all, or one per channel (K,).
     """
 
     p_change: float = 0.1
     p_channel: float = 0.5
     step_sd: float = 0.1
     baseline_sd: float = 0.5
-    nominal_thrust_n: float = 0.699
+    nominal_thrust_n: float | tuple[float, ...] = 0.699
 
     def check(self) -> "HealthPrior":
         for name in ("p_change", "p_channel"):
@@ -65,7 +69,7 @@ class HealthPrior:
                 raise InputError(f"must lie strictly between 0 and 1, got "
                                  f"{getattr(self, name)}", path=name)
         for name in ("step_sd", "baseline_sd", "nominal_thrust_n"):
-            if not getattr(self, name) > 0:
+            if not np.all(np.asarray(getattr(self, name), float) > 0):
                 raise InputError(f"must be positive, got {getattr(self, name)}", path=name)
         return self
 
@@ -74,9 +78,10 @@ class HealthPrior:
 class HealthPosterior:
     """Exact posterior of the change-point model.
 
-    dates : (N,) event dates, days. y, s : (N, K) log thrusts and their standard errors (NaN:
-    missing). p_change : posterior probability of a change. interval_prob : (N − 1,) posterior
-    probability that the change lies in ``(dates[j], dates[j+1]]`` (sums to ``p_change``).
+    dates : (N,) event dates, days. channels : (K,) the channels' names. y, s : (N, K) log
+    thrusts and their standard errors (NaN: missing). p_change : posterior probability of a
+    change. interval_prob : (N − 1,) posterior probability that the change lies in
+    ``(dates[j], dates[j+1]]`` (sums to ``p_change``).
     step_prob : (N − 1, K) posterior probability that channel ``k`` stepped, given a change in
     interval ``j``. Internals for the conditional posteriors: ``_w`` (N−1, K, G) posterior weight
     of ``σ_k`` given the interval and a step; ``_mean``, ``_cov`` (N−1, K, G, 2), (…, 2, 2) of
@@ -84,6 +89,7 @@ class HealthPosterior:
     """
 
     dates: np.ndarray
+    channels: tuple[str, ...]
     y: np.ndarray
     s: np.ndarray
     prior: HealthPrior
@@ -173,8 +179,8 @@ def _cum(a: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, axis=0)])
 
 
-def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrior()
-                     ) -> HealthPosterior:
+def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrior(),
+                     channels=None) -> HealthPosterior:
     """Exact posterior of the change-point model.
 
     Parameters
@@ -184,6 +190,7 @@ def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrio
         channel.
     se : (N, K) their standard errors (log units).
     prior : :class:`HealthPrior`.
+    channels : (K,) the channels' names (default ``channel 0`` …).
     """
     prior.check()
     t = np.asarray(dates_days, float)
@@ -194,10 +201,16 @@ def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrio
                          f"{t.shape}, {y.shape}, {s.shape}", path="events")
     if not np.all(np.isfinite(t)):
         raise InputError("event dates must be finite days", path="events")
+    k_ch = y.shape[-1]
+    names = (tuple(f"channel {k}" for k in range(k_ch)) if channels is None
+             else tuple(str(c) for c in channels))
+    log_nom = np.log(np.broadcast_to(np.asarray(prior.nominal_thrust_n, float), (k_ch,)))
+    if len(names) != k_ch:
+        raise InputError(f"{len(names)} channel names for {k_ch} channels", path="channels")
     order = np.argsort(t, kind="stable")
     t, y, s = t[order], y[order], s[order]
     obs = np.isfinite(y) & np.isfinite(s) & (s > 0)
-    yc = np.where(obs, y - np.log(prior.nominal_thrust_n), 0.0)
+    yc = np.where(obs, y - log_nom, 0.0)
     # per event, channel, scatter level: precision (0 where missing)
     w = np.where(obs[..., None], 1.0 / (np.where(obs, s, 1.0)[..., None] ** 2
                                         + SCATTER_GRID ** 2), 0.0)      # (N, K, G)
@@ -238,11 +251,11 @@ def health_posterior(dates_days, log_thrust, se, prior: HealthPrior = HealthPrio
     w1 = np.exp(ev1 - log_k1[..., None] - np.log(g))
     w0 = np.exp(ev0 - log_k0[:, None] - np.log(g))
     mean = np.stack([(a22 * h1 - a12 * hpost) / det, (a11 * hpost - a12 * h1) / det], axis=-1)
-    mean[..., 0] += np.log(prior.nominal_thrust_n)
+    mean[..., 0] += log_nom[:, None]
     cov = np.stack([np.stack([a22 / det, -a12 / det], -1),
                     np.stack([-a12 / det, a11 / det], -1)], -2)
     return HealthPosterior(
-        dates=t, y=y, s=s, prior=prior, p_change=float(interval_prob.sum()),
+        dates=t, channels=names, y=y, s=s, prior=prior, p_change=float(interval_prob.sum()),
         interval_prob=interval_prob, step_prob=step_prob, log_evidence=float(log_z), _w=w1,
         _mean=mean, _cov=cov,
-        _w0=w0, _mean0=tot_h / a0 + np.log(prior.nominal_thrust_n), _var0=1.0 / a0)
+        _w0=w0, _mean0=tot_h / a0 + log_nom[:, None], _var0=1.0 / a0)
