@@ -281,13 +281,7 @@ def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike,
     _check_manifest(workdir, _manifest(spec, model, seed, batch_size))
 
     n_batches = math.ceil(n_replicates / batch_size)
-    beyond = sorted(int(p.stem.split("_")[1]) for p in workdir.glob("batch_*.npz")
-                    if p.stem.split("_")[1].isdigit() and int(p.stem.split("_")[1]) >= n_batches)
-    if beyond:  # finished work the smaller campaign would drop with its work folder
-        need = beyond[-1] * batch_size + 1      # the last finished batch then still counts
-        raise InputError(f"{workdir}: holds {len(beyond)} finished batch(es) beyond "
-                         f"--replicates {n_replicates}; resume with --replicates {need} or more "
-                         "to keep them, or start over with --force")
+    _check_no_batches_beyond(workdir, n_batches, n_replicates, batch_size)
     done = load_checkpoints(workdir, n_batches)
     todo = [b for b in range(n_batches) if b not in done]
     if on_batch is not None and done:
@@ -316,3 +310,16 @@ def run_campaign(spec: ModelSpec, n_replicates: int, workdir: str | os.PathLike,
                           cat["n_divergent"], cat["rhat"], cat["ess"], cat["failed"], converged,
                           int(cat["draws"].shape[-1]), int(seed), int(batch_size), len(todo),
                           dict(model.settings))
+
+
+def _check_no_batches_beyond(workdir: Path, n_batches: int, n_replicates: int,
+                             batch_size: int) -> None:
+    """Raise :class:`InputError` when ``workdir`` holds finished batches beyond the first
+    ``n_batches``: work a smaller campaign would drop with its work folder."""
+    beyond = sorted(int(p.stem.split("_")[1]) for p in workdir.glob("batch_*.npz")
+                    if p.stem.split("_")[1].isdigit() and int(p.stem.split("_")[1]) >= n_batches)
+    if beyond:
+        need = beyond[-1] * batch_size + 1      # the last finished batch then still counts
+        raise InputError(f"{workdir}: holds {len(beyond)} finished batch(es) beyond "
+                         f"--replicates {n_replicates}; resume with --replicates {need} or more "
+                         "to keep them, or start over with --force")
