@@ -9,8 +9,9 @@ the step, ``F [g(t+dt − t_on) − g(t − t_on)]`` with ``g`` = :func:`pulse_i
 The controllers see the true state (the on-board attitude estimate is taken as perfect; its
 errors are far below the star-tracker noise put on the telemetry), while they use the *prior*
 model's inertia and thruster sets and the *believed* wheel axes. Sensor noise is added to the
-samples afterwards, so the noisy telemetry and the truth come from one trajectory; with time-tag jitter the noisy
-telemetry carries the jittered times (``SimArrays.t_meas``), the truth the true ones.
+samples afterwards, so the noisy telemetry and the truth come from one trajectory; with
+time-tag jitter the noisy telemetry carries the jittered times (``SimArrays.t_meas``), the truth
+the true ones.
 
 Flexible or slosh mode (:class:`~cassini_bayes.simulate.scenario.FlexMode`): in hybrid
 coordinates the mode is a momentum store exactly like a wheel — spin inertia ``|δ|²`` about
