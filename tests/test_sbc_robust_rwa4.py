@@ -27,6 +27,8 @@ from cassini_bayes.analysis.sbc_models import (
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate import simulate
 from cassini_bayes.simulate.scenario import load_scenario, scenario_from_dict
+from helpers import (assert_gyro_errors_recovered, assert_standard_normal, campaign_sbc,
+                     nuisance_columns)
 
 N_DRAWS = 1000
 ESPA_RCS = SCENARIOS_DIR / "wheel_axis_espa_bus_rcs.toml"
@@ -82,24 +84,13 @@ def test_robust_truth_follows_the_models_prior(case):
          for k in jax.random.split(jax.random.key(11), N_DRAWS)]
     assert d[0]["scale_wheels"] == known + (wheel,) == layout.scale_wheels
     common = [x.get("wheel_scale_common", 0.0) for x in d]
-    cols = {"gyro_bias": [x["gyro_bias"] for x in d], "gyro_scale": [x["gyro_scale"] for x in d],
-            "wheel_inertia": [x["wheel_scale"] - c for x, c in zip(d, common)],
-            "wheel_inertia_common": [[c] for c in common],
-            "wheel_axes": [np.ravel(x["wheel_tilt"]) for x in d],
-            "body_torque": [x["T_body"] for x in d],
-            "inertial_torque": [x["T_inertial"] for x in d],
-            "torque_rate": [x["T_N_rate"] for x in d]}
+    cols = nuisance_columns(d, common)
     nu = np.zeros((N_DRAWS, layout.size))
     for effect, sl in layout.slices.items():
         nu[:, sl] = np.asarray(cols[effect]).reshape(N_DRAWS, -1)
     assert set(layout.slices) >= {"gyro_bias", "gyro_scale", "wheel_inertia", "body_torque",
                                   "inertial_torque", "torque_rate"}
-    z = nu / nu_sd
-    se = 1.0 / np.sqrt(N_DRAWS)
-    assert np.all(np.abs(z.mean(0)) < 4 * se), z.mean(0)
-    np.testing.assert_allclose(z.std(0), 1.0, rtol=0.10)
-    corr = np.corrcoef(z, rowvar=False) - np.eye(z.shape[1])
-    assert np.abs(corr).max() < 4.5 * se
+    assert_standard_normal(nu / nu_sd)
 
 
 def test_robust_truth_reaches_the_simulator():
@@ -115,13 +106,9 @@ def test_robust_truth_reaches_the_simulator():
         nu = robust_rwa4_truth(jax.random.split(keys[i])[1], sc.prior, "RWA4", ())
         u = np.array([params[n][i] for n in ("u4_x", "u4_y", "u4_z")])
         assert abs(np.linalg.norm(u) - 1.0) < 1e-12
-        w, wm = np.asarray(arrays.omega[i]), np.asarray(arrays.omega_meas[i])
-        for j in range(3):
-            x = np.c_[w[:, j], np.ones(len(w))]
-            coef, res, *_ = np.linalg.lstsq(x, wm[:, j] - w[:, j], rcond=None)
-            se = np.sqrt(np.diag(np.linalg.inv(x.T @ x) * res[0] / (len(w) - 2)))
-            assert abs(coef[0] - nu["gyro_scale"][j]) < 5 * se[0]
-            assert abs(coef[1] - nu["gyro_bias"][j]) < 5 * se[1]
+        assert_gyro_errors_recovered(np.asarray(arrays.omega[i]),
+                                     np.asarray(arrays.omega_meas[i]), nu["gyro_scale"],
+                                     nu["gyro_bias"])
 
 
 def test_robust_tiny_campaign_plumbing(tmp_path):
@@ -144,12 +131,8 @@ def test_robust_sbc_detects_wrong_wheel_inertia(tmp_path):
     at family-wise 1 % (measured once: p 3.3e-4 for Iyy and Izz, 6.7e-4 for u4_y, against the
     per-parameter 1.1e-3; Iyy's 95 % intervals covered 2 of 8). For a calibrated model the
     ECDF test fails at most 1 % of the time."""
-    from cassini_bayes.analysis import sbc
-
     spec = ModelSpec.make("rwa4", robust=True, rwa4_inertia_factor=1.3)
     res = run_campaign(spec, 8, tmp_path, seed=6, batch_size=8)
-    out = sbc.sbc_result(res.names, res.rank, res.n_draws, alpha_family=0.01,
-                         draws={n: res.draws[:, j] for j, n in enumerate(res.names)},
-                         truth={n: res.truth[:, j] for j, n in enumerate(res.names)})
+    out = campaign_sbc(res, alpha_family=0.01)
     assert res.failed.sum() == 0
     assert not out.passed("ecdf")

@@ -654,6 +654,30 @@ def rwa4_row(summary, truth, label):
             "divergences": d.get("divergences"), "max_r_hat": d.get("max_r_hat"), "adequacy_ok": ok}
 
 
+def sampler_args(a) -> list:
+    """The CLI's sampler arguments from the parsed ``--chains/--warmup/--draws/--seed``."""
+    return ["--chains", a.chains, "--warmup", a.warmup, "--draws", a.draws, "--seed", a.seed,
+            "--force"]
+
+
+def save_results(out: Path, results: dict, log: list) -> None:
+    """``results.json`` and ``commands.log`` (every CLI command and its output) under ``out``."""
+    (out / "results.json").write_text(json.dumps(results, indent=2, default=float))
+    (out / "commands.log").write_text("\n\n".join(log))
+
+
+def cases(a, results: dict, log: list):
+    """Yield ``(case, its directory, start time)`` for each of ``a.cases``; the results so far
+    are saved after each case (a failed case included) and at the end."""
+    a.out.mkdir(parents=True, exist_ok=True)
+    for case in a.cases.split(","):
+        yield case, a.out / case, time.time()
+        save_results(a.out, results, log)
+    save_results(a.out, results, log)
+    print(f"\nresults: {a.out / 'results.json'}; commands and their output: "
+          f"{a.out / 'commands.log'}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "basilisk")
@@ -673,13 +697,9 @@ def main(argv=None):
             print("  ".join(f"{v:.5f}" for v in row))
         return
     print(f"cassini_bayes {cassini_bayes.__version__} from {Path(cassini_bayes.__file__).parent}")
-    a.out.mkdir(parents=True, exist_ok=True)
     log, results = [], {}
-    sampler = ["--chains", a.chains, "--warmup", a.warmup, "--draws", a.draws, "--seed", a.seed,
-               "--force"]
-    for case in a.cases.split(","):
-        d = a.out / case
-        t0 = time.time()
+    sampler = sampler_args(a)
+    for case, d, t0 in cases(a, results, log):
         truth = {"slews": run_slews, "rcs": run_rcs, "bias": run_bias}[case](model, d, a.seed)
         print(f"[{case}] Basilisk simulation {time.time() - t0:.0f} s; convention check "
               f"{truth['convention_check']:.1e}; momentum check "
@@ -737,10 +757,6 @@ def main(argv=None):
                 rows.append(rwa4_row(s, truth, label))
         results[case] = {"rows": rows, "diagnostics": s["diagnostics"],
                          "adequacy": s.get("adequacy"), "truth": truth}
-    (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
-    (a.out / "commands.log").write_text("\n\n".join(log))
-    print(f"\nresults: {a.out / 'results.json'}; commands and their output: "
-          f"{a.out / 'commands.log'}")
 
 
 if __name__ == "__main__":

@@ -572,13 +572,9 @@ def main(argv=None):
     print(f"cassini_bayes {cassini_bayes.__version__}; model {model.name}; truth: "
           f"{json.dumps(bx.inertia_dict(truth.inertia))}; {truth.tilted_wheel} "
           f"{truth.tilt_angle_deg:.3f}° off the file")
-    a.out.mkdir(parents=True, exist_ok=True)
     log, results = [], {}
-    sampler = ["--chains", a.chains, "--warmup", a.warmup, "--draws", a.draws, "--seed", a.seed,
-               "--force"]
-    for case in a.cases.split(","):
-        d = a.out / case
-        t0 = time.time()
+    sampler = bx.sampler_args(a)
+    for case, d, t0 in bx.cases(a, results, log):
         if case == "plan":
             plan_dir = a.plan or (a.out / "plan_run")
             if a.plan is None:
@@ -592,8 +588,6 @@ def main(argv=None):
             scen_path = plan_dir / "scenario.toml"
         elif case == "bias":
             results[case] = run_bias_case(truth, d, a, log)
-            (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
-            (a.out / "commands.log").write_text("\n\n".join(log))
             continue
         else:
             scen_path = a.slews_scenario if case == "slews" else a.axis_scenario
@@ -653,12 +647,6 @@ def main(argv=None):
                 res.update(compare_with_plan(plan_dir, scen_path, fit, d, truth, a.model,
                                              info["wheels_on"], log))
         results[case] = res
-        (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
-        (a.out / "commands.log").write_text("\n\n".join(log))
-    (a.out / "results.json").write_text(json.dumps(results, indent=2, default=float))
-    (a.out / "commands.log").write_text("\n\n".join(log))
-    print(f"\nresults: {a.out / 'results.json'}; commands and their output: "
-          f"{a.out / 'commands.log'}")
 
 
 if __name__ == "__main__":

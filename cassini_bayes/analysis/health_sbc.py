@@ -123,7 +123,8 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
     (docs/sbc/leak/README.md)."""
     from cassini_bayes.estimators.leak import ETA
     from cassini_bayes.inference.leak import (FRACTION_SCALES, OFFSET_SD_NMS, SAMPLE_STEP_S,
-                                              TORQUE_SCALES, LeakInputs, _Sums, leak_posterior)
+                                              TORQUE_SCALES, LeakInputs, leak_posterior)
+    from cassini_bayes.inference.leak._posterior import _Sums
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")

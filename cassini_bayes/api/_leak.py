@@ -23,7 +23,8 @@ from cassini_bayes.errors import InputError, spelled
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import PulseLogsArg, SpacecraftArg, TelemetriesArg
     from cassini_bayes.estimators.leak import ThresholdResult
-    from cassini_bayes.inference.leak import LeakPosterior
+    from cassini_bayes.inference.leak import LeakInputs, LeakPosterior
+    from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["LeakResult", "monitor_leak", "LEE_LAYOUT_ONLY"]
 
@@ -100,7 +101,6 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
     from cassini_bayes.api._inputs import pulse_inputs, spacecraft_input, telemetry_inputs
     from cassini_bayes.api._result import collect_warnings
     from cassini_bayes.consistency import check_telemetry_data
-    from cassini_bayes.estimators.leak import threshold_monitor
     from cassini_bayes.inference.leak import leak_inputs, leak_posterior
     from cassini_bayes.inference.leak_adequacy import leak_adequacy
 
@@ -127,16 +127,7 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
         inp = leak_inputs(tel, log, sc)
     post = leak_posterior(inp, prior_leak=prior_leak, eta=eta, sample_step_s=sample_step_s,
                           check_step_s=check_step_s, p_detect=p_detect)
-    lee, lee_summary = None, {"applies": False, "reason": LEE_LAYOUT_ONLY}
-    if sc.eq16_layout:
-        lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix,
-                                r_t_nms=threshold_nms, t_limit_s=t_limit_h * 3600.0, eta=eta)
-        lee_summary = {
-            "applies": True, "detection_time_s": lee.detection_time_s,
-            "axis": None if lee.axis is None else "XYZ"[lee.axis],
-            "thruster": None if lee.thruster is None else inp.thruster_names[lee.thruster],
-            "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
-            "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta}
+    lee, lee_summary = _lee_monitor(inp, sc, threshold_nms, t_limit_h, eta)
     summary = {
         "command": "monitor leak", "version": __version__,
         "t_start_s": float(inp.t[0]), "t_end_s": float(inp.t[-1]),
@@ -157,3 +148,21 @@ def monitor_leak(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *,
                            "eta": eta, "threshold_nms": threshold_nms, "t_limit_h": t_limit_h}}
     files = tuple(tel_files + log_files + sc_files)
     return LeakResult(post, lee, summary, config, files)
+
+
+def _lee_monitor(inp: LeakInputs, sc: Spacecraft, threshold_nms: float, t_limit_h: float,
+                 eta: float) -> tuple[ThresholdResult | None, dict]:
+    """Lee's threshold monitor (Lee §3.2, Eq 11) on the same residual and its summary entry;
+    on a layout other than Cassini's eight thrusters of Eq 16, ``None`` and the reason."""
+    from cassini_bayes.estimators.leak import threshold_monitor
+
+    if not sc.eq16_layout:
+        return None, {"applies": False, "reason": LEE_LAYOUT_ONLY}
+    lee = threshold_monitor(inp.t, inp.residual, inp.impulse, inp.q_matrix,
+                            r_t_nms=threshold_nms, t_limit_s=t_limit_h * 3600.0, eta=eta)
+    return lee, {
+        "applies": True, "detection_time_s": lee.detection_time_s,
+        "axis": None if lee.axis is None else "XYZ"[lee.axis],
+        "thruster": None if lee.thruster is None else inp.thruster_names[lee.thruster],
+        "triggers_s": list(lee.triggers_s), "dismissed_s": list(lee.dismissed_s),
+        "threshold_nms": threshold_nms, "t_limit_s": t_limit_h * 3600.0, "eta": eta}

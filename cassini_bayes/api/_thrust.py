@@ -30,6 +30,8 @@ if TYPE_CHECKING:
         TelemetriesArg,
         WheelErrors,
     )
+    from cassini_bayes.spacecraft import Spacecraft
+    from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["fit_thrust", "thrust_baseline", "thrust_sensitivity", "thrust_summary"]
 
@@ -268,15 +270,7 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     sc.require_thrusters("fit thrust" + (" --mode branch" if mode == "branch" else ""),
                          eq16=(mode == "branch"))
     inertia, inertia_input, inertia_paths = _inertia_knowledge(inertia_posterior, fix_inertia)
-    tels, tel_records, tel_paths = telemetry_inputs(telemetry, spacecraft=sc)
-    logs, log_records, log_paths = pulse_inputs(pulses, spacecraft=sc)
-    if not logs:
-        raise InputError(f"fit_thrust needs the pulse log of each event: {arg('pulses')} "
-                         "(columns t_on, thruster, width)")
-    if len(logs) != len(tels):
-        raise InputError(f"{len(tels)} telemetry but {len(logs)} pulse log(s); give one pulse "
-                         "log per telemetry, in the same order")
-    events = list(zip(tels, logs))
+    events, (tel_records, log_records), (tel_paths, log_paths) = _events(telemetry, pulses, sc)
     with step("checking the data"), collect_warnings() as check_warns:
         check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
     key = jax.random.key(seed)  # the one place the seed becomes a key
@@ -295,8 +289,25 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                                 "spacecraft": sc_record, **inertia_input},
                         options={"mode": mode, "model": "robust" if robust else "idealised",
                                  "inertia": ("posterior" if inertia_posterior is not None
-                                             else "sampled" if "Ixx" in cast(Any, post.idata).posterior
+                                             else "sampled"
+                                             if "Ixx" in cast(Any, post.idata).posterior
                                              else "fixed"),
                                  "wheel_errors": wheel_errors})
     return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,
                      (*tel_paths, *log_paths, *sc_paths, *inertia_paths))
+
+
+def _events(telemetry: TelemetriesArg, pulses: PulseLogsArg, sc: Spacecraft
+            ) -> tuple[list[tuple[Telemetry, PulseLog]], tuple[list[dict], list[dict]],
+                       tuple[list[Path], list[Path]]]:
+    """The ``(telemetry, pulse log)`` of each event, with the records and paths of both inputs;
+    :class:`InputError` unless there is one pulse log per telemetry."""
+    tels, tel_records, tel_paths = telemetry_inputs(telemetry, spacecraft=sc)
+    logs, log_records, log_paths = pulse_inputs(pulses, spacecraft=sc)
+    if not logs:
+        raise InputError(f"fit_thrust needs the pulse log of each event: {arg('pulses')} "
+                         "(columns t_on, thruster, width)")
+    if len(logs) != len(tels):
+        raise InputError(f"{len(tels)} telemetry but {len(logs)} pulse log(s); give one pulse "
+                         "log per telemetry, in the same order")
+    return list(zip(tels, logs)), (tel_records, log_records), (tel_paths, log_paths)

@@ -3,7 +3,7 @@
 Three estimators, all on telemetry arrays in SI units:
 
 * :func:`fit_axis_by_axis` — Eq 7 on single-axis slew segments, the products of inertia averaged
-  over the two axes that see them (how Eq 8 was obtained);
+  over the two axes that see them (how the paper obtained Eq 8);
 * :func:`fit_all_axes` — Eq 11, all six entries at once, momentum anchored on a quiescent sample;
 * :func:`fit_free_momentum` — the same regression with the inertial momentum ``H_N`` (and
   optionally a constant inertial torque ``T_N``, App. A) as extra unknowns; no anchor sample.

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import time
-import tomllib
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from pathlib import Path
 from cassini_bayes import __version__
 from cassini_bayes._devices import jax_entry
 from cassini_bayes._paths import EXPERIMENTS_DIR
+from cassini_bayes._toml import read_toml
 from cassini_bayes.analysis.paper_facts import PAPER_FACTS
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments._registry import registered_kinds
@@ -77,10 +77,7 @@ def discover_experiments(directory: str | os.PathLike = EXPERIMENTS_DIR,
     kinds = registered_kinds()
     found, skipped = [], []
     for p in sorted(directory.glob("*.toml")):
-        try:
-            d = tomllib.loads(p.read_text())
-        except tomllib.TOMLDecodeError as e:
-            raise InputError(f"not valid TOML: {e}", path=str(p)) from None
+        d = read_toml(p, "experiment file", "experiments/")
         kind = d.get("kind")
         if kind not in kinds:
             skipped.append((str(p), f"kind {kind!r} is not registered"))

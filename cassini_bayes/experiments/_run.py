@@ -21,7 +21,7 @@ from cassini_bayes._devices import jax_entry
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments._results import ExperimentContext, ExperimentOutput
 from cassini_bayes.experiments._schema import Experiment, load_experiment
-from cassini_bayes.files import json_text, toml_text
+from cassini_bayes.files import json_text
 
 
 def experiment_key(seed: int, name: str | None = None) -> jax.Array:
@@ -60,8 +60,13 @@ def _config_dict(exp: Experiment, settings: Mapping[str, Any], seed: int, quick:
 def write_run(exp: Experiment, workdir: Path, output: ExperimentOutput,
               settings: Mapping[str, Any], seed: int, quick: bool, elapsed_s: float) -> None:
     """Write ``results.json``, ``config.toml``, ``figures/*.png`` and ``report.html`` into
-    ``workdir``."""
+    ``workdir`` (the caller's :class:`~cassini_bayes.rundir.RunDir` makes it atomic).
+
+    An experiment's run directory is not a fit's: its numbers are ``results.json`` (checks,
+    tables, figures beside the summary) and it holds no posterior, so it shares only
+    ``config.toml``'s writer with :func:`cassini_bayes.api.write_run` and the SBC run's."""
     from cassini_bayes.experiments._page import experiment_page
+    from cassini_bayes.rundir import write_config
 
     fig_dir = workdir / "figures"
     fig_dir.mkdir(exist_ok=True)
@@ -80,7 +85,7 @@ def write_run(exp: Experiment, workdir: Path, output: ExperimentOutput,
         "links": [{"label": label, "path": path} for label, path in output.links],
     }
     (workdir / "results.json").write_text(json_text(results))
-    (workdir / "config.toml").write_text(toml_text(_config_dict(exp, settings, seed, quick)))
+    write_config(workdir, _config_dict(exp, settings, seed, quick))
     (workdir / "report.html").write_text(
         experiment_page(exp, output, settings, seed, quick, elapsed_s), encoding="utf-8")
 

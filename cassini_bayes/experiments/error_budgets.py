@@ -270,17 +270,7 @@ def error_budgets(key, settings, ctx) -> ExperimentOutput:
     ``thrust_table2`` and the RWA4 campaigns earlier in the same ``reproduce`` run; ``""``: none),
     ``posterior_draws`` (joint draws propagated).
     """
-    cals = list(dict.fromkeys(settings["calibrations"]))
-    for c in cals:
-        if c not in CALIBRATIONS:
-            raise ctx.error(f"'settings.calibrations' has unknown calibration {c!r}; known: "
-                            f"{', '.join(CALIBRATIONS)}")
-    if settings["n_seeds"] < 1:
-        raise ctx.error("'settings.n_seeds' must be at least 1")
-    if settings["external_torque_nm"] < 0:
-        raise ctx.error("'settings.external_torque_nm' must be non-negative (N m)")
-    if settings["posterior_draws"] < 10:
-        raise ctx.error("'settings.posterior_draws' must be at least 10")
+    cals = _calibrations(settings, ctx)
     posteriors = {w: find_posterior(v, w, f"posteriors.{w}", ctx)
                   for w, v in settings["posteriors"].items()}
     budgets = []
@@ -291,39 +281,8 @@ def error_budgets(key, settings, ctx) -> ExperimentOutput:
                                           external_torque_nm=settings["external_torque_nm"]))
     checks, tables, summary = [], [], {}
     for bud in budgets:
-        f = fact(_FACT[bud.calibration])
-        checks.append(check_fact(_FACT[bud.calibration], bud.rss,
-                                 label=f"{_TITLE[bud.calibration]}: RSS of the sources",
-                                 decimals=3, note=f"{settings['n_seeds']} keys per source"))
-        checks.append(check_fact(_FACT[bud.calibration], bud.total_worst,
-                                 label=f"{_TITLE[bud.calibration]}: worst with all sources on",
-                                 decimals=3, note=f"RMS {bud.total_rms:.3g} {bud.unit}"))
-        rows = [(line.source, f"{line.rms:.4g}", f"{line.worst:.4g}",
-                 f"{100 * line.rms ** 2 / bud.rss ** 2:.0f} %" if bud.rss > 0 else "—")
-                for line in bud.lines]
-        rows += [("RSS", f"{bud.rss:.4g}", "", "100 %"),
-                 ("all sources on", f"{bud.total_rms:.4g}", f"{bud.total_worst:.4g}", ""),
-                 ("paper's budget", f.printed, "", "")]
-        tables.append(Table(f"{_TITLE[bud.calibration]}: error budget ({bud.unit})",
-                            ("source", "RMS", "worst", "share of RSS²"), tuple(rows),
-                            note=f"scenario {settings['scenarios'][bud.calibration]}; "
-                                 f"least-squares estimate; {settings['n_seeds']} keys per source"))
-        summary[bud.calibration] = {
-            "unit": bud.unit, "scenario": settings["scenarios"][bud.calibration],
-            "lines": {line.source: {"rms": line.rms, "worst": line.worst} for line in bud.lines},
-            "rss": bud.rss, "total_rms": bud.total_rms, "total_worst": bud.total_worst,
-            "paper_budget": f.value}
-    notes = (
-        "Each source is switched on alone (the others off) and the papers' least-squares "
-        "estimate is computed for every key; a line is the RMS (and worst) error over the keys. "
-        "Sensor noise acts on the telemetry only, so those lines re-measure one noise-free "
-        "trajectory; external torque and pulse time constants change the dynamics and are "
-        "simulated, vmapped over the keys. 'Sampling' (no noise) is the method's own floor and "
-        "is inside every other line. Mass properties: the estimate with the predicted instead of "
-        "the true inertia (deterministic).",
-        "Like Lee's pointing budget (Table 2), contributions are combined by root-sum-square, "
-        "which assumes independent sources; the 'all sources on' row checks that assumption.",
-    )
+        _budget_lines(bud, settings, checks, tables, summary)
+    notes = _NOTES
     ctx.progress(0.95, "budgets from posteriors")
     sensitivity = None
     if "thrust" in cals and posteriors["inertia"] is not None:
@@ -344,6 +303,62 @@ def error_budgets(key, settings, ctx) -> ExperimentOutput:
                                                "RMS contribution of each source (log scale) "
                                                "with the RSS, the all-sources total and the "
                                                "paper's budget (dashed)."),))
+
+
+def _calibrations(settings, ctx) -> list[str]:
+    """The calibrations to budget, in order without repeats; ``ctx.error`` on a bad setting."""
+    cals = list(dict.fromkeys(settings["calibrations"]))
+    for c in cals:
+        if c not in CALIBRATIONS:
+            raise ctx.error(f"'settings.calibrations' has unknown calibration {c!r}; known: "
+                            f"{', '.join(CALIBRATIONS)}")
+    if settings["n_seeds"] < 1:
+        raise ctx.error("'settings.n_seeds' must be at least 1")
+    if settings["external_torque_nm"] < 0:
+        raise ctx.error("'settings.external_torque_nm' must be non-negative (N m)")
+    if settings["posterior_draws"] < 10:
+        raise ctx.error("'settings.posterior_draws' must be at least 10")
+    return cals
+
+
+def _budget_lines(bud, settings, checks, tables, summary) -> None:
+    """One calibration's budget: its RSS and all-sources checks, its table and its summary
+    entry (appended to ``checks``, ``tables`` and ``summary``)."""
+    f = fact(_FACT[bud.calibration])
+    checks.append(check_fact(_FACT[bud.calibration], bud.rss,
+                             label=f"{_TITLE[bud.calibration]}: RSS of the sources",
+                             decimals=3, note=f"{settings['n_seeds']} keys per source"))
+    checks.append(check_fact(_FACT[bud.calibration], bud.total_worst,
+                             label=f"{_TITLE[bud.calibration]}: worst with all sources on",
+                             decimals=3, note=f"RMS {bud.total_rms:.3g} {bud.unit}"))
+    rows = [(line.source, f"{line.rms:.4g}", f"{line.worst:.4g}",
+             f"{100 * line.rms ** 2 / bud.rss ** 2:.0f} %" if bud.rss > 0 else "—")
+            for line in bud.lines]
+    rows += [("RSS", f"{bud.rss:.4g}", "", "100 %"),
+             ("all sources on", f"{bud.total_rms:.4g}", f"{bud.total_worst:.4g}", ""),
+             ("paper's budget", f.printed, "", "")]
+    tables.append(Table(f"{_TITLE[bud.calibration]}: error budget ({bud.unit})",
+                        ("source", "RMS", "worst", "share of RSS²"), tuple(rows),
+                        note=f"scenario {settings['scenarios'][bud.calibration]}; "
+                             f"least-squares estimate; {settings['n_seeds']} keys per source"))
+    summary[bud.calibration] = {
+        "unit": bud.unit, "scenario": settings["scenarios"][bud.calibration],
+        "lines": {line.source: {"rms": line.rms, "worst": line.worst} for line in bud.lines},
+        "rss": bud.rss, "total_rms": bud.total_rms, "total_worst": bud.total_worst,
+        "paper_budget": f.value}
+
+
+_NOTES = (
+    "Each source is switched on alone (the others off) and the papers' least-squares "
+    "estimate is computed for every key; a line is the RMS (and worst) error over the keys. "
+    "Sensor noise acts on the telemetry only, so those lines re-measure one noise-free "
+    "trajectory; external torque and pulse time constants change the dynamics and are "
+    "simulated, vmapped over the keys. 'Sampling' (no noise) is the method's own floor and "
+    "is inside every other line. Mass properties: the estimate with the predicted instead of "
+    "the true inertia (deterministic).",
+    "Like Lee's pointing budget (Table 2), contributions are combined by root-sum-square, "
+    "which assumes independent sources; the 'all sources on' row checks that assumption.",
+)
 
 
 def thrust_inertia_sensitivity(key, scenario_name: str) -> np.ndarray:

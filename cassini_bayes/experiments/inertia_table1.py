@@ -112,13 +112,6 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
     ``torque`` (constant external torque in the posterior model), ``chains/warmup/draws`` (NUTS),
     ``weak_ratio_min`` (expected Izz sd ratio Post-PRM / Post-PROBE, the weak-Z check).
     """
-    from cassini_bayes.api import collect_warnings, inertia_summary
-    from cassini_bayes.estimators.baseline import fit_inertia_baseline
-    from cassini_bayes.estimators.inertia import table1_errors
-    from cassini_bayes.inference.inertia import fit_inertia
-    from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
-    from cassini_bayes.simulate import load_scenario, simulate
-
     check_sampler_settings(settings, ctx)
     epochs = list(dict.fromkeys(settings["epochs"]))
     for e in epochs:
@@ -131,88 +124,135 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
     links = []
     for n_done, epoch in enumerate(epochs):
         ctx.progress(n_done / len(epochs), f"{_EPOCH_LABEL[epoch]}: simulating")
-        scenario = load_scenario(EPOCH_SCENARIOS[epoch])
         k_sim, k_fit = jax.random.split(jax.random.fold_in(key, n_done))
-        sim = simulate(k_sim, scenario)
-        tel = sim.telemetry
-        pred = np.asarray(inertia_vector(scenario.prior.inertia), float)
-        truth = np.asarray(sim.params.inertia, float)
-        paper_pred, paper_est = _paper_columns(epoch)
-        ls = np.asarray(fit_inertia_baseline([tel], scenario.prior,
-                                             method=settings["ls_method"]).pi, float)
-        ctx.progress((n_done + 0.3) / len(epochs), f"{_EPOCH_LABEL[epoch]}: posterior")
-        seed, fkey = fit_seed(k_fit)
-        with collect_warnings() as fit_warnings:
-            # the Table 1 scenarios carry no sensor or wheel errors: the papers' idealised model
-            post = fit_inertia(fkey, [tel], scenario.prior, torque=settings["torque"], robust=False,
-                               settings=sampler(settings))
-        draws = posterior_draws(post.idata, INERTIA_NAMES)
-        mean, sd = draws.mean(0), draws.std(0, ddof=1)
-        q05, q95 = np.quantile(draws, [0.05, 0.95], axis=0)
-        sub = Path("fits") / epoch
-        write_fit_run(
-            ctx.workdir / sub, posterior=post, telemetry=tel,
-            summary=inertia_summary(post, seed=seed, torque=settings["torque"], robust=False,
-                                    wheel_errors="per_wheel", warnings=fit_warnings,
-                                    baseline=dict(zip(INERTIA_NAMES, map(float, ls)))),
-            config={"command": f"experiment inertia_table1 ({epoch})",
-                    "scenario": scenario.name, "options": {"torque": settings["torque"]},
-                    "sampler": sampler(settings)._asdict(),
-                    "spacecraft": scenario.prior.to_dict(),
-                    "truth_inertia": truth.tolist()})
-        links.append((f"{_EPOCH_LABEL[epoch]}: posterior report", str(sub / "report.html")))
-
-        err_paper = table1_errors(paper_pred, paper_est)
-        err_ls = table1_errors(pred, ls)
-        err_post = table1_errors(pred, mean)
-        acc_ls = table1_errors(truth, ls)        # estimate vs truth, same Eq 12/13 units
-        acc_post = table1_errors(truth, mean)
-        covered = (q05 <= truth) & (truth <= q95)
-        err_draws = np.column_stack([(pred[:3] - draws[:, :3]) / pred[:3] * 100.0,
-                                     pred[3:] - draws[:, 3:]])     # Eqs 12-13 per draw
-        err_q = np.quantile(err_draws, [0.05, 0.95], axis=0)
-        for i, name in enumerate(TABLE1_PARAMS):
-            rows.append((_EPOCH_LABEL[epoch], name, f"{pred[i]:.1f}", f"{truth[i]:.1f}",
-                         f"{ls[i]:.1f}", f"{mean[i]:.1f} ± {sd[i]:.2f}",
-                         f"[{q05[i]:.1f}, {q95[i]:.1f}]", "yes" if covered[i] else "no"))
-            err_rows.append((_EPOCH_LABEL[epoch], name, _fmt_err(err_paper[i], i),
-                             _fmt_err(err_ls[i], i), _fmt_err(err_post[i], i),
-                             f"{acc_ls[i]:+.3f}" + (" %" if i < _MOMENTS else ""),
-                             f"{acc_post[i]:+.3f}" + (" %" if i < _MOMENTS else "")))
-            limit = (100 * scenario.prior.moi_uncertainty if i < _MOMENTS
-                     else scenario.prior.poi_uncertainty)
-            req_rows.append((_EPOCH_LABEL[epoch], name, _fmt_err(err_post[i], i),
-                             f"±{limit:g}" + (" %" if i < _MOMENTS else " kg m²"),
-                             "met" if abs(err_post[i]) <= limit else "NOT met"))
-            if epoch != "march_2000":
-                checks.append(_table1_check(epoch, i, name, pred, paper_est, err_post[i],
-                                            err_q[:, i]))
-        d = post.diagnostics
-        checks.append(convergence_check(_EPOCH_LABEL[epoch], d, ctx.quick))
-        worst_moment = float(np.max(np.abs(acc_post[:_MOMENTS])))
-        checks.append(check_fact("inertia_accuracy_pct", worst_moment,
-                                 label=f"{_EPOCH_LABEL[epoch]}: worst moment error of the "
-                                       "posterior mean vs truth",
-                                 note="Eq 12 against the simulated truth", decimals=3))
-        checks.append(check_fact("inertia_accuracy_pct",
-                                 float(np.max(np.abs(acc_ls[:_MOMENTS]))),
-                                 label=f"{_EPOCH_LABEL[epoch]}: worst moment error of least "
-                                       f"squares ({settings['ls_method']}) vs truth",
-                                 note="Eq 12 against the simulated truth", decimals=3))
-        results[epoch] = {
-            "scenario": scenario.name, "prediction_kgm2": pred, "truth_kgm2": truth,
-            "least_squares_kgm2": ls, "posterior_mean_kgm2": mean, "posterior_sd_kgm2": sd,
-            "posterior_q05_kgm2": q05, "posterior_q95_kgm2": q95,
-            "covered_90": covered, "errors_paper": err_paper, "errors_ls_vs_prediction": err_ls,
-            "errors_posterior_vs_prediction": err_post, "errors_ls_vs_truth": acc_ls,
-            "errors_posterior_vs_truth": acc_post,
-            "diagnostics": post.diagnostics.to_dict(),
-            "weak_directions": list(post.problem.weak_directions), "run": str(sub)}
+        fit = _fit_epoch(k_sim, k_fit, epoch, settings, ctx, (n_done + 0.3) / len(epochs))
+        links.append((f"{_EPOCH_LABEL[epoch]}: posterior report", str(fit["sub"] / "report.html")))
+        results[epoch] = _epoch_rows(fit, epoch, settings, ctx, rows, err_rows, req_rows, checks)
 
     n_cov = sum(int(np.sum(r["covered_90"])) for r in results.values())
     n_all = 6 * len(results)
     checks.append(coverage_check("posterior 90 % intervals containing the truth (all epochs)",
                                  n_cov, n_all))
+    notes = _notes(results, settings, checks)
+    results["coverage_90"] = {"covered": n_cov, "total": n_all}
+    figures = (FigureOut("inertia_errors", png(_plot_errors(results)),
+                         "Error of the estimates against the simulated truth: posterior mean "
+                         "with its 90 % interval (bars) and least squares (×); moments in % "
+                         "(Eq 12), products in kg m² (Eq 13)."),
+               FigureOut("inertia_sd", png(_plot_sd(results)),
+                         "Posterior sd of each entry per epoch (log scale): the Post-PRM Izz and "
+                         "Ixz widths show the weak Z excitation."))
+    ctx.progress(1.0, "done")
+    return ExperimentOutput(summary=results, checks=tuple(checks), figures=figures,
+                            tables=_tables(rows, err_rows, req_rows, budget), notes=tuple(notes),
+                            links=tuple(links))
+
+
+def _fit_epoch(k_sim, k_fit, epoch: str, settings, ctx, progress: float) -> dict[str, Any]:
+    """Simulate ``epoch``'s slews, fit them by least squares and by the posterior, and write the
+    posterior's run under ``fits/<epoch>``; returns what the tables and checks read."""
+    from cassini_bayes.api import collect_warnings, inertia_summary
+    from cassini_bayes.estimators.baseline import fit_inertia_baseline
+    from cassini_bayes.inference.inertia import fit_inertia
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    scenario = load_scenario(EPOCH_SCENARIOS[epoch])
+    sim = simulate(k_sim, scenario)
+    tel = sim.telemetry
+    pred = np.asarray(inertia_vector(scenario.prior.inertia), float)
+    truth = np.asarray(sim.params.inertia, float)
+    paper_pred, paper_est = _paper_columns(epoch)
+    ls = np.asarray(fit_inertia_baseline([tel], scenario.prior,
+                                         method=settings["ls_method"]).pi, float)
+    ctx.progress(progress, f"{_EPOCH_LABEL[epoch]}: posterior")
+    seed, fkey = fit_seed(k_fit)
+    with collect_warnings() as fit_warnings:
+        # the Table 1 scenarios carry no sensor or wheel errors: the papers' idealised model
+        post = fit_inertia(fkey, [tel], scenario.prior, torque=settings["torque"], robust=False,
+                           settings=sampler(settings))
+    draws = posterior_draws(post.idata, INERTIA_NAMES)
+    mean, sd = draws.mean(0), draws.std(0, ddof=1)
+    q05, q95 = np.quantile(draws, [0.05, 0.95], axis=0)
+    sub = Path("fits") / epoch
+    write_fit_run(
+        ctx.workdir / sub, posterior=post, telemetry=tel,
+        summary=inertia_summary(post, seed=seed, torque=settings["torque"], robust=False,
+                                wheel_errors="per_wheel", warnings=fit_warnings,
+                                baseline=dict(zip(INERTIA_NAMES, map(float, ls)))),
+        config={"command": f"experiment inertia_table1 ({epoch})",
+                "scenario": scenario.name, "options": {"torque": settings["torque"]},
+                "sampler": sampler(settings)._asdict(),
+                "spacecraft": scenario.prior.to_dict(),
+                "truth_inertia": truth.tolist()})
+    return {"scenario": scenario, "pred": pred, "truth": truth, "paper_pred": paper_pred,
+            "paper_est": paper_est, "ls": ls, "post": post, "draws": draws, "mean": mean,
+            "sd": sd, "q05": q05, "q95": q95, "sub": sub}
+
+
+def _epoch_rows(fit, epoch: str, settings, ctx, rows, err_rows, req_rows, checks):
+    """One epoch's rows of the three tables and its checks (appended), and its entry of
+    ``summary.json``: errors by Feldman & Lee Eq 12 (moments, %) and Eq 13 (products, kg m²)
+    against the prediction and against the truth, coverage, convergence."""
+    from cassini_bayes.estimators.inertia import table1_errors
+
+    scenario, pred, truth, paper_pred, paper_est, ls, post, draws, mean, sd, q05, q95, sub = (
+        fit[k] for k in ("scenario", "pred", "truth", "paper_pred", "paper_est", "ls", "post",
+                         "draws", "mean", "sd", "q05", "q95", "sub"))
+    err_paper = table1_errors(paper_pred, paper_est)
+    err_ls = table1_errors(pred, ls)
+    err_post = table1_errors(pred, mean)
+    acc_ls = table1_errors(truth, ls)        # estimate vs truth, same Eq 12/13 units
+    acc_post = table1_errors(truth, mean)
+    covered = (q05 <= truth) & (truth <= q95)
+    err_draws = np.column_stack([(pred[:3] - draws[:, :3]) / pred[:3] * 100.0,
+                                 pred[3:] - draws[:, 3:]])     # Eqs 12-13 per draw
+    err_q = np.quantile(err_draws, [0.05, 0.95], axis=0)
+    for i, name in enumerate(TABLE1_PARAMS):
+        rows.append((_EPOCH_LABEL[epoch], name, f"{pred[i]:.1f}", f"{truth[i]:.1f}",
+                     f"{ls[i]:.1f}", f"{mean[i]:.1f} ± {sd[i]:.2f}",
+                     f"[{q05[i]:.1f}, {q95[i]:.1f}]", "yes" if covered[i] else "no"))
+        err_rows.append((_EPOCH_LABEL[epoch], name, _fmt_err(err_paper[i], i),
+                         _fmt_err(err_ls[i], i), _fmt_err(err_post[i], i),
+                         f"{acc_ls[i]:+.3f}" + (" %" if i < _MOMENTS else ""),
+                         f"{acc_post[i]:+.3f}" + (" %" if i < _MOMENTS else "")))
+        limit = (100 * scenario.prior.moi_uncertainty if i < _MOMENTS
+                 else scenario.prior.poi_uncertainty)
+        req_rows.append((_EPOCH_LABEL[epoch], name, _fmt_err(err_post[i], i),
+                         f"±{limit:g}" + (" %" if i < _MOMENTS else " kg m²"),
+                         "met" if abs(err_post[i]) <= limit else "NOT met"))
+        if epoch != "march_2000":
+            checks.append(_table1_check(epoch, i, name, pred, paper_est, err_post[i],
+                                        err_q[:, i]))
+    d = post.diagnostics
+    checks.append(convergence_check(_EPOCH_LABEL[epoch], d, ctx.quick))
+    worst_moment = float(np.max(np.abs(acc_post[:_MOMENTS])))
+    checks.append(check_fact("inertia_accuracy_pct", worst_moment,
+                             label=f"{_EPOCH_LABEL[epoch]}: worst moment error of the "
+                                   "posterior mean vs truth",
+                             note="Eq 12 against the simulated truth", decimals=3))
+    checks.append(check_fact("inertia_accuracy_pct",
+                             float(np.max(np.abs(acc_ls[:_MOMENTS]))),
+                             label=f"{_EPOCH_LABEL[epoch]}: worst moment error of least "
+                                   f"squares ({settings['ls_method']}) vs truth",
+                             note="Eq 12 against the simulated truth", decimals=3))
+    return {
+        "scenario": scenario.name, "prediction_kgm2": pred, "truth_kgm2": truth,
+        "least_squares_kgm2": ls, "posterior_mean_kgm2": mean, "posterior_sd_kgm2": sd,
+        "posterior_q05_kgm2": q05, "posterior_q95_kgm2": q95,
+        "covered_90": covered, "errors_paper": err_paper, "errors_ls_vs_prediction": err_ls,
+        "errors_posterior_vs_prediction": err_post, "errors_ls_vs_truth": acc_ls,
+        "errors_posterior_vs_truth": acc_post,
+        "diagnostics": post.diagnostics.to_dict(),
+        "weak_directions": list(post.problem.weak_directions), "run": str(sub)}
+
+
+def _notes(results, settings, checks) -> list[str]:
+    """How the scenarios and errors are made, the least-squares method, and the weak-Z reading
+    (with its check appended and its ratios in ``results``) when both Post-PRM and Post-PROBE
+    ran."""
+    from cassini_bayes.physics.momentum import INERTIA_NAMES
+
     notes = [
         "Each epoch's scenario simulates the slews with the paper's flight estimate as the truth "
         "and starts the calibration from the prediction; the prior is the prediction with the "
@@ -241,9 +281,12 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
             "the Post-PROBE values, so the data say which entries they cannot pin down instead of "
             "returning a confident wrong number.")
         results["weak_z_sd_ratio"] = dict(zip(INERTIA_NAMES, ratio.tolist()))
-    results["coverage_90"] = {"covered": n_cov, "total": n_all}
+    return notes
 
-    tables = (
+
+def _tables(rows, err_rows, req_rows, budget) -> tuple:
+    """Table 1 with ours beside it, the errors, and the knowledge-requirement verdicts."""
+    return (
         Table("Table 1 on simulated slews (kg m²)",
               ("epoch", "entry", "prediction", "truth (paper estimate)", "least squares",
                "posterior mean ± sd", "90 % interval", "truth inside"), tuple(rows)),
@@ -256,16 +299,6 @@ def inertia_table1(key, settings, ctx) -> ExperimentOutput:
               ("epoch", "entry", "error", "requirement", "verdict"), tuple(req_rows),
               note="The paper finds every requirement met except Post-PRM Ixz (−102 kg m²)."),
     )
-    figures = (FigureOut("inertia_errors", png(_plot_errors(results)),
-                         "Error of the estimates against the simulated truth: posterior mean "
-                         "with its 90 % interval (bars) and least squares (×); moments in % "
-                         "(Eq 12), products in kg m² (Eq 13)."),
-               FigureOut("inertia_sd", png(_plot_sd(results)),
-                         "Posterior sd of each entry per epoch (log scale): the Post-PRM Izz and "
-                         "Ixz widths show the weak Z excitation."))
-    ctx.progress(1.0, "done")
-    return ExperimentOutput(summary=results, checks=tuple(checks), figures=figures,
-                            tables=tables, notes=tuple(notes), links=tuple(links))
 
 
 def _plot_errors(results: Mapping[str, Any]):

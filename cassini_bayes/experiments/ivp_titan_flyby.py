@@ -39,12 +39,6 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
     Deterministic: ``key`` is unused.
     """
     from cassini_bayes.ivp.study import run_flyby_study
-    from cassini_bayes.report.ivp import (
-        equioscillation_png,
-        errors_png,
-        most_uniform_segment,
-        segment_errors_png,
-    )
 
     req = settings["requirement_urad"] * 1e-6
     if settings["months_days"] not in settings["conic_spans_days"]:
@@ -58,6 +52,21 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
         conic_spans_days=tuple(settings["conic_spans_days"]),
         update_interval_s=settings["update_interval_s"], dense_step_s=settings["dense_step_s"])
     ctx.progress(0.9, "writing")
+    return ExperimentOutput(summary=_summary(s), checks=tuple(_checks(s, settings, req)),
+                            figures=_figures(s, settings, req), tables=_tables(s, settings),
+                            notes=_NOTES)
+
+
+def _segments(s):
+    """The spacecraft→Titan segments of study ``s``, their orders and their bounds (s)."""
+    seg = s.segments.segments
+    return seg, np.asarray(seg.orders), np.asarray(seg.bounds_s)
+
+
+def _checks(s, settings, req: float) -> list[Check]:
+    """Each conic over the "months" span, the spacecraft as one conic, the segments' largest
+    angle and count, linear interpolation between updates and every target of the vector tree,
+    against the 40 µrad requirement ``req`` (rad)."""
     months = settings["conic_spans_days"].index(settings["months_days"])
     checks: list[Check] = []
     for c in s.conics:
@@ -68,9 +77,7 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
             note="7 numbers fitted over the span; the osculating conic of one instant holds "
                  + (f"{c.osculating_days:.3g} days" if np.isfinite(c.osculating_days) else
                     f"beyond ±{max(settings['conic_spans_days']) / 2:g} days"), decimals=2))
-    seg = s.segments.segments
-    orders = np.asarray(seg.orders)
-    bounds = np.asarray(seg.bounds_s)
+    seg, orders, bounds = _segments(s)
     span_days = (s.flyby_span_s[1] - s.flyby_span_s[0]) / 86400.0
     checks.append(Check(
         f"spacecraft as one conic about Titan over the {span_days:g}-day flyby span",
@@ -102,7 +109,12 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
             "ivp_modelling_error_urad", err * 1e6, decimals=3,
             label=f"target {name} through the vector tree (Fig 8)",
             note="spacecraft→Titan segments, Titan→Saturn→Sun→Earth conics, over the flyby span"))
+    return checks
 
+
+def _tables(s, settings) -> tuple:
+    """The conics against the n-body truth, and the Chebyshev segments."""
+    seg, orders, bounds = _segments(s)
     conic_table = Table(
         "Conics against the n-body truth: largest angle (µrad)",
         ("vector", *(f"fitted, {d:g} d" for d in settings["conic_spans_days"]),
@@ -124,15 +136,28 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
         note=f"Closest approach {(s.closest_approach_m - TITAN_RADIUS_M) / 1e3:.0f} km above "
              f"Titan at v∞ = {s.flyby.v_inf_m_s / 1e3:g} km/s. Total {seg.n_coefficients} "
              "numbers; one conic needs 7.")
+    return conic_table, seg_table
 
+
+def _figures(s, settings, req: float) -> tuple:
+    """The conics' and the segments' angle errors, one segment's equioscillation, and the
+    interpolation between updates."""
+    from cassini_bayes.ivp.nbody import integrate_flyby
+    from cassini_bayes.report.ivp import (
+        equioscillation_png,
+        errors_png,
+        most_uniform_segment,
+        segment_errors_png,
+    )
+
+    seg, orders, bounds = _segments(s)
     c_curves = [(f"{c.base}→{c.head} fitted", c.curve_t_s, c.fitted_curve_rad)
                 for c in s.conics] + [(f"{c.base}→{c.head} osculating", c.curve_t_s,
                                        c.osculating_curve_rad) for c in s.conics]
-    from cassini_bayes.ivp.nbody import integrate_flyby
     truth = integrate_flyby(s.flyby_span_s[0], s.flyby_span_s[1], s.flyby).relative(
         "titan", "spacecraft")
     k, tau, comp_err, ratio = most_uniform_segment(seg, truth)
-    figures = (
+    return (
         FigureOut("ivp_conics", errors_png(
             c_curves, req, f"Conics: fitted over {max(settings['conic_spans_days']):g} days vs "
                            "osculating at closest approach")),
@@ -149,16 +174,23 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
             "Linear interpolation between updates, fastest segment", scale_s=3600.0,
             xlabel="t (hours from closest approach)")),
     )
-    notes = (
-        "Trajectories from an n-body integration (DOP853, rtol 1e-12) of the Sun, the Earth–Moon "
-        "barycentre, Jupiter, Saturn with its J2, Titan and a massless spacecraft, started from "
-        "the documented elements at closest approach (docs/ivp.md). Conics by Goodyear's "
-        "universal-variable method (Eqs 12-14), segments by Chebyshev interpolation (Eqs 15-18).",
-        "Why 100 s suffices: between updates a vector from the attracting body is off by "
-        "−½s(1−s)h²r̈ − ⅙s(1−s)(1−2s)h³r⃛; r̈ is along r and changes only its length, so the "
-        "direction error is of order h³ (doubling h costs 8×).",
-    )
-    summary = {
+
+
+_NOTES = (
+    "Trajectories from an n-body integration (DOP853, rtol 1e-12) of the Sun, the Earth–Moon "
+    "barycentre, Jupiter, Saturn with its J2, Titan and a massless spacecraft, started from "
+    "the documented elements at closest approach (docs/ivp.md). Conics by Goodyear's "
+    "universal-variable method (Eqs 12-14), segments by Chebyshev interpolation (Eqs 15-18).",
+    "Why 100 s suffices: between updates a vector from the attracting body is off by "
+    "−½s(1−s)h²r̈ − ⅙s(1−s)(1−2s)h³r⃛; r̈ is along r and changes only its length, so the "
+    "direction error is of order h³ (doubling h costs 8×).",
+)
+
+
+def _summary(s) -> dict:
+    """``summary.json``'s numbers: conics, segments, interpolation, vector tree, altitude."""
+    seg, orders, bounds = _segments(s)
+    return {
         "conics": [{"base": c.base, "head": c.head, "spans_days": list(c.spans_days),
                     "fitted_max_urad": [e * 1e6 for e in c.fitted_max_rad],
                     "osculating_holds_days": c.osculating_days} for c in s.conics],
@@ -173,5 +205,3 @@ def ivp_titan_flyby(key, settings, ctx) -> ExperimentOutput:
         "tree_max_error_urad": {k: v * 1e6 for k, v in s.tree_error_rad.items()},
         "closest_approach_altitude_km": (s.closest_approach_m - TITAN_RADIUS_M) / 1e3,
     }
-    return ExperimentOutput(summary=summary, checks=tuple(checks), figures=figures,
-                            tables=(conic_table, seg_table), notes=notes)

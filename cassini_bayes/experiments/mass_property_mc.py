@@ -53,17 +53,8 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
     ``"auto"``: the Post-PROBE fit of ``inertia_table1`` in the same ``reproduce`` run; ``""``:
     none).
     """
-    if settings["n_draws"] < 100:
-        raise ctx.error("'settings.n_draws' must be at least 100")
-    for e in settings["flight_epochs"]:
-        if e not in _EPOCHS:
-            raise ctx.error(f"'settings.flight_epochs' has unknown epoch {e!r}; known: "
-                            f"{', '.join(_EPOCHS)}")
+    _check_settings(settings, ctx)
     phi_deg = settings["phi_range_deg"]
-    if len(phi_deg) != 2 or phi_deg[0] > phi_deg[1]:
-        raise ctx.error("'settings.phi_range_deg' must be [low, high] degrees with low <= high")
-    if settings["scale_points"] < 2:
-        raise ctx.error("'settings.scale_points' must be at least 2")
     sc = load_spacecraft(settings["spacecraft"])
     n, dist = settings["n_draws"], settings["distribution"]
     phi_range = (np.radians(phi_deg) if settings["axis"] == "cone"
@@ -77,30 +68,13 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
                                      distribution=dist)
              for (label, box), k in zip(boxes.items(), (key_1, key_2))}
     posterior = find_posterior(settings["inertia_posterior"], "inertia", "inertia_posterior", ctx)
-    label_3 = "3: inertia posterior"
     if posterior is not None:
-        from cassini_bayes.analysis.budget_lines import inertia_of
-        from cassini_bayes.names import INERTIA_NAMES
-
-        entries = np.stack([posterior.draws[k] for k in INERTIA_NAMES], -1)
-        draws[label_3] = mass_property_mc_posterior(
-            jax.random.fold_in(key, 3), inertia_of(entries), inertia_of(entries.mean(0)), n,
-            phi_range_rad=phi_range)
+        draws[_LABEL_3] = _posterior_draws(jax.random.fold_in(key, 3), posterior, n, phi_range)
     ctx.progress(0.5, "Monte Carlo draws done")
     stats = {label: summarise_errors(d.error_rad) for label, d in draws.items()}
-
-    # How large may a symmetric requirement box be for the 99th percentile to stay within 1.5°?
     budget = fact("rwa4_mass_property_deg")
-    scales = np.linspace(0.1, 1.0, settings["scale_points"])
-    req = boxes["1: pre-launch requirements"]
-    p99_scaled = np.array([
-        summarise_errors(mass_property_mc(key_s, sc.inertia, req.scaled(s), n,
-                                          phi_range_rad=phi_range, distribution=dist)
-                         .error_rad).p99_deg for s in scales])
-    inside = p99_scaled <= budget.value
-    scale_at_budget = (float(np.interp(budget.value, p99_scaled, scales))
-                       if inside.any() and not inside.all() else float("nan"))
-
+    scales, p99_scaled, scale_at_budget = _requirement_scale(
+        key_s, sc, boxes["1: pre-launch requirements"], settings, phi_range, budget.value)
     # Which elements matter: each element perturbed alone (same key: common random numbers).
     p99_alone = {label: [summarise_errors(mass_property_mc(key_s, sc.inertia, box.only(i), n,
                                                            phi_range_rad=phi_range,
@@ -108,7 +82,70 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
                          for i in range(6)]
                  for label, box in boxes.items()}
     ctx.progress(0.9, "element-by-element sensitivity done")
+    checks = _checks(stats, draws, sc, n, dist, scale_at_budget, posterior)
+    fig = plot_mass_property({f"analysis {k}": d for k, d in draws.items()}, budget.value)
+    figures = (FigureOut("mass_property_mc", png(fig),
+                         "Distribution of the extra RWA4 axis error of the RCS method (Brown Eq 1) "
+                         "when the assumed inertia differs from the true one; dashed: the paper's "
+                         "1.5°. Right: 99th percentile along the articulation cone."),)
+    summary = _summary(settings, sc, boxes, stats, p99_alone, scales, p99_scaled,
+                       scale_at_budget, posterior)
+    return ExperimentOutput(
+        summary=summary, checks=tuple(checks), figures=figures,
+        tables=_tables(stats, boxes, p99_alone, scales, p99_scaled, sc, settings),
+        notes=_notes(settings, sc, stats, budget.value, scale_at_budget, posterior))
 
+
+_LABEL_3 = "3: inertia posterior"
+
+
+def _check_settings(settings, ctx) -> None:
+    """Raise ``ctx.error`` naming the first setting out of its range."""
+    if settings["n_draws"] < 100:
+        raise ctx.error("'settings.n_draws' must be at least 100")
+    for e in settings["flight_epochs"]:
+        if e not in _EPOCHS:
+            raise ctx.error(f"'settings.flight_epochs' has unknown epoch {e!r}; known: "
+                            f"{', '.join(_EPOCHS)}")
+    phi_deg = settings["phi_range_deg"]
+    if len(phi_deg) != 2 or phi_deg[0] > phi_deg[1]:
+        raise ctx.error("'settings.phi_range_deg' must be [low, high] degrees with low <= high")
+    if settings["scale_points"] < 2:
+        raise ctx.error("'settings.scale_points' must be at least 2")
+
+
+def _posterior_draws(key, posterior, n: int, phi_range):
+    """Analysis 3: the extra axis error with the truth each (resampled) draw of the inertia
+    ``posterior`` and the calibration assuming its mean."""
+    from cassini_bayes.analysis.budget_lines import inertia_of
+    from cassini_bayes.names import INERTIA_NAMES
+
+    entries = np.stack([posterior.draws[k] for k in INERTIA_NAMES], -1)
+    return mass_property_mc_posterior(key, inertia_of(entries), inertia_of(entries.mean(0)), n,
+                                      phi_range_rad=phi_range)
+
+
+def _requirement_scale(key_s, sc, req, settings, phi_range, budget_deg):
+    """How large may a symmetric requirement box be for the 99th percentile to stay within the
+    budget: the 99th percentile of the requirement box ``req`` scaled by 0.1 … 1 (same key),
+    and the scale where it crosses ``budget_deg`` (NaN when it does not)."""
+    n, dist = settings["n_draws"], settings["distribution"]
+    scales = np.linspace(0.1, 1.0, settings["scale_points"])
+    p99_scaled = np.array([
+        summarise_errors(mass_property_mc(key_s, sc.inertia, req.scaled(s), n,
+                                          phi_range_rad=phi_range, distribution=dist)
+                         .error_rad).p99_deg for s in scales])
+    inside = p99_scaled <= budget_deg
+    scale_at_budget = (float(np.interp(budget_deg, p99_scaled, scales))
+                       if inside.any() and not inside.all() else float("nan"))
+    return scales, p99_scaled, scale_at_budget
+
+
+def _checks(stats, draws, sc, n, dist, scale_at_budget, posterior) -> list[Check]:
+    """Each analysis's 99th percentile against the paper's 1.5°, alone and with the testbed's
+    worst error (linear, as the paper, and RSS); the box size at the budget; analysis 3."""
+    budget = fact("rwa4_mass_property_deg")
+    label_3 = _LABEL_3
     testbed_worst = fact("rwa4_rcs_worst_deg").value
     checks: list[Check] = []
     for label, s in stats.items():
@@ -140,6 +177,12 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
                                 f"{v:.3g}" for v in np.percentile(
                                     np.degrees(draws[label_3].error_rad), [5, 95]))
                                  + f"] deg; inertia posterior {posterior.source}"))
+    return checks
+
+
+def _tables(stats, boxes, p99_alone, scales, p99_scaled, sc, settings) -> tuple:
+    """The error percentiles, the one-element sensitivities, the boxes and the scale curve."""
+    n, dist, phi_deg = settings["n_draws"], settings["distribution"], settings["phi_range_deg"]
     pct = Table(
         "Extra axis error (deg)",
         ("analysis", "mean", "50 %", "95 %", "99 %", "max"),
@@ -175,12 +218,12 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
              "all). Largest: " + "; ".join(
                  f"analysis {label.split(':')[0]}: {TABLE1_PARAMS[int(np.argmax(vals))]}"
                  for label, vals in p99_alone.items()) + ".")
-    fig = plot_mass_property({f"analysis {k}": d for k, d in draws.items()}, budget.value)
-    figures = (FigureOut("mass_property_mc", png(fig),
-                         "Distribution of the extra RWA4 axis error of the RCS method (Brown Eq 1) "
-                         "when the assumed inertia differs from the true one; dashed: the paper's "
-                         "1.5°. Right: 99th percentile along the articulation cone."),)
-    notes = (
+    return pct, alone_table, box_table, scale_table
+
+
+def _notes(settings, sc, stats, budget_deg, scale_at_budget, posterior) -> tuple:
+    """What the Monte Carlo solves, which boxes it draws from, and the reading of its numbers."""
+    return (
         "Over a short drift Brown's Eq 1 is momentum conservation in body axes, I Δω = −J Δρ u; "
         "solving it with the assumed inertia Î gives û ∝ Î I⁻¹ u, so the extra error is the angle "
         "between Î I⁻¹ u and u. It does not depend on the wheel momentum step or on noise.",
@@ -197,9 +240,18 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
            if posterior is not None else " Analysis 3 (the Monte Carlo fed from an inertia "
            "posterior) needs settings.inertia_posterior or an inertia_table1 run before it in "
            "the same reproduce run: not run."),
-        _reading(stats, budget.value, scale_at_budget, sc.moi_uncertainty, sc.poi_uncertainty),
+        _reading(stats, budget_deg, scale_at_budget, sc.moi_uncertainty, sc.poi_uncertainty),
     )
-    summary = {
+
+
+def _summary(settings, sc, boxes, stats, p99_alone, scales, p99_scaled, scale_at_budget,
+             posterior) -> dict:
+    """``summary.json``'s numbers: every analysis's box and error percentiles, the combined
+    errors, the one-element sensitivities and the requirement-scale curve."""
+    n, dist, phi_deg = settings["n_draws"], settings["distribution"], settings["phi_range_deg"]
+    label_3 = _LABEL_3
+    testbed_worst = fact("rwa4_rcs_worst_deg").value
+    return {
         "n_draws": n, "distribution": dist, "axis": settings["axis"],
         "phi_range_deg": list(phi_deg) if settings["axis"] == "cone" else [90.0, 90.0],
         "spacecraft": sc.name,
@@ -216,8 +268,6 @@ def mass_property(key, settings, ctx) -> ExperimentOutput:
         "requirement_scale": {"scale": scales.tolist(), "p99_deg": p99_scaled.tolist(),
                               "scale_at_budget": scale_at_budget},
     }
-    return ExperimentOutput(summary=summary, checks=tuple(checks), figures=figures,
-                            tables=(pct, alone_table, box_table, scale_table), notes=notes)
 
 
 def _reading(stats, budget_deg, scale_at_budget, moi, poi) -> str:

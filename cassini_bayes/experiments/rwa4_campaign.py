@@ -15,7 +15,6 @@ worst axis error of both against the paper, and the coverage of the posterior 90
 from __future__ import annotations
 
 import math
-import tomllib
 import warnings
 from pathlib import Path
 from typing import Any
@@ -159,61 +158,17 @@ def run_campaign(key, scenario, method: str, phis_rad, settings, ctx, *, label: 
 
 def _campaign_output(runs, *, label: str, mean_fact: str, worst_fact: str, budget_fact: str,
                      extra_checks=(), extra_notes=(), extra_summary=None) -> ExperimentOutput:
+    """The campaign's output: the mean and worst axis errors of least squares and of the
+    posterior mean against the paper's facts, the posterior cones' coverage, the per-run table,
+    and the ``extra_*`` of the calling experiment."""
     n = len(runs)
     posts = [r for r in runs if "post_error_deg" in r]
     m = len(posts)
     ls_err = np.array([r["ls_error_deg"] for r in runs])
     post_err = np.array([r["post_error_deg"] for r in posts])
-    checks = [
-        check_fact(mean_fact, float(ls_err.mean()), label=f"{label}: mean error, least squares",
-                   note=f"{n} simulated runs", decimals=3),
-        check_fact(worst_fact, float(ls_err.max()), label=f"{label}: worst error, least squares",
-                   note=f"{n} simulated runs", decimals=3),
-        check_fact(budget_fact, float(ls_err.max()),
-                   label=f"{label}: worst least-squares error against the budget", decimals=3),
-    ]
-    if m:
-        checks += [
-            check_fact(mean_fact, float(post_err.mean()),
-                       label=f"{label}: mean error, posterior mean", note=f"{m} runs", decimals=3),
-            check_fact(worst_fact, float(post_err.max()),
-                       label=f"{label}: worst error, posterior mean", note=f"{m} runs",
-                       decimals=3),
-            check_fact(budget_fact, float(post_err.max()),
-                       label=f"{label}: worst posterior-mean error against the budget",
-                       decimals=3, note=f"{m} runs"),
-        ]
+    checks = _error_checks(label, ls_err, post_err, mean_fact, worst_fact, budget_fact)
     checks += list(extra_checks)
-    coverage = {}
-    for level in ("90", "95") if m else ():
-        k = int(sum(bool(r[f"in_{level}"]) for r in posts))
-        lo, hi = coverage_interval(k, m)
-        nominal = int(level) / 100
-        se = math.sqrt(nominal * (1 - nominal) / m)
-        coverage[level] = {"inside": k, "runs": m, "fraction": k / m, "ci95": [lo, hi],
-                           "binomial_se_at_nominal": se}
-        checks.append(Check(f"{label}: runs whose true axis is inside the posterior {level} % cone",
-                            100.0 * k / m, "%", decimals=0, passed=bool(lo <= nominal <= hi),
-                            paper=f"nominal {level} %",
-                            note=f"{k}/{m}; 95 % Clopper-Pearson [{100 * lo:.0f}, {100 * hi:.0f}] "
-                                 f"%; binomial sd at nominal ±{100 * se:.0f} %"))
-
-    def cell(r, key, fmt="{:.3f}"):
-        return fmt.format(r[key]) if key in r else "—"
-
-    rows = tuple((str(i), f"{r['phi_deg']:.1f}", f"{r['from_rwa1_deg']:.1f}",
-                  f"{r['ls_error_deg']:.3f}", cell(r, "post_error_deg"),
-                  "—" if "cone_deg" not in r else f"{r['cone_deg']['90']:.3f}",
-                  "—" if "cone_deg" not in r else f"{r['cone_deg']['95']:.3f}",
-                  "—" if "in_90" not in r else ("yes" if r["in_90"] else "no"),
-                  "—" if "converged" not in r else ("yes" if r["converged"] else "NO"))
-                 for i, r in enumerate(runs))
-    table = Table(f"{label}: per-run axis errors (deg)",
-                  ("run", "articulation φ", "from RWA1", "LS error", "posterior error",
-                   "90 % cone", "95 % cone", "truth in 90 %", "converged"), rows,
-                  note="φ: articulation angle on the 54.7356° cone (RWA1 at 90°). LS: Brown's "
-                       "least squares at the predicted inertia; posterior: mean direction with "
-                       "the inertia sampled jointly (first runs only, see the settings).")
+    coverage = _coverage(posts, label, checks)
     links = tuple((f"run {i}: posterior report", r["report"]) for i, r in enumerate(runs)
                   if "report" in r)
     fig = _plot(runs, label, fact(budget_fact).value)
@@ -235,12 +190,79 @@ def _campaign_output(runs, *, label: str, mean_fact: str, worst_fact: str, budge
         "sanity check, not a calibration proof (the SBC runs are that).",
         *extra_notes,
     )
-    return ExperimentOutput(summary=summary, checks=tuple(checks), tables=(table,), notes=notes,
-                            links=links,
+    return ExperimentOutput(summary=summary, checks=tuple(checks),
+                            tables=(_run_table(runs, label),),
+                            notes=notes, links=links,
                             figures=(FigureOut(f"{label.replace(' ', '_')}_errors", png(fig),
                                                f"{label}: axis error per run, least squares "
                                                "and posterior mean, with the posterior 90 % and "
                                                "95 % cone radii; dashed: the paper's budget."),))
+
+
+def _error_checks(label, ls_err, post_err, mean_fact, worst_fact, budget_fact) -> list:
+    """Mean and worst axis error (deg) of least squares and, where any run has one, of the
+    posterior mean, against the paper's facts."""
+    n, m = len(ls_err), len(post_err)
+    checks = [
+        check_fact(mean_fact, float(ls_err.mean()), label=f"{label}: mean error, least squares",
+                   note=f"{n} simulated runs", decimals=3),
+        check_fact(worst_fact, float(ls_err.max()), label=f"{label}: worst error, least squares",
+                   note=f"{n} simulated runs", decimals=3),
+        check_fact(budget_fact, float(ls_err.max()),
+                   label=f"{label}: worst least-squares error against the budget", decimals=3),
+    ]
+    if m:
+        checks += [
+            check_fact(mean_fact, float(post_err.mean()),
+                       label=f"{label}: mean error, posterior mean", note=f"{m} runs", decimals=3),
+            check_fact(worst_fact, float(post_err.max()),
+                       label=f"{label}: worst error, posterior mean", note=f"{m} runs",
+                       decimals=3),
+            check_fact(budget_fact, float(post_err.max()),
+                       label=f"{label}: worst posterior-mean error against the budget",
+                       decimals=3, note=f"{m} runs"),
+        ]
+    return checks
+
+
+def _coverage(posts, label, checks) -> dict:
+    """How many runs have their true axis inside the posterior 90 % and 95 % cones, with the
+    Clopper-Pearson interval; a check per level appended to ``checks``."""
+    m = len(posts)
+    coverage = {}
+    for level in ("90", "95") if m else ():
+        k = int(sum(bool(r[f"in_{level}"]) for r in posts))
+        lo, hi = coverage_interval(k, m)
+        nominal = int(level) / 100
+        se = math.sqrt(nominal * (1 - nominal) / m)
+        coverage[level] = {"inside": k, "runs": m, "fraction": k / m, "ci95": [lo, hi],
+                           "binomial_se_at_nominal": se}
+        checks.append(Check(f"{label}: runs whose true axis is inside the posterior {level} % cone",
+                            100.0 * k / m, "%", decimals=0, passed=bool(lo <= nominal <= hi),
+                            paper=f"nominal {level} %",
+                            note=f"{k}/{m}; 95 % Clopper-Pearson [{100 * lo:.0f}, {100 * hi:.0f}] "
+                                 f"%; binomial sd at nominal ±{100 * se:.0f} %"))
+    return coverage
+
+
+def _run_table(runs, label) -> Table:
+    """Each run's articulation angle, errors, cones, coverage and convergence."""
+    def cell(r, key, fmt="{:.3f}"):
+        return fmt.format(r[key]) if key in r else "—"
+
+    rows = tuple((str(i), f"{r['phi_deg']:.1f}", f"{r['from_rwa1_deg']:.1f}",
+                  f"{r['ls_error_deg']:.3f}", cell(r, "post_error_deg"),
+                  "—" if "cone_deg" not in r else f"{r['cone_deg']['90']:.3f}",
+                  "—" if "cone_deg" not in r else f"{r['cone_deg']['95']:.3f}",
+                  "—" if "in_90" not in r else ("yes" if r["in_90"] else "no"),
+                  "—" if "converged" not in r else ("yes" if r["converged"] else "NO"))
+                 for i, r in enumerate(runs))
+    return Table(f"{label}: per-run axis errors (deg)",
+                  ("run", "articulation φ", "from RWA1", "LS error", "posterior error",
+                   "90 % cone", "95 % cone", "truth in 90 %", "converged"), rows,
+                  note="φ: articulation angle on the 54.7356° cone (RWA1 at 90°). LS: Brown's "
+                       "least squares at the predicted inertia; posterior: mean direction with "
+                       "the inertia sampled jointly (first runs only, see the settings).")
 
 
 def _plot(runs, label, budget_deg):
@@ -327,10 +349,11 @@ def flight_test_scenario(scenario_name: str):
     The RWA-method scenario with RWA1 (at its nominal axis, known to the controller) in place of
     RWA4; returns the scenario (its RWA1 truth is the model's axis).
     """
+    from cassini_bayes._toml import read_toml
     from cassini_bayes.simulate.scenario import scenario_from_dict, scenario_path
 
     p = scenario_path(scenario_name)
-    d = tomllib.loads(p.read_text())
+    d = read_toml(p, "scenario", "experiments/scenarios/")
     init = d.setdefault("initial", {})
     rpm = dict(init.get("wheel_rpm", {}))
     rpm["RWA1"] = rpm.pop("RWA4", -850.0)

@@ -84,17 +84,45 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     ``thruster``), ``per_event_fits`` (also fit each event alone), ``chains/warmup/draws`` (NUTS),
     ``tau_fall_alt_s`` (the paper's alternative fall time constant, s).
     """
-    from cassini_bayes.api import collect_warnings, thrust_summary
-    from cassini_bayes.estimators.baseline import fit_thrust_baseline
-    from cassini_bayes.inference.thrust import TAU_NAMES, fit_thrust
-    from cassini_bayes.simulate import load_scenario, simulate
+    from cassini_bayes.simulate import load_scenario
 
     check_sampler_settings(settings, ctx)
     if not settings["events"]:
         raise ctx.error("'settings.events' must name at least one biasing scenario")
     names = list(dict.fromkeys(settings["events"]))
     k_sims, k_pool, k_each = jax.random.split(key, 3)
-    events, sims, results = [], [], {"events": {}}
+    results = {"events": {}}
+    sims, events = _least_squares_events(k_sims, names, settings, ctx, results)
+    f_true = results["events"][names[0]]["truth_thrust_n"]
+    sc = load_scenario(names[0]).prior
+    tau_true = np.asarray(sims[0].params.tau_s, float)
+    post, td, f_all, links = _pooled_posterior(k_pool, events, names, sc, settings, ctx, results,
+                                               tau_true)
+    if settings["per_event_fits"]:
+        _per_event_posteriors(k_each, names, events, sc, settings, ctx, results)
+    pooled = results["pooled"]
+    checks = _checks(results, names, sc, f_true, tau_true, td, post, ctx)
+    fig = _plot(results, names, f_true, td, f_all)
+    ctx.progress(1.0, "done")
+    return ExperimentOutput(
+        summary=results, checks=tuple(checks),
+        tables=_tables(results, names, settings, f_true, tau_true, td),
+        notes=_notes(sc, pooled, _ls_tau_pct(results, names)), links=tuple(links),
+        figures=(FigureOut("thrust_table2", png(fig),
+                           "Left: thrust per event — least squares without adjustment, adjusted "
+                           "(τf nominal and alternative) and the posterior (90 % interval); "
+                           "dashed: truth. Right: pooled posterior draws of F against τf."),))
+
+
+def _least_squares_events(k_sims, names, settings, ctx, results):
+    """Simulate each event (key ``fold_in(k_sims, i)``) and fit it by the paper's least squares
+    (Eq 23) without adjustment, at the nominal and alternative τf and at both ends of the
+    manufacturer's τf range, into ``results["events"]``; returns the simulations and the
+    ``(telemetry, pulses)`` of each event."""
+    from cassini_bayes.estimators.baseline import fit_thrust_baseline
+    from cassini_bayes.simulate import load_scenario, simulate
+
+    events, sims = [], []
     for i, name in enumerate(names):
         ctx.progress(0.3 * i / len(names), f"{name}: simulating")
         scenario = load_scenario(name)
@@ -121,11 +149,16 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
             "day": _day(name), "truth_thrust_n": f_true, "n_pulses": int(sim.pulses.t_on.size),
             "ls_no_adjustment_n": float(plain), "ls_tf_nominal_n": float(adj),
             "ls_tf_alt_n": float(alt), "ls_tf_range_n": [float(hi), float(lo)]}
-    f_true = results["events"][names[0]]["truth_thrust_n"]
-    sc = load_scenario(names[0]).prior
-    tau_true = np.asarray(sims[0].params.tau_s, float)
+    return sims, events
 
-    # pooled posterior: one thrust (per mode) and shared time constants
+
+def _pooled_posterior(k_pool, events, names, sc, settings, ctx, results, tau_true):
+    """One thrust (per mode) and shared time constants fitted to all events, its run written
+    under ``fits/pooled`` and its numbers into ``results["pooled"]``; returns the posterior, its
+    τ draws, the mode's mean thrust draws and the report link."""
+    from cassini_bayes.api import collect_warnings, thrust_summary
+    from cassini_bayes.inference.thrust import TAU_NAMES, fit_thrust
+
     ctx.progress(0.35, "pooled posterior")
     seed, fkey = fit_seed(k_pool)
     with collect_warnings() as fit_warnings:
@@ -140,8 +173,6 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
     q05, q95 = np.quantile(f_all, [0.05, 0.95])
     half90_pct = 100 * 0.5 * (q95 - q05) / f_mean
     sd_tau_pct = 100 * f_sd * np.sqrt(share) / f_mean
-    t05, t95 = np.quantile(td, [0.05, 0.95], axis=0)
-    n_cov = int(q05 <= f_true <= q95) + int(np.sum((t05 <= tau_true) & (tau_true <= t95)))
     sub = Path("fits") / "pooled"
     baseline = {"F": float(np.mean([results["events"][n]["ls_tf_nominal_n"] for n in names]))}
     write_fit_run(ctx.workdir / sub, posterior=post,
@@ -159,42 +190,44 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         "tau_truth_s": tau_true, "tau_variance_share": share,
         "sd_from_tau_pct": float(sd_tau_pct), "half_width_90_pct": float(half90_pct),
         "diagnostics": post.diagnostics.to_dict(), "run": str(sub)}
+    return post, td, f_all, links
 
-    # per-event posteriors (each event alone: its own time constants)
-    if settings["per_event_fits"]:
-        for i, (name, ev) in enumerate(zip(names, events)):
-            ctx.progress(0.55 + 0.4 * i / len(names), f"{name}: posterior")
-            _, ekey = fit_seed(jax.random.fold_in(k_each, i))
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                pe = fit_thrust(ekey, [ev], sc, mode="mean", robust=False,
-                                settings=sampler(settings))
-            f = posterior_draws(pe.idata, ["F"])[:, 0]
-            results["events"][name].update(
-                post_mean_n=float(f.mean()), post_sd_n=float(f.std(ddof=1)),
-                post_q05_n=float(np.quantile(f, 0.05)), post_q95_n=float(np.quantile(f, 0.95)),
-                post_tau_fall_s=float(posterior_draws(pe.idata, ["tau_fall"]).mean()),
-                post_converged=bool(pe.diagnostics.converged))
 
-    rows = []
-    for name in names:
-        e = results["events"][name]
-        j = TABLE2["day"].index(e["day"]) if e["day"] in TABLE2["day"] else None
-        paper = (("—",) * 3 if j is None else
-                 (f"{TABLE2['no_adjustment_n'][j]:.2f}", f"{TABLE2['tf65_n'][j]:.3f}",
-                  f"{TABLE2['tf40_n'][j]:.3f}"))
-        post_txt = (f"{e['post_mean_n']:.3f} ± {e['post_sd_n']:.3f}" if "post_mean_n" in e
-                    else "—")
-        rows.append((str(e["day"]), *paper, f"{e['ls_no_adjustment_n']:.3f}",
-                     f"{e['ls_tf_nominal_n']:.3f}", f"{e['ls_tf_alt_n']:.3f}", post_txt))
-    rows.append(("pooled", "", "", "", "", "", "",
-                 f"{f_mean:.4f} ± {f_sd:.4f} [{q05:.4f}, {q95:.4f}]"))
+def _per_event_posteriors(k_each, names, events, sc, settings, ctx, results) -> None:
+    """Each event alone (its own time constants, key ``fold_in(k_each, i)``): its thrust's
+    posterior summary added to ``results["events"]``."""
+    from cassini_bayes.inference.thrust import fit_thrust
 
+    for i, (name, ev) in enumerate(zip(names, events)):
+        ctx.progress(0.55 + 0.4 * i / len(names), f"{name}: posterior")
+        _, ekey = fit_seed(jax.random.fold_in(k_each, i))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            pe = fit_thrust(ekey, [ev], sc, mode="mean", robust=False,
+                            settings=sampler(settings))
+        f = posterior_draws(pe.idata, ["F"])[:, 0]
+        results["events"][name].update(
+            post_mean_n=float(f.mean()), post_sd_n=float(f.std(ddof=1)),
+            post_q05_n=float(np.quantile(f, 0.05)), post_q95_n=float(np.quantile(f, 0.95)),
+            post_tau_fall_s=float(posterior_draws(pe.idata, ["tau_fall"]).mean()),
+            post_converged=bool(pe.diagnostics.converged))
+
+
+def _checks(results, names, sc, f_true, tau_true, td, post, ctx) -> list:
+    """The experiment's checks: the pooled posterior's accuracy, 90 % half-width, convergence
+    and coverage, the adjusted least squares' worst event, and the τf budget read both ways."""
+    from cassini_bayes.inference.thrust import TAU_NAMES
+
+    p = results["pooled"]
+    f_mean, f_sd, q05, q95 = p["thrust_mean_n"], p["thrust_sd_n"], p["q05_n"], p["q95_n"]
+    share, sd_tau_pct, half90_pct = (p["tau_variance_share"], p["sd_from_tau_pct"],
+                                     p["half_width_90_pct"])
+    t05, t95 = np.quantile(td, [0.05, 0.95], axis=0)
+    n_cov = int(q05 <= f_true <= q95) + int(np.sum((t05 <= tau_true) & (tau_true <= t95)))
     budget = fact("thrust_accuracy_pct")
     ls65 = np.array([results["events"][n]["ls_tf_nominal_n"] for n in names])
-    ls_range = np.array([results["events"][n]["ls_tf_range_n"] for n in names])
-    ls_tau_pct = float(np.max(100 * 0.5 * np.abs(ls_range[:, 1] - ls_range[:, 0]) / ls65))
-    checks = [
+    ls_tau_pct = _ls_tau_pct(results, names)
+    return [
         check_fact("thrust_accuracy_pct", 100 * abs(f_mean - f_true) / f_true,
                    label="pooled posterior mean thrust vs truth", decimals=2,
                    note=f"{len(names)} events, truth {f_true:g} N"),
@@ -218,7 +251,29 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         coverage_check("pooled posterior: 90 % intervals of F, τd, τr, τf containing the "
                        "truth", n_cov, 1 + len(TAU_NAMES)),
     ]
-    tables = (
+
+
+def _tables(results, names, settings, f_true, tau_true, td) -> tuple:
+    """Table 2 with the paper's columns beside ours, and the pooled time constants."""
+    from cassini_bayes.inference.thrust import TAU_NAMES
+
+    p = results["pooled"]
+    f_mean, f_sd, q05, q95 = p["thrust_mean_n"], p["thrust_sd_n"], p["q05_n"], p["q95_n"]
+    rows = []
+    for name in names:
+        e = results["events"][name]
+        j = TABLE2["day"].index(e["day"]) if e["day"] in TABLE2["day"] else None
+        paper = (("—",) * 3 if j is None else
+                 (f"{TABLE2['no_adjustment_n'][j]:.2f}", f"{TABLE2['tf65_n'][j]:.3f}",
+                  f"{TABLE2['tf40_n'][j]:.3f}"))
+        post_txt = (f"{e['post_mean_n']:.3f} ± {e['post_sd_n']:.3f}" if "post_mean_n" in e
+                    else "—")
+        rows.append((str(e["day"]), *paper, f"{e['ls_no_adjustment_n']:.3f}",
+                     f"{e['ls_tf_nominal_n']:.3f}", f"{e['ls_tf_alt_n']:.3f}", post_txt))
+    rows.append(("pooled", "", "", "", "", "", "",
+                 f"{f_mean:.4f} ± {f_sd:.4f} [{q05:.4f}, {q95:.4f}]"))
+
+    return (
         Table("Table 2: thrust (N), paper beside ours",
               ("day", "paper: no adj.", "paper: τf 65 ms", "paper: τf 40 ms", "LS: no adj.",
                "LS: τf 65 ms", f"LS: τf {1e3 * settings['tau_fall_alt_s']:g} ms",
@@ -233,7 +288,20 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
               tuple((n, f"{1e3 * t:.1f}", f"{1e3 * m:.2f}", f"{1e3 * s:.2f}")
                     for n, t, m, s in zip(TAU_NAMES, tau_true, td.mean(0), td.std(0, ddof=1)))),
     )
-    notes = (
+
+
+def _ls_tau_pct(results, names) -> float:
+    """The paper's ±10 % read on our data: the largest half-spread of an event's adjusted
+    least-squares thrust over the manufacturer's τf range, % of its nominal-τf value."""
+    ls65 = np.array([results["events"][n]["ls_tf_nominal_n"] for n in names])
+    ls_range = np.array([results["events"][n]["ls_tf_range_n"] for n in names])
+    return float(np.max(100 * 0.5 * np.abs(ls_range[:, 1] - ls_range[:, 0]) / ls65))
+
+
+def _notes(sc, pooled, ls_tau_pct) -> tuple:
+    """How the least squares and the posterior were made, and the τf budget in words."""
+    share, sd_tau_pct = pooled["tau_variance_share"], pooled["sd_from_tau_pct"]
+    return (
         "Least squares: Feldman & Lee Eq 23 (one thrust for all eight thrusters) on the simulated "
         "telemetry, the impulse taken from the commanded on-times (no adjustment) or from the "
         "pulse log under the pulse model with the given time constants (the exact form of the "
@@ -248,14 +316,6 @@ def thrust_table2(key, settings, ctx) -> ExperimentOutput:
         f"a sd of {sd_tau_pct:.2f} % — the data constrain τ well enough that the ±10 % "
         "collapses to a fraction of that.",
     )
-    fig = _plot(results, names, f_true, td, f_all)
-    ctx.progress(1.0, "done")
-    return ExperimentOutput(
-        summary=results, checks=tuple(checks), tables=tables, notes=notes, links=tuple(links),
-        figures=(FigureOut("thrust_table2", png(fig),
-                           "Left: thrust per event — least squares without adjustment, adjusted "
-                           "(τf nominal and alternative) and the posterior (90 % interval); "
-                           "dashed: truth. Right: pooled posterior draws of F against τf."),))
 
 
 def _plot(results, names, f_true, td, f_all):

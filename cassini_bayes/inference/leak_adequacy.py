@@ -33,7 +33,8 @@ from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHO
                                                     _check, normal_deviate)
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation
 from cassini_bayes.inference.leak import (OFFSET_SD_NMS, TORQUE_SCALES, LeakInputs,
-                                          LeakPosterior, _thinned)
+                                          LeakPosterior)
+from cassini_bayes.inference.leak._posterior import _thinned
 
 __all__ = ["leak_adequacy", "nuisance_posterior"]
 

@@ -13,16 +13,33 @@ Plain NumPy and matplotlib, no ArviZ: importing ArviZ alone costs more CPU than 
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator, ScalarFormatter
 
-from cassini_bayes.names import axis_label
+from cassini_bayes.report._figure_base import (  # noqa: F401 - re-exported
+    ARTICULATION_CONE_DEG as ARTICULATION_CONE_DEG,
+    BASE_COLOR,
+    CHAIN_COLORS as CHAIN_COLORS,
+    DPI as DPI,
+    MAX_SCATTER as MAX_SCATTER,
+    MAX_TRACE_DRAWS as MAX_TRACE_DRAWS,
+    POST_COLOR,
+    PRIOR_COLOR,
+    RANK_BINS,
+    RWA1_AXIS as RWA1_AXIS,
+    TRUTH_COLOR,
+    WINDOW_SD as WINDOW_SD,
+    _axis_label,
+    _grid_figure,
+    _thin,
+    png_bytes as png_bytes,
+    tidy_ticks as tidy_ticks,
+)
+from cassini_bayes.report._sky_figure import axis_sky_figure as axis_sky_figure
 
 __all__ = [
     "DPI",
@@ -37,92 +54,6 @@ __all__ = [
     "RWA1_AXIS",
     "ARTICULATION_CONE_DEG",
 ]
-
-DPI = 80
-MAX_TRACE_DRAWS = 500  # per chain, trace plots
-MAX_SCATTER = 1000  # points, sky plots
-RANK_BINS = 20
-WINDOW_SD = 6.0  # a marker further than this many posterior sd from the mean is off-scale
-# Brown (2012) §I: the RWA1 spin axis, RWA4's target when it replaces a failed RWA1
-RWA1_AXIS = np.array([0.0, 0.816497, 0.577350])
-# Brown (2012) §I: RWA4's spin axis is canted 54.7° from the articulation (+Z) axis
-ARTICULATION_CONE_DEG = 54.7356
-PRIOR_COLOR, POST_COLOR, BASE_COLOR, TRUTH_COLOR = "#6b7a8f", "#1f4e8c", "#222222", "#c0392b"
-CHAIN_COLORS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C8")
-
-
-def png_bytes(fig: Figure, *, dpi: int = DPI) -> bytes:
-    """Render ``fig`` with Agg to PNG, quantised to a 256-colour palette (about 3× smaller).
-
-    The canvas's RGBA pixels go to Pillow directly: ``savefig`` would encode a full-colour PNG
-    only for it to be decoded again before the quantisation (a third of a report's figure time).
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-    try:
-        from PIL import Image
-    except ImportError:  # pragma: no cover - Pillow ships with matplotlib
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=dpi)
-        return buf.getvalue()
-    fig.set_dpi(dpi)
-    canvas = FigureCanvasAgg(fig)
-    canvas.draw()
-    # the buffer's own shape: get_width_height rounds a fractional size up, the renderer down
-    img = Image.fromarray(np.asarray(canvas.buffer_rgba()), "RGBA")
-    out = io.BytesIO()
-    img.convert("RGB").quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(out, "PNG")
-    return out.getvalue()
-
-
-def _grid_figure(nrow: int, ncol: int, *, cell: tuple[float, float], left: float = 0.75,
-                 right: float = 0.2, top: float = 0.45, bottom: float = 0.55, wspace: float = 0.45,
-                 hspace: float = 0.55, width_ratios: Sequence[float] | None = None,
-                 **subplots_kw):
-    """A figure of ``nrow × ncol`` axes with fixed margins in inches.
-
-    Constrained layout costs several extra draw passes and dominates the time of figures with many
-    axes, so grids are laid out by hand. ``cell`` is the size of the mean cell; ``width_ratios``
-    widens some columns.
-    """
-    ratios = list(width_ratios) if width_ratios is not None else [1.0] * ncol
-    w = left + right + cell[0] * sum(ratios) + (ncol - 1) * wspace
-    h = top + bottom + nrow * cell[1] + (nrow - 1) * hspace
-    fig = Figure(figsize=(w, h))
-    if width_ratios is not None:
-        subplots_kw["gridspec_kw"] = {"width_ratios": ratios}
-    axes = fig.subplots(nrow, ncol, squeeze=False, **subplots_kw)
-    fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
-                        wspace=wspace / (cell[0] * np.mean(ratios)), hspace=hspace / cell[1])
-    return fig, axes
-
-
-def _axis_label(name: str, unit: str) -> str:
-    """``"Ixx (kg m²)"``; a dimensionless quantity says so."""
-    unit = unit if unit and unit not in ("–", "1") else "dimensionless"
-    return f"{name} ({unit})"
-
-
-def tidy_ticks(ax, *, x: int = 4, y: int = 4) -> None:
-    """At most ``x``/``y`` major ticks, plain numbers without an offset: labels never overlap and
-    read without a separate ``+7.1e3`` corner note."""
-    for axis, n in ((ax.xaxis, x), (ax.yaxis, y)):
-        if n:
-            axis.set_major_locator(MaxNLocator(nbins=n, min_n_ticks=2))
-            if isinstance(axis.get_major_formatter(), ScalarFormatter):
-                fmt = ScalarFormatter(useOffset=False)
-                fmt.set_powerlimits((-4, 6))
-                axis.set_major_formatter(fmt)
-    ax.tick_params(labelsize=8)
-
-
-def _thin(x: np.ndarray, max_draws: int) -> tuple[np.ndarray, np.ndarray]:
-    """Every k-th draw of a (chain, draw) array, so that at most ``max_draws`` remain per chain;
-    returns the kept draws and their iteration numbers."""
-    k = max(1, math.ceil(x.shape[1] / max_draws))
-    it = np.arange(0, x.shape[1], k)
-    return x[:, ::k], it
-
 
 class Panel(NamedTuple):
     """One parameter of :func:`answer_figure`: its draws and the values marked beside them."""
@@ -357,160 +288,4 @@ def pulse_impulse_figure(group) -> Figure:
     ax_r.legend(fontsize=7, loc="upper right")
     tidy_ticks(ax, x=5, y=5)
     tidy_ticks(ax_r, x=5, y=5)
-    return fig
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    v = np.asarray(v, dtype=float)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def _tangent_basis(m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """East (increasing azimuth) and north (increasing elevation) unit vectors at ``m``."""
-    ref = np.array([0.0, 0.0, 1.0]) if abs(m[2]) < 0.999 else np.array([1.0, 0.0, 0.0])
-    east = _unit(np.cross(ref, m))
-    north = np.cross(m, east)
-    return east, north
-
-
-def _to_plane_deg(u: np.ndarray, m: np.ndarray, east: np.ndarray, north: np.ndarray) -> np.ndarray:
-    """Azimuthal-equidistant projection about ``m``: distances from ``m`` are true angles (deg)."""
-    u = _unit(np.atleast_2d(u))
-    theta = np.degrees(np.arccos(np.clip(u @ m, -1.0, 1.0)))
-    phi = np.arctan2(u @ north, u @ east)
-    return np.stack([theta * np.cos(phi), theta * np.sin(phi)], -1)
-
-
-def _az_el_deg(u: np.ndarray) -> np.ndarray:
-    u = _unit(np.atleast_2d(u))
-    return np.degrees(np.stack([np.arctan2(u[:, 1], u[:, 0]), np.arcsin(np.clip(u[:, 2], -1, 1))],
-                               -1))
-
-
-def _cone_panel(ax, xy, marks, cones, lim, rings, title, m, east, north) -> None:
-    """One azimuthal-equidistant view about the posterior mean: draws, the posterior cones, the
-    dotted ``rings`` (deg) and the marked axes, those beyond ``lim`` written as off-scale."""
-    ax.scatter(xy[:, 0], xy[:, 1], s=4, color=POST_COLOR, alpha=0.45, label="posterior draws")
-    ang = np.linspace(0, 2 * np.pi, 241)
-    for r in rings:
-        ax.plot(r * np.cos(ang), r * np.sin(ang), color="#777777", linestyle=":", linewidth=1)
-        ax.annotate(f"{r:g}°", (r * np.cos(np.pi / 4), r * np.sin(np.pi / 4)), fontsize=7,
-                    color="#555555")
-    for (key, r), col in zip(sorted((cones or {}).items(), key=lambda kv: float(kv[0])),
-                             ("#7fb3d5", "#2e86c1", "#1b4f72")):
-        if r is not None and np.isfinite(r):
-            ax.plot(r * np.cos(ang), r * np.sin(ang), color=col, linewidth=1.3,
-                    label=f"{key} % cone ({r:.3g}°)")
-    off = []
-    for name, v, mk, col in marks:
-        p = _to_plane_deg(v, m, east, north)[0]
-        d = float(np.hypot(*p))
-        if max(abs(p[0]), abs(p[1])) <= lim:
-            ax.scatter([p[0]], [p[1]], marker=mk, s=120, color=col, label=f"{name} ({d:.3g}°)",
-                       zorder=5)
-        else:
-            off.append(f"{name}: {d:.3g}° from the mean (off-scale)")
-    ax.scatter([0], [0], marker="o", s=25, color="k", label="posterior mean", zorder=6)
-    ax.set_xlim(-lim, lim)
-    ax.set_ylim(-lim, lim)
-    ax.set_aspect("equal")
-    ax.grid(alpha=0.3)
-    ax.set_xlabel("east of the mean (deg)", fontsize=8)
-    ax.set_ylabel("north of the mean (deg)", fontsize=8)
-    ax.set_title(title, fontsize=9)
-    if off:
-        ax.text(0.02, 0.02, "\n".join(off), transform=ax.transAxes, fontsize=7, va="bottom",
-                color="#444444")
-    ax.legend(fontsize=6.5, loc="upper right")
-    tidy_ticks(ax, x=5, y=5)
-
-
-
-def axis_sky_figure(
-    draws: np.ndarray,
-    *,
-    mean: np.ndarray,
-    cones_deg: Mapping[str, float] | None = None,
-    truth: np.ndarray | None = None,
-    baseline: np.ndarray | None = None,
-    target: tuple[str, np.ndarray] | None = ("RWA1", RWA1_AXIS),
-    cone: tuple[np.ndarray, float] | None = (np.eye(3)[2], ARTICULATION_CONE_DEG),
-) -> Figure:
-    """A wheel's spin-axis posterior in three views.
-
-    Left: azimuth ``atan2(y, x)`` and elevation ``asin(z)`` of the draws in body axes, with the
-    wheel's articulation ``cone`` (its axis and angle, deg, from the model file; Cassini's RWA4:
-    54.7356° from +Z, Brown §I) and its reference wheel's axis ``target`` (name, axis; RWA1 for
-    RWA4), each when known. Middle: the draws in
-    an azimuthal-equidistant projection about the posterior mean direction, so circles are true
-    cones, at the papers' budgets' scale: 1°, 2°, 3° (dotted). Right: the same at the posterior's
-    own scale, with the posterior 50/90/95 % cones (solid) and the least-squares axis and truth;
-    a marked axis beyond a view's edge is written with its angular distance instead.
-
-    Parameters
-    ----------
-    draws : numpy.ndarray, shape (n, 3)
-        Posterior draws of the unit axis in body axes.
-    mean : numpy.ndarray, shape (3,)
-        Posterior mean direction.
-    """
-    draws = _unit(draws)
-    if len(draws) > MAX_SCATTER:
-        draws = draws[:: math.ceil(len(draws) / MAX_SCATTER)]
-    m = _unit(mean)
-    east, north = _tangent_basis(m)
-    fig, axes = _grid_figure(1, 3, cell=(4.1, 4.1), left=0.75, right=0.2, top=0.4, bottom=0.6,
-                             wspace=0.85, width_ratios=(1.15, 1, 1))
-    ax_g, ax_b, ax_z = axes[0]
-
-    # overview in azimuth-elevation, a window about the mean wide enough for every marker
-    ae_m = _az_el_deg(m)[0]
-
-    def _ae(v):  # azimuth unwrapped next to the mean's, so the window never straddles ±180°
-        p = _az_el_deg(v)
-        p[:, 0] = ae_m[0] + (p[:, 0] - ae_m[0] + 180.0) % 360.0 - 180.0
-        return p
-
-    ae = _ae(draws)
-    target_label = None if target is None else f"{target[0]} target"
-    marks = [] if target is None else [(target_label, np.asarray(target[1], float), "*",
-                                        "#e67e22")]
-    if truth is not None:
-        marks.append(("truth", truth, "x", TRUTH_COLOR))
-    if baseline is not None:
-        marks.append(("least squares", baseline, "+", BASE_COLOR))
-    pts = np.concatenate([ae] + [_ae(v) for _, v, _, _ in marks])
-    half = max(10.0, 1.2 * float(np.max(np.abs(pts - ae_m))))
-    if cone is not None:
-        c_axis, c_deg = _unit(np.asarray(cone[0], float)), float(cone[1])
-        e1, e2 = _tangent_basis(c_axis)
-        phi = np.linspace(0.0, 2.0 * np.pi, 721)[:, None]
-        ring = _ae(np.cos(np.radians(c_deg)) * c_axis + np.sin(np.radians(c_deg))
-                   * (np.cos(phi) * e1 + np.sin(phi) * e2))
-        jump = np.flatnonzero(np.abs(np.diff(ring[:, 0])) > 180.0) + 1   # the azimuth wraps
-        ring = np.insert(ring, jump, np.nan, axis=0)
-        ax_g.plot(ring[:, 0], ring[:, 1], color="#888888", linewidth=1, linestyle=":",
-                  label=f"articulation cone ({c_deg:.2f}° from {axis_label(c_axis, 3)})")
-    ax_g.scatter(ae[:, 0], ae[:, 1], s=4, color=POST_COLOR, alpha=0.5, label="posterior draws")
-    for name, v, mk, col in marks:
-        p = _ae(v)[0]
-        ax_g.scatter([p[0]], [p[1]], marker=mk, s=120, color=col, label=name, zorder=5)
-    ax_g.set_xlim(ae_m[0] - half, ae_m[0] + half)
-    ax_g.set_ylim(max(-90.0, ae_m[1] - half), min(90.0, ae_m[1] + half))
-    ax_g.grid(alpha=0.3)
-    ax_g.set_xlabel("body azimuth atan2(y, x) (deg)", fontsize=8)
-    ax_g.set_ylabel("body elevation asin(z) (deg)", fontsize=8)
-    ax_g.set_title("spin axis in body axes", fontsize=9)
-    ax_g.legend(fontsize=6.5, loc="lower left")
-    tidy_ticks(ax_g, x=5, y=5)
-
-    xy = _to_plane_deg(draws, m, east, north)
-    spread = float(np.max(np.hypot(xy[:, 0], xy[:, 1])))
-    _cone_panel(ax_b, xy, marks, {}, max(3.3, 1.1 * spread), (1.0, 2.0, 3.0),
-                "at the budgets' scale: 1°, 2°, 3° cones", m, east, north)
-    zoom = 1.15 * max([spread] + [float(r) for r in (cones_deg or {}).values()
-                                  if r is not None and np.isfinite(r)])
-    _cone_panel(ax_z, xy, [mk for mk in marks if mk[0] != target_label], cones_deg, zoom,
-                [r for r in (1.0, 2.0, 3.0) if r <= zoom], "at the posterior's scale", m, east,
-                north)
     return fig

@@ -77,12 +77,53 @@ def leak_report_html(res) -> str:
     from cassini_bayes.report.adequacy import adequacy_section
     from cassini_bayes.report.build import verdict_badges
     from cassini_bayes.report.figures import png_bytes
-    from cassini_bayes.report.html import (Raw, badge, bullet_list, figure, html_page,
-                                           page_header, paragraph, section, table)
+    from cassini_bayes.report.html import (badge, bullet_list, figure, html_page, page_header,
+                                           paragraph, section, table)
 
     s, post, lee = res.summary, res.posterior, res.lee
     b, lee_s = s["bayes"], s["lee"]
     hypotheses = post.hypotheses
+    lee_on = lee_s.get("applies", True)
+    leaking = b["detection_time_s"] is not None
+    answer = _answer_table(b, lee_s, hypotheses)
+    per = table(["hypothesis", "P at the last check", "P ≥ alarm first at (s)"],
+                [[h, f"{p:.4f}", _t(next((float(t) for t, q in zip(post.t_check, post.prob[:, j])
+                                          if q >= post.p_detect), None))]
+                 for j, (h, p) in enumerate(b["p_hypothesis"].items())], left=1)
+    call = (badge(f"LEAK: {b['thruster']}" if b["thruster"] else "LEAK, NOT ISOLATED", False)
+            if leaking else badge("NO LEAK", True))
+    header = page_header(f"{verdict_badges(s)} {call}",
+                         f"{s['command']} · cassini-bayes {__version__} · [{s['t_start_s']:.0f}, "
+                         f"{s['t_end_s']:.0f}] s · {b['n_checks']} checks · alarm at P ≥ "
+                         f"{b['p_detect']:g}", s.get("warnings") or [])
+    fig = figure(png_bytes(leak_figure(post, lee, hypotheses)),
+                 "Posterior probability of each hypothesis given the data up to each check "
+                 "(thrusters that never reach 1 % not drawn), the alarm level, and when each "
+                 "monitor detected the leak.", alt="leak probabilities")
+    lee_text = (f"Lee's monitor: the residual momentum against R_T = "
+                f"{lee_s['threshold_nms']:g} N m s within T_limit = "
+                f"{lee_s['t_limit_s'] / 3600:g} h, thrust variation η = {lee_s['eta']:g} "
+                "(Lee §3.2, Eq 11). " if lee_on else f"{lee_s['reason']} (its column: –). ")
+    sections = [
+        section("Answer", [answer, paragraph(
+            "The Bayesian monitor: the posterior of no leak or a leak of one of the model's "
+            f"{len(hypotheses) - 1} thrusters from an unknown onset (docs/leak.md); detection "
+            "when P(leak) reaches the alarm level, isolation when one thruster's probability "
+            "does. " + lee_text + "Requirement: the momentum the leak's torque builds up on its "
+            "worst axis between the onset and the isolation.",
+            note=True), fig], id="answer"),
+        adequacy_section(s, LEAK_NOTE),
+        section("Hypotheses", per, id="hypotheses"),
+        section("Inputs", bullet_list(str(f) for f in res.files), id="inputs"),
+    ]
+    return html_page("cassini-bayes thruster-leak monitor", sections, header=header)
+
+
+def _answer_table(b: dict, lee_s: dict, hypotheses) -> str:
+    """The answer table: the Bayesian monitor's verdict beside Lee's threshold monitor, and the
+    isolation requirement (the momentum the leak built up by then, Lee §3.2)."""
+    from cassini_bayes.report.html import Raw, badge, table
+
     lee_on = lee_s.get("applies", True)
 
     def lee_cell(value):
@@ -123,34 +164,4 @@ def leak_report_html(res) -> str:
     answer = table(["quantity", "unit", "Bayesian monitor (posterior)",
                     "Lee's threshold monitor (paper)", "requirement", "verdict"], rows, left=1,
                    classes=classes)
-    per = table(["hypothesis", "P at the last check", "P ≥ alarm first at (s)"],
-                [[h, f"{p:.4f}", _t(next((float(t) for t, q in zip(post.t_check, post.prob[:, j])
-                                          if q >= post.p_detect), None))]
-                 for j, (h, p) in enumerate(b["p_hypothesis"].items())], left=1)
-    call = (badge(f"LEAK: {b['thruster']}" if b["thruster"] else "LEAK, NOT ISOLATED", False)
-            if leaking else badge("NO LEAK", True))
-    header = page_header(f"{verdict_badges(s)} {call}",
-                         f"{s['command']} · cassini-bayes {__version__} · [{s['t_start_s']:.0f}, "
-                         f"{s['t_end_s']:.0f}] s · {b['n_checks']} checks · alarm at P ≥ "
-                         f"{b['p_detect']:g}", s.get("warnings") or [])
-    fig = figure(png_bytes(leak_figure(post, lee, hypotheses)),
-                 "Posterior probability of each hypothesis given the data up to each check "
-                 "(thrusters that never reach 1 % not drawn), the alarm level, and when each "
-                 "monitor detected the leak.", alt="leak probabilities")
-    lee_text = (f"Lee's monitor: the residual momentum against R_T = "
-                f"{lee_s['threshold_nms']:g} N m s within T_limit = "
-                f"{lee_s['t_limit_s'] / 3600:g} h, thrust variation η = {lee_s['eta']:g} "
-                "(Lee §3.2, Eq 11). " if lee_on else f"{lee_s['reason']} (its column: –). ")
-    sections = [
-        section("Answer", [answer, paragraph(
-            "The Bayesian monitor: the posterior of no leak or a leak of one of the model's "
-            f"{len(hypotheses) - 1} thrusters from an unknown onset (docs/leak.md); detection "
-            "when P(leak) reaches the alarm level, isolation when one thruster's probability "
-            "does. " + lee_text + "Requirement: the momentum the leak's torque builds up on its "
-            "worst axis between the onset and the isolation.",
-            note=True), fig], id="answer"),
-        adequacy_section(s, LEAK_NOTE),
-        section("Hypotheses", per, id="hypotheses"),
-        section("Inputs", bullet_list(str(f) for f in res.files), id="inputs"),
-    ]
-    return html_page("cassini-bayes thruster-leak monitor", sections, header=header)
+    return answer

@@ -8,9 +8,10 @@ the RCS controller on the 1/8 s command grid). Each thruster keeps a ring of its
 the step, ``F [g(t+dt − t_on) − g(t − t_on)]`` with ``g`` = :func:`pulse_impulse_until`.
 The controllers see the true state (the on-board attitude estimate is taken as perfect; its
 errors are far below the star-tracker noise put on the telemetry), while they use the *prior*
-model's inertia and thruster sets and the *believed* wheel axes. Sensor noise is added to the samples afterwards,
-so the noisy telemetry and the truth come from one trajectory; with time-tag jitter the noisy
-telemetry carries the jittered times (``SimArrays.t_meas``), the truth the true ones.
+model's inertia and thruster sets and the *believed* wheel axes. Sensor noise is added to the
+samples afterwards, so the noisy telemetry and the truth come from one trajectory; with
+time-tag jitter the noisy telemetry carries the jittered times (``SimArrays.t_meas``), the truth
+the true ones.
 
 Flexible or slosh mode (:class:`~cassini_bayes.simulate.scenario.FlexMode`): in hybrid
 coordinates the mode is a momentum store exactly like a wheel — spin inertia ``|δ|²`` about
@@ -58,6 +59,66 @@ def _plant(truth: TruthParams, cfg: _Config):
     return plant, dn
 
 
+def _wheel_torques(q, omega, rho, row, truth: TruthParams, carr, cfg: _Config, on):
+    """The wheel motor torques of one step, N m: the RWA attitude controller's (``control =
+    "rwa"``) or the commanded wheel ramps', clipped by the wheel limits when the scenario has
+    them; zero for a wheel that is off."""
+    k, m = truth.wheel_axes.shape[0], carr["q_matrix"].shape[1]
+    if cfg.control == "rwa":
+        u = ctl.rwa_wheel_torques(q, omega, rho, row[:10], carr["inertia_ctrl"],
+                                  carr["axes_believed"], carr["axes_pinv"],
+                                  carr["wheel_j_ctrl"], cfg.kp, cfg.kd)
+    else:
+        u = ctl.wheel_ramp_torques(rho, row[13 + m:13 + m + k],
+                                   row[13 + m + k:13 + m + 2 * k], truth.wheel_inertias,
+                                   cfg.wheel_gain)
+    if cfg.wheel_limits:
+        u = ctl.limit_wheel_torques(u, rho, carr["wheel_rate_max"], carr["wheel_torque_max"])
+    return jnp.where(on, u, 0.0)
+
+
+def _thruster_step(t, q, omega, row, rings, truth: TruthParams, carr, cfg: _Config):
+    """The thrusters over the step from ``t``: the commanded pulses (with ``control = "rcs"``
+    also the RCS controller's) enter each thruster's ring of its last :data:`PULSE_RING` pulses.
+    Returns the impulse (m,) N s and on-time (m,) s of each thruster over the step, its command
+    units (int8) and the rings ``(ring_t, ring_w, ring_g, free_at)`` after it."""
+    ring_t, ring_w, ring_g, free_at = rings
+    dt, m = cfg.dt, carr["q_matrix"].shape[1]
+    td, tr, tf = truth.tau_s[0], truth.tau_s[1], truth.tau_s[2]
+    forced = row[10:10 + m]
+    units = forced
+    if cfg.control == "rcs":
+        free = t >= free_at - 1e-9
+        auto = ctl.rcs_commands(q, omega, row[:10], row[10 + m:13 + m], free, carr["sets"],
+                                cfg.rate_gain_s, cfg.width_gain, cfg.max_units)
+        units = jnp.maximum(units, auto)
+    fire = units > 0
+    width = units * ctl.COMMAND_RESOLUTION_S
+    ring_t = jnp.where(fire[:, None], jnp.concatenate(
+        [jnp.full((m, 1), t), ring_t[:, :-1]], 1), ring_t)
+    ring_w = jnp.where(fire[:, None], jnp.concatenate(
+        [width[:, None], ring_w[:, :-1]], 1), ring_w)
+    ring_g = jnp.where(fire[:, None], jnp.concatenate(
+        [jnp.zeros((m, 1)), ring_g[:, :-1]], 1), ring_g)
+    free_at = jnp.where(fire, t + width + cfg.min_off_s, free_at)
+    # Exact impulse of each pulse over [t, t + dt] (Feldman & Lee §V profile):
+    # g(t + dt − t_on) − g(t − t_on), the second term carried from the previous step.
+    # Skipped (exactly: the carried g makes a later difference catch up) while every
+    # remembered pulse is over and its tail below e^-40.
+    busy = jnp.any(t + dt < ring_t + ring_w + td + 40.0 * tf)
+
+    def pulse_step(ring_g):
+        g1 = pulse_impulse_until(t + dt - ring_t, ring_w, td, tr, tf)
+        over = jnp.clip(jnp.minimum(t + dt, ring_t + ring_w) - jnp.maximum(t, ring_t), 0.0)
+        return truth.thrust_n * jnp.sum(g1 - ring_g, axis=1), g1, jnp.sum(over, axis=1)
+
+    def idle(ring_g):
+        return jnp.zeros(m), ring_g, jnp.zeros(m)
+
+    j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (m,) N s
+    return j_step, on_step, units.astype(jnp.int8), (ring_t, ring_w, ring_g, free_at)
+
+
 def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg: _Config):
     _TRACES[0] += 1
     dt = cfg.dt
@@ -67,7 +128,6 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
     plant, d_norm = _plant(truth, cfg)
     rho0 = jnp.concatenate([carr["rho0"], jnp.zeros(1)]) if cfg.flex else carr["rho0"]
     state0 = dynamics.state_from_rates(carr["q0"], carr["w0"], rho0, plant)
-    td, tr, tf = truth.tau_s[0], truth.tau_s[1], truth.tau_s[2]
     w_flex, z_flex = truth.flex_freq_rad_s, truth.flex_damping
 
     def eta_rate(state, omega):
@@ -78,60 +138,17 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
         state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b, cum_n, eta = carry
         i, row = xs
         t = i * dt
-        cmd = row[:10]
         omega = dynamics.body_rate(state, plant)
         rho = dynamics.wheel_rates(state, plant, omega)[:k]
-        if cfg.control == "rwa":
-            u = ctl.rwa_wheel_torques(state.q, omega, rho, cmd, carr["inertia_ctrl"],
-                                      carr["axes_believed"], carr["axes_pinv"],
-                                      carr["wheel_j_ctrl"], cfg.kp, cfg.kd)
-        else:
-            u = ctl.wheel_ramp_torques(rho, row[13 + m:13 + m + k],
-                                       row[13 + m + k:13 + m + 2 * k], truth.wheel_inertias,
-                                       cfg.wheel_gain)
-        if cfg.wheel_limits:
-            u = ctl.limit_wheel_torques(u, rho, carr["wheel_rate_max"],
-                                        carr["wheel_torque_max"])
-        u = jnp.where(on, u, 0.0)
+        u = _wheel_torques(state.q, omega, rho, row, truth, carr, cfg, on)
         body_imp = truth.torque_body_nm * dt
         if cfg.thrusters:
-            forced = row[10:10 + m]
-            units = forced
-            if cfg.control == "rcs":
-                free = t >= free_at - 1e-9
-                auto = ctl.rcs_commands(state.q, omega, cmd, row[10 + m:13 + m], free,
-                                        carr["sets"],
-                                        cfg.rate_gain_s, cfg.width_gain, cfg.max_units)
-                units = jnp.maximum(units, auto)
-            fire = units > 0
-            width = units * ctl.COMMAND_RESOLUTION_S
-            ring_t = jnp.where(fire[:, None], jnp.concatenate(
-                [jnp.full((m, 1), t), ring_t[:, :-1]], 1), ring_t)
-            ring_w = jnp.where(fire[:, None], jnp.concatenate(
-                [width[:, None], ring_w[:, :-1]], 1), ring_w)
-            ring_g = jnp.where(fire[:, None], jnp.concatenate(
-                [jnp.zeros((m, 1)), ring_g[:, :-1]], 1), ring_g)
-            free_at = jnp.where(fire, t + width + cfg.min_off_s, free_at)
-            # Exact impulse of each pulse over [t, t + dt] (Feldman & Lee §V profile):
-            # g(t + dt − t_on) − g(t − t_on), the second term carried from the previous step.
-            # Skipped (exactly: the carried g makes a later difference catch up) while every
-            # remembered pulse is over and its tail below e^-40.
-            busy = jnp.any(t + dt < ring_t + ring_w + td + 40.0 * tf)
-
-            def pulse_step(ring_g):
-                g1 = pulse_impulse_until(t + dt - ring_t, ring_w, td, tr, tf)
-                over = jnp.clip(jnp.minimum(t + dt, ring_t + ring_w) - jnp.maximum(t, ring_t),
-                                0.0)
-                return truth.thrust_n * jnp.sum(g1 - ring_g, axis=1), g1, jnp.sum(over, axis=1)
-
-            def idle(ring_g):
-                return jnp.zeros(m), ring_g, jnp.zeros(m)
-
-            j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (m,) N s
+            j_step, on_step, units, (ring_t, ring_w, ring_g, free_at) = _thruster_step(
+                t, state.q, omega, row, (ring_t, ring_w, ring_g, free_at), truth, carr, cfg)
             cum_on = cum_on + on_step
             cum_thr = cum_thr + j_step
             body_imp = body_imp + carr["q_matrix"] @ j_step                      # Eq 16
-            out_units = units.astype(jnp.int8)
+            out_units = units
         else:
             out_units = jnp.zeros((m,), jnp.int8)[:0]
         if cfg.leak:

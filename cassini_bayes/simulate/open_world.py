@@ -29,13 +29,13 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from cassini_bayes._toml import read_toml
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate.scenario import scenario_from_dict, scenario_path
 from cassini_bayes.spacecraft import check_physical_inertia
@@ -97,11 +97,7 @@ def base_scenario(base: dict | str | Path) -> dict:
     under ``experiments/scenarios/``)."""
     if isinstance(base, dict):
         return copy.deepcopy(base)
-    path = scenario_path(str(base))
-    try:
-        return tomllib.loads(path.read_text())
-    except OSError as e:
-        raise InputError(f"cannot read the scenario: {e.strerror}", path=str(path)) from None
+    return read_toml(scenario_path(str(base)), "scenario", "experiments/scenarios/")
 
 
 def _effect(rng, name: str, sd: float, size, record: dict) -> np.ndarray:

@@ -327,14 +327,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     InputError
         A telemetry file has too few samples or no wheel rates.
     """
-    if not telemetries:
-        raise InputError("no telemetry given; pass at least one slew file")
-    for tel in telemetries:  # Feldman & Lee Eq 3: the wheels exchange momentum with the body
-        if not tel.active_wheels():
-            raise InputError("no wheel runs (every wheel column is empty): the inertia is "
-                             "calibrated from the momentum the wheels exchange with the body; "
-                             "give reaction-wheel slew telemetry with the wheel rates",
-                             path=tel.source)
+    _check_wheels_run(telemetries)
     n_files = len(telemetries)
     setup = _setup(telemetries, spacecraft, torque=torque, robust=robust,
                    wheel_errors=wheel_errors)
@@ -356,7 +349,8 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
 
     data = InertiaData(fmat=fmat, gvec=gvec, q_star=q_star, n_obs=n_obs, theta_star=theta,
                        centre=centre, tril=tril, pi_mean=setup.prior.mean, pi_sd=setup.prior.sd,
-                       file_sd=setup.prior.file_sd, log_noise=log_s, nu_sd=setup.layout.sd if robust else None,
+                       file_sd=setup.prior.file_sd, log_noise=log_s,
+                       nu_sd=setup.layout.sd if robust else None,
                        nu_weights=setup.layout.scale_weights if robust else None)
     data = jax.device_put(jax.tree.map(np.asarray, data))
     return InertiaProblem(
@@ -373,3 +367,17 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
         sensitivity=sens,
         robust_cols=(np.concatenate([fd["cols"][:, :, setup.p_base:] for fd in files])
                      if robust else None))
+
+
+def _check_wheels_run(telemetries: Sequence[Telemetry]) -> None:
+    """Raise :class:`InputError` without telemetry, or for a file in which no wheel runs: the
+    inertia is calibrated from the momentum the wheels exchange with the body (Feldman & Lee
+    Eq 3)."""
+    if not telemetries:
+        raise InputError("no telemetry given; pass at least one slew file")
+    for tel in telemetries:
+        if not tel.active_wheels():
+            raise InputError("no wheel runs (every wheel column is empty): the inertia is "
+                             "calibrated from the momentum the wheels exchange with the body; "
+                             "give reaction-wheel slew telemetry with the wheel rates",
+                             path=tel.source)

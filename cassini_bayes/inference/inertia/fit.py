@@ -156,15 +156,7 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     _warn_weak(problem)
     n_files = len(telemetries)
     data = problem.data
-    coords = {"file": np.arange(n_files), "axis": list(AXES), "noise": list(NOISE_NAMES),
-              "z_dim": np.arange(data.centre.shape[0]), "noise_z_dim": np.arange(n_files),
-              "wheel": list(problem.layout.wheels), "tilt": ["u1", "u2"]}
-    dims = {"H0": ["file", "axis"], "T_N": ["file", "axis"], "z": ["z_dim"],
-            "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
-            "gyro_bias": ["file", "axis"], "gyro_scale": ["axis"], "wheel_tilt": ["wheel", "tilt"],
-            "T_body": ["file", "axis"], "T_N_rate": ["file", "axis"],
-            **({"wheel_scale": ["wheel"]} if wheel_errors == "per_wheel" else {}),
-            **{name: ["file"] for name in NOISE_NAMES}}
+    coords, dims = _coords_dims(problem, n_files, wheel_errors)
     log_nh = np.asarray(data.log_noise)
 
     def prior(key_prior, n):
@@ -175,7 +167,31 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
                      settings=settings, coords=coords, dims=dims, prior=prior,
                      prior_draws=prior_draws)
 
-    post = idata.posterior
+    r, std = _posterior_mean_residuals(problem, idata.posterior, torque, robust)
+    replace_groups(idata, _data_groups(problem, r, std))
+    names = (list(INERTIA_NAMES) + ["H0"] + (["T_N"] if torque else []) + ["noise_scale"]
+             + (robust_sites(problem.layout) if robust else []))
+    return InertiaPosterior(idata, diagnostics(idata, names), problem)
+
+
+def _coords_dims(problem, n_files: int, wheel_errors: str):
+    """The ArviZ coordinates and dimensions of the inertia posterior's sites: per file, axis,
+    noise component, wheel and tilt."""
+    coords = {"file": np.arange(n_files), "axis": list(AXES), "noise": list(NOISE_NAMES),
+              "z_dim": np.arange(problem.data.centre.shape[0]), "noise_z_dim": np.arange(n_files),
+              "wheel": list(problem.layout.wheels), "tilt": ["u1", "u2"]}
+    dims = {"H0": ["file", "axis"], "T_N": ["file", "axis"], "z": ["z_dim"],
+            "noise_z": ["noise_z_dim"], "noise_scale": ["file"],
+            "gyro_bias": ["file", "axis"], "gyro_scale": ["axis"], "wheel_tilt": ["wheel", "tilt"],
+            "T_body": ["file", "axis"], "T_N_rate": ["file", "axis"],
+            **({"wheel_scale": ["wheel"]} if wheel_errors == "per_wheel" else {}),
+            **{name: ["file"] for name in NOISE_NAMES}}
+    return coords, dims
+
+
+def _posterior_mean_residuals(problem, post, torque: bool, robust: bool):
+    """The momentum residuals at the posterior mean (inertia, momenta, torques, noise levels and,
+    for the robust model, the nuisance effects the data see)."""
     pi_mean = np.array([float(post[n].mean()) for n in INERTIA_NAMES])
     h0_mean = post["H0"].mean(("chain", "draw")).values
     tq_mean = post["T_N"].mean(("chain", "draw")).values if torque else np.zeros_like(h0_mean)
@@ -185,9 +201,4 @@ def fit_inertia(key, telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *
     if robust:  # the residual is that of π̃ = π/(1 + c) and δ_k = (c_k − c)/(1 + c) (nuisance.py)
         nu_mean, scale = _seen_nuisance(problem.layout, post)
         pi_mean, h0_mean, tq_mean = pi_mean / scale, h0_mean / scale, tq_mean / scale
-    r, std = momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean, nu_mean)
-
-    replace_groups(idata, _data_groups(problem, r, std))
-    names = (list(INERTIA_NAMES) + ["H0"] + (["T_N"] if torque else []) + ["noise_scale"]
-             + (robust_sites(problem.layout) if robust else []))
-    return InertiaPosterior(idata, diagnostics(idata, names), problem)
+    return momentum_residuals(problem, pi_mean, h0_mean, tq_mean, sig_mean, nu_mean)

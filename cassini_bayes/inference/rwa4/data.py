@@ -380,12 +380,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         overlapping, thrusters firing inside a window, no spin change (RCS), data that cannot
         determine the axis.
     """
-    if method not in METHODS:
-        raise InputError(f"{arg('method', method, cli_quote=True)}: choose one of "
-                         f"{', '.join(METHODS)}")
-    if prior not in PRIORS:
-        raise InputError(f"{arg('prior', prior, cli_quote=True)}: choose one of "
-                         f"{', '.join(PRIORS)}")
+    _check_options(method, prior)
     wheel = _wheel_name(tel, wheel)
     cone = check_cone_prior(spacecraft, wheel, prior)
     pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
@@ -410,18 +405,10 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
 
     inertia, i_src, i_mean, i_chol = _inertia_prior(inertia, spacecraft)
 
-    # Least-squares baseline, also the chart's centre: Brown Eq 1 (RCS), or Brown Eq 3 (RWA)
-    # with the body term C I ω kept at the prior-mean inertia (Eq 3 drops it for perfectly
-    # quiescent windows; on rwa4_rwa it moves the axis by 0.009°).
     q = np.asarray(quat_continuous(np.asarray(tel.q, float)))
     omega = np.asarray(tel.omega, float)
     i_pred = np.asarray(inertia_matrix(i_mean))
-    if method == "rcs":
-        fit = fit_axis_rcs(q, omega, rates, axes, js, i_pred, masks[0][0], masks[0][1],
-                           unknown=k_u)
-    else:
-        fit = fit_axis_rwa(q, omega, rates, axes, js, masks, unknown=k_u, inertia=i_pred)
-    u_ls = np.asarray(fit.axis, float)
+    u_ls = _least_squares_axis(method, q, omega, rates, axes, js, i_pred, masks, k_u)
 
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
@@ -439,17 +426,46 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
               cone_angle=jnp.asarray(np.radians(0.0 if cone is None else cone.angle_deg)),
               cone_sd=jnp.asarray(np.radians(1.0 if cone is None else cone.sd_deg)))
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
-    kw = Rwa4Data(**kw)
+    kw, sd_dir = _laplace_centred(chart, theta0, Rwa4Data(**kw), wheel, tel.source)
+    return Rwa4Problem(
+        data=kw, method=method, prior=prior, cone=cone, pairs=tuple(pairs), inertia=inertia,
+        inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
+        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
+        nuisance=nuisance, robust=robust)
+
+
+def _check_options(method: str, prior: str) -> None:
+    """Raise :class:`InputError` unless ``method`` and ``prior`` are known."""
+    if method not in METHODS:
+        raise InputError(f"{arg('method', method, cli_quote=True)}: choose one of "
+                         f"{', '.join(METHODS)}")
+    if prior not in PRIORS:
+        raise InputError(f"{arg('prior', prior, cli_quote=True)}: choose one of "
+                         f"{', '.join(PRIORS)}")
+
+
+def _least_squares_axis(method: str, q, omega, rates, axes, js, i_pred, masks,
+                        k_u: int) -> np.ndarray:
+    """The least-squares axis, also the chart's centre: Brown Eq 1 (RCS), or Brown Eq 3 (RWA)
+    with the body term C I ω kept at the prior-mean inertia ``i_pred`` (Eq 3 drops it for
+    perfectly quiescent windows; it moves the axis by a few thousandths of a degree)."""
+    if method == "rcs":
+        fit = fit_axis_rcs(q, omega, rates, axes, js, i_pred, masks[0][0], masks[0][1],
+                           unknown=k_u)
+    else:
+        fit = fit_axis_rwa(q, omega, rates, axes, js, masks, unknown=k_u, inertia=i_pred)
+    return np.asarray(fit.axis, float)
+
+
+def _laplace_centred(chart: str, theta0, kw: Rwa4Data, wheel: str, source):
+    """``kw`` with the Laplace approximation's mode and Cholesky factor in the chart, and the
+    axis direction's Laplace sd (deg); :class:`InputError` when the data leave the axis wider
+    than :data:`MAX_SD_DIRECTION_DEG` (no excitation between the windows)."""
     centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
     sd_dir = _sd_direction_deg(chart, centre, tril, kw)
     if not sd_dir < MAX_SD_DIRECTION_DEG:
         raise InputError(f"the data determine the {wheel} axis only to ±{sd_dir:.3g}° "
                          f"(Laplace sd > {MAX_SD_DIRECTION_DEG:g}°): no excitation between the "
                          "windows; choose windows across a spin change (RCS) or a slew (RWA)",
-                         path=tel.source)
-    kw = kw._replace(centre=jnp.asarray(centre), tril=jnp.asarray(tril))
-    return Rwa4Problem(
-        data=kw, method=method, prior=prior, cone=cone, pairs=tuple(pairs), inertia=inertia,
-        inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
-        noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
-        nuisance=nuisance, robust=robust)
+                         path=source)
+    return kw._replace(centre=jnp.asarray(centre), tril=jnp.asarray(tril)), sd_dir

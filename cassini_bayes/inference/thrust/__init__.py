@@ -56,8 +56,8 @@ Priors, stated in the physical parameters
   papers' profile (delay, exponential rise, hold, exponential fall;
   :mod:`~cassini_bayes.physics.pulse`) contains real valves that the manufacturer's ranges (delay
   3-7 ms, rise 15-25 ms, fall 40-90 ms) exclude: a first-order valve (no delay, one time
-  constant ``τ`` for rise and fall, 38-54 ms measured on an independent simulator) is
-  ``τd = 0``, ``τr = τf = τ``. The prior covers it:
+  constant ``τ`` for rise and fall; docs/robust/README.md) is ``τd = 0``, ``τr = τf = τ``. The
+  prior covers it:
 
   - ``τd ~ HalfNormal(σ_d)``, ``σ_d`` = the upper end of ``tau_delay_range`` (7 ms): largest
     density at ``τd = 0`` (a valve that opens at once), median 4.7 ms ≈ the nominal 5 ms, 85 %
@@ -85,8 +85,8 @@ Sampler coordinates
 Pulse logs of widths ≥ 125 ms pin the thrust and the long-pulse excess
 ``c = τf − τr e^{−τd/τr}`` (:func:`long_pulse_excess`; a long pulse delivers ``F (Δ + c)``) to
 ~1e-4 of their prior widths, and leave ``τd``, ``τr`` near their prior: the posterior of
-``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls (step
-sizes 0.02, tree depth 6, R-hat 1.05 before this parameterisation). The sampler therefore sees
+``log τ`` is a ridge a few microseconds wide along a curved surface, on which NUTS stalls
+(docs/performance.md). The sampler therefore sees
 ``f_z`` (prior-whitened ``log F``), ``a_z`` (the rise deficit ``a = τd + τr e^{−τd/τr}`` =
 ``a_mu e^{0.4 a_z}``, :func:`rise_deficit`: a pulse still on has delivered ``F (t − a)``, so the
 samples inside pulses pin it), ``s_z = asinh s`` (``s`` its split, ``τd = a σ(s)``,

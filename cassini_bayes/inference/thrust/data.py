@@ -357,11 +357,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     per_thruster = mode == "thruster"
     thrust_pred = spacecraft.thrust_per_thruster if per_thruster else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
-    if inertia is not None:
-        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
-        i_mean, i_tril = np.asarray(inertia.mean, float), tril
-    else:
-        i_mean, i_tril = np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
+    i_mean, i_tril = _inertia_mean_tril(inertia, i_fixed)
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
     k_slots = kw.pop("k_slots")
     layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
@@ -373,15 +369,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * thrust_pred, noise, i_lin)
     design, extra = None, {}
     if per_thruster:
-        j = np.asarray(_impulse_per_newton(jax.device_put(layout_e),
-                                           jax.device_put(np.eye(n_thr)), tau_med))
-        b_cov = (noise[:, 0, None, None]**2 * (i_lin @ i_lin)[None]
-                 + noise[:, 1, None, None]**2 * kw["wheel_cov"])
-        dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
-        design = thrust_design(j, kw["mask"], q_mat, dirs, thrust_pred, b_cov,
-                               THRUST_PRIOR_LOG_SD, spacecraft.com_sd_m,
-                               spacecraft.thruster_names, fired)
-        extra = dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
+        design, extra = _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft,
+                                             thrust_pred, fired)
     basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
     basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
     nu_cols = kw.pop("nu_cols")
@@ -412,3 +401,30 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
         fired=fired, noise_hat=noise, layout=layout if robust else None,
         thrusters=spacecraft.thruster_names, design=design)
+
+
+def _inertia_mean_tril(inertia: InertiaGaussian | None, i_fixed: np.ndarray):
+    """The inertia prior's mean (6,) kg m² and Cholesky factor: the Gaussian's (jittered by
+    1e-9 kg² m⁴ for the factorisation), or the fixed prediction with a zero factor."""
+    if inertia is not None:
+        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
+        return np.asarray(inertia.mean, float), tril
+    return np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
+
+
+def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacecraft,
+                         thrust_pred, fired):
+    """Mode ``thruster``: the combinations of the thrusts and the centre of mass the events
+    identify (:func:`thrust_design`, from each pulse's impulse per newton at the prior-median
+    time constants and the momentum noise), and the data fields its model reads."""
+    n_thr = len(spacecraft.thrusters)
+    q_mat = spacecraft.moment_matrix
+    j = np.asarray(_impulse_per_newton(jax.device_put(layout_e),
+                                       jax.device_put(np.eye(n_thr)), tau_med))
+    b_cov = (noise[:, 0, None, None]**2 * (i_lin @ i_lin)[None]
+             + noise[:, 1, None, None]**2 * kw["wheel_cov"])
+    dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
+    design = thrust_design(j, kw["mask"], q_mat, dirs, thrust_pred, b_cov,
+                           THRUST_PRIOR_LOG_SD, spacecraft.com_sd_m,
+                           spacecraft.thruster_names, fired)
+    return design, dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)

@@ -221,22 +221,10 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
                       "prior-dominated", stacklevel=2)
     kw = problem.data
-    n_ev = len(problem.sources)
     sample_inertia = inertia is not None
-    coords = {"event": np.arange(n_ev), "w_dim": np.arange(kw.centre.shape[0]),
-              "thruster": list(problem.thrusters)}
-    dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"],
-            **({"F": ["thruster"]} if mode == "thruster" else {})}
-    if robust:
-        coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
-                       "tilt": ["u1", "u2"]})
-        dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
-                     EFFECTS["wheel_axes"]: ["wheel", "tilt"],
-                     EFFECTS["body_torque"]: ["event", "axis"],
-                     **({EFFECTS["wheel_inertia"]: ["wheel"]}
-                        if wheel_errors == "per_wheel" else {})})
-    idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs={"data": kw}, settings=settings,
-                     coords=coords, dims=dims,
+    coords, dims = _coords_dims(problem, mode, robust, wheel_errors)
+    idata = run_nuts(key, thrust_model(mode, sample_inertia), model_kwargs={"data": kw},
+                     settings=settings, coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
     if problem.design is not None and problem.design.combinations.size:
@@ -252,10 +240,36 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                    | {"pulse_impulses": pulse_impulses(problem, post, nu_draws)})
     for line in tau_identification(post, problem.tau):
         warnings.warn(line, TauIdentificationWarning, stacklevel=2)
+    return ThrustPosterior(idata, diagnostics(idata, _judged_names(problem, sample_inertia,
+                                                                   robust)), problem)
+
+
+def _coords_dims(problem, mode: str, robust: bool, wheel_errors: str):
+    """The ArviZ coordinates and dimensions of the thrust posterior's sites: per event, per
+    thruster (mode ``thruster``) and, for the robust model, per axis, wheel and tilt."""
+    coords = {"event": np.arange(len(problem.sources)),
+              "w_dim": np.arange(problem.data.centre.shape[0]),
+              "thruster": list(problem.thrusters)}
+    dims = {"sigma_omega": ["event"], "sigma_rho": ["event"], "w": ["w_dim"],
+            **({"F": ["thruster"]} if mode == "thruster" else {})}
+    if robust:
+        coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
+                       "tilt": ["u1", "u2"]})
+        dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
+                     EFFECTS["wheel_axes"]: ["wheel", "tilt"],
+                     EFFECTS["body_torque"]: ["event", "axis"],
+                     **({EFFECTS["wheel_inertia"]: ["wheel"]}
+                        if wheel_errors == "per_wheel" else {})})
+    return coords, dims
+
+
+def _judged_names(problem, sample_inertia: bool, robust: bool) -> list[str]:
+    """The sites the fit's diagnostics judge: thrusts, centre-of-mass offsets, time constants,
+    noise levels, the inertia entries when sampled and the nuisance effects when robust."""
     names = (list(problem.names) + list(COM_NAMES[:problem.n_c]) + list(TAU_NAMES)
              + ["sigma_omega", "sigma_rho"])
     if sample_inertia:
         names += list(INERTIA_NAMES)
     if robust:
         names += [EFFECTS[e] for e in problem.layout.slices]
-    return ThrustPosterior(idata, diagnostics(idata, names), problem)
+    return names

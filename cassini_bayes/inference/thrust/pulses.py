@@ -74,8 +74,6 @@ def pulse_impulses(problem, post, nu_draws=None):
         ``measured`` and ``measured_sd`` (N m s) and ``predicted`` (N m s, posterior quantiles
         along ``quantile``).
     """
-    import xarray as xr
-
     kw = problem.data
     ev = kw.events
     k = int(np.asarray(ev.pulses.dt).shape[-1])                          # K transient samples
@@ -131,6 +129,13 @@ def pulse_impulses(problem, post, nu_draws=None):
             rows["measured"].append(float((v[b] - v[a]) @ u))
             rows["measured_sd"].append(float(np.sqrt(2.0 * u @ b_cov @ u)))
             rows["predicted"].append(np.quantile(pred @ u, QUANTILES).tolist())
+    return _as_dataset(rows)
+
+
+def _as_dataset(rows: dict[str, list]):
+    """The pulse groups' ``rows`` as the ``pulse_impulses`` group, with units."""
+    import xarray as xr
+
     g = ("group",)
     return xr.Dataset(
         {"t": (g, np.asarray(rows["t"], float), {"units": "s"}),
