@@ -39,7 +39,8 @@ tau_rise tau_fall``, with ``rank_inertia`` (default True) ``Ixx … Iyz``, and w
 from __future__ import annotations
 
 import dataclasses
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import jax
 import jax.numpy as jnp
@@ -61,8 +62,13 @@ from cassini_bayes.analysis.sbc_models import (
 )
 from cassini_bayes.errors import InputError
 
-__all__ = ["THRUST_ESPA_SCENARIO", "robust_thrust_truth", "reference_design",
-           "robust_thrust_model"]
+if TYPE_CHECKING:
+    from cassini_bayes.inference.thrust import ThrustDesign
+    from cassini_bayes.simulate.scenario import Scenario
+    from cassini_bayes.spacecraft import Spacecraft
+
+__all__ = ["THRUST_ESPA_SCENARIO", "robust_thrust_truth", "simulate_robust_thrust",
+           "reference_design", "robust_thrust_model"]
 
 THRUST_ESPA_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_thrust_espa_bus.toml"
 """The ESPA bus's short biasing event for the per-thruster robust SBC (the file's header)."""
@@ -71,7 +77,8 @@ _KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "robust", "mode", "pul
          "thrust_factor", "rank_inertia", "rank_nuisance"}
 
 
-def robust_thrust_truth(key, spacecraft, wheels, mode: str) -> dict[str, Any]:
+def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence[str],
+                        mode: str) -> dict[str, Any]:
     """One draw of every parameter of the robust thrust model from its own prior (module
     docstring), for ``spacecraft`` (the ``[prior]`` model), the running ``wheels`` of one event
     and the thrust ``mode``.
@@ -113,13 +120,14 @@ def robust_thrust_truth(key, spacecraft, wheels, mode: str) -> dict[str, Any]:
     return out
 
 
-def reference_design(scenario, settings_key: int = 0):
+def reference_design(scenario: Scenario, seed: int = 0) -> ThrustDesign:
     """The per-thruster design (:class:`~cassini_bayes.inference.thrust.ThrustDesign`) of the
     scenario's event flown at the prior's centre (nominal thrusts and centre of mass, the
     ``[pulse]`` prior's medians, the predicted inertia, no sensor or wheel error): which
     thrusters the event identifies and which combinations of the others. The ranked thrust
     quantities are fixed from it for the whole campaign (any fixed function of the parameters
-    ranks uniformly under a calibrated model; a replicate's own design may differ a little)."""
+    ranks uniformly under a calibrated model; a replicate's own design may differ a little).
+    ``seed``: the key of the reference event's sensor noise."""
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
     from cassini_bayes.inference.thrust import prepare_thrust, tau_prior
     from cassini_bayes.physics.momentum import inertia_vector
@@ -130,7 +138,7 @@ def reference_design(scenario, settings_key: int = 0):
         inertia=jnp.asarray(inertia_vector(sc.inertia)),
         thrust_n=jnp.asarray(sc.thrust_per_thruster, float),
         tau_s=jnp.asarray(tau_prior(sc).median()))
-    arrays = simulate_arrays(jax.random.key(settings_key), scenario, tp)
+    arrays = simulate_arrays(jax.random.key(seed), scenario, tp)
     log = pulse_log(arrays, scenario)
     if log is None:
         raise InputError("the thrust SBC scenario fires no thruster at the prior's centre; "
@@ -140,6 +148,50 @@ def reference_design(scenario, settings_key: int = 0):
     problem = _quiet(prepare_thrust)([(tel, log)], sc, mode="thruster",
                                      inertia=inertia_prior_gaussian(sc), robust=True)
     return problem.design
+
+
+def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario: Scenario,
+                           mode: str, *, pulse_dynamics: bool = True,
+                           thrust_factor: float = 1.0) -> tuple[list[dict[str, Any]], Any]:
+    """Draw one truth per ``prior_keys`` (:func:`robust_thrust_truth`, the scenario's running
+    wheels sorted as :func:`~cassini_bayes.inference.thrust.prepare_thrust` sorts them) and fly
+    each with its ``sim_keys`` noise: the thrusts (times ``thrust_factor``), time constants (1 µs
+    each without ``pulse_dynamics``: ideal rectangular pulses), inertia and body torque into
+    :class:`~cassini_bayes.simulate.run.TruthParams` (no inertial torque), the wheel and gyro
+    errors by :func:`~cassini_bayes.simulate.with_errors`, the time tags jittered with the
+    model's ``time_tag_sd_s``, and the centre-of-mass offset as the truth model's centre of mass
+    (a scenario of its own per replicate: the thrusters' torques are the simulator's
+    per-scenario arrays; one compiled program serves them all). Returns the drawn truths and the
+    runs' :class:`~cassini_bayes.simulate.run.SimArrays` stacked along a leading batch axis."""
+    from cassini_bayes.simulate.run import noise_params, simulate_arrays, truth_params
+    from cassini_bayes.simulate.run import with_errors
+
+    spacecraft = scenario.prior
+    wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
+    base = truth_params(scenario)
+    base_noise = noise_params(scenario)._replace(
+        time_tag_jitter_s=jnp.asarray(float(spacecraft.knowledge.time_tag_sd_s)))
+    drawn, runs = [], []
+    for p_key, s_key in zip(prior_keys, sim_keys):
+        d = robust_thrust_truth(p_key, spacecraft, wheels, mode)
+        tau = d["tau"] if pulse_dynamics else np.full(3, _IDEAL_PULSE_TAU_S)
+        tp = base._replace(inertia=jnp.asarray(d["inertia"]),
+                           thrust_n=jnp.asarray(d["thrust_n"] * thrust_factor),
+                           tau_s=jnp.asarray(tau), torque_body_nm=jnp.asarray(d["T_body"]),
+                           torque_inertial_nm=jnp.zeros(3),
+                           torque_inertial_rate_nm_s=jnp.zeros(3))
+        tp, nz = with_errors(scenario, tp, base_noise,
+                             wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),
+                             wheel_tilt_rad=dict(zip(d["wheels"], d["wheel_tilt"])),
+                             gyro_bias_rad_s=d["gyro_bias"], gyro_scale_factor=d["gyro_scale"])
+        sc = scenario
+        if np.any(d["com"]):
+            truth = dataclasses.replace(scenario.truth, com_m=np.asarray(spacecraft.com_m, float)
+                                        + d["com"])
+            sc = dataclasses.replace(scenario, truth=truth)
+        drawn.append(d)
+        runs.append(simulate_arrays(s_key, sc, tp, nz))
+    return drawn, jax.tree.map(lambda *xs: jnp.stack(xs), *runs)
 
 
 def _telemetry(arrays, scenario, source: str):
@@ -184,8 +236,7 @@ def robust_thrust_model(spec: ModelSpec) -> SbcModel:
     """
     from cassini_bayes.inference.inertia import INERTIA_NAMES
     from cassini_bayes.inference.thrust import COM_NAMES, MODES, TAU_NAMES, fit_thrust
-    from cassini_bayes.simulate.run import noise_params, pulse_log, simulate_arrays, truth_params
-    from cassini_bayes.simulate.run import with_errors
+    from cassini_bayes.simulate.run import pulse_log
 
     scenario = _scenario(spec, THRUST_SCENARIO)
     if not scenario.uses_thrusters:
@@ -208,9 +259,6 @@ def robust_thrust_model(spec: ModelSpec) -> SbcModel:
     names = (f_names + (tuple(COM_NAMES) if mode == "thruster" else ()) + tuple(TAU_NAMES)
              + (tuple(INERTIA_NAMES) if opts["rank_inertia"] else ())
              + (_nuisance_names(wheels) if opts["rank_nuisance"] else ()))
-    base, base_noise = truth_params(scenario), noise_params(scenario)
-    base_noise = base_noise._replace(
-        time_tag_jitter_s=jnp.asarray(float(spacecraft.knowledge.time_tag_sd_s)))
     settings = _sampler_settings(opts)
     factor = float(opts["thrust_factor"])
 
@@ -230,32 +278,10 @@ def robust_thrust_model(spec: ModelSpec) -> SbcModel:
     def prior_sample(key):
         return ranked(robust_thrust_truth(key, spacecraft, wheels, mode))
 
-    def flown(d):
-        """The scenario (its truth's centre of mass moved), truth and noise of one draw."""
-        tau = d["tau"] if opts["pulse_dynamics"] else np.full(3, _IDEAL_PULSE_TAU_S)
-        tp = base._replace(inertia=jnp.asarray(d["inertia"]),
-                           thrust_n=jnp.asarray(d["thrust_n"] * factor), tau_s=jnp.asarray(tau),
-                           torque_body_nm=jnp.asarray(d["T_body"]),
-                           torque_inertial_nm=jnp.zeros(3),
-                           torque_inertial_rate_nm_s=jnp.zeros(3))
-        tp, nz = with_errors(scenario, tp, base_noise,
-                             wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),
-                             wheel_tilt_rad=dict(zip(d["wheels"], d["wheel_tilt"])),
-                             gyro_bias_rad_s=d["gyro_bias"], gyro_scale_factor=d["gyro_scale"])
-        sc = scenario
-        if np.any(d["com"]):
-            truth = dataclasses.replace(scenario.truth, com_m=np.asarray(spacecraft.com_m, float)
-                                        + d["com"])
-            sc = dataclasses.replace(scenario, truth=truth)
-        return sc, tp, nz
-
     def simulate_batch_fn(prior_keys, sim_keys):
-        drawn = [robust_thrust_truth(k, spacecraft, wheels, mode) for k in prior_keys]
-        runs = []
-        for key, d in zip(sim_keys, drawn):
-            sc, tp, nz = flown(d)
-            runs.append(simulate_arrays(key, sc, tp, nz))
-        arrays = jax.tree.map(lambda *xs: jnp.stack(xs), *runs)
+        drawn, arrays = simulate_robust_thrust(prior_keys, sim_keys, scenario, mode,
+                                               pulse_dynamics=bool(opts["pulse_dynamics"]),
+                                               thrust_factor=factor)
         params = [ranked(d) for d in drawn]
         return {n: np.array([p[n] for p in params]) for n in names}, arrays
 
