@@ -141,8 +141,8 @@ def test_truth_reaches_the_simulator():
 @pytest.mark.slow
 def test_tiny_campaign_through_the_cli(run_cli, tmp_path):
     """``cassini-bayes sbc thrust --set robust=true -n 2`` with a tiny sampler (Cassini, mode
-    mean): exit 0, 19 ranked parameters, no failure, the options recorded (~2 min on the loaded
-    machine: the simulator and the sampler compile)."""
+    mean): exit 0, 19 ranked parameters, no failure, the options recorded (90 s at load ~13
+    on the 2-core machine, most of it compiling the simulator and the sampler)."""
     out = tmp_path / "sbc"
     code, _, stderr = run_cli("sbc", "thrust", "-n", 2, "--batch", 2, "--seed", 3,
                               "--set", "robust=true", "--set", "num_warmup=60",
