@@ -55,7 +55,9 @@ Registered here (the simulator models' default scenarios are shipped files under
     mode ``mean``) on a short RCS-controlled wheel-biasing event (:data:`THRUST_SCENARIO`); truth
     ``F, tau_delay, tau_rise, tau_fall`` from the fit's prior into ``TruthParams.thrust_n`` and
     ``tau_s``. Mis-specification: ``pulse_dynamics=False`` (ideal rectangular pulses simulated),
-    ``thrust_factor``.
+    ``thrust_factor``. ``--set robust=true``: the robust model (the CLI fit's default), every
+    truth drawn from its prior and flown (:mod:`cassini_bayes.analysis.sbc_thrust_robust`; option
+    ``mode``, ``thruster`` for per-thruster thrusts and the centre of mass).
 ``rwa4``
     A wheel's spin axis and the inertia (:func:`cassini_bayes.inference.rwa4.fit_rwa4`; options
     ``wheel``, default RWA4, and ``method``, default Brown's RCS method) on a short spin-up with
@@ -696,12 +698,19 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     (mode ``mean``) per replicate.
 
     Options: ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``robust``
-    (False: the idealised model, which matches a simulator without sensor/wheel errors), and two
+    (False: the idealised model, which matches a simulator without sensor/wheel errors; True:
+    the robust model ``fit thrust`` runs by default, every truth drawn from its prior and flown,
+    :func:`~cassini_bayes.analysis.sbc_thrust_robust.robust_thrust_model`), and two
     deliberate mis-specifications SBC must detect: ``pulse_dynamics=False`` makes the simulator
     fire ideal rectangular pulses (every time constant 1 µs, impulse ``F·Δ``) while the fit models
     the pulse response of Feldman & Lee §V (impulse ``F(Δ + c)``, ``c ≈ 45 ms``); and
     ``thrust_factor`` multiplies the simulated thrust (the recorded truth stays the drawn ``F``).
     """
+    if dict(spec.options).get("robust"):
+        from cassini_bayes.analysis.sbc_thrust_robust import robust_thrust_model
+
+        return robust_thrust_model(spec)
+
     import numpy as np
 
     from cassini_bayes.inference.thrust import (THRUST_PRIOR_LOG_SD, draw_tau_prior, fit_thrust,
@@ -723,7 +732,6 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     base = truth_params(scenario)._replace(
         inertia=jnp.asarray(inertia_vector(spacecraft.inertia)))
     settings = _sampler_settings(opts)
-    robust = bool(opts["robust"])
 
     def prior_sample(key):
         k_f, k_t = jax.random.split(key)
@@ -754,7 +762,7 @@ def _thrust(spec: ModelSpec) -> SbcModel:
         # the replicates' inertia is the model's prediction, so the fit holds it there: SBC of
         # the stated model, whose inertia prior is then a point
         post = fit_thrust(key, [(tel, log)], spacecraft, mode="mean", settings=settings,
-                          prior_draws=0, robust=robust, inertia="fixed")
+                          prior_draws=0, robust=False, inertia="fixed")
         return _posterior_draws(post.idata, names)
 
     record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path}

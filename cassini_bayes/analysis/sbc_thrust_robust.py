@@ -1,0 +1,326 @@
+"""SBC of the default robust thrust model (``cassini-bayes sbc thrust --set robust=true``).
+
+What ``cassini-bayes fit thrust`` runs by default (:func:`~cassini_bayes.inference.thrust.
+fit_thrust` with ``robust=True``, the inertia sampled from the model file's knowledge, per-wheel
+spin-inertia errors) is checked here in a closed world: every parameter that fit states a prior
+for is drawn from that prior and flown by the simulator (:func:`robust_thrust_truth`), and the
+fit's posterior ranks them (Talts et al. 2018).
+
+Drawn per replicate, for the scenario's ``[prior]`` spacecraft and its running wheels:
+
+* the thrust of the mode: ``log F ~ Normal(log F_pred, THRUST_PRIOR_LOG_SD)`` per thrust
+  parameter (``mean``: one for all thrusters; ``branch``: Cassini's ``F_Z``, ``F_Y``;
+  ``thruster``: one per thruster about its own nominal), flown as each thruster's
+  ``TruthParams.thrust_n``;
+* mode ``thruster`` only: the centre-of-mass offset ``δ ~ Normal(0, [center_of_mass] sd_m)`` per
+  axis, flown as the truth model's centre of mass ``e + δ`` (the thrusters' torques
+  ``(r_s − e − δ) × d_s``, Feldman & Lee Eq 16);
+* the pulse time constants from :func:`~cassini_bayes.inference.thrust.draw_tau_prior`;
+* the inertia from the model file's Gaussian knowledge
+  (:func:`~cassini_bayes.inference.inertia.knowledge.inertia_prior_gaussian`, the fit's prior);
+* the nuisance vector ``ν`` of the layout :func:`~cassini_bayes.inference.thrust.prepare_thrust`
+  builds for one event (gyro bias and scale factor, each running wheel's spin-inertia scale with
+  the shared part, the wheels' axis tilts, a body-fixed torque), ``layout.sd · N(0, 1)``, flown by
+  :func:`~cassini_bayes.simulate.with_errors` and ``TruthParams.torque_body_nm``;
+* the telemetry's time tags jittered with the model's ``[telemetry_knowledge] time_tag_sd_s``
+  (the sd the likelihood's time-tag term states; the fit reads the jittered times).
+
+The noise levels stay the scenario's: the fit's noise scale is centred on the data's own
+white-noise levels (empirical Bayes), which no prior draw can be made from.
+
+Ranked: the thrusts (``F``; mode ``thruster``: ``F[<name>]`` of each thruster the scenario's
+reference event identifies, and each identified combination of the others, labelled as the fit
+labels them; :func:`reference_design`), ``com_x com_y com_z`` (mode ``thruster``), ``tau_delay
+tau_rise tau_fall``, with ``rank_inertia`` (default True) ``Ixx … Iyz``, and with
+``rank_nuisance`` (default True) the gyro scale factors and biases and each wheel's scale
+``c_k`` (the nuisance sites the fit draws from their exact conditional).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from cassini_bayes._paths import SCENARIOS_DIR
+from cassini_bayes.analysis.sbc_models import (
+    THRUST_SCENARIO,
+    ModelSpec,
+    SbcFit,
+    SbcModel,
+    _check_options,
+    _IDEAL_PULSE_TAU_S,
+    _nuisance_names,
+    _nuisance_scalars,
+    _quiet,
+    _sampler_settings,
+    _scenario,
+)
+from cassini_bayes.errors import InputError
+
+if TYPE_CHECKING:
+    from cassini_bayes.inference.thrust import ThrustDesign
+    from cassini_bayes.simulate.scenario import Scenario
+    from cassini_bayes.spacecraft import Spacecraft
+
+__all__ = ["THRUST_ESPA_SCENARIO", "robust_thrust_truth", "simulate_robust_thrust",
+           "reference_design", "robust_thrust_model"]
+
+THRUST_ESPA_SCENARIO = SCENARIOS_DIR / "sbc" / "sbc_thrust_espa_bus.toml"
+"""The ESPA bus's short biasing event for the per-thruster robust SBC (the file's header)."""
+
+_KEYS = {"num_warmup", "num_draws", "num_chains", "thin", "robust", "mode", "pulse_dynamics",
+         "thrust_factor", "rank_inertia", "rank_nuisance"}
+
+
+def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence[str],
+                        mode: str) -> dict[str, Any]:
+    """One draw of every parameter of the robust thrust model from its own prior (module
+    docstring), for ``spacecraft`` (the ``[prior]`` model), the running ``wheels`` of one event
+    and the thrust ``mode``.
+
+    Returns ``thrust`` (n_f,) N, one per thrust parameter of the mode; ``thrust_n`` (M,) N, each
+    thruster's; ``com`` (3,) m (zero unless mode ``thruster``); ``tau`` (3,) s; ``inertia`` (6,)
+    kg m²; the one event's nuisance sites of :func:`~cassini_bayes.inference.nuisance.
+    split_nuisance` (``gyro_bias`` (3,), ``gyro_scale`` (3,), ``wheel_scale`` (K,) each wheel's
+    total ``c_k``, ``wheel_scale_common``, ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m); and
+    ``wheels``, the K wheel names in the layout's order.
+    """
+    from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
+    from cassini_bayes.inference.nuisance import nuisance_layout, split_nuisance
+    from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, draw_tau_prior, tau_prior
+    from cassini_bayes.inference.thrust.prior import _thrust_index, thrust_names
+
+    k_f, k_c, k_t, k_i, k_n = jax.random.split(key, 5)
+    n_thr = len(spacecraft.thrusters)
+    index = _thrust_index(mode, n_thr)
+    if mode == "thruster":
+        f_pred = np.asarray(spacecraft.thrust_per_thruster, float)
+    else:
+        f_pred = np.full(len(thrust_names(mode)), float(spacecraft.thrust))
+    thrust = np.exp(np.log(f_pred) + THRUST_PRIOR_LOG_SD
+                    * np.asarray(jax.random.normal(k_f, f_pred.shape)))
+    com = (float(spacecraft.com_sd_m) * np.asarray(jax.random.normal(k_c, (3,)))
+           if mode == "thruster" else np.zeros(3))
+    tau = np.asarray(draw_tau_prior(k_t, tau_prior(spacecraft)))
+    gauss = inertia_prior_gaussian(spacecraft)
+    chol = np.linalg.cholesky(np.asarray(gauss.cov) + 1e-9 * np.eye(6))   # as sample_thrust_prior
+    inertia = np.asarray(gauss.mean, float) + chol @ np.asarray(jax.random.normal(k_i, (6,)))
+    layout = nuisance_layout(spacecraft, 1, tuple(wheels), wheel_errors="per_wheel")
+    nu = layout.sd * np.asarray(jax.random.normal(k_n, (layout.size,)))
+    out = split_nuisance(nu, layout)
+    for site in ("gyro_bias", "T_body"):
+        out[site] = np.asarray(out[site])[0]                    # the one event
+    out.update(thrust=thrust, thrust_n=thrust[index], com=com, tau=tau, inertia=inertia,
+               wheels=layout.wheels)
+    return out
+
+
+def reference_design(scenario: Scenario, seed: int = 0) -> ThrustDesign:
+    """The per-thruster design (:class:`~cassini_bayes.inference.thrust.ThrustDesign`) of the
+    scenario's event flown at the prior's centre (nominal thrusts and centre of mass, the
+    ``[pulse]`` prior's medians, the predicted inertia, no sensor or wheel error): which
+    thrusters the event identifies and which combinations of the others. The ranked thrust
+    quantities are fixed from it for the whole campaign (any fixed function of the parameters
+    ranks uniformly under a calibrated model; a replicate's own design may differ a little).
+    ``seed``: the key of the reference event's sensor noise."""
+    from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
+    from cassini_bayes.inference.thrust import prepare_thrust, tau_prior
+    from cassini_bayes.physics.momentum import inertia_vector
+    from cassini_bayes.simulate.run import pulse_log, simulate_arrays, truth_params
+
+    sc = scenario.prior
+    tp = truth_params(scenario)._replace(
+        inertia=jnp.asarray(inertia_vector(sc.inertia)),
+        thrust_n=jnp.asarray(sc.thrust_per_thruster, float),
+        tau_s=jnp.asarray(tau_prior(sc).median()))
+    arrays = simulate_arrays(jax.random.key(seed), scenario, tp)
+    log = pulse_log(arrays, scenario)
+    if log is None:
+        raise InputError("the thrust SBC scenario fires no thruster at the prior's centre; "
+                         "give a biasing event that needs the thrusters",
+                         path=scenario.source or None)
+    tel = _telemetry(arrays, scenario, "<sbc thrust reference event>")
+    problem = _quiet(prepare_thrust)([(tel, log)], sc, mode="thruster",
+                                     inertia=inertia_prior_gaussian(sc), robust=True)
+    return problem.design
+
+
+def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario: Scenario,
+                           mode: str, *, pulse_dynamics: bool = True,
+                           thrust_factor: float = 1.0) -> tuple[list[dict[str, Any]], Any]:
+    """Draw one truth per ``prior_keys`` (:func:`robust_thrust_truth`, the scenario's running
+    wheels sorted as :func:`~cassini_bayes.inference.thrust.prepare_thrust` sorts them) and fly
+    each with its ``sim_keys`` noise: the thrusts (times ``thrust_factor``), time constants (1 µs
+    each without ``pulse_dynamics``: ideal rectangular pulses), inertia and body torque into
+    :class:`~cassini_bayes.simulate.run.TruthParams` (no inertial torque), the wheel and gyro
+    errors by :func:`~cassini_bayes.simulate.with_errors`, the time tags jittered with the
+    model's ``time_tag_sd_s``, and the centre-of-mass offset as the truth model's centre of mass
+    (a scenario of its own per replicate: the thrusters' torques are the simulator's
+    per-scenario arrays; one compiled program serves them all). Returns the drawn truths and the
+    runs' :class:`~cassini_bayes.simulate.run.SimArrays` stacked along a leading batch axis."""
+    from cassini_bayes.simulate.run import noise_params, simulate_arrays, truth_params
+    from cassini_bayes.simulate.run import with_errors
+
+    spacecraft = scenario.prior
+    wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
+    base = truth_params(scenario)
+    base_noise = noise_params(scenario)._replace(
+        time_tag_jitter_s=jnp.asarray(float(spacecraft.knowledge.time_tag_sd_s)))
+    drawn, runs = [], []
+    for p_key, s_key in zip(prior_keys, sim_keys):
+        d = robust_thrust_truth(p_key, spacecraft, wheels, mode)
+        tau = d["tau"] if pulse_dynamics else np.full(3, _IDEAL_PULSE_TAU_S)
+        tp = base._replace(inertia=jnp.asarray(d["inertia"]),
+                           thrust_n=jnp.asarray(d["thrust_n"] * thrust_factor),
+                           tau_s=jnp.asarray(tau), torque_body_nm=jnp.asarray(d["T_body"]),
+                           torque_inertial_nm=jnp.zeros(3),
+                           torque_inertial_rate_nm_s=jnp.zeros(3))
+        tp, nz = with_errors(scenario, tp, base_noise,
+                             wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),
+                             wheel_tilt_rad=dict(zip(d["wheels"], d["wheel_tilt"])),
+                             gyro_bias_rad_s=d["gyro_bias"], gyro_scale_factor=d["gyro_scale"])
+        sc = scenario
+        if np.any(d["com"]):
+            truth = dataclasses.replace(scenario.truth, com_m=np.asarray(spacecraft.com_m, float)
+                                        + d["com"])
+            sc = dataclasses.replace(scenario, truth=truth)
+        drawn.append(d)
+        runs.append(simulate_arrays(s_key, sc, tp, nz))
+    return drawn, jax.tree.map(lambda *xs: jnp.stack(xs), *runs)
+
+
+def _telemetry(arrays, scenario, source: str):
+    """The noisy :class:`~cassini_bayes.telemetry.Telemetry` of one replicate, with its recorded
+    (time-tag-jittered) sample times ``t_meas``."""
+    from cassini_bayes.telemetry import Telemetry
+
+    return Telemetry(t=np.asarray(arrays.t_meas), q=np.asarray(arrays.q_meas),
+                     omega=np.asarray(arrays.omega_meas),
+                     wheel_rates=np.asarray(arrays.wheel_rates_meas),
+                     wheel_names=scenario.wheel_names, on_times=np.asarray(arrays.on_times),
+                     source=source, thruster_names=scenario.truth.thruster_names)
+
+
+def _thrust_quantities(mode: str, design, thrusters) -> tuple[tuple[str, ...], np.ndarray]:
+    """The ranked thrust names and their weights (Q, n_f) on the mode's thrust vector: ``F``
+    (mean), ``F_Z F_Y`` (branch), or per thruster the identified thrusters ``F[<name>]`` and the
+    identified combinations of the others (:func:`reference_design`)."""
+    from cassini_bayes.inference.thrust.design import combination_label
+    from cassini_bayes.inference.thrust.prior import thrust_names
+
+    if mode != "thruster":
+        names = thrust_names(mode)
+        return names, np.eye(len(names))
+    m = len(thrusters)
+    rows = [np.eye(m)[i] for i in np.flatnonzero(design.identified)]
+    names = [f"F[{thrusters[i]}]" for i in np.flatnonzero(design.identified)]
+    for w in design.combinations:
+        rows.append(np.asarray(w, float))
+        names.append(combination_label(w, thrusters))
+    return tuple(names), np.array(rows).reshape(len(rows), m)
+
+
+def robust_thrust_model(spec: ModelSpec) -> SbcModel:
+    """The ``thrust`` SBC adapter with ``robust=True`` (module docstring).
+
+    Options: ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``mode``
+    (``mean``, ``branch`` or ``thruster``; default ``mean``, ``fit thrust``'s), ``rank_inertia``
+    and ``rank_nuisance`` (True), and the idealised adapter's two deliberate mis-specifications:
+    ``pulse_dynamics=False`` (ideal rectangular pulses flown) and ``thrust_factor`` (the flown
+    thrust times this factor, the recorded truth the drawn one).
+    """
+    from cassini_bayes.inference.inertia import INERTIA_NAMES
+    from cassini_bayes.inference.thrust import COM_NAMES, MODES, TAU_NAMES, fit_thrust
+    from cassini_bayes.simulate.run import pulse_log
+
+    scenario = _scenario(spec, THRUST_SCENARIO)
+    if not scenario.uses_thrusters:
+        raise InputError("the thrust SBC scenario fires no thrusters; give a biasing event "
+                         "(control = \"rcs\" or [[pulse]] entries)", path=spec.scenario_source)
+    opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "robust": True,
+            "mode": "mean", "pulse_dynamics": True, "thrust_factor": 1.0,
+            "rank_inertia": True, "rank_nuisance": True, **dict(spec.options)}
+    _check_options("thrust", opts, _KEYS)
+    mode = str(opts["mode"])
+    if mode not in MODES:
+        raise InputError(f"thrust SBC option mode={mode!r}: choose one of {', '.join(MODES)}")
+    spacecraft = scenario.prior
+    if [t.name for t in scenario.truth.thrusters] != list(spacecraft.thruster_names):
+        raise InputError("the robust thrust SBC flies the prior model's thrusters: give the "
+                         "scenario one model for [truth] and [prior]", path=spec.scenario_source)
+    wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
+    design = reference_design(scenario) if mode == "thruster" else None
+    f_names, f_weights = _thrust_quantities(mode, design, spacecraft.thruster_names)
+    names = (f_names + (tuple(COM_NAMES) if mode == "thruster" else ()) + tuple(TAU_NAMES)
+             + (tuple(INERTIA_NAMES) if opts["rank_inertia"] else ())
+             + (_nuisance_names(wheels) if opts["rank_nuisance"] else ()))
+    settings = _sampler_settings(opts)
+    factor = float(opts["thrust_factor"])
+
+    def ranked(d) -> dict[str, Any]:
+        out = dict(zip(f_names, f_weights @ d["thrust"]))
+        if mode == "thruster":
+            out.update(zip(COM_NAMES, d["com"]))
+        out.update(zip(TAU_NAMES, d["tau"]))
+        if opts["rank_inertia"]:
+            out.update(zip(INERTIA_NAMES, d["inertia"]))
+        if opts["rank_nuisance"]:
+            out.update(_nuisance_scalars({"gyro_scale": d["gyro_scale"],
+                                          "gyro_bias": d["gyro_bias"][None],
+                                          "wheel_scale": d["wheel_scale"]}, wheels))
+        return out
+
+    def prior_sample(key):
+        return ranked(robust_thrust_truth(key, spacecraft, wheels, mode))
+
+    def simulate_batch_fn(prior_keys, sim_keys):
+        drawn, arrays = simulate_robust_thrust(prior_keys, sim_keys, scenario, mode,
+                                               pulse_dynamics=bool(opts["pulse_dynamics"]),
+                                               thrust_factor=factor)
+        params = [ranked(d) for d in drawn]
+        return {n: np.array([p[n] for p in params]) for n in names}, arrays
+
+    def simulate(key, params):
+        raise NotImplementedError("the thrust adapter simulates in batches (simulate_batch)")
+
+    @_quiet
+    def fit(key, arrays):
+        log = pulse_log(arrays, scenario)
+        if log is None:
+            raise RuntimeError("no thruster fired in this replicate")
+        tel = _telemetry(arrays, scenario, "<sbc thrust replicate, robust>")
+        post = fit_thrust(key, [(tel, log)], spacecraft, mode=mode, settings=settings,
+                          prior_draws=0, robust=True)
+        if post.problem.layout.wheels != wheels:
+            raise RuntimeError(f"replicate's active wheels {post.problem.layout.wheels} are not "
+                               f"the scenario's {wheels}")
+        p = post.idata.posterior
+        if mode == "thruster":
+            f = np.asarray(p["F"].values, float)                          # (chain, draw, M)
+        else:
+            f = np.stack([np.asarray(p[n].values, float) for n in f_names], -1)
+        draws = dict(zip(f_names, np.moveaxis(f @ f_weights.T, -1, 0)))
+        scalars = [n for n in names if n not in draws and "[" not in n]
+        draws.update({n: np.asarray(p[n].values, float) for n in scalars})
+        if opts["rank_nuisance"]:
+            draws.update(_nuisance_scalars({s: np.asarray(p[s].values, float)
+                                            for s in ("gyro_scale", "gyro_bias", "wheel_scale")},
+                                           wheels))
+        n_div = int(post.idata.sample_stats["diverging"].values.sum())
+        return SbcFit({n: jnp.asarray(draws[n]) for n in names}, jnp.asarray(n_div))
+
+    record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path,
+              "time_tag_sd_s": float(spacecraft.knowledge.time_tag_sd_s),
+              "wheels": list(wheels)}
+    if design is not None:
+        record.update(reference_rank=int(design.rank), reference_thrust_rank=int(
+            design.thrust_rank), reference_identified=[
+            t for t, ok in zip(spacecraft.thruster_names, design.identified) if ok],
+            reference_combinations=[n for n in f_names if not n.startswith("F[")])
+    return SbcModel("thrust", names, prior_sample, simulate, fit, vectorized=False,
+                    settings=record, rhat_max=1.05, simulate_batch=simulate_batch_fn)
