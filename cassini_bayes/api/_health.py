@@ -244,7 +244,7 @@ def health_summary(post: HealthPosterior, fraction: float, adequacy: Adequacy | 
             br = {spacecraft.thrusters[s].branch for s in channels.groups[k]}
             out[name]["branch"] = br.pop() if len(br) == 1 else ""
     groups = {"any": list(range(len(post.channels)))}
-    branches = sorted({c["branch"] for c in out.values() if c.get("branch")})
+    branches = sorted({str(c["branch"]) for c in out.values() if c.get("branch")})
     if len(branches) > 1:
         groups.update({f"branch {b}": [k for k, c in enumerate(out.values())
                                        if c.get("branch") == b] for b in branches})
@@ -368,7 +368,11 @@ def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: f
     ys, ss, ds = [], [], []
     events = campaign_events(camp, seed)
     sims = [simulate(ev.scenario) for ev in events]
-    channels = event_channels([(sim.telemetry, sim.pulses) for sim in sims], sims[0].prior)
+    pairs = [(sim.telemetry, sim.pulses) for sim in sims if sim.pulses is not None]
+    if len(pairs) < len(sims):
+        raise InputError("every event of a health campaign is a biasing event with firings",
+                         path=str(campaign))
+    channels = event_channels(pairs, sims[0].prior)
     for ev, sim in zip(events, sims):
         sm = event_summary(sim.telemetry, sim.pulses, sim.prior, channels=channels,
                            tau_sd_frac=TAU_SD_FRAC if tau_sd_frac is None else tau_sd_frac)
