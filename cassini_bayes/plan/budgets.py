@@ -6,8 +6,8 @@
   requirement, Feldman & Lee §IV; their Eq 13 error), as the open-world campaigns judge them
   (docs/robust/open_world.md).
 
-* thrust: ±10 % of the predicted thrust (Feldman & Lee §V's stated accuracy, ``thrust_accuracy_pct``),
-  per thrust parameter and per identified combination of thrusts;
+* thrust: ±10 % of the predicted thrust (Feldman & Lee §V's stated accuracy,
+  ``thrust_accuracy_pct``), per thrust parameter and per identified combination of thrusts;
 * pulse time constants: half the width of the manufacturer's test range of the model file's
   ``[pulse]`` section (delay 3-7 ms, rise 15-25 ms, fall 40-90 ms for Cassini, Feldman & Lee §V):
   a calibration whose sd is not below it adds nothing to what the valve's data sheet says;

@@ -16,11 +16,13 @@ prediction is that density's Laplace approximation on the event flown without no
 3. the event's noise scale is held at 1 (``noise_z = 0``): on noise-free data its curvature is the
    prior's and its cross-curvature with every other coordinate vanishes at the truth (it multiplies
    residuals that are zero), so holding it changes no other sd;
-4. the mode of the fit's own log density over the other coordinates is found by the fit's
-   :func:`~cassini_bayes.inference.laplace.laplace`, and the negative ``jax.hessian`` there is the
-   precision: on noise-free data the residuals vanish at the truth, so it is the expected Fisher
-   information plus the prior (the dependence of the time-tag covariance on ``F`` and ``τ`` aside,
-   second order);
+4. the truth is mapped into the fit's sampler coordinates (:func:`truth_coordinates`, the inverse
+   of :func:`~cassini_bayes.inference.thrust.coords._physical`), and the negative ``jax.hessian``
+   of the fit's own log density there is the precision: on noise-free data the residuals vanish
+   at the truth, so it is the expected Fisher information plus the prior's curvature (the
+   dependence of the time-tag covariance on ``F`` and ``τ`` aside, second order). The truth,
+   not the mode: on noise-free data the two differ by the prior's pull only, and a mode search
+   of the ridge that ``F``, the inertia and the wheels' common scale make took minutes;
 5. every site (thrusts, ``com_*``, ``tau_*``, ``Ixx … Iyz``) follows by the delta method through
    the fit's own map to the physical parameters (``jax.jacfwd``); in mode ``thruster`` also each
    identified combination of thrusts (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`).
@@ -28,6 +30,7 @@ prediction is that density's Laplace approximation on the event flown without no
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -42,7 +45,8 @@ from cassini_bayes.plan.limits import Limits
 from cassini_bayes.plan.wheel_axis import noise_free_telemetry, scenario_noise
 from cassini_bayes.simulate.scenario import Scenario
 
-__all__ = ["ThrustPrediction", "evaluate_thrust", "predict_thrust"]
+__all__ = ["ThrustPrediction", "evaluate_thrust", "noise_free_problem", "predict_thrust",
+           "representable", "truth_coordinates"]
 
 _PRIOR_DRAWS = 4000       # prior draws for the sites' prior sd (fixed key)
 
@@ -129,12 +133,40 @@ class _Laplace(NamedTuple):
     site_mean: np.ndarray
 
 
-def predict_thrust(problem, sigmas) -> _Laplace:
+def truth_coordinates(problem, thrust, com, tau, inertia) -> np.ndarray:
+    """The sampler vector of the fit (noise coordinates left out, :func:`_held_density`) at the
+    physical parameters ``thrust`` (n_f,) N, ``com`` (3,) m (mode ``thruster``), ``tau`` (3,) s
+    and ``inertia`` (6,) kg m² (when sampled): the inverse of
+    :func:`~cassini_bayes.inference.thrust.coords._physical` and ``_tau_from_z``."""
+    from cassini_bayes.inference.thrust.coords import A_LOG_SCALE, C_SCALE_S
+    from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD
+
+    kw = problem.data
+    f_z = (np.log(np.asarray(thrust, float)) - np.asarray(kw.f_mu, float)) / THRUST_PRIOR_LOG_SD
+    parts = [f_z]
+    if problem.n_c:
+        x = np.concatenate([f_z, np.asarray(com, float) / float(kw.com_sd)])
+        y = np.asarray(kw.f_basis, float).T @ x          # f_basis is orthogonal
+        parts = [y[:problem.n_f], y[problem.n_f:]]
+    t_d, t_r, t_f = (max(float(tau[0]), 1e-7), float(tau[1]), float(tau[2]))
+    b = t_r * np.exp(-t_d / t_r)                         # rise deficit's part after the delay
+    a = t_d + b                                          # coords.rise_deficit
+    s_split = np.log(t_d / b)                            # τd/b = e^s
+    parts.append(np.array([np.arcsinh(s_split), np.log(a / float(kw.a_mu)) / A_LOG_SCALE,
+                           (t_f - b - float(kw.c_mu)) / C_SCALE_S]))
+    if problem.inertia is not None:
+        parts.append(np.linalg.solve(np.asarray(kw.inertia_tril, float),
+                                     np.asarray(inertia, float) - np.asarray(kw.inertia_mean)))
+    return np.concatenate(parts)
+
+
+def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     """Laplace approximation of the fit's posterior for the prepared ``problem`` with the
     white-noise levels ``sigmas`` (2,) rad/s of every event and its noise scale held at 1 (module
-    docstring): the mode, the covariance of the sampler coordinates, and the sites' covariance
-    (thrusts, ``com_*``, ``tau_*``, the inertia when sampled) by the delta method."""
-    from cassini_bayes.inference.laplace import laplace
+    docstring), at the sampler vector ``at`` (:func:`truth_coordinates`; default the mode, found
+    by :func:`~cassini_bayes.inference.laplace.laplace`): the point, the covariance of the
+    sampler coordinates, and the sites' covariance (thrusts, ``com_*``, ``tau_*``, the inertia
+    when sampled) by the delta method."""
     from cassini_bayes.inference.thrust.coords import _physical
 
     kw0 = problem.data
@@ -143,9 +175,12 @@ def predict_thrust(problem, sigmas) -> _Laplace:
                                                              (n_ev, 2))))
     n_f, n_c, si = problem.n_f, problem.n_c, problem.inertia is not None
     f = _held_density(n_f, n_c, si, n_ev)
-    x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev)
-    centre, _ = laplace(f, x0, kw)
-    centre = jnp.asarray(centre)
+    if at is None:
+        from cassini_bayes.inference.laplace import laplace
+
+        x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev)
+        at, _ = laplace(f, x0, kw)
+    centre = jnp.asarray(at, float)
     hess = -np.asarray(jax.hessian(f)(centre, kw))
     cov = np.linalg.inv(0.5 * (hess + hess.T))
     cov = 0.5 * (cov + cov.T)
@@ -202,15 +237,27 @@ def _truth(s: Scenario, problem, names: list[str]) -> np.ndarray:
     return np.asarray([values.get(n, np.nan) for n in names], float)
 
 
-def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = None) -> ThrustPrediction:
-    """Predicted posterior of the default robust thrust fit (inertia sampled from the model
-    file's knowledge, per-wheel scales) of the biasing event of scenario ``s`` in thrust
-    ``mode`` (module docstring)."""
+def representable(s: Scenario, mode: str) -> Scenario:
+    """``s`` with its truth moved into the fit's model where the mode cannot hold it: one thrust
+    for every thruster (the mean of the true ones) and the model file's centre of mass, unless
+    the mode is ``thruster`` (which has both). At a truth the model holds, the noise-free
+    residuals vanish and the Hessian there is the Fisher information; at one it does not hold,
+    the residuals' curvature makes it indefinite (a common ``F`` for thrusters 4 % apart)."""
+    if mode == "thruster":
+        return s
+    thrust = np.broadcast_to(np.asarray(s.thrust_n, float), (len(s.truth.thrusters),))
+    truth = replace(s.truth, com_m=np.asarray(s.prior.com_m, float))
+    return replace(s, thrust_n=tuple(float(np.mean(thrust)) for _ in thrust), truth=truth)
+
+
+def noise_free_problem(s: Scenario, mode: str = "mean"):
+    """The event of ``s`` flown without noise and prepared by the fit (the default robust model,
+    the inertia sampled from the model file's knowledge) with the scenario's sensors' noise
+    levels: ``(SimResult, ThrustProblem, (σ_ω, σ_ρ) rad/s)``."""
     from cassini_bayes.errors import InputError
     from cassini_bayes.inference.thrust import prepare_thrust, resolve_inertia
-    from cassini_bayes.inference.thrust.design import combination_label
 
-    sim, tel = noise_free_telemetry(s)
+    sim, tel = noise_free_telemetry(representable(s, mode))
     if sim.pulses is None or sim.pulses.t_on.size == 0:
         raise InputError(f"scenario {s.name!r}: no thruster fires, so there is no thrust to "
                          "calibrate (give [[wheel_ramp]]s under control = \"rcs\" or "
@@ -220,8 +267,22 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
     problem = prepare_thrust([(tel, sim.pulses)], sc, mode=mode,
                              inertia=resolve_inertia(None, sc, True), robust=True,
                              noise_hat=sig[None])
-    lap = predict_thrust(problem, sig)
+    return sim, problem, sig
+
+
+def evaluate_thrust(s: Scenario, mode: str = "mean",
+                    limits: Limits | None = None) -> ThrustPrediction:
+    """Predicted posterior of the default robust thrust fit (inertia sampled from the model
+    file's knowledge, per-wheel scales) of the biasing event of scenario ``s`` in thrust
+    ``mode`` (module docstring)."""
+    from cassini_bayes.inference.thrust.design import combination_label
+
+    sim, problem, sig = noise_free_problem(s, mode)
+    s = representable(s, mode)
+    sc = s.prior
     names = _site_names(problem)
+    truth = _truth(s, problem, names)
+    lap = predict_thrust(problem, sig, at=_truth_vector(problem, names, truth))
     sd = np.sqrt(np.diag(lap.site_cov))
     prior_sd = _prior_sd(problem, names)
     budget = thrust_budgets(sc, names, problem.thrust_pred)
@@ -247,13 +308,23 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
     log = sim.pulses
     return ThrustPrediction(
         mode=mode, sites=tuple(names), site_sd=sd, site_prior_sd=prior_sd, budget=budget,
-        truth=_truth(s, problem, names), combinations=combos, noise=sig, usage=usage,
+        truth=truth, combinations=combos, noise=sig, usage=usage,
         n_pulses=int(log.t_on.size),
         pulse_widths_s=tuple(float(x) for x in np.unique(np.round(log.width, 6))),
         duration_s=s.duration_s, t=np.asarray(arr.t), omega=np.asarray(arr.omega),
         wheel_rpm=rpm, wheel_names=tuple(s.wheel_names), pulse_t=np.asarray(log.t_on, float),
         pulse_width=np.asarray(log.width, float),
         pulse_thruster=tuple(log.thruster_names[i] for i in np.asarray(log.thruster)))
+
+
+def _truth_vector(problem, names: list[str], truth: np.ndarray) -> np.ndarray:
+    """:func:`truth_coordinates` from the sites' true values (:func:`_truth`)."""
+    v = dict(zip(names, truth))
+    thrust = truth[:problem.n_f]
+    com = [v.get(n, 0.0) for n in ("com_x", "com_y", "com_z")]
+    tau = [v[n] for n in TAU_NAMES]
+    inertia = [v[n] for n in INERTIA_NAMES] if problem.inertia is not None else None
+    return truth_coordinates(problem, thrust, com, tau, inertia)
 
 
 def _thrust_pct() -> float:
