@@ -94,13 +94,12 @@ def target_value(p: ThrustPrediction, target: str) -> float:
 
 
 def candidate_widths(limits: Limits) -> list[float]:
-    """Pulse widths searched (s): the shortest and longest the limits allow and the one between,
-    on the 1/8 s command grid."""
+    """Pulse widths searched (s): the shortest and the longest the limits allow, on the 1/8 s
+    command grid (the graded family covers the widths between)."""
     q = COMMAND_RESOLUTION_S
     lo = q * np.ceil(limits.min_pulse_s / q - 1e-9)
     hi = q * np.floor(limits.max_pulse_s / q + 1e-9)
-    mid = q * np.round(0.5 * (lo + hi) / q)
-    return sorted({float(x) for x in (lo, mid, hi) if lo - 1e-9 <= x <= hi + 1e-9})
+    return sorted({float(lo), float(hi)})
 
 
 def _largest_targets(limits: Limits, base: Scenario) -> tuple[list[str], np.ndarray, float, float]:
