@@ -42,7 +42,7 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
     return d.std(0).tolist(), d
 
 
-def run(case: str, seeds: int, settings) -> dict:
+def run(case: str, seeds: int, settings, partial=None) -> dict:
     import jax
     import numpy as np
 
@@ -80,6 +80,14 @@ def run(case: str, seeds: int, settings) -> dict:
                      "seconds": time.perf_counter() - t0})
         print(f"{name} seed {seed}: {fits[-1]['seconds']:.0f} s, R-hat {fits[-1]['r_hat']:.3f}, "
               f"div {fits[-1]['divergences']}", file=sys.stderr, flush=True)
+        if partial is not None:
+            partial(_summary(case, s, mode, pred, t_pred, names, fits))
+    return _summary(case, s, mode, pred, t_pred, names, fits)
+
+
+def _summary(case, s, mode, pred, t_pred, names, fits) -> dict:
+    import numpy as np
+
     sd = np.array([f["sd"] for f in fits])
     ratio = sd / pred.site_sd[None, :]
     hits = np.array([f["hit90"] for f in fits], float)
@@ -91,7 +99,7 @@ def run(case: str, seeds: int, settings) -> dict:
                  "coverage90": float(hits[:, i].mean())}
              for i, n in enumerate(names)}
     med = np.median(ratio, 0)
-    return {"case": case, "scenario": s.name, "mode": mode, "seeds": seeds,
+    return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
             "predict_seconds": t_pred, "predicted_max_ratio": pred.max_ratio,
             "predicted_worst": pred.worst, "n_pulses": pred.n_pulses,
             "pulse_widths_s": list(pred.pulse_widths_s), "sites": sites, "fits": fits,
@@ -120,8 +128,14 @@ def main(argv=None) -> None:
                                chain_method="vectorized")
     out = {"settings": {"chains": a.chains, "warmup": a.warmup, "draws": a.draws},
            "results": []}
+    def write(results):
+        if a.json:
+            a.json.parent.mkdir(parents=True, exist_ok=True)
+            a.json.write_text(json.dumps({**out, "results": results}, indent=1))
+
     for case in a.case:
-        r = run(case, a.seeds, settings)
+        done = list(out["results"])
+        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]))
         out["results"].append(r)
         print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} open-world seeds "
               f"(min–max); {r['within_25pct']}/{r['n_sites']} sites within 25 %; 90 % "
@@ -131,9 +145,7 @@ def main(argv=None) -> None:
             print(f"  {lab:10s} pred {v['predicted']:10.4g}  fit {v['fitted_median']:10.4g}  "
                   f"ratio {v['ratio_median']:.3f} ({v['ratio_min']:.3f}–{v['ratio_max']:.3f})"
                   f"  cover90 {v['coverage90']:.2f}  prior {v['prior']:.4g}", flush=True)
-        if a.json:
-            a.json.parent.mkdir(parents=True, exist_ok=True)
-            a.json.write_text(json.dumps(out, indent=1))
+        write(out["results"])
 
 
 if __name__ == "__main__":

@@ -83,10 +83,10 @@ def test_prediction_matches_a_differenced_hessian():
     np.testing.assert_allclose(sd_fd, np.sqrt(np.diag(lap.site_cov)), rtol=1e-3)
     # the point is the truth: the sites there are the scenario's true values
     np.testing.assert_allclose(lap.site_mean, truth, rtol=1e-9)
-    # the check can fail: a Hessian with the noise doubled is off by 2x
+    # the check can fail: with the noise doubled the sites the noise limits (not F, which the
+    # wheels' common scale limits here) move by far more than the tolerance
     lap2 = predict_thrust(problem, 2 * sig, at=at)
-    assert not np.allclose(np.sqrt(np.diag(lap2.site_cov))[:1],
-                           np.sqrt(np.diag(lap.site_cov))[:1], rtol=0.2)
+    assert not np.allclose(np.sqrt(np.diag(lap2.site_cov)), sd_fd, rtol=0.2)
 
 
 def test_evaluate_thrust_reports_every_site_beside_budget_and_prior():
