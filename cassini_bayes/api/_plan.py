@@ -155,7 +155,7 @@ def _thrust_block(p: Any) -> dict:
            "combinations": {k: {"sd": v[0], "prior_sd": v[1], "budget": v[2],
                                 "ratio": v[0] / v[2]} for k, v in p.combinations.items()},
            "max_ratio": p.max_ratio, "worst": p.worst, "n_pulses": p.n_pulses,
-           "pulse_widths_s": list(p.pulse_widths_s),
+           "pulse_widths_s": list(p.pulse_widths_s), "floored_directions": p.floored,
            "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
            "duration_s": p.duration_s}
     if p.usage:
@@ -176,6 +176,10 @@ def format_thrust_table(p: Any, title: str) -> str:
         lines.append(f"{n:10s} {sd:13.4g} {r} {bs} {pr:10.4g} {sd / pr:9.3f}")
     for k, (sd, pr, b) in p.combinations.items():
         lines.append(f"{k:10s} {sd:13.4g} {sd / b:10.3f} {b:10.4g} {pr:10.4g} {sd / pr:9.3f}")
+    if p.floored:
+        lines.append(f"{p.floored} direction(s) of the fit's coordinates have no curvature at "
+                     "the truth (left at a prior that is not log-concave there): given the "
+                     "prior's order of sd, the Laplace prediction is rough for them")
     lines.append(f"largest sd/budget {p.max_ratio:.3f} ({p.worst}); budgets: thrust "
                  "+-10 % (Feldman & Lee), time constants half the model file's manufacturer "
                  "range")
