@@ -144,7 +144,7 @@ def format_axis_table(p: Any, title: str) -> str:
 
 def _thrust_block(p: Any) -> dict:
     """A thrust prediction as summary.json holds it (SI: N, s, m, kg m²; ratio = sd / budget)."""
-    def num(x):
+    def num(x: float) -> float | None:
         return float(x) if np.isfinite(x) else None
 
     out = {"mode": p.mode,
