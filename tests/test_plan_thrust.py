@@ -149,7 +149,7 @@ def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     u = checks.largest_usage(tel.t, tel.omega, tel.wheel_rates, base.prior.wheel_axes,
                              base.prior.wheel_inertias, np.ones(4), lim)
     assert all(v <= 1.0 for v in u.values()), u
-    log = read_pulses(tmp_path / "sim" / "pulses.csv")
+    log = read_pulses(tmp_path / "sim" / "pulses.csv", spacecraft=base.prior)
     assert lim.min_pulse_s - 1e-9 <= log.width.min() and log.width.max() <= lim.max_pulse_s + 1e-9
     code, out, err = run_cli("plan", "evaluate", tmp_path / "p" / "scenario.toml")
     assert code == 0, err
