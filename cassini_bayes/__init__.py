@@ -50,6 +50,7 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time the names load
         load_spacecraft,
         monitor_leak,
         plan_inertia,
+        plan_thrust,
         plan_wheel_axis,
         propagate_conic,
         read_pulses,
@@ -69,7 +70,7 @@ __all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "InputError", "setup_jax", "request_host_devices",
     "fit_health", "simulate_health_campaign", "monitor_leak", "check_telemetry", "budget",
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory",
-    "evaluate_plan", "plan_inertia", "plan_wheel_axis",
+    "evaluate_plan", "plan_inertia", "plan_thrust", "plan_wheel_axis",
 ]
 
 def _api() -> _types.ModuleType:

@@ -33,9 +33,11 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time each name load
     from cassini_bayes.api._plan import (
         PlanEvaluation,
         PlanResult,
+        ThrustPlanResult,
         WheelAxisPlanResult,
         evaluate_plan,
         plan_inertia,
+        plan_thrust,
         plan_wheel_axis,
     )
     from cassini_bayes.api._result import (
@@ -65,8 +67,9 @@ _HOMES = {
                                "fit_chebyshev_segments", "propagate_conic"],
     "cassini_bayes.api._inertia": ["fit_inertia", "inertia_baseline", "inertia_summary"],
     "cassini_bayes.api._leak": ["LeakResult", "monitor_leak"],
-    "cassini_bayes.api._plan": ["PlanEvaluation", "PlanResult", "WheelAxisPlanResult",
-                                "evaluate_plan", "plan_inertia", "plan_wheel_axis"],
+    "cassini_bayes.api._plan": ["PlanEvaluation", "PlanResult", "ThrustPlanResult",
+                                "WheelAxisPlanResult", "evaluate_plan", "plan_inertia",
+                                "plan_thrust", "plan_wheel_axis"],
     "cassini_bayes.api._result": ["FitResult", "collect_warnings", "fit_config", "write_run",
                                   "write_run_files"],
     "cassini_bayes.api._rwa4": ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity",
@@ -88,8 +91,8 @@ __all__ = [
     "fit_health", "HealthResult", "simulate_health_campaign", "monitor_leak", "LeakResult",
     "check_telemetry", "TelemetryCheck", "budget", "BudgetResult",
     "propagate_conic", "fit_chebyshev_segments", "VectorTree", "fit_trajectory", "TrajectoryFit",
-    "evaluate_plan", "plan_inertia", "plan_wheel_axis", "PlanEvaluation", "PlanResult",
-    "WheelAxisPlanResult",
+    "evaluate_plan", "plan_inertia", "plan_thrust", "plan_wheel_axis", "PlanEvaluation",
+    "PlanResult", "ThrustPlanResult", "WheelAxisPlanResult",
 ]
 
 

@@ -24,11 +24,12 @@ if TYPE_CHECKING:
 PathArg = str | os.PathLike
 """A file path or a shipped file's name."""
 
-__all__ = ["PlanEvaluation", "PlanResult", "WheelAxisPlanResult", "evaluate_plan", "plan_inertia",
-           "plan_wheel_axis"]
+__all__ = ["PlanEvaluation", "PlanResult", "ThrustPlanResult", "WheelAxisPlanResult",
+           "evaluate_plan", "plan_inertia", "plan_thrust", "plan_wheel_axis"]
 
-CALIBRATIONS = ("inertia", "wheel-axis")
-"""What ``plan evaluate`` predicts: the robust inertia fit, or the RWA-method wheel-axis fit."""
+CALIBRATIONS = ("inertia", "wheel-axis", "thrust")
+"""What ``plan evaluate`` predicts: the robust inertia fit, the RWA-method wheel-axis fit, or
+the robust thrust fit of a biasing event."""
 
 FLOOR_SHARE = 0.95
 """A plan whose largest ratio is within this share of its knowledge floor is said to be set by
@@ -141,6 +142,53 @@ def format_axis_table(p: Any, title: str) -> str:
     return "\n".join(lines)
 
 
+def _thrust_block(p: Any) -> dict:
+    """A thrust prediction as summary.json holds it (SI: N, s, m, kg m²; ratio = sd / budget)."""
+    def num(x: float) -> float | None:
+        return float(x) if np.isfinite(x) else None
+
+    out = {"mode": p.mode,
+           "sites": {n: {"sd": float(sd), "prior_sd": float(pr), "budget": num(b),
+                         "ratio": num(sd / b), "truth": num(tr)}
+                     for n, sd, pr, b, tr in zip(p.sites, p.site_sd, p.site_prior_sd, p.budget,
+                                                 p.truth)},
+           "combinations": {k: {"sd": v[0], "prior_sd": v[1], "budget": v[2],
+                                "ratio": v[0] / v[2]} for k, v in p.combinations.items()},
+           "max_ratio": p.max_ratio, "worst": p.worst, "n_pulses": p.n_pulses,
+           "pulse_widths_s": list(p.pulse_widths_s), "floored_directions": p.floored,
+           "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
+           "duration_s": p.duration_s}
+    if p.usage:
+        out["usage"] = dict(p.usage)
+        out["limits_ok"] = bool(all(v <= 1.0 + 1e-9 for v in p.usage.values()))
+    return out
+
+
+def format_thrust_table(p: Any, title: str) -> str:
+    """The predicted sd of each thrust site beside its budget and prior sd, as printed."""
+    lines = [title, f"{p.n_pulses} pulses of widths "
+             + ", ".join(f"{w:g}" for w in p.pulse_widths_s) + " s; fit mode " + p.mode,
+             f"{'':10s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
+             f"{'prior sd':>10s} {'sd/prior':>9s}   (N, s, m, kg m^2)"]
+    for n, sd, pr, b in zip(p.sites, p.site_sd, p.site_prior_sd, p.budget):
+        r = f"{sd / b:10.3f}" if np.isfinite(b) else f"{'-':>10s}"
+        bs = f"{b:10.4g}" if np.isfinite(b) else f"{'-':>10s}"
+        lines.append(f"{n:10s} {sd:13.4g} {r} {bs} {pr:10.4g} {sd / pr:9.3f}")
+    for k, (sd, pr, b) in p.combinations.items():
+        lines.append(f"{k:10s} {sd:13.4g} {sd / b:10.3f} {b:10.4g} {pr:10.4g} {sd / pr:9.3f}")
+    if p.floored:
+        lines.append(f"{p.floored} direction(s) of the fit's coordinates have no curvature at "
+                     "the truth (left at a prior that is not log-concave there): given the "
+                     "prior's order of sd, the Laplace prediction is rough for them")
+    lines.append(f"largest sd/budget {p.max_ratio:.3f} ({p.worst}); budgets: thrust "
+                 "+-10 % (Feldman & Lee), time constants half the model file's manufacturer "
+                 "range")
+    if p.usage:
+        lines.append("limits used (largest fraction on the simulated telemetry): " + ", ".join(
+            f"{k} {v:.2f}" for k, v in p.usage.items()))
+    return "\n".join(lines)
+
+
 def window_options(pairs: Sequence[Any]) -> str:
     """The windows as ``fit wheel-axis`` options (``--window-a T0:T1 --window-b T0:T1`` …)."""
     return " ".join(f"--window-a {a[0]:.10g}:{a[1]:.10g} --window-b {b[0]:.10g}:{b[1]:.10g}"
@@ -192,6 +240,10 @@ class PlanEvaluation:
     def table(self) -> str:
         """The printed table (:func:`format_table`, or :func:`format_axis_table` for a
         wheel-axis prediction)."""
+        if self.config.get("options", {}).get("calibration") == "thrust":
+            return format_thrust_table(self.prediction, "predicted posterior of the robust "
+                                       f"thrust fit: {self.scenario.name} "
+                                       f"({self.scenario.duration_s:g} s)")
         if self.config.get("options", {}).get("calibration") == "wheel-axis":
             return format_axis_table(self.prediction, "predicted posterior of the robust "
                                      f"wheel-axis fit (RWA method): {self.scenario.name} "
@@ -203,8 +255,12 @@ class PlanEvaluation:
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml`` and ``report.html`` into ``out``
         (atomically; ``force`` replaces only a directory cassini-bayes wrote)."""
-        if self.config.get("options", {}).get("calibration") == "wheel-axis":
+        calibration = self.config.get("options", {}).get("calibration")
+        if calibration == "wheel-axis":
             from cassini_bayes.report.plan_axis import axis_evaluation_report as evaluation_report
+        elif calibration == "thrust":
+            from cassini_bayes.report.plan_thrust import (
+                thrust_evaluation_report as evaluation_report)
         else:
             from cassini_bayes.report.plan import evaluation_report
 
@@ -216,9 +272,10 @@ class PlanEvaluation:
 @jax_entry
 def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = None,
                   limits: PathArg | None = None,
-                  calibration: Literal["inertia", "wheel-axis"] | None = None,
+                  calibration: Literal["inertia", "wheel-axis", "thrust"] | None = None,
                   wheel: str | None = None,
-                  prior: Literal["uniform", "cone"] = "uniform") -> PlanEvaluation:
+                  prior: Literal["uniform", "cone"] = "uniform",
+                  mode: Literal["mean", "branch", "thruster"] = "mean") -> PlanEvaluation:
     """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
     torques and each nuisance parameter), or of the RWA-method wheel-axis fit (the axis and the
     inertia, the nuisances integrated out), for the manoeuvre of a scenario: the Laplace
@@ -233,11 +290,14 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
         scenario's ``[prior] model``): a path or shipped name.
     limits : optional limits file (path or shipped name): the table then shows the share of
         each limit the manoeuvre uses on its simulated telemetry.
-    calibration : ``"inertia"`` or ``"wheel-axis"``; default ``"wheel-axis"`` when ``wheel``
-        is given, else ``"inertia"``.
+    calibration : ``"inertia"``, ``"wheel-axis"`` or ``"thrust"``; default ``"wheel-axis"``
+        when ``wheel`` is given, ``"thrust"`` for a biasing event (thrusters fire: RCS control
+        or ``[[pulse]]``s, no slews), else ``"inertia"``.
     wheel : the wheel whose axis is calibrated (default: the one running wheel whose true axis
         differs from the model file's, else RWA4).
     prior : the wheel-axis fit's axis prior (``"uniform"`` or ``"cone"``).
+    mode : the thrust fit's mode (``fit thrust --mode``): ``"mean"``, ``"branch"`` or
+        ``"thruster"``.
     """
     from dataclasses import replace
 
@@ -247,16 +307,15 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     from cassini_bayes.simulate.scenario import scenario_path
     from cassini_bayes.spacecraft import load_spacecraft
 
-    if calibration is None:
-        calibration = "wheel-axis" if wheel is not None else "inertia"
-    if calibration not in CALIBRATIONS:
+    if calibration is not None and calibration not in CALIBRATIONS:
         raise InputError(f"{arg('calibration', calibration)}: choose one of "
                          f"{', '.join(CALIBRATIONS)}")
-    if wheel is not None and calibration != "wheel-axis":
-        raise InputError(f"{arg('wheel', wheel)}: a wheel is chosen for a wheel-axis "
-                         "calibration only (--calibration wheel-axis)")
     if prior not in ("uniform", "cone"):
         raise InputError(f"{arg('prior', prior)}: choose uniform or cone")
+    from cassini_bayes.inference.thrust import MODES
+
+    if mode not in MODES:
+        raise InputError(f"{arg('mode', mode)}: choose one of {', '.join(MODES)}")
     inputs: list[Path] = []
     if isinstance(scenario, Scenario):
         s = scenario
@@ -264,7 +323,14 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
         p = scenario_path(scenario)
         s = load_scenario(p)
         inputs.append(p)
-    if not s.slews or s.control != "rwa":
+    if calibration is None:
+        biasing = not s.slews and (s.control == "rcs" or bool(s.pulses))
+        calibration = ("wheel-axis" if wheel is not None
+                       else "thrust" if biasing else "inertia")
+    if wheel is not None and calibration != "wheel-axis":
+        raise InputError(f"{arg('wheel', wheel)}: a wheel is chosen for a wheel-axis "
+                         "calibration only (--calibration wheel-axis)")
+    if calibration != "thrust" and (not s.slews or s.control != "rwa"):
         raise InputError(f"scenario {s.name!r} has no RWA-controlled [[slew]]: an "
                          f"{'inertia' if calibration == 'inertia' else 'RWA-method wheel-axis'} "
                          "calibration is planned from RWA slews", path=s.source)
@@ -276,12 +342,16 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
             raise InputError(f"{arg('spacecraft', spacecraft)}: its wheels "
                              f"({', '.join(model.wheel_names)}) are not the scenario's "
                              f"({', '.join(s.truth.wheel_names)})")
+        if calibration == "thrust" and model.thruster_names != s.truth.thruster_names:
+            raise InputError(f"{arg('spacecraft', spacecraft)}: its thrusters "
+                             f"({', '.join(model.thruster_names)}) are not the scenario's "
+                             f"({', '.join(s.truth.thruster_names)})")
         s = replace(s, prior=model, prior_model_path=str(sc_file))
         sc_path = str(sc_file)
         inputs.append(sc_file)
     lim = None
     if limits is not None:
-        lim, _ = load_limits(limits, sc_path)
+        lim, _ = load_limits(limits, sc_path, slews=calibration != "thrust")
         inputs.append(Path(lim.source))
     pred: Any
     if calibration == "wheel-axis":
@@ -290,6 +360,14 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
         pred = evaluate_wheel_axis(s, wheel, lim, prior=prior)
         block = _axis_block(pred)
         block["fit_windows"] = window_options(pred.pairs)
+    elif calibration == "thrust":
+        from cassini_bayes.plan.thrust import evaluate_thrust
+        from cassini_bayes.plan.thrust_planner import pulse_usage
+
+        pred = evaluate_thrust(s, mode, lim)
+        if lim is not None:
+            pred = pred._replace(usage={**pred.usage, **pulse_usage(pred, lim)})
+        block = _thrust_block(pred)
     else:
         pred = evaluate_inertia(s, lim)
         block = _prediction_block(pred)
@@ -300,7 +378,8 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     config = {"command": "plan evaluate", "version": __version__,
               "inputs": {"scenario": s.source, "spacecraft": sc_path,
                          "limits": None if lim is None else lim.source},
-              "options": {"calibration": calibration, "wheel": wheel, "prior": prior}}
+              "options": {"calibration": calibration, "wheel": wheel, "prior": prior,
+                          "mode": mode}}
     return PlanEvaluation(pred, s, config, lim, summary, tuple(inputs))
 
 
@@ -617,3 +696,122 @@ def plan_wheel_axis(spacecraft: PathArg, limits: PathArg, *, wheel: str,
     for w in warns:
         warnings.warn(w, stacklevel=2)
     return WheelAxisPlanResult(plan, config, summary, tuple(inputs))
+
+
+@dataclass(frozen=True)
+class ThrustPlanResult(_PlannedRun):
+    """A planned thrust calibration (``cassini-bayes plan thrust``).
+
+    Attributes
+    ----------
+    plan : :class:`~cassini_bayes.plan.thrust_planner.ThrustPlan`: the scenario dict, its
+        predicted posterior, the choice, the comparison's prediction and the search.
+    config : inputs and options (``config.toml``).
+    """
+
+    def table(self) -> str:
+        """The printed tables of the plan and its comparison."""
+        p = self.plan
+        c = p.choice
+        what = (f"graded pulses up to {c.width_s:g} s" if c.graded
+                else f"{c.width_s:g} s pulses") + f", wheels to {c.wheel_fraction:g} of the limit"
+        out = [format_thrust_table(p.prediction, f"plan ({what})")]
+        if p.baseline is not None:
+            out.append(format_thrust_table(p.baseline, p.baseline_name))
+        return "\n\n".join(out)
+
+    def scenario_toml(self) -> str:
+        """The plan as scenario TOML text (``cassini-bayes simulate`` runs it)."""
+        import tomli_w
+
+        head = ("# Planned by cassini-bayes plan thrust (docs/planning.md): "
+                f"{self.plan.limits.name}, target {self.plan.target}; fit it with\n"
+                f"# fit thrust --mode {self.plan.mode}\n")
+        return head + tomli_w.dumps(self.plan.scenario)
+
+    def _report(self) -> str:
+        from cassini_bayes.report.plan_thrust import thrust_plan_report
+
+        return thrust_plan_report(self._summary, self.plan)
+
+
+@jax_entry
+def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
+                mode: Literal["mean", "branch", "thruster"] = "mean",
+                target: Literal["max_ratio", "max_ratio_thrust"] = "max_ratio",
+                baseline: PathArg | None = None, goal: float | None = None,
+                progress: bool = False) -> ThrustPlanResult:
+    """Plan a thrust calibration: the wheel-biasing event within ``limits`` (pulse widths,
+    spin-up targets) that minimises ``target`` of the robust thrust fit's predicted posterior,
+    by a documented search (:mod:`cassini_bayes.plan.thrust_planner`, docs/planning.md).
+
+    Parameters
+    ----------
+    spacecraft : the model file (path or shipped name): the plan's truth and the fit's prior.
+    limits : the limits file (path or shipped name, ``experiments/limits/``).
+    mode : the thrust fit's mode (``fit thrust --mode``).
+    target : ``"max_ratio"`` (the largest predicted sd over its budget, thrusts and time
+        constants) or ``"max_ratio_thrust"`` (the thrusts only).
+    baseline : scenario to compare with (path or shipped name; e.g. the shipped biasing event
+        of the same duration).
+    goal : the value of ``target`` wanted; a plan that cannot reach it says so.
+    progress : print the search's steps on stderr.
+    """
+    from cassini_bayes.inference.thrust import MODES
+    from cassini_bayes.plan.limits import load_limits
+    from cassini_bayes.plan.thrust_planner import THRUST_TARGETS, plan_thrust_event
+    from cassini_bayes.simulate import load_scenario
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    if mode not in MODES:
+        raise InputError(f"{arg('mode', mode)}: choose one of {', '.join(MODES)}")
+    if target not in THRUST_TARGETS:
+        raise InputError(f"{arg('target', target)}: choose one of {', '.join(THRUST_TARGETS)}")
+    if goal is not None and (isinstance(goal, bool) or not isinstance(goal, (int, float))
+                             or not np.isfinite(goal) or goal <= 0):
+        raise InputError(f"{arg('goal', goal)}: give a positive number (sd over budget)")
+    sc_file = _spacecraft_path(spacecraft)
+    ref = _model_reference(sc_file)
+    lim, base = load_limits(limits, ref, slews=False)
+    inputs = [sc_file, Path(lim.source)]
+    bl = None
+    if baseline is not None:
+        from dataclasses import replace
+
+        from cassini_bayes.spacecraft import load_spacecraft
+
+        bp = scenario_path(baseline)
+        bl = load_scenario(bp)
+        bl = replace(bl, prior=load_spacecraft(sc_file), prior_model_path=str(sc_file))
+        inputs.append(bp)
+    say = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else None
+    plan = plan_thrust_event(lim, base, ref, mode=mode, target=target, baseline=bl,
+                             progress=say)
+    from cassini_bayes.plan.thrust_planner import target_value
+
+    pred = plan.prediction
+    value = target_value(pred, target)
+    warns = []
+    if goal is not None and value > goal:
+        warns.append(f"the limits cannot reach the goal {target} <= {goal:g}: the best event "
+                     f"found reaches {value:.3f} ({pred.worst})")
+    summary = {
+        "kind": "plan", "command": "plan thrust", "calibration": "thrust",
+        "version": __version__, "spacecraft": ref, "limits_file": lim.source,
+        "limits": lim.to_dict(), "mode": mode, "target": target, "target_value": value,
+        "goal": None if goal is None else {"value": goal, "reached": value <= goal},
+        "choice": plan.choice._asdict(), "wheel_ramp": plan.scenario["wheel_ramp"],
+        "rcs_controller": plan.scenario["rcs_controller"],
+        "plan": _thrust_block(pred),
+        "baseline": (None if plan.baseline is None
+                     else {"name": plan.baseline_name, **_thrust_block(plan.baseline)}),
+        "improvement": (None if plan.baseline is None
+                        else {target: target_value(plan.baseline, target) / value}),
+        "search": list(plan.search), "warnings": warns}
+    config = {"command": "plan thrust", "version": __version__,
+              "inputs": {"spacecraft": str(sc_file), "limits": lim.source,
+                         "baseline": None if bl is None else bl.source},
+              "options": {"mode": mode, "target": target, "goal": goal}}
+    for w in warns:
+        warnings.warn(w, stacklevel=2)
+    return ThrustPlanResult(plan, config, summary, tuple(inputs))

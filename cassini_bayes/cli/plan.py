@@ -9,6 +9,12 @@
   ``report.html``.
 * ``plan wheel-axis --spacecraft M.toml --wheel NAME --limits L.toml --out DIR`` chooses the
   slew pairs, windows and the wheel's bias speed (:func:`cassini_bayes.api.plan_wheel_axis`).
+* ``plan evaluate BIASING.toml`` (a scenario whose thrusters fire and that has no slews, or
+  ``--calibration thrust``) prints the predicted sd of the robust thrust fit's parameters (thrust,
+  time constants; ``--mode thruster``: each thruster's and the centre-of-mass offset) beside the
+  papers' thrust budget and the model file's prior.
+* ``plan thrust --spacecraft M.toml --limits L.toml --out DIR`` chooses a wheel-biasing event
+  (pulse widths, spin-up targets) within the limits (:func:`cassini_bayes.api.plan_thrust`).
 * ``plan inertia --spacecraft M.toml --limits L.toml --out DIR`` chooses slews within the
   limits (:func:`cassini_bayes.api.plan_inertia`) and writes ``DIR/scenario.toml`` (the plan:
   ``cassini-bayes simulate`` runs it), ``summary.json``, ``config.toml`` and ``report.html``.
@@ -43,8 +49,12 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                                           "share of each limit used."),
         out: Path | None = typer.Option(None, "--out", help="Also write summary.json and "
                                         "report.html here (atomically)."),
-        calibration: str | None = typer.Option(None, "--calibration", help="inertia (default) "
-                                               "or wheel-axis (the RWA-method fit)."),
+        calibration: str | None = typer.Option(None, "--calibration", help="inertia, "
+                                               "wheel-axis (the RWA-method fit) or thrust "
+                                               "(default: thrust for a biasing event, else "
+                                               "inertia)."),
+        mode: str = typer.Option("mean", "--mode", help="Thrust fit's mode: mean, branch or "
+                                 "thruster (as fit thrust --mode)."),
         wheel: str | None = typer.Option(None, "--wheel", help="Wheel whose axis is calibrated "
                                          "(implies --calibration wheel-axis; default the one "
                                          "whose true axis is off the model's, else RWA4)."),
@@ -59,7 +69,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         if out is not None:
             check_out(out, force=force, inputs=[scenario])
         res = evaluate_plan(str(scenario), spacecraft=spacecraft, limits=limits,
-                            calibration=calibration, wheel=wheel, prior=prior)
+                            calibration=calibration, wheel=wheel, prior=prior, mode=mode)
         typer.echo(res.table())
         if out is not None:
             res.save(out, force=force)
@@ -103,6 +113,47 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         console.print(f"{mark} {len(s['slews'])} slews, {s['target']} {s['target_value']:.3f} "
                       f"(comparison ×{s['improvement'][s['target']]:.2f}) in "
                       f"{time.perf_counter() - t0:.0f} s → {escape(str(out))}")
+
+    @plan.command("thrust")
+    def thrust_cmd(
+        spacecraft: str = typer.Option(..., "--spacecraft", help="Spacecraft model TOML (the "
+                                       "plan's truth and the fit's prior)."),
+        limits: str = typer.Option(..., "--limits", help="Limits TOML (experiments/limits/): "
+                                   "duration, pulse widths, wheel speed and momentum, "
+                                   "thrusters allowed."),
+        out: Path = typer.Option(..., "--out", help="Output directory (written atomically)."),
+        mode: str = typer.Option("mean", "--mode", help="Thrust fit's mode: mean, branch or "
+                                 "thruster (as fit thrust --mode)."),
+        target: str = typer.Option("max_ratio", "--target", help="max_ratio (largest sd over "
+                                   "its budget: thrusts and time constants) or "
+                                   "max_ratio_thrust (the thrusts only)."),
+        baseline: str | None = typer.Option(None, "--baseline", help="Scenario to compare with "
+                                            "(e.g. the shipped biasing event of the same "
+                                            "duration)."),
+        goal: float | None = typer.Option(None, "--goal", min=0.0, help="Target value wanted; "
+                                          "a plan that cannot reach it says so."),
+        force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
+                                   "cassini-bayes wrote."),
+    ) -> None:
+        """Choose the pulse widths and wheel spin-up targets of a biasing event within limits
+        (a search scored by the predicted posterior); write the plan as a scenario, with its
+        report."""
+        console = stderr_console()
+        from cassini_bayes.api import plan_thrust
+
+        check_out(out, force=force)
+        t0 = time.perf_counter()
+        res = plan_thrust(spacecraft, limits, mode=mode, target=target, baseline=baseline,
+                          goal=goal, progress=True)
+        res.save(out, force=force)
+        typer.echo(res.table())
+        s = res.summary()
+        ok = s["plan"].get("limits_ok", True) and (s["goal"] is None or s["goal"]["reached"])
+        mark = "[green]✓[/green]" if ok else "[yellow]![/yellow]"
+        imp = s["improvement"]
+        console.print(f"{mark} {s['target']} {s['target_value']:.3f} ({s['plan']['worst']})"
+                      + (f", comparison ×{imp[s['target']]:.2f}" if imp else "")
+                      + f" in {time.perf_counter() - t0:.0f} s → {escape(str(out))}")
 
     @plan.command("wheel-axis")
     def wheel_axis_cmd(

@@ -14,10 +14,13 @@ Schema (SI inside; the file's units are in the key names)::
     max_wheel_torque_nm = 0.2       # largest wheel motor torque (required)
     max_wheel_momentum_nms = 34.0   # largest momentum of one wheel, J |ρ| (optional)
     min_pulse_s = 0.125             # shortest thruster pulse (thrust plans; default 0.125 s)
+    max_pulse_s = 0.75              # longest thruster pulse (thrust plans; default 0.75 s)
+    thrusters = ["Z1", "Z2", ...]   # thrusters a thrust plan may fire (default all)
     [run]       dt_s, sample_period_s        (the telemetry the calibration will use)
     [initial]   wheels_on, q, wheel_rpm      (the spacecraft when the plan starts)
     [noise]     as a scenario's              (the sensors the calibration will use)
     [rwa_controller]  as a scenario's
+    [rcs_controller]  as a scenario's (thrust plans: the dead-band controller of a biasing event)
 
 ``[run]``, ``[initial]``, ``[noise]`` and ``[rwa_controller]`` have a scenario's keys
 (:mod:`cassini_bayes.simulate.scenario`): a plan is written as a scenario made of them, the
@@ -60,10 +63,14 @@ LIMITS_DIR = EXPERIMENTS_DIR / "limits"
 ACCEL_TORQUE_SHARE = 0.5
 """Share of the wheel torque limit a planned slew's acceleration may use; the rest is left to the
 controller's gyroscopic and feedback torques (checked on the simulated telemetry)."""
-_TOP = {"name", "description", "limits", "run", "initial", "noise", "rwa_controller"}
+_TOP = {"name", "description", "limits", "run", "initial", "noise", "rwa_controller",
+        "rcs_controller"}
 _LIMIT_KEYS = {"duration_s", "quiet_s", "max_body_rate_mrad_s", "max_axis_rate_mrad_s",
                "max_body_accel_mrad_s2", "max_slew_deg", "max_wheel_rpm",
-               "max_wheel_torque_nm", "max_wheel_momentum_nms", "min_pulse_s"}
+               "max_wheel_torque_nm", "max_wheel_momentum_nms", "min_pulse_s", "max_pulse_s",
+               "thrusters"}
+MAX_PULSE_S = 0.75
+"""Default longest pulse of a thrust plan (s): Cassini's biasing events' (Feldman & Lee §V)."""
 _REQUIRED = ("duration_s", "max_body_rate_mrad_s", "max_wheel_rpm", "max_wheel_torque_nm")
 
 
@@ -75,8 +82,10 @@ class Limits:
     axis (inf: none). accel_max_rad_s2 : largest commanded acceleration (inf: only the wheel
     torque bounds it). slew_max_rad : largest angle of one slew (inf: none).
     wheel_rate_max_rad_s, wheel_torque_max_nm, wheel_momentum_max_nms : per wheel (momentum inf:
-    none). min_pulse_s : s. sections : the file's scenario sections (``run``, ``initial``,
-    ``noise``, ``rwa_controller``), as read. name, source : the file's name and path.
+    none). min_pulse_s, max_pulse_s : shortest and longest thruster pulse, s.
+    sections : the file's scenario sections (``run``, ``initial``, ``noise``,
+    ``rwa_controller``, ``rcs_controller``), as read. name, source : the file's name and path.
+    thrusters : the thrusters a thrust plan may fire (``None``: all).
     """
 
     name: str
@@ -93,6 +102,8 @@ class Limits:
     wheel_momentum_max_nms: float
     min_pulse_s: float
     sections: dict
+    max_pulse_s: float = MAX_PULSE_S
+    thrusters: tuple[str, ...] | None = None
 
     def to_dict(self) -> dict:
         """The limits as a file would state them (``[limits]`` keys, the file's units)."""
@@ -100,7 +111,9 @@ class Limits:
                "max_body_rate_mrad_s": self.rate_max_rad_s * 1e3,
                "max_wheel_rpm": self.wheel_rate_max_rad_s * 30.0 / np.pi,
                "max_wheel_torque_nm": self.wheel_torque_max_nm,
-               "min_pulse_s": self.min_pulse_s}
+               "min_pulse_s": self.min_pulse_s, "max_pulse_s": self.max_pulse_s}
+        if self.thrusters is not None:
+            out["thrusters"] = list(self.thrusters)
         if np.all(np.isfinite(self.axis_rate_max_rad_s)):
             out["max_axis_rate_mrad_s"] = [x * 1e3 for x in self.axis_rate_max_rad_s]
         if np.isfinite(self.accel_max_rad_s2):
@@ -156,10 +169,11 @@ def _fibonacci(n: int) -> np.ndarray:
 
 
 def limits_from_dict(d: dict[str, Any], spacecraft_path: str,
-                     src: str = "<limits>") -> tuple[Limits, Scenario]:
+                     src: str = "<limits>", *, slews: bool = True) -> tuple[Limits, Scenario]:
     """Check a limits dict against the spacecraft of the model file ``spacecraft_path``; returns
     the limits and the base scenario (:func:`base_scenario_dict`, loaded: its own keys are
-    checked as a scenario's)."""
+    checked as a scenario's). ``slews``: the plan is made of slews (a duration shorter than one
+    slew is refused); ``False`` for a thrust plan's biasing event."""
     if not isinstance(d, dict):
         raise InputError("a limits file is a TOML table", path=src)
     top = TomlTable(d, "", src, _TOP)
@@ -180,8 +194,12 @@ def limits_from_dict(d: dict[str, Any], spacecraft_path: str,
     if min_pulse < MIN_PULSE_S - 1e-12:
         raise t.err("min_pulse_s", f"= {min_pulse} s is below the {MIN_PULSE_S} s command grid "
                                    "of the thrusters")
-    sections = {k: copy.deepcopy(d[k]) for k in ("run", "initial", "noise", "rwa_controller")
-                if k in d}
+    max_pulse = t.num("max_pulse_s", MAX_PULSE_S, positive=True)
+    if max_pulse < min_pulse:
+        raise t.err("max_pulse_s", f"= {max_pulse} s is below 'limits.min_pulse_s' = {min_pulse} "
+                                   "s")
+    sections = {k: copy.deepcopy(d[k]) for k in ("run", "initial", "noise", "rwa_controller",
+                                                 "rcs_controller") if k in d}
     for k in ("run", "initial"):
         if k not in sections:
             raise InputError(f"missing table [{k}] (the telemetry's dt_s and sample_period_s; "
@@ -201,10 +219,26 @@ def limits_from_dict(d: dict[str, Any], spacecraft_path: str,
         wheel_rate_max_rad_s=t.num("max_wheel_rpm", positive=True) * np.pi / 30.0,
         wheel_torque_max_nm=t.num("max_wheel_torque_nm", positive=True),
         wheel_momentum_max_nms=_optional(t, "max_wheel_momentum_nms"),
-        min_pulse_s=min_pulse, sections=sections)
+        min_pulse_s=min_pulse, sections=sections, max_pulse_s=max_pulse,
+        thrusters=_thrusters(t))
     base = scenario_from_dict(base_scenario_dict(lim, spacecraft_path), src)
-    _check_consistency(lim, base, src)
+    _check_consistency(lim, base, src, slews)
+    if lim.thrusters is not None:
+        unknown = [n for n in lim.thrusters if n not in base.prior.thruster_names]
+        if unknown:
+            raise t.err("thrusters", f"names {', '.join(unknown)}, not thrusters of the "
+                                     f"spacecraft model ({', '.join(base.prior.thruster_names)})")
     return lim, base
+
+
+def _thrusters(t: TomlTable) -> tuple[str, ...] | None:
+    """``thrusters``: a non-empty list of names, or ``None`` (all may fire)."""
+    if not t.has("thrusters"):
+        return None
+    v = t.table["thrusters"]
+    if not isinstance(v, list) or not v or not all(isinstance(x, str) and x for x in v):
+        raise t.err("thrusters", f"= {v!r}: give a non-empty list of thruster names")
+    return tuple(v)
 
 
 def _optional(t: TomlTable, key: str) -> float:
@@ -212,7 +246,7 @@ def _optional(t: TomlTable, key: str) -> float:
     return t.num(key, positive=True) if t.has(key) else np.inf
 
 
-def _check_consistency(lim: Limits, base: Scenario, src: str) -> None:
+def _check_consistency(lim: Limits, base: Scenario, src: str, slews: bool = True) -> None:
     """Limits that contradict each other or the state the plan starts from (one line each)."""
     sc = base.prior
     on = [n for n, o in zip(base.wheel_names, base.wheels_on) if o]
@@ -231,8 +265,12 @@ def _check_consistency(lim: Limits, base: Scenario, src: str) -> None:
     accel = accel_bound(lim, sc, on)
     rate = min(lim.rate_max_rad_s, float(np.min(lim.axis_rate_max_rad_s)))
     one_slew = 2.0 * rate / accel
-    need = 2.0 * lim.quiet_s + one_slew
-    if lim.duration_s < need:
+    need = 2.0 * lim.quiet_s + (one_slew if slews else 0.0)
+    if lim.duration_s <= need:
+        if not slews:
+            raise InputError(f"'limits.duration_s' = {lim.duration_s:g} s leaves no time between "
+                             f"the {lim.quiet_s:g} s quiet at the start and at the end "
+                             "('limits.quiet_s')", path=src)
         raise InputError(f"'limits.duration_s' = {lim.duration_s:g} s is shorter than one slew: "
                          f"{lim.quiet_s:g} s quiet before and after plus {one_slew:.0f} s to "
                          f"reach {rate * 1e3:g} mrad/s and stop at {accel * 1e3:.3g} mrad/s²; "
@@ -242,9 +280,11 @@ def _check_consistency(lim: Limits, base: Scenario, src: str) -> None:
                          "telemetry samples", path=src)
 
 
-def load_limits(path: str | os.PathLike, spacecraft_path: str) -> tuple[Limits, Scenario]:
+def load_limits(path: str | os.PathLike, spacecraft_path: str, *,
+                slews: bool = True) -> tuple[Limits, Scenario]:
     """Load a limits TOML (a path, or the stem of a file under ``experiments/limits/``) for the
-    spacecraft of the model file ``spacecraft_path`` (written into the plan's scenario)."""
+    spacecraft of the model file ``spacecraft_path`` (written into the plan's scenario);
+    ``slews`` as :func:`limits_from_dict`."""
     p = limits_path(path)
     return limits_from_dict(read_toml(p, "limits", "experiments/limits/"), spacecraft_path,
-                            str(p))
+                            str(p), slews=slews)

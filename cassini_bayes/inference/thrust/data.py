@@ -240,7 +240,8 @@ def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
 
 
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
-                   layout, i_lin: np.ndarray, robust: bool) -> tuple[dict, np.ndarray, np.ndarray]:
+                   layout, i_lin: np.ndarray, robust: bool,
+                   noise_hat=None) -> tuple[dict, np.ndarray, np.ndarray]:
     """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
     thrusters that fired (M,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
     inertia the robust columns are linear around."""
@@ -283,7 +284,7 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         wid[e, :m] = log.width      # padded pulses: width 0 → no impulse, slot n_max → dropped
         slot[e, :m] = _pulse_slots(t, log)
         wcov[e] = wc
-        noise[e] = rate_noise_levels(tel)
+        noise[e] = rate_noise_levels(tel) if noise_hat is None else noise_hat[e]
         fired[np.unique(log.thruster)] = True
 
     kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
@@ -327,12 +328,14 @@ def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, 
 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
-                   robust: bool = False, wheel_errors: str = "per_wheel") -> ThrustProblem:
+                   robust: bool = False, wheel_errors: str = "per_wheel",
+                   noise_hat=None) -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
 
     ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
     external torque); ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel
-    spin-inertia model.
+    spin-inertia model. ``noise_hat`` (E, 2) rad/s replaces the white-noise levels estimated
+    from the data (a plan's noise-free telemetry has none; :mod:`cassini_bayes.plan.thrust`).
 
     Raises
     ------
@@ -352,7 +355,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors)
-    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust)
+    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust,
+                                      None if noise_hat is None else np.asarray(noise_hat, float))
     q_mat = spacecraft.moment_matrix
     per_thruster = mode == "thruster"
     thrust_pred = spacecraft.thrust_per_thruster if per_thruster else float(spacecraft.thrust)

@@ -1,0 +1,174 @@
+"""Planning a thrust calibration: the prediction is the Laplace approximation of the robust thrust
+fit's own density (checked against a brute-force differenced Hessian), the planned biasing event
+keeps its limits on the simulated telemetry, bad limits are one-line errors, the CLI
+(docs/planning.md)."""
+
+from __future__ import annotations
+
+import copy
+import json
+import tomllib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from cassini_bayes.errors import InputError
+from cassini_bayes.plan.limits import limits_from_dict, limits_path
+from cassini_bayes.simulate import scenario_from_dict
+from cassini_bayes.simulate.open_world import base_scenario
+
+ESPA = "models/espa_bus.toml"
+
+
+def _small_event() -> dict:
+    """``pulses_espa_bus`` cut to its first eight pulses (one per thruster, 250 ms) and 100 s."""
+    d = copy.deepcopy(base_scenario("pulses_espa_bus"))
+    d["run"]["duration_s"] = 100.0
+    d["pulse"] = d["pulse"][:8]
+    d["name"] = "pulses_espa_small"
+    return d
+
+
+def _limits(**change) -> dict:
+    d = tomllib.loads(limits_path("thrust_espa_bus").read_text())
+    d["limits"].update(change)
+    return d
+
+
+def test_prediction_matches_a_differenced_hessian():
+    """The predicted covariance (``jax.hessian`` of the fit's density at the truth, noise scale
+    held) equals the inverse of a brute-force Hessian from second differences of the density's
+    values (step 1e-3 posterior sd along the predicted whitening), and the sites' sd its delta
+    method with a differenced Jacobian of the fit's map to the physical parameters: to 1e-3 relative
+    (the differences' truncation is ~1e-6 and their rounding ~1e-5 of the curvature)."""
+    from cassini_bayes.inference.thrust.coords import _physical
+    from cassini_bayes.plan.thrust import (_held_density, _site_names, _truth, _truth_vector,
+                                           noise_free_problem, predict_thrust, representable)
+
+    s = scenario_from_dict(_small_event())
+    _, problem, sig = noise_free_problem(s, "mean")
+    s = representable(s, "mean")
+    names = _site_names(problem)
+    truth = _truth(s, problem, names)
+    at = _truth_vector(problem, names, truth)
+    lap = predict_thrust(problem, sig, at=at)
+    kw = problem.data._replace(log_noise_hat=jnp.log(jnp.asarray(sig)[None]))
+    n_f, n_c, n_ev = problem.n_f, problem.n_c, 1
+    f = jax.jit(_held_density(n_f, n_c, True, n_ev))
+    x0 = np.asarray(lap.centre)
+    w = np.linalg.cholesky(lap.cov)
+    h = 1e-3
+    d = x0.size
+    hw = np.zeros((d, d))
+    for i in range(d):
+        for j in range(i, d):
+            ei, ej = h * w[:, i], h * w[:, j]
+            v = (float(f(x0 + ei + ej, kw)) - float(f(x0 + ei - ej, kw))
+                 - float(f(x0 - ei + ej, kw)) + float(f(x0 - ei - ej, kw))) / (4 * h * h)
+            hw[i, j] = hw[j, i] = -v
+    cov_fd = w @ np.linalg.inv(hw) @ w.T
+    np.testing.assert_allclose(np.sqrt(np.diag(cov_fd)), np.sqrt(np.diag(lap.cov)), rtol=1e-3)
+    k = n_f + n_c + 3
+
+    def sites(x):
+        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
+        p = _physical(theta, kw, n_f, n_c, True)
+        return np.asarray(jnp.concatenate([p.thrust, p.tau, p.inertia]))
+
+    jac = np.stack([(sites(x0 + 1e-4 * w[:, i]) - sites(x0 - 1e-4 * w[:, i])) / 2e-4
+                    for i in range(d)], 1) @ np.linalg.inv(w)
+    sd_fd = np.sqrt(np.diag(jac @ cov_fd @ jac.T))
+    np.testing.assert_allclose(sd_fd, np.sqrt(np.diag(lap.site_cov)), rtol=1e-3)
+    # the point is the truth: the sites there are the scenario's true values
+    np.testing.assert_allclose(lap.site_mean, truth, rtol=1e-9)
+    # the check can fail: with the noise doubled the sites the noise limits (not F, which the
+    # wheels' common scale limits here) move by far more than the tolerance
+    lap2 = predict_thrust(problem, 2 * sig, at=at)
+    assert not np.allclose(np.sqrt(np.diag(lap2.site_cov)), sd_fd, rtol=0.2)
+
+
+def test_evaluate_thrust_reports_every_site_beside_budget_and_prior():
+    """Mode ``thruster`` on the small event: a thrust per thruster, the centre-of-mass offset,
+    the time constants and the inertia, each narrower than its prior; thrust budgets ±10 %."""
+    from cassini_bayes.plan.thrust import evaluate_thrust
+
+    s = scenario_from_dict(_small_event())
+    p = evaluate_thrust(s, "thruster")
+    assert p.sites[:8] == tuple(f"F[{n}]" for n in s.prior.thruster_names)
+    assert p.sites[8:11] == ("com_x", "com_y", "com_z")
+    assert np.all(p.site_sd < p.site_prior_sd)
+    np.testing.assert_allclose(p.budget[:8], 0.1 * s.prior.thrust_per_thruster)
+    assert np.isnan(p.budget[8]) and p.n_pulses == 8
+    assert p.max_ratio == max(x for x in p.ratio if np.isfinite(x))
+
+
+@pytest.mark.parametrize("change, key", [
+    ({"max_pulse_s": 0.1}, "max_pulse_s"),
+    ({"min_pulse_s": 0.5, "max_pulse_s": 0.25}, "max_pulse_s"),
+    ({"thrusters": ["A1", "Z9"]}, "thrusters"),
+    ({"thrusters": []}, "thrusters"),
+    ({"thrusters": "A1"}, "thrusters"),
+    ({"duration_s": 120.0}, "duration_s"),
+    ({"max_wheel_rpm": -1.0}, "max_wheel_rpm"),
+    ({"min_pulse_s": 0.05}, "min_pulse_s"),
+])
+def test_bad_thrust_limits_are_one_line_errors(change, key):
+    with pytest.raises(InputError) as e:
+        limits_from_dict(_limits(**change), ESPA, "thrust_limits.toml", slews=False)
+    msg = str(e.value)
+    assert key in msg and "\n" not in msg
+
+
+@pytest.mark.slow
+def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
+    """``plan thrust`` on a 4-minute ESPA event with the longest pulse 250 ms and two thrusters
+    forbidden: the written scenario simulates (noisy, ``simulate``) within every limit, on the
+    telemetry and on the pulse log, and ``plan evaluate`` gives the plan's prediction."""
+    import tomli_w
+
+    from cassini_bayes.plan import checks
+    from cassini_bayes.plan.limits import load_limits
+    from cassini_bayes.telemetry import read_pulses, read_telemetry
+
+    d = _limits(duration_s=240.0, max_pulse_s=0.25)
+    lim_file = tmp_path / "limits.toml"
+    lim_file.write_text(tomli_w.dumps(d))
+    code, out, err = run_cli("plan", "thrust", "--spacecraft", "espa_bus", "--limits", lim_file,
+                             "--out", tmp_path / "p")
+    assert code == 0, err
+    s = json.loads((tmp_path / "p" / "summary.json").read_text())
+    assert s["plan"]["limits_ok"]
+    assert len(s["search"]) >= 4
+    code, _, err = run_cli("simulate", tmp_path / "p" / "scenario.toml", "--out",
+                           tmp_path / "sim", "--seed", "3")
+    assert code == 0, err
+    lim, base = load_limits(lim_file, ESPA, slews=False)
+    tel = read_telemetry(tmp_path / "sim" / "telemetry.csv", spacecraft=base.prior)
+    u = checks.largest_usage(tel.t, tel.omega, tel.wheel_rates, base.prior.wheel_axes,
+                             base.prior.wheel_inertias, np.ones(4), lim)
+    assert all(v <= 1.0 for v in u.values()), u
+    log = read_pulses(tmp_path / "sim" / "pulses.csv", spacecraft=base.prior)
+    assert lim.min_pulse_s - 1e-9 <= log.width.min() and log.width.max() <= lim.max_pulse_s + 1e-9
+    code, out, err = run_cli("plan", "evaluate", tmp_path / "p" / "scenario.toml")
+    assert code == 0, err
+    assert f"{s['plan']['sites']['F']['sd']:.4g}" in out
+
+
+def test_plan_evaluate_cli_on_a_biasing_event(run_cli, tmp_path):
+    """``plan evaluate`` recognises a scenario whose thrusters fire as a thrust calibration and
+    prints each thrust site; a spacecraft with other thrusters is refused in one line."""
+    import tomli_w
+
+    p = tmp_path / "small.toml"
+    p.write_text(tomli_w.dumps(_small_event()))
+    code, out, err = run_cli("plan", "evaluate", p, "--spacecraft", "espa_bus", "--out",
+                             tmp_path / "ev")
+    assert code == 0, err
+    assert "robust thrust fit" in out and "tau_rise" in out and "sd/budget" in out
+    summary = json.loads((tmp_path / "ev" / "summary.json").read_text())
+    assert summary["calibration"] == "thrust" and "F" in summary["prediction"]["sites"]
+    assert (tmp_path / "ev" / "report.html").stat().st_size > 1000
+    code, _, err = run_cli("plan", "evaluate", p, "--spacecraft", "cassini_post_probe")
+    assert code != 0 and "spacecraft" in err
