@@ -90,6 +90,8 @@ def test_one_slew_pair_is_refused_and_unknown_wheels_are_one_line_errors():
     with pytest.raises(InputError, match="wheel-axis calibration only"):
         evaluate_plan("wheel_axis_espa_bus", calibration="inertia", wheel="RW2")
     with pytest.raises(InputError, match="choose one of"):
+        evaluate_plan("wheel_axis_espa_bus", calibration="leak")
+    with pytest.raises(InputError, match="no thruster fires"):
         evaluate_plan("wheel_axis_espa_bus", calibration="thrust")
 
 
