@@ -27,7 +27,8 @@ def _commit() -> str | None:
     return out + ("+uncommitted" if dirty else "")
 
 
-def _cpu() -> str:
+def cpu_name() -> str:
+    """The CPU's model name (/proc/cpuinfo; the platform's processor string elsewhere)."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.startswith("model name"):
@@ -51,7 +52,7 @@ def start(records: Path, options: dict, argv: list[str] | None = None) -> dict:
                                                           else argv)]),
            "commit": _commit(), "started": now,
            "versions": {p: metadata.version(p) for p in ("cassini-bayes", "jax", "numpyro")},
-           "machine": f"{_cpu()}, {os.cpu_count()} cores", "load_average": os.getloadavg()[0]}
+           "machine": f"{cpu_name()}, {os.cpu_count()} cores", "load_average": os.getloadavg()[0]}
     if path.exists():
         man = json.loads(path.read_text())
         if man.get("options") != json.loads(json.dumps(options)):

@@ -17,7 +17,6 @@ and, as a baseline in the same process, the Chebyshev evaluation in vectorised N
 from __future__ import annotations
 
 import argparse
-import platform
 import time
 
 import jax
@@ -25,16 +24,7 @@ import numpy as np
 
 import cassini_bayes  # noqa: F401  (64-bit)
 from cassini_bayes.ivp import ChebyshevSegments, propagate_conic_unchecked
-
-
-def cpu_name() -> str:
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
+from _provenance import cpu_name
 
 
 def timed(fn, repeats: int) -> tuple[float, float]:

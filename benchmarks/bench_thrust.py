@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import shutil
 import subprocess
 import sys
@@ -34,22 +33,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from _provenance import cpu_name
+
 _T0 = (time.perf_counter(), time.process_time())
 ROOT = Path(__file__).resolve().parents[1]
 
 PHASES = ("imports", "read and check", "preparation", "laplace", "sampler",
           "nuisance draws, residuals", "summaries", "writing")
-
-
-def cpu_name() -> str:
-    """The CPU's model name (/proc/cpuinfo; the platform's processor string elsewhere)."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 class _Clock:
