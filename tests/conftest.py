@@ -30,8 +30,8 @@ jax.config.update("jax_numpy_rank_promotion", "raise")
 @pytest.fixture(autouse=True, scope="module")
 def _release_compiled_programs():
     """After each test module, drop JAX's in-memory compiled programs (``jax.clear_caches``):
-    each executable holds memory maps, and a worker that keeps those of ~500 tests passes the
-    kernel's ``vm.max_map_count`` (65 530), where XLA aborts or segfaults compiling. Later
+    each executable holds memory maps, and a worker that keeps those of every test it ran passes
+    the kernel's ``vm.max_map_count``, where XLA aborts or segfaults compiling. Later
     modules reload what they share from the persistent cache."""
     yield
     jax.clear_caches()

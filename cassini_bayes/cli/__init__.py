@@ -292,7 +292,7 @@ def _hide_dask(argv: list[str]) -> None:
     """Make Dask unimportable for a command that does not ask for it (``--executor dask``).
 
     xarray imports ``dask.array`` at its first variable and ``distributed`` when it writes a
-    netCDF file where Dask is installed: about 1 s of every fit that never uses it. Only the
+    netCDF file where Dask is installed, a cost paid by every fit that never uses it. Only the
     console script does this; :func:`main` called in-process leaves the interpreter alone.
     """
     asked = "--executor=dask" in argv or any(
