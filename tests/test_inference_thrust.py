@@ -64,7 +64,7 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
     columns; ``pulses`` ``(t_on, thruster, width)`` (default: none)."""
     from cassini_bayes.inference.gaussian import RankOneRows, column_statistics
     from cassini_bayes.inference.thrust.likelihood import EventData
-    from cassini_bayes.physics.impulse import impulse_lhs_basis
+    from cassini_bayes.physics.impulse import impulse_lhs_basis, jump_areas
 
     n = t.size
     t_on, thr, width = pulses or (np.zeros(1), np.zeros(1, int), np.zeros(1))
@@ -77,7 +77,16 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
                      wheel_cov=wheel_cov, nu_cols=none, time_tag_rates=np.asarray(rates),
                      rank_one=RankOneRows(np.arange(n), (np.zeros((0, n)),) * 3),
                      lhs_wheels=basis[0],
-                     lhs_inertia=basis[1:], nu_stats=column_statistics(none, np.ones(n)))
+                     lhs_inertia=basis[1:], nu_stats=column_statistics(none, np.ones(n)),
+                     jump_area=np.asarray(jump_areas(t, t_on, thr, width, slot, 2, 8,
+                                                     (0.005, 0.02, 0.065))),
+                     omega_mid=_interval_means(omega), h_mid=_interval_means(h))
+
+
+def _interval_means(x):
+    """(3, n): the mean of samples ``i − 1`` and ``i`` of ``x`` (n, 3), the first sample at 0."""
+    x = np.asarray(x, float)
+    return np.concatenate([x[:1], 0.5 * (x[1:] + x[:-1])]).T
 
 
 def test_offset_marginal_matches_dense_gaussian():
@@ -288,7 +297,8 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
     information form with generic 3×3 inverses and log-determinants."""
     from cassini_bayes.physics.impulse import impulse_lhs
     from cassini_bayes.physics.momentum import inertia_matrix
-    from cassini_bayes.physics.pulse import thrust_profile
+    from cassini_bayes.physics.pulse import (pulse_impulse_area, pulse_impulse_until,
+                                             thrust_profile)
 
     # host copies: data, not traced (a jitted function's captured arrays are traced)
     ev = jax.tree.map(np.asarray, problem.data.events)
@@ -305,8 +315,19 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
         t_on, thr, width = (x[e][keep] for x in (ev.t_on, ev.thruster, ev.width))
         v = impulse_lhs(t, ev.omega[e][:n], inertia, ev.h_wheels[e][:n])   # Feldman & Lee Eq 17
         j = impulse_from_pulses(t, t_on, thr, width, *tau)                  # (n, 8) s
-        r = v - (j * f8[None, :]) @ q.T
         one_hot = (thr[:, None] == np.arange(8)[None, :]).astype(float)
+        # the trapezoidal ΔG's error across the rate steps, every pulse at every sample
+        since = t[:, None] - t_on[None, :]
+        area = pulse_impulse_area(since, width[None, :], *tau_median) @ one_hot
+        j_med = pulse_impulse_until(since, width[None, :], *tau_median) @ one_hot
+        eps = jnp.concatenate([jnp.zeros((1, 8)), jnp.diff(area, axis=0)
+                               - 0.5 * np.diff(t)[:, None] * (j_med[1:] + j_med[:-1])])
+        a = (eps * f8[None, :]) @ q.T                                       # (n, 3) N m s²
+        w_m, h_m = (_interval_means(x[e][:n]).T for x in (ev.omega, ev.h_wheels))
+        step = (jnp.cross(jnp.linalg.solve(inertia, a.T).T, w_m @ inertia.T + h_m)
+                + jnp.cross(w_m, a))
+        v = v + jnp.cumsum(step, 0)
+        r = v - (j * f8[None, :]) @ q.T
         rates = time_tag_sd * thrust_profile(t[:, None] - t_on[None, :],
                                              width[None, :], *tau_median) @ one_hot
         m = (rates * f8[None, :]) @ q.T                                     # (n, 3) N m s

@@ -9,7 +9,8 @@ import pytest
 from scipy.integrate import quad
 
 from cassini_bayes.physics.pulse import (impulse_ratio, mix_ratio, pulse_impulse,
-                                         pulse_impulse_until, thrust_profile)
+                                         pulse_impulse_area, pulse_impulse_until,
+                                         thrust_profile)
 
 CASES = [(0.125, 0.005, 0.020, 0.065), (0.250, 0.005, 0.020, 0.065), (0.125, 0.005, 0.020, 0.040),
          (0.750, 0.003, 0.015, 0.090), (0.010, 0.005, 0.025, 0.040),
@@ -40,6 +41,28 @@ def test_impulse_until_equals_partial_integral(width, td, tr, tf):
         got = float(pulse_impulse_until(upper, width, td, tr, tf))
         assert np.isclose(got, _integral(width, td, tr, tf, upper), rtol=1e-9, atol=1e-13)
     assert float(pulse_impulse_until(-1.0, width, td, tr, tf)) == 0.0
+
+
+@pytest.mark.parametrize("width, td, tr, tf", CASES)
+def test_impulse_area_is_the_integral_of_the_impulse_so_far(width, td, tr, tf):
+    """``pulse_impulse_area`` equals the quadrature of ``pulse_impulse_until`` (rtol 1e-9), is 0
+    before the command, and once the pulse has decayed grows as ``j_∞ (t − c)`` with ``c`` the
+    thrust profile's centroid."""
+    until = jax.jit(pulse_impulse_until)
+    for upper in (0.5 * td, td + 0.3 * width, width, width + 0.5 * td, width + td + tf, 1.0):
+        pts = [p for p in (td, width, width + td) if 0 < p < upper]
+        want = quad(lambda s: float(until(s, width, td, tr, tf)), 0.0, upper, points=pts or None,
+                    limit=200, epsabs=1e-15, epsrel=1e-12)[0]
+        got = float(pulse_impulse_area(upper, width, td, tr, tf))
+        assert np.isclose(got, want, rtol=1e-9, atol=1e-15)
+    assert float(pulse_impulse_area(-1.0, width, td, tr, tf)) == 0.0
+    end = width + td + 60 * tf
+    j_inf = float(pulse_impulse_until(end, width, td, tr, tf))
+    moment = quad(lambda s: s * float(_profile(s, width, td, tr, tf)), 0.0, end,
+                  points=[p for p in (td, width, width + td) if p > 0] or None, limit=200,
+                  epsabs=1e-15, epsrel=1e-12)[0]
+    assert np.isclose(float(pulse_impulse_area(end, width, td, tr, tf)),
+                      j_inf * end - moment, rtol=1e-9)
 
 
 def test_impulse_until_derivative_is_the_profile():

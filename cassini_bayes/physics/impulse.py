@@ -31,13 +31,15 @@ from jax import Array
 
 from cassini_bayes.names import THRUSTER_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
-from cassini_bayes.physics.pulse import pulse_impulse_until
+from cassini_bayes.physics.pulse import pulse_impulse_area, pulse_impulse_until
 
 __all__ = [
     "THRUSTER_NAMES",
     "delta_omega",
     "delta_wheel_momentum",
     "gyroscopic_impulse",
+    "jump_areas",
+    "rate_step_correction",
     "impulse_lhs",
     "impulse_lhs_basis",
     "impulse_from_on_times",
@@ -82,6 +84,52 @@ def gyroscopic_impulse(t_s: Array, omega_rad_s: Array, inertia: Array,
     f = jnp.cross(w, h_body)
     steps = 0.5 * (f[1:] + f[:-1]) * jnp.diff(t)[:, None]
     return jnp.concatenate([jnp.zeros_like(f[:1]), jnp.cumsum(steps, 0)], 0)
+
+
+def jump_areas(t: Array, t_on: Array, thruster: Array, width: Array, slot: Array, k: int,
+               n_thrusters: int, tau) -> Array:
+    """(M, n) s²: per thruster, ``∫ j dt − Δt (j(t_{i−1}) + j(t_i)) / 2`` over the interval
+    ending at sample ``i`` (0 at ``i = 0``) of the samples ``t`` (n,) s, ``j`` the impulse per
+    newton of the pulses commanded at ``t_on`` (m,) s on ``thruster`` (m,) (indices into the
+    ``n_thrusters``) with widths ``width`` (m,) s; ``slot`` (m,) is each pulse's first sample at
+    or after its command (``n``: none), and its thrust has ended ``k`` samples after it. Time
+    constants ``tau`` (3,) s.
+
+    A pulse steps the body rate between two samples; the trapezoidal ``ΔG`` (Feldman & Lee
+    Eq 15) treats the rate as linear across the interval, and misses ``∫ δω dt`` by ``I⁻¹ Q (F ⊙
+    ε)``, ``ε`` this area (:func:`rate_step_correction`). It is ``j_∞ (t_mid − t_c)`` for a pulse
+    that lands inside one interval, ``t_c`` its thrust's centroid.
+    """
+    t = jnp.asarray(t)
+    n = t.shape[0]
+    rows = jnp.asarray(slot)[:, None] + jnp.arange(-1, k)[None, :]        # (m, k + 1)
+    valid = (rows >= 0) & (rows < n)
+    dt = t[jnp.clip(rows, 0, n - 1)] - jnp.asarray(t_on)[:, None]
+    w = jnp.asarray(width)[:, None]
+    j = pulse_impulse_until(dt, w, *tau)
+    area = pulse_impulse_area(dt, w, *tau)
+    eps = (area[:, 1:] - area[:, :-1]) - 0.5 * (dt[:, 1:] - dt[:, :-1]) * (j[:, 1:] + j[:, :-1])
+    ok = valid[:, 1:] & valid[:, :-1]
+    at = jnp.where(ok, jnp.asarray(thruster)[:, None] * n + rows[:, 1:], n_thrusters * n)
+    return jnp.zeros(n_thrusters * n).at[at].add(eps, mode="drop").reshape(n_thrusters, n)
+
+
+def rate_step_correction(inertia: Array, area: Array, omega_mid: Array, h_mid: Array) -> Array:
+    """(3, n) N m s: what the trapezoidal ``ΔG`` (Feldman & Lee Eq 15, :func:`gyroscopic_impulse`)
+    misses across the pulses' rate steps, accumulated to each sample; add it to ``V``.
+
+    ``area = Q (F ⊙ ε)`` (3, n) N m s², ``ε`` the thrusters' :func:`jump_areas`: the thrusters'
+    part of the rate, ``δω = I⁻¹ Q (F ⊙ j(t))``, is integrated by the trapezoid with the error
+    ``δθ = I⁻¹ area`` per interval; to first order in it the integrand ``ω × (I ω + H)`` then
+    misses ``δθ × (I ω_m + H_m) + ω_m × I δθ``, ``ω_m`` (3, n) rad/s and ``H_m`` (3, n) N m s
+    the interval's mean rate and wheel momentum (exact for one step). Where the wheels hold
+    newton-metre-seconds and a pulse steps the rate by mrad/s, it is as large as the sample noise
+    per pulse, and it accumulates over an event.
+    """
+    d_theta = jnp.linalg.solve(inertia, area)
+    h_m = inertia @ omega_mid + h_mid
+    step = jnp.cross(d_theta, h_m, axis=0) + jnp.cross(omega_mid, area, axis=0)
+    return jnp.cumsum(step, 1)
 
 
 def impulse_lhs(t_s: Array, omega_rad_s: Array, inertia: Array, h_wheels_body: Array) -> Array:

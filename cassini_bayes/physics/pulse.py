@@ -36,6 +36,7 @@ __all__ = [
     "impulse_ratio",
     "mix_ratio",
     "pulse_impulse_until",
+    "pulse_impulse_area",
 ]
 
 # Manufacturer's time constants (Feldman & Lee 2006 §V): delay 5 ms, rise 20 ms, fall 65 ms.
@@ -175,3 +176,30 @@ def _pulse_impulse_until_jvp(primals, tangents):
 
 
 pulse_impulse_until.defjvp(_pulse_impulse_until_jvp, symbolic_zeros=True)
+
+
+def pulse_impulse_area(t_s, width_s, tau_delay_s, tau_rise_s, tau_fall_s) -> Array:
+    """``∫_0^t j(s) ds`` (N s² per N of thrust, i.e. s²): the integral of the impulse a pulse has
+    delivered (:func:`pulse_impulse_until`) from its command to ``t_s`` after it, phase by phase
+    in closed form. Once the pulse has decayed it is ``j_∞ (t − c)``, ``c`` the centroid of the
+    thrust profile after the command; it measures where inside a sample interval the impulse
+    arrived, what the trapezoidal gyroscopic impulse needs (:mod:`cassini_bayes.inference.thrust`).
+    """
+    t = jnp.asarray(t_s)
+    w, td, tr, tf = (jnp.asarray(x) for x in (width_s, tau_delay_s, tau_rise_s, tau_fall_s))
+    e_d = jnp.exp(-td / tr)
+    hi1 = jnp.maximum(w, td)
+    # rising: ∫ (s − τd) + τr (e^{−s/τr} − e^{−τd/τr}) ds from τd to min(t, max(Δ, τd)), then
+    # held at its end value
+    u = jnp.clip(t, td, hi1)
+    rise = 0.5 * (u - td)**2 + tr**2 * (e_d - jnp.exp(-u / tr)) - tr * e_d * (u - td)
+    rise_end = (hi1 - td) + tr * (jnp.exp(-hi1 / tr) - e_d)
+    rise = rise + jnp.maximum(t - hi1, 0.0) * rise_end
+    held = 1.0 - jnp.exp(-w / tr)
+    # held for τd after the command ends: ∫ held (s − Δ) ds, then held τd
+    v = jnp.clip(t, w, w + td)
+    hold = held * (0.5 * (v - w)**2 + jnp.maximum(t - w - td, 0.0) * td)
+    # decaying: ∫ held τf (1 − e^{−x/τf}) dx
+    x = jnp.maximum(t - w - td, 0.0)
+    tail = held * tf * (x - tf * (1.0 - jnp.exp(-x / tf)))
+    return rise + hold + tail

@@ -43,6 +43,13 @@ a random walk. With ``b_e`` a free parameter the residuals ``V − Q J − b_e``
 between samples would instead be MA(1)-correlated with lag-one correlation −½.) ``δG_i``, the
 error of the gyroscopic impulse integrated from noisy rates, is a random walk but ~10× below the
 gyro term on the shipped scenarios (|H_RWA| ≤ 30 N m s, 1 µrad/s gyro noise); it is neglected.
+``ΔG`` is the trapezoid on the samples (:func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`),
+exact for rates linear between samples; a pulse steps the rate between two samples, and the
+likelihood adds back what the trapezoid misses across each step
+(:func:`~cassini_bayes.physics.impulse.rate_step_correction`: linear in ``F``, at the pulses'
+centroids for the prior-median time constants). Without it a spacecraft whose wheels hold
+newton-metre-seconds while its dead band fires has residuals far above its sensor noise, and
+its thrusts, noise levels and wheel scales absorb them (docs/thrust_any_layout.md).
 ``b_e`` has a flat prior and is integrated out analytically:
 
     log p(V_e | θ) = Σ_i log N(r_i − r̄; 0, B_e) + (3/2) log 2π + ½ log|B_e| − (3/2) log n_e.
@@ -139,8 +146,9 @@ and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 1
 event with three wheels). The sampler keeps the idealised model's coordinates (5 for one event
 and one ``F``); :func:`fit_thrust` then draws ``ν`` from its exact Gaussian conditional at each
 draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead
-(21 coordinates on one event), the time-tag term left a banana: the conditional mean of the torque about Z moved with ``τr²`` by about one conditional
-sd per unit of whitened ``τr``, which no affine whitening removes — 84 divergences and R-hat up
+(21 coordinates on one event), the time-tag term left a banana: the conditional mean of the
+torque about Z moved with ``τr²`` by about one conditional sd per unit of whitened ``τr``, which
+no affine whitening removes — 84 divergences and R-hat up
 to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the worst of those
 (seed 14: 5 divergences, tree depth 4-5) has none, at tree depth 2-3.
 

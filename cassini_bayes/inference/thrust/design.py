@@ -181,4 +181,5 @@ def thrust_design(j, mask, q_matrix, d_matrix, thrust_pred, noise_cov, log_sd: f
             full[np.abs(full) < 1e-9] = 0.0
             combos = full
     return ThrustDesign(tuple(names), basis, sv, int(np.sum(sv >= INFORMATION_MIN)),
-                        int(ident.shape[1]), identified, np.asarray(fired, bool), combos, 1.0 - np.diag(post)[m:])
+                        int(ident.shape[1]), identified, np.asarray(fired, bool), combos,
+                        1.0 - np.diag(post)[m:])

@@ -13,6 +13,7 @@ import numpy as np
 
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
+from cassini_bayes.physics.impulse import rate_step_correction
 from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until, thrust_profile
 
 if TYPE_CHECKING:
@@ -44,6 +45,9 @@ class EventData(NamedTuple):
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
+    jump_area: jax.Array       # (M, n) s², trapezoid error of ∫ j dt per interval (jump_areas)
+    omega_mid: jax.Array       # (3, n) rad/s, body rate at the middle of the interval ending at i
+    h_mid: jax.Array           # (3, n) N m s, wheel momentum there
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
 
 
@@ -63,8 +67,9 @@ class PulseLayout(NamedTuple):
 
 def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> PulseLayout:
     """:class:`PulseLayout` (NumPy) of pulses commanded at ``t_on`` (m,) s on ``thruster`` (m,)
-    (indices into the spacecraft's ``n_thrusters`` thrusters) with widths ``width`` (m,) s, first sample at or after the command ``slot`` (m,) (``n``:
-    none), on samples ``t`` (n,) s, ``k`` transient samples per pulse."""
+    (indices into the spacecraft's ``n_thrusters`` thrusters) with widths ``width`` (m,) s,
+    first sample at or after the command ``slot`` (m,) (``n``: none), on samples ``t`` (n,) s,
+    ``k`` transient samples per pulse."""
     t = np.asarray(t, float)
     n = t.size
     order = np.argsort(np.asarray(slot), kind="stable")
@@ -102,15 +107,24 @@ def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     return settled + q_f @ transient
 
 
+def _jump_correction(inertia, q_f, ev: EventData):
+    """(3, n) N m s: the trapezoidal ``ΔG``'s error across the pulses' rate steps at ``q_f = Q
+    diag(F)`` (3, M) (:func:`~cassini_bayes.physics.impulse.rate_step_correction`)."""
+    return rate_step_correction(inertia, q_f @ ev.jump_area, ev.omega_mid, ev.h_mid)
+
+
 def _event_residual(pi, q_f, tau, ev: EventData):
     """``r = V(t_i) − Q (F ⊙ j(t_i))`` (3, n) N m s: Feldman & Lee Eq 17, left minus right;
     ``V`` from its basis in the inertia ``pi`` (6,) kg m²
-    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`), ``q_f = Q diag(F)`` (3, M)."""
+    (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`) with the gyroscopic impulse's
+    trapezoid error across the pulses' rate steps added back (:func:`_jump_correction`),
+    ``q_f = Q diag(F)`` (3, M)."""
     # Feldman & Lee Eq 17 (left); six fused multiply-adds, where a product with the (6, 3 n)
     # basis copied it into the layout of XLA's matrix-vector kernel at every gradient
     v = ev.lhs_wheels
     for k in range(6):
         v = v + pi[k] * ev.lhs_inertia[k]
+    v = v + _jump_correction(inertia_matrix(pi), q_f, ev)
     return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
@@ -166,9 +180,9 @@ fraction of its white-noise sd at the data's noise levels (:func:`time_tag_rows`
 
 
 def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
-    """(M, n) s (``M = n_thrusters``): ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each thruster's impulse rate per
-    newton at each sample (module docstring, "Robust model"): the thrust profile
-    (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
+    """(M, n) s (``M = n_thrusters``): ``σ_t ∂j/∂t``, the time-tag sd ``σ_t`` (s) times each
+    thruster's impulse rate per newton at each sample (module docstring, "Robust model"): the
+    thrust profile (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
     :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples,
     at the time constants ``τ`` (3,) s, the prior's medians: evaluated once, so the covariance
     does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).

@@ -35,7 +35,8 @@ def _log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring);
     the offsets and the robust model's nuisance ``ν`` are integrated out exactly. The thrust and
     centre-of-mass coordinates are ``N(0, 1)`` a priori (a rotation of the prior-whitened
-    ``log F`` and offset keeps them so, :func:`~cassini_bayes.inference.thrust.coords._physical`)."""
+    ``log F`` and offset keeps them so,
+    :func:`~cassini_bayes.inference.thrust.coords._physical`)."""
     n_ev = kw.log_noise_hat.shape[0]
     f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
     _, log_prior_tau = _tau_from_z(tau_z, kw)
@@ -119,9 +120,10 @@ def thrust_model(mode: str, sample_inertia: bool = False):
 
     Call it with ``data=ThrustProblem.data``. Posterior sites: the thrust names of the mode
     (N; mode ``"thruster"``: ``F`` along the spacecraft's thrusters and the centre-of-mass
-    offset ``com_x``, ``com_y``, ``com_z``, m), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s), ``sigma_omega``, ``sigma_rho`` (event)
-    rad/s, ``Ixx … Iyz`` (kg m²) when ``sample_inertia``, and the sampler's whitened ``w``
-    (the robust model's nuisance ``ν`` is integrated out; :func:`fit_thrust` adds its draws).
+    offset ``com_x``, ``com_y``, ``com_z``, m), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s),
+    ``sigma_omega``, ``sigma_rho`` (event) rad/s, ``Ixx … Iyz`` (kg m²) when
+    ``sample_inertia``, and the sampler's whitened ``w`` (the robust model's nuisance ``ν`` is
+    integrated out; :func:`fit_thrust` adds its draws).
     """
     thrust_names(mode)    # an unknown mode is refused here
 
