@@ -189,6 +189,11 @@ def main(argv=None) -> None:
 
     settings = SamplerSettings(chains=args.chains, warmup=args.warmup, draws=args.draws,
                                chain_method="vectorized")
+    if args.json is not None and args.seeds:
+        from _provenance import start
+
+        # seeds and cases grow over resumed runs; the sampler settings may not change
+        start(args.json, {k: getattr(args, k) for k in ("chains", "warmup", "draws")}, argv)
     saved = json.loads(args.json.read_text()) if args.json and args.json.exists() else {}
     results = saved.get("results", {})
     command = "python benchmarks/adequacy_by_size.py " + " ".join(

@@ -128,6 +128,10 @@ def main(argv=None) -> None:
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     sys.path.insert(0, str(ROOT))
     from cassini_bayes.inference.runner import SamplerSettings
 

@@ -55,6 +55,10 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), None, replace=True)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         subprocess.run([sys.executable, "-m", "cassini_bayes.cli", "simulate", "slews_post_probe",

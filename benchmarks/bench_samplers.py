@@ -288,6 +288,10 @@ def main(argv=None) -> int:
     ap.add_argument("--work", default=None, help="working folder (default: a new temporary one)")
     ap.add_argument("--json", default=None, help="write every run and the medians here")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     import tempfile
     import tomllib
 

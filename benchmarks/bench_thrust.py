@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _provenance import cpu_name
+from _provenance import cpu_name, start
 
 _T0 = (time.perf_counter(), time.process_time())
 ROOT = Path(__file__).resolve().parents[1]
@@ -168,6 +168,8 @@ def main(argv=None) -> None:
     if args.child:
         print("BENCH " + json.dumps(child(args)))
         return
+    if args.json:
+        start(args.json, vars(args), argv, replace=True)
 
     sys.path.insert(0, str(ROOT))
     tmp = Path(args.workdir or tempfile.mkdtemp(prefix="bench_thrust_"))

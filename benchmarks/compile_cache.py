@@ -165,6 +165,10 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--quick", action="store_true", help="with --reproduce: its --quick")
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     if args.reproduce:
         result = {"cpu_count": os.cpu_count(), "runs": _reproduce(args.quick)}
         if args.json:

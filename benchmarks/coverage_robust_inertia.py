@@ -166,6 +166,10 @@ def main(argv=None) -> None:
     ap.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS))
     ap.add_argument("--json", type=Path, default=None, help="write per-seed results and summary")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     opts = {k: getattr(args, k) for k in ("chains", "warmup", "draws", "errors", "models")}
     jobs = [(f, s, opts) for s in range(args.first_seed, args.first_seed + args.seeds)
             for f in args.families]                  # seed-major: every family gets going early

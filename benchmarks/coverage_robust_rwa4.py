@@ -138,6 +138,10 @@ def main(argv=None) -> None:
     ap.add_argument("--models", nargs="+", default=list(MODELS), choices=list(MODELS))
     ap.add_argument("--json", default=None, help="write every fit's record here")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
 
     from cassini_bayes.inference.runner import SamplerSettings
 

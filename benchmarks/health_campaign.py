@@ -62,6 +62,10 @@ def main(argv=None) -> dict:
     ap.add_argument("--wheel-inertia-sd", type=float, default=None)
     ap.add_argument("--out", default=None)
     args = ap.parse_args(argv)
+    if args.out:
+        from _provenance import start
+
+        start(args.out, vars(args), argv, replace=True)
     prior = HealthPrior()
     deg, ctl = load_campaign("health_degradation"), load_campaign("health_control")
     if args.wheel_inertia_sd is not None:

@@ -37,8 +37,11 @@ def _record(res, extra: dict) -> dict:
                            for n, p in res.parameters.items()}, **extra}
 
 
-def _write(out: Path, res, extra: dict) -> dict:
+def _write(out: Path, res, extra: dict, options: dict, argv) -> dict:
+    from _provenance import start
+
     out.mkdir(parents=True, exist_ok=True)
+    start(out, options, argv, replace=True)
     plot_rank_histograms(res).savefig(out / "rank_histograms.png", dpi=100)
     plot_ecdf_difference(res).savefig(out / "ecdf_difference.png", dpi=100)
     rec = _record(res, extra)
@@ -57,7 +60,8 @@ def main(argv=None) -> None:
     dates, _, se = campaign_summaries("health_control", 0)
     cp = changepoint_sbc(args.seed, args.reps, dates, se)
     rec = _write(Path(args.out) / "health", cp, {"wall_s": time.time() - t0,
-                                                 "design": "health_control seed 0"})
+                                                 "design": "health_control seed 0"},
+                 vars(args), argv)
     print(json.dumps({k: v for k, v in rec.items() if k != "parameters"}),
           {n: (round(p["chi2_p"], 3), round(p["ecdf_p"], 3))
            for n, p in rec["parameters"].items()})
@@ -68,7 +72,8 @@ def main(argv=None) -> None:
                               (lk.truth[:, None] == np.arange(9)[None, :]).ravel())
     rec = _write(Path(args.out) / "leak", lk.result,
                  {"wall_s": time.time() - t0, "leak_replicates": int(lk.leak.sum()),
-                  "p_leak_calibration": table, "p_hypothesis_calibration": every})
+                  "p_leak_calibration": table, "p_hypothesis_calibration": every},
+                 vars(args), argv)
     print(json.dumps({k: v for k, v in rec.items() if k != "parameters"}),
           {n: (round(p["chi2_p"], 3), round(p["ecdf_p"], 3))
            for n, p in rec["parameters"].items()})

@@ -88,6 +88,10 @@ def main() -> None:
     ap.add_argument("--sizes", nargs="+", default=None,
                     help="leak sizes to run (default: all three); 'none' runs controls only")
     args = ap.parse_args()
+    if args.out:
+        from _provenance import start
+
+        start(args.out, vars(args), None, replace=True)
     rng = np.random.default_rng(args.seed)
     base = load_scenario("leak_cruise")
     base = dataclasses.replace(base, duration_s=args.hours * 3600.0)

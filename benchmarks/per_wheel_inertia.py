@@ -36,6 +36,10 @@ def main(argv=None) -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     sys.path.insert(0, str(ROOT / "tests"))
 
     import jax

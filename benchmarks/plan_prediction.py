@@ -138,6 +138,11 @@ def main(argv=None) -> None:
                     help="draw each seed's errors open-world (simulate/open_world.py)")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args(argv)
+    if a.json:
+        from _provenance import start
+
+        a.json.parent.mkdir(parents=True, exist_ok=True)
+        start(a.json, vars(a), argv, replace=True)
     sys.path.insert(0, str(ROOT))
     import cassini_bayes
     from cassini_bayes.inference.runner import SamplerSettings

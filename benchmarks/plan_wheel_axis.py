@@ -141,10 +141,13 @@ def main(argv=None) -> None:
     settings = SamplerSettings(chains=a.chains, warmup=a.warmup, draws=a.draws,
                                target_accept=RWA4_TARGET_ACCEPT)
     a.out.mkdir(parents=True, exist_ok=True)
+    from _provenance import start
+
     for name in a.scenarios:
         r = run(name, a.seeds, settings, a.first_seed, a.wheel)
         stem = Path(name).parent.name if name.endswith(".toml") else name
         path = a.out / f"wheel_axis_{stem}.json"
+        start(path, {**vars(a), "scenarios": [name]}, argv, replace=True)
         path.write_text(json.dumps(r, indent=1) + "\n", encoding="utf-8")
         print(f"{name}: sd_dir ratio median {r['sd_direction_ratio_median']:.3f}, cone90 "
               f"coverage {r['coverage_cone90']:.2f}, sites "

@@ -68,6 +68,10 @@ def main() -> None:
     ap.add_argument("--table", nargs="+", type=Path, metavar="JSON",
                     help="print the docs' table of these records and exit")
     args = ap.parse_args()
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), None, replace=True)
     if args.table:
         print(table(args.table))
         return

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import time
 import tomllib
 import warnings
@@ -38,17 +37,6 @@ SHIPPED_RCS = (("rwa4_rcs", "uniform"), ("rwa4_rcs", "cone"), ("rwa4_rcs_real", 
                ("rwa4_rcs_slow", "uniform"))
 RATE_SD_RAD_S = 1e-5
 CONE_DEG = 54.7356103172453  # Brown §I: the articulation cone's half-angle about +Z
-
-
-def _provenance(args) -> dict:
-    import cassini_bayes
-
-    def git(*a):
-        return subprocess.run(["git", *a], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-
-    return {"command": "python benchmarks/rcs_slow_spinup.py " + " ".join(args.argv),
-            "script_commit": git("rev-parse", "HEAD"), "package": cassini_bayes.__file__,
-            "version": getattr(cassini_bayes, "__version__", "?")}
 
 
 def family_case(seed: int) -> dict:
@@ -150,16 +138,17 @@ def run_posterior(draws: int, log=print) -> dict:
 
 
 def main(argv=None) -> None:
-    import sys
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("part", nargs="?", default="family", choices=("family", "posterior"))
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--long-draws", type=int, default=10_000)
-    ap.add_argument("--json", default=None, help="write the records and their provenance here")
+    ap.add_argument("--json", default=None, help="write the records here (their manifest beside)")
     args = ap.parse_args(argv)
-    args.argv = list(sys.argv[1:] if argv is None else argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     t0 = time.perf_counter()
     if args.part == "family":
         records = run_family(range(args.first_seed, args.first_seed + args.seeds))
@@ -173,8 +162,7 @@ def main(argv=None) -> None:
         records = run_posterior(args.long_draws)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"provenance": _provenance(args), "part": args.part, "records": records},
-                      fh, indent=1)
+            json.dump({"part": args.part, "records": records}, fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -80,6 +80,10 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", default=None, help="write the results here")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     settings = SamplerSettings(chains=4, warmup=500, draws=500)
     out = _rwa4(settings) | _thrust(settings)
     if args.json:

@@ -107,6 +107,10 @@ def main() -> None:
     ap.add_argument("--top", type=int, default=8)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args()
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), None, replace=True)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

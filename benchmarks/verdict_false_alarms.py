@@ -229,6 +229,10 @@ def main() -> None:
                     help="leak: give each model the simulation's true inertia (a diagnostic)")
     ap.add_argument("--json", default=None, help="write the raw statistics here")
     args = ap.parse_args()
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), None, replace=True)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     t0, raw = time.time(), {}
     if args.part == "health":

@@ -38,3 +38,18 @@ def test_manifest_written_extended_and_guarded(tmp_path, provenance):
     orphan.write_text("{}\n")
     with pytest.raises(SystemExit, match="without a manifest"):
         provenance.start(orphan, opts, [])
+
+
+def test_manifest_replaced_for_rewritten_records_and_inside_run_directories(tmp_path,
+                                                                            provenance):
+    out = tmp_path / "r.json"
+    out.write_text("{}\n")                       # a one-shot benchmark's old records
+    provenance.start(out, {"json": out, "seeds": 2}, ["--json", str(out)], replace=True)
+    provenance.start(out, {"json": out, "seeds": 3}, [], replace=True)
+    man = json.loads(provenance.manifest_path(out).read_text())
+    assert man["options"] == {"json": str(out), "seeds": 3} and len(man["runs"]) == 1
+    run_dir = tmp_path / "sbc" / "health"
+    run_dir.mkdir(parents=True)
+    provenance.start(run_dir, {"reps": 4}, [], replace=True)
+    assert provenance.manifest_path(run_dir) == run_dir / "manifest.json"
+    assert json.loads((run_dir / "manifest.json").read_text())["records"] == "."
