@@ -1,0 +1,181 @@
+"""Regenerate the markdown tables of ``docs/`` from the records they summarise.
+
+    python benchmarks/docs_tables.py           # rewrite every table block that differs
+    python benchmarks/docs_tables.py --check   # exit 1, naming each block that differs
+
+A table block in a markdown file under ``docs/`` is
+
+    <!-- table: KIND RECORDS... -->
+    | the table |
+    <!-- /table -->
+
+``KIND`` names a function of ``KINDS`` below and ``RECORDS`` are the records' paths, relative to
+the markdown file's folder; each record must have a manifest (``benchmarks/_provenance.py``), so
+a table can always be traced to the run that made it. The text between the markers is the
+function's output and nothing else: a hand-edited cell fails ``--check``
+(``tests/test_evidence.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import shlex
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from _provenance import manifest_path  # noqa: E402
+
+BLOCK = re.compile(r"<!-- table: (?P<spec>[^\n]*?) -->\n(?P<body>.*?)<!-- /table -->",
+                   re.DOTALL)
+Kind = Callable[[list[Path]], str]
+KINDS: dict[str, Kind] = {}
+
+
+def kind(name: str) -> Callable[[Kind], Kind]:
+    """Register a table generator under ``name`` (the marker's ``KIND``)."""
+    def register(fn: Kind) -> Kind:
+        KINDS[name] = fn
+        return fn
+    return register
+
+
+def _rel(path: Path) -> str:
+    try:
+        return str(path.relative_to(ROOT))
+    except ValueError:
+        return str(path)
+
+
+def _json(path: Path) -> dict:
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def _p(p: float) -> str:
+    """A p-value as the SBC tables print it: three decimals, two significant digits below 0.01."""
+    return f"{p:.3f}" if p >= 0.01 else f"{p:.2g}"
+
+
+def _sbc_row(name: str, chi2_p: float, ecdf_p: float, cov: list[float]) -> str:
+    return (f"| {name} | {_p(chi2_p)} | {_p(ecdf_p)} | "
+            + " | ".join(f"{c:.3f}" for c in cov) + " |")
+
+
+_SBC_HEAD = ("| parameter | χ² p | ECDF p | cov 50 | cov 80 | cov 90 | cov 95 |\n"
+             "|-----------|------|--------|--------|--------|--------|--------|")
+
+
+@kind("sbc")
+def sbc(paths: list[Path]) -> str:
+    """Rank uniformity and coverage per parameter of a ``cassini-bayes sbc`` summary.json, or
+    of ``benchmarks/health_sbc.py``'s (the health and leak models)."""
+    (path,) = paths
+    rows = [_SBC_HEAD]
+    for name, par in _json(path)["parameters"].items():
+        if "chi2" in par:                                   # cassini-bayes sbc
+            cov = [par["coverage"][k]["observed"] for k in ("50", "80", "90", "95")]
+            rows.append(_sbc_row(name, par["chi2"]["p_value"], par["ecdf"]["p_value"], cov))
+        else:                                               # benchmarks/health_sbc.py
+            cov = [par["coverage"][k] for k in ("0.5", "0.8", "0.9", "0.95")]
+            rows.append(_sbc_row(name, par["chi2_p"], par["ecdf_p"], cov))
+    return "\n".join(rows)
+
+
+def _calibration(paths: list[Path], key: str, label: str) -> str:
+    (path,) = paths
+    bins = _json(path)[key]
+    rows = [f"| {label} | n | mean P | observed rate | sd |", "|---|---|---|---|---|"]
+    for i, b in enumerate(bins):
+        lo, hi = (f"{x:g}" for x in b["bin"])
+        close = "]" if i == len(bins) - 1 else ")"
+        rows.append(f"| [{lo}, {hi}{close} | {b['n']} | {b['mean_p']:.2g} | {b['rate']:.2g} | "
+                    f"{b['sd']:.2g} |")
+    return "\n".join(rows)
+
+
+@kind("leak_p_calibration")
+def leak_p_calibration(paths: list[Path]) -> str:
+    """Calibration of the leak monitor's ``P(leak)`` (health_sbc.py's leak summary.json)."""
+    return _calibration(paths, "p_leak_calibration", "P(leak) bin")
+
+
+@kind("leak_hypothesis_calibration")
+def leak_hypothesis_calibration(paths: list[Path]) -> str:
+    """Calibration of every leak hypothesis' probability (the same summary.json)."""
+    return _calibration(paths, "p_hypothesis_calibration", "P bin")
+
+
+@kind("quick_settings")
+def quick_settings(paths: list[Path]) -> str:
+    """Converged fits per sampler setting (benchmarks/quick_settings.py's records)."""
+    from quick_settings import table
+
+    return table(paths)
+
+
+def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[Path]]]:
+    """Each table block of ``text``: the match, its kind and its records' paths; exits with a
+    one-line message naming ``md`` for an unknown kind, a missing record or one without a
+    manifest."""
+    out = []
+    for m in BLOCK.finditer(text):
+        line = text.count("\n", 0, m.start()) + 1
+        name, *rel = shlex.split(m["spec"])
+        where = f"{_rel(md)}:{line}"
+        if name not in KINDS:
+            sys.exit(f"{where}: unknown table kind {name!r}; known: {', '.join(sorted(KINDS))}")
+        paths = [(md.parent / r).resolve() for r in rel]
+        for p in paths:
+            if not p.exists():
+                sys.exit(f"{where}: records {_rel(p)} not found")
+            if not (manifest_path(p).exists() or (p.parent / "manifest.json").exists()):
+                sys.exit(f"{where}: records {_rel(p)} have no manifest; write one "
+                         "(benchmarks/_provenance.py)")
+        out.append((m, name, paths))
+    if text.count("<!-- table:") != len(out) or text.count("<!-- /table -->") != len(out):
+        sys.exit(f"{_rel(md)}: a table marker without its pair")
+    return out
+
+
+def render(md: Path) -> tuple[str, list[str]]:
+    """The text of ``md`` with every table block regenerated, and the blocks that changed."""
+    text = md.read_text(encoding="utf-8")
+    pieces, changed, at = [], [], 0
+    for m, name, paths in blocks(text, md):
+        body = KINDS[name](paths) + "\n"
+        if body != m["body"]:
+            changed.append(f"{_rel(md)}:{text.count(chr(10), 0, m.start()) + 1}: "
+                           f"table {m['spec']!r} differs from its records")
+        pieces += [text[at:m.start("body")], body]
+        at = m.end("body")
+    return "".join(pieces) + text[at:], changed
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true",
+                    help="change nothing; exit 1 if a table differs from its records")
+    ap.add_argument("--docs", type=Path, default=DOCS, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    differ = []
+    for md in sorted(args.docs.rglob("*.md")):
+        text, changed = render(md)
+        differ += changed
+        if changed and not args.check:
+            tmp = md.with_name(md.name + ".tmp")
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, md)
+    for line in differ:
+        print(line if args.check else line.replace("differs from its records", "rewritten"))
+    return 1 if differ and args.check else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
