@@ -13,11 +13,11 @@ warm-up.
 
 Prints one line per fit and setting, then per setting the fraction of fits that converged and
 the worst R-hat and ESS; ``--json`` writes every row. Not a test: the numbers are in
-docs/performance.md ("Quick settings").
+docs/performance.md ("Quick settings"), whose table ``benchmarks/docs_tables.py`` makes from the
+records in docs/quick_settings/ (:func:`table`).
 
     python benchmarks/quick_settings.py [--scenarios slews_post_probe slews_post_prm ...]
         [--seeds 0 1 2] [--warmups 300 500] [--chains 2 4] [--draws 300 500] [--json q.json]
-    python benchmarks/quick_settings.py --table docs/quick_settings/*.json   # the docs' table
 """
 
 from __future__ import annotations
@@ -65,16 +65,11 @@ def main() -> None:
     ap.add_argument("--chains", nargs="+", type=int, default=[2, 4])
     ap.add_argument("--draws", nargs="+", type=int, default=[300, 500])
     ap.add_argument("--json", type=Path)
-    ap.add_argument("--table", nargs="+", type=Path, metavar="JSON",
-                    help="print the docs' table of these records and exit")
     args = ap.parse_args()
     if args.json:
         from _provenance import start
 
         start(args.json, vars(args), None, replace=True)
-    if args.table:
-        print(table(args.table))
-        return
 
     import jax
 
