@@ -10,7 +10,8 @@ A table block in a markdown file under ``docs/`` is
     <!-- /table -->
 
 ``KIND`` names a function of ``KINDS`` below and ``RECORDS`` are the records' paths, relative to
-the markdown file's folder; each record must have a manifest (``benchmarks/_provenance.py``), so
+the markdown file's folder (``A+B``: one argument of several records, pooled where the kind
+pools); each record must have a manifest (``benchmarks/_provenance.py``), so
 a table can always be traced to the run that made it. The text between the markers is the
 function's output and nothing else: a hand-edited cell fails ``--check``
 (``tests/test_evidence.py``).
@@ -35,7 +36,7 @@ from _provenance import manifest_path  # noqa: E402
 
 BLOCK = re.compile(r"<!-- table: (?P<spec>[^\n]*?) -->\n(?P<body>.*?)<!-- /table -->",
                    re.DOTALL)
-Kind = Callable[[list[Path]], str]
+Kind = Callable[[list[tuple[Path, ...]]], str]
 KINDS: dict[str, Kind] = {}
 
 
@@ -73,10 +74,10 @@ _SBC_HEAD = ("| parameter | χ² p | ECDF p | cov 50 | cov 80 | cov 90 | cov 95 
 
 
 @kind("sbc")
-def sbc(paths: list[Path]) -> str:
+def sbc(args: list[tuple[Path, ...]]) -> str:
     """Rank uniformity and coverage per parameter of a ``cassini-bayes sbc`` summary.json, or
     of ``benchmarks/health_sbc.py``'s (the health and leak models)."""
-    (path,) = paths
+    ((path,),) = args
     rows = [_SBC_HEAD]
     for name, par in _json(path)["parameters"].items():
         if "chi2" in par:                                   # cassini-bayes sbc
@@ -88,8 +89,8 @@ def sbc(paths: list[Path]) -> str:
     return "\n".join(rows)
 
 
-def _calibration(paths: list[Path], key: str, label: str) -> str:
-    (path,) = paths
+def _calibration(args: list[tuple[Path, ...]], key: str, label: str) -> str:
+    ((path,),) = args
     bins = _json(path)[key]
     rows = [f"| {label} | n | mean P | observed rate | sd |", "|---|---|---|---|---|"]
     for i, b in enumerate(bins):
@@ -101,26 +102,54 @@ def _calibration(paths: list[Path], key: str, label: str) -> str:
 
 
 @kind("leak_p_calibration")
-def leak_p_calibration(paths: list[Path]) -> str:
+def leak_p_calibration(args: list[tuple[Path, ...]]) -> str:
     """Calibration of the leak monitor's ``P(leak)`` (health_sbc.py's leak summary.json)."""
-    return _calibration(paths, "p_leak_calibration", "P(leak) bin")
+    return _calibration(args, "p_leak_calibration", "P(leak) bin")
 
 
 @kind("leak_hypothesis_calibration")
-def leak_hypothesis_calibration(paths: list[Path]) -> str:
+def leak_hypothesis_calibration(args: list[tuple[Path, ...]]) -> str:
     """Calibration of every leak hypothesis' probability (the same summary.json)."""
-    return _calibration(paths, "p_hypothesis_calibration", "P bin")
+    return _calibration(args, "p_hypothesis_calibration", "P bin")
 
 
 @kind("quick_settings")
-def quick_settings(paths: list[Path]) -> str:
-    """Converged fits per sampler setting (benchmarks/quick_settings.py's records)."""
+def quick_settings(args: list[tuple[Path, ...]]) -> str:
+    """Converged fits per sampler setting (benchmarks/quick_settings.py's records, pooled)."""
     from quick_settings import table
 
-    return table(paths)
+    return table([p for group in args for p in group])
 
 
-def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[Path]]]:
+@kind("bench_samplers")
+def bench_samplers(args: list[tuple[Path, ...]]) -> str:
+    """The package's warm robust fit against nutpie (benchmarks/bench_samplers.py records): a
+    row per argument, its label the letter that ends the record's name (``A+B``: pooled)."""
+    from statistics import median
+
+    rows = ["| run | `fit inertia` (robust, warm, run directory and report) | nutpie, plain "
+            "model | ratio of medians | per round |", "|---|---|---|---|---|"]
+    for group in args:
+        walls: dict[str, list[float]] = {"pkg_robust_warm": [], "nutpie": []}
+        for path in group:
+            runs = sorted(_json(path)["runs"], key=lambda r: r["round"])
+            for system, w in walls.items():
+                w += [r["wall_s"] for r in runs if r["system"] == system]
+        pkg, nut = walls["pkg_robust_warm"], walls["nutpie"]
+        per_round = [a / b for a, b in zip(pkg, nut, strict=True)]
+        ratio = f"{median(pkg) / median(nut):.2f} | {min(per_round):.2f}–{max(per_round):.2f}"
+        if len(group) > 1:
+            rows.append(f"| all {len(pkg)} | median {median(pkg):.2f} s | median "
+                        f"{median(nut):.2f} s | {ratio} |")
+            continue
+        label = re.search(r"[a-z]*$", group[0].stem)[0]
+        cells = [", ".join(f"{w:.2f}" for w in ws) + f" s (median {median(ws):.2f})"
+                 for ws in (pkg, nut)]
+        rows.append(f"| {label} ({len(pkg)} rounds) | {cells[0]} | {cells[1]} | {ratio} |")
+    return "\n".join(rows)
+
+
+def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
     manifest."""
@@ -128,17 +157,17 @@ def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[Path]]]:
     for m in BLOCK.finditer(text):
         line = text.count("\n", 0, m.start()) + 1
         name, *rel = shlex.split(m["spec"])
+        groups = [tuple((md.parent / r).resolve() for r in arg.split("+")) for arg in rel]
         where = f"{_rel(md)}:{line}"
         if name not in KINDS:
             sys.exit(f"{where}: unknown table kind {name!r}; known: {', '.join(sorted(KINDS))}")
-        paths = [(md.parent / r).resolve() for r in rel]
-        for p in paths:
+        for p in (p for group in groups for p in group):
             if not p.exists():
                 sys.exit(f"{where}: records {_rel(p)} not found")
             if not (manifest_path(p).exists() or (p.parent / "manifest.json").exists()):
                 sys.exit(f"{where}: records {_rel(p)} have no manifest; write one "
                          "(benchmarks/_provenance.py)")
-        out.append((m, name, paths))
+        out.append((m, name, groups))
     if text.count("<!-- table:") != len(out) or text.count("<!-- /table -->") != len(out):
         sys.exit(f"{_rel(md)}: a table marker without its pair")
     return out
@@ -148,8 +177,8 @@ def render(md: Path) -> tuple[str, list[str]]:
     """The text of ``md`` with every table block regenerated, and the blocks that changed."""
     text = md.read_text(encoding="utf-8")
     pieces, changed, at = [], [], 0
-    for m, name, paths in blocks(text, md):
-        body = KINDS[name](paths) + "\n"
+    for m, name, groups in blocks(text, md):
+        body = KINDS[name](groups) + "\n"
         if body != m["body"]:
             changed.append(f"{_rel(md)}:{text.count(chr(10), 0, m.start()) + 1}: "
                            f"table {m['spec']!r} differs from its records")
