@@ -149,6 +149,50 @@ def bench_samplers(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+def _results(args: list[tuple[Path, ...]]) -> list[dict]:
+    return [r for group in args for path in group for r in _json(path)["results"]]
+
+
+def _ratios(result: dict) -> list[float]:
+    return [site["ratio_median"] for site in result["sites"].values()]
+
+
+@kind("plan_prediction")
+def plan_prediction(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted posterior sd per site (benchmarks/plan_prediction.py records)."""
+    rows = ["| scenario | sites | median over seeds, per site: range | every single fit: range "
+            "| within 10 % | predict (s) |", "|---|---|---|---|---|---|"]
+    for r in _results(args):
+        med, sites = _ratios(r), r["sites"].values()
+        lo, hi = min(s["ratio_min"] for s in sites), max(s["ratio_max"] for s in sites)
+        rows.append(f"| `{r['scenario']}` | {r['n_sites']} | {min(med):.3f}–{max(med):.3f} | "
+                    f"{lo:.3f}–{hi:.3f} | {r['within_10pct']}/{r['n_sites']} | "
+                    f"{r['predict_seconds']:.2g} |")
+    return "\n".join(rows)
+
+
+def _share(x: float) -> str:
+    """A coverage in a per-entry list: 1.0, else two decimals without the leading zero."""
+    return "1.0" if x == 1.0 else f"{x:.2f}".removeprefix("0")
+
+
+@kind("plan_prediction_open_world")
+def plan_prediction_open_world(args: list[tuple[Path, ...]]) -> str:
+    """The same over open-world truths (plan_prediction.py --open-world): sites whose median
+    ratio is within 25 %, and the inertia's 90 % coverage."""
+    rows = ["| scenario, open-world seeds | sites within ±25 % (median fitted/predicted) | "
+            "median ratio, range over sites | inertia 90 % coverage (per entry) |",
+            "|---|---|---|---|"]
+    for r in _results(args):
+        med = _ratios(r)
+        k = sum(abs(m - 1.0) <= 0.25 for m in med)
+        within = f"**{k}/{len(med)}**" if k == len(med) else f"{k}/{len(med)}"
+        per = " ".join(_share(x) for x in r["coverage90_per_entry"])
+        rows.append(f"| `{r['scenario']}`, {r['seeds']} seeds | {within} | "
+                    f"{min(med):.3f}–{max(med):.3f} | {r['coverage90']:.3f} ({per}) |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
