@@ -193,6 +193,26 @@ def plan_prediction_open_world(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+@kind("plan_wheel_axis")
+def plan_wheel_axis(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted sd of the wheel's axis and the inertia, median over open-world
+    seeds (range), and the 90 % cone's coverage (benchmarks/plan_wheel_axis.py records)."""
+    rows = ["| scenario | u4_x | u4_y | u4_z | Ixx…Iyz | largest angular sd | 90 % cone radius | "
+            "90 % cone coverage | per-component coverage |", "|---|---|---|---|---|---|---|---|---|"]
+    axis = ("u4_x", "u4_y", "u4_z")
+    for r in (_json(path) for group in args for path in group):
+        med, lo, hi = r["ratio_median"], r["ratio_min"], r["ratio_max"]
+        inertia = [v for k, v in med.items() if k not in axis]
+        cov, n = r["coverage_cone90"], r["seeds"]
+        rows.append(f"| `{r['scenario']}` ({r['wheel']}) | "
+                    + " | ".join(f"{med[k]:.3f} ({lo[k]:.2f}–{hi[k]:.2f})" for k in axis)
+                    + f" | {min(inertia):.3f}–{max(inertia):.3f} | "
+                    f"{r['sd_direction_ratio_median']:.3f} | {r['cone90_ratio_median']:.3f} | "
+                    f"**{cov:.2f}** ({round(cov * n)}/{n}) | "
+                    + " ".join(f"{r['coverage90_per_site'][k]:.2f}" for k in axis) + " |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
