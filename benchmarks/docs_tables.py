@@ -198,7 +198,7 @@ def plan_wheel_axis(args: list[tuple[Path, ...]]) -> str:
     """Fitted over predicted sd of the wheel's axis and the inertia, median over open-world
     seeds (range), and the 90 % cone's coverage (benchmarks/plan_wheel_axis.py records)."""
     rows = ["| scenario | u4_x | u4_y | u4_z | Ixx…Iyz | largest angular sd | 90 % cone radius | "
-            "90 % cone coverage | per-component coverage |", "|---|---|---|---|---|---|---|---|---|"]
+            "90 % cone coverage | per-component coverage |", "|" + "---|" * 9]
     axis = ("u4_x", "u4_y", "u4_z")
     for r in (_json(path) for group in args for path in group):
         med, lo, hi = r["ratio_median"], r["ratio_min"], r["ratio_max"]
