@@ -213,6 +213,54 @@ def plan_wheel_axis(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+@kind("closed_world_inertia")
+def closed_world_inertia(args: list[tuple[Path, ...]]) -> str:
+    """Closed-world coverage of the robust inertia model per family
+    (benchmarks/coverage_robust_inertia.py records' ``summary``)."""
+    rows = ["| family, model | 90 % coverage (seeds × 6) | per entry Ixx … Iyz | moments within "
+            "1 % | largest moment error | max R-hat | divergences |", "|---|---|---|---|---|---|---|"]
+    for group in args:
+        for path in group:
+            for key, r in _json(path)["summary"].items():
+                n = r["seeds"]
+                per = " ".join(f"{x:.1f}" for x in r["coverage_per_entry"].values())
+                rows.append(f"| `{key}` | {r['coverage_90']:.3f} ± {r['coverage_se']:.3f} "
+                            f"({n} × 6) | {per} | {round(r['budget_pass'] * n)}/{n} | "
+                            f"{100 * r['max_rel_moment_error']:.2f} % | {r['max_r_hat']:.3f} | "
+                            f"{r['divergences']} |")
+    return "\n".join(rows)
+
+
+def _deg(x: float) -> str:
+    return f"{x:.2g}°" if x < 1 else f"{x:.3g}°"
+
+
+@kind("closed_world_rwa4")
+def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+    """Closed-world RWA4 axis coverage per family and model
+    (benchmarks/coverage_robust_rwa4.py records)."""
+    from statistics import median
+
+    rows = ["| family, model | record | 90 % cone covers (binomial sd at 0.9) | axis error median "
+            "/ worst | median cone90 | max R-hat | divergences |", "|---|---|---|---|---|---|---|"]
+    for group in args:
+        for path in group:
+            for family, models in _json(path).items():
+                for model, fits in models.items():
+                    n, k = len(fits), sum(f["covered"] for f in fits)
+                    err = [f["err_deg"] for f in fits]
+                    div = [f"seed {f['seed']}: {f['divergences']}" for f in fits
+                           if f["divergences"]]
+                    rows.append(
+                        f"| `{family}`, {model} | `{path.name}` | {k}/{n} = {k / n:.2f} ± "
+                        f"{(0.09 / n) ** 0.5:.3f} | {_deg(median(err))} / {_deg(max(err))} | "
+                        f"{median(f['cone90_deg'] for f in fits):.3g}° | "
+                        f"{max(f['r_hat'] for f in fits):.3f} | "
+                        + (f"{sum(f['divergences'] for f in fits)} ({', '.join(div)})" if div
+                           else "0") + " |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
