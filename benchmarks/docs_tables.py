@@ -218,7 +218,7 @@ def closed_world_inertia(args: list[tuple[Path, ...]]) -> str:
     """Closed-world coverage of the robust inertia model per family
     (benchmarks/coverage_robust_inertia.py records' ``summary``)."""
     rows = ["| family, model | 90 % coverage (seeds × 6) | per entry Ixx … Iyz | moments within "
-            "1 % | largest moment error | max R-hat | divergences |", "|---|---|---|---|---|---|---|"]
+            "1 % | largest moment error | max R-hat | divergences |", "|" + "---|" * 7]
     for group in args:
         for path in group:
             for key, r in _json(path)["summary"].items():
