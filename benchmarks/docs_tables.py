@@ -261,6 +261,40 @@ def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+def _jsonl(path: Path) -> list[dict]:
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines() if line]
+
+
+@kind("open_world_inertia")
+def open_world_inertia(args: list[tuple[Path, ...]]) -> str:
+    """Open-world inertia coverage per family and model (benchmarks/coverage_open_world.py
+    records): all entries' 90 % coverage with its binomial and seed-clustered sd (the sd of
+    the per-seed coverage over the seeds, / √seeds), per entry, budget, adequacy, max |z|."""
+    from statistics import stdev
+
+    rows = ["| family | model | 90 % coverage (binomial sd; seed-clustered sd) | per entry Ixx "
+            "Iyy Izz Ixy Ixz Iyz | budget | adequacy ok | max \\|z\\| |", "|" + "---|" * 7]
+    records = [r for group in args for path in group for r in _jsonl(path)]
+    for family in dict.fromkeys(r["family"] for r in records):
+        seeds = [r for r in records if r["family"] == family]
+        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
+            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+            n_seeds, per_entry = len(fits), list(zip(*(f["hit"] for f in fits), strict=True))
+            hits = [h for f in fits for h in f["hit"]]
+            k, n = sum(hits), len(hits)
+            cov = k / n
+            se = (cov * (1 - cov) / n) ** 0.5 if 0 < cov < 1 else (0.09 / n) ** 0.5
+            clustered = stdev(sum(f["hit"]) / len(f["hit"]) for f in fits) / n_seeds ** 0.5
+            z = max(abs(x) for f in fits for x in f["z"])
+            first = f"| `{family}` |" if i == 0 else "| |"
+            rows.append(f"{first} {model} | {cov:.3f} ± {se:.3f}; {clustered:.3f} ({k}/{n}) | "
+                        + " ".join(_share(sum(e) / n_seeds) for e in per_entry)
+                        + f" | {sum(f['budget'] for f in fits)}/{n_seeds} | "
+                        f"{sum(f['adequacy_ok'] for f in fits)}/{n_seeds} | "
+                        + (f"{z:.1f}" if z < 10 else f"{z:.0f}") + " |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
