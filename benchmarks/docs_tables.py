@@ -254,7 +254,7 @@ def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
                     rows.append(
                         f"| `{family}`, {model} | `{path.name}` | {k}/{n} = {k / n:.2f} ± "
                         f"{(0.09 / n) ** 0.5:.3f} | {_deg(median(err))} / {_deg(max(err))} | "
-                        f"{median(f['cone90_deg'] for f in fits):.3g}° | "
+                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
                         f"{max(f['r_hat'] for f in fits):.3f} | "
                         + (f"{sum(f['divergences'] for f in fits)} ({', '.join(div)})" if div
                            else "0") + " |")
@@ -292,6 +292,37 @@ def open_world_inertia(args: list[tuple[Path, ...]]) -> str:
                         + f" | {sum(f['budget'] for f in fits)}/{n_seeds} | "
                         f"{sum(f['adequacy_ok'] for f in fits)}/{n_seeds} | "
                         + (f"{z:.1f}" if z < 10 else f"{z:.0f}") + " |")
+    return "\n".join(rows)
+
+
+def _coverage(k: int, n: int) -> str:
+    """``k/n = p ± sd``: the binomial sd at p, at the nominal 0.9 where p is 0 or 1."""
+    p = k / n
+    return f"{k}/{n} = {p:.3f} ± {(p * (1 - p) / n if 0 < p < 1 else 0.09 / n) ** 0.5:.3f}"
+
+
+@kind("open_world_rwa4")
+def open_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+    """Open-world RWA4 axis per family and model (benchmarks/coverage_open_world.py records):
+    90 % cone coverage, axis error, cone, budget, adequacy, R-hat and divergences."""
+    from statistics import median
+
+    rows = ["| family | model | 90 % cone covers | axis error median / worst | median 90 % cone "
+            "| budget | adequacy ok | max R-hat, divergences |", "|" + "---|" * 8]
+    records = [r for group in args for path in group for r in _jsonl(path)]
+    for family in dict.fromkeys(r["family"] for r in records):
+        seeds = [r for r in records if r["family"] == family]
+        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
+            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+            n, err = len(fits), [f["error"][0] for f in fits]
+            first = f"| `{family}` |" if i == 0 else "| |"
+            rows.append(f"{first} {model} | {_coverage(sum(f['hit'][0] for f in fits), n)} | "
+                        f"{median(err):#.3g}° / {max(err):#.3g}° | "
+                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                        f"{sum(f['budget'] for f in fits)}/{n} | "
+                        f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
+                        f"{max(f['r_hat'] for f in fits):.3f}, "
+                        f"{sum(f['divergences'] for f in fits)} |")
     return "\n".join(rows)
 
 
