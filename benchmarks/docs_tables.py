@@ -326,6 +326,38 @@ def open_world_rwa4(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+@kind("open_world_thrust")
+def open_world_thrust(args: list[tuple[Path, ...]]) -> str:
+    """Open-world thrust coverage per record, family and model (coverage_open_world.py
+    records): all entries' 90 % coverage, per entry, F's error and sd relative to its truth
+    (sd = error / z), the worst z of F, budget, R-hat and divergences."""
+    from statistics import median, quantiles
+
+    rows = ["| family | model, seeds | 90 % coverage | per entry F τd τr τf | \\|F error\\| "
+            "median / 90th pct / worst | worst z(F) | median sd(F) | budget (10 %) | max R-hat, "
+            "divergences |", "|" + "---|" * 9]
+    for group in args:
+        records = [r for path in group for r in _jsonl(path)]
+        for family in dict.fromkeys(r["family"] for r in records):
+            seeds = [r for r in records if r["family"] == family]
+            for model in dict.fromkeys(m for r in seeds for m in r["fits"]):
+                fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+                n = len(fits)
+                hits = [h for f in fits for h in f["hit"]]
+                per = " ".join(_share(sum(e) / n)
+                               for e in zip(*(f["hit"] for f in fits), strict=True))
+                err = [100 * abs(f["error"][0]) / f["truth"][0] for f in fits]
+                sd = [100 * abs(f["error"][0] / f["z"][0]) / f["truth"][0] for f in fits]
+                zcell = f"{max((f['z'][0] for f in fits), key=abs):+.1f}".replace("-", "−")
+                rows.append(
+                    f"| `{family}` | {model}, {n} | {_coverage(sum(hits), len(hits))} | {per} | "
+                    f"{median(err):.2f} % / {quantiles(err, n=10, method='inclusive')[-1]:.2f} % "
+                    f"/ {max(err):.2f} % | {zcell} | {median(sd):.2f} % | "
+                    f"{sum(f['budget'] for f in fits)}/{n} | "
+                    f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
