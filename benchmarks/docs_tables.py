@@ -358,6 +358,24 @@ def open_world_thrust(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+@kind("health_campaign")
+def health_campaign(args: list[tuple[Path, ...]]) -> str:
+    """The thruster-health acceptance campaign per record (benchmarks/health_campaign.py):
+    detection, delay, quiet controls and the change date's interval coverage."""
+    rows = ["| seeds | detected | delay, events: median / 90 % / max | control quiet (every look "
+            "< 0.05) | before the change quiet | 90 % interval covers (binomial sd) | 50 % "
+            "covers (sd) |", "|" + "---|" * 7]
+    for r in (_json(path) for group in args for path in group):
+        n, d = r["seeds"], r["delay_events"]
+        rows.append(f"| {r['first_seed']}-{r['first_seed'] + n - 1} | {d['detected']}/{n} | "
+                    f"{d['median']:g} / {d['q90']:g} / {d['max']:g} | "
+                    f"{round(r['control_quiet_fraction'] * n)}/{n} | "
+                    f"{round(r['pre_change_quiet_fraction'] * n)}/{n} | "
+                    f"{r['coverage_90']:.3f} ({r['coverage_90_sd']:.3f}) | "
+                    f"{r['coverage_50']:.3f} ({r['coverage_50_sd']:.3f}) |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
