@@ -376,6 +376,35 @@ def health_campaign(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+def _ratio(x: float) -> str:
+    return f"{x:.2f}" if x < 10 else f"{x:.0f}"
+
+
+@kind("plan_thrust")
+def plan_thrust(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted sd of the thrust fit's sites, median over open-world seeds
+    (benchmarks/plan_thrust.py records; a record's ``repredicted`` sites where it has them)."""
+    rows = ["| scenario | F | tau_delay | tau_rise | tau_fall | Ixx…Izz | Ixy…Iyz | sites within "
+            "±25 % | 90 % coverage (all sites) | R-hat, divergences |", "|" + "---|" * 10]
+    for r in _results(args):
+        sites = r.get("repredicted", {}).get("sites", r["sites"])
+        med = {k: v["ratio_median"] for k, v in sites.items()}
+        f, k = sites["F"], sum(abs(m - 1.0) <= 0.25 for m in med.values())
+        within = f"{k}/{len(med)}"
+        cov = r["sites"]
+        rows.append(
+            f"| `{r['scenario']}` | {_ratio(f['ratio_median'])} ({_ratio(f['ratio_min'])}–"
+            f"{_ratio(f['ratio_max'])}) | "
+            + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")) + " | "
+            + " | ".join(f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
+                         for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
+            + f" | {f'**{within}**' if k == len(med) else within} | {r['coverage90']:.2f} "
+            f"(F {cov['F']['coverage90']:.2f}, τ "
+            + "/".join(f"{cov[t]['coverage90']:.1f}" for t in ("tau_delay", "tau_rise", "tau_fall"))
+            + f") | ≤ {r['max_r_hat']:.3f}, {r['divergences']} |")
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
