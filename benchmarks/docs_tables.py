@@ -405,6 +405,97 @@ def plan_thrust(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
+def _verdict(values: list[float | None], threshold: float) -> str:
+    """``failed/n (median, largest)`` of one check's statistic (``; smallest`` when every one
+    failed); a statistic the check could not compute (None) passes."""
+    from statistics import median
+
+    ok = [v for v in values if v is not None]
+    k, n = sum(v > threshold for v in ok), len(values)
+    if not ok:
+        return f"{k}/{n} (n/a)"
+    if k == n:
+        return f"{k}/{n} ({median(ok):.2f}; smallest {min(ok):.2f})"
+    return f"{k}/{n} ({median(ok):.2f}, {max(ok):.2f})"
+
+
+def _verdict_rows(cases: dict[str, list[dict]], thresholds: dict[str, float]) -> list[str]:
+    rows = []
+    for case, stats in cases.items():
+        cells = [_verdict([s[c] for s in stats], t) for c, t in thresholds.items()]
+        fails = sum(any(s[c] is not None and s[c] > t for c, t in thresholds.items())
+                    for s in stats)
+        rows.append(f"| {case} | " + " | ".join(cells) + f" | **{fails}/{len(stats)}** |")
+    return rows
+
+
+def _seeds(records: list[dict]) -> str:
+    first = min(r["args"]["first_seed"] for r in records)
+    return f"{first}-{first + sum(r['args']['seeds'] for r in records) - 1}"
+
+
+@kind("verdict_health")
+def verdict_health(args: list[tuple[Path, ...]]) -> str:
+    """The health campaign's adequacy verdict per model, control and degraded campaigns
+    pooled (benchmarks/verdict_false_alarms.py health records; ``A+B``: seeds pooled)."""
+    from cassini_bayes.inference.adequacy import PRIOR_CONFLICT_SD, Z_THRESHOLD
+
+    thresholds = {"inertia_conflict": PRIOR_CONFLICT_SD, "held_out": Z_THRESHOLD}
+    rows = ["| events | seeds | model | `inertia_conflict` | `held_out` | any check |",
+            "|" + "---|" * 6]
+    for group in args:
+        records = [_json(path) for path in group]
+        cases: dict[str, list[dict]] = {}
+        for rec in records:
+            for campaign in rec["raw"].values():
+                for seed in campaign:
+                    for model, st in seed.items():
+                        if model != "seed":
+                            cases.setdefault(f"`{model}`", []).append(st)
+        head = f"| {records[0]['args']['events']} | {_seeds(records)} "
+        rows += [head + r for r in _verdict_rows(cases, thresholds)]
+    return "\n".join(rows)
+
+
+@kind("verdict_leak")
+def verdict_leak(args: list[tuple[Path, ...]]) -> str:
+    """The leak monitor's adequacy verdict per model, on stretches without and with a leak
+    (benchmarks/verdict_false_alarms.py leak records)."""
+    from cassini_bayes.inference.adequacy import AUTOCORR_MAX, PRIOR_CONFLICT_SD, Z_THRESHOLD
+
+    thresholds = {"residual_fit": Z_THRESHOLD, "prior_data_conflict": PRIOR_CONFLICT_SD,
+                  "residual_autocorrelation": AUTOCORR_MAX}
+    rows = ["| stretches | model | `residual_fit` | `prior_data_conflict` | "
+            "`residual_autocorrelation` | any check |", "|" + "---|" * 6]
+    for group in args:
+        stretches = [s for path in group for s in _json(path)["raw"]["stretches"]]
+        for leak in (False, True):
+            sel = [s for s in stretches if s["leak"] == leak]
+            models = [k for k, v in sel[0].items() if isinstance(v, dict) and "residual_fit" in v]
+            cases = {f"{len(sel)} {'with' if leak else 'without'} a leak | `{m}`":
+                     [s[m] for s in sel] for m in models}
+            rows += _verdict_rows(cases, thresholds)
+    return "\n".join(rows)
+
+
+@kind("verdict_budget")
+def verdict_budget(args: list[tuple[Path, ...]]) -> str:
+    """The budget's ``shared_inertia`` check on clean and epoch-mixed pairs of runs
+    (benchmarks/verdict_false_alarms.py budget records; ``A+B``: seeds pooled)."""
+    from cassini_bayes.inference.adequacy import Z_THRESHOLD
+
+    rows = []
+    for group in args:
+        records = [_json(path) for path in group]
+        pairs = [p for rec in records for p in rec["raw"]["pairs"]]
+        rows += [f"| seeds {_seeds(records)} | `shared_inertia` (median, largest) | any check |",
+                 "|" + "---|" * 3]
+        rows += _verdict_rows({f"`{case}`": [{"shared_inertia": p[case]} for p in pairs]
+                               for case in ("clean", "epochs")},
+                              {"shared_inertia": Z_THRESHOLD})
+    return "\n".join(rows)
+
+
 def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
     """Each table block of ``text``: the match, its kind and its records' paths; exits with a
     one-line message naming ``md`` for an unknown kind, a missing record or one without a
