@@ -1,0 +1,144 @@
+"""Table kinds of the closed- and open-world coverage campaigns (docs/robust/); registered in
+:mod:`_tables` by import."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from _tables import coverage_cell, kind, read_json, read_jsonl, share_cell
+
+
+@kind("closed_world_inertia")
+def closed_world_inertia(args: list[tuple[Path, ...]]) -> str:
+    """Closed-world coverage of the robust inertia model per family
+    (benchmarks/coverage_robust_inertia.py records' ``summary``)."""
+    rows = ["| family, model | 90 % coverage (seeds × 6) | per entry Ixx … Iyz | moments within "
+            "1 % | largest moment error | max R-hat | divergences |", "|" + "---|" * 7]
+    for group in args:
+        for path in group:
+            for key, r in read_json(path)["summary"].items():
+                n = r["seeds"]
+                per = " ".join(f"{x:.1f}" for x in r["coverage_per_entry"].values())
+                rows.append(f"| `{key}` | {r['coverage_90']:.3f} ± {r['coverage_se']:.3f} "
+                            f"({n} × 6) | {per} | {round(r['budget_pass'] * n)}/{n} | "
+                            f"{100 * r['max_rel_moment_error']:.2f} % | {r['max_r_hat']:.3f} | "
+                            f"{r['divergences']} |")
+    return "\n".join(rows)
+
+
+def _deg(x: float) -> str:
+    return f"{x:.2g}°" if x < 1 else f"{x:.3g}°"
+
+
+@kind("closed_world_rwa4")
+def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+    """Closed-world RWA4 axis coverage per family and model
+    (benchmarks/coverage_robust_rwa4.py records)."""
+    from statistics import median
+
+    rows = ["| family, model | record | 90 % cone covers (binomial sd at 0.9) | axis error median "
+            "/ worst | median cone90 | max R-hat | divergences |", "|---|---|---|---|---|---|---|"]
+    for group in args:
+        for path in group:
+            for family, models in read_json(path).items():
+                for model, fits in models.items():
+                    n, k = len(fits), sum(f["covered"] for f in fits)
+                    err = [f["err_deg"] for f in fits]
+                    div = [f"seed {f['seed']}: {f['divergences']}" for f in fits
+                           if f["divergences"]]
+                    rows.append(
+                        f"| `{family}`, {model} | `{path.name}` | {k}/{n} = {k / n:.2f} ± "
+                        f"{(0.09 / n) ** 0.5:.3f} | {_deg(median(err))} / {_deg(max(err))} | "
+                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                        f"{max(f['r_hat'] for f in fits):.3f} | "
+                        + (f"{sum(f['divergences'] for f in fits)} ({', '.join(div)})" if div
+                           else "0") + " |")
+    return "\n".join(rows)
+
+
+@kind("open_world_inertia")
+def open_world_inertia(args: list[tuple[Path, ...]]) -> str:
+    """Open-world inertia coverage per family and model (benchmarks/coverage_open_world.py
+    records): all entries' 90 % coverage with its binomial and seed-clustered sd (the sd of
+    the per-seed coverage over the seeds, / √seeds), per entry, budget, adequacy, max |z|."""
+    from statistics import stdev
+
+    rows = ["| family | model | 90 % coverage (binomial sd; seed-clustered sd) | per entry Ixx "
+            "Iyy Izz Ixy Ixz Iyz | budget | adequacy ok | max \\|z\\| |", "|" + "---|" * 7]
+    records = [r for group in args for path in group for r in read_jsonl(path)]
+    for family in dict.fromkeys(r["family"] for r in records):
+        seeds = [r for r in records if r["family"] == family]
+        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
+            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+            n_seeds, per_entry = len(fits), list(zip(*(f["hit"] for f in fits), strict=True))
+            hits = [h for f in fits for h in f["hit"]]
+            k, n = sum(hits), len(hits)
+            cov = k / n
+            se = (cov * (1 - cov) / n) ** 0.5 if 0 < cov < 1 else (0.09 / n) ** 0.5
+            clustered = stdev(sum(f["hit"]) / len(f["hit"]) for f in fits) / n_seeds ** 0.5
+            z = max(abs(x) for f in fits for x in f["z"])
+            first = f"| `{family}` |" if i == 0 else "| |"
+            rows.append(f"{first} {model} | {cov:.3f} ± {se:.3f}; {clustered:.3f} ({k}/{n}) | "
+                        + " ".join(share_cell(sum(e) / n_seeds) for e in per_entry)
+                        + f" | {sum(f['budget'] for f in fits)}/{n_seeds} | "
+                        f"{sum(f['adequacy_ok'] for f in fits)}/{n_seeds} | "
+                        + (f"{z:.1f}" if z < 10 else f"{z:.0f}") + " |")
+    return "\n".join(rows)
+
+
+@kind("open_world_rwa4")
+def open_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+    """Open-world RWA4 axis per family and model (benchmarks/coverage_open_world.py records):
+    90 % cone coverage, axis error, cone, budget, adequacy, R-hat and divergences."""
+    from statistics import median
+
+    rows = ["| family | model | 90 % cone covers | axis error median / worst | median 90 % cone "
+            "| budget | adequacy ok | max R-hat, divergences |", "|" + "---|" * 8]
+    records = [r for group in args for path in group for r in read_jsonl(path)]
+    for family in dict.fromkeys(r["family"] for r in records):
+        seeds = [r for r in records if r["family"] == family]
+        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
+            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+            n, err = len(fits), [f["error"][0] for f in fits]
+            first = f"| `{family}` |" if i == 0 else "| |"
+            rows.append(f"{first} {model} | {coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
+                        f"{median(err):#.3g}° / {max(err):#.3g}° | "
+                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                        f"{sum(f['budget'] for f in fits)}/{n} | "
+                        f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
+                        f"{max(f['r_hat'] for f in fits):.3f}, "
+                        f"{sum(f['divergences'] for f in fits)} |")
+    return "\n".join(rows)
+
+
+@kind("open_world_thrust")
+def open_world_thrust(args: list[tuple[Path, ...]]) -> str:
+    """Open-world thrust coverage per record, family and model (coverage_open_world.py
+    records): all entries' 90 % coverage, per entry, F's error and sd relative to its truth
+    (sd = error / z), the worst z of F, budget, R-hat and divergences."""
+    from statistics import median, quantiles
+
+    rows = ["| family | model, seeds | 90 % coverage | per entry F τd τr τf | \\|F error\\| "
+            "median / 90th pct / worst | worst z(F) | median sd(F) | budget (10 %) | max R-hat, "
+            "divergences |", "|" + "---|" * 9]
+    for group in args:
+        records = [r for path in group for r in read_jsonl(path)]
+        for family in dict.fromkeys(r["family"] for r in records):
+            seeds = [r for r in records if r["family"] == family]
+            for model in dict.fromkeys(m for r in seeds for m in r["fits"]):
+                fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+                n = len(fits)
+                hits = [h for f in fits for h in f["hit"]]
+                per = " ".join(share_cell(sum(e) / n)
+                               for e in zip(*(f["hit"] for f in fits), strict=True))
+                err = [100 * abs(f["error"][0]) / f["truth"][0] for f in fits]
+                sd = [100 * abs(f["error"][0] / f["z"][0]) / f["truth"][0] for f in fits]
+                zcell = f"{max((f['z'][0] for f in fits), key=abs):+.1f}".replace("-", "−")
+                rows.append(
+                    f"| `{family}` | {model}, {n} | {coverage_cell(sum(hits), len(hits))} | "
+                    f"{per} | "
+                    f"{median(err):.2f} % / {quantiles(err, n=10, method='inclusive')[-1]:.2f} % "
+                    f"/ {max(err):.2f} % | {zcell} | {median(sd):.2f} % | "
+                    f"{sum(f['budget'] for f in fits)}/{n} | "
+                    f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
+    return "\n".join(rows)

@@ -1,0 +1,96 @@
+"""Table kinds of the planning benchmarks' records (docs/planning/); registered in
+:mod:`_tables` by import."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from _tables import kind, read_json, share_cell
+
+
+def _results(args: list[tuple[Path, ...]]) -> list[dict]:
+    return [r for group in args for path in group for r in read_json(path)["results"]]
+
+
+def _ratios(result: dict) -> list[float]:
+    return [site["ratio_median"] for site in result["sites"].values()]
+
+
+@kind("plan_prediction")
+def plan_prediction(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted posterior sd per site (benchmarks/plan_prediction.py records)."""
+    rows = ["| scenario | sites | median over seeds, per site: range | every single fit: range "
+            "| within 10 % | predict (s) |", "|---|---|---|---|---|---|"]
+    for r in _results(args):
+        med, sites = _ratios(r), r["sites"].values()
+        lo, hi = min(s["ratio_min"] for s in sites), max(s["ratio_max"] for s in sites)
+        rows.append(f"| `{r['scenario']}` | {r['n_sites']} | {min(med):.3f}–{max(med):.3f} | "
+                    f"{lo:.3f}–{hi:.3f} | {r['within_10pct']}/{r['n_sites']} | "
+                    f"{r['predict_seconds']:.2g} |")
+    return "\n".join(rows)
+
+
+@kind("plan_prediction_open_world")
+def plan_prediction_open_world(args: list[tuple[Path, ...]]) -> str:
+    """The same over open-world truths (plan_prediction.py --open-world): sites whose median
+    ratio is within 25 %, and the inertia's 90 % coverage."""
+    rows = ["| scenario, open-world seeds | sites within ±25 % (median fitted/predicted) | "
+            "median ratio, range over sites | inertia 90 % coverage (per entry) |",
+            "|---|---|---|---|"]
+    for r in _results(args):
+        med = _ratios(r)
+        k = sum(abs(m - 1.0) <= 0.25 for m in med)
+        within = f"**{k}/{len(med)}**" if k == len(med) else f"{k}/{len(med)}"
+        per = " ".join(share_cell(x) for x in r["coverage90_per_entry"])
+        rows.append(f"| `{r['scenario']}`, {r['seeds']} seeds | {within} | "
+                    f"{min(med):.3f}–{max(med):.3f} | {r['coverage90']:.3f} ({per}) |")
+    return "\n".join(rows)
+
+
+@kind("plan_wheel_axis")
+def plan_wheel_axis(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted sd of the wheel's axis and the inertia, median over open-world
+    seeds (range), and the 90 % cone's coverage (benchmarks/plan_wheel_axis.py records)."""
+    rows = ["| scenario | u4_x | u4_y | u4_z | Ixx…Iyz | largest angular sd | 90 % cone radius | "
+            "90 % cone coverage | per-component coverage |", "|" + "---|" * 9]
+    axis = ("u4_x", "u4_y", "u4_z")
+    for r in (read_json(path) for group in args for path in group):
+        med, lo, hi = r["ratio_median"], r["ratio_min"], r["ratio_max"]
+        inertia = [v for k, v in med.items() if k not in axis]
+        cov, n = r["coverage_cone90"], r["seeds"]
+        rows.append(f"| `{r['scenario']}` ({r['wheel']}) | "
+                    + " | ".join(f"{med[k]:.3f} ({lo[k]:.2f}–{hi[k]:.2f})" for k in axis)
+                    + f" | {min(inertia):.3f}–{max(inertia):.3f} | "
+                    f"{r['sd_direction_ratio_median']:.3f} | {r['cone90_ratio_median']:.3f} | "
+                    f"**{cov:.2f}** ({round(cov * n)}/{n}) | "
+                    + " ".join(f"{r['coverage90_per_site'][k]:.2f}" for k in axis) + " |")
+    return "\n".join(rows)
+
+
+def _ratio(x: float) -> str:
+    return f"{x:.2f}" if x < 10 else f"{x:.0f}"
+
+
+@kind("plan_thrust")
+def plan_thrust(args: list[tuple[Path, ...]]) -> str:
+    """Fitted over predicted sd of the thrust fit's sites, median over open-world seeds
+    (benchmarks/plan_thrust.py records; a record's ``repredicted`` sites where it has them)."""
+    rows = ["| scenario | F | tau_delay | tau_rise | tau_fall | Ixx…Izz | Ixy…Iyz | sites within "
+            "±25 % | 90 % coverage (all sites) | R-hat, divergences |", "|" + "---|" * 10]
+    for r in _results(args):
+        sites = r.get("repredicted", {}).get("sites", r["sites"])
+        med = {k: v["ratio_median"] for k, v in sites.items()}
+        f, k = sites["F"], sum(abs(m - 1.0) <= 0.25 for m in med.values())
+        within = f"{k}/{len(med)}"
+        cov = r["sites"]
+        rows.append(
+            f"| `{r['scenario']}` | {_ratio(f['ratio_median'])} ({_ratio(f['ratio_min'])}–"
+            f"{_ratio(f['ratio_max'])}) | "
+            + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")) + " | "
+            + " | ".join(f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
+                         for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
+            + f" | {f'**{within}**' if k == len(med) else within} | {r['coverage90']:.2f} "
+            f"(F {cov['F']['coverage90']:.2f}, τ "
+            + "/".join(f"{cov[t]['coverage90']:.1f}" for t in ("tau_delay", "tau_rise", "tau_fall"))
+            + f") | ≤ {r['max_r_hat']:.3f}, {r['divergences']} |")
+    return "\n".join(rows)
