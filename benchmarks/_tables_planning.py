@@ -94,3 +94,43 @@ def plan_thrust(args: list[tuple[Path, ...]]) -> str:
             + "/".join(f"{cov[t]['coverage90']:.1f}" for t in ("tau_delay", "tau_rise", "tau_fall"))
             + f") | ≤ {r['max_r_hat']:.3f}, {r['divergences']} |")
     return "\n".join(rows)
+
+
+def _scenario_label(scenario: str) -> str:
+    """A scenario's name, or the folder of a written scenario.toml."""
+    return Path(scenario).parent.name if scenario.endswith(".toml") else scenario
+
+
+@kind("plan_wheel_axis_vs_baseline")
+def plan_wheel_axis_vs_baseline(args: list[tuple[Path, ...]]) -> str:
+    """A planned wheel-axis calibration against the baseline slews, both fitted on the same
+    open-world seeds (two benchmarks/plan_wheel_axis.py records: baseline, plan)."""
+    from statistics import median
+
+    (base,), (plan,) = args
+    recs = [read_json(base), read_json(plan)]
+    fits = [r["fits"] for r in recs]
+
+    def med(key: str, sub: str | None = None) -> list[float]:
+        return [median(f[key][sub] if sub else f[key] for f in fs) for fs in fits]
+
+    head = (f"| {recs[1]['wheel']} axis, {recs[1]['seeds']} open-world seeds, fitted (median) | "
+            f"`{_scenario_label(recs[0]['scenario'])}` | `{_scenario_label(recs[1]['scenario'])}`"
+            " | plan vs baseline |")
+    rows = [head, "|---|---|---|---|"]
+    for label, (b, p) in (("largest angular sd", med("sd_direction_deg")),
+                          ("90 % cone", med("cone_deg", "90")),
+                          ("error of the posterior mean", med("error_deg"))):
+        rows.append(f"| {label} | {b:.3f}° | {p:.3f}° | ×{b / p:.2f} |")
+    rows.append(f"| 90 % cone coverage | {recs[0]['coverage_cone90']:.2f} | "
+                f"{recs[1]['coverage_cone90']:.2f} | |")
+    axis = ("u4_x", "u4_y", "u4_z")
+    cells = []
+    for r in recs:
+        m = r["ratio_median"]
+        inertia = [v for k, v in m.items() if k not in axis]
+        cells.append(", ".join(f"{m[k]:.2f}" for k in axis)
+                     + f" ({min(inertia):.2f}–{max(inertia):.2f})")
+    rows.append(f"| fitted / predicted sd: u4_x, u4_y, u4_z (inertia) | {cells[0]} | "
+                f"{cells[1]} | |")
+    return "\n".join(rows)
