@@ -158,3 +158,28 @@ def plan_wheel_axis_predicted(args: list[tuple[Path, ...]]) -> str:
                                                          "wheel_torque")) for r in (b, p)]
     rows.append(f"| limits used: body rate, wheel speed, wheel torque | {used[0]} | {used[1]} | |")
     return "\n".join(rows)
+
+
+@kind("plan_thrust_vs_shipped")
+def plan_thrust_vs_shipped(args: list[tuple[Path, ...]]) -> str:
+    """A planned biasing event against the shipped one, predicted and fitted on open-world
+    seeds (two benchmarks/plan_thrust.py records: shipped, plan): the largest sd/budget over
+    the sites (which site) and F's sd."""
+    (shipped,), (plan,) = args
+    rows = ["| | predicted: largest sd/budget | predicted F sd (N) | fitted (open-world seeds, "
+            "median): largest sd/budget | fitted F sd (N) |", "|---|---|---|---|---|"]
+    cells = []
+    for path in (shipped, plan):
+        (r,) = read_json(path)["results"]
+        site, worst = max(((k, v["fitted_median"] / v["budget"]) for k, v in r["sites"].items()),
+                          key=lambda kv: kv[1])
+        cells.append((r["scenario"], r["predicted_max_ratio"], r["predicted_worst"],
+                      r["sites"]["F"]["predicted"], worst, site,
+                      r["sites"]["F"]["fitted_median"], r["seeds"]))
+    for scenario, pmax, pworst, pf, fmax, fworst, ff, n in cells:
+        rows.append(f"| `{scenario}` | {pmax:.2f} ({pworst}) | {pf:.5f} | {fmax:.2f} ({fworst}), "
+                    f"{n} seeds | {ff:.5f} |")
+    (_, pa, _, fa, wa, _, ga, _), (_, pb, _, fb, wb, _, gb, _) = cells
+    rows.append(f"| plan vs shipped | ×{pa / pb:.2f} | ×{fa / fb:.2f} | ×{wa / wb:.2f} | "
+                f"×{ga / gb:.2f} |")
+    return "\n".join(rows)
