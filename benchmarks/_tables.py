@@ -7,7 +7,15 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
-Kind = Callable[[list[tuple[Path, ...]]], str]
+
+class Records(tuple):
+    """One marker argument: its records' paths (``A+B``: several, pooled) and the seeds it
+    selects (``PATH@0-19``; None: every seed)."""
+
+    seeds: range | None = None
+
+
+Kind = Callable[[list[Records]], str]
 KINDS: dict[str, Kind] = {}
 
 

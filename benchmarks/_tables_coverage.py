@@ -3,13 +3,11 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from _tables import coverage_cell, kind, read_json, read_jsonl, share_cell
+from _tables import Records, coverage_cell, kind, read_json, read_jsonl, share_cell
 
 
 @kind("closed_world_inertia")
-def closed_world_inertia(args: list[tuple[Path, ...]]) -> str:
+def closed_world_inertia(args: list[Records]) -> str:
     """Closed-world coverage of the robust inertia model per family
     (benchmarks/coverage_robust_inertia.py records' ``summary``)."""
     rows = ["| family, model | 90 % coverage (seeds × 6) | per entry Ixx … Iyz | moments within "
@@ -31,7 +29,7 @@ def _deg(x: float) -> str:
 
 
 @kind("closed_world_rwa4")
-def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+def closed_world_rwa4(args: list[Records]) -> str:
     """Closed-world RWA4 axis coverage per family and model
     (benchmarks/coverage_robust_rwa4.py records)."""
     from statistics import median
@@ -57,7 +55,7 @@ def closed_world_rwa4(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("open_world_inertia")
-def open_world_inertia(args: list[tuple[Path, ...]]) -> str:
+def open_world_inertia(args: list[Records]) -> str:
     """Open-world inertia coverage per family and model (benchmarks/coverage_open_world.py
     records): all entries' 90 % coverage with its binomial and seed-clustered sd (the sd of
     the per-seed coverage over the seeds, / √seeds), per entry, budget, adequacy, max |z|."""
@@ -87,7 +85,7 @@ def open_world_inertia(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("open_world_rwa4")
-def open_world_rwa4(args: list[tuple[Path, ...]]) -> str:
+def open_world_rwa4(args: list[Records]) -> str:
     """Open-world RWA4 axis per family and model (benchmarks/coverage_open_world.py records):
     90 % cone coverage, axis error, cone, budget, adequacy, R-hat and divergences."""
     from statistics import median
@@ -112,7 +110,7 @@ def open_world_rwa4(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("open_world_thrust")
-def open_world_thrust(args: list[tuple[Path, ...]]) -> str:
+def open_world_thrust(args: list[Records]) -> str:
     """Open-world thrust coverage per record, family and model (coverage_open_world.py
     records): all entries' 90 % coverage, per entry, F's error and sd relative to its truth
     (sd = error / z), the worst z of F, budget, R-hat and divergences."""
@@ -141,4 +139,30 @@ def open_world_thrust(args: list[tuple[Path, ...]]) -> str:
                     f"/ {max(err):.2f} % | {zcell} | {median(sd):.2f} % | "
                     f"{sum(f['budget'] for f in fits)}/{n} | "
                     f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
+    return "\n".join(rows)
+
+
+@kind("rcs_family")
+def rcs_family(args: list[Records]) -> str:
+    """The RWA4 RCS slow-spin-up family per argument (benchmarks/rcs_slow_spinup.py family
+    records; the chart is the record's name, ``family_before…`` or ``family_after…``)."""
+    from statistics import median
+
+    rows = ["| chart | seeds | converged | divergences (fits) | max R-hat | min / median bulk ESS "
+            "| axis error median / worst | median cone90 |", "|" + "---|" * 8]
+    for group in args:
+        fits = [f for path in group for f in read_json(path)["records"]
+                if group.seeds is None or f["seed"] in group.seeds]
+        seeds = sorted(f["seed"] for f in fits)
+        chart = group[0].stem.split("_")[1]
+        div = [f for f in fits if f["divergences"]]
+        each = ", ".join(f"{f['seed']}" + (f": {f['divergences']}" if f["divergences"] > 1 else "")
+                         for f in div)
+        err, ess = [f["err_deg"] for f in fits], [f["ess_bulk"] for f in fits]
+        rows.append(f"| {chart} | {seeds[0]}–{seeds[-1]} | {sum(f['converged'] for f in fits)}/"
+                    f"{len(fits)} | {sum(f['divergences'] for f in fits)}"
+                    + (f" ({len(div)} fits: seeds {each})" if div else "")
+                    + f" | {max(f['r_hat'] for f in fits):.4f} | {min(ess):.0f} / "
+                    f"{median(ess):.0f} | {median(err):.2f}° / {max(err):.2f}° | "
+                    f"{median(f['cone90_deg'] for f in fits):.2f}° |")
     return "\n".join(rows)

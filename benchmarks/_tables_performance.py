@@ -4,13 +4,12 @@ docs/quick_settings/); registered in :mod:`_tables` by import."""
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
-from _tables import kind, read_json
+from _tables import Records, kind, read_json
 
 
 @kind("quick_settings")
-def quick_settings(args: list[tuple[Path, ...]]) -> str:
+def quick_settings(args: list[Records]) -> str:
     """Converged fits per sampler setting (benchmarks/quick_settings.py's records, pooled)."""
     from quick_settings import table
 
@@ -18,7 +17,7 @@ def quick_settings(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("bench_samplers")
-def bench_samplers(args: list[tuple[Path, ...]]) -> str:
+def bench_samplers(args: list[Records]) -> str:
     """The package's warm robust fit against nutpie (benchmarks/bench_samplers.py records): a
     row per argument, its label the letter that ends the record's name (``A+B``: pooled)."""
     from statistics import median

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from _tables import kind, read_json, share_cell
+from _tables import Records, kind, read_json, share_cell
 
 
-def _results(args: list[tuple[Path, ...]]) -> list[dict]:
+def _results(args: list[Records]) -> list[dict]:
     return [r for group in args for path in group for r in read_json(path)["results"]]
 
 
@@ -17,7 +17,7 @@ def _ratios(result: dict) -> list[float]:
 
 
 @kind("plan_prediction")
-def plan_prediction(args: list[tuple[Path, ...]]) -> str:
+def plan_prediction(args: list[Records]) -> str:
     """Fitted over predicted posterior sd per site (benchmarks/plan_prediction.py records)."""
     rows = ["| scenario | sites | median over seeds, per site: range | every single fit: range "
             "| within 10 % | predict (s) |", "|---|---|---|---|---|---|"]
@@ -31,7 +31,7 @@ def plan_prediction(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("plan_prediction_open_world")
-def plan_prediction_open_world(args: list[tuple[Path, ...]]) -> str:
+def plan_prediction_open_world(args: list[Records]) -> str:
     """The same over open-world truths (plan_prediction.py --open-world): sites whose median
     ratio is within 25 %, and the inertia's 90 % coverage."""
     rows = ["| scenario, open-world seeds | sites within ±25 % (median fitted/predicted) | "
@@ -48,7 +48,7 @@ def plan_prediction_open_world(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("plan_wheel_axis")
-def plan_wheel_axis(args: list[tuple[Path, ...]]) -> str:
+def plan_wheel_axis(args: list[Records]) -> str:
     """Fitted over predicted sd of the wheel's axis and the inertia, median over open-world
     seeds (range), and the 90 % cone's coverage (benchmarks/plan_wheel_axis.py records)."""
     rows = ["| scenario | u4_x | u4_y | u4_z | Ixx…Iyz | largest angular sd | 90 % cone radius | "
@@ -72,7 +72,7 @@ def _ratio(x: float) -> str:
 
 
 @kind("plan_thrust")
-def plan_thrust(args: list[tuple[Path, ...]]) -> str:
+def plan_thrust(args: list[Records]) -> str:
     """Fitted over predicted sd of the thrust fit's sites, median over open-world seeds
     (benchmarks/plan_thrust.py records; a record's ``repredicted`` sites where it has them)."""
     rows = ["| scenario | F | tau_delay | tau_rise | tau_fall | Ixx…Izz | Ixy…Iyz | sites within "
@@ -102,7 +102,7 @@ def _scenario_label(scenario: str) -> str:
 
 
 @kind("plan_wheel_axis_vs_baseline")
-def plan_wheel_axis_vs_baseline(args: list[tuple[Path, ...]]) -> str:
+def plan_wheel_axis_vs_baseline(args: list[Records]) -> str:
     """A planned wheel-axis calibration against the baseline slews, both fitted on the same
     open-world seeds (two benchmarks/plan_wheel_axis.py records: baseline, plan)."""
     from statistics import median
@@ -137,7 +137,7 @@ def plan_wheel_axis_vs_baseline(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("plan_wheel_axis_predicted")
-def plan_wheel_axis_predicted(args: list[tuple[Path, ...]]) -> str:
+def plan_wheel_axis_predicted(args: list[Records]) -> str:
     """A wheel-axis plan's prediction against its baseline's (a ``plan wheel-axis`` run
     directory's summary.json): sd, cone, the variance shares of the torques, limits used."""
     ((run,),) = args
@@ -161,7 +161,7 @@ def plan_wheel_axis_predicted(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("plan_thrust_vs_shipped")
-def plan_thrust_vs_shipped(args: list[tuple[Path, ...]]) -> str:
+def plan_thrust_vs_shipped(args: list[Records]) -> str:
     """A planned biasing event against the shipped one, predicted and fitted on open-world
     seeds (two benchmarks/plan_thrust.py records: shipped, plan): the largest sd/budget over
     the sites (which site) and F's sd."""

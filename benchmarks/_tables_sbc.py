@@ -3,9 +3,7 @@ docs/verdicts/); registered in :mod:`_tables` by import."""
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from _tables import kind, read_json
+from _tables import Records, kind, read_json
 
 
 def _p(p: float) -> str:
@@ -23,7 +21,7 @@ _SBC_HEAD = ("| parameter | χ² p | ECDF p | cov 50 | cov 80 | cov 90 | cov 95 
 
 
 @kind("sbc")
-def sbc(args: list[tuple[Path, ...]]) -> str:
+def sbc(args: list[Records]) -> str:
     """Rank uniformity and coverage per parameter of a ``cassini-bayes sbc`` summary.json, or
     of ``benchmarks/health_sbc.py``'s (the health and leak models)."""
     ((path,),) = args
@@ -38,7 +36,7 @@ def sbc(args: list[tuple[Path, ...]]) -> str:
     return "\n".join(rows)
 
 
-def _calibration(args: list[tuple[Path, ...]], key: str, label: str) -> str:
+def _calibration(args: list[Records], key: str, label: str) -> str:
     ((path,),) = args
     bins = read_json(path)[key]
     rows = [f"| {label} | n | mean P | observed rate | sd |", "|---|---|---|---|---|"]
@@ -51,19 +49,19 @@ def _calibration(args: list[tuple[Path, ...]], key: str, label: str) -> str:
 
 
 @kind("leak_p_calibration")
-def leak_p_calibration(args: list[tuple[Path, ...]]) -> str:
+def leak_p_calibration(args: list[Records]) -> str:
     """Calibration of the leak monitor's ``P(leak)`` (health_sbc.py's leak summary.json)."""
     return _calibration(args, "p_leak_calibration", "P(leak) bin")
 
 
 @kind("leak_hypothesis_calibration")
-def leak_hypothesis_calibration(args: list[tuple[Path, ...]]) -> str:
+def leak_hypothesis_calibration(args: list[Records]) -> str:
     """Calibration of every leak hypothesis' probability (the same summary.json)."""
     return _calibration(args, "p_hypothesis_calibration", "P bin")
 
 
 @kind("health_campaign")
-def health_campaign(args: list[tuple[Path, ...]]) -> str:
+def health_campaign(args: list[Records]) -> str:
     """The thruster-health acceptance campaign per record (benchmarks/health_campaign.py):
     detection, delay, quiet controls and the change date's interval coverage."""
     rows = ["| seeds | detected | delay, events: median / 90 % / max | control quiet (every look "
@@ -110,7 +108,7 @@ def _seeds(records: list[dict]) -> str:
 
 
 @kind("verdict_health")
-def verdict_health(args: list[tuple[Path, ...]]) -> str:
+def verdict_health(args: list[Records]) -> str:
     """The health campaign's adequacy verdict per model, control and degraded campaigns
     pooled (benchmarks/verdict_false_alarms.py health records; ``A+B``: seeds pooled)."""
     from cassini_bayes.inference.adequacy import PRIOR_CONFLICT_SD, Z_THRESHOLD
@@ -133,7 +131,7 @@ def verdict_health(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("verdict_leak")
-def verdict_leak(args: list[tuple[Path, ...]]) -> str:
+def verdict_leak(args: list[Records]) -> str:
     """The leak monitor's adequacy verdict per model, on stretches without and with a leak
     (benchmarks/verdict_false_alarms.py leak records)."""
     from cassini_bayes.inference.adequacy import AUTOCORR_MAX, PRIOR_CONFLICT_SD, Z_THRESHOLD
@@ -154,7 +152,7 @@ def verdict_leak(args: list[tuple[Path, ...]]) -> str:
 
 
 @kind("verdict_budget")
-def verdict_budget(args: list[tuple[Path, ...]]) -> str:
+def verdict_budget(args: list[Records]) -> str:
     """The budget's ``shared_inertia`` check on clean and epoch-mixed pairs of runs
     (benchmarks/verdict_false_alarms.py budget records; ``A+B``: seeds pooled)."""
     from cassini_bayes.inference.adequacy import Z_THRESHOLD

@@ -11,10 +11,10 @@ A table block in a markdown file under ``docs/`` is, each marker on a line of it
 
 ``KIND`` names a registered table kind (``_tables.KINDS``; the kinds are in ``_tables_*.py``)
 and ``RECORDS`` are the records' paths, relative to the markdown file's folder (``A+B``: one
-argument of several records, pooled where the kind pools); each record must have a manifest
-(``benchmarks/_provenance.py``), so a table can always be traced to the run that made it. The
-text between the markers is the kind's output and nothing else: a hand-edited cell fails
-``--check`` (``tests/test_evidence.py``).
+argument of several records, pooled where the kind pools; ``PATH@0-19``: those seeds only, where
+the kind reads seeds); each record must have a manifest (``benchmarks/_provenance.py``), so a
+table can always be traced to the run that made it. The text between the markers is the kind's
+output and nothing else: a hand-edited cell fails ``--check`` (``tests/test_evidence.py``).
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import _tables_performance  # noqa: E402,F401
 import _tables_planning  # noqa: E402,F401
 import _tables_sbc  # noqa: E402,F401
 from _provenance import manifest_path  # noqa: E402
-from _tables import KINDS  # noqa: E402
+from _tables import KINDS, Records  # noqa: E402
 
 BLOCK = re.compile(r"^<!-- table: (?P<spec>[^\n]*?) -->\n(?P<body>.*?)^<!-- /table -->$",
                    re.DOTALL | re.MULTILINE)
@@ -50,16 +50,28 @@ def _rel(path: Path) -> str:
         return str(path)
 
 
-def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[tuple[Path, ...]]]]:
-    """Each table block of ``text``: the match, its kind and its records' paths; exits with a
-    one-line message naming ``md`` for an unknown kind, a missing record or one without a
-    manifest."""
+def _records(arg: str, folder: Path, where: str) -> Records:
+    """A marker argument ``A+B@FIRST-LAST`` as :class:`Records`."""
+    paths, _, seeds = arg.partition("@")
+    rec = Records((folder / r).resolve() for r in paths.split("+"))
+    if seeds:
+        first, _, last = seeds.partition("-")
+        if not (first.isdigit() and last.isdigit()):
+            sys.exit(f"{where}: seeds {seeds!r} of {arg!r} are not FIRST-LAST; write e.g. @0-19")
+        rec.seeds = range(int(first), int(last) + 1)
+    return rec
+
+
+def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[Records]]]:
+    """Each table block of ``text``: the match, its kind and its arguments' records; exits
+    with a one-line message naming ``md`` for an unknown kind, a missing record or one without
+    a manifest."""
     out = []
     for m in BLOCK.finditer(text):
         line = text.count("\n", 0, m.start()) + 1
         name, *rel = shlex.split(m["spec"])
-        groups = [tuple((md.parent / r).resolve() for r in arg.split("+")) for arg in rel]
         where = f"{_rel(md)}:{line}"
+        groups = [_records(arg, md.parent, where) for arg in rel]
         if name not in KINDS:
             sys.exit(f"{where}: unknown table kind {name!r}; known: {', '.join(sorted(KINDS))}")
         for p in (p for group in groups for p in group):
