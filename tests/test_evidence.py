@@ -78,3 +78,19 @@ def test_a_hand_edited_cell_or_a_record_without_manifest_fails(docs_tables, tmp_
     (docs / "sbc" / "thrust" / "manifest.json").unlink()
     with pytest.raises(SystemExit, match="no manifest"):
         docs_tables.main(["--check", "--docs", str(docs)])
+
+
+@pytest.mark.parametrize("block, message", [
+    ("<!-- table: no_such_kind x.json -->\n| a |\n<!-- /table -->\n", "unknown table kind"),
+    ("<!-- table: sbc missing.json -->\n| a |\n<!-- /table -->\n", "not found"),
+    ("<!-- table: sbc x.json@first-last -->\n| a |\n<!-- /table -->\n", "FIRST-LAST"),
+    ("<!-- table: sbc x.json -->\n| a |\n", "without its pair"),
+])
+def test_a_bad_table_marker_is_a_one_line_error(docs_tables, tmp_path, block, message):
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "x.json").write_text("{}\n")
+    (docs / "x.json.manifest.json").write_text("{}\n")
+    (docs / "page.md").write_text("# A page\n\n" + block, encoding="utf-8")
+    with pytest.raises(SystemExit, match=message):
+        docs_tables.main(["--check", "--docs", str(docs)])
