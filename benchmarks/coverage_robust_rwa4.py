@@ -4,8 +4,8 @@ For each scenario family (``rwa4_rcs_real``: Brown §III.B, RCS method; ``rwa4_r
 §III.C, RWA method) and each seed: draw the truth's sensor and actuator errors at the scale of the
 robust model's prior (the prior model's :class:`~cassini_bayes.spacecraft.Knowledge`: gyro bias
 and scale factor per axis, a shared and a per-wheel spin-inertia error, two tilt angles of each
-*known* wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the file's
-flexible mode, time-tag jitter and true RWA4 axis (and its inertia, unless ``--draw-inertia``
+*known* wheel's axis, a body-fixed torque of 15 µN m per axis, Feldman & Lee App. A), keep the
+file's flexible mode, time-tag jitter and true RWA4 axis (and its inertia, unless ``--draw-inertia``
 draws it from the fit's inertia prior), simulate, and fit both models (Brown's
 idealised one and the robust one) with the nominal spacecraft model. Prints, per family and
 model, how often the truth lies inside the posterior's 90 % cone (with the binomial sd), the
@@ -117,7 +117,8 @@ def report(family: str, res: dict) -> None:
         cov = np.mean([x["covered"] for x in r])
         err = np.array([x["err_deg"] for x in r])
         print(f"{family} {m:9s}: 90 % cone coverage {cov:.2f} ({int(cov * n)}/{n}; nominal "
-              f"0.90 ± {np.sqrt(0.09 / n):.2f} binomial sd); axis error median {np.median(err):.3f}°, "
+              f"0.90 ± {np.sqrt(0.09 / n):.2f} binomial sd); axis error median "
+              f"{np.median(err):.3f}°, "
               f"worst {err.max():.3f}° (budget {budget:g}°); median cone90 "
               f"{np.median([x['cone90_deg'] for x in r]):.4f}°; max R-hat "
               f"{max(x['r_hat'] for x in r):.3f}, min bulk ESS {min(x['ess'] for x in r):.0f}, "

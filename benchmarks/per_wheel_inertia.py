@@ -88,7 +88,8 @@ def main(argv=None) -> None:
                   f"{wall:6.1f} s  wheel_scale {np.round(rec['wheel_scale_mean'], 4)} "
                   f"± {np.round(rec['wheel_scale_sd'], 4)}")
             for n, r in rows.items():
-                print(f"    {n}: z {r['z']:+6.2f}  sd {r['sd']:7.2f}  90% {'in ' if r['in90'] else 'OUT'}"
+                print(f"    {n}: z {r['z']:+6.2f}  sd {r['sd']:7.2f}  "
+                      f"90% {'in ' if r['in90'] else 'OUT'}"
                       f"  99% {'in ' if r['in99'] else 'OUT'}")
     if args.json:
         args.json.write_text(json.dumps(out, indent=2) + "\n")
