@@ -70,10 +70,14 @@ def test_a_slower_spacecraft_gets_the_same_quiet_periods(flights):
     b = cb.check_telemetry(tel_b, spacecraft=sc_b, wheel_tol_rpm=2.0 * RATE_SCALE)
     assert b.quiet == a.quiet
     assert [w.idle for w in b.wheels] == [w.idle for w in a.wheels]
-    # the same physics verdicts (the attitude check's count of turning stretches differs:
-    # 267 against Cassini's 865, a rule of consistency/_attitude.py not yet relative)
+    # the same physics verdicts, and the attitude check cuts the same turning stretches (its
+    # turn is relative to the file's attitude and gyro noise, consistency/_attitude.py)
     for line in (a.physics, b.physics):
         assert line.startswith("q vs ω consistent") and "wheel rpm confirmed" in line
+    assert b.attitude.segments == a.attitude.segments
+    assert b.attitude.turn_rad == pytest.approx(RATE_SCALE * a.attitude.turn_rad, rel=1e-3)
+    assert b.attitude.alignment[0] == pytest.approx(a.attitude.alignment[0], abs=1e-5)
+    assert b.attitude.scale == pytest.approx(a.attitude.scale, abs=1e-4)
     assert b.rate_max_rad_s == pytest.approx(RATE_SCALE * a.rate_max_rad_s, rel=0.05)
     # the test can fail: with Cassini's former absolute rate default the slow slews are quiet
     old = cb.check_telemetry(tel_b, spacecraft=sc_b, rate_max_rad_s=1e-3,
