@@ -62,9 +62,9 @@ class TelemetryCheck:
     one; empty for a spacecraft without thrusters); ``quiet`` the quiet periods ``(t0, t1)`` s
     and the rules that made them (``min_quiet_s``; ``rate_max_rad_s`` the body-rate bound
     applied, rad/s, and ``rate_rule`` where it came from; ``wheel_tol_rpm`` the largest wheel
-    bound before its noise floor, and ``wheel_tol_rule`` where it came from); ``n_pulses`` of the
-    pulse log
-    (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
+    bound before its noise floor, and ``wheel_tol_rule`` where it came from: ``"given"``, ``"the
+    model's quiet_tol_rpm"`` or ``"the default"``); ``n_pulses`` of the pulse log (``None``
+    without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
     (:func:`cassini_bayes.consistency.quantised_rates`).
     """
 
@@ -194,7 +194,12 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         quantised_rates,
     )
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
-    from cassini_bayes.windows import quiet_periods, quiet_rate_max, quiet_wheel_tol_rpm
+    from cassini_bayes.windows import (
+        QUIET_WHEEL_TOL_RPM,
+        quiet_periods,
+        quiet_rate_max,
+        quiet_wheel_tol_rpm,
+    )
 
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
                                     (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
@@ -248,7 +253,8 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
             thrusters.append(ThrusterStats(name, count, total))
     tols = quiet_wheel_tol_rpm(tel, wheel_tol_rpm, sc)
     running = np.all(np.isfinite(tel.wheel_rates), axis=0)
-    wheel_tol = float(np.max(tols[running] if np.any(running) else tols))
+    tols = tols[running] if np.any(running) else tols
+    wheel_tol = float(np.max(tols))
     quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,
                           wheel_tol_rpm=wheel_tol_rpm, spacecraft=sc)
     return TelemetryCheck(
@@ -261,7 +267,8 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=quiet_rate_max(tel, rate_max_rad_s), wheel_tol_rpm=wheel_tol,
         rate_rule="given" if rate_max_rad_s is not None else "a third of the file's top rate",
-        wheel_tol_rule=("given" if wheel_tol_rpm is not None else "default" if sc is None
-                        else "the model's quiet_tol_rpm"),
+        wheel_tol_rule=("given" if wheel_tol_rpm is not None
+                        else "the model's quiet_tol_rpm" if np.any(tols != QUIET_WHEEL_TOL_RPM)
+                        else "the default"),
         n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
         quanta=quantised_rates(tel), model_thrusters=tuple(tel.thruster_names))
