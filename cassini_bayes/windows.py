@@ -15,7 +15,8 @@ sample's two neighbours, however coarse the sampling),
   (:data:`QUIET_RATE_FRACTION`): quiet is relative to the spacecraft's own slews, not to one
   spacecraft's rates,
 - ``max ρ − min ρ ≤ wheel_tol_rpm`` for each wheel that is on (NaN wheels are ignored); by
-  default :data:`QUIET_WHEEL_TOL_RPM`,
+  default the spacecraft model's ``[[wheel]] quiet_tol_rpm`` of that wheel
+  (:func:`quiet_wheel_tol_rpm`; :data:`QUIET_WHEEL_TOL_RPM` without a model),
 - no cumulative thruster on-time grows within the window (when the telemetry has on-times).
 
 Both tolerances are at least :data:`QUIET_NOISE_SD` times the white noise of the file's own
@@ -30,35 +31,33 @@ from __future__ import annotations
 
 import re
 import warnings
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from cassini_bayes.errors import InputError
+from cassini_bayes.spacecraft import QUIET_WHEEL_TOL_RPM
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry, white_noise_sd
 
-__all__ = ["quiet_mask", "quiet_periods", "quiet_rate_max", "top_rate", "QUIET_RATE_FRACTION",
-           "QUIET_NOISE_SD", "QUIET_WHEEL_TOL_RPM", "slew_windows", "split_slews", "parse_window",
-           "clamp_window", "WindowClampWarning"]
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
+
+__all__ = ["quiet_mask", "quiet_periods", "quiet_rate_max", "quiet_wheel_tol_rpm", "top_rate",
+           "QUIET_RATE_FRACTION", "QUIET_NOISE_SD", "QUIET_WHEEL_TOL_RPM", "slew_windows",
+           "split_slews", "parse_window", "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
 
 QUIET_RATE_FRACTION = 1.0 / 3.0
 """A quiet sample's body rate is at most this fraction of the file's top rate (:func:`top_rate`):
-a slew coasting at its top rate with the wheels steady is not a rest. Cassini's slews at 2-3
-mrad/s give the 1 mrad/s of the papers' quiet windows; the ESPA bus's 15 mrad/s slews 5 mrad/s."""
+a slew coasting at its top rate with the wheels steady is not a rest. On Cassini's slews it gives
+the papers' 1 mrad/s (docs/model_file.md)."""
 
 QUIET_NOISE_SD = 8.0
 """The quiet tolerances are at least this many white-noise sds of the file's own rates: the range
 of a window's worth of white noise (10-40 samples) is ~4 sd, beyond 8 sd less than once in 10⁵
 windows (7.4 sd at 1e-4 for 41 samples)."""
-
-
-QUIET_WHEEL_TOL_RPM = 2.0
-"""The default largest change of a running wheel's rate within a quiet window, rpm, raised to
-:data:`QUIET_NOISE_SD` × the wheel's own white noise (which scales it for coarse sensors). An
-absolute constant (docs/limits.md): it keeps the papers' quiet windows and the pinned wheel-axis
-fits; a wheel whose slew ramps change it by less over the window needs ``--wheel-tol``."""
 
 
 def _moving_range(x: np.ndarray, half: int) -> np.ndarray:
@@ -88,8 +87,8 @@ def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
 
 def _half(t: np.ndarray, smooth_s: float) -> int:
     """Half the moving window in samples: at least the neighbours, however coarse the sampling
-    (at 0.1 Hz half a 10-s window rounds to no sample, and a wheel spin-up inside a "quiet"
-    window turned the RWA4 axis to its antipode, flight-data audit)."""
+    (at 0.1 Hz half a 10-s window rounds to no sample, and a window of one sample sees no wheel
+    ramp)."""
     dt = float(np.median(np.diff(t))) if t.size > 1 else 0.0
     return max(1, int(round(0.5 * smooth_s / dt))) if dt > 0 else 1
 
@@ -106,12 +105,25 @@ def quiet_rate_max(tel: Telemetry, rate_max: float | None = None,
     return float(max(rate_max, QUIET_NOISE_SD * white_noise_sd(omega)))
 
 
+def quiet_wheel_tol_rpm(tel: Telemetry, wheel_tol_rpm: float | None = None,
+                        spacecraft: Spacecraft | None = None) -> np.ndarray:
+    """(k,) the largest change of each telemetry wheel's rate within a quiet window, rpm, before
+    its noise floor: ``wheel_tol_rpm`` when given, else the spacecraft model's ``[[wheel]]
+    quiet_tol_rpm`` of that wheel, else :data:`QUIET_WHEEL_TOL_RPM` (no model, or a wheel the
+    model lacks)."""
+    if wheel_tol_rpm is not None:
+        return np.full(len(tel.wheel_names), float(wheel_tol_rpm))
+    model = {} if spacecraft is None else {w.name: w.quiet_tol_rpm for w in spacecraft.wheels}
+    return np.array([model.get(n.upper(), QUIET_WHEEL_TOL_RPM) for n in tel.wheel_names])
+
+
 def quiet_mask(
     tel: Telemetry,
     *,
     rate_max: float | None = None,
-    wheel_tol_rpm: float = QUIET_WHEEL_TOL_RPM,
+    wheel_tol_rpm: float | None = None,
     smooth_s: float = 10.0,
+    spacecraft: Spacecraft | None = None,
 ) -> np.ndarray:
     """Boolean (n,) mask of quiescent samples (criteria in the module docstring).
 
@@ -124,8 +136,11 @@ def quiet_mask(
         spacecraft's slew rates; ``inf``: no rate rule (a free drift is quiet, as Brown's
         RCS-method Time B needs).
     wheel_tol_rpm : largest change of any running wheel's rate within the window, rpm (at least
-        :data:`QUIET_NOISE_SD` × that wheel's white noise).
+        :data:`QUIET_NOISE_SD` × that wheel's white noise); default each wheel's
+        (:func:`quiet_wheel_tol_rpm`).
     smooth_s : width of the centred moving window, s.
+    spacecraft : the model whose ``[[wheel]] quiet_tol_rpm`` give the wheels' default
+        tolerances.
     """
     t = np.asarray(tel.t, dtype=float)
     n = t.shape[0]
@@ -139,7 +154,8 @@ def quiet_mask(
     if np.any(running):
         spread_rpm = _moving_range(rates[:, running], half) / RPM_TO_RAD_S
         noise_rpm = np.array([white_noise_sd(rates[:, j]) for j in np.flatnonzero(running)])
-        tol = np.maximum(wheel_tol_rpm, QUIET_NOISE_SD * noise_rpm / RPM_TO_RAD_S)
+        given = quiet_wheel_tol_rpm(tel, wheel_tol_rpm, spacecraft)[running]
+        tol = np.maximum(given, QUIET_NOISE_SD * noise_rpm / RPM_TO_RAD_S)
         quiet &= np.all(spread_rpm <= tol, axis=1)
     if tel.on_times is not None:
         # a sample is loud when on-time grows into or out of it, or anywhere in its window
@@ -165,14 +181,16 @@ def quiet_periods(
     *,
     min_duration_s: float = 60.0,
     rate_max: float | None = None,
-    wheel_tol_rpm: float = QUIET_WHEEL_TOL_RPM,
+    wheel_tol_rpm: float | None = None,
     smooth_s: float = 10.0,
+    spacecraft: Spacecraft | None = None,
 ) -> list[Window]:
     """Quiet periods of at least ``min_duration_s`` seconds, as ``(t0, t1)`` sample times, s.
 
     See :func:`quiet_mask` for the criteria; returned in time order, non-overlapping.
     """
-    mask = quiet_mask(tel, rate_max=rate_max, wheel_tol_rpm=wheel_tol_rpm, smooth_s=smooth_s)
+    mask = quiet_mask(tel, rate_max=rate_max, wheel_tol_rpm=wheel_tol_rpm, smooth_s=smooth_s,
+                      spacecraft=spacecraft)
     t = np.asarray(tel.t, dtype=float)
     return [(float(t[a]), float(t[b])) for a, b in _runs(mask)
             if t[b] - t[a] >= min_duration_s]

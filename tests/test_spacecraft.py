@@ -1,4 +1,5 @@
-"""Spacecraft models: the shipped files load, carry the papers' numbers, and bad files fail clearly."""
+"""Spacecraft models: the shipped files load, carry the papers' numbers, and bad files fail
+clearly."""
 
 from __future__ import annotations
 
@@ -96,6 +97,22 @@ def test_round_trip_through_dict():
     assert again.articulated_wheels == ("RWA4",)
 
 
+def test_a_wheels_quiet_tolerance_is_read_and_written_back():
+    """``[[wheel]] quiet_tol_rpm``: 2 rpm where the file gives none (and not written back),
+    the file's own otherwise (docs/model_file.md, "A wheel's quiet tolerance")."""
+    from cassini_bayes.spacecraft import QUIET_WHEEL_TOL_RPM
+
+    d = _bus()
+    assert all(w.quiet_tol_rpm == QUIET_WHEEL_TOL_RPM == 2.0
+               for w in spacecraft_from_dict(d).wheels)
+    assert "quiet_tol_rpm" not in spacecraft_from_dict(d).to_dict()["wheel"][0]
+    d["wheel"][1]["quiet_tol_rpm"] = 0.25
+    sc = spacecraft_from_dict(d)
+    assert [w.quiet_tol_rpm for w in sc.wheels][:2] == [2.0, 0.25]
+    again = spacecraft_from_dict(sc.to_dict())
+    assert [w.quiet_tol_rpm for w in again.wheels][:2] == [2.0, 0.25]
+
+
 def test_eq16_shorthand_expands_to_the_papers_moment_matrix():
     """Feldman & Lee Eq 16 as printed, entry by entry, with a centre-of-mass offset ``e``: the
     ``[thrusters]`` shorthand's eight ``[[thruster]]`` entries give exactly this ``Q``."""
@@ -175,6 +192,7 @@ def test_spacecraft_without_thrusters():
     (lambda d: d["wheel"][0].update(name="rw 1"), "'wheel[0].name' = 'rw 1'"),
     (lambda d: d["wheel"][0].update(max_speed_rpm=-1), "wheel[0].max_speed_rpm"),
     (lambda d: d["wheel"][0].update(articulated="yes"), "wheel[0].articulated"),
+    (lambda d: d["wheel"][1].update(quiet_tol_rpm=0), "'wheel[1].quiet_tol_rpm' = 0 rpm"),
     (lambda d: d.update(thrusters={"Lx": 1, "Ly": 1, "Lzy": 1, "Lzz": 1}), "give the thrusters "
      "once"),
     (lambda d: d.update(center_of_mass={"sd_m": -0.1}), "center_of_mass.sd_m"),

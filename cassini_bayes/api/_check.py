@@ -61,9 +61,10 @@ class TelemetryCheck:
     that fired) and ``model_thrusters`` (the names the spacecraft model has, Cassini's without
     one; empty for a spacecraft without thrusters); ``quiet`` the quiet periods ``(t0, t1)`` s
     and the rules that made them (``min_quiet_s``; ``rate_max_rad_s`` the body-rate bound
-    applied, rad/s, and ``rate_rule`` where it came from; ``wheel_tol_rpm`` the wheel bound
-    before its noise floor); ``n_pulses`` of the pulse log
-    (``None`` without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
+    applied, rad/s, and ``rate_rule`` where it came from; ``wheel_tol_rpm`` the largest wheel
+    bound before its noise floor, and ``wheel_tol_rule`` where it came from: ``"given"``, ``"the
+    model's quiet_tol_rpm"`` or ``"the default"``); ``n_pulses`` of the pulse log (``None``
+    without one); ``notes`` warnings to show; ``quanta`` the rate columns on a lattice
     (:func:`cassini_bayes.consistency.quantised_rates`).
     """
 
@@ -85,6 +86,7 @@ class TelemetryCheck:
     quanta: tuple = ()
     model_thrusters: tuple[str, ...] = ()
     rate_rule: str = "given"
+    wheel_tol_rule: str = "given"
 
     @property
     def n(self) -> int:
@@ -174,9 +176,9 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         long, with ``|ω| ≤ rate_max_rad_s``, running wheels within ``wheel_tol_rpm`` over 10 s
         and no thruster firing: the rule ``fit wheel-axis`` detects its windows with
         (:func:`cassini_bayes.windows.quiet_periods`). By default the rate bound is a third of
-        the file's top rate and the wheel bound
-        :data:`~cassini_bayes.windows.QUIET_WHEEL_TOL_RPM`, each at least 8 sd of the file's own
-        noise; given values override them (still floored by the noise).
+        the file's top rate and each wheel's bound the model's ``[[wheel]] quiet_tol_rpm``
+        (:data:`~cassini_bayes.windows.QUIET_WHEEL_TOL_RPM` without one), each at least 8 sd of
+        the file's own noise; given values override them (still floored by the noise).
     check_units : the rad/s-vs-rpm and deg/s heuristics (off for wheels idling below 12 rpm).
 
     Raises
@@ -192,9 +194,12 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         quantised_rates,
     )
     from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
-    from cassini_bayes.windows import quiet_periods
-
-    from cassini_bayes.windows import QUIET_WHEEL_TOL_RPM, quiet_rate_max
+    from cassini_bayes.windows import (
+        QUIET_WHEEL_TOL_RPM,
+        quiet_periods,
+        quiet_rate_max,
+        quiet_wheel_tol_rpm,
+    )
 
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
                                     (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
@@ -246,9 +251,12 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
                      if log is not None and source != "on_* columns"
                      else _pulse_count(on))
             thrusters.append(ThrusterStats(name, count, total))
-    wheel_tol = QUIET_WHEEL_TOL_RPM if wheel_tol_rpm is None else float(wheel_tol_rpm)
+    tols = quiet_wheel_tol_rpm(tel, wheel_tol_rpm, sc)
+    running = np.all(np.isfinite(tel.wheel_rates), axis=0)
+    tols = tols[running] if np.any(running) else tols
+    wheel_tol = float(np.max(tols))
     quiet = quiet_periods(tel, min_duration_s=min_quiet_s, rate_max=rate_max_rad_s,
-                          wheel_tol_rpm=wheel_tol)
+                          wheel_tol_rpm=wheel_tol_rpm, spacecraft=sc)
     return TelemetryCheck(
         t=np.asarray(tel.t, float),
         max_rate_rad_s=float(np.linalg.norm(tel.omega, axis=1).max()),
@@ -259,5 +267,8 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         quiet=tuple((float(a), float(b)) for a, b in quiet), min_quiet_s=min_quiet_s,
         rate_max_rad_s=quiet_rate_max(tel, rate_max_rad_s), wheel_tol_rpm=wheel_tol,
         rate_rule="given" if rate_max_rad_s is not None else "a third of the file's top rate",
+        wheel_tol_rule=("given" if wheel_tol_rpm is not None
+                        else "the model's quiet_tol_rpm" if np.any(tols != QUIET_WHEEL_TOL_RPM)
+                        else "the default"),
         n_pulses=None if log is None else len(log.t_on), notes=tuple(notes),
         quanta=quantised_rates(tel), model_thrusters=tuple(tel.thruster_names))

@@ -72,8 +72,8 @@ def _print(console: Console, file: Path, pulses: Path | None, c) -> None:
     else:
         console.print(f"Quiet periods: none of at least {c.min_quiet_s:g} s")
     console.print(f"  quiet means |ω| ≤ {c.rate_max_rad_s * 1e3:.3g} mrad/s ({c.rate_rule}, at "
-                  f"least 8 noise sd), running wheels within {c.wheel_tol_rpm:g} rpm (at least 8 "
-                  "noise sd) over 10 s, no thruster firing")
+                  f"least 8 noise sd), running wheels within {c.wheel_tol_rpm:g} rpm "
+                  f"({c.wheel_tol_rule}, at least 8 noise sd) over 10 s, no thruster firing")
     if c.n_pulses is not None:
         console.print(f"[bold]{escape(str(pulses))}[/bold]: valid pulse log, "
                       f"{c.n_pulses} pulses")
@@ -93,7 +93,8 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
             "third of the file's top rate, at least 8 sd of its gyro noise]."),
         wheel_tol: float | None = typer.Option(
             None, "--wheel-tol", help="Largest wheel-rate change in a quiet stretch, rpm "
-            "[default: 2, at least 8 sd of each wheel's noise]."),
+            "[default: each wheel's quiet_tol_rpm in the spacecraft model, else 2; at least 8 sd "
+            "of each wheel's noise]."),
         spacecraft: str | None = typer.Option(None, "--spacecraft", help="Spacecraft model "
                                               "TOML: also check the wheel units against "
                                               "momentum conservation."),

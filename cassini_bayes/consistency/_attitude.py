@@ -9,7 +9,7 @@ import numpy as np
 
 from cassini_bayes.consistency._programs import _conjugate, _rotvecs_between
 from cassini_bayes.errors import InputError
-from cassini_bayes.telemetry import Telemetry
+from cassini_bayes.telemetry import RATE_NOISE_FLOORS, Telemetry, white_noise_sd
 
 # Thresholds (margins measured in docs/input_checks.md)
 
@@ -34,8 +34,10 @@ STILL_RATES_RAD = 0.2
 STILL_RATIO = 0.1
 """… "nearly still": the quaternions turn by less than this fraction of that integrated
 rotation."""
-_SEG_NOISE = 20.0      # a turning stretch turns by this many attitude-noise sd …
-_SEG_MIN_RAD = 1e-3    # … and at least this much
+SEG_NOISE_SD = 20.0
+"""A turning stretch turns by this many sd of the file's own noise: of its attitude, and of one
+sample's integrated body rate (``σ_ω × dt``): relative to the file, so a spacecraft flown slower
+with sensors to match is cut into the same stretches."""
 _SEG_MAX_RAD = 0.05    # target turn per stretch is capped here (∫ω dt ≈ rotation vector)
 _SEG_MAX_SAMPLES = 200  # longest stretch searched, samples
 GAP_FACTOR = 3.0
@@ -93,10 +95,23 @@ def _gaps_before(t: np.ndarray) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(gap)])
 
 
-def _turning_segments(q: np.ndarray, t: np.ndarray | None = None) -> list[tuple[int, int]]:
+def _segment_turn(q: np.ndarray, t: np.ndarray | None = None,
+                  omega: np.ndarray | None = None) -> float:
+    """The turn of a stretch, rad: :data:`SEG_NOISE_SD` × the larger of the attitude noise
+    (:func:`_attitude_noise`) and one median step's integrated body-rate noise (``σ_ω`` floored
+    at ``RATE_NOISE_FLOORS[0]`` for noise-free data), at most :data:`_SEG_MAX_RAD`."""
+    step_rad = 0.0
+    if t is not None and len(t) > 1:
+        sd = max(white_noise_sd(omega) if omega is not None else 0.0, RATE_NOISE_FLOORS[0])
+        step_rad = sd * float(np.median(np.diff(np.asarray(t, float))))
+    return float(min(SEG_NOISE_SD * max(_attitude_noise(q), step_rad), _SEG_MAX_RAD))
+
+
+def _turning_segments(q: np.ndarray, t: np.ndarray | None = None,
+                      omega: np.ndarray | None = None) -> list[tuple[int, int]]:
     """Non-overlapping stretches ``(a, b)`` over which the attitude turns by a set angle.
 
-    The angle is ``clip(20 σ_att, 1e-3, 0.05)`` rad (``σ_att`` from :func:`_attitude_noise`),
+    The angle is :func:`_segment_turn`'s (given the times ``t`` and body rates ``omega``),
     reached within :data:`_SEG_MAX_SAMPLES` samples; quiet stretches give none. The rotation angle
     between two quaternions is the same under every reading (``|q_a · q_b|`` is invariant under
     reordering and conjugation), so the stretches are too. Given the times ``t``, no stretch spans
@@ -106,7 +121,7 @@ def _turning_segments(q: np.ndarray, t: np.ndarray | None = None) -> list[tuple[
     """
     n = q.shape[0]
     gaps = _gaps_before(t) if t is not None else np.zeros(n, int)
-    target = float(np.clip(_SEG_NOISE * _attitude_noise(q), _SEG_MIN_RAD, _SEG_MAX_RAD))
+    target = _segment_turn(q, t, omega)
     lmax = min(_SEG_MAX_SAMPLES, n - 1)
     reach = np.full(n, -1)
     for lag in range(lmax, 0, -1):  # smallest lag wins
@@ -148,7 +163,7 @@ def attitude_rate_agreement(tel: Telemetry) -> AttitudeAgreement | None:
     q = np.asarray(tel.q, float)
     if q.shape[0] < 4:
         return None
-    segs = _turning_segments(q, np.asarray(tel.t, float))
+    segs = _turning_segments(q, np.asarray(tel.t, float), np.asarray(tel.omega, float))
     if len(segs) < MIN_SEGMENTS:
         return None
     a_idx = np.array([s[0] for s in segs])
@@ -195,7 +210,8 @@ def check_attitude_rates(tel: Telemetry) -> AttitudeAgreement | None:
     rotation, e.g. about a single axis from the identity, cannot tell them apart); when no
     reading fits and the declared one aligns by less than :data:`ALIGN_BAD` (rates and attitude
     inconsistent); or when the declared reading fits but the rotation is not about 1× the
-    integrated rate (°/s or mrad/s body rates). Returns the agreement (``None``: not identifiable, no check).
+    integrated rate (°/s or mrad/s body rates). Returns the agreement (``None``: not
+    identifiable, no check).
     """
     ag = attitude_rate_agreement(tel)
     if ag is None:

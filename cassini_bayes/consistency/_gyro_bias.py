@@ -106,8 +106,8 @@ def check_gyro_bias(tel: Telemetry, spacecraft: Spacecraft) -> GyroBias | None:
     """Warn when the data show a gyro bias far beyond the model file's ``[gyro]`` knowledge:
     on some axis ``|b| > GYRO_BIAS_Z × bias_sd_rad_s`` and ``> GYRO_BIAS_Z × its standard
     error``. The fits' gyro-bias prior then under-states it, and the RWA4 axis by the RWA method
-    can be wrong by more than its cone with every adequacy check passing (a 2e-5 rad/s bias:
-    0.71° off against a 0.18° cone). Returns the estimate (``None``: not enough quiet windows).
+    can be wrong by more than its cone with every adequacy check passing. Returns the estimate
+    (``None``: not enough quiet windows).
     """
     est = gyro_bias_estimate(tel)
     if est is None:

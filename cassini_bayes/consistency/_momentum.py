@@ -58,9 +58,9 @@ class WheelAxes(NamedTuple):
     ----------
     alignment : cosine between the fitted and the measured body-momentum changes (1 = perfect).
     conditioning : smallest over largest singular value of the balance's design (the wheels'
-        columns and the external torque's), its columns scaled to unit length: near 0 when the wheels' rates move together (a biasing event, a
-        slew about one axis) and the vectors cannot be told apart; 0.3–0.5 for slews about
-        three axes.
+        columns and the external torque's), its columns scaled to unit length: near 0 when the
+        wheels' rates move together (a biasing event, a slew about one axis) and the vectors
+        cannot be told apart.
     vectors : per known wheel, ``w_k / J_k`` (body frame, per rpm-read rad/s): the model's axis
         ``g_k`` for a correct file, within the inertia's ±10 %; ``−g_k`` for a column with its
         sign flipped, ``g_j`` for a column holding wheel ``j``'s rates, ``9.55 g_k`` for rad/s.
@@ -227,11 +227,11 @@ def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
 
     with ``I_pred`` the model's predicted tensor and the known wheels' axes and spin inertias
     from the model, and ``T`` a constant inertial external torque over the whole file (its
-    impulse over a long record is a sizeable part of what a small spacecraft's slews exchange:
-    the ESPA bus's 2e-5 N m over 22 minutes against 0.38 N m s). Each articulated wheel (``free_wheels``, default the model's
-    ``articulated`` wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures,
-    Brown §III) enters with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other
-    wheel running ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
+    impulse over a long record can be a sizeable part of what a small spacecraft's slews
+    exchange). Each articulated wheel (``free_wheels``, default the model's ``articulated``
+    wheels: Cassini's RWA4, whose axis is what the RWA4 calibration measures, Brown §III) enters
+    with a free momentum vector ``w`` (``J_f u_f`` for rpm data); with no other wheel running
+    ``κ`` is the median of ``|w_f| / J_f``. Subtracting each stretch's mean
     removes ``H_s``. The same balance with a free vector ``w_k`` for every known wheel in place
     of ``κ J_k g_k`` is :attr:`MomentumScale.axes`. ``None`` when no wheel runs, no stretch has
     three samples, or nothing varies.

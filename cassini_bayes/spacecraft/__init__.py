@@ -28,6 +28,9 @@ from cassini_bayes.spacecraft._geometry import (
     CASSINI_WHEEL_AXES as CASSINI_WHEEL_AXES,
 )
 from cassini_bayes.spacecraft._geometry import (
+    QUIET_WHEEL_TOL_RPM as QUIET_WHEEL_TOL_RPM,
+)
+from cassini_bayes.spacecraft._geometry import (
     Thruster as Thruster,
 )
 from cassini_bayes.spacecraft._geometry import (
@@ -113,7 +116,7 @@ from cassini_bayes.spacecraft._read import (
 )
 
 __all__ = ["Wheel", "WheelCone", "Thruster", "PulseConstants", "Knowledge", "Spacecraft",
-           "wheel_tilt_basis", "WHEEL_SPEED_NOMINAL_RPM",
+           "wheel_tilt_basis", "WHEEL_SPEED_NOMINAL_RPM", "QUIET_WHEEL_TOL_RPM",
            "tilted_axis", "load_spacecraft", "eq16_thrusters", "moment_matrix",
            "eq16_moment_matrix",
            "spacecraft_from_dict", "CASSINI_WHEEL_AXES"]

@@ -61,6 +61,13 @@ class WheelCone:
     sd_deg: float = 1.0
 
 
+QUIET_WHEEL_TOL_RPM = 2.0
+"""A ``[[wheel]]`` entry's default ``quiet_tol_rpm``, rpm: the largest change of the wheel's rate
+within a quiet window (``cassini_bayes.windows.quiet_mask``). A wheel rate: the papers' quiet
+windows and the pinned wheel-axis fits rest on it; a spacecraft whose slews change its wheels by
+less within 10 s states its own (docs/model_file.md)."""
+
+
 @dataclass(frozen=True)
 class Wheel:
     """A reaction wheel: ``axis`` unit vector in body axes, ``inertia`` kg m² about it.
@@ -73,7 +80,9 @@ class Wheel:
     articulation cone its axis lies on (the wheel-axis fit's ``cone`` prior and its adequacy
     check; ``None``: none known). ``reference``, ``reference_tol_deg``: the wheel whose axis
     this one must match and how closely (Cassini's RWA4 replacing RWA1 within ±2°, Brown §I),
-    reported by the wheel-axis fit; ``None`` when the file gives none.
+    reported by the wheel-axis fit; ``None`` when the file gives none. ``quiet_tol_rpm``: the
+    largest change of its rate within a quiet window, rpm (:data:`QUIET_WHEEL_TOL_RPM` unless
+    the file gives one).
     """
 
     name: str
@@ -86,6 +95,7 @@ class Wheel:
     cone: WheelCone | None = None
     reference: str | None = None
     reference_tol_deg: float | None = None
+    quiet_tol_rpm: float = QUIET_WHEEL_TOL_RPM
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from cassini_bayes.errors import InputError
 from cassini_bayes.names import THRUSTER_NAMES
 from cassini_bayes.spacecraft._geometry import (
     _EQ16_DIRECTIONS,
+    QUIET_WHEEL_TOL_RPM,
     _EQ16_SIGNS_XY,
     Thruster,
     Wheel,
@@ -251,7 +252,9 @@ class Spacecraft:
                                           "cone_deg": w.cone.angle_deg,
                                           "cone_sd_deg": w.cone.sd_deg}),
             **({} if w.reference is None else {"reference": w.reference,
-                                               "reference_tol_deg": w.reference_tol_deg})}
+                                               "reference_tol_deg": w.reference_tol_deg}),
+            **({} if w.quiet_tol_rpm == QUIET_WHEEL_TOL_RPM
+               else {"quiet_tol_rpm": w.quiet_tol_rpm})}
         thrusters = self._thrusters_dict()
         return {
             "name": self.name,

@@ -16,7 +16,13 @@ import numpy as np
 from cassini_bayes._paths import model_path
 from cassini_bayes._toml import UNIT_TOL, TomlTable, read_toml
 from cassini_bayes.errors import InputError, as_path
-from cassini_bayes.spacecraft._geometry import Thruster, Wheel, WheelCone, eq16_thrusters
+from cassini_bayes.spacecraft._geometry import (
+    QUIET_WHEEL_TOL_RPM,
+    Thruster,
+    Wheel,
+    WheelCone,
+    eq16_thrusters,
+)
 from cassini_bayes.spacecraft._model import (
     Knowledge,
     PulseConstants,
@@ -37,7 +43,7 @@ _TORQUE_KNOWLEDGE_KEYS = {"sd_nm": "torque_sd_nm", "rate_sd_nm_per_h": "torque_r
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac", "max_speed_rpm", "max_torque_nm",
                "articulated", "cone_axis", "cone_deg", "cone_sd_deg", "reference",
-               "reference_tol_deg"}
+               "reference_tol_deg", "quiet_tol_rpm"}
 _EQ16_KEYS = {"Lx", "Ly", "Lzy", "Lzz", "com"}
 _THRUSTER_ENTRY_KEYS = {"name", "position", "direction", "F", "branch"}
 _COM_KEYS = {"offset_m", "sd_m"}
@@ -213,8 +219,10 @@ def _wheels(top: TomlTable) -> tuple[Wheel, ...]:
         speed = w.in_range("max_speed_rpm", np.inf, lo=0.0, hi=WHEEL_SPEED_MAX_RPM, unit="rpm")
         torque = w.in_range("max_torque_nm", np.inf, lo=0.0, hi=WHEEL_TORQUE_MAX_NM, unit="N m")
         articulated = w.flag("articulated", False)
+        quiet = w.in_range("quiet_tol_rpm", QUIET_WHEEL_TOL_RPM, lo=0.0, hi=WHEEL_SPEED_MAX_RPM,
+                           unit="rpm")
         wheels.append(Wheel(name, axis, j, sd, speed, torque, articulated, _cone(w, name),
-                            *_reference(w, name)))
+                            *_reference(w, name), quiet_tol_rpm=quiet))
     _unique([w.name for w in wheels], "wheel", src)
     names = {w.name for w in wheels}
     for i, w in enumerate(wheels):

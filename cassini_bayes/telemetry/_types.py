@@ -14,9 +14,10 @@ from cassini_bayes.units import RPM_TO_RAD_S
 WHEEL_NAMES = ("RWA1", "RWA2", "RWA3", "RWA4")
 """Cassini's wheels: the telemetry's wheel columns ``rwa1 … rwa4`` when no model names others."""
 IDLE_RPM = 1.0
-"""A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: its momentum,
-0.16 kg m² × 1 rpm = 0.017 N m s rms, is ~1000× below what a slew exchanges (18–22 N m s);
-tachometer noise about 0 rpm (±0.3 rpm) is idle, a wheel through zero speed is not."""
+"""A wheel whose rate's root mean square is at most this (rpm) is idle, as if off: a wheel sized
+to its spacecraft exchanges hundreds of rpm in a slew, so this carries ~1e-3 of a slew's momentum
+(docs/model_file.md, "Constants that remain"); tachometer noise about 0 rpm is idle, a wheel
+through zero speed is not."""
 IDLE_NOISE_SD = 3.0
 """… or whose rms rate is at most this many times its own white noise
 (:func:`white_noise_sd`): a coarse tachometer's noise about 0 rpm (a CubeSat's hall sensors,

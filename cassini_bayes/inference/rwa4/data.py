@@ -383,8 +383,8 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     _check_options(method, prior)
     wheel = _wheel_name(tel, wheel)
     cone = check_cone_prior(spacecraft, wheel, prior)
-    pairs = detect_windows(tel, method, wheel=wheel) if pairs is None else \
-        [tuple(p) for p in pairs]
+    pairs = (detect_windows(tel, method, wheel=wheel, spacecraft=spacecraft) if pairs is None
+             else [tuple(p) for p in pairs])
     pairs = _check_windows(tel, pairs, method)
 
     t = np.asarray(tel.t, float)

@@ -4,18 +4,24 @@ from the quiet periods or given, and checked.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 from cassini_bayes.windows import clamp_window
 
+if TYPE_CHECKING:
+    from cassini_bayes.spacecraft import Spacecraft
+
 __all__ = ["MIN_SPIN_CHANGE_RPM", "RCS_MIN_QUIET_S", "WHEEL", "Window", "detect_windows"]
 
 MIN_SPIN_CHANGE_RPM = 10.0   # smaller spin changes between A and B cannot calibrate the axis
 RCS_MIN_QUIET_S = 30.0
 """Shortest RCS-method Time A / Time B, s: the drift after the spin-up lasts until the widened
-dead-band is reached, dead-band × I / (J Δρ) — 45 s on the ESPA bus (2000 rpm, 22 mrad/s)."""
+dead-band is reached, dead-band × I / (J Δρ), under a minute on a small spacecraft
+(docs/model_file.md)."""
 WHEEL = "RWA4"               # the wheel solved for by default
 
 Window = tuple[float, float]
@@ -40,16 +46,15 @@ def _median_rpm(tel: Telemetry, w: Window, wheel: str) -> float:
     return float(np.nanmedian(np.asarray(tel.wheel_rate(wheel), float)[m]) / RPM_TO_RAD_S)
 
 
-def detect_windows(tel: Telemetry, method: str,
-                   wheel: str = WHEEL) -> list[tuple[Window, Window]]:
+def detect_windows(tel: Telemetry, method: str, wheel: str = WHEEL,
+                   spacecraft: Spacecraft | None = None) -> list[tuple[Window, Window]]:
     """Time A / Time B window pairs from the quiet periods (:func:`cassini_bayes.windows.
-    quiet_periods`).
+    quiet_periods`; the wheels' tolerances the ``spacecraft`` model's ``quiet_tol_rpm``).
 
     * RCS: the two consecutive quiet periods across the largest change of ``wheel``'s median
       rate, with no body-rate rule and at least :data:`RCS_MIN_QUIET_S` long: Brown's Time B is
-      a free drift at ``J Δρ / I`` (Brown Eq 1: the body rates carry the balance), 0.3 mrad/s on
-      Cassini and 22 mrad/s on the ESPA bus; what makes it quiet is the wheels holding their
-      rates and no thruster firing.
+      a free drift at ``J Δρ / I`` (Brown Eq 1: the body rates carry the balance); what makes it
+      quiet is the wheels holding their rates and no thruster firing.
     * RWA: consecutive quiet periods paired in order, ``(Q0, Q1), (Q2, Q3), …`` — Brown's "Time A"
       before and "Time B" after the first slew of each slew pair.
 
@@ -63,10 +68,11 @@ def detect_windows(tel: Telemetry, method: str,
     wheel = _wheel_name(tel, wheel) if method == "rcs" else wheel
 
     if method == "rcs":
-        quiet = quiet_periods(tel, rate_max=np.inf, min_duration_s=RCS_MIN_QUIET_S)
+        quiet = quiet_periods(tel, rate_max=np.inf, min_duration_s=RCS_MIN_QUIET_S,
+                              spacecraft=spacecraft)
         rule = f"≥ {RCS_MIN_QUIET_S:g} s"
     else:
-        quiet = quiet_periods(tel)
+        quiet = quiet_periods(tel, spacecraft=spacecraft)
         rule = f"≥ 60 s, |ω| ≤ {QUIET_RATE_FRACTION:.2g} × the file's top rate"
     if len(quiet) < 2:
         raise InputError(f"found {len(quiet)} quiet period(s) ({rule}, wheels steady, no "
