@@ -12,7 +12,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
-from cassini_bayes.estimators.leak import residual_momentum
+from cassini_bayes.estimators.leak import rate_step_columns, residual_momentum
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
@@ -182,7 +182,14 @@ _TAIL_TAUS = 40.0
 def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft) -> LeakInputs:
     """Residual momentum (Lee Eq 10) and modelled impulses of a telemetry stretch; pulses of the
     log that act entirely outside the stretch are left out with a warning
-    (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    (:func:`~cassini_bayes.telemetry.pulses_in_span`).
+
+    With a pulse log the residual has the trapezoidal ``ΔG``'s error across the pulses' rate
+    steps put back (:func:`~cassini_bayes.estimators.leak.rate_step_columns`) at the model's
+    thrusts, time constants and inertia: the thrust errors ``δ`` move it by their own fraction
+    only (second order), and without it a bus whose wheels hold N m s while its dead band
+    fires carries a slow wander of the residual the white model cannot hold. On-times alone
+    do not place the pulses within a sample, and are used as they are."""
     if pulses is not None:
         p = spacecraft.pulse
         pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + _TAIL_TAUS * p.tau_fall)
@@ -190,6 +197,12 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
     q = spacecraft.moment_matrix
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
+    if pulses is not None and np.asarray(pulses.t_on).size:
+        p = spacecraft.pulse
+        steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
+                                  (pulses.t_on, pulses.thruster, pulses.width),
+                                  (p.tau_delay, p.tau_rise, p.tau_fall), len(spacecraft.thrusters))
+        r = r + np.einsum("nbsa,as,s->nb", steps, q, spacecraft.thrust_per_thruster)
     return LeakInputs(np.asarray(tel.t, float), r, j, q, spacecraft.thrust_per_thruster,
                       spacecraft.knowledge.torque_sd_nm, tel.source, spacecraft.thruster_names)
 
