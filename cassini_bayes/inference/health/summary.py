@@ -49,7 +49,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
-from cassini_bayes.estimators.leak import rate_step_columns
+from cassini_bayes.estimators.leak import rate_step_columns, rate_step_units
 from cassini_bayes.estimators.thrust import combination_label, regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
 from cassini_bayes.telemetry import pulses_in_span
@@ -260,24 +260,27 @@ def _sensitivities(tel, des: EventDesign, sc, tau_sd_frac, f, xw, w_fit, a_inv):
         tp = tau.copy()
         tp[i] *= 1.0 + tau_sd_frac
         jp = np.asarray(_impulse(t, *log, *tp, n_thrusters=m))
-        cp = rate_step_columns(t, omega, sc.inertia, des.h, log, tp, m)
+        cp = rate_step_columns(t, omega, sc.inertia, des.h, log, tp, m, des.units)
         dx = channel_design(jp, q, channels, cp)[:, :, fired] * sw - xw   # weighted change
         out.append(-a_inv @ np.einsum("tap,taq,q->p", xw, dx, f))
     axes, inertias = wheel_geometry(tel, sc)
     rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
-    zero = None
+    hs, dvs = [], []
     for k, name in enumerate(tel.wheel_names):
         sd = sc.wheel(name).inertia_sd_frac or sc.knowledge.wheel_inertia_sd_frac
         if not np.any(rates[:, k]) or not sd:
             continue
-        h = np.outer(rates[:, k] * inertias[k] * sd, axes[k])     # the wheel's momentum × sd
-        dv = np.asarray(_lhs(t, omega, np.zeros((3, 3)), h)) * np.sqrt(w_fit)[None, :]
-        # the steps' columns are affine in the wheel momentum: their change is C(h) − C(0)
-        if zero is None:
-            zero = rate_step_columns(t, omega, sc.inertia, np.zeros_like(h), log, tau, m)
-        dc = rate_step_columns(t, omega, sc.inertia, h, log, tau, m) - zero
-        dx = (channel_design(np.zeros_like(des.j), q, channels, dc)[:, :, fired] * sw)
-        out.append(a_inv @ (np.einsum("tap,ta->p", xw, dv) - np.einsum("tap,taq,q->p", xw, dx, f)))
+        hs.append(np.outer(rates[:, k] * inertias[k] * sd, axes[k]))   # its momentum × sd
+        dvs.append(np.asarray(_lhs(t, omega, np.zeros((3, 3)), hs[-1])) * np.sqrt(w_fit)[None, :])
+    if hs:
+        # the rate-step units are affine in the wheel momentum: each wheel's change is its
+        # units less those of no wheel momentum
+        units = rate_step_units(t, omega, sc.inertia, np.stack(hs + [np.zeros_like(hs[0])]))
+        for dv, du in zip(dvs, units[:-1] - units[-1]):
+            dc = rate_step_columns(t, omega, sc.inertia, None, log, tau, m, du)
+            dx = channel_design(np.zeros_like(des.j), q, channels, dc)[:, :, fired] * sw
+            out.append(a_inv @ (np.einsum("tap,ta->p", xw, dv)
+                                - np.einsum("tap,taq,q->p", xw, dx, f)))
     return out
 
 
@@ -287,7 +290,8 @@ class EventDesign(NamedTuple):
     splits, each less its rate steps' share of ``ΔG``: :func:`channel_design`), ``fired`` (P,)
     bool over all the columns, ``n_pulses`` (K,), the moment matrix ``q`` (3, M) m, the pulse
     ``log`` arrays, the time constants ``tau`` (3,) s, the
-    ``channels`` and the wheel momentum ``h`` (n, 3) N m s."""
+    ``channels``, the wheel momentum ``h`` (n, 3) N m s and the rate-step ``units``
+    (:func:`~cassini_bayes.estimators.leak.rate_step_units`)."""
 
     v: np.ndarray
     j: np.ndarray
@@ -299,14 +303,13 @@ class EventDesign(NamedTuple):
     tau: np.ndarray
     channels: HealthChannels
     h: np.ndarray
+    units: np.ndarray
 
 
 def _inputs(tel, pulses, spacecraft):
-    """``(v, j, log, tau, h, steps)`` of one event (Feldman & Lee Eq 17 with the pulse response
-    at the model's time constants; ``h`` the wheel momentum;
-    ``steps`` the rate-step columns of :func:`channel_design` at the model's inertia and time
-    constants); pulses acting entirely outside the telemetry are left out with a warning
-    (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    """``(v, j, log, tau, h)`` of one event (Feldman & Lee Eq 17 with the pulse response at the
+    model's time constants; ``h`` the wheel momentum, N m s); pulses acting entirely outside the
+    telemetry are left out with a warning (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
     if pulses is not None:
         p = spacecraft.pulse   # (its thrust is negligible 40 fall times after the command)
         pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + 40.0 * p.tau_fall)
@@ -320,9 +323,7 @@ def _inputs(tel, pulses, spacecraft):
     m = len(spacecraft.thrusters)
     v, j = regression_inputs(tel.t, tel.omega, h, spacecraft.inertia, pulses=log,
                              tau=tuple(tau), n_thrusters=m)
-    steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
-                              _padded(log, float(np.asarray(tel.t)[-1])), tau, m)
-    return v, j, log, tau, h, steps
+    return v, j, log, tau, h
 
 
 def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = None,
@@ -332,7 +333,12 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
 
     ``channels``: those of all the events fitted together (:func:`event_channels`); by default
     this event's own."""
-    v, j, log, tau, h, steps = _inputs(tel, pulses, spacecraft)
+    v, j, log, tau, h = _inputs(tel, pulses, spacecraft)
+    # the rate steps at the model's inertia and time constants (channel_design)
+    units = rate_step_units(tel.t, tel.omega, spacecraft.inertia, h)
+    steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
+                              _padded(log, float(np.asarray(tel.t)[-1])), tau,
+                              len(spacecraft.thrusters), units)
     q = spacecraft.moment_matrix
     if channels is None:
         channels = health_channels([j], spacecraft.thruster_names, q)
@@ -348,7 +354,7 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
                          f"{dict(zip(channels.names, n_pulses.tolist()))}, {n} samples)",
                          path=getattr(tel, "source", "telemetry"))
     _check_rank(x, j, channels, n_pulses, getattr(tel, "source", "telemetry"))
-    return EventDesign(v, j, x, fired, n_pulses, q, log, tau, channels, h)
+    return EventDesign(v, j, x, fired, n_pulses, q, log, tau, channels, h, units)
 
 
 _RANK_COND_MAX = 1e10
