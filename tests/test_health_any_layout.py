@@ -164,3 +164,42 @@ def test_cassinis_channels_are_the_papers_columns():
     want = [col(0), col(1), col(2), col(3), col(4) + col(6), col(5) + col(7),
             col(4) - col(6), col(5) - col(7)]
     np.testing.assert_array_equal(channel_design(j, q, ch), np.stack(want, axis=-1))
+
+
+@pytest.fixture(scope="module")
+def espa_campaign():
+    """The first four events of the ESPA health campaign (its file's seed): wheels at up to a
+    few N m s while the dead band fires 0.25 s pulses."""
+    from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
+
+    camp = load_campaign("health_degradation_espa_bus")
+    return [(ev, simulate(ev.scenario)) for ev in campaign_events(camp, camp.seed)[:4]]
+
+
+def _log_errors_at_the_truth(events) -> np.ndarray:
+    """(events, channels): each event's summary under its own TRUE spacecraft (inertia, wheels,
+    time constants) less the log of its true channel thrusts."""
+    from cassini_bayes.inference.health import event_channels
+
+    ch = event_channels([(s.telemetry, s.pulses) for _, s in events], events[0][1].prior)
+    out = []
+    for ev, sim in events:
+        sm = event_summary(sim.telemetry, sim.pulses, ev.scenario.truth, channels=ch)
+        out.append(sm.log_thrust - np.log(ch.weights @ ev.thrust_n))
+    return np.array(out)
+
+
+def test_rate_steps_leave_the_truth_at_the_noise(espa_campaign, monkeypatch):
+    """Under the true spacecraft, each event's thrusts come out within 0.6 % of the truth
+    (observed rms 0.11 %, largest 0.26 % over the 32 event channels: sensor noise). Without
+    the rate-step columns (the trapezoidal ΔG's error across each pulse's rate step, Feldman &
+    Lee Eq 15) the same events' errors are 3× larger or more (observed rms 0.85 %, up to 2.8 %):
+    the test measures the correction, and fails without it."""
+    from cassini_bayes.inference.health import summary as health_summary
+
+    err = _log_errors_at_the_truth(espa_campaign)
+    assert np.all(np.isfinite(err)) and np.max(np.abs(err)) < 0.006, err
+    monkeypatch.setattr(health_summary, "rate_step_columns",
+                        lambda t, *a: np.zeros((np.size(t), 3, a[5], 3)))
+    bare = _log_errors_at_the_truth(espa_campaign)
+    assert np.sqrt(np.mean(bare ** 2)) > 3 * np.sqrt(np.mean(err ** 2)), (bare, err)

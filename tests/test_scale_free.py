@@ -213,3 +213,50 @@ def test_fit_gives_the_same_relative_posterior(pair):
         mc_sd = np.hypot(float(az.mcse(xa, method="sd")), float(az.mcse(xb, method="sd")))
         assert abs(xb.mean() - xa.mean()) <= K_MCSE * mc_mean, (name, xa.mean(), xb.mean())
         assert abs(xb.std() - xa.std()) <= K_MCSE * mc_sd, (name, xa.std(), xb.std())
+
+
+@pytest.fixture(scope="module")
+def leak_pair(tmp_path_factory):
+    """Cassini's leak scenario (10 % of Z1 from 600 s, cut to 20 min) flown at its size and at
+    1e-4 of it (true thrusts scaled too): per scale the monitor's inputs."""
+    from cassini_bayes.inference.leak import leak_inputs
+
+    tmp = tmp_path_factory.mktemp("scaled_leak")
+    out = {}
+    for scale in (1.0, 1e-4):
+        path = tmp / f"cassini_post_probe_{scale:g}.toml"
+        path.write_text(tomli_w.dumps(scaled_model("cassini_post_probe", scale)))
+        d = scaled_scenario("leak_cruise", scale, str(path))
+        d["truth"]["thrust_n"] = [f * scale for f in d["truth"]["thrust_n"]]
+        d["run"]["duration_s"] = 1200.0
+        sim = cb.simulate(scenario_from_dict(d, "leak_cruise"), seed=11)
+        out[scale] = leak_inputs(sim.telemetry, sim.pulses, cb.load_spacecraft(path))
+    return out
+
+
+def test_leak_monitor_gives_the_same_answer(leak_pair):
+    """The Bayesian leak monitor at 1e-4 of Cassini: the residual, its offset prior and noise
+    floor 1e-4 times the original, every probability at every check, the fraction, its interval
+    and the onset the same (rtol 1e-6; they agree to 1e-14 and 1e-10). The noise floor of
+    1e-6 N m s put back (the scaled residual's noise is ~7e-7 N m s) moves the fraction's sd by
+    27 %: the test can fail. (The offset prior's scale barely matters: 10 N m s instead of the
+    wheels' capacity moves the probabilities by 7e-12.)"""
+    import dataclasses
+
+    from cassini_bayes.inference.leak import leak_posterior
+
+    a, b = leak_pair[1.0], leak_pair[1e-4]
+    np.testing.assert_allclose(b.residual / 1e-4, a.residual, rtol=0,
+                               atol=1e-6 * np.max(np.abs(a.residual)))
+    _close(b.offset_sd_nms / 1e-4, a.offset_sd_nms, "offset prior sd / s")
+    _close(b.noise_floor_nms / 1e-4, a.noise_floor_nms, "noise floor / s")
+    pa, pb = leak_posterior(a), leak_posterior(b)
+    assert pa.thruster == pb.thruster == "Z1"
+    assert pa.detection_time_s == pb.detection_time_s
+    np.testing.assert_allclose(pb.prob, pa.prob, rtol=0, atol=RTOL)
+    _close([pb.fraction_mean, pb.fraction_sd, *pb.fraction_interval, pb.onset_s],
+           [pa.fraction_mean, pa.fraction_sd, *pa.fraction_interval, pa.onset_s],
+           "fraction, its sd and interval, onset")
+    _close(pb.noise_sd_nms / 1e-4, pa.noise_sd_nms, "noise level / s")
+    old = leak_posterior(dataclasses.replace(b, noise_floor_nms=1e-6))
+    assert abs(old.fraction_sd - pa.fraction_sd) > 100 * RTOL * pa.fraction_sd

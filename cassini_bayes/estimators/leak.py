@@ -13,12 +13,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
-from cassini_bayes.physics.impulse import angular_impulse, impulse_lhs
+from cassini_bayes.physics.impulse import (angular_impulse, impulse_lhs, jump_areas,
+                                           rate_step_correction)
 
-__all__ = ["residual_momentum", "leak_torque", "momentum_correction", "threshold_monitor",
-           "ThresholdResult", "LEAK_THRESHOLD_NMS", "T_LIMIT_CRUISE_S", "ETA", "Z_ARM_M"]
+__all__ = ["residual_momentum", "rate_step_columns", "rate_step_units", "leak_torque",
+           "momentum_correction", "threshold_monitor", "ThresholdResult", "LEAK_THRESHOLD_NMS",
+           "T_LIMIT_CRUISE_S", "ETA", "Z_ARM_M"]
 
 _lhs = jax.jit(impulse_lhs)
 
@@ -40,6 +43,75 @@ def residual_momentum(t_s, omega_rad_s, inertia, h_wheels_body, q_matrix,
                     np.asarray(h_wheels_body, float))
     # Lee Eq 10 with T_RWA = -dH_RWA/dt: R = I dw + dH_RWA + dG - Q J
     return np.asarray(v - angular_impulse(q_matrix, impulse_ns))
+
+
+_TAIL_TAUS = 40.0   # a pulse's thrust is below e⁻⁴⁰ of its peak this many fall times after it
+_jump_areas = jax.jit(jump_areas, static_argnums=(5, 6))
+# per wheel-momentum history and body axis a: the correction of a unit area e_a in every
+# interval (accumulated)
+_unit_corrections = jax.jit(jax.vmap(jax.vmap(
+    lambda inertia, e_a, w_m, h_m: rate_step_correction(
+        inertia, jnp.broadcast_to(e_a[:, None], w_m.shape), w_m, h_m),
+    in_axes=(None, 0, None, None)), in_axes=(None, None, None, 0)))
+
+
+def _interval_means(x: np.ndarray) -> np.ndarray:
+    """(..., 3, n): the mean of samples ``i − 1`` and ``i`` of ``x`` (..., n, 3) at ``i`` (the
+    first sample's own value at ``i = 0``)."""
+    x = np.asarray(x, float)
+    mid = np.concatenate([x[..., :1, :], 0.5 * (x[..., 1:, :] + x[..., :-1, :])], -2)
+    return np.swapaxes(mid, -1, -2)
+
+
+def rate_step_units(t_s, omega_rad_s, inertia, h_wheels_body) -> np.ndarray:
+    """(..., 3, 3, n) N m s per N m s²: per interval (ending at sample ``i``), what the
+    trapezoidal ``ΔG`` misses for a unit area ``Q (F ⊙ ε)`` along body axis ``a`` (``[..., a,
+    b, i]``, ``b`` the axis of the miss): the increments of
+    :func:`~cassini_bayes.physics.impulse.rate_step_correction`, linear in the area.
+    ``h_wheels_body`` (n, 3) N m s, or (B, n, 3) for several wheel-momentum histories at once;
+    other arguments as :func:`~cassini_bayes.physics.impulse.impulse_lhs`. ``t_s`` only sets
+    the sample count. Affine in the wheel momentum: the difference of two histories' units is
+    the units of their difference's momentum term."""
+    h = np.asarray(h_wheels_body, float)
+    batch = h.reshape((-1,) + h.shape[-2:])
+    unit = np.asarray(_unit_corrections(np.asarray(inertia, float), np.eye(3),
+                                        _interval_means(np.asarray(omega_rad_s, float)),
+                                        _interval_means(batch)))          # (B, 3a, 3b, n)
+    assert unit.shape[-1] == np.size(t_s)
+    return np.diff(unit, axis=-1, prepend=0.0).reshape(h.shape[:-2] + unit.shape[1:])
+
+
+def rate_step_columns(t_s, omega_rad_s, inertia, h_wheels_body, pulses, tau,
+                      n_thrusters: int, units: np.ndarray | None = None) -> np.ndarray:
+    """(n, 3, M, 3) N m s per N per m: what the trapezoidal ``ΔG`` (Feldman & Lee Eq 15) misses
+    across the pulses' rate steps, per newton of thruster ``s`` and per metre of its moment arm
+    along body axis ``a`` (``[..., s, a]``), accumulated to each sample: the dense form of
+    :func:`~cassini_bayes.physics.impulse.rate_step_correction` for a least-squares design.
+
+    The correction is linear in the thrusts and in the arms, so ``V + Σ_s F_s C[:, :, s] @ q_s``
+    is Eq 17's left side with the steps put back (``q_s`` column ``s`` of ``Q``): an estimator
+    linear in ``F`` subtracts ``C[:, :, s] @ q_s`` from each thruster's column ``q_s j_s``
+    instead of guessing the thrust. ``pulses`` ``(t_on, thruster, width)``; ``tau`` (3,) s the
+    time constants of :func:`~cassini_bayes.physics.impulse.jump_areas`; ``units`` the
+    :func:`rate_step_units` of the same samples (computed when not given: they do not depend on
+    the pulses or ``tau``); other arguments as :func:`~cassini_bayes.physics.impulse.impulse_lhs`.
+    The correction's own dependence on the inertia is second order in the inertia's error and
+    is taken at ``inertia``.
+    """
+    t = np.asarray(t_s, float)
+    t_on, thr, width = (np.asarray(x) for x in pulses)
+    n = t.size
+    if n < 2 or t_on.size == 0:
+        return np.zeros((n, 3, n_thrusters, 3))
+    td, _, tf = (float(x) for x in tau)
+    k = int(np.ceil((float(np.max(width)) + td + _TAIL_TAUS * tf)
+                    / float(np.min(np.diff(t))))) + 1
+    slot = np.searchsorted(t, t_on, side="left")
+    eps = np.asarray(_jump_areas(t, t_on, np.asarray(thr, int), width, slot, k, n_thrusters,
+                                 tuple(float(x) for x in tau)))                   # (M, n) s²
+    if units is None:
+        units = rate_step_units(t, omega_rad_s, inertia, h_wheels_body)
+    return np.cumsum(np.einsum("sn,abn->nbsa", eps, units), axis=0)               # (n, 3, M, 3)
 
 
 def leak_torque(q_matrix, thruster: int, leak_fraction: float, thrust_n: float = 1.0) -> np.ndarray:

@@ -49,11 +49,13 @@ def _design(t: np.ndarray, impulse: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def nuisance_posterior(cols: np.ndarray, y: np.ndarray, noise_sd: np.ndarray,
-                       torque_sd_nm: float, eta: float, extra_sd=()):
+                       torque_sd_nm: float, eta: float, extra_sd=(),
+                       offset_sd_nms: float = OFFSET_SD_NMS):
     """Posterior of the monitor's nuisance parameters given rows ``y`` (n, 3) and design
     ``cols`` (n, 3, 6 + m + e), under the component of the torque's prior mixture that the data
     favour (the larger evidence; the mixture's mean would average two fits and fit neither);
-    ``extra_sd`` the prior sds of ``e`` more columns after the monitor's 6 + m (a leak's).
+    ``extra_sd`` the prior sds of ``e`` more columns after the monitor's 6 + m (a leak's);
+    ``offset_sd_nms`` the offsets' prior sd, N m s (the monitor's, ``LeakInputs.offset_sd_nms``).
 
     Returns ``(mean (6 + m + e,), p_eff)``: the posterior mean and the effective number of
     parameters (the trace of the hat matrix)."""
@@ -63,7 +65,7 @@ def nuisance_posterior(cols: np.ndarray, y: np.ndarray, noise_sd: np.ndarray,
     means, traces, log_z = [], [], []
     n_thrusters = cols.shape[-1] - 6 - len(extra_sd)
     for (scale, weight) in TORQUE_SCALES:
-        prec = 1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
+        prec = 1.0 / np.r_[np.full(3, offset_sd_nms ** 2),
                            np.full(3, (scale * max(torque_sd_nm, 1e-12)) ** 2),
                            np.full(n_thrusters, max(eta, 1e-12) ** 2), np.asarray(extra_sd) ** 2]
         a = np.diag(prec) + nn
@@ -103,7 +105,8 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
         def fit_at(onset: float):
             leak = (np.maximum(used.t - onset, 0.0)[:, None] * torque[None, :])[..., None]
             c2 = np.concatenate([cols, leak], axis=2)
-            m, p_eff = nuisance_posterior(c2, y, sd, torque_sd_nm, eta, extra_sd=(1.0,))
+            m, p_eff = nuisance_posterior(c2, y, sd, torque_sd_nm, eta, extra_sd=(1.0,),
+                                          offset_sd_nms=used.offset_sd_nms)
             e = y - np.einsum("iap,p->ia", c2, m)
             return float(np.sum((e / sd[None, :]) ** 2)), m[:p0], p_eff, e, onset, m[p0]
 
@@ -121,7 +124,8 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
         hyp = (f"a leak of {names[k]}, {100 * frac:.3g} % from {onset:.0f} s (the "
                f"monitor's estimate {100 * post.fraction_mean:.3g} % from {post.onset_s:.0f} s)")
     else:
-        mean, p_eff = nuisance_posterior(cols, y, sd, torque_sd_nm, eta)
+        mean, p_eff = nuisance_posterior(cols, y, sd, torque_sd_nm, eta,
+                                         offset_sd_nms=used.offset_sd_nms)
         e = y - np.einsum("iap,p->ia", cols, mean)
         chi2 = float(np.sum((e / sd[None, :]) ** 2))
         hyp = "no leak"

@@ -49,6 +49,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
+from cassini_bayes.estimators.leak import rate_step_columns, rate_step_units
 from cassini_bayes.estimators.thrust import combination_label, regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
 from cassini_bayes.telemetry import pulses_in_span
@@ -195,11 +196,17 @@ class EventSummary:
         return np.isfinite(self.log_thrust)
 
 
-def channel_design(j: np.ndarray, q_matrix: np.ndarray, channels: HealthChannels) -> np.ndarray:
+def channel_design(j: np.ndarray, q_matrix: np.ndarray, channels: HealthChannels,
+                   steps: np.ndarray | None = None) -> np.ndarray:
     """``(n, 3, P)``: the angular impulse per newton (N m s per N) of each regression column
     (:meth:`HealthChannels.columns`: each channel's ``Σ_s Q[:, s] J_s(t)`` over its members,
-    then the split directions); ``j`` (n, M) per-newton impulses (s)."""
-    cols = [sum(vec[None, :] * j[:, s:s + 1] for s, vec in col)
+    then the split directions); ``j`` (n, M) per-newton impulses (s). ``steps`` (n, 3, M, 3):
+    the trapezoidal ``ΔG``'s error across the pulses' rate steps per newton and per metre of arm
+    (:func:`~cassini_bayes.estimators.leak.rate_step_columns`), taken off each column: Eq 17's
+    left side misses ``Σ_s F_s steps[:, :, s] @ q_s``, linear in the thrusts, so the
+    regression carries it on its columns rather than at a guessed thrust."""
+    cols = [sum(vec[None, :] * j[:, s:s + 1]
+                - (0.0 if steps is None else steps[:, :, s] @ vec) for s, vec in col)
             for col in channels.columns(q_matrix)]
     return np.stack(cols, axis=-1)
 
@@ -233,43 +240,58 @@ def _padded(log, t_end: float):
             np.r_[width, np.zeros(extra)])
 
 
-def _sensitivities(tel, log, sc, tau, tau_sd_frac, q, channels, fired, f, xw, w_fit, a_inv):
+def _sensitivities(tel, des: EventDesign, sc, tau_sd_frac, f, xw, w_fit, a_inv):
     """One-sd changes of the weighted least-squares estimate (p,) for each time constant off by
     ``tau_sd_frac`` and each wheel's spin inertia off by its ``inertia_sd_frac``: the change of
-    ``f = A⁻¹ Xᵀ W v`` at the fit's own weights ``w_fit`` (the weights of its last pass)."""
+    ``f = A⁻¹ Xᵀ W v`` at the fit's own weights ``w_fit`` (the weights of its last pass), the
+    rate-step columns moved with them (the areas with ``τ``, the wheel momentum they turn)."""
     from cassini_bayes.estimators.baseline import wheel_geometry
 
     sw = np.sqrt(w_fit)[None, :, None]
     t = np.asarray(tel.t, float)
-    log = _padded(log, t[-1])
+    omega = np.asarray(tel.omega, float)
+    tau, q, channels, fired = des.tau, des.q, des.channels, des.fired
+    log = _padded(des.log, t[-1])
+    m = len(channels.thrusters)
     out = []
     for i in range(3):
         if tau_sd_frac <= 0 or tau[i] <= 0:
             continue
         tp = tau.copy()
         tp[i] *= 1.0 + tau_sd_frac
-        jp = np.asarray(_impulse(t, *log, *tp, n_thrusters=len(channels.thrusters)))
-        dx = channel_design(jp, q, channels)[:, :, fired] * sw - xw   # weighted change
+        jp = np.asarray(_impulse(t, *log, *tp, n_thrusters=m))
+        cp = rate_step_columns(t, omega, sc.inertia, des.h, log, tp, m, des.units)
+        dx = channel_design(jp, q, channels, cp)[:, :, fired] * sw - xw   # weighted change
         out.append(-a_inv @ np.einsum("tap,taq,q->p", xw, dx, f))
     axes, inertias = wheel_geometry(tel, sc)
     rates = np.nan_to_num(np.asarray(tel.wheel_rates, float))
-    omega = np.asarray(tel.omega, float)
+    hs, dvs = [], []
     for k, name in enumerate(tel.wheel_names):
         sd = sc.wheel(name).inertia_sd_frac or sc.knowledge.wheel_inertia_sd_frac
         if not np.any(rates[:, k]) or not sd:
             continue
-        h = np.outer(rates[:, k] * inertias[k] * sd, axes[k])     # the wheel's momentum × sd
-        dv = np.asarray(_lhs(t, omega, np.zeros((3, 3)), h)) * np.sqrt(w_fit)[None, :]
-        out.append(a_inv @ np.einsum("tap,ta->p", xw, dv))
+        hs.append(np.outer(rates[:, k] * inertias[k] * sd, axes[k]))   # its momentum × sd
+        dvs.append(np.asarray(_lhs(t, omega, np.zeros((3, 3)), hs[-1])) * np.sqrt(w_fit)[None, :])
+    if hs:
+        # the rate-step units are affine in the wheel momentum: each wheel's change is its
+        # units less those of no wheel momentum
+        units = rate_step_units(t, omega, sc.inertia, np.stack(hs + [np.zeros_like(hs[0])]))
+        for dv, du in zip(dvs, units[:-1] - units[-1]):
+            dc = rate_step_columns(t, omega, sc.inertia, None, log, tau, m, du)
+            dx = channel_design(np.zeros_like(des.j), q, channels, dc)[:, :, fired] * sw
+            out.append(a_inv @ (np.einsum("tap,ta->p", xw, dv)
+                                - np.einsum("tap,taq,q->p", xw, dx, f)))
     return out
 
 
 class EventDesign(NamedTuple):
     """The regression of one event (Feldman & Lee Eq 17): ``v`` (n, 3) N m s, the per-newton
     impulses ``j`` (n, M) s, the design ``x`` (n, 3, p) of the fired columns (channels, then
-    splits), ``fired`` (P,) bool over all the columns, ``n_pulses`` (K,), the moment matrix
-    ``q`` (3, M) m, the pulse ``log`` arrays, the time constants ``tau`` (3,) s and the
-    ``channels``."""
+    splits, each less its rate steps' share of ``ΔG``: :func:`channel_design`), ``fired`` (P,)
+    bool over all the columns, ``n_pulses`` (K,), the moment matrix ``q`` (3, M) m, the pulse
+    ``log`` arrays, the time constants ``tau`` (3,) s, the
+    ``channels``, the wheel momentum ``h`` (n, 3) N m s and the rate-step ``units``
+    (:func:`~cassini_bayes.estimators.leak.rate_step_units`)."""
 
     v: np.ndarray
     j: np.ndarray
@@ -280,12 +302,14 @@ class EventDesign(NamedTuple):
     log: tuple
     tau: np.ndarray
     channels: HealthChannels
+    h: np.ndarray
+    units: np.ndarray
 
 
 def _inputs(tel, pulses, spacecraft):
-    """``(v, j, log, tau)`` of one event (Feldman & Lee Eq 17 with the pulse response at the
-    model's time constants); pulses acting entirely outside the telemetry are left out with a
-    warning (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    """``(v, j, log, tau, h)`` of one event (Feldman & Lee Eq 17 with the pulse response at the
+    model's time constants; ``h`` the wheel momentum, N m s); pulses acting entirely outside the
+    telemetry are left out with a warning (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
     if pulses is not None:
         p = spacecraft.pulse   # (its thrust is negligible 40 fall times after the command)
         pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + 40.0 * p.tau_fall)
@@ -295,10 +319,11 @@ def _inputs(tel, pulses, spacecraft):
     p = spacecraft.pulse
     log = (pulses.t_on, pulses.thruster, pulses.width)
     tau = np.array([p.tau_delay, p.tau_rise, p.tau_fall])
-    v, j = regression_inputs(tel.t, tel.omega, wheel_momentum(tel, spacecraft),
-                             spacecraft.inertia, pulses=log, tau=tuple(tau),
-                             n_thrusters=len(spacecraft.thrusters))
-    return v, j, log, tau
+    h = np.asarray(wheel_momentum(tel, spacecraft), float)
+    m = len(spacecraft.thrusters)
+    v, j = regression_inputs(tel.t, tel.omega, h, spacecraft.inertia, pulses=log,
+                             tau=tuple(tau), n_thrusters=m)
+    return v, j, log, tau, h
 
 
 def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = None,
@@ -308,7 +333,12 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
 
     ``channels``: those of all the events fitted together (:func:`event_channels`); by default
     this event's own."""
-    v, j, log, tau = _inputs(tel, pulses, spacecraft)
+    v, j, log, tau, h = _inputs(tel, pulses, spacecraft)
+    # the rate steps at the model's inertia and time constants (channel_design)
+    units = rate_step_units(tel.t, tel.omega, spacecraft.inertia, h)
+    steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
+                              _padded(log, float(np.asarray(tel.t)[-1])), tau,
+                              len(spacecraft.thrusters), units)
     q = spacecraft.moment_matrix
     if channels is None:
         channels = health_channels([j], spacecraft.thruster_names, q)
@@ -317,14 +347,14 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
     cols = channels.columns(q)
     owner = [next(k for k, g in enumerate(channels.groups) if col[0][0] in g) for col in cols]
     fired = n_pulses[owner] > 0                          # the channels, then the splits
-    x = channel_design(j, q, channels)[:, :, fired]
+    x = channel_design(j, q, channels, steps)[:, :, fired]
     n = v.shape[0]
     if not (n_pulses >= min_pulses).any() or 3 * n <= fired.sum() + 2:
         raise InputError(f"identifies no thrust channel (pulses per channel "
                          f"{dict(zip(channels.names, n_pulses.tolist()))}, {n} samples)",
                          path=getattr(tel, "source", "telemetry"))
     _check_rank(x, j, channels, n_pulses, getattr(tel, "source", "telemetry"))
-    return EventDesign(v, j, x, fired, n_pulses, q, log, tau, channels)
+    return EventDesign(v, j, x, fired, n_pulses, q, log, tau, channels, h, units)
 
 
 _RANK_COND_MAX = 1e10
@@ -408,7 +438,7 @@ def event_summary(tel, pulses, spacecraft, *, channels: HealthChannels | None = 
     with a finite ``thrust_n`` (:func:`left_out_channels` says so for a fit).
     """
     des = event_design(tel, pulses, spacecraft, channels=channels, min_pulses=min_pulses)
-    v, x, fired, n_pulses, q, ch = des.v, des.x, des.fired, des.n_pulses, des.q, des.channels
+    v, x, fired, n_pulses, ch = des.v, des.x, des.fired, des.n_pulses, des.channels
     k_ch = len(ch)
     n = v.shape[0]
     lags = newey_west_lags(n) if lags is None else int(lags)
@@ -417,8 +447,7 @@ def event_summary(tel, pulses, spacecraft, *, channels: HealthChannels | None = 
     w = 1.0 / np.maximum(rms, 1e-12) ** 2
     a_inv = np.linalg.inv(a)
     cov_f = residual_cov(x, e, w_fit, w, a, lags)
-    for g in _sensitivities(tel, des.log, spacecraft, des.tau, tau_sd_frac, q, ch, fired, f, xw,
-                            w_fit, a_inv):
+    for g in _sensitivities(tel, des, spacecraft, tau_sd_frac, f, xw, w_fit, a_inv):
         cov_f += np.outer(g, g)
     idx = np.flatnonzero(fired[:k_ch])
     f, cov_f = f[:idx.size], cov_f[:idx.size, :idx.size]    # the splits are nuisance

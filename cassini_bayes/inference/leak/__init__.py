@@ -8,7 +8,9 @@ hypothesis ``k`` (thruster ``k`` leaks a fraction ``f`` of its thrust from ``t_L
 
     R(t_i) = r_0 + T (t_i − t_0) + Σ_j δ_j Q[:, j] J_j(t_i) + f F Q[:, k] (t_i − t_L)_+ + e_i
 
-* ``r_0`` (3,) the offset of the first sample's noise, prior ``N(0, 10² N m s)`` per axis;
+* ``r_0`` (3,) the offset of the first sample's noise, prior ``N(0, C²)`` per axis, ``C`` the
+  model's wheel momentum capacity (:attr:`LeakInputs.offset_sd_nms`: the spacecraft's own
+  momentum scale, wide);
 * ``T`` (3,) an unknown constant external torque (N m), prior a scale mixture of normals: with
   probability 0.9 ``N(0, σ_T²)``, ``σ_T`` the spacecraft model's ``[torque_knowledge] sd_nm``,
   and with 0.1 ten times wider (:data:`TORQUE_SCALES`): a torque several ``σ_T`` off the model
@@ -21,14 +23,16 @@ hypothesis ``k`` (thruster ``k`` leaks a fraction ``f`` of its thrust from ``t_L
 * the leak column ``F_k Q[:, k] (t − t_L)_+``: a 10 % Z1 leak at 1 N is (−0.158, +0.123, 0) N m;
 * ``e_i`` white noise, per axis, its sd from the data (median absolute deviation of the second
   differences ÷ √6, blind to a leak's slope; the larger of the levels of the raw rows and of
-  the rows used). ``R`` is an *integral* of the torque residual, but its noise is not a random
-  walk: ``I Δω`` and ``ΔH_RWA`` are differences of sampled states, so the gyro and tach noise
-  enter each sample once. What is integrated — the gyroscopic impulse ``ΔG`` from noisy 1 s
-  rates, across pulses — makes a random walk of ~2e-3 N m s over hours, which a white model on
-  1 s samples takes for a
-  torque of ~1e-7 N m; the monitor therefore uses the residual every :data:`SAMPLE_STEP_S` =
-  60 s, where the white level covers it (measured, docs/leak.md). A random-walk term in the
-  likelihood (a Kalman filter per hypothesis) would be the exact remedy; it is not done here.
+  the rows used; at least :attr:`LeakInputs.noise_floor_nms`, the spacecraft's momentum at the
+  package's rate-noise floors). ``R`` is an *integral* of the torque residual, but its noise is
+  not a random walk: ``I Δω`` and ``ΔH_RWA`` are differences of sampled states, so the gyro and
+  tach noise enter each sample once. What is integrated — the gyroscopic impulse ``ΔG`` from
+  noisy 1 s rates, across pulses (the trapezoid's first-order error at each pulse's rate step is
+  put back, :func:`leak_inputs`) — makes a random walk of ~2e-3 N m s over hours, which a white
+  model on 1 s samples takes for a torque of ~1e-7 N m; the monitor therefore uses the residual
+  every :data:`SAMPLE_STEP_S` = 60 s, where the white level covers it (measured, docs/leak.md).
+  A random-walk term in the likelihood (a Kalman filter per hypothesis) would be the exact
+  remedy; it is not done here.
 
 ``r_0``, ``T`` and ``δ`` are Gaussian and the model is linear, so they are integrated out exactly
 (Woodbury). The leak fraction has a scale-mixture of half-normal priors (scales 10⁻⁴ … 1, equal

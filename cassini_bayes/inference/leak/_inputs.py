@@ -12,11 +12,11 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
-from cassini_bayes.estimators.leak import residual_momentum
+from cassini_bayes.estimators.leak import rate_step_columns, residual_momentum
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
+from cassini_bayes.telemetry import RATE_NOISE_FLOORS, PulseLog, Telemetry, pulses_in_span
 
 HYPOTHESES = ("none",) + THRUSTER_NAMES
 """Cassini's hypotheses (the Eq 16 layout); a run's own are :attr:`LeakInputs.hypotheses`:
@@ -27,7 +27,10 @@ TORQUE_SCALES = ((1.0, 0.9), (10.0, 0.1))
 """The external torque's prior: ``(multiple of the model file's sd, weight)`` of each normal
 component of its scale mixture (a contaminated normal)."""
 OFFSET_SD_NMS = 10.0
-"""Prior sd of the residual's offset ``r_0`` per axis, N m s (wide: it only absorbs noise)."""
+"""Prior sd of the residual's offset ``r_0`` per axis, N m s, of inputs built without a
+spacecraft model (:class:`LeakInputs`' default; Cassini's scale): :func:`leak_inputs` takes the
+model's wheel momentum capacity instead (wide: the offset only absorbs the first sample's
+noise, and a prior of the spacecraft's own momentum scale keeps it so at any size)."""
 SAMPLE_STEP_S = 60.0
 """Spacing (s) of the residual samples the monitor uses. Besides its white noise (~0.007 N m s
 per sample) the residual carries a random walk: the gyroscopic impulse ``ΔG`` is integrated from
@@ -39,7 +42,6 @@ it uses, the surer it is. Measured on 24 four-hour cruise control stretches, the
 at 30 s and 0.003 / 0.011 / 0.032 at 60 s (docs/leak.md)."""
 MAX_GRID = 20_000
 """Most steps of any of the monitor's grids (samples, checks, onsets) over a stretch."""
-_NOISE_FLOOR_NMS = 1e-6
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,9 @@ class LeakInputs:
     source : the telemetry it came from, for error messages.
     thruster_names : (m,) the thrusters' names, in the order of the columns (Cassini's
         ``Z1 … Y4`` by default).
+    offset_sd_nms : prior sd of the residual's offset per axis, N m s (:data:`OFFSET_SD_NMS`).
+    noise_floor_nms : the white-noise level's floor per axis, N m s, for noise-free data (0:
+        none, the residual must carry noise).
     """
 
     t: np.ndarray
@@ -63,6 +68,8 @@ class LeakInputs:
     torque_sd_nm: float
     source: str = "<telemetry>"
     thruster_names: tuple[str, ...] = THRUSTER_NAMES
+    offset_sd_nms: float = OFFSET_SD_NMS
+    noise_floor_nms: float = 0.0
 
     def __post_init__(self):
         m = len(self.thruster_names)
@@ -182,7 +189,14 @@ _TAIL_TAUS = 40.0
 def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft) -> LeakInputs:
     """Residual momentum (Lee Eq 10) and modelled impulses of a telemetry stretch; pulses of the
     log that act entirely outside the stretch are left out with a warning
-    (:func:`~cassini_bayes.telemetry.pulses_in_span`)."""
+    (:func:`~cassini_bayes.telemetry.pulses_in_span`).
+
+    With a pulse log the residual has the trapezoidal ``ΔG``'s error across the pulses' rate
+    steps put back (:func:`~cassini_bayes.estimators.leak.rate_step_columns`) at the model's
+    thrusts, time constants and inertia: the thrust errors ``δ`` move it by their own fraction
+    only (second order), and without it a bus whose wheels hold N m s while its dead band
+    fires carries a slow wander of the residual the white model cannot hold. On-times alone
+    do not place the pulses within a sample, and are used as they are."""
     if pulses is not None:
         p = spacecraft.pulse
         pulses = pulses_in_span(pulses, tel, tail_s=p.tau_delay + _TAIL_TAUS * p.tau_fall)
@@ -190,19 +204,40 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
     q = spacecraft.moment_matrix
     j = _impulses(tel, pulses, spacecraft)
     r = residual_momentum(tel.t, tel.omega, spacecraft.inertia, h, q, j)
+    if pulses is not None and np.asarray(pulses.t_on).size:
+        p = spacecraft.pulse
+        steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
+                                  (pulses.t_on, pulses.thruster, pulses.width),
+                                  (p.tau_delay, p.tau_rise, p.tau_fall), len(spacecraft.thrusters))
+        r = r + np.einsum("nbsa,as,s->nb", steps, q, spacecraft.thrust_per_thruster)
     return LeakInputs(np.asarray(tel.t, float), r, j, q, spacecraft.thrust_per_thruster,
-                      spacecraft.knowledge.torque_sd_nm, tel.source, spacecraft.thruster_names)
+                      spacecraft.knowledge.torque_sd_nm, tel.source, spacecraft.thruster_names,
+                      offset_sd_nms=spacecraft.momentum_capacity_nms,
+                      noise_floor_nms=_noise_floor_nms(spacecraft))
 
 
-def _noise_sd(r: np.ndarray) -> np.ndarray:
-    """White-noise sd per axis (N m s) of rows ``r`` (n, 3): the median absolute deviation of
-    the second differences ÷ √6. A leak or a torque adds a constant to every first difference
-    after its onset, which second differences remove (but at the onset's one row); first
-    differences read a leak's slope as noise (1.1-2× the level, docs/sbc/leak)."""
+def _noise_floor_nms(spacecraft: Spacecraft) -> float:
+    """The momentum noise of one sample at the package's rate-noise floors, N m s:
+    ``√((λ_max σ_ω)² + Σ_k (J_k σ_ρ)²)``, ``λ_max`` the model's largest principal moment, ``J_k``
+    its wheels' spin inertias and ``(σ_ω, σ_ρ)`` :data:`~cassini_bayes.telemetry.RATE_NOISE_FLOORS`
+    (the floors of measured body- and wheel-rate noise): the residual's white-noise level of
+    noise-free data, in the spacecraft's own momentum (Cassini ~7e-6 N m s, the ESPA bus 2e-8)."""
+    s_w, s_r = RATE_NOISE_FLOORS
+    lam = float(np.max(np.linalg.eigvalsh(np.asarray(spacecraft.inertia, float))))
+    j = np.array([w.inertia for w in spacecraft.wheels], float)
+    return float(np.hypot(lam * s_w, s_r * np.linalg.norm(j)))
+
+
+def _noise_sd(r: np.ndarray, floor_nms: float) -> np.ndarray:
+    """White-noise sd per axis (N m s) of rows ``r`` (n, 3), at least ``floor_nms``
+    (:attr:`LeakInputs.noise_floor_nms`): the median absolute deviation of the second
+    differences ÷ √6. A leak or a torque adds a constant to every first difference after its
+    onset, which second differences remove (but at the onset's one row); first differences read
+    a leak's slope as noise (1.1-2× the level, docs/sbc/leak)."""
     d = np.diff(r, n=2, axis=0)
     if d.shape[0] < 2:
-        return np.full(3, _NOISE_FLOOR_NMS)
+        return np.full(3, floor_nms)
     mad = np.median(np.abs(d - np.median(d, axis=0)), axis=0)
-    return np.maximum(1.4826 * mad / np.sqrt(6.0), _NOISE_FLOOR_NMS)
+    return np.maximum(1.4826 * mad / np.sqrt(6.0), floor_nms)
 
 

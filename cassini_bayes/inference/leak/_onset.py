@@ -238,7 +238,8 @@ class _Check:
     def _nodes(self, idx):
         """Quadrature nodes ``(i, w, log_weight)`` of the flat entries ``idx`` (``i`` indexes
         ``idx``; each entry's nodes contiguous)."""
-        f = (lambda a: np.broadcast_to(a, self.const.shape).ravel()[idx])
+        def f(a):
+            return np.broadcast_to(a, self.const.shape).ravel()[idx]
         return _nodes(f(self.b), f(self.g), f(self.r0), f(self.r1), f(self.easy), self.rule)
 
     def log_evidence(self) -> np.ndarray:
@@ -254,7 +255,8 @@ class _Check:
         sel[:, k] = np.isfinite(self.log_bf[:, k])
         idx = np.flatnonzero(sel)
         i, w, lw = self._nodes(idx)
-        f = (lambda a: np.broadcast_to(a, self.const.shape).ravel()[idx[i]])
+        def f(a):
+            return np.broadcast_to(a, self.const.shape).ravel()[idx[i]]
         lw = lw + f(self.const)
         d = np.sinh(w) / f(self.scale) - f(self.shift)          # onset before t_ref, s
         s = f(np.broadcast_to(FRACTION_SCALES, self.const.shape))
@@ -268,12 +270,13 @@ class _Check:
     def onset_cdf(self, k: int, t_s: float) -> float:
         """Thruster ``k``'s posterior probability that its onset is before ``t_s`` (s from the
         stretch's first row)."""
-        l = int(np.searchsorted(self.t_ref, t_s, side="right"))   # the cell holding t_s
+        cell = int(np.searchsorted(self.t_ref, t_s, side="right"))   # the cell holding t_s
         total = logsumexp(self.log_bf[:, k])
-        parts = [logsumexp(self.log_bf[:l, k])] if l else []
-        if l < self.t_ref.size:
-            d = max(self.t_ref[l] - t_s, 0.0)
-            f = (lambda a: np.broadcast_to(a, self.const.shape)[l, k].ravel())
+        parts = [logsumexp(self.log_bf[:cell, k])] if cell else []
+        if cell < self.t_ref.size:
+            d = max(self.t_ref[cell] - t_s, 0.0)
+            def f(a):
+                return np.broadcast_to(a, self.const.shape)[cell, k].ravel()
             r = f(self.scale) * (d + f(self.shift))
             i, _, lw = _nodes(f(self.b), f(self.g), r, f(self.r1), np.zeros(r.size, bool),
                               self.rule)

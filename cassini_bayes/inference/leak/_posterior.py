@@ -11,9 +11,8 @@ from scipy.special import log_ndtr, logsumexp
 
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.leak import ETA
-from cassini_bayes.inference.leak._inputs import (MAX_GRID, OFFSET_SD_NMS, SAMPLE_STEP_S,
-                                                 TORQUE_SCALES, LeakInputs, LeakPosterior,
-                                                 _noise_sd)
+from cassini_bayes.inference.leak._inputs import (MAX_GRID, SAMPLE_STEP_S, TORQUE_SCALES,
+                                                 LeakInputs, LeakPosterior, _noise_sd)
 from cassini_bayes.inference.leak._onset import _LOG_SQRT_2PI, _RULE, _Check, _Rule
 
 
@@ -34,13 +33,14 @@ class _Sums:
         cols = np.concatenate([np.broadcast_to(eye, (n, 3, 3)), t[:, None, None] * eye[None],
                                q[None, :, :] * inp.impulse[:, None, :]], axis=2)
         # one nuisance prior precision per component of the torque's scale mixture
-        self.prior_prec = [1.0 / np.r_[np.full(3, OFFSET_SD_NMS ** 2),
+        self.prior_prec = [1.0 / np.r_[np.full(3, inp.offset_sd_nms ** 2),
                                        np.full(3, (scale * max(inp.torque_sd_nm, 1e-12)) ** 2),
                                        np.full(q.shape[1], max(eta, 1e-12) ** 2)]
                            for scale, _ in TORQUE_SCALES]
         self.log_w = np.log([w for _, w in TORQUE_SCALES])
         self.t, self.y = t, y
         self.raw_t, self.raw_y = raw.t, raw.residual
+        self.floor = inp.noise_floor_nms
         self.nn = _cum(np.einsum("iap,iaq->iapq", cols, cols))
         self.ny = _cum(np.einsum("iap,ia->iap", cols, y))
         self.n1, self.nt = _cum(cols), _cum(t[:, None, None] * cols)
@@ -53,7 +53,7 @@ class _Sums:
         levels seen between the used rows and between the raw telemetry rows (the latter is
         reliable from a few dozen seconds on, the former holds the slow wander)."""
         raw = self.raw_y[:np.searchsorted(self.raw_t, self.t[c] + self.raw_t[0], "right")]
-        return np.maximum(_noise_sd(self.y[:c + 1]), _noise_sd(raw))
+        return np.maximum(_noise_sd(self.y[:c + 1], self.floor), _noise_sd(raw, self.floor))
 
     def check(self, c: int, rule: _Rule = _RULE) -> _Check:
         """The evidence of every thruster's leak with the data rows 0..c (module docstring), its
