@@ -15,7 +15,7 @@ from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, column_statistics
 from cassini_bayes.inference.laplace import laplace
-from cassini_bayes.inference.noise import rate_noise_levels
+from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
 from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
@@ -284,7 +284,8 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         wid[e, :m] = log.width      # padded pulses: width 0 → no impulse, slot n_max → dropped
         slot[e, :m] = _pulse_slots(t, log)
         wcov[e] = wc
-        noise[e] = rate_noise_levels(tel) if noise_hat is None else noise_hat[e]
+        noise[e] = (rate_noise_levels(tel, pulse_bent(t, log.t_on, log.width))
+                    if noise_hat is None else noise_hat[e])
         fired[np.unique(log.thruster)] = True
 
     kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
