@@ -319,10 +319,14 @@ def _sensitivity_rules(summary: dict, sensitivity: dict) -> dict:
 
 
 def _az_mcse(x, method: str, prob: float | None = None) -> float:
-    import arviz as az
+    import numpy as np
 
+    from cassini_bayes._arviz import load_arviz
+
+    az = load_arviz()    # without numba: ArviZ's numba kernel of mcse(method="sd") fails
     kwargs = {"prob": prob} if prob is not None else {}
-    return float(az.mcse(x, method=method, **kwargs))
+    # arviz 0.23 returns a (1,) array for a bare (chain, draw) array
+    return float(np.asarray(az.mcse(x, method=method, **kwargs)).reshape(()))
 
 
 def _mcse_by_label(idata) -> dict[str, dict[str, float]]:
@@ -348,14 +352,14 @@ def _mcse_by_label(idata) -> dict[str, dict[str, float]]:
 # --- recording and the false-failure check -------------------------------------------------
 
 def _fit(model: str, files: dict, out: Path, seed: int | None = None) -> tuple[dict, object]:
-    import arviz as az
+    from cassini_bayes._arviz import load_arviz
 
     from cassini_bayes.cli import main
 
     code = main(cli_args(model, files, out, seed))
     assert code in (0, 3), f"{model}: exit {code}"
     summary = numbers(json.loads((out / "summary.json").read_text()))
-    return summary, az.from_netcdf(out / "posterior.nc")
+    return summary, load_arviz().from_netcdf(out / "posterior.nc")
 
 
 def record() -> None:  # pragma: no cover - run by hand
