@@ -229,7 +229,7 @@ def test_campaign_fit_is_the_runners_sampler():
     (the one NUTS driver of the package, vmapped over data sets), and vmapped over a batch each
     replicate gets the fit it would get alone (to rounding: a vmapped program may order
     floating-point reductions differently)."""
-    from cassini_bayes.analysis.sbc_models import _toy_numpyro_model, _toy_settings
+    from cassini_bayes.analysis.sbc_models._toy import _toy_numpyro_model, _toy_settings
     from cassini_bayes.inference.runner import run_nuts
 
     model = build_model(SPEC)
