@@ -38,7 +38,8 @@ QUIET_TORQUE_KNOWLEDGE = 10.0
 """A wheel is busy (biasing) in :func:`quiet_windows` while its motor torque exceeds this many
 times the truth model's ``[torque_knowledge] sd_nm``: more than holding the attitude against the
 environment takes (Cassini: 1.5e-4 N m)."""
-_IMPULSE_RTOL = 1e-9      # a thruster fires while its impulse grows by this × the run's largest step
+# a thruster fires while its impulse grows by this × the run's largest step
+_IMPULSE_RTOL = 1e-9
 
 
 _PREPARED: dict[int, tuple] = {}   # id(scenario) → (scenario, plan, controller arrays), a few
