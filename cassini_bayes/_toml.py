@@ -38,10 +38,25 @@ def read_toml(path: Path, what: str, where: str) -> dict[str, Any]:
     except OSError as e:
         raise InputError(f"cannot be read ({e.strerror}); check the path and its permissions",
                          path=str(path)) from None
+    return parse_toml(text, str(path))
+
+
+def parse_toml(text: str, source: str) -> dict[str, Any]:
+    """``text`` parsed as TOML; bad TOML is a one-line :class:`InputError` naming ``source``
+    (the file the text came from)."""
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
-        raise InputError(f"not valid TOML: {e}", path=str(path)) from None
+        raise InputError(f"not valid TOML: {e}", path=source) from None
+
+
+def toml_value(raw: str) -> Any:
+    """``raw`` read as one TOML value (``300``, ``1.2``, ``false``, ``"cone"``), else the text
+    itself (stripped): what a ``KEY=VALUE`` option on the command line means."""
+    try:
+        return tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        return raw.strip()
 
 
 def is_numbers(v: Any) -> bool:

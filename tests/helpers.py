@@ -51,3 +51,10 @@ def campaign_sbc(res, alpha_family: float = 0.01):
     return sbc.sbc_result(res.names, res.rank, res.n_draws, alpha_family=alpha_family,
                           draws={n: res.draws[:, j] for j, n in enumerate(res.names)},
                           truth={n: res.truth[:, j] for j, n in enumerate(res.names)})
+
+
+def replicate_of(arrays, i: int):
+    """Replicate ``i`` of batched simulator output (a pytree of arrays), as NumPy."""
+    import jax
+
+    return jax.tree.map(lambda a: np.asarray(a[i]), arrays)

@@ -211,6 +211,18 @@ def _exact_normal(spec):
     return SbcModel("exact-normal", ("theta",), prior_sample, simulate, fit, vectorized=False)
 
 
+def test_a_model_needs_a_simulator():
+    """``simulate`` may be ``None`` only beside ``simulate_batch``: one of them makes the data."""
+    from cassini_bayes.analysis.sbc_models import SbcModel
+
+    model = _exact_normal(None)
+    with pytest.raises(ValueError, match="neither simulate nor simulate_batch"):
+        SbcModel("no-data", ("theta",), model.prior_sample, None, model.fit)
+    batch = SbcModel("batched", ("theta",), model.prior_sample, None, model.fit,
+                     simulate_batch=lambda prior_keys, sim_keys: ({}, None))
+    assert batch.simulate is None
+
+
 def test_failed_fits_are_counted_not_fatal(tmp_path):
     from cassini_bayes.analysis.sbc_models import register
 
@@ -229,7 +241,7 @@ def test_campaign_fit_is_the_runners_sampler():
     (the one NUTS driver of the package, vmapped over data sets), and vmapped over a batch each
     replicate gets the fit it would get alone (to rounding: a vmapped program may order
     floating-point reductions differently)."""
-    from cassini_bayes.analysis.sbc_models import _toy_numpyro_model, _toy_settings
+    from cassini_bayes.analysis.sbc_models._toy import _toy_numpyro_model, _toy_settings
     from cassini_bayes.inference.runner import run_nuts
 
     model = build_model(SPEC)

@@ -76,12 +76,12 @@ def test_inertia_draws_follow_the_stated_prior():
 def test_sbc_truths_and_posterior_prior_group_use_the_same_sampler():
     """The SBC truth draw and :func:`sample_rwa4_prior` are both :func:`sample_inertia_prior`:
     the SBC adapter's inertia is exactly that function's draw for the same key."""
-    from cassini_bayes.analysis.sbc_models import _draw_rwa4_truth
+    from cassini_bayes.analysis.sbc_models._rwa4 import draw_rwa4_truth
 
     ip = inertia_prior(load_spacecraft("models/cassini_pre_soi.toml"))
     for seed in range(5):
         key = jax.random.key(seed)
-        _, pi = _draw_rwa4_truth(key, ip.mean, ip.sd, cone=None)
+        _, pi = draw_rwa4_truth(key, ip.mean, ip.sd, cone=None)
         expected = rwa4.sample_inertia_prior(jax.random.split(key)[1], ip.mean,
                                              np.diag(ip.sd**2), 1)[0]
         np.testing.assert_array_equal(pi, expected)

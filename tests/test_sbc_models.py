@@ -91,7 +91,8 @@ def test_thrust_truth_and_pulse_switch_reach_the_simulator():
     accumulated pulse impulse of Feldman & Lee §V at the drawn τ; with ``pulse_dynamics=False``
     the same with 1 µs time constants (ideal rectangular pulses, ``F Σ width``): less by the
     long-pulse excess ``F c`` (c ≈ 45 ms) per pulse."""
-    from cassini_bayes.analysis.sbc_models import _IDEAL_PULSE_TAU_S, _replicate
+    from cassini_bayes.analysis.sbc_models._common import IDEAL_PULSE_TAU_S
+    from helpers import replicate_of
     from cassini_bayes.physics.pulse import pulse_impulse_until
     from cassini_bayes.simulate.run import pulse_log
 
@@ -100,11 +101,11 @@ def test_thrust_truth_and_pulse_switch_reach_the_simulator():
     for dynamics in (True, False):
         _, params, arrays = _batch("thrust", pulse_dynamics=dynamics)
         for i in range(2):
-            rep = _replicate(arrays, i)
+            rep = replicate_of(arrays, i)
             log = pulse_log(rep, sc)
             assert log is not None and len(log.t_on) > 10
             tau = ([params[n][i] for n in ("tau_delay", "tau_rise", "tau_fall")] if dynamics
-                   else [_IDEAL_PULSE_TAU_S] * 3)
+                   else [IDEAL_PULSE_TAU_S] * 3)
             per_pulse = np.asarray(pulse_impulse_until(rep.t[-1] - log.t_on, log.width, *tau))
             expected = np.bincount(log.thruster, per_pulse, minlength=8) * params["F"][i]
             np.testing.assert_allclose(rep.thruster_impulse[-1], expected, rtol=1e-6,
@@ -130,7 +131,7 @@ def test_rwa4_truth_reaches_the_simulator_and_windows_are_quiet():
     """The plant spins RWA4 about the drawn axis with the drawn inertia: body momentum
     ``I ω + J4 ρ4 u4`` has the magnitude of the conserved inertial momentum at every sample
     (to 1e-9 relative), no thruster fires, and RWA4 changes by ~200 rpm between the windows."""
-    from cassini_bayes.analysis.sbc_models import _replicate
+    from helpers import replicate_of
     from cassini_bayes.physics.momentum import inertia_matrix
     from cassini_bayes.telemetry import RPM_TO_RAD_S
 
@@ -139,7 +140,7 @@ def test_rwa4_truth_reaches_the_simulator_and_windows_are_quiet():
     j4 = sc.truth.wheel_inertias[k4]
     model, params, arrays = _batch("rwa4")
     for i in range(2):
-        rep = _replicate(arrays, i)
+        rep = replicate_of(arrays, i)
         u = np.array([params[n][i] for n in ("u4_x", "u4_y", "u4_z")])
         i_m = np.asarray(inertia_matrix(jnp.asarray(
             [params[n][i] for n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")])))

@@ -62,12 +62,12 @@ def test_robust_truth_follows_the_models_prior():
     """
     from scipy import stats
 
-    from cassini_bayes.analysis.sbc_models import _telemetry
+    from cassini_bayes.simulate.run import measured_telemetry
     from cassini_bayes.inference.inertia import prepare_inertia
 
     sc = load_scenario(INERTIA_SCENARIO)
     _, _, arrays = _batch(1)
-    tel = _telemetry(jax.tree.map(lambda a: a[0], arrays), sc, "<replicate>")
+    tel = measured_telemetry(jax.tree.map(lambda a: a[0], arrays), sc, "<replicate>")
     problem = prepare_inertia([tel], sc.prior, robust=True)
     layout, data = problem.layout, problem.data
     keys = jax.random.split(jax.random.key(11), N_DRAWS)

@@ -110,7 +110,7 @@ def test_truth_reaches_the_simulator():
     impulse is its drawn thrust times the pulse log's accumulated pulse impulses at the drawn
     time constants (Feldman & Lee §V); the recorded sample times are jittered with the model's
     10 ms time-tag sd (sample sd within 25 % over 151 samples, ~4 se)."""
-    from cassini_bayes.analysis.sbc_models import _replicate
+    from helpers import replicate_of
     from cassini_bayes.physics.pulse import pulse_impulse_until
     from cassini_bayes.simulate.run import pulse_log
     from cassini_bayes.spacecraft import moment_matrix
@@ -121,7 +121,7 @@ def test_truth_reaches_the_simulator():
     for i, d in enumerate(drawn):
         again = robust_thrust_truth(keys[i], sc.prior, ("RW1", "RW2", "RW3", "RW4"), "thruster")
         assert np.array_equal(again["thrust"], d["thrust"]) and np.any(d["com"])
-        a = _replicate(arrays, i)
+        a = replicate_of(arrays, i)
         imp = a.thruster_impulse[-1]
         t_end = a.t[-1] - a.t[0]
         q = moment_matrix(sc.prior.thrusters, sc.prior.com_m + d["com"])

@@ -39,6 +39,7 @@ tau_rise tau_fall``, with ``rank_inertia`` (default True) ``Ixx … Iyz``, and w
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -47,19 +48,17 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes._paths import SCENARIOS_DIR
-from cassini_bayes.analysis.sbc_models import (
-    THRUST_SCENARIO,
-    ModelSpec,
-    SbcFit,
-    SbcModel,
-    _check_options,
-    _IDEAL_PULSE_TAU_S,
-    _nuisance_names,
-    _nuisance_scalars,
-    _quiet,
-    _sampler_settings,
-    _scenario,
+from cassini_bayes.analysis.sbc_models import ModelSpec, SbcFit, SbcModel
+from cassini_bayes.analysis.sbc_models._common import (
+    IDEAL_PULSE_TAU_S,
+    check_options,
+    nuisance_names,
+    nuisance_scalars,
+    quiet,
+    sampler_settings,
+    truth_nuisance_scalars,
 )
+from cassini_bayes.analysis.sbc_models._thrust import thrust_scenario
 from cassini_bayes.errors import InputError
 
 if TYPE_CHECKING:
@@ -131,7 +130,8 @@ def reference_design(scenario: Scenario, seed: int = 0) -> ThrustDesign:
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
     from cassini_bayes.inference.thrust import prepare_thrust, tau_prior
     from cassini_bayes.physics.momentum import inertia_vector
-    from cassini_bayes.simulate.run import pulse_log, simulate_arrays, truth_params
+    from cassini_bayes.simulate.run import (measured_telemetry, pulse_log, simulate_arrays,
+                                            truth_params)
 
     sc = scenario.prior
     tp = truth_params(scenario)._replace(
@@ -144,8 +144,8 @@ def reference_design(scenario: Scenario, seed: int = 0) -> ThrustDesign:
         raise InputError("the thrust SBC scenario fires no thruster at the prior's centre; "
                          "give a biasing event that needs the thrusters",
                          path=scenario.source or None)
-    tel = _telemetry(arrays, scenario, "<sbc thrust reference event>")
-    problem = _quiet(prepare_thrust)([(tel, log)], sc, mode="thruster",
+    tel = measured_telemetry(arrays, scenario, "<sbc thrust reference event>")
+    problem = quiet(prepare_thrust)([(tel, log)], sc, mode="thruster",
                                      inertia=inertia_prior_gaussian(sc), robust=True)
     return problem.design
 
@@ -174,7 +174,7 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
     drawn, runs = [], []
     for p_key, s_key in zip(prior_keys, sim_keys):
         d = robust_thrust_truth(p_key, spacecraft, wheels, mode)
-        tau = d["tau"] if pulse_dynamics else np.full(3, _IDEAL_PULSE_TAU_S)
+        tau = d["tau"] if pulse_dynamics else np.full(3, IDEAL_PULSE_TAU_S)
         tp = base._replace(inertia=jnp.asarray(d["inertia"]),
                            thrust_n=jnp.asarray(d["thrust_n"] * thrust_factor),
                            tau_s=jnp.asarray(tau), torque_body_nm=jnp.asarray(d["T_body"]),
@@ -192,18 +192,6 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
         drawn.append(d)
         runs.append(simulate_arrays(s_key, sc, tp, nz))
     return drawn, jax.tree.map(lambda *xs: jnp.stack(xs), *runs)
-
-
-def _telemetry(arrays, scenario, source: str):
-    """The noisy :class:`~cassini_bayes.telemetry.Telemetry` of one replicate, with its recorded
-    (time-tag-jittered) sample times ``t_meas``."""
-    from cassini_bayes.telemetry import Telemetry
-
-    return Telemetry(t=np.asarray(arrays.t_meas), q=np.asarray(arrays.q_meas),
-                     omega=np.asarray(arrays.omega_meas),
-                     wheel_rates=np.asarray(arrays.wheel_rates_meas),
-                     wheel_names=scenario.wheel_names, on_times=np.asarray(arrays.on_times),
-                     source=source, thruster_names=scenario.truth.thruster_names)
 
 
 def _thrust_quantities(mode: str, design, thrusters) -> tuple[tuple[str, ...], np.ndarray]:
@@ -225,6 +213,129 @@ def _thrust_quantities(mode: str, design, thrusters) -> tuple[tuple[str, ...], n
     return tuple(names), np.array(rows).reshape(len(rows), m)
 
 
+def _robust_options(spec: ModelSpec, scenario: Scenario) -> dict[str, Any]:
+    """The adapter's options: the defaults overridden by ``spec``'s, checked; the scenario must
+    fly the prior model's thrusters (one model for ``[truth]`` and ``[prior]``)."""
+    from cassini_bayes.inference.thrust import MODES
+
+    opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "robust": True,
+            "mode": "mean", "pulse_dynamics": True, "thrust_factor": 1.0,
+            "rank_inertia": True, "rank_nuisance": True, **dict(spec.options)}
+    check_options("thrust", opts, _KEYS)
+    mode = str(opts["mode"])
+    if mode not in MODES:
+        raise InputError(f"thrust SBC option mode={mode!r}: choose one of {', '.join(MODES)}")
+    if [t.name for t in scenario.truth.thrusters] != list(scenario.prior.thruster_names):
+        raise InputError("the robust thrust SBC flies the prior model's thrusters: give the "
+                         "scenario one model for [truth] and [prior]", path=spec.scenario_source)
+    return opts
+
+
+@dataclass(frozen=True, eq=False)
+class _RobustReplicates:
+    """Truth, simulation and fit of the robust thrust adapter's replicates: the ranked thrust
+    quantities ``f_names`` are ``f_weights`` (Q, n_f) times the mode's thrust vector."""
+
+    scenario: Any
+    opts: dict[str, Any]
+    wheels: tuple[str, ...]
+    f_names: tuple[str, ...]
+    f_weights: np.ndarray
+    settings: Any
+
+    @property
+    def mode(self) -> str:
+        return str(self.opts["mode"])
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The ranked scalars, in order (module docstring)."""
+        from cassini_bayes.inference.inertia import INERTIA_NAMES
+        from cassini_bayes.inference.thrust import COM_NAMES, TAU_NAMES
+
+        return (self.f_names + (tuple(COM_NAMES) if self.mode == "thruster" else ())
+                + tuple(TAU_NAMES) + (tuple(INERTIA_NAMES) if self.opts["rank_inertia"] else ())
+                + (nuisance_names(self.wheels) if self.opts["rank_nuisance"] else ()))
+
+    def ranked(self, d: dict[str, Any]) -> dict[str, Any]:
+        """The ranked scalars of a drawn truth (:func:`robust_thrust_truth`)."""
+        from cassini_bayes.inference.inertia import INERTIA_NAMES
+        from cassini_bayes.inference.thrust import COM_NAMES, TAU_NAMES
+
+        out = dict(zip(self.f_names, self.f_weights @ d["thrust"]))
+        if self.mode == "thruster":
+            out.update(zip(COM_NAMES, d["com"]))
+        out.update(zip(TAU_NAMES, d["tau"]))
+        if self.opts["rank_inertia"]:
+            out.update(zip(INERTIA_NAMES, d["inertia"]))
+        if self.opts["rank_nuisance"]:
+            out.update(truth_nuisance_scalars(d, self.wheels))
+        return out
+
+    def prior_sample(self, key) -> dict[str, Any]:
+        """``(key) -> {name: scalar}``: the ranked scalars of one prior draw."""
+        return self.ranked(robust_thrust_truth(key, self.scenario.prior, self.wheels, self.mode))
+
+    def simulate_batch(self, prior_keys, sim_keys):
+        """The truths drawn and flown by :func:`simulate_robust_thrust`, ranked."""
+        drawn, arrays = simulate_robust_thrust(
+            prior_keys, sim_keys, self.scenario, self.mode,
+            pulse_dynamics=bool(self.opts["pulse_dynamics"]),
+            thrust_factor=float(self.opts["thrust_factor"]))
+        params = [self.ranked(d) for d in drawn]
+        return {n: np.array([p[n] for p in params]) for n in self.names}, arrays
+
+    def fit(self, key, arrays) -> SbcFit:
+        """The robust :func:`~cassini_bayes.inference.thrust.fit_thrust` of one replicate's
+        telemetry and commanded pulses, its draws ranked."""
+        from cassini_bayes.inference.thrust import fit_thrust
+        from cassini_bayes.simulate.run import measured_telemetry, pulse_log
+
+        log = pulse_log(arrays, self.scenario)
+        if log is None:
+            raise RuntimeError("no thruster fired in this replicate")
+        tel = measured_telemetry(arrays, self.scenario, "<sbc thrust replicate, robust>")
+        post = fit_thrust(key, [(tel, log)], self.scenario.prior, mode=self.mode,
+                          settings=self.settings, prior_draws=0, robust=True)
+        if post.problem.layout.wheels != self.wheels:
+            raise RuntimeError(f"replicate's active wheels {post.problem.layout.wheels} are not "
+                               f"the scenario's {self.wheels}")
+        n_div = int(post.idata.sample_stats["diverging"].values.sum())
+        draws = self.posterior_ranked(post.idata.posterior)
+        return SbcFit({n: jnp.asarray(draws[n]) for n in self.names}, jnp.asarray(n_div))
+
+    def posterior_ranked(self, p) -> dict[str, np.ndarray]:
+        """The ranked quantities' ``(chain, draw)`` draws from the posterior group ``p``: the
+        thrust quantities as ``f_weights`` times the thrust draws, the nuisance split."""
+        if self.mode == "thruster":
+            f = np.asarray(p["F"].values, float)                          # (chain, draw, M)
+        else:
+            f = np.stack([np.asarray(p[n].values, float) for n in self.f_names], -1)
+        draws = dict(zip(self.f_names, np.moveaxis(f @ self.f_weights.T, -1, 0)))
+        scalars = [n for n in self.names if n not in draws and "[" not in n]
+        draws.update({n: np.asarray(p[n].values, float) for n in scalars})
+        if self.opts["rank_nuisance"]:
+            draws.update(nuisance_scalars({s: np.asarray(p[s].values, float)
+                                           for s in ("gyro_scale", "gyro_bias", "wheel_scale")},
+                                          self.wheels))
+        return draws
+
+
+def _robust_record(reps: _RobustReplicates, design) -> dict[str, Any]:
+    """The settings recorded in the run: the options, the scenario, the time-tag sd, the wheels
+    and, per thruster, the reference design's rank and identified thrusters."""
+    scenario, spacecraft = reps.scenario, reps.scenario.prior
+    record = {**reps.opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path,
+              "time_tag_sd_s": float(spacecraft.knowledge.time_tag_sd_s),
+              "wheels": list(reps.wheels)}
+    if design is not None:
+        record.update(reference_rank=int(design.rank), reference_thrust_rank=int(
+            design.thrust_rank), reference_identified=[
+            t for t, ok in zip(spacecraft.thruster_names, design.identified) if ok],
+            reference_combinations=[n for n in reps.f_names if not n.startswith("F[")])
+    return record
+
+
 def robust_thrust_model(spec: ModelSpec) -> SbcModel:
     """The ``thrust`` SBC adapter with ``robust=True`` (module docstring).
 
@@ -234,93 +345,13 @@ def robust_thrust_model(spec: ModelSpec) -> SbcModel:
     ``pulse_dynamics=False`` (ideal rectangular pulses flown) and ``thrust_factor`` (the flown
     thrust times this factor, the recorded truth the drawn one).
     """
-    from cassini_bayes.inference.inertia import INERTIA_NAMES
-    from cassini_bayes.inference.thrust import COM_NAMES, MODES, TAU_NAMES, fit_thrust
-    from cassini_bayes.simulate.run import pulse_log
-
-    scenario = _scenario(spec, THRUST_SCENARIO)
-    if not scenario.uses_thrusters:
-        raise InputError("the thrust SBC scenario fires no thrusters; give a biasing event "
-                         "(control = \"rcs\" or [[pulse]] entries)", path=spec.scenario_source)
-    opts = {"num_warmup": 300, "num_draws": 300, "num_chains": 2, "thin": 3, "robust": True,
-            "mode": "mean", "pulse_dynamics": True, "thrust_factor": 1.0,
-            "rank_inertia": True, "rank_nuisance": True, **dict(spec.options)}
-    _check_options("thrust", opts, _KEYS)
+    scenario = thrust_scenario(spec)
+    opts = _robust_options(spec, scenario)
     mode = str(opts["mode"])
-    if mode not in MODES:
-        raise InputError(f"thrust SBC option mode={mode!r}: choose one of {', '.join(MODES)}")
-    spacecraft = scenario.prior
-    if [t.name for t in scenario.truth.thrusters] != list(spacecraft.thruster_names):
-        raise InputError("the robust thrust SBC flies the prior model's thrusters: give the "
-                         "scenario one model for [truth] and [prior]", path=spec.scenario_source)
     wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
     design = reference_design(scenario) if mode == "thruster" else None
-    f_names, f_weights = _thrust_quantities(mode, design, spacecraft.thruster_names)
-    names = (f_names + (tuple(COM_NAMES) if mode == "thruster" else ()) + tuple(TAU_NAMES)
-             + (tuple(INERTIA_NAMES) if opts["rank_inertia"] else ())
-             + (_nuisance_names(wheels) if opts["rank_nuisance"] else ()))
-    settings = _sampler_settings(opts)
-    factor = float(opts["thrust_factor"])
-
-    def ranked(d) -> dict[str, Any]:
-        out = dict(zip(f_names, f_weights @ d["thrust"]))
-        if mode == "thruster":
-            out.update(zip(COM_NAMES, d["com"]))
-        out.update(zip(TAU_NAMES, d["tau"]))
-        if opts["rank_inertia"]:
-            out.update(zip(INERTIA_NAMES, d["inertia"]))
-        if opts["rank_nuisance"]:
-            out.update(_nuisance_scalars({"gyro_scale": d["gyro_scale"],
-                                          "gyro_bias": d["gyro_bias"][None],
-                                          "wheel_scale": d["wheel_scale"]}, wheels))
-        return out
-
-    def prior_sample(key):
-        return ranked(robust_thrust_truth(key, spacecraft, wheels, mode))
-
-    def simulate_batch_fn(prior_keys, sim_keys):
-        drawn, arrays = simulate_robust_thrust(prior_keys, sim_keys, scenario, mode,
-                                               pulse_dynamics=bool(opts["pulse_dynamics"]),
-                                               thrust_factor=factor)
-        params = [ranked(d) for d in drawn]
-        return {n: np.array([p[n] for p in params]) for n in names}, arrays
-
-    def simulate(key, params):
-        raise NotImplementedError("the thrust adapter simulates in batches (simulate_batch)")
-
-    @_quiet
-    def fit(key, arrays):
-        log = pulse_log(arrays, scenario)
-        if log is None:
-            raise RuntimeError("no thruster fired in this replicate")
-        tel = _telemetry(arrays, scenario, "<sbc thrust replicate, robust>")
-        post = fit_thrust(key, [(tel, log)], spacecraft, mode=mode, settings=settings,
-                          prior_draws=0, robust=True)
-        if post.problem.layout.wheels != wheels:
-            raise RuntimeError(f"replicate's active wheels {post.problem.layout.wheels} are not "
-                               f"the scenario's {wheels}")
-        p = post.idata.posterior
-        if mode == "thruster":
-            f = np.asarray(p["F"].values, float)                          # (chain, draw, M)
-        else:
-            f = np.stack([np.asarray(p[n].values, float) for n in f_names], -1)
-        draws = dict(zip(f_names, np.moveaxis(f @ f_weights.T, -1, 0)))
-        scalars = [n for n in names if n not in draws and "[" not in n]
-        draws.update({n: np.asarray(p[n].values, float) for n in scalars})
-        if opts["rank_nuisance"]:
-            draws.update(_nuisance_scalars({s: np.asarray(p[s].values, float)
-                                            for s in ("gyro_scale", "gyro_bias", "wheel_scale")},
-                                           wheels))
-        n_div = int(post.idata.sample_stats["diverging"].values.sum())
-        return SbcFit({n: jnp.asarray(draws[n]) for n in names}, jnp.asarray(n_div))
-
-    record = {**opts, "scenario": scenario.name, "prior_model": scenario.prior_model_path,
-              "time_tag_sd_s": float(spacecraft.knowledge.time_tag_sd_s),
-              "wheels": list(wheels)}
-    if design is not None:
-        record.update(reference_rank=int(design.rank), reference_thrust_rank=int(
-            design.thrust_rank), reference_identified=[
-            t for t, ok in zip(spacecraft.thruster_names, design.identified) if ok],
-            reference_combinations=[n for n in f_names if not n.startswith("F[")])
-    return SbcModel("thrust", names, prior_sample, simulate, fit, vectorized=False,
-                    settings=record, rhat_max=1.05, simulate_batch=simulate_batch_fn)
+    f_names, f_weights = _thrust_quantities(mode, design, scenario.prior.thruster_names)
+    reps = _RobustReplicates(scenario, opts, wheels, f_names, f_weights, sampler_settings(opts))
+    return SbcModel("thrust", reps.names, reps.prior_sample, None, quiet(reps.fit),
+                    vectorized=False, settings=_robust_record(reps, design), rhat_max=1.05,
+                    simulate_batch=reps.simulate_batch)

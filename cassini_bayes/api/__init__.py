@@ -30,16 +30,10 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time each name load
         propagate_conic,
     )
     from cassini_bayes.api._leak import LeakResult, monitor_leak
-    from cassini_bayes.api._plan import (
-        PlanEvaluation,
-        PlanResult,
-        ThrustPlanResult,
-        WheelAxisPlanResult,
-        evaluate_plan,
-        plan_inertia,
-        plan_thrust,
-        plan_wheel_axis,
-    )
+    from cassini_bayes.api._plan import PlanEvaluation, evaluate_plan
+    from cassini_bayes.api._plan_axis import WheelAxisPlanResult, plan_wheel_axis
+    from cassini_bayes.api._plan_inertia import PlanResult, plan_inertia
+    from cassini_bayes.api._plan_thrust import ThrustPlanResult, plan_thrust
     from cassini_bayes.api._result import (
         FitResult,
         collect_warnings,
@@ -67,9 +61,10 @@ _HOMES = {
                                "fit_chebyshev_segments", "propagate_conic"],
     "cassini_bayes.api._inertia": ["fit_inertia", "inertia_baseline", "inertia_summary"],
     "cassini_bayes.api._leak": ["LeakResult", "monitor_leak"],
-    "cassini_bayes.api._plan": ["PlanEvaluation", "PlanResult", "ThrustPlanResult",
-                                "WheelAxisPlanResult", "evaluate_plan", "plan_inertia",
-                                "plan_thrust", "plan_wheel_axis"],
+    "cassini_bayes.api._plan": ["PlanEvaluation", "evaluate_plan"],
+    "cassini_bayes.api._plan_axis": ["WheelAxisPlanResult", "plan_wheel_axis"],
+    "cassini_bayes.api._plan_inertia": ["PlanResult", "plan_inertia"],
+    "cassini_bayes.api._plan_thrust": ["ThrustPlanResult", "plan_thrust"],
     "cassini_bayes.api._result": ["FitResult", "collect_warnings", "fit_config", "write_run",
                                   "write_run_files"],
     "cassini_bayes.api._rwa4": ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity",

@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -69,10 +69,10 @@ class TrajectoryFit:
     files: tuple
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
-        """Write ``segments.csv`` (one row per segment: ``t_start_s, t_end_s, order, max_error_urad``
-        and the coefficients ``cx_0 … cz_12``, m), ``summary.json``, ``config.toml`` and
-        ``report.html`` into ``out`` atomically; ``force`` replaces only a directory
-        cassini-bayes wrote."""
+        """Write ``segments.csv`` (one row per segment: ``t_start_s, t_end_s, order,
+        max_error_urad`` and the coefficients ``cx_0 … cz_12``, m), ``summary.json``,
+        ``config.toml`` and ``report.html`` into ``out`` atomically; ``force`` replaces only a
+        directory cassini-bayes wrote."""
         from cassini_bayes.report.ivp import (
             equioscillation_png,
             ivp_fit_page,
@@ -114,9 +114,28 @@ class TrajectoryFit:
         return interpolant(self.trajectory)
 
 
+def _conic_block(traj: Trajectory, mu: float, requirement_urad: float) -> dict[str, Any]:
+    """The conic about the body of ``mu`` fitted over the whole span (its state at the span's
+    middle), and its largest angular error on a 2000-point grid, as summary.json holds it."""
+    from cassini_bayes.ivp.conic_fit import fit_conic
+    from cassini_bayes.ivp.segmenter import angle_between_vectors
+    from cassini_bayes.ivp.trajectory import interpolant, interpolant_derivative
+
+    f = interpolant(traj)
+    t0, t1 = float(traj.t_s[0]), float(traj.t_s[-1])
+    r0 = f(np.array([0.5 * (t0 + t1)]))[0]
+    v0 = np.asarray(interpolant_derivative(traj)(0.5 * (t0 + t1)))
+    conic = fit_conic(f, t0, t1, r0=r0, v0=v0, mu=mu, t0_s=0.5 * (t0 + t1), fit_mu=False)
+    grid = np.linspace(t0, t1, 2000)
+    c_err = angle_between_vectors(np.asarray(conic.position(grid)), f(grid))
+    return {"mu_m3_s2": mu, "t0_s": conic.t0_s, "r0_m": [float(x) for x in conic.r0],
+            "v0_m_s": [float(x) for x in conic.v0], "max_error_urad": float(c_err.max() * 1e6),
+            "meets_requirement": bool(c_err.max() <= requirement_urad * 1e-6)}
+
+
 @jax_entry
-def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_urad: float = 40.0, max_order: int = 12,
-                   mu: float | None = None) -> TrajectoryFit:
+def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_urad: float = 40.0,
+                   max_order: int = 12, mu: float | None = None) -> TrajectoryFit:
     """Chebyshev segments of a trajectory whose direction stays within ``requirement_urad`` of
     the trajectory's (Lee §3.3.2; :func:`~cassini_bayes.ivp.fit_chebyshev_segments`).
 
@@ -131,12 +150,10 @@ def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_ur
         segments'.
     """
     from cassini_bayes.ivp._checks import check_mu, check_order
-    from cassini_bayes.ivp.conic_fit import fit_conic
     from cassini_bayes.ivp.segmenter import angle_between_vectors, fit_chebyshev_segments
     from cassini_bayes.ivp.trajectory import (
         Trajectory,
         interpolant,
-        interpolant_derivative,
         read_trajectory,
         validate_trajectory,
     )
@@ -180,17 +197,7 @@ def fit_trajectory(trajectory: Trajectory | str | os.PathLike, *, requirement_ur
                      for k in range(len(orders))],
     }
     if mu is not None:
-        r0 = f(np.array([0.5 * (t0 + t1)]))[0]
-        v0 = np.asarray(interpolant_derivative(traj)(0.5 * (t0 + t1)))
-        conic = fit_conic(f, t0, t1, r0=r0, v0=v0, mu=float(mu), t0_s=0.5 * (t0 + t1),
-                          fit_mu=False)
-        grid = np.linspace(t0, t1, 2000)
-        c_err = angle_between_vectors(np.asarray(conic.position(grid)), f(grid))
-        summary["conic"] = {"mu_m3_s2": float(mu), "t0_s": conic.t0_s,
-                            "r0_m": [float(x) for x in conic.r0],
-                            "v0_m_s": [float(x) for x in conic.v0],
-                            "max_error_urad": float(c_err.max() * 1e6),
-                            "meets_requirement": bool(c_err.max() <= requirement_urad * 1e-6)}
+        summary["conic"] = _conic_block(traj, float(mu), requirement_urad)
     config = {"command": "ivp fit", "version": __version__, "inputs": {"trajectory": record},
               "settings": {"requirement_urad": float(requirement_urad),
                            "max_order": int(max_order),

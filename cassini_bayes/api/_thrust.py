@@ -288,13 +288,18 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                         inputs={"telemetry": tel_records, "pulses": log_records,
                                 "spacecraft": sc_record, **inertia_input},
                         options={"mode": mode, "model": "robust" if robust else "idealised",
-                                 "inertia": ("posterior" if inertia_posterior is not None
-                                             else "sampled"
-                                             if "Ixx" in cast(Any, post.idata).posterior
-                                             else "fixed"),
+                                 "inertia": _inertia_option(inertia_posterior, post),
                                  "wheel_errors": wheel_errors})
     return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,
                      (*tel_paths, *log_paths, *sc_paths, *inertia_paths))
+
+
+def _inertia_option(inertia_posterior: FitArg | None, post: Any) -> str:
+    """How the fit treated the inertia (``config.toml``): its prior from an inertia
+    ``posterior``, ``sampled`` from the model's knowledge, or ``fixed`` at its prediction."""
+    if inertia_posterior is not None:
+        return "posterior"
+    return "sampled" if "Ixx" in cast(Any, post.idata).posterior else "fixed"
 
 
 def _events(telemetry: TelemetriesArg, pulses: PulseLogsArg, sc: Spacecraft

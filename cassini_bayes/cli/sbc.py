@@ -62,99 +62,115 @@ ORDER = 60
 __all__ = ["register", "parse_options"]
 
 
+def _sbc_cmd(
+    model: str = typer.Argument(..., help="Model to calibrate: toy, inertia, thrust or rwa4 "
+                                "(whichever are registered)."),
+    replicates: int = typer.Option(..., "--replicates", "-n", min=1,
+                                   help="Number of replicates N."),
+    out: Path = typer.Option(..., "--out", help="Run directory to write (atomically)."),
+    scenario: Path | None = typer.Option(None, "--scenario",
+                                         help="Scenario TOML for the simulator/model."),
+    seed: int = seed_option(0, "Root seed; replicate i uses fold_in(key, i)."),
+    executor: str = typer.Option("local", "--executor", help="local or dask."),
+    scheduler: str | None = typer.Option(None, "--scheduler",
+                                         help="Dask scheduler address (default: a local "
+                                         "cluster)."),
+    workers: int | None = typer.Option(None, "--workers", min=1,
+                                       help="Workers of the local Dask "
+                                       "cluster (default min(2, CPU count)); with "
+                                       "--executor dask and no --scheduler."),
+    batch: int = typer.Option(16, "--batch", min=1, help="Replicates per vectorised batch."),
+    options: list[str] = typer.Option([], "--set", help="Model option KEY=VALUE (VALUE as "
+                                      "TOML), repeatable: num_warmup, num_draws, num_chains, "
+                                      "thin or a model's mis-specification switch."),
+    alpha: float = typer.Option(0.01, "--alpha", help="Family-wise false-failure rate of "
+                                "each uniformity statistic (Bonferroni over parameters)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite DIR and drop checkpoints."),
+    resume: bool = typer.Option(False, "--resume", help="Continue an interrupted campaign."),
+) -> None:
+    """Simulation-based calibration (ranks, uniformity tests, coverage) of MODEL."""
+    from cassini_bayes.analysis.sbc_models import ModelSpec, registered_models
+    from cassini_bayes.analysis.sbc_run import work_dir, write_run
+
+    if model not in registered_models():
+        raise InputError(f"unknown model {model!r} for sbc; choose one of "
+                         f"{', '.join(registered_models())}")
+    if not 0 < alpha < 1:
+        raise InputError(f"--alpha must be between 0 and 1, got {alpha}")
+    if scenario is not None:   # a file, or a shipped scenario's bare name
+        from cassini_bayes.simulate.scenario import scenario_path
+
+        scenario = scenario_path(scenario)
+    scenario_text = None if scenario is None else text_file(scenario, "scenario")
+    out = Path(out)
+    work = work_dir(out)
+    check_out(out, force=force, inputs=[scenario] if scenario else [])
+    _clear_or_keep_checkpoints(out, work, force=force, resume=resume)
+    if workers is not None and (executor != "dask" or scheduler):
+        raise InputError("--workers sets the size of a local Dask cluster: it needs "
+                         "--executor dask and no --scheduler")
+    spec = ModelSpec.make(model, scenario_text,
+                          scenario_source=str(scenario) if scenario else "<scenario>",
+                          **_check_sampler_options(parse_options(options)))
+    result = _run_with_progress(spec, replicates, work, seed=seed, batch=batch,
+                                executor=executor, scheduler=scheduler, workers=workers)
+    summary = write_run(out, spec, result, alpha=alpha, executor=executor, force=force)
+    shutil.rmtree(work, ignore_errors=True)
+    _print_summary(summary, out)
+
+
+def _clear_or_keep_checkpoints(out: Path, work: Path, *, force: bool, resume: bool) -> None:
+    """Drop the checkpoint folder ``work`` with ``--force`` or when it holds no finished batch;
+    keep it with ``--resume``; else it is an error that names both."""
+    if not work.exists():
+        return
+    if force or not any(work.glob("batch_*.npz")):  # (no finished batch: nothing to keep)
+        shutil.rmtree(work)
+    elif not resume:
+        raise InputError(f"an unfinished campaign for {out} is checkpointed in {work}; "
+                         "pass --resume to continue it or --force to start over")
+
+
+def _run_with_progress(spec, replicates: int, work: Path, *, seed: int, batch: int,
+                       executor: str, scheduler: str | None, workers: int | None):
+    """Run the campaign with a progress bar of its batches. An interrupted campaign with
+    finished batches stops with a line on how to resume; one without any leaves no trace."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from cassini_bayes.analysis.campaign import run_campaign
+
+    with Progress("[progress.description]{task.description}", BarColumn(),
+                  MofNCompleteColumn(), TimeElapsedColumn(), transient=True) as progress:
+        task = progress.add_task(f"sbc {spec.name}: batches", total=None)
+
+        def on_batch(b, n_done, n_total):
+            progress.update(task, completed=n_done, total=n_total)
+
+        try:
+            return run_campaign(spec, replicates, work, seed=seed, batch_size=batch,
+                                executor=executor, scheduler=scheduler, n_workers=workers,
+                                on_batch=on_batch)
+        except KeyboardInterrupt:
+            n_done = len(list(work.glob("batch_*.npz")))
+            if not n_done:
+                shutil.rmtree(work, ignore_errors=True)
+                raise
+            raise Interrupted(f"{n_done} finished batch(es) are checkpointed in {work}; run "
+                              "the same command with --resume to continue") from None
+        except BaseException:
+            if not any(work.glob("batch_*.npz")):  # nothing worth resuming: leave no trace
+                shutil.rmtree(work, ignore_errors=True)
+            raise
+
+
 def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     """Add ``sbc`` to the ``cassini-bayes`` command."""
-
-    @app.command("sbc")
-    def sbc(
-        model: str = typer.Argument(..., help="Model to calibrate: toy, inertia, thrust or rwa4 "
-                                    "(whichever are registered)."),
-        replicates: int = typer.Option(..., "--replicates", "-n", min=1,
-                                       help="Number of replicates N."),
-        out: Path = typer.Option(..., "--out", help="Run directory to write (atomically)."),
-        scenario: Path | None = typer.Option(None, "--scenario",
-                                             help="Scenario TOML for the simulator/model."),
-        seed: int = seed_option(0, "Root seed; replicate i uses fold_in(key, i)."),
-        executor: str = typer.Option("local", "--executor", help="local or dask."),
-        scheduler: str | None = typer.Option(None, "--scheduler",
-                                             help="Dask scheduler address (default: a local "
-                                             "cluster)."),
-        workers: int | None = typer.Option(None, "--workers", min=1,
-                                           help="Workers of the local Dask "
-                                           "cluster (default min(2, CPU count)); with "
-                                           "--executor dask and no --scheduler."),
-        batch: int = typer.Option(16, "--batch", min=1, help="Replicates per vectorised batch."),
-        options: list[str] = typer.Option([], "--set", help="Model option KEY=VALUE (VALUE as "
-                                          "TOML), repeatable: num_warmup, num_draws, num_chains, "
-                                          "thin or a model's mis-specification switch."),
-        alpha: float = typer.Option(0.01, "--alpha", help="Family-wise false-failure rate of "
-                                    "each uniformity statistic (Bonferroni over parameters)."),
-        force: bool = typer.Option(False, "--force", help="Overwrite DIR and drop checkpoints."),
-        resume: bool = typer.Option(False, "--resume", help="Continue an interrupted campaign."),
-    ) -> None:
-        """Simulation-based calibration (ranks, uniformity tests, coverage) of MODEL."""
-        from cassini_bayes.analysis.campaign import run_campaign
-        from cassini_bayes.analysis.sbc_models import ModelSpec, registered_models
-        from cassini_bayes.analysis.sbc_run import work_dir, write_run
-
-        if model not in registered_models():
-            raise InputError(f"unknown model {model!r} for sbc; choose one of "
-                             f"{', '.join(registered_models())}")
-        if not 0 < alpha < 1:
-            raise InputError(f"--alpha must be between 0 and 1, got {alpha}")
-        if scenario is not None:   # a file, or a shipped scenario's bare name
-            from cassini_bayes.simulate.scenario import scenario_path
-
-            scenario = scenario_path(scenario)
-        scenario_text = None if scenario is None else text_file(scenario, "scenario")
-        out = Path(out)
-        work = work_dir(out)
-        check_out(out, force=force, inputs=[scenario] if scenario else [])
-        if work.exists():
-            if force or not any(work.glob("batch_*.npz")):  # (no finished batch: nothing to keep)
-                shutil.rmtree(work)
-            elif not resume:
-                raise InputError(f"an unfinished campaign for {out} is checkpointed in {work}; "
-                                 "pass --resume to continue it or --force to start over")
-        if workers is not None and (executor != "dask" or scheduler):
-            raise InputError("--workers sets the size of a local Dask cluster: it needs "
-                             "--executor dask and no --scheduler")
-        spec = ModelSpec.make(model, scenario_text,
-                              scenario_source=str(scenario) if scenario else "<scenario>",
-                              **_check_sampler_options(parse_options(options)))
-
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-        with Progress("[progress.description]{task.description}", BarColumn(),
-                      MofNCompleteColumn(), TimeElapsedColumn(), transient=True) as progress:
-            task = progress.add_task(f"sbc {model}: batches", total=None)
-
-            def on_batch(b, n_done, n_total):
-                progress.update(task, completed=n_done, total=n_total)
-
-            try:
-                result = run_campaign(spec, replicates, work, seed=seed, batch_size=batch,
-                                      executor=executor, scheduler=scheduler, n_workers=workers,
-                                      on_batch=on_batch)
-            except KeyboardInterrupt:
-                n_done = len(list(work.glob("batch_*.npz")))
-                if not n_done:
-                    shutil.rmtree(work, ignore_errors=True)
-                    raise
-                raise Interrupted(f"{n_done} finished batch(es) are checkpointed in {work}; run "
-                                  "the same command with --resume to continue") from None
-            except BaseException:
-                if not any(work.glob("batch_*.npz")):  # nothing worth resuming: leave no trace
-                    shutil.rmtree(work, ignore_errors=True)
-                raise
-        summary = write_run(out, spec, result, alpha=alpha, executor=executor, force=force)
-        shutil.rmtree(work, ignore_errors=True)
-        _print_summary(summary, out)
+    app.command("sbc")(_sbc_cmd)
 
 
 def parse_options(items: list[str]) -> dict:
     """``["KEY=VALUE", ...]`` of ``--set`` as a dict; ``VALUE`` read as TOML, else a string."""
-    import tomllib
+    from cassini_bayes._toml import toml_value
 
     out = {}
     for item in items:
@@ -162,11 +178,7 @@ def parse_options(items: list[str]) -> dict:
         key = key.strip()
         if not sep or not key:
             raise InputError(f"--set {item!r}: write KEY=VALUE, e.g. --set num_warmup=300")
-        try:
-            value = tomllib.loads(f"v = {raw.strip()}")["v"]
-        except tomllib.TOMLDecodeError:
-            value = raw.strip()
-        out[key] = value
+        out[key] = toml_value(raw)
     return out
 
 

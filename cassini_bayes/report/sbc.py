@@ -30,6 +30,50 @@ def _label_axes(fig, xlabel: str, ylabel: str) -> None:
     fig.tight_layout()
 
 
+def _cov_cell(c: dict) -> tuple[str, str]:
+    """A coverage as ``observed ± se`` and its class: red beyond 3 standard errors of the
+    nominal level, amber beyond 2."""
+    z = abs(c["observed"] - c["nominal"]) / c["se"] if c["se"] > 0 else 0.0
+    return (f"{c['observed']:.3f} ± {c['se']:.3f}",
+            "bad" if z > 3 else ("warn" if z > 2 else "good"))
+
+
+def _answer_table(parameters: dict, a: float) -> str:
+    """Per parameter: its unit, the two uniformity p-values against ``a``, the 90 % coverage
+    and the verdict."""
+    from cassini_bayes.report.html import Raw, badge, table
+    from cassini_bayes.report.tables import unit_of
+
+    rows, cls = [], []
+    for n, p in parameters.items():
+        c90, c90_cls = _cov_cell(p["coverage"]["90"])
+        rows.append([n, unit_of(n) or "–", f"{p['chi2']['p_value']:.3g}",
+                     f"{p['ecdf']['p_value']:.3g}", c90,
+                     Raw(badge("calibrated" if p["passed"] else "FAIL", p["passed"]))])
+        cls.append(["", "", "bad" if p["chi2"]["p_value"] < a else "good",
+                    "bad" if p["ecdf"]["p_value"] < a else "good", c90_cls, ""])
+    return table(["parameter", "unit", "rank uniformity: χ² p", "ECDF p",
+                  "90 % interval coverage", "verdict"], rows, classes=cls)
+
+
+def _coverage_table(parameters: dict) -> str:
+    """Per parameter: the two uniformity statistics and the coverage at every level."""
+    from cassini_bayes.report.html import table
+
+    crow, ccls = [], []
+    for n, p in parameters.items():
+        row, rc = [n, f"{p['chi2']['statistic']:.2f} ({p['chi2']['bins']} bins)",
+                   f"{p['ecdf']['statistic']:.4f}"], ["", "", ""]
+        for k in ("50", "80", "90", "95"):
+            text, c = _cov_cell(p["coverage"][k])
+            row.append(text)
+            rc.append(c)
+        crow.append(row)
+        ccls.append(rc)
+    return table(["parameter", "χ² statistic", "ECDF γ", "50 %", "80 %", "90 %", "95 %"], crow,
+                 classes=ccls)
+
+
 def sbc_report_html(sbc, summary: dict) -> str:
     """Self-contained HTML of a campaign's :class:`~cassini_bayes.analysis.sbc.SbcResult` and
     its ``summary.json`` dict: the answer first (per parameter, its unit, whether its ranks are
@@ -40,39 +84,11 @@ def sbc_report_html(sbc, summary: dict) -> str:
     matplotlib.use("Agg", force=False)
     from cassini_bayes.analysis.sbc import plot_ecdf_difference, plot_rank_histograms
     from cassini_bayes.report.build import verdict_badges
-    from cassini_bayes.report.html import (Raw, badge, figure, html_page, page_header,
-                                           paragraph, section, table)
-    from cassini_bayes.report.tables import unit_of
+    from cassini_bayes.report.html import badge, figure, html_page, page_header, paragraph, section
 
     a = summary["alpha_per_parameter"]
-
-    def cov_cell(c):
-        z = abs(c["observed"] - c["nominal"]) / c["se"] if c["se"] > 0 else 0.0
-        return (f"{c['observed']:.3f} ± {c['se']:.3f}",
-                "bad" if z > 3 else ("warn" if z > 2 else "good"))
-
-    rows, cls = [], []
-    for n, p in summary["parameters"].items():
-        c90, c90_cls = cov_cell(p["coverage"]["90"])
-        rows.append([n, unit_of(n) or "–", f"{p['chi2']['p_value']:.3g}",
-                     f"{p['ecdf']['p_value']:.3g}", c90,
-                     Raw(badge("calibrated" if p["passed"] else "FAIL", p["passed"]))])
-        cls.append(["", "", "bad" if p["chi2"]["p_value"] < a else "good",
-                    "bad" if p["ecdf"]["p_value"] < a else "good", c90_cls, ""])
-    answer = table(["parameter", "unit", "rank uniformity: χ² p", "ECDF p",
-                    "90 % interval coverage", "verdict"], rows, classes=cls)
-    crow, ccls = [], []
-    for n, p in summary["parameters"].items():
-        row, rc = [n, f"{p['chi2']['statistic']:.2f} ({p['chi2']['bins']} bins)",
-                   f"{p['ecdf']['statistic']:.4f}"], ["", "", ""]
-        for k in ("50", "80", "90", "95"):
-            text, c = cov_cell(p["coverage"][k])
-            row.append(text)
-            rc.append(c)
-        crow.append(row)
-        ccls.append(rc)
-    cov = table(["parameter", "χ² statistic", "ECDF γ", "50 %", "80 %", "90 %", "95 %"], crow,
-                classes=ccls)
+    answer = _answer_table(summary["parameters"], a)
+    cov = _coverage_table(summary["parameters"])
     header = page_header(
         f"{verdict_badges(summary)} "
         + badge("CALIBRATED: uniformity passed" if summary["passed"] else

@@ -31,14 +31,15 @@ from cassini_bayes.simulate.sensors import NoiseParams
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
 __all__ = ["TruthParams", "SimArrays", "SimResult", "truth_params", "noise_params", "simulate",
-           "simulate_arrays", "simulate_batch", "pulse_log", "quiet_windows", "PULSE_RING",
-           "trace_count", "with_errors"]
+           "simulate_arrays", "simulate_batch", "measured_telemetry", "pulse_log", "quiet_windows",
+           "PULSE_RING", "trace_count", "with_errors"]
 
 QUIET_TORQUE_KNOWLEDGE = 10.0
 """A wheel is busy (biasing) in :func:`quiet_windows` while its motor torque exceeds this many
 times the truth model's ``[torque_knowledge] sd_nm``: more than holding the attitude against the
 environment takes (Cassini: 1.5e-4 N m)."""
-_IMPULSE_RTOL = 1e-9      # a thruster fires while its impulse grows by this × the run's largest step
+# a thruster fires while its impulse grows by this × the run's largest step
+_IMPULSE_RTOL = 1e-9
 
 
 _PREPARED: dict[int, tuple] = {}   # id(scenario) → (scenario, plan, controller arrays), a few
@@ -101,6 +102,14 @@ def _telemetry(s: Scenario, t, q, w, rho, on_times, source) -> Telemetry:
                      thruster_names=s.truth.thruster_names)
 
 
+def measured_telemetry(arrays: SimArrays, scenario: Scenario, source: str) -> Telemetry:
+    """The noisy :class:`~cassini_bayes.telemetry.Telemetry` of one run, as a fit reads it: the
+    recorded (time-tag-jittered) times ``t_meas`` and the measured attitude, rates and wheel
+    speeds; ``source`` names it in messages."""
+    return _telemetry(scenario, arrays.t_meas, arrays.q_meas, arrays.omega_meas,
+                      arrays.wheel_rates_meas, arrays.on_times, source)
+
+
 def pulse_log(arrays: SimArrays, scenario: Scenario) -> PulseLog | None:
     """The commanded pulses of one run (``None`` when none fired)."""
     units = np.asarray(arrays.pulse_units)
@@ -128,8 +137,7 @@ def simulate(key: Array, scenario: Scenario, truth: TruthParams | None = None) -
     arr = jax.tree_util.tree_map(np.asarray, simulate_arrays(key, scenario, params))
     src = f"<simulated {scenario.name}>"
     tel_truth = _telemetry(scenario, arr.t, arr.q, arr.omega, arr.wheel_rates, arr.on_times, src)
-    tel = _telemetry(scenario, arr.t_meas, arr.q_meas, arr.omega_meas, arr.wheel_rates_meas,
-                     arr.on_times, src)
+    tel = measured_telemetry(arr, scenario, src)
     return SimResult(scenario, tel_truth, tel, pulse_log(arr, scenario), arr, params)
 
 

@@ -396,12 +396,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     active = tel.active_mask()
     known = [k for k in range(len(names)) if k != k_u and active[k]]
     masks = [((t >= a[0]) & (t <= a[1]), (t >= b[0]) & (t <= b[1])) for a, b in pairs]
-    rho = np.nan_to_num(rates[:, k_u])
-    spin = np.array([(rho[mb].mean() - rho[ma].mean()) / RPM_TO_RAD_S for ma, mb in masks])
-    if method == "rcs" and abs(spin[0]) < MIN_SPIN_CHANGE_RPM:
-        raise InputError(f"{wheel} changes by {spin[0]:.3g} rpm between Time A and Time B "
-                         f"(< {MIN_SPIN_CHANGE_RPM:g} rpm): no spin change to calibrate from",
-                         path=tel.source)
+    spin = _spin_changes(rates[:, k_u], masks, method, wheel, tel.source)
 
     inertia, i_src, i_mean, i_chol = _inertia_prior(inertia, spacecraft)
 
@@ -420,11 +415,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),
-              margin_scale=_margin_scale(i_mean),
-              cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
-              cone_axis=jnp.asarray(np.eye(3)[2] if cone is None else cone.axis),
-              cone_angle=jnp.asarray(np.radians(0.0 if cone is None else cone.angle_deg)),
-              cone_sd=jnp.asarray(np.radians(1.0 if cone is None else cone.sd_deg)))
+              margin_scale=_margin_scale(i_mean), **_cone_arrays(prior, cone))
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
     kw, sd_dir = _laplace_centred(chart, theta0, Rwa4Data(**kw), wheel, tel.source)
     return Rwa4Problem(
@@ -432,6 +423,28 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         inertia_source=i_src, baseline=u_ls, sd_direction_deg=sd_dir, spin_change_rpm=spin,
         noise_hat=noise, source=tel.source, wheel=wheel, chart=chart, layout=layout,
         nuisance=nuisance, robust=robust)
+
+
+def _spin_changes(rho: np.ndarray, masks, method: str, wheel: str, source: str) -> np.ndarray:
+    """The solved wheel's spin change (rpm) from Time A to Time B of each pair, from its rates
+    ``rho`` (rad/s); the RCS method needs the first pair's to be at least
+    ``MIN_SPIN_CHANGE_RPM`` (Brown Eq 1 divides by it)."""
+    rho = np.nan_to_num(rho)
+    spin = np.array([(rho[mb].mean() - rho[ma].mean()) / RPM_TO_RAD_S for ma, mb in masks])
+    if method == "rcs" and abs(spin[0]) < MIN_SPIN_CHANGE_RPM:
+        raise InputError(f"{wheel} changes by {spin[0]:.3g} rpm between Time A and Time B "
+                         f"(< {MIN_SPIN_CHANGE_RPM:g} rpm): no spin change to calibrate from",
+                         path=source)
+    return spin
+
+
+def _cone_arrays(prior: str, cone) -> dict:
+    """The cone prior's entries of the model's data: its axis, angle and sd (rad), weighted 1
+    with the cone prior and 0 (placeholders) without."""
+    return dict(cone_weight=jnp.asarray(1.0 if prior == "cone" else 0.0),
+                cone_axis=jnp.asarray(np.eye(3)[2] if cone is None else cone.axis),
+                cone_angle=jnp.asarray(np.radians(0.0 if cone is None else cone.angle_deg)),
+                cone_sd=jnp.asarray(np.radians(1.0 if cone is None else cone.sd_deg)))
 
 
 def _check_options(method: str, prior: str) -> None:
