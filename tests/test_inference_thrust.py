@@ -64,7 +64,7 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
     columns; ``pulses`` ``(t_on, thruster, width)`` (default: none)."""
     from cassini_bayes.inference.gaussian import RankOneRows, column_statistics
     from cassini_bayes.inference.thrust.likelihood import EventData
-    from cassini_bayes.physics.impulse import impulse_lhs_basis, jump_areas
+    from cassini_bayes.physics.impulse import impulse_lhs_basis
 
     n = t.size
     t_on, thr, width = pulses or (np.zeros(1), np.zeros(1, int), np.zeros(1))
@@ -78,8 +78,6 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
                      rank_one=RankOneRows(np.arange(n), (np.zeros((0, n)),) * 3),
                      lhs_wheels=basis[0],
                      lhs_inertia=basis[1:], nu_stats=column_statistics(none, np.ones(n)),
-                     jump_area=np.asarray(jump_areas(t, t_on, thr, width, slot, 2, 8,
-                                                     (0.005, 0.02, 0.065))),
                      omega_mid=_interval_means(omega), h_mid=_interval_means(h))
 
 
@@ -318,10 +316,10 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
         one_hot = (thr[:, None] == np.arange(8)[None, :]).astype(float)
         # the trapezoidal ΔG's error across the rate steps, every pulse at every sample
         since = t[:, None] - t_on[None, :]
-        area = pulse_impulse_area(since, width[None, :], *tau_median) @ one_hot
-        j_med = pulse_impulse_until(since, width[None, :], *tau_median) @ one_hot
+        area = pulse_impulse_area(since, width[None, :], *tau) @ one_hot
+        j_now = pulse_impulse_until(since, width[None, :], *tau) @ one_hot
         eps = jnp.concatenate([jnp.zeros((1, 8)), jnp.diff(area, axis=0)
-                               - 0.5 * np.diff(t)[:, None] * (j_med[1:] + j_med[:-1])])
+                               - 0.5 * np.diff(t)[:, None] * (j_now[1:] + j_now[:-1])])
         a = (eps * f8[None, :]) @ q.T                                       # (n, 3) N m s²
         w_m, h_m = (_interval_means(x[e][:n]).T for x in (ev.omega, ev.h_wheels))
         step = (jnp.cross(jnp.linalg.solve(inertia, a.T).T, w_m @ inertia.T + h_m)

@@ -53,12 +53,13 @@ def test_residuals_at_the_truth_are_noise_across_the_pulses(espa_biasing):
 
 
 def test_the_correction_is_what_removes_the_steps(espa_biasing):
-    """The same residuals with the correction's areas set to zero are ≥ 3× larger on every axis
-    (measured 6-10×): what the test above measures is the correction, not the data."""
+    """The same residuals with the correction switched off (its rates and momenta set to zero)
+    are ≥ 3× larger on every axis (measured 6-10×): what the test above measures is the
+    correction, not the data."""
     scenario, _, problem = espa_biasing
     ev = problem.data.events
-    bare = problem._replace(data=problem.data._replace(
-        events=ev._replace(jump_area=jax.numpy.zeros_like(ev.jump_area))))
+    bare = problem._replace(data=problem.data._replace(events=ev._replace(
+        omega_mid=jax.numpy.zeros_like(ev.omega_mid), h_mid=jax.numpy.zeros_like(ev.h_mid))))
     with_fix = np.sqrt(np.mean(_residuals(scenario, problem)**2, 0))
     without = np.sqrt(np.mean(_residuals(scenario, bare)**2, 0))
     assert np.all(without > 3 * with_fix), (without, with_fix)

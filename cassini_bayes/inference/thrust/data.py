@@ -25,7 +25,7 @@ from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, p
 from cassini_bayes.inference.thrust.model import _laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, _thrust_index,
                                                   tau_prior, thrust_names)
-from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis, jump_areas
+from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
@@ -303,8 +303,6 @@ _time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None, None)
 _impulse_per_newton = jax.jit(jax.vmap(
     lambda lay, eye, tau: thruster_impulse(lay, eye, *tau), in_axes=(0, None, None)))
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
-_jump_areas = jax.jit(jax.vmap(jump_areas, in_axes=(0, 0, 0, 0, 0, None, None, None)),
-                      static_argnums=(5, 6))
 
 
 def _interval_means(x: np.ndarray) -> np.ndarray:
@@ -314,16 +312,11 @@ def _interval_means(x: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(mid.transpose(0, 2, 1))
 
 
-def _rate_steps(kw: dict, k_slots: int, n_thr: int, tau_med) -> dict:
+def _rate_steps(kw: dict) -> dict:
     """The :class:`EventData` fields of the trapezoidal ``ΔG``'s correction across the pulses'
-    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`): each thruster's
-    areas at the prior-median time constants (fixed, as the time-tag rates are: the centroid of
-    a pulse moves by milliseconds with ``τ``, the interval's middle is half a sample away) and
-    the intervals' mean rates and wheel momenta."""
-    jump = _jump_areas(*jax.device_put([kw[k] for k in ("t", "t_on", "thruster", "width",
-                                                         "slot")]), k_slots, n_thr, tau_med)
-    return dict(jump_area=np.asarray(jump), omega_mid=_interval_means(kw["omega"]),
-                h_mid=_interval_means(kw["h_wheels"]))
+    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`): the intervals'
+    mean rates and wheel momenta."""
+    return dict(omega_mid=_interval_means(kw["omega"]), h_mid=_interval_means(kw["h_wheels"]))
 
 
 def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
@@ -403,7 +396,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
     derived = dict(time_tag_rates=tag_rates, rank_one=rank_one, pulses=layout_e,
                    lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], nu_cols=nu_cols,
-                   **_rate_steps(kw, k_slots, n_thr, tau_med),
+                   **_rate_steps(kw),
                    nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
                                              np.stack([x.total for x in stats])))
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per

@@ -14,12 +14,14 @@ import numpy as np
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.impulse import rate_step_correction
-from cassini_bayes.physics.pulse import pulse_impulse, pulse_impulse_until, thrust_profile
+from cassini_bayes.physics.pulse import (pulse_impulse, pulse_impulse_area, pulse_impulse_until,
+                                         thrust_profile)
 
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "time_tag_rates",
+__all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "jump_area",
+           "time_tag_rates",
            "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals", "moment_matrix_at"]
 
 
@@ -45,7 +47,6 @@ class EventData(NamedTuple):
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
-    jump_area: jax.Array       # (M, n) s², trapezoid error of ∫ j dt per interval (jump_areas)
     omega_mid: jax.Array       # (3, n) rad/s, body rate at the middle of the interval ending at i
     h_mid: jax.Array           # (3, n) N m s, wheel momentum there
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
@@ -59,6 +60,7 @@ class PulseLayout(NamedTuple):
     that sample, so the pulses settled by any sample are a leading run of them."""
 
     dt: jax.Array        # (m, K) s, each transient sample's time after the command
+    dt_prev: jax.Array   # (m,) s, the sample before the first's (= dt[:, 0] when none)
     width: jax.Array     # (m,) s commanded widths (0: padding, no impulse)
     thruster: jax.Array  # (m,) int index into the spacecraft's M thrusters
     at: jax.Array        # (m, K) int, flat index thruster·n + sample into (M, n); M n: none
@@ -79,8 +81,10 @@ def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> Pu
     dt = np.where(row_ok, t[np.minimum(rows, n - 1)] - t_on[:, None], 0.0)
     at = np.where(row_ok, np.asarray(thruster)[order][:, None] * n + rows, n_thrusters * n)
     settled = np.searchsorted(slot + k, np.arange(n), side="right")
-    return PulseLayout(dt, np.asarray(width, float)[order], np.asarray(thruster)[order], at,
-                       settled)
+    prev = np.clip(slot - 1, 0, n - 1)
+    dt_prev = np.where((slot >= 1) & (slot < n), t[prev] - t_on, dt[:, 0])
+    return PulseLayout(dt, dt_prev, np.asarray(width, float)[order],
+                       np.asarray(thruster)[order], at, settled)
 
 
 def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
@@ -107,10 +111,27 @@ def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     return settled + q_f @ transient
 
 
-def _jump_correction(inertia, q_f, ev: EventData):
+def jump_area(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
+    """``Q (F ⊙ ε)`` (3, n) N m s²: the thrusters' trapezoid errors of ``∫ j dt`` per interval
+    (the sparse form of :func:`~cassini_bayes.physics.impulse.jump_areas`), at the sampled time
+    constants: a pulse lands inside an interval at its thrust's centroid, which the time
+    constants move. Only a pulse's transient samples (:class:`PulseLayout`) have one."""
+    dts = jnp.concatenate([layout.dt_prev[:, None], layout.dt], 1)      # (m, K + 1)
+    w = layout.width[:, None]
+    j = pulse_impulse_until(dts, w, tau_delay, tau_rise, tau_fall)
+    area = pulse_impulse_area(dts, w, tau_delay, tau_rise, tau_fall)
+    eps = (area[:, 1:] - area[:, :-1]) - 0.5 * (dts[:, 1:] - dts[:, :-1]) * (j[:, 1:] + j[:, :-1])
+    m, n = q_f.shape[1], layout.settled.shape[0]
+    per = jnp.zeros(m * n).at[layout.at].add(eps, mode="drop").reshape(m, n)
+    return q_f @ per
+
+
+def _jump_correction(inertia, q_f, tau, ev: EventData):
     """(3, n) N m s: the trapezoidal ``ΔG``'s error across the pulses' rate steps at ``q_f = Q
-    diag(F)`` (3, M) (:func:`~cassini_bayes.physics.impulse.rate_step_correction`)."""
-    return rate_step_correction(inertia, q_f @ ev.jump_area, ev.omega_mid, ev.h_mid)
+    diag(F)`` (3, M) and the time constants ``tau``
+    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`)."""
+    return rate_step_correction(inertia, jump_area(ev.pulses, q_f, *tau), ev.omega_mid,
+                                ev.h_mid)
 
 
 def _event_residual(pi, q_f, tau, ev: EventData):
@@ -124,7 +145,7 @@ def _event_residual(pi, q_f, tau, ev: EventData):
     v = ev.lhs_wheels
     for k in range(6):
         v = v + pi[k] * ev.lhs_inertia[k]
-    v = v + _jump_correction(inertia_matrix(pi), q_f, ev)
+    v = v + _jump_correction(inertia_matrix(pi), q_f, tau, ev)
     return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
