@@ -179,6 +179,9 @@ def _score_thrusters(post, sim, scenario) -> dict:
             cols.append(p["F_combination"].isel(combination=j).values.ravel())
             names.append(f"F_combination[{label}]")
             truth.append(float(design.combinations[j] @ f_true))
+    n_f = len(cols)
+    _add_impulse_bits(p, design, sim, f_true, cols, names, truth)
+    n_bits = len(cols) - n_f
     offset = np.asarray(scenario.truth.com_m, float) - np.asarray(scenario.prior.com_m, float)
     for i, name in enumerate(COM_NAMES):
         if name in p:
@@ -192,13 +195,38 @@ def _score_thrusters(post, sim, scenario) -> dict:
     d, truth = np.stack(cols, 1), np.array(truth)
     q05, q95 = np.quantile(d, [0.05, 0.95], axis=0)
     err = d.mean(0) - truth
-    n_f = int(design.identified.sum())
-    rel = np.abs(err[:n_f]) / truth[:n_f]
+    n_id = int(design.identified.sum())
+    rel = np.abs(err[:n_id]) / truth[:n_id]
+    rel_bit = np.abs(err[n_f:n_f + n_bits]) / truth[n_f:n_f + n_bits]
     return {"entries": names, "hit": ((q05 <= truth) & (truth <= q95)).tolist(),
             "interval": np.stack([q05, q95], 1).tolist(), "error": err.tolist(),
             "z": (err / d.std(0)).tolist(), "truth": truth.tolist(),
             "budget": bool(np.all(rel <= 0.03)),
-            "max_rel_thrust_error": float(rel.max()) if n_f else None}
+            "max_rel_thrust_error": float(rel.max()) if n_id else None,
+            "bit_budget": bool(np.all(rel_bit <= 0.03)),
+            "max_rel_bit_error": float(rel_bit.max()) if n_bits else None}
+
+
+def _add_impulse_bits(p, design, sim, f_true, cols, names, truth) -> None:
+    """Append each identified thruster's mean impulse per pulse of the event, ``F_s`` times the
+    mean of ``j(Δ; τ)`` over its pulses (N s), drawn and true: what one pulse width measures
+    when the thrust and the pulse shape trade off (docs/thrust_any_layout.md)."""
+    import numpy as np
+
+    from cassini_bayes.inference.thrust import TAU_NAMES
+    from cassini_bayes.physics.pulse import pulse_impulse
+
+    tau = [p[n].values.ravel()[:, None] for n in TAU_NAMES]
+    tau_true = np.asarray(sim.params.tau_s, float)
+    thruster, width = np.asarray(sim.pulses.thruster), np.asarray(sim.pulses.width, float)
+    for i, name in enumerate(design.thrusters):
+        w = width[thruster == i]
+        if not design.identified[i] or w.size == 0:
+            continue
+        j = np.asarray(pulse_impulse(w[None, :], *tau)).mean(1)
+        cols.append(p["F"].sel(thruster=name).values.ravel() * j)
+        names.append(f"bit[{name}]")
+        truth.append(f_true[i] * float(np.mean(pulse_impulse(w, *tau_true))))
 
 
 def run_seed(family: str, seed: int, opts: dict) -> dict:
@@ -290,7 +318,10 @@ def report(rows: list[dict]) -> None:
                   f"{np.sqrt(cov * (1 - cov) / n) if 0 < cov < 1 else np.sqrt(0.09 / n):.3f} "
                   f"({int(h.sum())}/{n})  per entry "
                   + " ".join(f"{e} {c:.2f}" for e, c in zip(fits[0]["entries"], h.mean(0)))
-                  + f"  budget {np.mean([f['budget'] for f in fits]):.2f}  adequacy ok "
+                  + f"  budget {np.mean([f['budget'] for f in fits]):.2f}"
+                  + (f"  impulse-bit budget {np.mean([f['bit_budget'] for f in fits]):.2f}"
+                     if all("bit_budget" in f for f in fits) else "")
+                  + "  adequacy ok "
                   f"{np.mean([f['adequacy_ok'] for f in fits]):.2f}  max R-hat "
                   f"{max(f['r_hat'] for f in fits):.3f}  div "
                   f"{sum(f['divergences'] for f in fits)}  median "
