@@ -157,6 +157,72 @@ def _pulse_count(on: np.ndarray) -> int:
 
 
 @jax_entry
+def _check_quiet_options(min_quiet_s, rate_max_rad_s, wheel_tol_rpm) -> None:
+    """One-line errors for a quiet-period option that is not a positive finite number (the
+    rate and wheel bounds may be ``None``: the file's own rule)."""
+    for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
+                                    (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
+                                    (wheel_tol_rpm, "--wheel-tol", "wheel_tol_rpm")):
+        if value is None and argument != "min_quiet_s":
+            continue
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not 0 < value < float("inf")):
+            raise InputError(f"must be a positive finite number, got {value!r}",
+                             path=spelled(option, argument))
+
+
+def _on_times(tel, log, notes: list[str]):
+    """The telemetry with its thruster on-times and where they came from: its own ``on_*``
+    columns (the pulse log, if any, only validated), else the pulse log's; notes appended."""
+    from cassini_bayes.telemetry import PulseSpanWarning, with_on_times
+
+    if log is None:
+        return tel, None if tel.on_times is None else "on_* columns"
+    if tel.on_times is not None:
+        notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "
+                     "validated")
+        return tel, "on_* columns"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PulseSpanWarning)
+        tel = with_on_times(tel, log)
+    notes += [str(w.message) for w in caught if issubclass(w.category, PulseSpanWarning)]
+    return tel, f"pulse log {log.source}"
+
+
+def _wheel_stats(tel) -> list:
+    """Each wheel's range, first and last rate (rpm) and whether it idles; a wheel with a
+    missing rate is off."""
+    from cassini_bayes.telemetry import RPM_TO_RAD_S
+
+    wheels = []
+    active = tel.active_mask()
+    for j, name in enumerate(tel.wheel_names):
+        rpm = tel.wheel_rates[:, j] / RPM_TO_RAD_S
+        if not np.all(np.isfinite(rpm)):
+            wheels.append(WheelStats(name, False))
+            continue
+        wheels.append(WheelStats(name, True, float(rpm.min()), float(rpm.max()),
+                                 float(rpm[0]), float(rpm[-1]), idle=not active[j]))
+    return wheels
+
+
+def _thruster_stats(tel, log) -> list:
+    """Each thruster that fires: its pulse count (from ``log`` when it gave the on-times, else
+    counted in the on-time column) and its total on-time (s)."""
+    thrusters = []
+    if tel.on_times is None:
+        return thrusters
+    for k, name in enumerate(tel.thruster_names):
+        on = tel.on_times[:, k]
+        total = float(on[-1] - on[0])
+        if total <= 0:
+            continue
+        count = (int(np.count_nonzero(log.thruster == k)) if log is not None
+                 else _pulse_count(on))
+        thrusters.append(ThrusterStats(name, count, total))
+    return thrusters
+
+
 def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
                     spacecraft: SpacecraftArg | None = None, min_quiet_s: float = 60.0,
                     rate_max_rad_s: float | None = None, wheel_tol_rpm: float | None = None,
@@ -193,7 +259,7 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         check_telemetry_data,
         quantised_rates,
     )
-    from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseSpanWarning, _turn_angle, with_on_times
+    from cassini_bayes.telemetry import _turn_angle
     from cassini_bayes.windows import (
         QUIET_WHEEL_TOL_RPM,
         quiet_periods,
@@ -201,15 +267,7 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         quiet_wheel_tol_rpm,
     )
 
-    for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
-                                    (rate_max_rad_s, "--rate-max", "rate_max_rad_s"),
-                                    (wheel_tol_rpm, "--wheel-tol", "wheel_tol_rpm")):
-        if value is None and argument != "min_quiet_s":
-            continue
-        if (isinstance(value, bool) or not isinstance(value, (int, float))
-                or not 0 < value < float("inf")):
-            raise InputError(f"must be a positive finite number, got {value!r}",
-                             path=spelled(option, argument))
+    _check_quiet_options(min_quiet_s, rate_max_rad_s, wheel_tol_rpm)
     sc = spacecraft_input(spacecraft)[0] if spacecraft is not None else None
     tel = one_telemetry(telemetry, check_units=check_units, spacecraft=sc)
     log = one_pulse_log(pulses, spacecraft=sc) if pulses is not None else None
@@ -220,37 +278,10 @@ def check_telemetry(telemetry: TelemetryArg, *, pulses: PulsesArg | None = None,
         attitude, momentum = check_telemetry_data(tel, sc, log)
     notes: list[str] = [str(w.message) for w in physics_warnings
                         if issubclass(w.category, (GyroBiasWarning, QuantisedRatesWarning))]
-    source = None if tel.on_times is None and log is None else "on_* columns"
-    if log is not None and tel.on_times is not None:
-        notes.append(f"{tel.source} has on_* columns; they are used and {log.source} is only "
-                     "validated")
-    elif log is not None:
-        source = f"pulse log {log.source}"
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", PulseSpanWarning)
-            tel = with_on_times(tel, log)
-        notes += [str(w.message) for w in caught if issubclass(w.category, PulseSpanWarning)]
+    tel, source = _on_times(tel, log, notes)
 
-    wheels = []
-    active = tel.active_mask()
-    for j, name in enumerate(tel.wheel_names):
-        rpm = tel.wheel_rates[:, j] / RPM_TO_RAD_S
-        if not np.all(np.isfinite(rpm)):
-            wheels.append(WheelStats(name, False))
-            continue
-        wheels.append(WheelStats(name, True, float(rpm.min()), float(rpm.max()),
-                                 float(rpm[0]), float(rpm[-1]), idle=not active[j]))
-    thrusters = []
-    if tel.on_times is not None:
-        for k, name in enumerate(tel.thruster_names):
-            on = tel.on_times[:, k]
-            total = float(on[-1] - on[0])
-            if total <= 0:
-                continue
-            count = (int(np.count_nonzero(log.thruster == k))
-                     if log is not None and source != "on_* columns"
-                     else _pulse_count(on))
-            thrusters.append(ThrusterStats(name, count, total))
+    wheels = _wheel_stats(tel)
+    thrusters = _thruster_stats(tel, log if source != "on_* columns" else None)
     tols = quiet_wheel_tol_rpm(tel, wheel_tol_rpm, sc)
     running = np.all(np.isfinite(tel.wheel_rates), axis=0)
     tols = tols[running] if np.any(running) else tols

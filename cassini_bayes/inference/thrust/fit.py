@@ -177,8 +177,8 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         knowledge, :func:`inertia_prior_gaussian`): sampled jointly. ``"fixed"``: held at the
         model file's prediction. ``None`` (default): ``"prior"`` for the robust model, ``"fixed"``
         for the idealised one (the papers' model). A fixed inertia that is not the truth is a
-        closed world: the momentum the pulses put into the body rates is ``I Δω``, so a 3 %
-        inertia error moved ``F`` 3 % (12 sd) on a Table 2 event, through the wheel scale.
+        closed world: the momentum the pulses put into the body rates is ``I Δω``, so an inertia
+        error moves ``F`` with it, through the wheel scale.
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
     robust : add the nuisance parameters (gyro bias and scale, wheel inertia scales and tilts,
@@ -227,6 +227,19 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      settings=settings, coords=coords, dims=dims,
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
+    _complete(key, idata, problem, robust, sample_inertia, coords, dims)
+    for line in tau_identification(idata.posterior, problem.tau):
+        warnings.warn(line, TauIdentificationWarning, stacklevel=2)
+    return ThrustPosterior(idata, diagnostics(idata, _judged_names(problem, sample_inertia,
+                                                                   robust)), problem)
+
+
+def _complete(key, idata, problem, robust: bool, sample_inertia: bool, coords, dims) -> None:
+    """Add to the sampled ``idata`` what is computed from its draws: the identified thrust
+    combinations, the robust model's nuisance draws (from their exact conditional), the
+    posterior-mean residuals and the data groups, each pulse group's impulses."""
+    from cassini_bayes.inference.progress import step
+
     if problem.design is not None and problem.design.combinations.size:
         _add_combinations(idata, problem)
     with step("nuisance draws and residuals"):
@@ -238,10 +251,6 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
     replace_groups(idata, _data_groups(problem, d)
                    | {"pulse_impulses": pulse_impulses(problem, post, nu_draws)})
-    for line in tau_identification(post, problem.tau):
-        warnings.warn(line, TauIdentificationWarning, stacklevel=2)
-    return ThrustPosterior(idata, diagnostics(idata, _judged_names(problem, sample_inertia,
-                                                                   robust)), problem)
 
 
 def _coords_dims(problem, mode: str, robust: bool, wheel_errors: str):
