@@ -157,7 +157,8 @@ def _pulse_count(on: np.ndarray) -> int:
 
 
 @jax_entry
-def _check_quiet_options(min_quiet_s, rate_max_rad_s, wheel_tol_rpm) -> None:
+def _check_quiet_options(min_quiet_s: float, rate_max_rad_s: float | None,
+                         wheel_tol_rpm: float | None) -> None:
     """One-line errors for a quiet-period option that is not a positive finite number (the
     rate and wheel bounds may be ``None``: the file's own rule)."""
     for value, option, argument in ((min_quiet_s, "--min-quiet", "min_quiet_s"),
@@ -171,7 +172,8 @@ def _check_quiet_options(min_quiet_s, rate_max_rad_s, wheel_tol_rpm) -> None:
                              path=spelled(option, argument))
 
 
-def _on_times(tel, log, notes: list[str]):
+def _on_times(tel: Telemetry, log: PulseLog | None,
+              notes: list[str]) -> tuple[Telemetry, str | None]:
     """The telemetry with its thruster on-times and where they came from: its own ``on_*``
     columns (the pulse log, if any, only validated), else the pulse log's; notes appended."""
     from cassini_bayes.telemetry import PulseSpanWarning, with_on_times
@@ -189,7 +191,7 @@ def _on_times(tel, log, notes: list[str]):
     return tel, f"pulse log {log.source}"
 
 
-def _wheel_stats(tel) -> list:
+def _wheel_stats(tel: Telemetry) -> list[WheelStats]:
     """Each wheel's range, first and last rate (rpm) and whether it idles; a wheel with a
     missing rate is off."""
     from cassini_bayes.telemetry import RPM_TO_RAD_S
@@ -206,10 +208,10 @@ def _wheel_stats(tel) -> list:
     return wheels
 
 
-def _thruster_stats(tel, log) -> list:
+def _thruster_stats(tel: Telemetry, log: PulseLog | None) -> list[ThrusterStats]:
     """Each thruster that fires: its pulse count (from ``log`` when it gave the on-times, else
     counted in the on-time column) and its total on-time (s)."""
-    thrusters = []
+    thrusters: list[ThrusterStats] = []
     if tel.on_times is None:
         return thrusters
     for k, name in enumerate(tel.thruster_names):
