@@ -80,8 +80,8 @@ Priors, stated in the physical parameters
   data's own white-noise levels (:func:`rate_noise_levels`). One scale, not two: the gyro term of
   ``B_e`` outweighs the wheel term ~100× on the shipped scenarios, so a free ``σ_ρ`` is
   unidentified below ``σ̂_ρ`` and cut off sharply above it — a one-sided cliff NUTS handles badly
-  (measured: divergences and bulk ESS ~100 on two Table 2 events); the mix of the two comes from
-  the data, the overall level is learned.
+  (docs/performance.md, "Thrust model choices, measured"); the mix of the two comes from the
+  data, the overall level is learned.
 * Inertia: sampled jointly from a Gaussian — the model file's knowledge (±10 % moments, ±75 kg m²
   products; the robust model's default) or an inertia run's posterior — or fixed at the model
   file's prediction (the papers' idealised model). The likelihood then carries the Jacobian
@@ -101,11 +101,10 @@ samples inside pulses pin it), ``s_z = asinh s`` (``s`` its split, ``τd = a σ(
 ``τd → 0`` that the half-normal delay prior leaves) and ``c_z`` (``c = c_mu + 0.01 s · c_z``);
 ``τr``, ``τf`` follow in closed form,
 the prior carried over by the Jacobian (:func:`_tau_from_z`). With the delay free over 0-10 ms
-the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed): 1-6
-divergences, R-hat up to 1.048 and bulk ESS ~60 on the idealised fit of
-``biasing_day028_first_order`` (2 × 300 + 300). Sampling ``a`` additively beside the delay
-(``a − τd`` free to reach 0) put a wall at ``τr = 0`` into the sampler's space, behind a
-density spike: the open-world papers'-profile campaign diverged on 8 of 20 seeds (up to 263).
+the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed), and
+sampling ``a`` additively beside the delay (``a − τd`` free to reach 0) put a wall at ``τr = 0``
+into the sampler's space, behind a density spike (docs/performance.md, "Thrust model choices,
+measured").
 ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
 Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The
@@ -134,10 +133,9 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   carry the timing information of the time constants, so it enters the sample's covariance
   instead of a parameter (:func:`time_tag_rates`: the impulse rates evaluated once, at the
   prior's time constants, times the sampled thrust, so that it keeps the likelihood's invariance
-  under the common scale of ``I``, ``F`` and the wheels). Without it the robust fits of 20 error
-  draws of ``biasing_day028_real`` (10 ms jitter, flexible mode) covered ``τr`` and ``τf`` in 6
-  of 20 90 % intervals; refits without the flexible mode still missed (``τr`` up to 8.7 sd),
-  refits without the jitter did not (≤ 2.7 sd).
+  under the common scale of ``I``, ``F`` and the wheels). Without it the time constants'
+  intervals miss under the telemetry's real jitter (docs/performance.md, "Thrust model choices,
+  measured").
 
 ``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
 rather than sampled (as in the robust RWA4 model): per event the offset is removed
@@ -148,9 +146,8 @@ and one ``F``); :func:`fit_thrust` then draws ``ν`` from its exact Gaussian con
 draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead
 (21 coordinates on one event), the time-tag term left a banana: the conditional mean of the
 torque about Z moved with ``τr²`` by about one conditional sd per unit of whitened ``τr``, which
-no affine whitening removes — 84 divergences and R-hat up
-to 1.054 over 20 error draws of ``biasing_day028_real``; integrated out, the worst of those
-(seed 14: 5 divergences, tree depth 4-5) has none, at tree depth 2-3.
+no affine whitening removes; integrated out, it leaves none (docs/performance.md, "Thrust model
+choices, measured").
 
 The common part of the wheel scales is confounded with the thrust scale (``F`` balances the
 wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the
