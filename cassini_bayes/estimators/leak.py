@@ -55,7 +55,7 @@ _unit_corrections = jax.jit(jax.vmap(jax.vmap(
     in_axes=(None, 0, None, None)), in_axes=(None, None, None, 0)))
 
 
-def _interval_means(x: np.ndarray) -> np.ndarray:
+def interval_means(x: np.ndarray) -> np.ndarray:
     """(..., 3, n): the mean of samples ``i − 1`` and ``i`` of ``x`` (..., n, 3) at ``i`` (the
     first sample's own value at ``i = 0``)."""
     x = np.asarray(x, float)
@@ -75,8 +75,8 @@ def rate_step_units(t_s, omega_rad_s, inertia, h_wheels_body) -> np.ndarray:
     h = np.asarray(h_wheels_body, float)
     batch = h.reshape((-1,) + h.shape[-2:])
     unit = np.asarray(_unit_corrections(np.asarray(inertia, float), np.eye(3),
-                                        _interval_means(np.asarray(omega_rad_s, float)),
-                                        _interval_means(batch)))          # (B, 3a, 3b, n)
+                                        interval_means(np.asarray(omega_rad_s, float)),
+                                        interval_means(batch)))          # (B, 3a, 3b, n)
     assert unit.shape[-1] == np.size(t_s)
     return np.diff(unit, axis=-1, prepend=0.0).reshape(h.shape[:-2] + unit.shape[1:])
 

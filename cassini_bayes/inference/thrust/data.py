@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.errors import InputError, spelled
+from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, column_statistics
@@ -305,18 +306,12 @@ _impulse_per_newton = jax.jit(jax.vmap(
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
 
 
-def _interval_means(x: np.ndarray) -> np.ndarray:
-    """(E, 3, n): the mean of samples ``i − 1`` and ``i`` of ``x`` (E, n, 3) at ``i`` (the first
-    sample's own value at ``i = 0``)."""
-    mid = np.concatenate([x[:, :1], 0.5 * (x[:, 1:] + x[:, :-1])], 1)
-    return np.ascontiguousarray(mid.transpose(0, 2, 1))
-
-
 def _rate_steps(kw: dict) -> dict:
     """The :class:`EventData` fields of the trapezoidal ``ΔG``'s correction across the pulses'
     rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`): the intervals'
     mean rates and wheel momenta."""
-    return dict(omega_mid=_interval_means(kw["omega"]), h_mid=_interval_means(kw["h_wheels"]))
+    return dict(omega_mid=np.ascontiguousarray(interval_means(kw["omega"])),
+                h_mid=np.ascontiguousarray(interval_means(kw["h_wheels"])))
 
 
 def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
