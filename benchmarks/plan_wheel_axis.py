@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _fitted(post, true_axis, truth_pi) -> dict:
     import numpy as np
 
-    from cassini_bayes.inference.rwa4.data import _tangent_basis
+    from cassini_bayes.inference.rwa4.data import tangent_basis
     from cassini_bayes.inference.sphere import angles_deg
     from cassini_bayes.plan.wheel_axis import AXIS_SITES
 
@@ -38,7 +38,7 @@ def _fitted(post, true_axis, truth_pi) -> dict:
     d = np.stack([np.asarray(p[n].values).ravel() for n in AXIS_SITES], 1)
     mean = np.asarray(post.direction["mean"], float)
     u = d[:, :3] / np.linalg.norm(d[:, :3], axis=1, keepdims=True)
-    e = _tangent_basis(mean)
+    e = tangent_basis(mean)
     v = (u @ e.T) / (u @ mean)[:, None]
     sd_dir = float(np.degrees(np.sqrt(np.linalg.eigvalsh(np.cov(v.T))[-1])))
     err = float(angles_deg(mean[None], np.asarray(true_axis, float))[0])

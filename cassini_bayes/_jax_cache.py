@@ -1,9 +1,8 @@
 """JAX's persistent compilation cache for cassini-bayes: on by default, one place to move it.
 
-Every process used to compile its XLA programs from scratch (``fit inertia`` of 2 300 samples:
-19-23 s wall per call on the 2-core machine, the second call as long as the first).
-:func:`enable` points JAX's persistent compilation cache at a folder, so a later process with the
-same shapes loads the compiled programs instead (measured in docs/performance.md).
+Without it every process compiles its XLA programs from scratch, the second call as long as
+the first. :func:`enable` points JAX's persistent compilation cache at a folder, so a later
+process with the same shapes loads the compiled programs instead (docs/performance.md).
 
 Where the cache lives, first match wins:
 

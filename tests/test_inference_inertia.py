@@ -20,7 +20,7 @@ from cassini_bayes.inference.inertia import (cholesky_params_from_pi, fit_inerti
                                              is_physical, momentum_residuals, noise_covariance,
                                              pi_from_cholesky_params, prepare_inertia,
                                              sample_prior)
-from cassini_bayes.inference.inertia.prior import _log_jacobian
+from cassini_bayes.inference.inertia.prior import log_jacobian
 from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
 from cassini_bayes.spacecraft import load_spacecraft
@@ -85,7 +85,7 @@ def test_cholesky_map_roundtrip_and_jacobian():
     consts = []
     for lp_i in [lp, lp + 0.3, np.array([1.0, -0.5, 2.0, 3.0, -1.0, 0.2])]:
         _, ld = jnp.linalg.slogdet(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_i)))
-        consts.append(float(ld - _log_jacobian(jnp.asarray(lp_i))))
+        consts.append(float(ld - log_jacobian(jnp.asarray(lp_i))))
     np.testing.assert_allclose(consts, np.log(16.0), atol=1e-9)
 
 

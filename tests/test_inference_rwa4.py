@@ -117,14 +117,14 @@ def test_whitened_axes_are_gaussian():
     −1200 at ±1). At ±3 only the RCS chart is checked: the prior-dominated log-Cholesky inertia
     coordinates of the RWA chart are skewed by the near physical boundary (−3.3 and −11.2 at
     ∓3 on one axis, seed 21), which NUTS's fits still handle (0 divergences measured)."""
-    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
+    from cassini_bayes.inference.rwa4.model import LOG_DENSITY
 
     for name, method in (("rwa4_rcs", "rcs"), ("rwa4_rwa", "rwa")):
         sc, r = _sim(name, 21)
         p = prepare_rwa4(r.telemetry, sc.prior, method=method)
         assert p.chart == method
         kw = p.data
-        f = jax.jit(lambda w, kw=kw, c=p.chart: _LOG_DENSITY[c](kw.centre + kw.tril @ w,
+        f = jax.jit(lambda w, kw=kw, c=p.chart: LOG_DENSITY[c](kw.centre + kw.tril @ w,
                                                                 kw))
         n = kw.centre.shape[0]
         l0 = float(f(jnp.zeros(n)))
@@ -177,7 +177,7 @@ def test_rcs_chart_has_no_wall_toward_the_physical_boundary():
     infinity; here the curvature peaks at 3.6 and the density falls by 58 over the 12 units).
     The earlier chart met ``m = 0`` at 3.2 units (log density −∞; curvature 16.5 at 2.75): the
     test fails on it (run by hand against commit 31a1372)."""
-    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL
+    from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL
     from cassini_bayes.inference.rwa4.prior import _physical_margin
 
     sc, r = _slow_spinup(SLOW_AXIS, SLOW_RATES, 1)
@@ -186,13 +186,13 @@ def test_rcs_chart_has_no_wall_toward_the_physical_boundary():
     n = kw.centre.shape[0]
 
     def margin(w):
-        return _physical_margin(_PHYSICAL[p.chart](kw.centre + kw.tril @ w, kw)[1])
+        return _physical_margin(PHYSICAL[p.chart](kw.centre + kw.tril @ w, kw)[1])
 
     g = np.asarray(jax.grad(margin)(jnp.zeros(n)))
     d = jnp.asarray(-g / np.linalg.norm(g))
     step = 0.25
     ts = jnp.arange(0.0, 12.0 + step / 2, step)
-    ld = np.asarray(jax.jit(jax.vmap(lambda t: _LOG_DENSITY[p.chart](
+    ld = np.asarray(jax.jit(jax.vmap(lambda t: LOG_DENSITY[p.chart](
         kw.centre + kw.tril @ (t * d), kw)))(ts))
     assert np.all(np.isfinite(ld)), float(ts[np.argmin(np.isfinite(ld))])
     curvature = -(ld[2:] - 2.0 * ld[1:-1] + ld[:-2]) / step**2

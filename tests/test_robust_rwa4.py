@@ -13,7 +13,7 @@ import pytest
 from cassini_bayes.frames import dcm, rotvec_to_quat
 from cassini_bayes.inference.nuisance import nuisance_layout
 from cassini_bayes.inference.rwa4.data import _nuisance_means, _window_means
-from cassini_bayes.inference.rwa4.likelihood import _balance, _nuisance_cols
+from cassini_bayes.inference.rwa4.likelihood import balance, nuisance_cols
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S
@@ -78,9 +78,9 @@ def _residual(sc, u4, effects, wheel_errors):
     pi = jnp.asarray([i_star[0, 0], i_star[1, 1], i_star[2, 2], i_star[0, 1], i_star[0, 2],
                       i_star[1, 2]])
     np.testing.assert_allclose(np.asarray(inertia_matrix(pi)), i_star)
-    d = np.asarray(_balance(jnp.asarray(u4), pi, m_pi=data["m_pi"], r_u=data["r_u"],
+    d = np.asarray(balance(jnp.asarray(u4), pi, m_pi=data["m_pi"], r_u=data["r_u"],
                             k_h=data["k_h"], j4=data["j4"]))[0]
-    cols = np.asarray(_nuisance_cols(jnp.asarray(u4), r_u=data["r_u"], j4=data["j4"],
+    cols = np.asarray(nuisance_cols(jnp.asarray(u4), r_u=data["r_u"], j4=data["j4"],
                                      nu_cols=nuis["nu_cols"], nu_wheel=nuis["nu_wheel"]))[0]
     return d, d + cols @ nu
 
@@ -132,7 +132,7 @@ def test_common_model_misses_opposite_wheel_errors():
     data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
     nuis = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
                            np.asarray(sc.inertia))
-    col = np.asarray(_nuisance_cols(jnp.asarray(u4), r_u=data["r_u"], j4=data["j4"],
+    col = np.asarray(nuisance_cols(jnp.asarray(u4), r_u=data["r_u"], j4=data["j4"],
                                     nu_cols=nuis["nu_cols"], nu_wheel=nuis["nu_wheel"]))[0]
     col = col[:, layout.slices["wheel_inertia"].start]
     best = d - col * (col @ d) / (col @ col)     # the best common scale, by least squares

@@ -102,7 +102,7 @@ def _chart_kwargs() -> SimpleNamespace:
     z_apex = np.array([0.1, -0.05, 0.08])
     a = z_apex + k @ np.linalg.solve(chol, mean)        # z_a = a − K L⁻¹ μ
     u0 = -a / np.linalg.norm(a)
-    basis = rwa4_data._tangent_basis(u0)
+    basis = rwa4_data.tangent_basis(u0)
     rcs = rwa4_data._rcs_chart(a, q_inv, u0, basis, mean, chol)
     np.testing.assert_allclose(rcs["rcs_apex"], z_apex, atol=1e-12)
     return SimpleNamespace(**{k: jnp.asarray(v) for k, v in dict(
@@ -123,7 +123,7 @@ def test_both_charts_state_the_same_prior(chart):
     within 2.5 s of the boundary are included (50 of 300 have m < 2 s); in the RCS chart, points
     where its radial map compresses (beyond half-way to the wall) too."""
     kw = _chart_kwargs()
-    physical = rwa4_charts._PHYSICAL[chart]
+    physical = rwa4_charts.PHYSICAL[chart]
     rng = np.random.default_rng(4)
     if chart == "rcs":   # θ = (δ, log|z|, y): y of unit scale up to the walls and beyond
         theta = rng.standard_normal((300, 8)) * np.array([0.01, 0.01, 0.05, 3, 3, 3, 3, 3])
@@ -139,7 +139,7 @@ def test_both_charts_state_the_same_prior(chart):
         gnomonic = -1.5 * jnp.log(1.0 + jnp.sum(v**2))
         xi_err = jnp.max(jnp.abs(kw.pi_chol @ xi - (pi - kw.pi_mean)))
         return (log_jac - jnp.linalg.slogdet(d_pi)[1] - gnomonic
-                - rwa4_prior._log_physical_factor(pi, kw.margin_scale),
+                - rwa4_prior.log_physical_factor(pi, kw.margin_scale),
                 rwa4_prior._physical_margin(pi), xi_err, jnp.max(jnp.abs(d_pi_axis)))
 
     res, margin, xi_err, d_axis = map(np.asarray, jax.jit(jax.vmap(residual))(jnp.asarray(theta)))
@@ -259,7 +259,7 @@ def test_laplace_step_of_hard_replicates(monkeypatch, seed, index):
     problem = seen["problem"]
     assert problem.sd_direction_deg < 5.0
     assert seen["passes"] == 1
-    density = rwa4_charts._LOG_DENSITY[problem.chart]
+    density = rwa4_charts.LOG_DENSITY[problem.chart]
     data = problem.data
     h = -np.asarray(jax.hessian(density)(jnp.asarray(data.centre), data))
     tril = np.asarray(data.tril)

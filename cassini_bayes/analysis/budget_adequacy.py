@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from cassini_bayes.inference.adequacy.check import (Z_THRESHOLD, Adequacy, Check, _check,
+from cassini_bayes.inference.adequacy.check import (Z_THRESHOLD, Adequacy, Check, z_check,
                                                     normal_deviate, not_applicable)
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import INERTIA_NAMES
@@ -93,7 +93,7 @@ def input_convergence(summaries: dict[str, dict], runs: dict[str, Path]) -> Chec
         f"bulk ESS {_num(d, 'min_ess_bulk', '.0f')}, {_num(d, 'divergences', 'd')} divergences): "
         "its lines rest on draws that may not represent its posterior; re-fit it with more draws"
         for k, d in bad.items())
-    return _check("input_convergence", float(len(bad)), 0.0, ", ".join(bad) or None, note or None)
+    return z_check("input_convergence", float(len(bad)), 0.0, ", ".join(bad) or None, note or None)
 
 
 def input_adequacy(summaries: dict[str, dict], runs: dict[str, Path]) -> Check:
@@ -110,7 +110,7 @@ def input_adequacy(summaries: dict[str, dict], runs: dict[str, Path]) -> Check:
              "not fit its data" for k, v in bad.items()]
     if unchecked:
         parts.append("no adequacy verdict in the " + ", ".join(unchecked) + " run(s)")
-    return _check("input_adequacy", float(len(bad)), 0.0, ", ".join(bad) or None,
+    return z_check("input_adequacy", float(len(bad)), 0.0, ", ".join(bad) or None,
                   "; ".join(parts) or None)
 
 
@@ -123,7 +123,7 @@ def spacecraft_models(models: dict[str, str]) -> Check:
     if n > 1:
         note += ("; the budget combines parameters of different spacecraft or epochs; give runs "
                  "of one model")
-    return _check("spacecraft_models", float(n), 1.0, note=note)
+    return z_check("spacecraft_models", float(n), 1.0, note=note)
 
 
 def shared_inertia(draws: dict[str, np.ndarray], threshold: float = Z_THRESHOLD) -> Check:
@@ -143,7 +143,7 @@ def shared_inertia(draws: dict[str, np.ndarray], threshold: float = Z_THRESHOLD)
             where = (f"{INERTIA_NAMES[j]}: {ka} {a[:, j].mean():.6g} ± {a[:, j].std(ddof=1):.3g}"
                      f", {kb} {b[:, j].mean():.6g} ± {b[:, j].std(ddof=1):.3g} kg m^2")
     p = 2.0 * stats.norm.sf(worst)
-    return _check(name, normal_deviate(min(p * n_tests, 1.0)), threshold, where,
+    return z_check(name, normal_deviate(min(p * n_tests, 1.0)), threshold, where,
                   f"largest |z| {worst:.2f} over {n_tests} entries and pairs of runs; runs that "
                   "disagree describe different spacecraft (an epoch, a model) or one of them "
                   "does not fit its data")

@@ -20,8 +20,7 @@ fits run one after the other. The draws are thinned by the model's ``thin`` and 
 thinning is recorded beside its R-hat, to check that the ``L`` ranked draws are about as good as
 independent ones (``ESS ≥ L``; Talts et al. 2018, Sec. 5.1). Throughput (``benchmarks/
 bench_sbc.py``; ``docs/sbc/``): the toy model runs thousands of replicates a minute once compiled;
-the inertia model's replicates cost mostly their NumPy preparation, the sampler about 0.06 s a
-replicate at ``B = 16``.
+the inertia model's replicates cost mostly their NumPy preparation, not the sampler.
 
 Checkpoints: ``WORKDIR/manifest.json`` records what the campaign is (model, options, scenario
 hash, seed, batch size, package version); every finished batch is written to

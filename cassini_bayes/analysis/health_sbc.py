@@ -124,7 +124,7 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
     from cassini_bayes.estimators.leak import ETA
     from cassini_bayes.inference.leak import (FRACTION_SCALES, OFFSET_SD_NMS, SAMPLE_STEP_S,
                                               TORQUE_SCALES, LeakInputs, leak_posterior)
-    from cassini_bayes.inference.leak._posterior import _Sums
+    from cassini_bayes.inference.leak._posterior import Sums
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")
@@ -154,7 +154,7 @@ def leak_sbc(seed: int, n_replicates: int, *, hours: float = 4.0, prior_leak: fl
         if not is_leak:
             continue
         # the true thruster's posterior of (onset, fraction) given all the data
-        ev = _Sums(inp, ETA, inp).check(n - 1)
+        ev = Sums(inp, ETA, inp).check(n - 1)
         w, _, m, sd = ev.mixture(k)
         # P(f ≤ frac) of each node's normal cut at 0: 1 − Φ((m − frac)/sd) / Φ(m/sd)
         cdf = -np.expm1(log_ndtr((m - frac) / sd) - log_ndtr(m / sd))

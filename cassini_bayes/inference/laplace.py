@@ -16,22 +16,19 @@ The Hessian is the central difference of the compiled gradient along the current
 coordinates (``2 d`` gradients for ``d`` parameters, step ``1e-4`` of the current scale), taken
 twice at each round's start: once along the previous round's scales (unit scales at the start),
 then along the scales that this gives, so that the step is ``1e-4`` posterior sd in every
-direction (:func:`_rewhiten`). On a robust thrust event the whitening agreed with
-``jax.hessian``'s to 1.6e-9 relative (rounding; the truncation error, 1.6e-8 at a step of 1e-3,
-falls as the step squared). ``jax.hessian`` is exact, but it is a second program of the whole
-density (forward over reverse) to trace, lower and load in every process: about 2 s of each warm
-thrust fit on the 2-core machine, for a matrix that only sets the sampler's coordinates (the
-density sampled is exact whatever they are).
+direction (:func:`_rewhiten`): the truncation error falls as the step squared, below rounding at
+this step. ``jax.hessian`` is exact, but it is a second program of the whole density (forward
+over reverse) to trace, lower and load in every process, for a matrix that only sets the
+sampler's coordinates (the density sampled is exact whatever they are; the costs are in
+docs/performance.md, "Other model choices, measured").
 
 Differences fail where the density is far from quadratic within the step: inside a round the
 trust region can move to where the curvature is 1e9 times that at the round's start (an RWA4
 SBC replicate near the inertia's physical boundary), so a step of ``1e-4`` of the old scales is
 several posterior sd there, the differenced "Hessian" has spurious negative curvature and the
-solve stalls (200 iterations, no progress; the axis was then refused as undetermined, ±37°).
-So when the differenced rounds do not reach a negligible Newton decrement, :func:`laplace`
-starts again with ``jax.hessian`` (compiled only then) and keeps the better end point. On the
-208-replicate RWA4 SBC (seed 2026) the fallback served 16 of the first 60 replicates; the thrust
-fits of five shipped biasing scenarios, robust and idealised, converge with differences alone.
+solve stalls. So when the differenced rounds do not reach a negligible Newton decrement,
+:func:`laplace` starts again with ``jax.hessian`` (compiled only then) and keeps the better end
+point.
 """
 
 from __future__ import annotations

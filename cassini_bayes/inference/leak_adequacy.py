@@ -30,11 +30,11 @@ import numpy as np
 from scipy import optimize, stats
 
 from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHOLD, Adequacy,
-                                                    _check, normal_deviate)
+                                                    z_check, normal_deviate)
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation
 from cassini_bayes.inference.leak import (OFFSET_SD_NMS, TORQUE_SCALES, LeakInputs,
                                           LeakPosterior)
-from cassini_bayes.inference.leak._posterior import _thinned
+from cassini_bayes.inference.leak._posterior import thinned
 
 __all__ = ["leak_adequacy", "nuisance_posterior"]
 
@@ -92,7 +92,7 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
     Gaussian of sd 1, i.e. 100 % of the thrust) and its onset scanned over ± two sample steps
     around the monitor's posterior mean and refined: the check judges the model at its best
     fit, which the note sets beside the monitor's estimate."""
-    used = _thinned(inp, sample_step_s)
+    used = thinned(inp, sample_step_s)
     t = used.t - used.t[0]
     y = np.asarray(used.residual, float)
     cols = _design(t, used.impulse, used.q_matrix)
@@ -130,7 +130,7 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
         chi2 = float(np.sum((e / sd[None, :]) ** 2))
         hyp = "no leak"
     dof = max(3 * t.size - p_eff, 1.0)
-    fit = _check("residual_fit", normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0)),
+    fit = z_check("residual_fit", normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0)),
                  Z_THRESHOLD, note=f"chi2 {chi2:.4g} on {dof:.4g} dof under {hyp}; residual rms "
                  + ", ".join(f"{a} {r:.3g}" for a, r in zip("XYZ", np.sqrt(np.mean(e * e, 0))))
                  + " N m s against the assumed noise " + ", ".join(f"{s_:.3g}" for s_ in sd))
@@ -138,7 +138,7 @@ def leak_adequacy(inp: LeakInputs, post: LeakPosterior, *, eta: float,
     z = np.r_[np.abs(mean[3:6]) / max(torque_sd, 1e-300), np.abs(mean[6:]) / max(eta, 1e-300)]
     labels = [f"torque[{a}]" for a in "XYZ"] + [f"thrust_error[{n}]" for n in names]
     j = int(np.argmax(z))
-    conflict = _check("prior_data_conflict", float(z[j]), PRIOR_CONFLICT_SD, labels[j],
+    conflict = z_check("prior_data_conflict", float(z[j]), PRIOR_CONFLICT_SD, labels[j],
                       f"torque {', '.join(f'{x * 1e6:.3g}' for x in mean[3:6])} µN m (prior sd "
                       f"{torque_sd * 1e6:.3g}); thrust errors up to "
                       f"{100 * np.max(np.abs(mean[6:])):.3g} % (prior sd {100 * eta:.3g} %), "

@@ -147,9 +147,9 @@ def _wheel_limit_rad_s(limits: Limits, base: Scenario, wheel: str) -> float:
 
 
 def _perpendicular_axes(g: np.ndarray, n: int, phase_rad: float) -> np.ndarray:
-    from cassini_bayes.plan.wheel_axis import _tangent_basis
+    from cassini_bayes.plan.wheel_axis import tangent_basis
 
-    e = _tangent_basis(g)
+    e = tangent_basis(g)
     phi = phase_rad + np.arange(n) * np.pi / n
     return np.cos(phi)[:, None] * e[0] + np.sin(phi)[:, None] * e[1]
 

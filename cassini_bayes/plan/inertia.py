@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.frames import dcm
-from cassini_bayes.inference.inertia.data import Setup, _setup
+from cassini_bayes.inference.inertia.data import Setup, problem_setup
 from cassini_bayes.inference.inertia.gls import full_prior
 from cassini_bayes.inference.noise import ATTITUDE_FLOOR, RATE_FLOORS
 from cassini_bayes.names import INERTIA_NAMES
@@ -80,7 +80,7 @@ def inertia_model(spacecraft: Spacecraft, wheels_on) -> InertiaModel:
     stub = Telemetry(t=np.array([0.0, 1.0]), q=np.tile([0.0, 0.0, 0.0, 1.0], (2, 1)),
                      omega=np.zeros((2, 3)), wheel_rates=rates, wheel_names=tuple(names),
                      on_times=None, source="<plan>")
-    setup = _setup([stub], spacecraft, torque=True, robust=True, wheel_errors="per_wheel")
+    setup = problem_setup([stub], spacecraft, torque=True, robust=True, wheel_errors="per_wheel")
     _, full_prec, _ = full_prior(setup, 1)
     return InertiaModel(setup, idx, np.asarray(spacecraft.wheel_axes, float),
                         np.asarray(spacecraft.wheel_inertias, float), full_prec[setup.active])

@@ -76,8 +76,8 @@ class AxisPrediction(NamedTuple):
     direction_summary` reports a fit's. budget_deg : Brown's expected accuracy.
     pairs : the Time A / Time B windows (s) the fit uses. noise : (3,) the noise levels used
     (rad/s, rad/s, rad). shares : the share of the axis's predicted variance each robust effect
-    carries (:func:`effect_shares`). usage : the largest fraction of each limit on the simulated telemetry
-    (empty without limits). duration_s; t, omega, wheel_rpm, wheel_names : the noise-free flight
+    carries (:func:`effect_shares`). usage : the largest fraction of each limit on the simulated
+    telemetry (empty without limits). duration_s; t, omega, wheel_rpm, wheel_names : the noise-free flight
     (s, rad/s, rpm with idle wheels NaN) for the report's figure.
     """
 
@@ -164,9 +164,9 @@ def predict_axis(problem, sigmas) -> _Laplace:
     by ``jax.hessian`` of the fit's log density, the sites by the delta method (module
     docstring)."""
     from cassini_bayes.inference.laplace import laplace
-    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL
+    from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL
 
-    log_density, physical = _LOG_DENSITY[problem.chart], _PHYSICAL[problem.chart]
+    log_density, physical = LOG_DENSITY[problem.chart], PHYSICAL[problem.chart]
     kw = problem.data._replace(log_noise_hat=jnp.log(jnp.asarray(sigmas, float)))
     centre, _ = laplace(log_density, problem.data.centre, data=kw)
     centre = jnp.asarray(centre)
@@ -180,15 +180,15 @@ def predict_axis(problem, sigmas) -> _Laplace:
 
     jac = np.asarray(jax.jacfwd(sites)(centre))
     u = np.asarray(sites(centre))[:3]
-    basis = np.asarray(_tangent_basis(u))
+    basis = np.asarray(tangent_basis(u))
     jt = basis @ jac[:3]                    # tangent-plane coordinates of u, rad per θ
     return _Laplace(np.asarray(centre), cov, jac @ cov @ jac.T, u, jt @ cov @ jt.T)
 
 
 def _tangent_var(problem, kw, centre, jt_of) -> float:
-    from cassini_bayes.inference.rwa4.model import _LOG_DENSITY
+    from cassini_bayes.inference.rwa4.model import LOG_DENSITY
 
-    hess = -np.asarray(jax.hessian(_LOG_DENSITY[problem.chart])(jnp.asarray(centre), kw))
+    hess = -np.asarray(jax.hessian(LOG_DENSITY[problem.chart])(jnp.asarray(centre), kw))
     jt = jt_of
     return float(np.trace(jt @ np.linalg.solve(0.5 * (hess + hess.T), jt.T)))
 
@@ -199,11 +199,11 @@ def effect_shares(problem, sigmas, lap: _Laplace) -> dict[str, float]:
     sd set to 0 at the same mode; ``"sensor noise"``: the variance left with every effect
     known, over the whole. Says which error a manoeuvre is limited by (the shares need not add
     to 1: the effects are correlated in the data)."""
-    from cassini_bayes.inference.rwa4.model import _PHYSICAL
+    from cassini_bayes.inference.rwa4.model import PHYSICAL
 
     kw = problem.data._replace(log_noise_hat=jnp.log(jnp.asarray(sigmas, float)))
-    physical = _PHYSICAL[problem.chart]
-    basis = np.asarray(_tangent_basis(lap.axis))
+    physical = PHYSICAL[problem.chart]
+    basis = np.asarray(tangent_basis(lap.axis))
     jt = basis @ np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(jnp.asarray(lap.centre)))
     total = float(np.trace(lap.tangent_cov))
     sd = np.asarray(kw.nu_sd, float)
@@ -220,8 +220,9 @@ def effect_shares(problem, sigmas, lap: _Laplace) -> dict[str, float]:
     return out
 
 
-def _tangent_basis(u: np.ndarray) -> np.ndarray:
-    from cassini_bayes.inference.rwa4.data import _tangent_basis as basis
+def tangent_basis(u: np.ndarray) -> np.ndarray:
+    """(2, 3) orthonormal basis of the plane perpendicular to the direction of ``u``."""
+    from cassini_bayes.inference.rwa4.data import tangent_basis as basis
 
     return basis(np.asarray(u, float) / np.linalg.norm(u))
 

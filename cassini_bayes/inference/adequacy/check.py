@@ -72,7 +72,7 @@ def not_applicable(name: str, threshold: float, note: str) -> Check:
     return Check(name, None, threshold, True, note=note)
 
 
-def _check(name: str, z: float, threshold: float, parameter: str | None = None,
+def z_check(name: str, z: float, threshold: float, parameter: str | None = None,
            note: str | None = None) -> Check:
     z = float(z)
     return Check(name, z, threshold, bool(z <= threshold), parameter, note)

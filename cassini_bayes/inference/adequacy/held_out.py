@@ -10,7 +10,7 @@ from typing import Sequence
 import numpy as np
 from scipy import stats
 
-from cassini_bayes.inference.adequacy.check import (Z_THRESHOLD, Check, _check, normal_deviate,
+from cassini_bayes.inference.adequacy.check import (Z_THRESHOLD, Check, z_check, normal_deviate,
                                                     not_applicable)
 
 
@@ -98,5 +98,5 @@ def inertia_held_out(problem, idata, threshold: float = Z_THRESHOLD) -> Check:
     p_val = np.array([stats.chi2.sf(d, k) if k else 1.0 for d, k in zip(d2, dof)])
     worst = int(np.argmin(p_val))
     z = normal_deviate(min(1.0, n_files * p_val[worst]))
-    return _check(name, z, threshold, problem.sources[worst],
+    return z_check(name, z, threshold, problem.sources[worst],
                   note=f"χ² {d2[worst]:.1f} on {dof[worst]} dof")

@@ -11,7 +11,7 @@ import numpy as np
 from scipy import stats
 
 from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, Z_THRESHOLD, Adequacy, Check,
-                                                    _check, normal_deviate, not_applicable)
+                                                    z_check, normal_deviate, not_applicable)
 from cassini_bayes.inference.adequacy.held_out import inertia_held_out
 from cassini_bayes.inference.adequacy.prior_conflict import common_wheel_scale, prior_data_conflict
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation, residual_regression
@@ -60,9 +60,8 @@ def inertia_adequacy(post, sites: Sequence[str]) -> Adequacy:
 def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
     """The checks of :func:`~cassini_bayes.inference.thrust.fit_thrust`'s result ``post``.
 
-    No residual regression: on correctly specified simulations (``biasing_day028``, the model
-    file's inertia equal to the truth) the Z-axis impulse residual correlates with the wheel
-    momentum and the body-rate change at a normal deviate of 3–5.5 (47 % of 30 seeds beyond 4;
+    No residual regression: on correctly specified simulations the Z-axis impulse residual
+    correlates with the wheel momentum and the body-rate change (docs/adequacy.md;
     ``benchmarks/adequacy_false_alarms.py``), a structure of the model's own approximations (the
     neglected random walk of the integrated gyroscopic term, Feldman & Lee Eq 17), not of the
     data; a wrong inertia shows instead as the wheel spin-inertia scale pulled from its prior.
@@ -105,7 +104,7 @@ def balance_fit(post, threshold: float = Z_THRESHOLD) -> Check:
     z = normal_deviate(min(2.0 * float(stats.chi2.sf(chi2, dof)), 1.0))   # one-sided tail
     # the covariance holds the nuisance prior's whole spread (integrated out), so a clean fit
     # sits far below its dof (0.005 on 10): the check fires on misfits beyond that prior
-    return _check("balance_fit", z, threshold, note=f"chi2 {chi2:.3g} on {dof} dof, against "
+    return z_check("balance_fit", z, threshold, note=f"chi2 {chi2:.3g} on {dof} dof, against "
                   "noise plus the nuisance prior's spread")
 
 
@@ -130,7 +129,7 @@ def articulation_cone(post, threshold_deg: float = CONE_OFFSET_MAX_DEG) -> Check
     cos = float(np.clip(u @ problem.cone.axis / np.linalg.norm(u), -1.0, 1.0))
     polar = float(np.degrees(np.arccos(cos)))
     offset = abs(polar - problem.cone.angle_deg)
-    return _check("articulation_cone", offset, threshold_deg,
+    return z_check("articulation_cone", offset, threshold_deg,
                   note=f"axis {polar:.1f}° from {axis_label(problem.cone.axis)}; the wheels' "
                   f"cone is at {problem.cone.angle_deg:.2f}°"
                   + ("; a wheel-rate sign flipped in the file points the axis to the antipode, "

@@ -10,7 +10,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from cassini_bayes.inference.adequacy.check import PRIOR_CONFLICT_SD, Check, _check, not_applicable
+from cassini_bayes.inference.adequacy.check import PRIOR_CONFLICT_SD, Check, z_check, not_applicable
 
 
 def _elements(da) -> dict[str, np.ndarray]:
@@ -105,4 +105,4 @@ def prior_data_conflict(idata, sites: Sequence[str], threshold: float = PRIOR_CO
                 worst, worst_z = label, z
     if worst is None:
         return not_applicable(name, threshold, "no posterior site has a proper prior")
-    return _check(name, worst_z, threshold, worst)
+    return z_check(name, worst_z, threshold, worst)

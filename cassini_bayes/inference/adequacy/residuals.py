@@ -10,7 +10,7 @@ from typing import Sequence
 import numpy as np
 from scipy import stats
 
-from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, Z_THRESHOLD, Check, _check,
+from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, Z_THRESHOLD, Check, z_check,
                                                     normal_deviate, not_applicable)
 
 
@@ -42,7 +42,7 @@ def residual_autocorrelation(residual: np.ndarray, block: np.ndarray,
             worst, worst_z = f"{label} axis {'xyz'[k]} (ρ̂₁ {rho[k]:+.3f})", float(abs(rho[k]))
     if worst is None:
         return not_applicable("residual_autocorrelation", threshold, "too few residuals")
-    return _check("residual_autocorrelation", worst_z, threshold, worst)
+    return z_check("residual_autocorrelation", worst_z, threshold, worst)
 
 
 def _lag1(x: np.ndarray) -> np.ndarray:
@@ -126,5 +126,5 @@ def residual_regression(residual: np.ndarray, covariates: np.ndarray, block: np.
     if not tests:
         return not_applicable("residual_regression", threshold, "too few residuals")
     p, where = min(tests, key=lambda t: t[0])
-    return _check("residual_regression", normal_deviate(min(1.0, len(tests) * p)), threshold,
+    return z_check("residual_regression", normal_deviate(min(1.0, len(tests) * p)), threshold,
                   where)

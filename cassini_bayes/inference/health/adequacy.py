@@ -32,7 +32,7 @@ from scipy.special import ndtr
 
 from cassini_bayes.estimators.baseline import wheel_momentum
 from cassini_bayes.inference.adequacy.check import (PRIOR_CONFLICT_SD, Z_THRESHOLD, Adequacy,
-                                                    Check, _check, normal_deviate,
+                                                    Check, z_check, normal_deviate,
                                                     not_applicable)
 from cassini_bayes.inference.health.changepoint import (SCATTER_GRID, HealthPrior,
                                                         health_posterior)
@@ -143,7 +143,7 @@ def inertia_conflict(probes: Sequence[InertiaProbe], labels: Sequence[str],
     if z[e, k] > threshold:
         note += ("; the health model takes the model's inertia as exact up to a shared scale: "
                  "give the spacecraft model of the events' epoch (fit inertia calibrates it)")
-    return _check(name, float(z[e, k]), threshold, f"{labels[e]} {channels[k]}", note)
+    return z_check(name, float(z[e, k]), threshold, f"{labels[e]} {channels[k]}", note)
 
 
 def predictive_cdf(post, date_days: float, log_thrust: float, se: float, k: int) -> float:
@@ -195,7 +195,7 @@ def held_out_events(dates_days, log_thrust, se, prior: HealthPrior, labels: Sequ
     n_tests = int(np.isfinite(z).sum())
     e, k = np.unravel_index(int(np.nanargmax(z)), z.shape)
     p = 2.0 * stats.norm.sf(z[e, k])
-    return _check(name, normal_deviate(min(p * n_tests, 1.0)), threshold,
+    return z_check(name, normal_deviate(min(p * n_tests, 1.0)), threshold,
                   f"{labels[e]} {channels[k]}",
                   f"largest |z| {z[e, k]:.2f} of {n_tests} event channels, each against the "
                   "others' change-point posterior")

@@ -21,7 +21,7 @@ from cassini_bayes.inference.inertia.gls import (
     sufficient_statistics,
     whitening,
 )
-from cassini_bayes.inference.inertia.likelihood import _SYM
+from cassini_bayes.inference.inertia.likelihood import SYM_INDEX
 from cassini_bayes.inference.inertia.prior import InertiaPrior, inertia_prior
 from cassini_bayes.inference.noise import ATTITUDE_FLOOR, RATE_FLOORS, floored, white_noise_sd
 from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout
@@ -185,7 +185,7 @@ class Setup(NamedTuple):
     w_index: np.ndarray      # indices of the wheel-scale block in the full vector
 
 
-def _setup(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *, torque: bool,
+def problem_setup(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *, torque: bool,
            robust: bool, wheel_errors: str) -> Setup:
     """The :class:`Setup` of a problem."""
     n_files = len(telemetries)
@@ -288,7 +288,7 @@ def _residual_data(files: list[dict]) -> dict:
         dt=np.concatenate([fd["dt"] for fd in files]),
         onehot=onehot,
         wheel_cov_t=np.concatenate(
-            [np.broadcast_to([fd["wcov"][i, j] for i, j in _SYM], (fd["t"].size, 6))
+            [np.broadcast_to([fd["wcov"][i, j] for i, j in SYM_INDEX], (fd["t"].size, 6))
              for fd in files]).T.copy()))
 
 
@@ -329,7 +329,7 @@ def prepare_inertia(telemetries: Sequence[Telemetry], spacecraft: Spacecraft, *,
     """
     _check_wheels_run(telemetries)
     n_files = len(telemetries)
-    setup = _setup(telemetries, spacecraft, torque=torque, robust=robust,
+    setup = problem_setup(telemetries, spacecraft, torque=torque, robust=robust,
                    wheel_errors=wheel_errors)
     files = [file_data(f, tel, spacecraft, setup.p_full) for f, tel in enumerate(telemetries)]
     set_robust_columns(files, setup, setup.prior.mean)

@@ -17,7 +17,7 @@ import numpy as np
 
 from cassini_bayes.errors import UnidentifiableError
 from cassini_bayes.inference.inertia.prior import (NOISE_PRIOR_LOG_SD, cholesky_params_from_pi,
-                                                   _inertia_matrix, is_physical,
+                                                   inertia_matrix_jit, is_physical,
                                                    pi_from_cholesky_params)
 from cassini_bayes.inference.nuisance import robust_columns
 from cassini_bayes.names import INERTIA_NAMES
@@ -42,7 +42,7 @@ def _body_cov_terms(inertia: np.ndarray, wheel_cov: np.ndarray, h_body: np.ndarr
 def set_robust_columns(files: list[dict], setup, pi) -> None:
     """Rebuild each file's robust columns of ``ν``, linear around the inertia ``pi`` (the prior
     mean when ``pi`` is not physical)."""
-    i_star = np.asarray(_inertia_matrix(pi if is_physical(pi) else setup.prior.mean))
+    i_star = np.asarray(inertia_matrix_jit(pi if is_physical(pi) else setup.prior.mean))
     for f, fd in enumerate(files):
         fd["cols"][:, :, setup.p_base:] = robust_columns(setup.layout, f, i_star, fd["w"],
                                                          fd["h_w"], fd["wheel_h"], fd["a"],
@@ -59,7 +59,7 @@ def _fitted(x, fit_map):
 def _weights(fd: dict, f: int, th_full, ls, prior_mean):
     """``B_t⁻¹``, the three terms of ``B_t`` per unit variance, and ``B_t`` of file ``f`` at the
     full vector ``th_full`` and log noise levels ``ls`` (3,)."""
-    i_m = np.asarray(_inertia_matrix(th_full[:6] if is_physical(th_full[:6]) else prior_mean))
+    i_m = np.asarray(inertia_matrix_jit(th_full[:6] if is_physical(th_full[:6]) else prior_mean))
     j0 = 6 + 6 * f
     h_n = th_full[j0:j0 + 3] + np.outer(fd["dt"], th_full[j0 + 3:j0 + 6])
     h_body = np.einsum("nij,nj->ni", fd["a"], np.broadcast_to(h_n, fd["w"].shape))

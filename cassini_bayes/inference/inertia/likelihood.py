@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
 __all__ = ["momentum_residuals", "noise_covariance"]
 
-_SYM = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+SYM_INDEX = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
 
 def _body_residual(pi, h0, tq, log_sigma, *, omega_t, h_wheels_t, a_t, dt, onehot, wheel_cov_t):
@@ -39,12 +39,12 @@ def _body_residual(pi, h0, tq, log_sigma, *, omega_t, h_wheels_t, a_t, dt, oneho
     hh = jnp.sum(h_m * h_m, 0)
     b = [s2[0] * i2[i, j] + s2[1] * wheel_cov_t[k]
          + s2[2] * ((hh if i == j else 0.0) - h_m[i] * h_m[j])
-         for k, (i, j) in enumerate(_SYM)]
+         for k, (i, j) in enumerate(SYM_INDEX)]
     return e, b
 
 
 def _matrix(b):
-    """(N, 3, 3) symmetric matrices from their six components (6, N) in ``_SYM`` order."""
+    """(N, 3, 3) symmetric matrices from their six components (6, N) in ``SYM_INDEX`` order."""
     return jnp.stack([jnp.stack([b[0], b[3], b[4]], -1), jnp.stack([b[3], b[1], b[5]], -1),
                       jnp.stack([b[4], b[5], b[2]], -1)], -2)
 

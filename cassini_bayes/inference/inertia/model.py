@@ -13,7 +13,7 @@ import numpyro
 import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
-from cassini_bayes.inference.inertia.prior import (NOISE_NAMES, _log_jacobian,
+from cassini_bayes.inference.inertia.prior import (NOISE_NAMES, log_jacobian,
                                                    pi_from_cholesky_params)
 from cassini_bayes.names import INERTIA_NAMES
 
@@ -61,7 +61,7 @@ def _model(data: InertiaData, *, torque: bool, per_wheel: bool = True, common: b
     # Prior, in physical coordinates (module docstring); the affine part of z → θ has a constant
     # Jacobian, the log-Cholesky map's is added here, and (π̃, H̃_0, T̃_N) → (π, H_0, T_N) at
     # fixed c contributes (6 + 3F [+ 3F]) log(1 + c).
-    log_prior = (jnp.sum(dist.Normal(pi_mean, pi_sd).log_prob(pi)) + _log_jacobian(lp)
+    log_prior = (jnp.sum(dist.Normal(pi_mean, pi_sd).log_prob(pi)) + log_jacobian(lp)
                  + jnp.sum(dist.Normal(0.0, file_sd[None, :3]).log_prob(h0)))
     if torque:
         log_prior += jnp.sum(dist.Normal(0.0, file_sd[None, 3:]).log_prob(tq))

@@ -47,13 +47,13 @@ def pi_from_cholesky_params(lp):
 
 # jitted once: called eagerly, each would compile a handful of one-operation XLA programs
 # (a slice and a stack each) per shape, every process (docs/performance.md)
-_inertia_matrix = jax.jit(inertia_matrix)
+inertia_matrix_jit = jax.jit(inertia_matrix)
 _inertia_vector = jax.jit(inertia_vector)
 
 
 def cholesky_params_from_pi(pi) -> np.ndarray:
     """Inverse of :func:`pi_from_cholesky_params`; raises ``ValueError`` for a non-physical π."""
-    i_m = np.asarray(_inertia_matrix(np.asarray(pi, float)))
+    i_m = np.asarray(inertia_matrix_jit(np.asarray(pi, float)))
     sigma = 0.5 * np.trace(i_m) * np.eye(3) - i_m
     l_mat = np.linalg.cholesky(sigma)  # LinAlgError (a ValueError) when not physical
     return np.array([np.log(l_mat[0, 0]), np.log(l_mat[1, 1]), np.log(l_mat[2, 2]),
@@ -62,12 +62,12 @@ def cholesky_params_from_pi(pi) -> np.ndarray:
 
 def is_physical(pi) -> np.ndarray:
     """Whether each ``π`` (..., 6) is positive definite and obeys the triangle inequalities."""
-    i_m = np.asarray(_inertia_matrix(np.asarray(pi, float)))
+    i_m = np.asarray(inertia_matrix_jit(np.asarray(pi, float)))
     sigma = 0.5 * np.trace(i_m, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - i_m
     return np.linalg.eigvalsh(sigma)[..., 0] > 0
 
 
-def _log_jacobian(lp):
+def log_jacobian(lp):
     """``log|det ∂π/∂lp|`` of :func:`pi_from_cholesky_params`, up to a constant.
 
     ``lp → L`` (exp of the diagonal) contributes ``Σ lp_ii``; ``L → Σ = L Lᵀ`` contributes

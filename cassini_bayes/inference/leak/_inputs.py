@@ -228,7 +228,7 @@ def _noise_floor_nms(spacecraft: Spacecraft) -> float:
     return float(np.hypot(lam * s_w, s_r * np.linalg.norm(j)))
 
 
-def _noise_sd(r: np.ndarray, floor_nms: float) -> np.ndarray:
+def noise_sd(r: np.ndarray, floor_nms: float) -> np.ndarray:
     """White-noise sd per axis (N m s) of rows ``r`` (n, 3), at least ``floor_nms``
     (:attr:`LeakInputs.noise_floor_nms`): the median absolute deviation of the second
     differences ÷ √6. A leak or a torque adds a constant to every first difference after its

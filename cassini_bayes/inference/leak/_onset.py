@@ -1,8 +1,8 @@
 """The onset integral of the leak monitor: quadrature of each onset cell's evidence.
 
 Per cell the leak's fraction is integrated in closed form, leaving a bounded integrand in ``w``
-with one peak or trough (:mod:`cassini_bayes.inference.leak`); :class:`_Rule` sets the
-Gauss-Legendre rule adapted to it and :class:`_Check` holds one check's evidence.
+with one peak or trough (:mod:`cassini_bayes.inference.leak`); :class:`Rule` sets the
+Gauss-Legendre rule adapted to it and :class:`OnsetCheck` holds one check's evidence.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from cassini_bayes.inference.leak._inputs import FRACTION_SCALES
 
 
 @dataclass(frozen=True)
-class _Rule:
+class Rule:
     """The onset quadrature: a cell whose integrand varies by less than ``easy_nats`` over at
     most ``easy_span`` in ``w`` takes Gauss-Legendre with ``easy_nodes`` nodes; any other is
     split at its peak or trough, each side at the points ``levels`` nats below its top, each
@@ -37,7 +37,7 @@ class _Rule:
     prune_nats: float = 40.0
 
 
-_RULE = _Rule()
+RULE = Rule()
 
 
 @functools.cache
@@ -48,8 +48,8 @@ def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 # The onset integral of one cell is ∫ exp(log_g(w)) dw over w ∈ [asinh r₀, asinh r₁]; log_g
 # is unimodal in the angle θ = atan(sinh w) + atan2(g, b) (its peak at θ = 0, its trough at ±π).
-# The rule and its settings: _Rule (above).
-_LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
+# The rule and its settings: Rule (above).
+LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
 
 def _log_g(w, b, g):
@@ -62,7 +62,7 @@ def _log_g(w, b, g):
 
 def _mills(b):
     """φ(B) / Φ(B)."""
-    return np.exp(-0.5 * b * b - _LOG_SQRT_2PI - log_ndtr(b))
+    return np.exp(-0.5 * b * b - LOG_SQRT_2PI - log_ndtr(b))
 
 
 def _dlog_g(w, b, g):
@@ -175,7 +175,7 @@ def _segment_logsumexp(idx, v, size):
 
 
 @dataclass
-class _Check:
+class OnsetCheck:
     """The evidence at one check: per cell (onset in ``[t_ref − width, t_ref)``), thruster,
     torque component and fraction scale (axes ``(cells, m, torques, scales)``), the Gram terms of
     the leak's columns ``P = F Q[:, k] (t − t_ref)₊`` and ``O = F Q[:, k] 1(t ≥ t_ref)`` and their
@@ -191,7 +191,7 @@ class _Check:
     a_oo: np.ndarray
     z_p: np.ndarray
     z_o: np.ndarray
-    rule: _Rule = _RULE
+    rule: Rule = RULE
 
     def __post_init__(self):
         s = FRACTION_SCALES

@@ -12,8 +12,8 @@ from scipy.special import log_ndtr, logsumexp
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.leak import ETA
 from cassini_bayes.inference.leak._inputs import (MAX_GRID, SAMPLE_STEP_S, TORQUE_SCALES,
-                                                 LeakInputs, LeakPosterior, _noise_sd)
-from cassini_bayes.inference.leak._onset import _LOG_SQRT_2PI, _RULE, _Check, _Rule
+                                                 LeakInputs, LeakPosterior, noise_sd)
+from cassini_bayes.inference.leak._onset import LOG_SQRT_2PI, RULE, OnsetCheck, Rule
 
 
 def _cum(a: np.ndarray) -> np.ndarray:
@@ -21,7 +21,7 @@ def _cum(a: np.ndarray) -> np.ndarray:
     return np.concatenate([np.zeros((1,) + a.shape[1:]), np.cumsum(a, axis=0)])
 
 
-class _Sums:
+class Sums:
     """Prefix sums of a stretch for the closed-form evidence at any check."""
 
     def __init__(self, inp: LeakInputs, eta: float, raw: LeakInputs):
@@ -53,9 +53,9 @@ class _Sums:
         levels seen between the used rows and between the raw telemetry rows (the latter is
         reliable from a few dozen seconds on, the former holds the slow wander)."""
         raw = self.raw_y[:np.searchsorted(self.raw_t, self.t[c] + self.raw_t[0], "right")]
-        return np.maximum(_noise_sd(self.y[:c + 1], self.floor), _noise_sd(raw, self.floor))
+        return np.maximum(noise_sd(self.y[:c + 1], self.floor), noise_sd(raw, self.floor))
 
-    def check(self, c: int, rule: _Rule = _RULE) -> _Check:
+    def check(self, c: int, rule: Rule = RULE) -> OnsetCheck:
         """The evidence of every thruster's leak with the data rows 0..c (module docstring), its
         onset integrated by ``rule``."""
         e, t = c + 1, self.t
@@ -95,7 +95,7 @@ class _Sums:
                          z_p0 - g_p @ sol_b, z_o0 - g_o @ sol_b))
         a_pp, a_po, a_oo, z_p, z_o = (np.stack(x, axis=-1)[..., None] for x in zip(*gram))
         log_z0 = self.log_w + np.array(log_z0)
-        return _Check(t_ref=tr, width=tr - t[cell - 1], t_c=float(t[c]),
+        return OnsetCheck(t_ref=tr, width=tr - t[cell - 1], t_c=float(t[c]),
                       log_prior=log_z0 - logsumexp(log_z0), a_pp=a_pp, a_po=a_po,
                       a_oo=np.maximum(a_oo, 1e-300), z_p=z_p, z_o=z_o, rule=rule)
 
@@ -103,7 +103,7 @@ class _Sums:
 def _fraction(weight, mean, sd):
     """Mean, sd and the 5 % and 95 % quantiles of a mixture of normals cut at 0."""
     a = mean / sd
-    ratio = np.exp(-0.5 * a * a - _LOG_SQRT_2PI - log_ndtr(a))   # φ(a) / Φ(a)
+    ratio = np.exp(-0.5 * a * a - LOG_SQRT_2PI - log_ndtr(a))   # φ(a) / Φ(a)
     m1 = mean + sd * ratio
     var = sd * sd * (1.0 - ratio * (a + ratio))
     mu = float(np.sum(weight * m1))
@@ -121,7 +121,7 @@ def _fraction(weight, mean, sd):
     return mu, sig, q[0], q[1]
 
 
-def _thinned(inp: LeakInputs, step_s: float) -> LeakInputs:
+def thinned(inp: LeakInputs, step_s: float) -> LeakInputs:
     """The rows nearest a grid every ``step_s`` (and the last one)."""
     t = inp.t
     idx = np.unique(np.r_[np.searchsorted(t, np.arange(t[0], t[-1], step_s)), t.size - 1])
@@ -130,7 +130,7 @@ def _thinned(inp: LeakInputs, step_s: float) -> LeakInputs:
 
 def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ETA,
                    sample_step_s: float = SAMPLE_STEP_S, check_step_s: float = 60.0,
-                   p_detect: float = 0.99, _rule: _Rule = _RULE) -> LeakPosterior:
+                   p_detect: float = 0.99, _rule: Rule = RULE) -> LeakPosterior:
     """Run the Bayesian monitor over a stretch, as it would run on board: the residual taken
     every ``sample_step_s`` (:data:`SAMPLE_STEP_S`); a check every ``check_step_s`` (and at the
     last sample) sees only the data up to it, the onset uniform over that part of the stretch;
@@ -152,12 +152,12 @@ def leak_posterior(inp: LeakInputs, *, prior_leak: float = 0.01, eta: float = ET
             raise InputError(f"{v:g} s makes {span / v:.3g} steps over the {span:.6g} s "
                              f"stretch, more than {MAX_GRID}; use at least "
                              f"{span / MAX_GRID:.3g} s", path=spelled(flag, name))
-    raw, inp = inp, _thinned(inp, sample_step_s)
+    raw, inp = inp, thinned(inp, sample_step_s)
     n = inp.t.size
     if n < 3:
         raise InputError(f"has {n} rows {sample_step_s:g} s apart; the leak monitor needs at "
                          "least 3", path=inp.source)
-    sums = _Sums(inp, eta, raw)
+    sums = Sums(inp, eta, raw)
     t, m = sums.t, len(inp.thruster_names)
     checks = np.unique(np.r_[np.searchsorted(t, np.arange(check_step_s, t[-1], check_step_s)),
                              n - 1])

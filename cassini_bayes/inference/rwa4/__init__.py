@@ -10,12 +10,11 @@ pair)
     A(q_i)ᵀ c_i = H_g,    c_i = I ω_i + Σ_known J_k ρ_k,i g_k + J_4 ρ_4,i u4      (Brown Eqs 1, 3)
 
 (``A(q)`` inertial→body, Brown Eq 2; ``I`` kg m²; ``ρ`` rad/s; ``J`` kg m²). Brown averages each
-window and solves the difference for ``u4``; so does the likelihood here (:func:`_loglik`): the
-change of the window-mean inertial momentum is zero up to the noise of the means. A per-sample
-likelihood (each sample's momentum equal to the pair's, ``H_g`` integrated out) was tried first:
-on ``rwa4_rcs`` it preferred an inertia 55 % off the truth by 1460 log-units — the drift samples
-carry inertia information that the simulator's dynamics do not match to the gyro-noise level — so
-the window means, Brown's own information, are used.
+window and solves the difference for ``u4``; so does the likelihood here (:func:`loglik`): the
+change of the window-mean inertial momentum is zero up to the noise of the means. Not a
+per-sample likelihood: the drift samples carry inertia information that a simulator's dynamics
+do not match to the gyro-noise level, so the window means, Brown's own information, are used
+(docs/performance.md, "Other model choices, measured").
 
 * RCS method (Eq 1): one pair, "Time A" before and "Time B" after the RWA4 spin-up while the
   spacecraft drifts; RWA4 is the only wheel and ``I ω`` carries the balance, so the inertia matters.
@@ -60,7 +59,7 @@ Priors
   sampled jointly, so the mass-property error is part of the posterior (Brown's Monte Carlo
   analysis, ≤ 1.5°, comes out of the posterior instead of being added afterwards). The stated
   prior, the same in both charts and in :func:`sample_inertia_prior` (SBC truths included), is
-  this Gaussian times the physical factor ``1 − exp(−(m/s)³)`` (:func:`_log_physical_factor`):
+  this Gaussian times the physical factor ``1 − exp(−(m/s)³)`` (:func:`log_physical_factor`):
   ``m`` the smallest eigenvalue of the second moment ``½ tr(I) 1 − I`` (positive exactly for
   positive-definite tensors obeying the triangle inequalities), ``s`` half its value at the
   prior mean. The factor is 0 for unphysical tensors, 1 − 3e-4 at the mean, 0.63 half-way to

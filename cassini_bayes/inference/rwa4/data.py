@@ -19,10 +19,10 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import (ATTITUDE_FLOOR, RATE_FLOORS, floored, rate_noise_levels,
                                            white_noise_sd)
 from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
-from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL
-from cassini_bayes.inference.rwa4.prior import PRIORS, _margin_scale
+from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL
+from cassini_bayes.inference.rwa4.prior import PRIORS, margin_scale
 from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
-                                                  _check_windows, _wheel_name, detect_windows)
+                                                  check_windows, wheel_name, detect_windows)
 from cassini_bayes.physics.momentum import inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft, WheelCone
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -32,7 +32,7 @@ __all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Data", "Rwa4Problem", "check_
 
 METHODS = ("rcs", "rwa")
 MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
-_DIM = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
+N_COORDS = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
 
 
 class Rwa4Data(NamedTuple):
@@ -41,7 +41,7 @@ class Rwa4Data(NamedTuple):
 
     Attributes
     ----------
-    m_pi, r_u, k_h, n_w, t_aa, j4, known_cov : the window means of :func:`_loglik` (its
+    m_pi, r_u, k_h, n_w, t_aa, j4, known_cov : the window means of :func:`loglik` (its
         docstring): per window (2G), ``A(q)ᵀ`` times the inertia regressor, times the solved
         wheel's rate (rad/s), and times the known wheels' momentum (N m s); the sample counts;
         the attitude products; the solved wheel's spin inertia (kg m²); ``Σ J² g gᵀ`` of the
@@ -51,7 +51,7 @@ class Rwa4Data(NamedTuple):
     u0, basis : the gnomonic chart's centre (3,) and tangent basis (2, 3).
     pi_mean, pi_chol : the inertia prior's mean (6,) kg m² and Cholesky factor (6, 6).
     log_noise_hat : (3,) log noise levels (rad/s, rad/s, rad).
-    margin_scale : the physical-inertia factor's scale (:func:`_margin_scale`).
+    margin_scale : the physical-inertia factor's scale (:func:`margin_scale`).
     cone_weight, cone_axis, cone_angle, cone_sd : the articulation-cone prior (weight 0 or 1;
         the cone's unit axis; rad).
     lp_centre, lp_tril : the RWA chart's log-Cholesky inertia coordinates.
@@ -145,7 +145,7 @@ def _attitude_noise(q: np.ndarray) -> float:
     return white_noise_sd(inc, differenced=True)
 
 
-def _tangent_basis(u: np.ndarray) -> np.ndarray:
+def tangent_basis(u: np.ndarray) -> np.ndarray:
     """(2, 3) orthonormal basis of the plane perpendicular to the unit vector ``u``."""
     e = np.eye(3)[int(np.argmin(np.abs(u)))]
     e1 = np.cross(u, e)
@@ -163,7 +163,7 @@ def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
 
 
 def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
-    """The window averages of :func:`_loglik` (its docstring), as JAX arrays."""
+    """The window averages of :func:`loglik` (its docstring), as JAX arrays."""
     a_all = np.asarray(dcm(jnp.asarray(q)))
     h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
                    else np.zeros((q.shape[0], 3)))
@@ -187,7 +187,7 @@ def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
 
 def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
                     t, inertia) -> dict:
-    """The robust model's nuisance columns of ``d_g`` (:func:`_loglik`), as JAX arrays.
+    """The robust model's nuisance columns of ``d_g`` (:func:`loglik`), as JAX arrays.
 
     The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
     and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
@@ -196,7 +196,7 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale columns
     (per wheel: its own, the layout's last scale, and the shared one; common: the one scale),
     whose solved-wheel part
-    :func:`_nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
+    :func:`nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
     """
     a_all = np.asarray(dcm(jnp.asarray(q)))
     rho = np.nan_to_num(rates)
@@ -214,7 +214,7 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
                 nu_wheel=jnp.asarray(one_hot))
 
 
-def _no_nuisance(n_pairs: int) -> dict:
+def no_nuisance(n_pairs: int) -> dict:
     """The idealised model: no nuisance columns (R = 0)."""
     return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
 
@@ -310,7 +310,7 @@ def _chart(kw: dict, method: str, data: dict, inertia: InertiaGaussian, i_mean: 
     """Add the chart's arrays to ``kw``; the chart (``"rcs"`` when the RCS balance map and its
     chart exist, :func:`_balance_map`, :func:`_rcs_chart`; else ``"rwa"``) and the sampler's
     starting point (module docstring)."""
-    theta0 = np.zeros(_DIM)
+    theta0 = np.zeros(N_COORDS)
     chart = "rwa"
     lp_c = cholesky_params_from_pi(i_mean)
     jac = np.asarray(jax.jacfwd(pi_from_cholesky_params)(jnp.asarray(lp_c)))
@@ -331,7 +331,7 @@ def _sd_direction_deg(chart: str, centre, tril, kw: Rwa4Data) -> float:
     """The Laplace approximation's largest angular sd (deg) of the axis: its gnomonic chart
     coordinates ``v`` are linearised in ``θ`` at the mode (``v = θ[:2]`` in the RWA chart)."""
     def v_of(theta):
-        u = _PHYSICAL[chart](theta, kw)[0]
+        u = PHYSICAL[chart](theta, kw)[0]
         return (kw.basis @ u) / (kw.u0 @ u)
 
     jac = np.asarray(jax.jacfwd(v_of)(jnp.asarray(centre))) @ np.asarray(tril)
@@ -381,11 +381,11 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
         determine the axis.
     """
     _check_options(method, prior)
-    wheel = _wheel_name(tel, wheel)
+    wheel = wheel_name(tel, wheel)
     cone = check_cone_prior(spacecraft, wheel, prior)
     pairs = (detect_windows(tel, method, wheel=wheel, spacecraft=spacecraft) if pairs is None
              else [tuple(p) for p in pairs])
-    pairs = _check_windows(tel, pairs, method)
+    pairs = check_windows(tel, pairs, method)
 
     t = np.asarray(tel.t, float)
     names = tel.wheel_names
@@ -411,11 +411,11 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
                              wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
                              inertial_torque=True, torque_rate=True)
     nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
-    data.update(nuisance if robust else _no_nuisance(len(pairs)))
-    kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(_tangent_basis(u_ls)),
+    data.update(nuisance if robust else no_nuisance(len(pairs)))
+    kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),
-              margin_scale=_margin_scale(i_mean), **_cone_arrays(prior, cone))
+              margin_scale=margin_scale(i_mean), **_cone_arrays(prior, cone))
     chart, theta0 = _chart(kw, method, data, inertia, i_mean, i_chol)
     kw, sd_dir = _laplace_centred(chart, theta0, Rwa4Data(**kw), wheel, tel.source)
     return Rwa4Problem(
@@ -474,7 +474,7 @@ def _laplace_centred(chart: str, theta0, kw: Rwa4Data, wheel: str, source):
     """``kw`` with the Laplace approximation's mode and Cholesky factor in the chart, and the
     axis direction's Laplace sd (deg); :class:`InputError` when the data leave the axis wider
     than :data:`MAX_SD_DIRECTION_DEG` (no excitation between the windows)."""
-    centre, tril = laplace(_LOG_DENSITY[chart], theta0, data=kw)
+    centre, tril = laplace(LOG_DENSITY[chart], theta0, data=kw)
     sd_dir = _sd_direction_deg(chart, centre, tril, kw)
     if not sd_dir < MAX_SD_DIRECTION_DEG:
         raise InputError(f"the data determine the {wheel} axis only to ±{sd_dir:.3g}° "

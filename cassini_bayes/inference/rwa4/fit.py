@@ -12,9 +12,9 @@ import numpy as np
 from cassini_bayes.diagnostics import Diagnostics
 from cassini_bayes.inference.idata import replace_groups
 from cassini_bayes.inference.inertia import InertiaGaussian
-from cassini_bayes.inference.rwa4.data import _DIM, Rwa4Problem, _no_nuisance, prepare_rwa4
-from cassini_bayes.inference.rwa4.likelihood import _balance, _noise_cov, _nuisance_cols
-from cassini_bayes.inference.rwa4.model import _LOG_DENSITY, _PHYSICAL, rwa4_model
+from cassini_bayes.inference.rwa4.data import N_COORDS, Rwa4Problem, no_nuisance, prepare_rwa4
+from cassini_bayes.inference.rwa4.likelihood import balance, noise_cov, nuisance_cols
+from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL, rwa4_model
 from cassini_bayes.inference.rwa4.prior import sample_rwa4_prior
 from cassini_bayes.inference.rwa4.windows import WHEEL, Window
 from cassini_bayes.inference.sphere import direction_summary
@@ -29,7 +29,7 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     """RMS shift of the axis (deg) each nuisance effect of prior size would cause in a model that
     leaves it out (Lee §4.1 made quantitative, as :mod:`~cassini_bayes.inference.sensitivity`).
 
-    Linearised at the Laplace centre ``θ*``: the data ``d`` (:func:`_balance`) gain ``D_e ν_e``
+    Linearised at the Laplace centre ``θ*``: the data ``d`` (:func:`balance`) gain ``D_e ν_e``
     from effect ``e``, which moves the idealised model's mode by
     ``Δθ = H⁻¹ Jᵀ C⁻¹ D_e ν_e`` (``H`` the idealised log density's negative Hessian, ``J`` =
     ∂d/∂θ, ``C`` the noise covariance); with ``ν_e ~ N(0, diag sd_e²)`` the axis shift ``U Δθ``
@@ -37,23 +37,22 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     """
     kw = problem.data
     centre = kw.centre
-    ideal = kw._replace(**_no_nuisance(len(problem.pairs)))
-    physical = _PHYSICAL[problem.chart]
-    log_density = _LOG_DENSITY[problem.chart]
+    ideal = kw._replace(**no_nuisance(len(problem.pairs)))
+    physical = PHYSICAL[problem.chart]
+    log_density = LOG_DENSITY[problem.chart]
 
-    def balance(theta):
+    def balance_at(theta):
         u, pi, _, _ = physical(theta, kw)
-        return _balance(u, pi, m_pi=kw.m_pi, r_u=kw.r_u, k_h=kw.k_h,
-                        j4=kw.j4).ravel()
+        return balance(u, pi, m_pi=kw.m_pi, r_u=kw.r_u, k_h=kw.k_h, j4=kw.j4).ravel()
 
     u, pi, _, _ = physical(centre, kw)
     hess = -np.asarray(jax.hessian(lambda th: log_density(th, ideal))(centre))
-    jac = np.asarray(jax.jacfwd(balance)(centre))
+    jac = np.asarray(jax.jacfwd(balance_at)(centre))
     jac_u = np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(centre))
-    noise = jax.scipy.linalg.block_diag(*_noise_cov(
+    noise = jax.scipy.linalg.block_diag(*noise_cov(
         u, pi, kw.log_noise_hat, n_w=kw.n_w, t_aa=kw.t_aa, j4=kw.j4,
         known_cov=kw.known_cov))
-    cols = np.asarray(_nuisance_cols(u, r_u=kw.r_u, j4=kw.j4,
+    cols = np.asarray(nuisance_cols(u, r_u=kw.r_u, j4=kw.j4,
                                      nu_cols=problem.nuisance["nu_cols"],
                                      nu_wheel=problem.nuisance["nu_wheel"]))
     cols = cols.reshape(jac.shape[0], -1)
@@ -120,7 +119,7 @@ def fit_rwa4(key, tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs"
         problem = prepare_rwa4(tel, spacecraft, method=method, pairs=pairs, prior=prior,
                                inertia=inertia, wheel=wheel, robust=robust,
                                wheel_errors=wheel_errors)
-    coords = {"w_dim": np.arange(_DIM)}
+    coords = {"w_dim": np.arange(N_COORDS)}
     dims = {"w": ["w_dim"]}
     idata = run_nuts(key, rwa4_model(problem.chart), model_kwargs={"data": problem.data},
                      settings=settings, coords=coords, dims=dims,

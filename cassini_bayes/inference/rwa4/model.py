@@ -14,8 +14,8 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
 from cassini_bayes.inference.inertia import pi_from_cholesky_params
-from cassini_bayes.inference.rwa4.likelihood import _loglik
-from cassini_bayes.inference.rwa4.prior import _log_physical_factor
+from cassini_bayes.inference.rwa4.likelihood import loglik
+from cassini_bayes.inference.rwa4.prior import log_physical_factor
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
 
 __all__ = ["rwa4_model"]
@@ -30,7 +30,7 @@ def _gnomonic(v, kw):
 
 def _physical_rwa(theta, kw):
     """``u`` (3,), ``π`` (6,) kg m², ``ξ = L⁻¹(π − μ)`` and the log Jacobian of
-    ``θ = (v (2), ζ (6))`` plus the log physical factor (:func:`_log_physical_factor`):
+    ``θ = (v (2), ζ (6))`` plus the log physical factor (:func:`log_physical_factor`):
     log-Cholesky inertia coordinates ``lp = lp₀ + T ζ`` (physical by construction,
     :func:`~cassini_bayes.inference.inertia.pi_from_cholesky_params`)."""
     u, log_jac = _gnomonic(theta[:2], kw)
@@ -40,7 +40,7 @@ def _physical_rwa(theta, kw):
     # log|det ∂π/∂lp| up to a constant: exp of the diagonal gives Σ lp_ii, L → L Lᵀ gives
     # 2³ L00³ L11² L22, Σ → I = tr(Σ) 1 − Σ is linear
     return u, pi, xi, (log_jac + 4.0 * lp[0] + 3.0 * lp[1] + 2.0 * lp[2]
-                       + _log_physical_factor(pi, kw.margin_scale))
+                       + log_physical_factor(pi, kw.margin_scale))
 
 
 _KNEE = 0.5          # the RCS chart's radial map is the identity up to this fraction of the way
@@ -98,7 +98,7 @@ def _physical_rcs(theta, kw):
     # π linear in (z, w): the physical truncation is an explicit factor
     log_jac_z = 2.0 * jnp.log(t) + 2.0 * rho - jnp.log(root) - 1.5 * jnp.log(q2)
     return u, pi, xi, (log_jac_u + log_jac_z + 3.0 * jnp.log(scale) + log_jac_box
-                       + _log_physical_factor(pi, kw.margin_scale))
+                       + log_physical_factor(pi, kw.margin_scale))
 
 
 def _log_density_with(physical, theta, kw):
@@ -109,7 +109,7 @@ def _log_density_with(physical, theta, kw):
     angle = jnp.arccos(jnp.clip(u @ kw.cone_axis, -1.0, 1.0))
     log_prior += -0.5 * kw.cone_weight * ((angle - kw.cone_angle) / kw.cone_sd) ** 2
     data = {k: getattr(kw, k) for k in _DATA_KEYS}
-    return log_prior + _loglik(u, pi, kw.log_noise_hat, **data)
+    return log_prior + loglik(u, pi, kw.log_noise_hat, **data)
 
 
 def _log_density_rcs(theta, kw):
@@ -124,8 +124,8 @@ def _log_density_rwa(theta, kw):
 
 _DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov", "nu_cols", "nu_sd",
               "nu_wheel")
-_LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
-_PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
+LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
+PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
 
 
 @lru_cache(maxsize=None)
@@ -137,7 +137,7 @@ def rwa4_model(chart: str = "rwa"):
     (the solved wheel's axis), ``Ixx … Iyz`` (kg m²) and the sampler's whitened ``w``
     (``θ = centre + tril w``).
     """
-    log_density, physical = _LOG_DENSITY[chart], _PHYSICAL[chart]
+    log_density, physical = LOG_DENSITY[chart], PHYSICAL[chart]
 
     def model(data):
         w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (),

@@ -33,12 +33,12 @@ def _physical_margin(pi):
     return jnp.linalg.eigvalsh(0.5 * jnp.trace(i_m) * jnp.eye(3) - i_m)[0]
 
 
-def _margin_scale(mean) -> jax.Array:
+def margin_scale(mean) -> jax.Array:
     """The physical factor's scale ``s`` (kg m²): the prior mean's margin / ``_MARGIN_FRACTION``."""
     return jnp.asarray(float(_physical_margin(jnp.asarray(mean, float))) / _MARGIN_FRACTION)
 
 
-def _log_physical_factor(pi, scale):
+def log_physical_factor(pi, scale):
     """``log(1 − exp(−(m/s)³))`` for margin ``m > 0`` (:func:`_physical_margin`), ``−∞`` for
     ``m ≤ 0``: the physical truncation of the inertia prior, made smooth so that NUTS
     trajectories are turned back before the boundary instead of diverging on a cliff there.
@@ -46,11 +46,9 @@ def _log_physical_factor(pi, scale):
     ``s`` (kg m²) = ½ the prior mean's margin (:data:`_MARGIN_FRACTION`), power 3
     (:data:`_FACTOR_POWER`): the factor is 1 − 3e-4 at the mean, 0.63 half-way to the boundary,
     and near it ``≈ (m/s)³``, a log barrier ``3 log m`` whose curvature at a NUTS turning point of
-    energy ``K`` grows as ``e^{2K/3}``. The earlier ``1 − exp(−m/s)`` with ``s`` = ¼ of the
-    margin (``e^{2K}``) gave 1004 divergences in a 208-replicate SBC and 37 when ten of its
-    divergent replicates were refitted (2 × 300 draws each); this factor gave 1 on the same ten
-    and 1 on replicates 0–23 (both times replicate 4, the smallest truth margin). A hard cut
-    (``rwa4_rwa``: 69 divergences in 4000 draws) is worse still.
+    energy ``K`` grows as ``e^{2K/3}``; a softer power (``1 − exp(−m/s)``, curvature ``e^{2K}``)
+    or a hard cut diverge near the boundary (docs/performance.md, "Other model choices,
+    measured").
     """
     m = _physical_margin(pi)
     safe = jnp.where(m > 0, m, 1.0)
@@ -81,18 +79,18 @@ def _sample_u4(key, n: int, cone: WheelCone | None) -> np.ndarray:
     return np.concatenate(out)[:n]
 
 
-_log_factors = jax.jit(jax.vmap(_log_physical_factor, in_axes=(0, None)))
+_log_factors = jax.jit(jax.vmap(log_physical_factor, in_axes=(0, None)))
 
 
 def sample_inertia_prior(key, mean, cov, n: int) -> np.ndarray:
     """``n`` draws (n, 6) kg m² of the stated inertia prior of both charts: ``Normal(mean, cov)``
-    times the physical factor :func:`_log_physical_factor` (scale from ``mean`` as in
+    times the physical factor :func:`log_physical_factor` (scale from ``mean`` as in
     :func:`prepare_rwa4`), by rejection: a Gaussian draw is kept with probability
-    ``exp(_log_physical_factor)`` (0 when unphysical). The one sampler of this prior, used by
+    ``exp(log_physical_factor)`` (0 when unphysical). The one sampler of this prior, used by
     :func:`sample_rwa4_prior` and the SBC truth draws."""
     mean = np.asarray(mean, float)
     chol = np.linalg.cholesky(np.asarray(cov, float))
-    scale = _margin_scale(mean)
+    scale = margin_scale(mean)
     kept, have = [], 0
     for r in range(1000):
         k_g, k_a = jax.random.split(jax.random.fold_in(key, r))

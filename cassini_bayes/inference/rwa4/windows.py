@@ -31,7 +31,7 @@ def _WINDOWS_HINT() -> str:  # noqa: N802 - a message constant, spelled for the 
     return spelled("--window-a T0:T1 --window-b T0:T1", "windows=[((A0, A1), (B0, B1))] (s)")
 
 
-def _wheel_name(tel: Telemetry, wheel: str) -> str:
+def wheel_name(tel: Telemetry, wheel: str) -> str:
     """The telemetry's spelling of ``wheel``; InputError when it is absent or not running."""
     names = {n.upper(): n for n in tel.wheel_names}
     name = names.get(str(wheel).upper())
@@ -65,7 +65,7 @@ def detect_windows(tel: Telemetry, method: str, wheel: str = WHEEL,
     """
     from cassini_bayes.windows import QUIET_RATE_FRACTION, quiet_periods
 
-    wheel = _wheel_name(tel, wheel) if method == "rcs" else wheel
+    wheel = wheel_name(tel, wheel) if method == "rcs" else wheel
 
     if method == "rcs":
         quiet = quiet_periods(tel, rate_max=np.inf, min_duration_s=RCS_MIN_QUIET_S,
@@ -91,7 +91,7 @@ def detect_windows(tel: Telemetry, method: str, wheel: str = WHEEL,
     return [(quiet[i], quiet[i + 1]) for i in range(0, len(quiet) - 1, 2)]
 
 
-def _check_windows(tel: Telemetry, pairs, method: str) -> list:
+def check_windows(tel: Telemetry, pairs, method: str) -> list:
     """The window pairs, ends up to half a sample past the data clamped onto it
     (:func:`~cassini_bayes.windows.clamp_window`, with a warning); one-line InputErrors for
     pairs the calibration cannot use."""

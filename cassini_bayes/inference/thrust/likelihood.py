@@ -167,8 +167,7 @@ def _event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     With the inertia fixed this is a constant; with the inertia sampled it is what keeps the
     likelihood invariant under the unidentifiable common scale of ``I``, ``F`` and the wheel
     inertias. Without it the density of ``V`` alone grows as ``|det I|⁻ⁿ`` when all three shrink
-    together: on a 480-sample event whose true inertia was 3 % above the model's, the sampled
-    inertia went 4 % the wrong way, dragging ``F`` 3.5 % low and the wheel scale 7 prior sd.
+    together, and the sampled inertia runs the wrong way, dragging ``F`` and the wheel scale.
     """
     inertia = inertia_matrix(pi)
     q_f = q_matrix * f_m[None, :]
@@ -209,12 +208,10 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
     does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
 
     The likelihood's time-tag column is ``Q (F ⊙ rates)`` at the *sampled* thrust
-    (:func:`_event_loglik`). Fixed at the predicted thrust, as it was, it broke the likelihood's
-    invariance under the common scale of ``I``, ``F`` and the wheel inertias that the data cannot
-    see (:func:`_event_loglik`): shrinking all three shrank the residuals a time-tag error leaves
-    but not their stated variance, so time tags wider than stated pulled the scale, and ``F``,
-    down — by 0.19 of ``F``'s sd at 1.5 × the stated spread on ``biasing_day028``
-    (``benchmarks/time_tag_bias.py``), the bias the open-world campaigns measured."""
+    (:func:`_event_loglik`), so that it keeps the likelihood's invariance under the common scale
+    of ``I``, ``F`` and the wheel inertias that the data cannot see: at a fixed thrust, shrinking
+    all three would shrink the residuals a time-tag error leaves but not their stated variance,
+    and time tags wider than stated would pull ``F`` down (``benchmarks/time_tag_bias.py``)."""
     n = layout.settled.shape[0]
     rate = thrust_profile(layout.dt, layout.width[:, None], *tau)
     m = n_thrusters
