@@ -77,8 +77,8 @@ class AxisPrediction(NamedTuple):
     pairs : the Time A / Time B windows (s) the fit uses. noise : (3,) the noise levels used
     (rad/s, rad/s, rad). shares : the share of the axis's predicted variance each robust effect
     carries (:func:`effect_shares`). usage : the largest fraction of each limit on the simulated
-    telemetry (empty without limits). duration_s; t, omega, wheel_rpm, wheel_names : the noise-free flight
-    (s, rad/s, rpm with idle wheels NaN) for the report's figure.
+    telemetry (empty without limits). duration_s; t, omega, wheel_rpm, wheel_names : the
+    noise-free flight (s, rad/s, rpm with idle wheels NaN) for the report's figure.
     """
 
     wheel: str
