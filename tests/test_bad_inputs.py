@@ -40,8 +40,8 @@ from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, cumulative_on_times, \
     write_pulses, write_telemetry
 from kinematics import slew_segments, wheels_for_conserved_momentum
-from test_inference_inertia import make_slews
-from test_report import make_run
+from run_dirs import make_run
+from slews import make_slews
 
 SC = "cassini_2000_03_15"
 ROOT = Path(__file__).resolve().parents[1]
