@@ -11,7 +11,7 @@ import copy
 import tomllib
 
 import cassini_bayes as cb
-from cassini_bayes._paths import MODELS_DIR, SCENARIOS_DIR
+from cassini_bayes.simulate.scenario import scenario_path
 
 __all__ = ["scaled_model", "scaled_scenario"]
 
@@ -19,7 +19,7 @@ __all__ = ["scaled_model", "scaled_scenario"]
 def scaled_model(name: str, s: float) -> dict:
     """The shipped model ``name`` as a model-file dict with every mass property, torque and
     momentum scaled by ``s`` (rates, angles and fractions unchanged)."""
-    d = cb.load_spacecraft(MODELS_DIR / f"{name}.toml").to_dict()
+    d = cb.load_spacecraft(name).to_dict()
     for k in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "poi_uncertainty"):
         d["inertia"][k] *= s
     for w in d["wheel"]:
@@ -38,7 +38,7 @@ def scaled_model(name: str, s: float) -> dict:
 def scaled_scenario(name: str, s: float, model_path: str) -> dict:
     """The shipped scenario ``name`` flying the model at ``model_path``, its true inertia and
     external torques scaled by ``s``."""
-    d = tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
+    d = tomllib.loads(scenario_path(name).read_text())
     d = copy.deepcopy(d)
     d["truth"]["model"] = d["prior"]["model"] = model_path
     truth = d["truth"]

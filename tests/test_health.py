@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+import tomllib
 
 import numpy as np
 import pytest
@@ -126,9 +127,8 @@ def _event(**truth):
     from cassini_bayes.api import simulate
     from cassini_bayes.simulate import scenario_from_dict
     from cassini_bayes.simulate.scenario import scenario_path
-    from cassini_bayes._toml import read_toml
 
-    d = read_toml(scenario_path("health_event"), "scenario", "")
+    d = tomllib.loads(scenario_path("health_event").read_text())
     d["truth"].update(truth)
     for ramp, rpm in zip(d["wheel_ramp"], (640.0, -720.0, 500.0)):
         ramp["target_rpm"] = rpm
