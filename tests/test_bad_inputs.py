@@ -392,10 +392,10 @@ def test_a_large_clean_file_passes_the_adequacy_checks(tmp_path, run_cli):
     import json
     import tomllib
 
-    from cassini_bayes._paths import SCENARIOS_DIR
     from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.scenario import scenario_path
 
-    d = tomllib.loads((SCENARIOS_DIR / "slews_post_probe.toml").read_text())
+    d = tomllib.loads(scenario_path("slews_post_probe").read_text())
     d["run"].update(duration_s=19_990.0, dt_s=0.1, sample_period_s=0.1)
     tel = simulate(jax.random.key(28), scenario_from_dict(d, "long")).telemetry
     assert tel.n == 199_901

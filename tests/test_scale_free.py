@@ -32,7 +32,6 @@ import pytest
 import tomli_w
 
 import cassini_bayes as cb
-from cassini_bayes._arviz import load_arviz
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.simulate import scenario_from_dict
 from scaled import scaled_model, scaled_scenario
@@ -171,7 +170,10 @@ def test_fit_gives_the_same_relative_posterior(pair):
     for name in INERTIA_NAMES:
         xa = fa.idata.posterior[name].values
         xb = fb.idata.posterior[name].values / s
-        az = load_arviz()   # without numba, whose mcse(method="sd") kernel fails under NumPy 2
+        # ArviZ as the package loads it (tests/conftest.py): without numba, whose
+        # mcse(method="sd") kernel fails under NumPy 2
+        import arviz as az
+
         mc_mean = np.hypot(*(np.asarray(az.mcse(x, method="mean")).reshape(()) for x in (xa, xb)))
         mc_sd = np.hypot(*(np.asarray(az.mcse(x, method="sd")).reshape(()) for x in (xa, xb)))
         assert abs(xb.mean() - xa.mean()) <= K_MCSE * mc_mean, (name, xa.mean(), xb.mean())
