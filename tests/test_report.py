@@ -18,7 +18,7 @@ import pytest
 
 from cassini_bayes.report import build_report, html_page, section, table
 from cassini_bayes.report.html import Raw, figure
-from cassini_bayes.report.rundata import flatten_draws, load_run
+from cassini_bayes.report.rundata import load_run
 from cassini_bayes.report.tables import diagnostics, parameter_names, parameter_rows
 from pages import first_table
 from run_dirs import INERTIA, make_run, summary_stats
@@ -418,38 +418,33 @@ def _axes_problems(fig) -> list[str]:
     return out
 
 
-def _report_figures(run_dir):
-    """Every figure a fit report of ``run_dir`` draws, built as the report builds them."""
-    from cassini_bayes.report import _answer, figures
+def _report_figures(run_dir, monkeypatch) -> dict:
+    """Every figure the report of ``run_dir`` draws, caught as the report renders it to PNG,
+    named by its position and first panel's title."""
+    from cassini_bayes.report import figures, render_report
 
-    run = load_run(run_dir)
-    names = parameter_names(run)
-    rows = parameter_rows(run, names, diagnostics(run, names))
-    post = flatten_draws(run.posterior, names)
-    out = {"trace and rank": figures.trace_rank_figure(post, {r.label: r.unit for r in rows}),
-           "residuals": figures.residuals_figure(run.groups["residuals"], var="residual",
-                                                 ylabel="residual (N m s)")}
-    if run.kind == "rwa4":
-        mean, cones = _answer._direction(run)
-        out["sky"] = figures.axis_sky_figure(_answer._axis_draws(run), mean=mean, cones_deg=cones,
-                                             truth=_answer._axis_vec(run.summary["truth"]),
-                                             baseline=_answer._axis_vec(run.summary["baseline"]))
-    else:
-        out["answer"] = figures.answer_figure(
-            [figures.Panel(r.label, r.unit, post[r.label], r.baseline, r.truth, r.prior_mean)
-             for r in rows])
-    if run.kind == "thrust":
-        out["pulses"] = figures.pulse_impulse_figure(run.groups["pulse_impulses"])
-    return out
+    drawn = {}
+    render = figures.png_bytes
+
+    def keep(fig, **kw):
+        drawn[f"{len(drawn)}: {fig.axes[0].get_title() if fig.axes else ''}"] = fig
+        return render(fig, **kw)
+
+    monkeypatch.setattr(figures, "png_bytes", keep)
+    page = render_report(load_run(run_dir))
+    assert "could not be drawn" not in page
+    return drawn
 
 
 @pytest.mark.parametrize("kind", ["inertia", "thrust", "rwa4"])
-def test_every_figure_axis_has_a_unit_and_no_tick_labels_overlap(reports, kind):
+def test_every_figure_axis_has_a_unit_and_no_tick_labels_overlap(reports, kind, monkeypatch):
     """Issue 31: trace, rank, pair and energy plots carried no units and the pair plot's tick
     labels overlapped ("75006000"). Every axis of every figure of a fit report is labelled
     "name (unit)" and its tick labels are apart; checked on the drawn figures. The check can
     fail: an axis without a unit and crowded ticks are caught."""
-    for name, fig in _report_figures(reports[kind][0]).items():
+    drawn = _report_figures(reports[kind][0], monkeypatch)
+    assert len(drawn) >= N_FIGURES[kind], list(drawn)
+    for name, fig in drawn.items():
         assert _axes_problems(fig) == [], name
     from matplotlib.figure import Figure
 
