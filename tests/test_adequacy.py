@@ -30,7 +30,7 @@ from cassini_bayes.inference.adequacy import (
 from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import Telemetry, write_telemetry
-from test_inference_inertia import make_slews
+from slews import make_slews
 
 CONTRACT = {"statistic", "threshold", "ok"}
 

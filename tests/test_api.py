@@ -203,9 +203,9 @@ def test_check_and_leak_monitor_take_loaded_objects(inputs):
 
 def test_simulate_wraps_the_command(tmp_path, run_cli):
     """``cb.simulate`` writes what ``cassini-bayes simulate`` writes, byte for byte."""
-    from cassini_bayes._paths import SCENARIOS_DIR
+    from cassini_bayes.simulate.scenario import scenario_path
 
-    code, _, err = run_cli("simulate", SCENARIOS_DIR / "fsds_biasing.toml", "--out",
+    code, _, err = run_cli("simulate", scenario_path("fsds_biasing"), "--out",
                            tmp_path / "cli", "--seed", "3")
     assert code == 0, err
     sim = cb.simulate("fsds_biasing", seed=3)

@@ -40,8 +40,8 @@ from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import RPM_TO_RAD_S, PulseLog, Telemetry, cumulative_on_times, \
     write_pulses, write_telemetry
 from kinematics import slew_segments, wheels_for_conserved_momentum
-from test_inference_inertia import make_slews
-from test_report import make_run
+from run_dirs import make_run
+from slews import make_slews
 
 SC = "cassini_2000_03_15"
 ROOT = Path(__file__).resolve().parents[1]
@@ -392,10 +392,10 @@ def test_a_large_clean_file_passes_the_adequacy_checks(tmp_path, run_cli):
     import json
     import tomllib
 
-    from cassini_bayes._paths import SCENARIOS_DIR
     from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.scenario import scenario_path
 
-    d = tomllib.loads((SCENARIOS_DIR / "slews_post_probe.toml").read_text())
+    d = tomllib.loads(scenario_path("slews_post_probe").read_text())
     d["run"].update(duration_s=19_990.0, dt_s=0.1, sample_period_s=0.1)
     tel = simulate(jax.random.key(28), scenario_from_dict(d, "long")).telemetry
     assert tel.n == 199_901

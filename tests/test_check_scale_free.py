@@ -21,7 +21,7 @@ from cassini_bayes.inference.rwa4 import detect_windows
 from cassini_bayes.simulate import scenario_from_dict
 from cassini_bayes.spacecraft import QUIET_WHEEL_TOL_RPM
 from cassini_bayes.windows import quiet_mask
-from test_scale_free import scaled_model, scaled_scenario
+from scaled import scaled_model, scaled_scenario
 
 MASS_SCALE = 1e-4
 RATE_SCALE = 0.1

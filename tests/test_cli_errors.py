@@ -25,8 +25,8 @@ from cassini_bayes._paths import EXPERIMENTS_DIR, MODELS_DIR, SCENARIOS_DIR, inp
 from cassini_bayes.errors import InputError
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import write_telemetry
-from test_inference_inertia import make_slews
-from test_report import make_run
+from run_dirs import make_run
+from slews import make_slews
 
 SC = "cassini_2000_03_15"
 TINY = ["--chains", "1", "--warmup", "20", "--draws", "20", "--idealised"]

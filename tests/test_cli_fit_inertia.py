@@ -13,7 +13,7 @@ import pytest
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import Telemetry, write_telemetry
 from margins import assert_mixed, assert_verdict_consistent
-from test_inference_inertia import make_slews
+from slews import make_slews
 
 SMALL = ["--chains", "4", "--warmup", "400", "--draws", "400"]
 PARAM_KEYS = {"mean", "sd", "q05", "q50", "q95", "r_hat", "ess_bulk", "ess_tail"}

@@ -11,9 +11,7 @@ import pytest
 from cassini_bayes._paths import EXPERIMENTS_DIR
 from cassini_bayes.errors import InputError
 from cassini_bayes.experiments import (
-    ExperimentKind,
     ExperimentOutput,
-    _registry,
     check_fact,
     experiment_from_dict,
     load_experiment,
@@ -133,13 +131,20 @@ def test_missing_file_is_an_input_error(tmp_path):
         load_experiment(tmp_path / "nope.toml")
 
 
-def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
+@pytest.fixture
+def own_registry(monkeypatch):
+    """The kinds a test registers are forgotten after it (the registry has no public way to
+    drop a kind: this is the one place a test reaches into it)."""
+    from cassini_bayes.experiments import _registry
+
+    monkeypatch.setattr(_registry, "_KINDS", dict(registered_kinds()))
+
+
+def test_a_kind_that_fails_leaves_no_directory(tmp_path, own_registry):
+    @register("test_boom", defaults={"n": 1})
     def boom(key, settings, ctx):
         raise RuntimeError("kaboom")
 
-    kinds = dict(_registry._KINDS)
-    kinds["test_boom"] = ExperimentKind("test_boom", boom, {"n": 1})
-    monkeypatch.setattr(_registry, "_KINDS", kinds)
     path = _write(tmp_path, 'kind = "test_boom"\n')
     with pytest.raises(RuntimeError, match="kaboom"):
         run_experiment(path, tmp_path / "out")
@@ -147,10 +152,8 @@ def test_a_kind_that_fails_leaves_no_directory(tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["exp.toml"]
 
 
-def test_a_new_kind_is_one_function(tmp_path, monkeypatch):
+def test_a_new_kind_is_one_function(tmp_path, own_registry):
     """The framework contract: register a function, write a two-line file, run it."""
-    kinds = dict(_registry._KINDS)
-    monkeypatch.setattr(_registry, "_KINDS", kinds)
 
     @register("test_square", defaults={"x": 3.0}, quick={"x": 2.0})
     def square(key, settings, ctx):
@@ -190,9 +193,7 @@ def test_paper_fact_verdicts():
         fact("R_999ms")
 
 
-def test_table_settings_are_checked_key_by_key(tmp_path, monkeypatch):
-    kinds = dict(_registry._KINDS)
-    monkeypatch.setattr(_registry, "_KINDS", kinds)
+def test_table_settings_are_checked_key_by_key(tmp_path, own_registry):
 
     @register("test_tables", defaults={"events": [{"day": 28, "width_s": 0.125}]})
     def tables(key, settings, ctx):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import textwrap
+import tomllib
 
 import numpy as np
 import pytest
@@ -24,6 +25,7 @@ from cassini_bayes.cli import main
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.health import HealthPrior, event_summary, health_posterior
 from cassini_bayes.inference.health.changepoint import SCATTER_GRID
+from health_data import synthetic_events
 from pages import first_table
 
 Z3_Z4 = [2, 3]
@@ -32,25 +34,11 @@ CHANNELS = ("F[Z1]", "F[Z2]", "F[Z3]", "F[Z4]", "F_combination[0.5 F[Y1] + 0.5 F
 """Cassini's six channels as the health fit finds them from its events' firings."""
 
 
-def _synthetic(seed: int, n: int = 14, drop: float = 0.0, day: float = 200.0,
-               channels=(2, 3), se: float = 0.01, scatter: float = 0.01):
-    """Event dates over 365 days and log-thrust summaries with a step of ``drop`` on
-    ``channels`` from ``day`` (uniform, not Gaussian, scatter: not the model's law)."""
-    rng = np.random.default_rng(seed)
-    t = np.sort(np.r_[0.0, rng.uniform(0.0, 365.0, n - 1)])
-    y = np.log(0.699) + rng.uniform(-0.03, 0.03, 6)[None, :] + np.zeros((n, 6))
-    y = y + rng.normal(0.0, se, (n, 6)) + rng.uniform(-1.0, 1.0, (n, 6)) * scatter * np.sqrt(3)
-    after = t >= day
-    for k in channels:
-        y[after, k] += np.log1p(-drop)
-    return t, y, np.full((n, 6), se)
-
-
 # --- the change-point model --------------------------------------------------------------------
 
 
 def test_detects_a_seven_percent_drop_and_dates_it():
-    t, y, s = _synthetic(1, drop=0.07)
+    t, y, s = synthetic_events(1, drop=0.07)
     post = health_posterior(t, y, s)
     p = post.p_down(Z3_Z4, 0.05)
     assert post.p_change > 0.999
@@ -65,7 +53,7 @@ def test_detects_a_seven_percent_drop_and_dates_it():
 
 
 def test_control_stays_quiet_at_every_event():
-    t, y, s = _synthetic(2)
+    t, y, s = synthetic_events(2)
     for n in range(3, t.size + 1):
         post = health_posterior(t[:n], y[:n], s[:n])
         assert post.p_down(Z3_Z4, 0.05)[-1] < 0.02      # threshold 0.05
@@ -76,9 +64,9 @@ def test_the_assertions_can_fail():
     """The detection test's checks would catch a model that misses the drop: the same data
     with the step on Z1/Z2 instead gives no Z3/Z4 alarm, and the pooled-baseline-only reading
     (no change allowed, p_change → 0) gives none either."""
-    t, y, s = _synthetic(1, drop=0.07, channels=(0, 1))
+    t, y, s = synthetic_events(1, drop=0.07, channels=(0, 1))
     assert health_posterior(t, y, s).p_down(Z3_Z4, 0.05)[-1] < 0.05
-    t, y, s = _synthetic(1, drop=0.07)
+    t, y, s = synthetic_events(1, drop=0.07)
     assert health_posterior(t, y, s, HealthPrior(p_change=1e-12)).p_down(Z3_Z4, 0.05)[-1] < 0.05
 
 
@@ -111,7 +99,7 @@ def test_evidence_matches_brute_force():
 
 
 def test_missing_channels_and_bad_inputs():
-    t, y, s = _synthetic(3)
+    t, y, s = synthetic_events(3)
     y[:, 4] = np.nan                                     # Y13 never identified
     post = health_posterior(t, y, s)
     assert np.all(np.isfinite(post.p_down([4], 0.05)))
@@ -124,7 +112,7 @@ def test_missing_channels_and_bad_inputs():
 
 
 def test_draws_agree_with_the_exact_probabilities():
-    t, y, s = _synthetic(4, drop=0.07)
+    t, y, s = synthetic_events(4, drop=0.07)
     post = health_posterior(t, y, s)
     dr = post.draws(np.random.default_rng(0), 4000)
     exact = post.p_down([2], 0.05)[-1]
@@ -139,9 +127,8 @@ def _event(**truth):
     from cassini_bayes.api import simulate
     from cassini_bayes.simulate import scenario_from_dict
     from cassini_bayes.simulate.scenario import scenario_path
-    from cassini_bayes._toml import read_toml
 
-    d = read_toml(scenario_path("health_event"), "scenario", "")
+    d = tomllib.loads(scenario_path("health_event").read_text())
     d["truth"].update(truth)
     for ramp, rpm in zip(d["wheel_ramp"], (640.0, -720.0, 500.0)):
         ramp["target_rpm"] = rpm
@@ -316,7 +303,7 @@ def test_sbc_glue_runs():
     from cassini_bayes.analysis.health_sbc import (calibration_table, changepoint_sbc,
                                                    leak_sbc)
 
-    t, _, s = _synthetic(5, n=8)
+    t, _, s = synthetic_events(5, n=8)
     res = changepoint_sbc(0, 12, t, s, n_draws=19, channels=CHANNELS)
     assert res.ranks.shape == (12, 19) and res.ranks.max() <= 19      # 6 × (b, d, sigma), tau
     assert res.names[:3] == ("b[F[Z1]]", "d[F[Z1]]", "sigma[F[Z1]]")

@@ -16,7 +16,7 @@ from cassini_bayes.inference.health.adequacy import (InertiaProbe, held_out_even
                                                      inertia_conflict, inertia_probe,
                                                      predictive_cdf)
 from cassini_bayes.inference.health.changepoint import SCATTER_GRID
-from test_health import _synthetic
+from health_data import synthetic_events
 
 LABELS = [f"event_{k:03d}" for k in range(40)]
 NAMES = ["F[Z1]", "F[Z2]", "F[Z3]", "F[Z4]", "F_combination[0.5 F[Y1] + 0.5 F[Y3]]",
@@ -50,7 +50,7 @@ def test_predictive_cdf_matches_exact_draws():
     the scatter grid) against 6000 exact draws of the posterior plus the event's noise: within
     0.025 (4 binomial sd at 6000 draws) at five points of each of two channels and three
     dates (one before, one inside, one after the change interval)."""
-    t, y, s = _synthetic(1, drop=0.07)
+    t, y, s = synthetic_events(1, drop=0.07)
     post = health_posterior(t, y, s)
     rng = np.random.default_rng(3)
     dr = post.draws(rng, 6000)
@@ -67,14 +67,14 @@ def test_predictive_cdf_matches_exact_draws():
 
 def test_held_out_passes_a_clean_campaign_and_names_an_outlier():
     """Each event against the change-point posterior of the others: the synthetic campaigns of
-    test_health (a 7 % drop, and none) pass (observed 0.0; threshold 4); one event moved by 12
-    times its sd plus the largest scatter level fails, and is named; two events: not
+    tests/health_data.py (a 7 % drop, and none) pass (observed 0.0; threshold 4); one event
+    moved by 12 times its sd plus the largest scatter level fails, and is named; two events: not
     applicable."""
     prior = HealthPrior()
     for drop in (0.07, 0.0):
-        t, y, s = _synthetic(1, drop=drop)
+        t, y, s = synthetic_events(1, drop=drop)
         assert held_out_events(t, y, s, prior, LABELS, NAMES).statistic < 2.0
-    t, y, s = _synthetic(1, drop=0.07)
+    t, y, s = synthetic_events(1, drop=0.07)
     y[5, 4] += 12 * np.hypot(s[5, 4], SCATTER_GRID[-1])
     c = held_out_events(t, y, s, prior, LABELS, NAMES)
     assert not c.ok and c.statistic > 4.0 and c.parameter == f"event_005 {NAMES[4]}"

@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cassini_bayes.api._simulation import simulate
+from cassini_bayes.api import simulate
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.health import event_summary, health_channels
 from cassini_bayes.simulate import load_scenario

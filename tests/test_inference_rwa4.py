@@ -154,10 +154,10 @@ def _slow_spinup(axis, rates, seed):
     and residual body rates ``rates`` (rad/s), simulated with key ``seed``."""
     import tomllib
 
-    from cassini_bayes._paths import SCENARIOS_DIR
     from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.scenario import scenario_path
 
-    d = tomllib.loads((SCENARIOS_DIR / "rwa4_rcs_slow.toml").read_text())
+    d = tomllib.loads(scenario_path("rwa4_rcs_slow").read_text())
     d["truth"]["rwa4_axis"], d["initial"]["rates_rad_s"] = list(axis), list(rates)
     sc = scenario_from_dict(d, "rwa4_rcs_slow[test]")
     return sc, simulate(jax.random.key(seed), sc)
@@ -236,10 +236,10 @@ def test_firing_between_time_a_and_time_b_is_refused():
     naming the first firing."""
     import tomllib
 
-    from cassini_bayes._paths import SCENARIOS_DIR
     from cassini_bayes.simulate import scenario_from_dict, simulate
+    from cassini_bayes.simulate.scenario import scenario_path
 
-    d = tomllib.loads((SCENARIOS_DIR / "rwa4_rcs_slow.toml").read_text())
+    d = tomllib.loads(scenario_path("rwa4_rcs_slow").read_text())
     d["truth"]["rwa4_axis"], d["initial"]["rates_rad_s"] = list(SLOW_AXIS), list(SLOW_RATES)
     d["wheel_ramp"][0]["torque_nm"] = 0.0035
     sc = scenario_from_dict(d, "rwa4_rcs_slow[firing]")

@@ -22,7 +22,7 @@ import xarray as xr
 from cassini_bayes import _jax_cache
 from cassini_bayes.spacecraft import load_spacecraft
 from cassini_bayes.telemetry import write_telemetry
-from test_inference_inertia import make_slews
+from slews import make_slews
 
 ROOT = Path(__file__).resolve().parents[1]
 SC = "cassini_2000_03_15"

@@ -5,7 +5,7 @@ The wheels sit on a cone, not along the body axes, so wheels whose spin inertias
 different fractions tilt the wheel momentum: the products of inertia move by many posterior sd
 (``docs/robust/per_wheel.md``). A common scale cannot absorb that; one scale per wheel can, and
 the data learn the differences from slews about several axes while the common part stays at its
-prior (Psiaki 2005). Data: the multi-axis slews of ``make_slews`` (test_inference_inertia.py:
+prior (Psiaki 2005). Data: the multi-axis slews of ``make_slews`` (tests/slews.py:
 Y, X, Y, Z and a skew axis, wheels RWA1-3) whose true wheels are off by ``ERRORS``.
 """
 
@@ -24,8 +24,8 @@ from cassini_bayes.inference.nuisance import nuisance_layout, robust_columns, wh
 from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
 from cassini_bayes.spacecraft import load_spacecraft, spacecraft_from_dict
-from test_inference_inertia import TRUTH, make_slews
 from margins import assert_mixed
+from slews import TRUTH, make_slews
 
 PI_TRUE = np.asarray(inertia_vector(TRUTH))
 # Each wheel's true spin-inertia error (RWA1..RWA4; RWA4 is off in these slews): ±0.6-0.9 %,

@@ -3,7 +3,7 @@ scales and axis tilts, external torque — the idealised model is confidently wr
 present, the robust one covers the truth, and what the data cannot separate stays at its prior.
 
 Data: the noise-free slews of tests/kinematics.py (via ``make_slews`` of
-test_inference_inertia.py) with the effects injected into the telemetry before the noise is
+tests/slews.py) with the effects injected into the telemetry before the noise is
 judged: the gyro reads ``(1 + s) ω + b``; each wheel's true spin inertia is ``(1 + c_k)`` times
 the model file's (``WHEEL_ERR``, about one prior sd each with mixed signs; the telemetry's wheel
 rates are made with the true ones); the slews' momentum drifts under a constant inertial torque.
@@ -28,8 +28,8 @@ from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector, wheel_momentum_body
 from cassini_bayes.spacecraft import Knowledge, load_spacecraft
 from cassini_bayes.telemetry import Telemetry
-from test_inference_inertia import TRUTH, make_slews
 from margins import assert_mixed
+from slews import TRUTH, make_slews
 
 PI_TRUE = np.asarray(inertia_vector(TRUTH))
 SCALE = np.array([6e-4, -5e-4, 4e-4])      # gyro scale-factor error per axis (~1 prior sd)

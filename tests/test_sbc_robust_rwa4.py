@@ -16,7 +16,6 @@ import jax
 import numpy as np
 import pytest
 
-from cassini_bayes._paths import SCENARIOS_DIR
 from cassini_bayes.analysis.campaign import run_campaign
 from cassini_bayes.analysis.sbc_models import (
     RWA4_SCENARIO,
@@ -26,12 +25,12 @@ from cassini_bayes.analysis.sbc_models import (
 )
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate import simulate
-from cassini_bayes.simulate.scenario import load_scenario, scenario_from_dict
+from cassini_bayes.simulate.scenario import load_scenario, scenario_from_dict, scenario_path
 from helpers import (assert_gyro_errors_recovered, assert_standard_normal, campaign_sbc,
                      nuisance_columns)
 
 N_DRAWS = 1000
-ESPA_RCS = SCENARIOS_DIR / "wheel_axis_espa_bus_rcs.toml"
+ESPA_RCS = scenario_path("wheel_axis_espa_bus_rcs")
 
 
 def test_options_are_checked():
@@ -51,7 +50,7 @@ def test_options_are_checked():
 def _espa_rwa_short():
     """The ESPA bus's RWA-method scenario cut to its first slew pair (700 s): four running
     wheels, so three known wheels with tilts."""
-    d = tomllib.loads((SCENARIOS_DIR / "wheel_axis_espa_bus.toml").read_text())
+    d = tomllib.loads(scenario_path("wheel_axis_espa_bus").read_text())
     d["run"]["duration_s"] = 700.0
     d["slew"] = [s for s in d["slew"] if s["t_start_s"] < 600.0]
     return scenario_from_dict(d, "wheel_axis_espa_bus (700 s)")

@@ -26,18 +26,15 @@ MCSE estimates hold; 12 numbers).
 
 from __future__ import annotations
 
-import copy
-import tomllib
 
 import numpy as np
 import pytest
 import tomli_w
 
 import cassini_bayes as cb
-from cassini_bayes._arviz import load_arviz
-from cassini_bayes._paths import MODELS_DIR, SCENARIOS_DIR
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.simulate import scenario_from_dict
+from scaled import scaled_model, scaled_scenario
 
 RTOL = 1e-6
 K_MCSE = 5.0
@@ -51,42 +48,6 @@ CASES = [
                   {"chains": 4, "warmup": 500, "draws": 500}), id="espa-1e-2",
                  marks=pytest.mark.slow),
 ]
-
-
-def scaled_model(name: str, s: float) -> dict:
-    """The shipped model ``name`` as a model-file dict with every mass property, torque and
-    momentum scaled by ``s`` (rates, angles and fractions unchanged)."""
-    d = cb.load_spacecraft(MODELS_DIR / f"{name}.toml").to_dict()
-    for k in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "poi_uncertainty"):
-        d["inertia"][k] *= s
-    for w in d["wheel"]:
-        w["inertia"] *= s
-        if "max_torque_nm" in w:
-            w["max_torque_nm"] *= s
-    for x in d.get("thruster", []):
-        if "F" in x:
-            x["F"] *= s
-    if "thrust" in d:
-        d["thrust"]["F"] *= s
-    d["torque_knowledge"] = {k: v * s for k, v in d["torque_knowledge"].items()}
-    return d
-
-
-def scaled_scenario(name: str, s: float, model_path: str) -> dict:
-    """The shipped scenario ``name`` flying the model at ``model_path``, its true inertia and
-    external torques scaled by ``s``."""
-    d = tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
-    d = copy.deepcopy(d)
-    d["truth"]["model"] = d["prior"]["model"] = model_path
-    truth = d["truth"]
-    truth["inertia"] = {k: v * s for k, v in truth["inertia"].items()}
-    for k in ("external_torque_inertial_nm", "external_torque_body_nm",
-              "external_torque_inertial_rate_nm_s"):
-        if k in truth:
-            truth[k] = [v * s for v in truth[k]]
-    for ramp in d.get("wheel_ramp", []):
-        ramp["torque_nm"] *= s
-    return d
 
 
 @pytest.fixture(scope="module", params=CASES)
@@ -209,7 +170,10 @@ def test_fit_gives_the_same_relative_posterior(pair):
     for name in INERTIA_NAMES:
         xa = fa.idata.posterior[name].values
         xb = fb.idata.posterior[name].values / s
-        az = load_arviz()   # without numba, whose mcse(method="sd") kernel fails under NumPy 2
+        # ArviZ as the package loads it (tests/conftest.py): without numba, whose
+        # mcse(method="sd") kernel fails under NumPy 2
+        import arviz as az
+
         mc_mean = np.hypot(*(np.asarray(az.mcse(x, method="mean")).reshape(()) for x in (xa, xb)))
         mc_sd = np.hypot(*(np.asarray(az.mcse(x, method="sd")).reshape(()) for x in (xa, xb)))
         assert abs(xb.mean() - xa.mean()) <= K_MCSE * mc_mean, (name, xa.mean(), xb.mean())

@@ -11,13 +11,13 @@ import jax
 import numpy as np
 import pytest
 
-from cassini_bayes._paths import SCENARIOS_DIR
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators import fit_axis_rwa, fit_inertia_baseline
 from cassini_bayes.physics.momentum import (inertial_momentum, stacked_system,
                                             wheel_momentum_body)
 from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
 from cassini_bayes.simulate.controllers import slew_duration
+from cassini_bayes.simulate.scenario import scenario_path
 
 REQUIRED = ["slew_2000_03_15", "slews_pre_soi", "slews_post_prm", "slews_post_probe",
             "fsds_biasing", "biasing_day028", "biasing_day049", "biasing_day061",
@@ -26,7 +26,7 @@ SHORT_S = 2700.0   # common truncated length: one compiled program per wheel set
 
 
 def _dict(name):
-    return tomllib.loads((SCENARIOS_DIR / f"{name}.toml").read_text())
+    return tomllib.loads(scenario_path(name).read_text())
 
 
 def _truncated(name, duration=SHORT_S):
@@ -97,8 +97,8 @@ def test_impossible_values_named():
 
 
 def test_cli_rejects_bad_scenario(tmp_path, run_cli):
-    d = (SCENARIOS_DIR / "slews_post_probe.toml").read_text().replace("dt_s = 0.25",
-                                                                      "dt_s = 0.25\ndt = 1")
+    d = scenario_path("slews_post_probe").read_text().replace("dt_s = 0.25",
+                                                              "dt_s = 0.25\ndt = 1")
     p = tmp_path / "bad.toml"
     p.write_text(d)
     code, out, err = run_cli("simulate", p, "--out", tmp_path / "o")
@@ -107,8 +107,8 @@ def test_cli_rejects_bad_scenario(tmp_path, run_cli):
 
 
 def test_cli_simulate_writes_run_atomically(tmp_path, run_cli):
-    text = (SCENARIOS_DIR / "fsds_biasing.toml").read_text().replace("duration_s = 640.0",
-                                                                     "duration_s = 120.0")
+    text = scenario_path("fsds_biasing").read_text().replace("duration_s = 640.0",
+                                                             "duration_s = 120.0")
     p = tmp_path / "short_fsds.toml"
     p.write_text(text)
     out = tmp_path / "run"

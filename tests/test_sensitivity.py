@@ -22,7 +22,7 @@ from cassini_bayes.inference.sensitivity import linear_sensitivity, sensitivity_
 from cassini_bayes.physics.momentum import INERTIA_NAMES
 from cassini_bayes.report.sensitivity import sensitivity_section
 from cassini_bayes.spacecraft import load_spacecraft
-from test_inference_inertia import H0, TORQUE, make_slews
+from slews import H0, TORQUE, make_slews
 
 KEY = jax.random.key(11)
 

@@ -211,9 +211,9 @@ def test_rcs_windows_detected_and_scale_free(scenario, model, wheel, s, tmp_path
     audit and the pinned fit use: 0-417 s and 723-1237 s) and on the ESPA bus, whose Time B
     drifts at 22 mrad/s, beyond any Cassini-sized rate rule (1 mrad/s finds no Time B); and
     the same spacecraft scaled by ``s`` in inertia, wheel inertias and torques (the same
-    manoeuvre, tests/test_scale_free.py) gives the same windows."""
+    manoeuvre, tests/scaled.py) gives the same windows."""
     import tomli_w
-    from test_scale_free import scaled_model, scaled_scenario
+    from scaled import scaled_model, scaled_scenario
 
     import cassini_bayes as cb
     from cassini_bayes.inference.rwa4 import detect_windows
