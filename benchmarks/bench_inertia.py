@@ -45,7 +45,7 @@ def main(argv=None) -> None:
     from cassini_bayes.inference.runner import SamplerSettings, run_nuts
     from cassini_bayes.physics.momentum import INERTIA_NAMES
     from cassini_bayes.spacecraft import load_spacecraft
-    from test_inference_inertia import make_slews
+    from slews import make_slews
 
     sc = load_spacecraft("cassini_2000_03_15")
     tel_a = make_slews(jax.random.key(1), sc, dt=0.5, rest=50.0)

@@ -49,7 +49,7 @@ def main(argv=None) -> None:
     from cassini_bayes.inference.runner import SamplerSettings
     from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
     from cassini_bayes.spacecraft import load_spacecraft
-    from test_inference_inertia import TRUTH, make_slews
+    from slews import TRUTH, make_slews
 
     truth = np.asarray(inertia_vector(TRUTH))
     sc = load_spacecraft("cassini_2000_03_15")
