@@ -41,9 +41,9 @@ HOURS = 4.0
 
 def _fine():
     """The reference rule: 4-5x finer than the monitor's in every setting."""
-    from cassini_bayes.inference.leak import _Rule
+    from cassini_bayes.inference.leak._onset import Rule
 
-    return _Rule(easy_nats=-1.0, part_w=0.1, part_y=0.25, part_nodes=12, prune_nats=80.0)
+    return Rule(easy_nats=-1.0, part_w=0.1, part_y=0.25, part_nodes=12, prune_nats=80.0)
 
 
 def _stretches(seeds):

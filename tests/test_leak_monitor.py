@@ -191,13 +191,13 @@ def test_the_onset_quadrature_agrees_with_a_finer_rule():
     rows, probabilities within 1e-6 and the fraction's mean and the onset within 1e-3 of their
     posterior sd (measured ~1e-9: deterministic, far from CPU-dependent last bits). It can fail:
     2 Gauss-Legendre nodes on every cell (no cut at the peak) miss by far more."""
-    from cassini_bayes.inference.leak import _Rule
+    from cassini_bayes.inference.leak._onset import Rule
 
     inp = _between_rows(3, 1505.6, hours=1.0)
-    fine = _Rule(easy_nats=-1.0, part_w=0.1, part_y=0.25, part_nodes=12, prune_nats=80.0)
+    fine = Rule(easy_nats=-1.0, part_w=0.1, part_y=0.25, part_nodes=12, prune_nats=80.0)
     dp, dfm, dom = _rule_differences(inp, fine)
     assert dp < 1e-6 and dfm < 1e-3 and dom < 1e-3
-    coarse = _Rule(easy_nats=np.inf, easy_span=np.inf, easy_nodes=2)
+    coarse = Rule(easy_nats=np.inf, easy_span=np.inf, easy_nodes=2)
     assert max(_rule_differences(inp, coarse)[1:]) > 1e-3
 
 

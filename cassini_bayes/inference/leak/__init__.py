@@ -92,7 +92,6 @@ from cassini_bayes.inference.leak._inputs import (
 from cassini_bayes.inference.leak._inputs import (
     leak_inputs as leak_inputs,
 )
-from cassini_bayes.inference.leak._onset import Rule as Rule  # the finer rules of the tests
 from cassini_bayes.inference.leak._posterior import leak_posterior as leak_posterior
 
 __all__ = ["LeakInputs", "LeakPosterior", "leak_inputs", "leak_posterior", "HYPOTHESES",
