@@ -166,3 +166,51 @@ def rcs_family(args: list[Records]) -> str:
                     f"{median(ess):.0f} | {median(err):.2f}° / {max(err):.2f}° | "
                     f"{median(f['cone90_deg'] for f in fits):.2f}° |")
     return "\n".join(rows)
+
+
+def _setting(opts: dict) -> str:
+    """A campaign record's open-world setting in words: the widening, the effects switched off
+    and the fits' stated torque knowledge (coverage_open_world.py options)."""
+    parts = [f"widen {opts.get('widen', 1.5):g}"]
+    if opts.get("off"):
+        parts.append("off " + " ".join(opts["off"]))
+    if opts.get("torque_sd_nm"):
+        parts.append(f"torque prior {opts['torque_sd_nm']:g} N m")
+    return ", ".join(parts)
+
+
+@kind("open_world_wheel_axis")
+def open_world_wheel_axis(args: list[Records]) -> str:
+    """Open-world wheel axis of any spacecraft per record, family and model
+    (coverage_open_world.py records with ``component_hit``): the setting, the 90 % cone's
+    coverage, each axis component's and inertia entry's 90 % interval coverage, all components
+    pooled, the axis error (and within 0.5°, the issue-29 criterion), the cone, Brown's budget,
+    adequacy, R-hat and divergences."""
+    from statistics import median
+
+    rows = ["| family (wheel) | setting | 90 % cone covers | per component u_x u_y u_z Ixx Iyy "
+            "Izz Ixy Ixz Iyz | all components | axis error median / worst | within 0.5° | "
+            "median 90 % cone | budget (1°) | adequacy ok | max R-hat, divergences |",
+            "|" + "---|" * 11]
+    for group in args:
+        records = [r for path in group for r in read_jsonl(path)]
+        for family in dict.fromkeys(r["family"] for r in records):
+            seeds = [r for r in records if r["family"] == family]
+            for model in dict.fromkeys(m for r in seeds for m in r["fits"]):
+                fits = [r["fits"][model] for r in seeds if model in r["fits"]]
+                n, err = len(fits), [f["error"][0] for f in fits]
+                comp = [h for f in fits for h in f["component_hit"]]
+                per = " ".join(share_cell(sum(e) / n)
+                               for e in zip(*(f["component_hit"] for f in fits), strict=True))
+                rows.append(f"| `{family}` ({fits[0]['wheel']}) | {_setting(seeds[0]['options'])}"
+                            f"{'' if model == 'per_wheel' else ', ' + model} | "
+                            f"{coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
+                            f"{per} | {coverage_cell(sum(comp), len(comp))} | "
+                            f"{median(err):#.3g}° / {max(err):#.3g}° | "
+                            f"{sum(e <= 0.5 for e in err)}/{n} | "
+                            f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                            f"{sum(f['budget'] for f in fits)}/{n} | "
+                            f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
+                            f"{max(f['r_hat'] for f in fits):.3f}, "
+                            f"{sum(f['divergences'] for f in fits)} |")
+    return "\n".join(rows)

@@ -35,7 +35,12 @@ biasing event, ``fit_thrust(mode="thruster")``, the thrusts, time constants and 
 drawn too: ``draw_open_world(draw_thrusters=True)``; scored on the identified thrusts and
 combinations, ``com_*`` and the time constants, budget every thrust within 3 %); RWA4
 ``rwa4_rcs``, ``rwa4_rwa`` and ``rwa4_rcs_calibrated`` (the RCS method given an inertia
-calibration's posterior instead of the model file's ±10 %, :data:`CALIBRATED_SD`).
+calibration's posterior instead of the model file's ±10 %, :data:`CALIBRATED_SD`). The non-Cassini
+spacecraft: inertia ``espa_slews`` (the ESPA bus) and ``cubesat_slews`` (the 12U CubeSat), scored
+as Cassini's (moments within 1 %, products within the model file's ``poi_uncertainty``); wheel
+axis ``espa_wheel_axis`` (RW2) and ``cubesat_wheel_axis`` (the skew wheel RWS) by the RWA method
+(:data:`WHEEL_AXIS`), scored on the 90 % cone and, per component, on each ``u4_*`` and inertia
+entry's 90 % interval (``component_hit``, ``component_z``; recorded for every axis family).
 """
 
 from __future__ import annotations
@@ -63,7 +68,14 @@ FAMILIES = {   # family: (kind, scenario)
     "rwa4_rcs": ("rwa4", "rwa4_rcs"),
     "rwa4_rwa": ("rwa4", "rwa4_rwa"),
     "rwa4_rcs_calibrated": ("rwa4", "rwa4_rcs"),
+    "espa_slews": ("inertia", "slews_espa_bus"),
+    "cubesat_slews": ("inertia", "slews_cubesat_12u"),
+    "espa_wheel_axis": ("rwa4", "wheel_axis_espa_bus"),
+    "cubesat_wheel_axis": ("rwa4", "wheel_axis_cubesat_12u"),
 }
+# The wheel-axis families of the non-Cassini spacecraft: the wheel each scenario calibrates (the
+# one its [truth] tilts and biases) and the method (Brown §III.C, the RWA-controlled slews).
+WHEEL_AXIS = {"espa_wheel_axis": ("RW2", "rwa"), "cubesat_wheel_axis": ("RWS", "rwa")}
 # rwa4_rcs_calibrated: the RCS fit is given an inertia calibration's posterior instead of the
 # model file's ±10 % knowledge (Brown's < 3° assumes a mass-property error worth ≤ 1.5°): a
 # Gaussian with the sds of the open-world inertia posteriors (moments 0.6 %, products 5 kg m²)
@@ -74,7 +86,7 @@ THRUST_BUDGET = 0.10      # Feldman & Lee §V: F known to ±10 %
 
 
 def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | None,
-         inertia=None):
+         inertia=None, wheel: str = "RWA4"):
     """Fit one model; returns (posterior, adequacy). The adequacy checks get the sites the CLI
     gives them (``cassini_bayes/api/_inertia.py``, ``_thrust.py``, ``_rwa4.py``)."""
     from cassini_bayes.inference import adequacy as adq
@@ -110,11 +122,11 @@ def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | No
     from cassini_bayes.inference.rwa4 import U4_NAMES, fit_rwa4
 
     post = fit_rwa4(key, tel, prior, method=method, robust=robust, wheel_errors=wheel_errors,
-                    inertia=inertia, settings=settings, prior_draws=200)
+                    inertia=inertia, settings=settings, prior_draws=200, wheel=wheel)
     return post, adq.rwa4_adequacy(post, list(U4_NAMES) + list(INERTIA_NAMES))
 
 
-def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
+def _score(kind: str, post, sim, scenario, method: str | None, wheel: str = "RWA4") -> dict:
     """Coverage of the 90 % intervals and the error against the budgets."""
     import numpy as np
 
@@ -124,11 +136,12 @@ def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
     if kind == "rwa4":
         from cassini_bayes.inference.sphere import angles_deg
 
-        u = np.asarray(sim.params.wheel_axes)[list(scenario.wheel_names).index("RWA4")]
+        u = np.asarray(sim.params.wheel_axes)[list(scenario.wheel_names).index(wheel)]
         err = float(angles_deg(np.array(post.direction["mean"])[None], u)[0])
         cone = float(post.direction["cone_deg"]["90"])
         return {"entries": ["axis"], "hit": [err <= cone], "error": [err], "cone90_deg": cone,
-                "budget": err <= BUDGET_DEG[method]}
+                "budget": err <= BUDGET_DEG[method], "wheel": wheel,
+                **_score_components(p, u, scenario)}
     if kind == "thruster":
         return _score_thrusters(post, sim, scenario)
     if kind == "inertia":
@@ -155,6 +168,23 @@ def _score(kind: str, post, sim, scenario, method: str | None) -> dict:
     return {"entries": names, "hit": ((q05 <= truth) & (truth <= q95)).tolist(),
             "interval": np.stack([q05, q95], 1).tolist(), "error": err.tolist(),
             "z": (err / d.std(0)).tolist(), "truth": truth.tolist(), "budget": budget}
+
+
+def _score_components(p, u, scenario) -> dict:
+    """Per component of a wheel-axis fit: the 90 % central interval of each axis component
+    (``u4_*``, the solved wheel's unit axis) and of each inertia entry against its truth, with
+    z = (mean − truth)/sd; scored beside the cone (Cassini's families record them too)."""
+    import numpy as np
+
+    from cassini_bayes.inference.rwa4 import U4_NAMES
+    from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
+
+    names = list(U4_NAMES) + list(INERTIA_NAMES)
+    truth = np.r_[np.asarray(u, float), np.asarray(inertia_vector(scenario.truth.inertia), float)]
+    d = np.stack([p[n].values.ravel() for n in names], 1)
+    q05, q95 = np.quantile(d, [0.05, 0.95], axis=0)
+    return {"components": names, "component_hit": ((q05 <= truth) & (truth <= q95)).tolist(),
+            "component_z": ((d.mean(0) - truth) / d.std(0)).tolist()}
 
 
 def _score_thrusters(post, sim, scenario) -> dict:
@@ -240,9 +270,10 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
 
     kind, name = FAMILIES[family]
     fam = list(FAMILIES).index(family)
+    wheel, method = WHEEL_AXIS.get(family, ("RWA4", name.split("_")[1] if kind == "rwa4" else None))
     ow = draw_open_world(name, np.random.default_rng([seed, fam]), widen=opts["widen"],
                          draw_inertia=kind != "inertia",
-                         solved_wheel="RWA4" if kind == "rwa4" else None,
+                         solved_wheel=wheel if kind == "rwa4" else None,
                          draw_thrusters=kind == "thruster")
     ow = without(ow, opts["off"])
     if opts.get("time_tag_scale", 1.0) != 1.0:   # the drawn time tags scaled, nothing else
@@ -253,7 +284,6 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
     k_sim, k_fit = jax.random.split(jax.random.key(50_000 * (fam + 1) + seed))
     sim = simulate(k_sim, scenario)
     tel = apply_time_tags(sim.telemetry, ow)
-    method = name.split("_")[1] if kind == "rwa4" else None
     inertia = None
     if family == "rwa4_rcs_calibrated":
         from cassini_bayes.inference.thrust import InertiaGaussian
@@ -279,8 +309,9 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            post, ad = _fit(kind, k_fit, sim, tel, prior, model, settings, method, inertia)
-        rec = _score(kind, post, sim, scenario, method)
+            post, ad = _fit(kind, k_fit, sim, tel, prior, model, settings, method, inertia,
+                            wheel)
+        rec = _score(kind, post, sim, scenario, method, wheel)
         worst = {c.name: (c.statistic, c.parameter) for c in ad.checks if not c.ok}
         rec |= {"r_hat": float(post.diagnostics.max_r_hat),
                 "divergences": int(post.diagnostics.divergences),

@@ -112,6 +112,19 @@ def test_solved_wheel_is_not_tilted():
     assert ow.record["wheel_axis_tilt_deg"]["wheels"] == [w for w in on if w != "RWA4"]
 
 
+def test_solved_wheel_keeps_the_scenarios_own_axis():
+    """A scenario that tilts the wheel it calibrates (ESPA RW2, 1°) keeps that tilt in the open
+    world, also with the drawn tilts switched off: the offset is what the fit must find."""
+    from cassini_bayes.simulate.open_world import base_scenario, without
+
+    own = base_scenario("wheel_axis_espa_bus")["truth"]["wheel_axis_tilt_deg"]["RW2"]
+    ow = draw_open_world("wheel_axis_espa_bus", 3, solved_wheel="RW2")
+    tilts = ow.scenario["truth"]["wheel_axis_tilt_deg"]
+    assert tilts["RW2"] == own and set(tilts) == {"RW1", "RW2", "RW3", "RW4"}
+    assert "RW2" not in ow.record["wheel_axis_tilt_deg"]["wheels"]
+    assert without(ow, ["tilts"]).scenario["truth"]["wheel_axis_tilt_deg"] == {"RW2": own}
+
+
 def test_time_tags_and_stale_samples():
     ow = draw_open_world("biasing_day028", 5, slip_prob=0.05)
     n = ow.time_tag_error_s.shape[0]

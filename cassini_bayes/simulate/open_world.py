@@ -176,7 +176,9 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     rng : NumPy Generator, or an int seed for ``np.random.default_rng``.
     widen : each error's sd over its prior sd (the prior model's ``Knowledge``).
     draw_inertia : draw the true inertia from the prior model's knowledge box (thrust, RWA4).
-    solved_wheel : a wheel whose axis the fit solves for (RWA4): not tilted.
+    solved_wheel : a wheel whose axis the fit solves for (RWA4): not drawn; it keeps the
+        scenario's own true axis (its ``wheel_axis_tilt_deg`` entry, or Cassini's ``rwa4_axis``),
+        the offset from the model file that the calibration is there to find.
     torque_sd_nm : scale of the external torques per axis, N m (drawn ``widen`` × wider; default
         the prior model's ``[torque_knowledge] sd_nm``, the robust fits' prior sd); the inertial
         torque also drifts, by up to this much over the run (unmodelled).
@@ -209,7 +211,9 @@ def draw_open_world(base: dict | str | Path, rng: np.random.Generator | int, *,
     tilted = [w for w in d["initial"]["wheels_on"] if str(w).upper() != str(solved_wheel).upper()]
     tilt = _effect(rng, "wheel_axis_tilt_deg", widen * kn.wheel_axis_sd_deg, (len(tilted), 2), rec)
     rec["wheel_axis_tilt_deg"]["wheels"] = tilted
-    truth["wheel_axis_tilt_deg"] = {w: tilt[i].tolist() for i, w in enumerate(tilted)}
+    own = {w: v for w, v in truth.get("wheel_axis_tilt_deg", {}).items()
+           if str(w).upper() == str(solved_wheel).upper()}
+    truth["wheel_axis_tilt_deg"] = {w: tilt[i].tolist() for i, w in enumerate(tilted)} | own
     truth["external_torque_body_nm"] = _effect(rng, "external_torque_body_nm",
                                                widen * torque_sd_nm, 3, rec).tolist()
     truth["external_torque_inertial_nm"] = _effect(rng, "external_torque_inertial_nm",
@@ -262,8 +266,10 @@ def without(ow: OpenWorld, effects) -> OpenWorld:
             slip = np.zeros_like(slip)
         elif e == "wheels":
             truth["wheel_inertia_errors"] = [0.0] * len(truth["wheel_inertia_errors"])
-        elif e == "tilts":
-            truth["wheel_axis_tilt_deg"] = {}
+        elif e == "tilts":         # the drawn tilts; a solved wheel keeps its own axis
+            drawn = set(ow.record["wheel_axis_tilt_deg"]["wheels"])
+            truth["wheel_axis_tilt_deg"] = {w: v for w, v in truth["wheel_axis_tilt_deg"].items()
+                                            if w not in drawn}
         elif e == "gyro":
             noise["gyro_bias_rad_s"] = noise["gyro_scale_factor"] = [0.0, 0.0, 0.0]
         else:
