@@ -35,6 +35,7 @@ import _tables_coverage  # noqa: E402,F401
 import _tables_performance  # noqa: E402,F401
 import _tables_planning  # noqa: E402,F401
 import _tables_sbc  # noqa: E402,F401
+import _tables_validation  # noqa: E402,F401
 from _provenance import manifest_path  # noqa: E402
 from _tables import KINDS, Records  # noqa: E402
 

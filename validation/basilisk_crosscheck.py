@@ -424,8 +424,8 @@ def fl_equivalent_tau_fall(by_width) -> float:
     """τf for which Feldman & Lee's §V impulse (τd, τr as in TAU) matches Basilisk's delivered one.
 
     The τf whose count-weighted mean impulse residual over the commanded widths is zero, found by
-    bisection (the §V impulse increases with τf). This is the value a perfect fit of the paper's pulse model should
-    find for τf when τd and τr sit at their priors.
+    bisection (the §V impulse increases with τf). This is the value a perfect fit of the paper's
+    pulse model should find for τf when τd and τr sit at their priors.
     """
     def misfit(tf):
         return sum(v["count"] * (float(pulse_impulse(float(w), TAU["tau_delay"], TAU["tau_rise"],

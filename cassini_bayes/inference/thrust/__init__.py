@@ -124,9 +124,10 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
 * gyro scale factors ``s``: ``+ I diag(ω_meas) s``;
 * wheel spin-inertia errors ``c_k``, one per active wheel (``wheel_errors="per_wheel"``, the
   default): the true wheel momentum is ``H_w + Σ_k c_k J_k ρ_k g_k``, so the left side computed
-  with the model's wheels is ``Q F j − Σ_k c_k J_k ρ_k(t) g_k``; ``"common"``: one ``c`` for all,
-  ``− c H_w(t)``;
-* wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj J_k ρ_k u_kj``;
+  with the model's wheels is ``Q F j − Σ_k c_k (J_k ρ_k g_k + ∫ ω × J_k ρ_k g_k dt)`` (the wheel
+  momentum enters ``ΔG``, Eq 15, too); ``"common"``: one ``c`` for all, ``− c (H_w + ∫ ω × H_w
+  dt)``;
+* wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj (J_k ρ_k u_kj + ∫ ω × J_k ρ_k u_kj dt)``;
 * telemetry time-tag errors (white, sd ``σ_t`` = ``Knowledge.time_tag_sd_s``, 10 ms by default):
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
   thrusters' torque at ``t_i`` times ``δ`` — noise only on the samples taken during a pulse, which

@@ -172,9 +172,21 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
         if name in per_wheel:
             for j in range(2):
                 cols[:, :, a0 + 2 * k + j] = -per_wheel[name][:, None] * layout.tilt_u[k, j]
+    wheel = np.r_[np.arange(layout.size)[layout.wheel_block], np.arange(a0, sl["wheel_axes"].stop)]
+    cols[:, :, wheel] = _with_gyroscopic(cols[:, :, wheel], omega, t)
     t0 = sl["body_torque"].start + 3 * e
     cols[:, :, t0:t0 + 3] = dt[:, :, None] * np.eye(3)[None]              # T_e (t − t_0)
     return cols
+
+
+def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(n, 3, W) wheel-momentum columns ``δH`` plus their gyroscopic impulse ``∫ ω × δH dt``
+    (Feldman & Lee Eq 15, the cumulative trapezoid of
+    :func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`): a wheel's momentum enters the
+    left side of Eq 17 through ``H`` and through ``ΔG``, so an error in it does both."""
+    f = np.einsum("nij,njw->niw", np.asarray(skew(omega)), momentum)     # ω × δH
+    steps = 0.5 * (f[1:] + f[:-1]) * np.diff(t)[:, None, None]
+    return momentum + np.concatenate([np.zeros_like(f[:1]), np.cumsum(steps, 0)])
 
 
 def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:

@@ -1,0 +1,45 @@
+"""Table kinds of the cross-checks against other simulators (validation/results/, shown in
+docs/robust/basilisk.md); registered in :mod:`_tables` by import."""
+
+from __future__ import annotations
+
+from _tables import Records, kind, read_json
+
+
+def _adequacy(adequacy: dict | None) -> str:
+    if not adequacy:
+        return "–"
+    failed = [k for k, c in adequacy["checks"].items() if not c.get("ok", True)]
+    return "ok" if adequacy["ok"] else f"fails ({', '.join(failed)})"
+
+
+@kind("basilisk_espa_bias")
+def basilisk_espa_bias(args: list[Records]) -> str:
+    """One row per ``validation/basilisk_espa.py --cases bias`` record (its ``bias`` block):
+    the thrust errors per thruster (% of the truth), the largest, the largest posterior sd (% of
+    the thrust), the centre-of-mass offset's error (mm; posterior sd), the entries their 90 %
+    interval covers, max R-hat, divergences, the adequacy verdict, the fit's wall time, and the
+    125 ms impulse bits' largest error (% of Basilisk's) and how many of the eight their 90 %
+    interval covers (``impulse_bits``, validation/espa_bias_record.py)."""
+    rows = ["| RW2 tilt | telemetry (s) | seed | thrust error A1..F4 (%) | max \\|err\\| | "
+            "thrust sd | offset error (mm) | covered | max R-hat | div. | adequacy | fit time | "
+            "impulse bit max \\|err\\| | bits covered | record |", "|" + "---|" * 15]
+    for path in (p for group in args for p in group):
+        b = read_json(path)["bias"]
+        t, dg = b["truth"], b["diagnostics"]
+        thrust = [r for r in b["rows"] if "rel_error_pct" in r]
+        com = [r for r in b["rows"] if r["kind"] == "com"]
+        errs = ", ".join(f"{r['rel_error_pct']:+.2f}" for r in thrust)
+        sd = max(100 * r["sd"] / r["truth"] for r in thrust)
+        off = (", ".join(f"{1e3 * r['error']:+.1f}" for r in com) + " (sd "
+               + ", ".join(f"{1e3 * r['sd']:.1f}" for r in com) + ")")
+        cov = sum(r["covered"] for r in b["rows"])
+        bits = b.get("impulse_bits") or []
+        bit_err = (f"{max(abs(r['rel_error_pct']) for r in bits):.2f} %" if bits else "–")
+        bit_cov = f"{sum(r['covered'] for r in bits)}/{len(bits)}" if bits else "–"
+        rows.append(f"| {t['tilt_angle_deg']:.1f}° | {t['sample_period_s']:g} | {b['seed']} | "
+                    f"{errs} | {b['max_abs_thrust_error_pct']:.2f} % | {sd:.2f} % | {off} | "
+                    f"{cov}/{len(b['rows'])} | {dg['max_r_hat']:.4f} | {dg['divergences']} | "
+                    f"{_adequacy(b['adequacy'])} | {b['fit_wall_s']:.0f} s | {bit_err} | "
+                    f"{bit_cov} | `{path.name}` |")
+    return "\n".join(rows)
