@@ -30,8 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-import _tables_basilisk  # noqa: E402,F401  (each module registers its kinds)
-import _tables_coverage  # noqa: E402,F401
+import _tables_coverage  # noqa: E402,F401  (each module registers its kinds)
 import _tables_performance  # noqa: E402,F401
 import _tables_planning  # noqa: E402,F401
 import _tables_sbc  # noqa: E402,F401
