@@ -109,7 +109,7 @@ def test_truth_reaches_the_simulator():
     torque, to 1e-6 of its size (without ``δ`` it is off by more than 1e-5); each thruster's
     impulse is its drawn thrust times the pulse log's accumulated pulse impulses at the drawn
     time constants (Feldman & Lee §V); the recorded sample times are jittered with the model's
-    10 ms time-tag sd (sample sd within 25 % over 151 samples, ~4 se)."""
+    10 ms time-tag sd (sample sd within 25 % over 81 samples, ~3 se)."""
     from helpers import replicate_of
     from cassini_bayes.physics.pulse import pulse_impulse_until
     from cassini_bayes.simulate.run import pulse_log
