@@ -1,6 +1,6 @@
 """SBC of the default robust thrust model (``cassini-bayes sbc thrust --set robust=true``).
 
-The adapter (cassini_bayes.analysis.sbc_thrust_robust) draws every parameter of the robust
+The adapter (cassini_bayes.analysis.sbc_models._thrust_robust) draws every parameter of the robust
 thrust fit from that fit's prior and flies it; these tests check the options and the ranked
 names, that the draws follow the prior the fit states (thrust, centre of mass, time constants,
 inertia, the nuisance in the layout ``prepare_thrust`` builds), that the draws reach the
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from cassini_bayes.analysis.sbc_models import THRUST_SCENARIO, ModelSpec, build_model
-from cassini_bayes.analysis.sbc_thrust_robust import (THRUST_ESPA_SCENARIO, robust_thrust_truth,
+from cassini_bayes.analysis.sbc_models._thrust_robust import (THRUST_ESPA_SCENARIO, robust_thrust_truth,
                                                       simulate_robust_thrust)
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate.scenario import load_scenario

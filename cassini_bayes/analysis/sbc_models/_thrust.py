@@ -130,14 +130,14 @@ def _thrust(spec: ModelSpec) -> SbcModel:
     Options: ``num_warmup, num_draws, num_chains, thin`` (default 300, 300, 2, 3), ``robust``
     (False: the idealised model, which matches a simulator without sensor/wheel errors; True:
     the robust model ``fit thrust`` runs by default, every truth drawn from its prior and flown,
-    :func:`~cassini_bayes.analysis.sbc_thrust_robust.robust_thrust_model`), and two
+    :func:`~cassini_bayes.analysis.sbc_models._thrust_robust.robust_thrust_model`), and two
     deliberate mis-specifications SBC must detect: ``pulse_dynamics=False`` makes the simulator
     fire ideal rectangular pulses (every time constant 1 µs, impulse ``F·Δ``) while the fit models
     the pulse response of Feldman & Lee §V (impulse ``F(Δ + c)``, ``c ≈ 45 ms``); and
     ``thrust_factor`` multiplies the simulated thrust (the recorded truth stays the drawn ``F``).
     """
     if dict(spec.options).get("robust"):
-        from cassini_bayes.analysis.sbc_thrust_robust import robust_thrust_model
+        from cassini_bayes.analysis.sbc_models._thrust_robust import robust_thrust_model
 
         return robust_thrust_model(spec)
     scenario = thrust_scenario(spec)

@@ -48,7 +48,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes._paths import SCENARIOS_DIR
-from cassini_bayes.analysis.sbc_models import ModelSpec, SbcFit, SbcModel
+from cassini_bayes.analysis.sbc_models._contract import ModelSpec, SbcFit, SbcModel
 from cassini_bayes.analysis.sbc_models._common import (
     IDEAL_PULSE_TAU_S,
     check_options,
