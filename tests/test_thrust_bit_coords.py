@@ -73,3 +73,41 @@ def test_bit_coordinates_are_log_f_at_the_prior_median(espa):
     np.testing.assert_allclose(_log_bit_shift(jnp.asarray(tp.median()), kw), 0.0, atol=1e-12)
     off = np.asarray(_log_bit_shift(jnp.asarray(tp.median() * 1.3), kw))
     assert np.all(np.abs(off) > 1e-3)
+
+
+def test_impulse_bit_draws_and_their_report():
+    """fit_thrust adds ``bit`` (N s) for the fired thrusters where every thruster fires at one
+    width: each draw's ``F_s j(Δ_s; τ)`` (Feldman & Lee §V; exact), and the summary's
+    ``thrust_design["impulse_bits"]`` and the report's thrust-design section state them as the
+    identified quantity with their width."""
+    from types import SimpleNamespace
+
+    import arviz as az
+
+    from cassini_bayes.api._thrust import _impulse_bits_block
+    from cassini_bayes.inference.thrust.fit import _add_impulse_bits
+    from cassini_bayes.physics.pulse import pulse_impulse
+    from cassini_bayes.report._sections import thrust_design_section
+
+    names = ["A1", "A2", "A3"]
+    rng = np.random.default_rng(5)
+    draws = {"F": rng.uniform(0.9, 1.1, (2, 5, 3)), "tau_delay": rng.uniform(0.003, 0.006, (2, 5)),
+             "tau_rise": rng.uniform(0.01, 0.02, (2, 5)),
+             "tau_fall": rng.uniform(0.03, 0.05, (2, 5))}
+    idata = az.from_dict(posterior=draws, dims={"F": ["thruster"]}, coords={"thruster": names})
+    kw = SimpleNamespace(bit_width=np.array([0.125, 0.0, 0.25]))
+    _add_impulse_bits(idata, SimpleNamespace(data=kw, thrusters=tuple(names)))
+    bit = idata.posterior["bit"]
+    assert list(bit.bit_thruster.values) == ["A1", "A3"]
+    assert bit.attrs["width_s"] == [0.125, 0.25]
+    want = draws["F"][1, 3, 2] * float(pulse_impulse(0.25, *(draws[n][1, 3] for n in
+                                                            ("tau_delay", "tau_rise", "tau_fall"))))
+    assert float(bit.values[1, 3, 1]) == pytest.approx(want, rel=1e-12)
+    params = {"bit[A1]": {"mean": 0.1712, "sd": 0.0011, "q05": 0.1695, "q95": 0.1731}}
+    block = _impulse_bits_block(bit, params)
+    assert block["width_s"] == {"A1": 0.125, "A3": 0.25}
+    html = str(thrust_design_section({"thrust_design": {
+        "singular_values": [3.0], "rank": 1, "parameters": 11, "thrust_rank": 1,
+        "thrusters": names, "identified": names, "not_fired": ["A2"], "combinations": [],
+        "com_told": {}, "impulse_bits": block}}))
+    assert "impulse bit" in html and "0.1712" in html and "125" in html
