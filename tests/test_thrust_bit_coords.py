@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from cassini_bayes.inference.thrust.coords import _log_bit_shift, _physical, bit_widths
+from cassini_bayes.inference.thrust.coords import _log_bit_shift, _physical, _bit_widths
 from cassini_bayes.inference.thrust.data import prepare_thrust
 from cassini_bayes.inference.thrust.model import _log_density
 from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD
@@ -22,13 +22,13 @@ from cassini_bayes.simulate import load_scenario, simulate
 def test_bit_widths_only_where_every_parameter_fires_at_one_width():
     width = np.array([[0.125, 0.125, 0.125, 0.0], [0.125, 0.125, 0.0, 0.0]])
     thruster = np.array([[0, 1, 0, 7], [1, 0, 0, 0]])
-    np.testing.assert_array_equal(bit_widths(width, thruster, np.arange(3)), [0.125, 0.125, 0])
-    np.testing.assert_array_equal(bit_widths(width, thruster, np.zeros(3, int)), [0.125])
+    np.testing.assert_array_equal(_bit_widths(width, thruster, np.arange(3)), [0.125, 0.125, 0])
+    np.testing.assert_array_equal(_bit_widths(width, thruster, np.zeros(3, int)), [0.125])
     two = width.copy()
     two[1, 0] = 0.25                   # thruster 1 fires at 125 and 250 ms
-    assert bit_widths(two, thruster, np.arange(3)) is None
-    assert bit_widths(two, thruster, np.zeros(3, int)) is None
-    assert bit_widths(np.zeros((1, 3)), np.zeros((1, 3), int), np.arange(2)) is None
+    assert _bit_widths(two, thruster, np.arange(3)) is None
+    assert _bit_widths(two, thruster, np.zeros(3, int)) is None
+    assert _bit_widths(np.zeros((1, 3)), np.zeros((1, 3), int), np.arange(2)) is None
 
 
 @pytest.fixture(scope="module")

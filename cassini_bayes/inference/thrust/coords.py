@@ -16,7 +16,7 @@ from cassini_bayes.inference.thrust.prior import (_HALF_NORMAL_MEDIAN, _NOISE_ST
                                                   THRUST_PRIOR_LOG_SD)
 from cassini_bayes.physics.pulse import pulse_impulse
 
-__all__ = ["C_SCALE_S", "A_LOG_SCALE", "long_pulse_excess", "rise_deficit", "bit_widths"]
+__all__ = ["C_SCALE_S", "A_LOG_SCALE", "long_pulse_excess", "rise_deficit"]
 
 C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler coordinate
 A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
@@ -116,7 +116,7 @@ def _tau_from_z(tau_z, kw):
 _SAME_WIDTH_S = 1e-6    # widths closer than this are one command (commands are ms apart)
 
 
-def bit_widths(width, thruster, f_index) -> np.ndarray | None:
+def _bit_widths(width, thruster, f_index) -> np.ndarray | None:
     """(n_f,) s: the one commanded width of each thrust parameter's pulses, where every thrust
     parameter that fires does so at one width (0 for a parameter that never fires); ``None``
     where any parameter fires at two or more widths.
@@ -142,7 +142,7 @@ def bit_widths(width, thruster, f_index) -> np.ndarray | None:
 def _log_bit_shift(tau, kw):
     """(n_f,) ``log j(Δ̄_k; τ) − log j(Δ̄_k; τ̃)``: how far the pulse shape at ``τ`` moves each
     thrust parameter's impulse bit from its value at the prior-median time constants ``τ̃``
-    (``Δ̄_k = kw.bit_width``, :func:`bit_widths`; 0 where a parameter never fires).
+    (``Δ̄_k = kw.bit_width``, :func:`_bit_widths`; 0 where a parameter never fires).
 
     ``j(Δ; τ) = (Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}`` is Feldman &
     Lee §V's closed form of one pulse's impulse per newton
@@ -181,7 +181,7 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     mass is ``(r_s − e − δ) × d_s = Q_s − δ × d_s`` (Feldman & Lee Eq 16 with the offset ``δ``).
 
     Where every thrust parameter fires at one pulse width (``kw.bit_width`` given,
-    :func:`bit_widths`) the thrust coordinates are the prior-whitened log impulse bit instead:
+    :func:`_bit_widths`) the thrust coordinates are the prior-whitened log impulse bit instead:
     ``log F_k = log b_k − log j(Δ̄_k; τ) + log j(Δ̄_k; τ̃)`` (:func:`_log_bit_shift`), so they equal
     the ``log F`` coordinates at the prior-median ``τ̃``. One width measures ``b_k = F_k j(Δ̄_k)``
     and leaves ``F_k`` to trade against the pulse shape along the curved ridge
