@@ -84,7 +84,7 @@ def thrust_design_section(summary: dict) -> Section | None:
         rows = []
         for n, w in bits["width_s"].items():
             p = bits["posterior"].get(n) or {}
-            rows.append([n, fmt(1e3 * w, 4), fmt(p.get("mean"), 4), fmt(p.get("sd"), 4),
+            rows.append([n, f"{1e3 * w:g}", fmt(p.get("mean"), 4), fmt(p.get("sd"), 4),
                          fmt(p.get("q05"), 4), fmt(p.get("q95"), 4)])
         body.append(paragraph(
             "Every thruster fires at one pulse width: the events identify each one's impulse "
