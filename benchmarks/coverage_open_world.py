@@ -33,7 +33,8 @@ Families: inertia ``post_probe``, ``pre_soi``, ``post_prm`` (weak Z); thrust ``d
 ``day028_first_order`` (first-order valve); per thruster ``espa_bias`` (the ESPA bus's RCS
 biasing event, ``fit_thrust(mode="thruster")``, the thrusts, time constants and centre of mass
 drawn too: ``draw_open_world(draw_thrusters=True)``; scored on the identified thrusts and
-combinations, ``com_*`` and the time constants, budget every thrust within 3 %); RWA4
+combinations, ``com_*`` and the time constants, budget every thrust within 3 %) and
+``espa_bias_mixed`` (the same event with pulses of 125-500 ms); RWA4
 ``rwa4_rcs``, ``rwa4_rwa`` and ``rwa4_rcs_calibrated`` (the RCS method given an inertia
 calibration's posterior instead of the model file's ±10 %, :data:`CALIBRATED_SD`). The non-Cassini
 spacecraft: inertia ``espa_slews`` (the ESPA bus) and ``cubesat_slews`` (the 12U CubeSat), scored
@@ -65,6 +66,7 @@ FAMILIES = {   # family: (kind, scenario)
     "day028": ("thrust", "biasing_day028"),
     "day028_first_order": ("thrust", "biasing_day028_first_order"),
     "espa_bias": ("thruster", "biasing_espa_bus"),
+    "espa_bias_mixed": ("thruster", "biasing_espa_bus_mixed_widths"),
     "rwa4_rcs": ("rwa4", "rwa4_rcs"),
     "rwa4_rwa": ("rwa4", "rwa4_rwa"),
     "rwa4_rcs_calibrated": ("rwa4", "rwa4_rcs"),

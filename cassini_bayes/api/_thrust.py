@@ -132,11 +132,14 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
                    baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of a thrust posterior (``ThrustPosterior``): parameters (thrust and
     ``tau_*``; mode ``thruster``: ``F[<name>]`` per thruster, ``com_x``, ``com_y``, ``com_z``
-    and ``F_combination[<label>]`` per identified combination), baseline, diagnostics,
+    and ``F_combination[<label>]`` per identified combination; ``bit[<name>]``, N s, where
+    every thruster fires at one width), baseline, diagnostics,
     adequacy, nuisance, ``mode``, ``model``, ``wheel_errors``, (robust fits) ``sensitivity``
     and (mode ``thruster``) ``thrust_design``: the impulse design's rank, singular values,
     identified thrusters, combinations with their weights, and whether the centre of mass is
-    told by the events (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`)."""
+    told by the events (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`), and
+    where every thruster fires at one width the impulse bits they identify instead of the
+    thrusts (``impulse_bits``: width and posterior per thruster)."""
     from cassini_bayes.inference.adequacy import thrust_adequacy
     from cassini_bayes.inference.nuisance import EFFECTS
     from cassini_bayes.inference.summary import CONTRACTION_WEAK, build_summary
@@ -146,6 +149,8 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     names = list(thrust_names(mode))
     if "F_combination" in post.idata.posterior:      # mode thruster, thrusters told in combination
         names.append("F_combination")
+    if "bit" in post.idata.posterior:                # mode thruster, every thruster at one width
+        names.append("bit")
     if mode == "thruster":
         names += list(COM_NAMES)
     names += list(TAU_NAMES)
@@ -173,6 +178,8 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
         block["com_told"] = {n: (params.get(n) or {}).get("contraction") is not None
                              and params[n]["contraction"] >= CONTRACTION_WEAK
                              for n in COM_NAMES}
+        if "bit" in post.idata.posterior:
+            block["impulse_bits"] = _impulse_bits_block(post.idata.posterior["bit"], params)
         summary["thrust_design"] = block
         quiet = [n for n, told in block["com_told"].items() if not told]
         if quiet:
@@ -181,6 +188,18 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
                 f"(posterior/prior contraction < {CONTRACTION_WEAK:g}; only firings with a net "
                 "force move it): prior-dominated, from [center_of_mass] sd_m")
     return summary
+
+
+def _impulse_bits_block(bit, params: dict) -> dict:
+    """``thrust_design["impulse_bits"]``: the events fire every thruster at one width, so what
+    they identify per thruster is its impulse bit ``F j(Δ; τ)`` at that width (``bit[<name>]``,
+    N s), and ``F`` only as well as the pulse shape (docs/thrust_any_layout.md)."""
+    names = [str(n) for n in bit["bit_thruster"].values]
+    return {"width_s": dict(zip(names, (float(w) for w in bit.attrs["width_s"]))),
+            "posterior": {n: params.get(f"bit[{n}]") for n in names},
+            "rule": "one commanded pulse width per thruster: the events identify the impulse "
+                    "bit F j(width; tau) (Feldman & Lee §V); the thrusts F trade against the "
+                    "pulse shape and are known only as well as the time constants"}
 
 
 def _inertia_knowledge(inertia_posterior, fix_inertia: bool):

@@ -57,7 +57,8 @@ def thrust_design_section(summary: dict) -> Section | None:
     """What the events tell about each thruster (``summary["thrust_design"]`` of ``fit thrust
     --mode thruster``): the impulse design's rank and singular values, the thrusters identified
     one by one, the identified combinations of the others with their posterior, and whether
-    the centre of mass is told (docs/thrust_any_layout.md). ``None`` for the other modes."""
+    the centre of mass is told, and where every thruster fires at one width the impulse bits
+    they identify (docs/thrust_any_layout.md). ``None`` for the other modes."""
     d = summary.get("thrust_design")
     if not d:
         return None
@@ -78,6 +79,19 @@ def thrust_design_section(summary: dict) -> Section | None:
         body.append(paragraph("The other thrusters are told only in these combinations "
                               "(weights of the thrusts, N per N):"))
         body.append(table(["combination", "mean N", "sd N", "5 %", "95 %"], rows))
+    bits = d.get("impulse_bits")
+    if bits:
+        rows = []
+        for n, w in bits["width_s"].items():
+            p = bits["posterior"].get(n) or {}
+            rows.append([n, f"{1e3 * w:g}", fmt(p.get("mean"), 4), fmt(p.get("sd"), 4),
+                         fmt(p.get("q05"), 4), fmt(p.get("q95"), 4)])
+        body.append(paragraph(
+            "Every thruster fires at one pulse width: the events identify each one's impulse "
+            "bit F j(width; τ) (Feldman & Lee §V), and the thrusts F only as well as the pulse "
+            "shape (the time constants). The identified quantity:"))
+        body.append(table(["thruster", "width ms", "bit mean N s", "sd N s", "5 %", "95 %"],
+                          rows))
     told = d.get("com_told") or {}
     quiet = [n for n, ok in told.items() if not ok]
     body.append(paragraph(

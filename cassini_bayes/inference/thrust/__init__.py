@@ -105,6 +105,14 @@ the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``
 sampling ``a`` additively beside the delay (``a − τd`` free to reach 0) put a wall at ``τr = 0``
 into the sampler's space, behind a density spike (docs/performance.md, "Thrust model choices,
 measured").
+Where the events fire every thrust parameter at one pulse width (an ESPA-class bus's dead band
+at 125 ms), they measure its impulse bit ``F j(Δ; τ)`` and leave ``F`` to trade against the
+pulse shape along the curved ridge ``F j(τ) = const``; there ``f_z`` is the prior-whitened
+``log F + log j(Δ; τ) − log j(Δ; τ̃)`` instead (``τ̃`` the prior median), the ridge a coordinate
+axis, the prior carried over exactly (a unit-triangular map,
+:func:`~cassini_bayes.inference.thrust.coords._physical`), and the fit
+adds the impulse bits ``bit`` (N s) to the posterior. Events with several widths (Cassini's
+125/250/500 ms) keep ``log F``.
 ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the
 Gaussian's Cholesky factor); then ``w`` with ``θ = centre + tril w``, ``centre``/``tril`` a
 Laplace approximation of the posterior (:func:`cassini_bayes.inference.laplace.laplace`). The

@@ -9,9 +9,12 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import numpyro.distributions as dist
 
-from cassini_bayes.inference.thrust.prior import _NOISE_STEP, THRUST_PRIOR_LOG_SD
+from cassini_bayes.inference.thrust.prior import (_HALF_NORMAL_MEDIAN, _NOISE_STEP,
+                                                  THRUST_PRIOR_LOG_SD)
+from cassini_bayes.physics.pulse import pulse_impulse
 
 __all__ = ["C_SCALE_S", "A_LOG_SCALE", "long_pulse_excess", "rise_deficit"]
 
@@ -55,8 +58,8 @@ def _lambert_w0(x):
     """Principal branch of Lambert's W for ``x ≥ 0`` (``w e^w = x``): Halley's iteration from
     ``l − log(1 + l) l/(1 + l)``, ``l = log(1 + x)`` (``≈ log x − log log x`` for large ``x``),
     converged to rounding in 4 steps for ``1e-14 ≤ x ≤ 1e12``; differentiable."""
-    l = jnp.log1p(x)
-    w = l - jnp.log1p(l) * l / (1.0 + l)
+    lx = jnp.log1p(x)
+    w = lx - jnp.log1p(lx) * lx / (1.0 + lx)
     for _ in range(4):
         ew = jnp.exp(w)
         f = w * ew - x
@@ -110,6 +113,50 @@ def _tau_from_z(tau_z, kw):
     return jnp.stack([t_d, t_r, t_f]), log_prior
 
 
+_SAME_WIDTH_S = 1e-6    # widths closer than this are one command (commands are ms apart)
+
+
+def _bit_widths(width, thruster, f_index) -> np.ndarray | None:
+    """(n_f,) s: the one commanded width of each thrust parameter's pulses, where every thrust
+    parameter that fires does so at one width (0 for a parameter that never fires); ``None``
+    where any parameter fires at two or more widths.
+
+    ``width``, ``thruster``: the events' padded pulse widths (s, 0 for padding) and thruster
+    indices; ``f_index`` (M,): each thruster's thrust parameter. One width measures the impulse
+    bit ``F j(Δ; τ)`` and not ``F`` apart from the pulse shape (:func:`_log_bit_shift`); two
+    widths measure ``j(Δ₁)/j(Δ₂)``, which separates them.
+    """
+    width = np.asarray(width, float)
+    on = width > 0
+    param = np.asarray(f_index)[np.asarray(thruster)[on]]
+    w = width[on]
+    out = np.zeros(int(np.max(f_index)) + 1)
+    for k in np.unique(param):
+        wk = w[param == k]
+        if np.ptp(wk) > _SAME_WIDTH_S:
+            return None
+        out[k] = wk[0]
+    return out if np.any(out > 0) else None
+
+
+def _log_bit_shift(tau, kw):
+    """(n_f,) ``log j(Δ̄_k; τ) − log j(Δ̄_k; τ̃)``: how far the pulse shape at ``τ`` moves each
+    thrust parameter's impulse bit from its value at the prior-median time constants ``τ̃``
+    (``Δ̄_k = kw.bit_width``, :func:`_bit_widths`; 0 where a parameter never fires).
+
+    ``j(Δ; τ) = (Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}`` is Feldman &
+    Lee §V's closed form of one pulse's impulse per newton
+    (:func:`~cassini_bayes.physics.pulse.pulse_impulse`).
+    """
+    w = kw.bit_width
+    fired = w > 0
+    w = jnp.where(fired, w, 1.0)
+    t_med = (_HALF_NORMAL_MEDIAN * kw.tau_delay_scale, jnp.exp(kw.tau_mu[0]),
+             jnp.exp(kw.tau_mu[1]))
+    shift = jnp.log(pulse_impulse(w, tau[0], tau[1], tau[2])) - jnp.log(pulse_impulse(w, *t_med))
+    return jnp.where(fired, shift, 0.0)
+
+
 class Physical(NamedTuple):
     """The physical parameters at a sampler vector (:func:`_physical`)."""
 
@@ -120,6 +167,7 @@ class Physical(NamedTuple):
     tau: jax.Array          # (3,) s
     log_sigma: jax.Array    # (E, 2) log rad/s
     inertia: jax.Array      # (6,) kg m²
+    whitened: jax.Array     # (n_f + n_c,) prior-whitened (log F, δ): N(0, 1) a priori
 
 
 def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
@@ -131,6 +179,15 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     (:func:`~cassini_bayes.inference.thrust.design.thrust_design`), so the prior stays
     ``N(0, 1)`` in the sampler's coordinates. The torque per newton about the sampled centre of
     mass is ``(r_s − e − δ) × d_s = Q_s − δ × d_s`` (Feldman & Lee Eq 16 with the offset ``δ``).
+
+    Where every thrust parameter fires at one pulse width (``kw.bit_width`` given,
+    :func:`_bit_widths`) the thrust coordinates are the prior-whitened log impulse bit instead:
+    ``log F_k = log b_k − log j(Δ̄_k; τ) + log j(Δ̄_k; τ̃)`` (:func:`_log_bit_shift`), so they equal
+    the ``log F`` coordinates at the prior-median ``τ̃``. One width measures ``b_k = F_k j(Δ̄_k)``
+    and leaves ``F_k`` to trade against the pulse shape along the curved ridge
+    ``F j(τ) = const``; in ``(log b, τ)`` that ridge is a coordinate axis. The map
+    ``(log b, τ) → (log F, τ)`` is unit-triangular (Jacobian 1), so the prior carries over as
+    ``p_F(log F(b, τ)) p(τ)``: :attr:`Physical.whitened` is ``N(0, 1)`` a priori.
     """
     n_ev = kw.log_noise_hat.shape[0]
     f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
@@ -138,12 +195,16 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     com = com_z
     if kw.f_basis is not None:
         x = kw.f_basis @ jnp.concatenate([f_z, com_z])
-        f_z, com = x[:n_f], kw.com_sd * x[n_f:]
+        f_z, com_z = x[:n_f], x[n_f:]
+        com = kw.com_sd * com_z
         q = q - jnp.cross(com[:, None], kw.d_matrix, axis=0)     # Feldman & Lee Eq 16, r − e − δ
-    thrust = jnp.exp(kw.f_mu + THRUST_PRIOR_LOG_SD * f_z)
     tau, _ = _tau_from_z(tau_z, kw)
+    if kw.bit_width is not None:
+        f_z = f_z - _log_bit_shift(tau, kw) / THRUST_PRIOR_LOG_SD
+    thrust = jnp.exp(kw.f_mu + THRUST_PRIOR_LOG_SD * f_z)
     log_sigma = kw.log_noise_hat + _NOISE_STEP * noise_z[:, None]
     pi = kw.inertia_mean
     if sample_inertia:
         pi = pi + kw.inertia_tril @ inertia_z
-    return Physical(thrust, thrust[kw.f_index], q, com, tau, log_sigma, pi)
+    return Physical(thrust, thrust[kw.f_index], q, com, tau, log_sigma, pi,
+                    jnp.concatenate([f_z, com_z]))

@@ -18,7 +18,7 @@ from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, colu
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
-from cassini_bayes.inference.thrust.coords import long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.coords import _bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
                                                        thruster_impulse, time_tag_rates,
@@ -67,6 +67,9 @@ class ThrustData(NamedTuple):
         (M + 3, M + 3) rotation of the prior-whitened ``(log F, δ)`` into the impulse design's
         singular directions (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`),
         the centre of mass's prior sd (m) and the thrusters' unit directions (3, M).
+    bit_width : (n_f,) s, each thrust parameter's one pulse width where the events fire every
+        parameter at one width (the sampler then sees the impulse bits,
+        :func:`~cassini_bayes.inference.thrust.coords._bit_widths`), else ``None``.
     """
 
     events: EventData
@@ -87,6 +90,7 @@ class ThrustData(NamedTuple):
     f_basis: object = None
     com_sd: object = None
     d_matrix: object = None
+    bit_width: object = None
 
 
 class ThrustProblem(NamedTuple):
@@ -412,6 +416,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
         a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
         f_mu=np.log(thrust_pred), f_index=_thrust_index(mode, n_thr), inertia_mean=i_mean,
+        bit_width=_bit_widths(kw["width"], kw["thruster"], _thrust_index(mode, n_thr)),
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)

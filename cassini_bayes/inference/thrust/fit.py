@@ -84,6 +84,33 @@ def _add_combinations(idata, problem: ThrustProblem) -> None:
             attrs={"units": "N"})
 
 
+def _add_impulse_bits(idata, problem: ThrustProblem) -> None:
+    """Mode ``thruster``: add ``bit`` (N s) to the posterior and prior groups
+    where the events fire every thruster at one width (``problem.data.bit_width``): each one's
+    impulse bit ``F_s j(Δ; τ)`` at that width (Feldman & Lee §V closed form,
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse`), the quantity one width identifies;
+    ``F_s`` alone trades against the pulse shape. Fired thrusters only (dimension
+    ``bit_thruster``); their widths are the attribute ``width_s``."""
+    import xarray as xr
+
+    from cassini_bayes.physics.pulse import pulse_impulse
+
+    widths = np.asarray(problem.data.bit_width, float)                    # (M,) s, 0: unfired
+    fired = np.flatnonzero(widths > 0)
+    for group in ("posterior", "prior"):
+        if group not in idata.groups():
+            continue
+        ds = getattr(idata, group)
+        tau = [np.asarray(ds[n].values, float)[..., None] for n in TAU_NAMES]
+        f = np.asarray(ds["F"].values, float)[..., fired]
+        ds["bit"] = xr.DataArray(
+            f * np.asarray(pulse_impulse(widths[fired][None, None], *tau)),
+            dims=("chain", "draw", "bit_thruster"),
+            coords={"chain": ds.chain, "draw": ds.draw,
+                    "bit_thruster": [problem.thrusters[i] for i in fired]},
+            attrs={"units": "N s", "width_s": [float(widths[i]) for i in fired]})
+
+
 RESIDUAL_DRAWS = 100
 """Posterior draws averaged into the stored residual (:func:`_posterior_mean_residuals`)."""
 
@@ -242,6 +269,8 @@ def _complete(key, idata, problem, robust: bool, sample_inertia: bool, coords, d
 
     if problem.design is not None and problem.design.combinations.size:
         _add_combinations(idata, problem)
+    if problem.mode == "thruster" and problem.data.bit_width is not None:
+        _add_impulse_bits(idata, problem)
     with step("nuisance draws and residuals"):
         nu_draws = None
         if robust:

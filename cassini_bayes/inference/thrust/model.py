@@ -36,13 +36,19 @@ def _log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     the offsets and the robust model's nuisance ``ν`` are integrated out exactly. The thrust and
     centre-of-mass coordinates are ``N(0, 1)`` a priori (a rotation of the prior-whitened
     ``log F`` and offset keeps them so,
-    :func:`~cassini_bayes.inference.thrust.coords._physical`)."""
+    :func:`~cassini_bayes.inference.thrust.coords._physical`); in impulse-bit coordinates
+    (``kw.bit_width`` given) the prior is that of the physical point's whitened ``(log F, δ)``
+    (the map has Jacobian 1)."""
     n_ev = kw.log_noise_hat.shape[0]
     f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
     _, log_prior_tau = _tau_from_z(tau_z, kw)
+    prior_com = n_c > 0
+    if kw.bit_width is not None:     # impulse-bit coordinates: the prior at the physical point
+        f_z = _physical(theta, kw, n_f, n_c, sample_inertia).whitened
+        prior_com = False
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
-    if n_c:
+    if prior_com:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(com_z))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
