@@ -117,13 +117,13 @@ def child(args) -> dict:
     out["step_size"] = [float(x) for x in np.asarray(idata.sample_stats["step_size"])[:, 0]]
     out["divergences"] = int(np.asarray(idata.sample_stats["diverging"]).sum())
     # the cost of the sampler's unit of work, at the sampler's centre
-    from cassini_bayes.inference.thrust.model import _log_density
+    from cassini_bayes.inference.thrust.model import log_density
 
     problem = post.problem
     kw = problem.data
     n_f, n_c, sample_inertia = problem.n_f, problem.n_c, problem.inertia is not None
     vg = jax.jit(jax.value_and_grad(
-        lambda w, kw: _log_density(kw.centre + kw.tril @ w, kw, n_f, n_c, sample_inertia)))
+        lambda w, kw: log_density(kw.centre + kw.tril @ w, kw, n_f, n_c, sample_inertia)))
     w = jax.device_put(np.zeros(kw.centre.shape[0]))
     jax.block_until_ready(vg(w, kw))
     best_c = best_w = float("inf")

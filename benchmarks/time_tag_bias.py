@@ -38,14 +38,14 @@ def _mode_f(tel, pulses, spacecraft, inertia) -> tuple[float, float]:
     import jax
     import jax.numpy as jnp
 
-    from cassini_bayes.inference.thrust.coords import _physical
+    from cassini_bayes.inference.thrust.coords import physical
     from cassini_bayes.inference.thrust.data import prepare_thrust
 
     data = prepare_thrust([(tel, pulses)], spacecraft, mode="mean", inertia=inertia,
                           robust=True).data
     centre = jnp.asarray(data.centre)
-    thrust = float(_physical(centre, data, 1, 0, True).thrust[0])
-    grad = jax.grad(lambda th: _physical(th, data, 1, 0, True).thrust[0])(centre)
+    thrust = float(physical(centre, data, 1, 0, True).thrust[0])
+    grad = jax.grad(lambda th: physical(th, data, 1, 0, True).thrust[0])(centre)
     return thrust, float(np.linalg.norm(np.asarray(grad) @ np.asarray(data.tril)))
 
 

@@ -33,6 +33,7 @@ import numpy as np
 import pytest
 
 from cassini_bayes import consistency as cons
+from cassini_bayes.consistency._attitude import ALIGN_GOOD
 from cassini_bayes._paths import SCENARIOS_DIR
 from cassini_bayes.errors import InputError, UnidentifiableError, command_line
 from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
@@ -414,9 +415,15 @@ def test_every_shipped_scenario_passes_and_its_corruptions_fail(name):
     r = simulate(jax.random.key(7), load_scenario(name))
     tel, log, sc = r.telemetry, r.pulses, _prior(name)
     cons.check_telemetry_data(tel, sc, log)
-    if cons.attitude_rate_agreement(tel) is not None:
+    agreement = cons.attitude_rate_agreement(tel)
+    if agreement is not None:
+        # the check names the right reading only where that reading aligns well itself (500 ms
+        # rate steps between 1 s samples of biasing_espa_bus_mixed_widths: 0.898); otherwise it
+        # still refuses the corrupted file as inconsistent
+        named = agreement.alignment[0] >= ALIGN_GOOD
+        match = "columns q1..q4: the quaternion looks" if named else "columns q1..q4"
         for bad in (_scalar_first(tel), _conjugated(tel)):
-            with pytest.raises(InputError, match="columns q1..q4: the quaternion looks"):
+            with pytest.raises(InputError, match=match):
                 cons.check_attitude_rates(bad)
     if name in WHEELS_AT_REST:
         # the balance does not fit (alignment 0.16 on leak_cruise), so the check says nothing

@@ -136,14 +136,14 @@ def test_offset_marginal_matches_dense_gaussian():
 def test_event_likelihood_is_the_density_of_the_rates():
     """With the inertia sampled, the event's likelihood is the density of the measured rates, not
     of ``V = I ω + …``: the dense Gaussian of ``x_i = I⁻¹ r_i`` (covariance ``I⁻¹ Σ_i I⁻ᵀ``, flat
-    offset in rate units) equals :func:`_event_loglik`'s, which adds ``(n − 1) log|det I|`` to the
+    offset in rate units) equals :func:`event_loglik`'s, which adds ``(n − 1) log|det I|`` to the
     density of ``V``. Without that Jacobian the density grows as ``|det I|⁻ⁿ`` when ``I``, ``F``
     and the wheel inertias shrink together (the common scale the data cannot see), and a sampled
     inertia was pulled 4 % the wrong way on a Table 2 event (test below, slow)."""
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.thrust.likelihood import (_event_loglik, _event_residual,
+    from cassini_bayes.inference.thrust.likelihood import (event_loglik, _event_residual,
                                                            _noise_cov)
     from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
     from cassini_bayes.physics.momentum import inertia_vector
@@ -162,7 +162,7 @@ def test_event_likelihood_is_the_density_of_the_rates():
     m = (0.7 * rates) @ np.asarray(q).T                # the time-tag columns at F = 0.7 N
     ev = _event(t, omega, h, rates.T, wheel_cov)
     pi = inertia_vector(jnp.asarray(inertia))
-    st = _event_loglik(pi, jnp.full(8, 0.7), (0.005, 0.02, 0.065), jnp.asarray(log_sigma), ev, q)
+    st = event_loglik(pi, jnp.full(8, 0.7), (0.005, 0.02, 0.065), jnp.asarray(log_sigma), ev, q)
     r = np.asarray(_event_residual(pi, 0.7 * q, (0.005, 0.02, 0.065), ev)).T
     i_inv = np.linalg.inv(inertia)
     b = np.asarray(_noise_cov(jnp.asarray(inertia), jnp.asarray(log_sigma),
@@ -182,7 +182,7 @@ def test_event_likelihood_is_invariant_under_the_common_scale():
     made the likelihood pull ``s``, and ``F``, down on time tags wider than stated (0.19 sd of
     ``F`` on ``biasing_day028``, ``benchmarks/time_tag_bias.py``); the check below shows this
     test fails for such a term."""
-    from cassini_bayes.inference.thrust.likelihood import _event_loglik
+    from cassini_bayes.inference.thrust.likelihood import event_loglik
     from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
     from cassini_bayes.physics.momentum import inertia_vector
 
@@ -199,7 +199,7 @@ def test_event_likelihood_is_invariant_under_the_common_scale():
 
     def loglik(s, rate_scale=1.0):
         ev = _event(t, omega, s * h, rate_scale * rates, s ** 2 * 0.02 * np.eye(3), pulses)
-        return float(_event_loglik(s * pi, jnp.full(8, 0.7 * s), tau,
+        return float(event_loglik(s * pi, jnp.full(8, 0.7 * s), tau,
                                    jnp.log(jnp.array([2e-6, 1e-3])), ev, q).loglik)
 
     base = loglik(1.0)
@@ -360,8 +360,8 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
     largest time-tag rate 1e-4 off moves the value 1e-8 relative, which fails it."""
     from cassini_bayes.inference.gaussian import nuisance_log_marginal
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
-    from cassini_bayes.inference.thrust.coords import _physical
-    from cassini_bayes.inference.thrust.likelihood import _event_loglik
+    from cassini_bayes.inference.thrust.coords import physical
+    from cassini_bayes.inference.thrust.likelihood import event_loglik
     from cassini_bayes.simulate import load_scenario, simulate
 
     scenario = load_scenario("fsds_biasing")
@@ -379,7 +379,7 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
         return p.inertia, p.per_thruster, p.tau, p.log_sigma
 
     def fast(pi, f8, tau, log_sigma, ev=kw.events):
-        st = jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None))(
+        st = jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None))(
             pi, f8, (tau[0], tau[1], tau[2]), log_sigma, ev, kw.q_matrix)
         return jnp.sum(st.loglik) + nuisance_log_marginal(jnp.sum(st.info, 0),
                                                           jnp.sum(st.score, 0), kw.nu_sd)
@@ -389,7 +389,7 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
 
     def at(lik):
         return jax.jit(jax.value_and_grad(
-            lambda theta: lik(*_args(_physical(theta, kw, n_f, 0, True)))))
+            lambda theta: lik(*_args(physical(theta, kw, n_f, 0, True)))))
 
     rng = np.random.default_rng(8)
     fast_vg, dense_vg = at(fast), at(dense)
@@ -404,7 +404,7 @@ def test_log_density_and_gradient_equal_the_dense_likelihood():
     top = int(np.argmax(np.abs(tag).max(0)))
     bumped = kw.events._replace(time_tag_rates=kw.events.time_tag_rates.at[0, :, top].multiply(
         1.0 + 1e-4))
-    x = _args(_physical(theta, kw, n_f, 0, True))
+    x = _args(physical(theta, kw, n_f, 0, True))
     assert float(fast(*x, ev=bumped)) != pytest.approx(float(dense(*x)), rel=1e-9)
 
 
@@ -460,14 +460,14 @@ def test_tau_identification_names_unidentified_and_conflicting_time_constants():
 
 
 def test_sampler_prior_density_is_the_stated_prior():
-    """The log prior of the sampler coordinates ``(s_z, a_z, c_z)`` (:func:`_tau_from_z`, with its
+    """The log prior of the sampler coordinates ``(s_z, a_z, c_z)`` (:func:`tau_from_z`, with its
     Jacobians) is the stated prior's density of ``(τd, τr, τf)`` times ``|∂τ/∂z|`` — checked at
     the papers' profile, at a first-order valve, near τd = 0 (1 µs), at τd = 12 ms and at a
     delay ten times the rise (``τr → 0``, the far tail of ``s``); the map inverts (Lambert W) to
     1e-12."""
     from cassini_bayes.inference.thrust import (A_LOG_SCALE, C_SCALE_S, long_pulse_excess,
                                                 rise_deficit)
-    from cassini_bayes.inference.thrust.coords import _tau_from_z
+    from cassini_bayes.inference.thrust.coords import tau_from_z
 
     sc = load_spacecraft("models/fsds.toml")
     tp = tau_prior(sc)
@@ -485,9 +485,9 @@ def test_sampler_prior_density_is_the_stated_prior():
     for tau in [(0.005, 0.020, 0.065), (1e-6, 0.045, 0.045), (0.0004, 0.030, 0.050),
                 (0.012, 0.015, 0.040), (0.020, 0.002, 0.060)]:
         z = coords(tau)
-        got_tau, log_p = _tau_from_z(z, kw)
+        got_tau, log_p = tau_from_z(z, kw)
         np.testing.assert_allclose(np.asarray(got_tau), tau, rtol=1e-12, atol=1e-15)
-        jac = np.linalg.det(np.asarray(jax.jacfwd(lambda v: _tau_from_z(v, kw)[0])(z)))
+        jac = np.linalg.det(np.asarray(jax.jacfwd(lambda v: tau_from_z(v, kw)[0])(z)))
         want = (stats.halfnorm(scale=tp.delay_scale).logpdf(tau[0])
                 + sum(stats.lognorm(s=sd, scale=np.exp(mu)).logpdf(x)
                       for mu, sd, x in zip(tp.log_mean, tp.log_sd, tau[1:]))

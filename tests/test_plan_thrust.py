@@ -43,7 +43,7 @@ def test_prediction_matches_a_differenced_hessian():
     values (step 1e-3 posterior sd along the predicted whitening), and the sites' sd its delta
     method with a differenced Jacobian of the fit's map to the physical parameters: to 1e-3 relative
     (the differences' truncation is ~1e-6 and their rounding ~1e-5 of the curvature)."""
-    from cassini_bayes.inference.thrust.coords import _physical
+    from cassini_bayes.inference.thrust.coords import physical
     from cassini_bayes.plan.thrust import (_held_density, _site_names, _truth, _truth_vector,
                                            noise_free_problem, predict_thrust, representable)
 
@@ -74,7 +74,7 @@ def test_prediction_matches_a_differenced_hessian():
 
     def sites(x):
         theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
-        p = _physical(theta, kw, n_f, n_c, True)
+        p = physical(theta, kw, n_f, n_c, True)
         return np.asarray(jnp.concatenate([p.thrust, p.tau, p.inertia]))
 
     jac = np.stack([(sites(x0 + 1e-4 * w[:, i]) - sites(x0 - 1e-4 * w[:, i])) / 2e-4

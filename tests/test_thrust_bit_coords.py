@@ -1,5 +1,5 @@
 """The impulse-bit coordinates of the per-thruster thrust fit
-(:func:`cassini_bayes.inference.thrust.coords._physical`): where every thruster fires at one
+(:func:`cassini_bayes.inference.thrust.coords.physical`): where every thruster fires at one
 width the sampler sees ``log b = log F + log j(Δ; τ)`` (shifted to ``log F`` at the prior-median
 time constants), an exact reparameterisation: the same physical point has the same log density
 in both coordinates.
@@ -12,9 +12,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from cassini_bayes.inference.thrust.coords import _log_bit_shift, _physical, _bit_widths
+from cassini_bayes.inference.thrust.coords import log_bit_shift, physical, bit_widths
 from cassini_bayes.inference.thrust.data import prepare_thrust
-from cassini_bayes.inference.thrust.model import _log_density
+from cassini_bayes.inference.thrust.model import log_density
 from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD
 from cassini_bayes.simulate import load_scenario, simulate
 
@@ -22,13 +22,13 @@ from cassini_bayes.simulate import load_scenario, simulate
 def test_bit_widths_only_where_every_parameter_fires_at_one_width():
     width = np.array([[0.125, 0.125, 0.125, 0.0], [0.125, 0.125, 0.0, 0.0]])
     thruster = np.array([[0, 1, 0, 7], [1, 0, 0, 0]])
-    np.testing.assert_array_equal(_bit_widths(width, thruster, np.arange(3)), [0.125, 0.125, 0])
-    np.testing.assert_array_equal(_bit_widths(width, thruster, np.zeros(3, int)), [0.125])
+    np.testing.assert_array_equal(bit_widths(width, thruster, np.arange(3)), [0.125, 0.125, 0])
+    np.testing.assert_array_equal(bit_widths(width, thruster, np.zeros(3, int)), [0.125])
     two = width.copy()
     two[1, 0] = 0.25                   # thruster 1 fires at 125 and 250 ms
-    assert _bit_widths(two, thruster, np.arange(3)) is None
-    assert _bit_widths(two, thruster, np.zeros(3, int)) is None
-    assert _bit_widths(np.zeros((1, 3)), np.zeros((1, 3), int), np.arange(2)) is None
+    assert bit_widths(two, thruster, np.arange(3)) is None
+    assert bit_widths(two, thruster, np.zeros(3, int)) is None
+    assert bit_widths(np.zeros((1, 3)), np.zeros((1, 3), int), np.arange(2)) is None
 
 
 @pytest.fixture(scope="module")
@@ -51,17 +51,17 @@ def test_bit_coordinates_are_an_exact_reparameterisation(espa):
     rng = np.random.default_rng(3)
     for _ in range(20):
         theta = 0.5 * rng.standard_normal(kw.centre.shape)     # about the prior's centre
-        p = _physical(jnp.asarray(theta), kw, n_f, n_c, False)
+        p = physical(jnp.asarray(theta), kw, n_f, n_c, False)
         assert np.all(np.isfinite(p.tau))
         x = basis @ theta[:n_f + n_c]
-        x[:n_f] -= np.asarray(_log_bit_shift(p.tau, kw)) / THRUST_PRIOR_LOG_SD
+        x[:n_f] -= np.asarray(log_bit_shift(p.tau, kw)) / THRUST_PRIOR_LOG_SD
         theta_f = theta.copy()
         theta_f[:n_f + n_c] = basis.T @ x
-        p_f = _physical(jnp.asarray(theta_f), kw_f, n_f, n_c, False)
+        p_f = physical(jnp.asarray(theta_f), kw_f, n_f, n_c, False)
         np.testing.assert_allclose(p_f.thrust, p.thrust, rtol=1e-12)
         np.testing.assert_allclose(p_f.com, p.com, rtol=1e-9, atol=1e-15)
-        a = float(_log_density(jnp.asarray(theta), kw, n_f, n_c, False))
-        b = float(_log_density(jnp.asarray(theta_f), kw_f, n_f, n_c, False))
+        a = float(log_density(jnp.asarray(theta), kw, n_f, n_c, False))
+        b = float(log_density(jnp.asarray(theta_f), kw_f, n_f, n_c, False))
         assert np.isfinite(a)
         assert a == pytest.approx(b, rel=0, abs=1e-3)
 
@@ -70,8 +70,8 @@ def test_bit_coordinates_are_log_f_at_the_prior_median(espa):
     """At the prior-median time constants the shift is zero: the coordinates equal today's."""
     kw = espa.data
     tp = espa.tau
-    np.testing.assert_allclose(_log_bit_shift(jnp.asarray(tp.median()), kw), 0.0, atol=1e-12)
-    off = np.asarray(_log_bit_shift(jnp.asarray(tp.median() * 1.3), kw))
+    np.testing.assert_allclose(log_bit_shift(jnp.asarray(tp.median()), kw), 0.0, atol=1e-12)
+    off = np.asarray(log_bit_shift(jnp.asarray(tp.median() * 1.3), kw))
     assert np.all(np.abs(off) > 1e-3)
 
 

@@ -17,7 +17,7 @@ prediction is that density's Laplace approximation on the event flown without no
    prior's and its cross-curvature with every other coordinate vanishes at the truth (it multiplies
    residuals that are zero), so holding it changes no other sd;
 4. the truth is mapped into the fit's sampler coordinates (:func:`truth_coordinates`, the inverse
-   of :func:`~cassini_bayes.inference.thrust.coords._physical`), and the negative ``jax.hessian``
+   of :func:`~cassini_bayes.inference.thrust.coords.physical`), and the negative ``jax.hessian``
    of the fit's own log density there is the precision: on noise-free data the residuals vanish
    at the truth, so it is the expected Fisher information plus the prior's curvature (the
    dependence of the time-tag covariance on ``F`` and ``τ`` aside, second order). The truth,
@@ -112,13 +112,13 @@ class ThrustPrediction(NamedTuple):
 def _held_density(n_f: int, n_c: int, sample_inertia: bool, n_ev: int):
     """The fit's log density with every event's noise coordinate held at 0: ``f(x, kw)``, ``x``
     the sampler vector without them (one function object per layout: compiled once)."""
-    from cassini_bayes.inference.thrust.model import _log_density
+    from cassini_bayes.inference.thrust.model import log_density
 
     k = n_f + n_c + 3
 
     def f(x, kw):
         theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
-        return _log_density(theta, kw, n_f, n_c, sample_inertia)
+        return log_density(theta, kw, n_f, n_c, sample_inertia)
 
     return f
 
@@ -147,19 +147,22 @@ prediction says how many (``ThrustPrediction.floored``)."""
 def truth_coordinates(problem, thrust, com, tau, inertia) -> np.ndarray:
     """The sampler vector of the fit (noise coordinates left out, :func:`_held_density`) at the
     physical parameters ``thrust`` (n_f,) N, ``com`` (3,) m (mode ``thruster``), ``tau`` (3,) s
-    and ``inertia`` (6,) kg m² (when sampled): the inverse of
-    :func:`~cassini_bayes.inference.thrust.coords._physical` and ``_tau_from_z``."""
-    from cassini_bayes.inference.thrust.coords import A_LOG_SCALE, C_SCALE_S
+    and ``inertia`` (6,) kg m² (when sampled): the inverse of the fit's ``coords.physical`` and
+    ``coords.tau_from_z``."""
+    from cassini_bayes.inference.thrust.coords import A_LOG_SCALE, C_SCALE_S, log_bit_shift
     from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD
 
     kw = problem.data
+    t_d, t_r, t_f = (max(float(tau[0]), 1e-7), float(tau[1]), float(tau[2]))
     f_z = (np.log(np.asarray(thrust, float)) - np.asarray(kw.f_mu, float)) / THRUST_PRIOR_LOG_SD
+    if kw.bit_width is not None:      # impulse-bit coordinates (coords.physical)
+        shift = np.asarray(log_bit_shift(jnp.asarray([t_d, t_r, t_f]), kw))
+        f_z = f_z + shift / THRUST_PRIOR_LOG_SD
     parts = [f_z]
     if problem.n_c:
         x = np.concatenate([f_z, np.asarray(com, float) / float(kw.com_sd)])
         y = np.asarray(kw.f_basis, float).T @ x          # f_basis is orthogonal
         parts = [y[:problem.n_f], y[problem.n_f:]]
-    t_d, t_r, t_f = (max(float(tau[0]), 1e-7), float(tau[1]), float(tau[2]))
     b = t_r * np.exp(-t_d / t_r)                         # rise deficit's part after the delay
     a = t_d + b                                          # coords.rise_deficit
     s_split = np.log(t_d / b)                            # τd/b = e^s
@@ -178,7 +181,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     by :func:`~cassini_bayes.inference.laplace.laplace`): the point, the covariance of the
     sampler coordinates, and the sites' covariance (thrusts, ``com_*``, ``tau_*``, the inertia
     when sampled) by the delta method."""
-    from cassini_bayes.inference.thrust.coords import _physical
+    from cassini_bayes.inference.thrust.coords import physical
 
     kw0 = problem.data
     n_ev = kw0.log_noise_hat.shape[0]
@@ -201,7 +204,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
 
     def sites(x):
         theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
-        p = _physical(theta, kw, n_f, n_c, si)
+        p = physical(theta, kw, n_f, n_c, si)
         parts = [p.thrust, p.com, p.tau] + ([p.inertia] if si else [])
         return jnp.concatenate(parts)
 

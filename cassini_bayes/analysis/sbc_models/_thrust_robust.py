@@ -92,11 +92,11 @@ def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
     from cassini_bayes.inference.nuisance import nuisance_layout, split_nuisance
     from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, draw_tau_prior, tau_prior
-    from cassini_bayes.inference.thrust.prior import _thrust_index, thrust_names
+    from cassini_bayes.inference.thrust.prior import thrust_index, thrust_names
 
     k_f, k_c, k_t, k_i, k_n = jax.random.split(key, 5)
     n_thr = len(spacecraft.thrusters)
-    index = _thrust_index(mode, n_thr)
+    index = thrust_index(mode, n_thr)
     if mode == "thruster":
         f_pred = np.asarray(spacecraft.thrust_per_thruster, float)
     else:

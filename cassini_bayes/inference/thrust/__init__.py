@@ -85,7 +85,7 @@ Priors, stated in the physical parameters
 * Inertia: sampled jointly from a Gaussian — the model file's knowledge (±10 % moments, ±75 kg m²
   products; the robust model's default) or an inertia run's posterior — or fixed at the model
   file's prediction (the papers' idealised model). The likelihood then carries the Jacobian
-  ``|det I|`` per sample that maps the data (rates) to ``V`` (:func:`_event_loglik`).
+  ``|det I|`` per sample that maps the data (rates) to ``V`` (``likelihood.event_loglik``).
 
 Sampler coordinates
 -------------------
@@ -100,7 +100,7 @@ samples inside pulses pin it), ``s_z = asinh s`` (``s`` its split, ``τd = a σ(
 ``a − τd = a σ(−s)``, σ the logistic function; the ``asinh`` folds the long tail of ``s`` towards
 ``τd → 0`` that the half-normal delay prior leaves) and ``c_z`` (``c = c_mu + 0.01 s · c_z``);
 ``τr``, ``τf`` follow in closed form,
-the prior carried over by the Jacobian (:func:`_tau_from_z`). With the delay free over 0-10 ms
+the prior carried over by the Jacobian (``coords.tau_from_z``). With the delay free over 0-10 ms
 the earlier coordinates ``(log τd, log τr, c)`` left a second curved ridge (``a`` fixed), and
 sampling ``a`` additively beside the delay (``a − τd`` free to reach 0) put a wall at ``τr = 0``
 into the sampler's space, behind a density spike (docs/performance.md, "Thrust model choices,
@@ -110,7 +110,7 @@ at 125 ms), they measure its impulse bit ``F j(Δ; τ)`` and leave ``F`` to trad
 pulse shape along the curved ridge ``F j(τ) = const``; there ``f_z`` is the prior-whitened
 ``log F + log j(Δ; τ) − log j(Δ; τ̃)`` instead (``τ̃`` the prior median), the ridge a coordinate
 axis, the prior carried over exactly (a unit-triangular map,
-:func:`~cassini_bayes.inference.thrust.coords._physical`), and the fit
+:func:`~cassini_bayes.inference.thrust.coords.physical`), and the fit
 adds the impulse bits ``bit`` (N s) to the posterior. Events with several widths (Cassini's
 125/250/500 ms) keep ``log F``.
 ``noise_z`` (``log s_e`` in units of 0.1) and ``inertia_z`` (whitened by the

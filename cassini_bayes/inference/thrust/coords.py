@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import numpyro.distributions as dist
 
-from cassini_bayes.inference.thrust.prior import (_HALF_NORMAL_MEDIAN, _NOISE_STEP,
+from cassini_bayes.inference.thrust.prior import (HALF_NORMAL_MEDIAN, NOISE_STEP,
                                                   THRUST_PRIOR_LOG_SD)
 from cassini_bayes.physics.pulse import pulse_impulse
 
@@ -22,7 +22,7 @@ C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler 
 A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
 
 
-def _unpack(theta, n_f: int, n_c: int, n_ev: int, sample_inertia: bool):
+def unpack(theta, n_f: int, n_c: int, n_ev: int, sample_inertia: bool):
     """Split the sampler vector into ``f_z`` (n_f,), ``com_z`` (n_c,), ``tau_z`` (3,) =
     ``(s_z, a_z, c_z)``, ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
     f_z = theta[:n_f]
@@ -67,7 +67,7 @@ def _lambert_w0(x):
     return w
 
 
-def _tau_from_z(tau_z, kw):
+def tau_from_z(tau_z, kw):
     """Time constants (3,) s from the sampler's ``(s_z, a_z, c_z)`` and the log prior density
     of the sampler coordinates (exact: the Jacobians included).
 
@@ -116,14 +116,14 @@ def _tau_from_z(tau_z, kw):
 _SAME_WIDTH_S = 1e-6    # widths closer than this are one command (commands are ms apart)
 
 
-def _bit_widths(width, thruster, f_index) -> np.ndarray | None:
+def bit_widths(width, thruster, f_index) -> np.ndarray | None:
     """(n_f,) s: the one commanded width of each thrust parameter's pulses, where every thrust
     parameter that fires does so at one width (0 for a parameter that never fires); ``None``
     where any parameter fires at two or more widths.
 
     ``width``, ``thruster``: the events' padded pulse widths (s, 0 for padding) and thruster
     indices; ``f_index`` (M,): each thruster's thrust parameter. One width measures the impulse
-    bit ``F j(Δ; τ)`` and not ``F`` apart from the pulse shape (:func:`_log_bit_shift`); two
+    bit ``F j(Δ; τ)`` and not ``F`` apart from the pulse shape (:func:`log_bit_shift`); two
     widths measure ``j(Δ₁)/j(Δ₂)``, which separates them.
     """
     width = np.asarray(width, float)
@@ -139,10 +139,10 @@ def _bit_widths(width, thruster, f_index) -> np.ndarray | None:
     return out if np.any(out > 0) else None
 
 
-def _log_bit_shift(tau, kw):
+def log_bit_shift(tau, kw):
     """(n_f,) ``log j(Δ̄_k; τ) − log j(Δ̄_k; τ̃)``: how far the pulse shape at ``τ`` moves each
     thrust parameter's impulse bit from its value at the prior-median time constants ``τ̃``
-    (``Δ̄_k = kw.bit_width``, :func:`_bit_widths`; 0 where a parameter never fires).
+    (``Δ̄_k = kw.bit_width``, :func:`bit_widths`; 0 where a parameter never fires).
 
     ``j(Δ; τ) = (Δ + τf) + τr (e^{−Δ/τr} − e^{−τd/τr}) − (τf + τd) e^{−Δ/τr}`` is Feldman &
     Lee §V's closed form of one pulse's impulse per newton
@@ -151,14 +151,14 @@ def _log_bit_shift(tau, kw):
     w = kw.bit_width
     fired = w > 0
     w = jnp.where(fired, w, 1.0)
-    t_med = (_HALF_NORMAL_MEDIAN * kw.tau_delay_scale, jnp.exp(kw.tau_mu[0]),
+    t_med = (HALF_NORMAL_MEDIAN * kw.tau_delay_scale, jnp.exp(kw.tau_mu[0]),
              jnp.exp(kw.tau_mu[1]))
     shift = jnp.log(pulse_impulse(w, tau[0], tau[1], tau[2])) - jnp.log(pulse_impulse(w, *t_med))
     return jnp.where(fired, shift, 0.0)
 
 
 class Physical(NamedTuple):
-    """The physical parameters at a sampler vector (:func:`_physical`)."""
+    """The physical parameters at a sampler vector (:func:`physical`)."""
 
     thrust: jax.Array       # (n_f,) N, one per thrust parameter
     per_thruster: jax.Array  # (M,) N, each thruster's thrust
@@ -170,7 +170,7 @@ class Physical(NamedTuple):
     whitened: jax.Array     # (n_f + n_c,) prior-whitened (log F, δ): N(0, 1) a priori
 
 
-def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
+def physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     """Physical parameters of the non-dimensional vector (:class:`Physical`).
 
     Per-thruster model (``kw.f_basis`` given): the prior-whitened deviations of ``log F`` (n_f)
@@ -181,8 +181,8 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     mass is ``(r_s − e − δ) × d_s = Q_s − δ × d_s`` (Feldman & Lee Eq 16 with the offset ``δ``).
 
     Where every thrust parameter fires at one pulse width (``kw.bit_width`` given,
-    :func:`_bit_widths`) the thrust coordinates are the prior-whitened log impulse bit instead:
-    ``log F_k = log b_k − log j(Δ̄_k; τ) + log j(Δ̄_k; τ̃)`` (:func:`_log_bit_shift`), so they equal
+    :func:`bit_widths`) the thrust coordinates are the prior-whitened log impulse bit instead:
+    ``log F_k = log b_k − log j(Δ̄_k; τ) + log j(Δ̄_k; τ̃)`` (:func:`log_bit_shift`), so they equal
     the ``log F`` coordinates at the prior-median ``τ̃``. One width measures ``b_k = F_k j(Δ̄_k)``
     and leaves ``F_k`` to trade against the pulse shape along the curved ridge
     ``F j(τ) = const``; in ``(log b, τ)`` that ridge is a coordinate axis. The map
@@ -190,7 +190,7 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     ``p_F(log F(b, τ)) p(τ)``: :attr:`Physical.whitened` is ``N(0, 1)`` a priori.
     """
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
+    f_z, com_z, tau_z, noise_z, inertia_z = unpack(theta, n_f, n_c, n_ev, sample_inertia)
     q = kw.q_matrix
     com = com_z
     if kw.f_basis is not None:
@@ -198,11 +198,11 @@ def _physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
         f_z, com_z = x[:n_f], x[n_f:]
         com = kw.com_sd * com_z
         q = q - jnp.cross(com[:, None], kw.d_matrix, axis=0)     # Feldman & Lee Eq 16, r − e − δ
-    tau, _ = _tau_from_z(tau_z, kw)
+    tau, _ = tau_from_z(tau_z, kw)
     if kw.bit_width is not None:
-        f_z = f_z - _log_bit_shift(tau, kw) / THRUST_PRIOR_LOG_SD
+        f_z = f_z - log_bit_shift(tau, kw) / THRUST_PRIOR_LOG_SD
     thrust = jnp.exp(kw.f_mu + THRUST_PRIOR_LOG_SD * f_z)
-    log_sigma = kw.log_noise_hat + _NOISE_STEP * noise_z[:, None]
+    log_sigma = kw.log_noise_hat + NOISE_STEP * noise_z[:, None]
     pi = kw.inertia_mean
     if sample_inertia:
         pi = pi + kw.inertia_tril @ inertia_z

@@ -18,13 +18,13 @@ from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, colu
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
-from cassini_bayes.inference.thrust.coords import _bit_widths, long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
                                                        thruster_impulse, time_tag_rates,
                                                        time_tag_rows)
-from cassini_bayes.inference.thrust.model import _laplace_density, thrust_sizes
-from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, _thrust_index,
+from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
+from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
@@ -69,7 +69,7 @@ class ThrustData(NamedTuple):
         the centre of mass's prior sd (m) and the thrusters' unit directions (3, M).
     bit_width : (n_f,) s, each thrust parameter's one pulse width where the events fire every
         parameter at one width (the sampler then sees the impulse bits,
-        :func:`~cassini_bayes.inference.thrust.coords._bit_widths`), else ``None``.
+        :func:`~cassini_bayes.inference.thrust.coords.bit_widths`), else ``None``.
     """
 
     events: EventData
@@ -415,8 +415,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     kw, derived, rest = jax.device_put((kw, derived, dict(
         q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
         a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
-        f_mu=np.log(thrust_pred), f_index=_thrust_index(mode, n_thr), inertia_mean=i_mean,
-        bit_width=_bit_widths(kw["width"], kw["thruster"], _thrust_index(mode, n_thr)),
+        f_mu=np.log(thrust_pred), f_index=thrust_index(mode, n_thr), inertia_mean=i_mean,
+        bit_width=bit_widths(kw["width"], kw["thruster"], thrust_index(mode, n_thr)),
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
@@ -424,7 +424,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     data = ThrustData(events=events, **kw)
     n_f, n_c = thrust_sizes(mode, data)
     dim = n_f + n_c + 3 + n_ev + (6 if inertia is not None else 0)
-    centre, tril = laplace(_laplace_density(n_f, n_c, inertia is not None), np.zeros(dim), data)
+    centre, tril = laplace(laplace_density(n_f, n_c, inertia is not None), np.zeros(dim), data)
     data = data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
     return ThrustProblem(
         data=data, mode=mode, names=names, thrust_pred=thrust_pred, tau=tp,

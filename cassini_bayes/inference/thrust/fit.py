@@ -16,7 +16,7 @@ from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
 from cassini_bayes.inference.nuisance import split_nuisance
 from cassini_bayes.inference.thrust.data import ThrustProblem, prepare_thrust
 from cassini_bayes.inference.thrust.likelihood import impulse_residuals
-from cassini_bayes.inference.thrust.model import _nuisance_sampler, thrust_model
+from cassini_bayes.inference.thrust.model import nuisance_sampler, thrust_model
 from cassini_bayes.inference.thrust.prior import (COM_NAMES, THRUST_PRIOR_LOG_SD,
                                                   TauIdentificationWarning,
                                                   resolve_inertia, sample_thrust_prior,
@@ -43,7 +43,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
                         coords: dict, dims: dict) -> np.ndarray:
     """Add the robust model's nuisance sites (:func:`~cassini_bayes.inference.nuisance.
     split_nuisance`) to the posterior: one draw of ``ν`` from its exact conditional per draw of
-    the sampler (:func:`_nuisance_sampler`), so the sites are draws of the joint posterior.
+    the sampler (:func:`nuisance_sampler`), so the sites are draws of the joint posterior.
     Returns the draws of ``ν`` (chain × draw, R), in the posterior's flattened order."""
     import xarray as xr
 
@@ -52,7 +52,7 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     n_chain, n_draw, dim = w.shape
     n_nu = kw.nu_sd.shape[0]
     eps = jax.random.normal(key, (n_chain * n_draw, n_nu))
-    nu = np.asarray(_nuisance_sampler(problem.n_f, problem.n_c, sample_inertia)(
+    nu = np.asarray(nuisance_sampler(problem.n_f, problem.n_c, sample_inertia)(
         jnp.asarray(w.reshape(-1, dim)), eps, kw))
     for site, v in split_nuisance(nu.reshape(n_chain, n_draw, n_nu), problem.layout).items():
         site_dims = tuple(dims.get(site, ()))

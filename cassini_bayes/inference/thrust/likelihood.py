@@ -149,7 +149,7 @@ def _event_residual(pi, q_f, tau, ev: EventData):
     return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
-def _event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
+def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``; ``pi``
     (6,) kg m² the inertia.
 
@@ -208,7 +208,7 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
     does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
 
     The likelihood's time-tag column is ``Q (F ⊙ rates)`` at the *sampled* thrust
-    (:func:`_event_loglik`), so that it keeps the likelihood's invariance under the common scale
+    (:func:`event_loglik`), so that it keeps the likelihood's invariance under the common scale
     of ``I``, ``F`` and the wheel inertias that the data cannot see: at a fixed thrust, shrinking
     all three would shrink the residuals a time-tag error leaves but not their stated variance,
     and time tags wider than stated would pull ``F`` down (``benchmarks/time_tag_bias.py``)."""

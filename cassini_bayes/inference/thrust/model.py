@@ -15,9 +15,9 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.inference.gaussian import (OffsetMarginal, nuisance_log_marginal,
                                               nuisance_marginal)
-from cassini_bayes.inference.thrust.coords import _physical, _tau_from_z, _unpack
-from cassini_bayes.inference.thrust.likelihood import _event_loglik
-from cassini_bayes.inference.thrust.prior import (_NOISE_STEP, COM_NAMES, NOISE_PRIOR_LOG_SD,
+from cassini_bayes.inference.thrust.coords import physical, tau_from_z, unpack
+from cassini_bayes.inference.thrust.likelihood import event_loglik
+from cassini_bayes.inference.thrust.prior import (NOISE_STEP, COM_NAMES, NOISE_PRIOR_LOG_SD,
                                                   thrust_names)
 from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 
@@ -25,29 +25,29 @@ __all__ = ["thrust_model", "thrust_sizes"]
 
 def _event_stats(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
-    p = _physical(theta, kw, n_f, n_c, sample_inertia)
-    return jax.vmap(_event_loglik, in_axes=(None, None, None, 0, 0, None))(
+    p = physical(theta, kw, n_f, n_c, sample_inertia)
+    return jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None))(
         p.inertia, p.per_thruster, (p.tau[0], p.tau[1], p.tau[2]), p.log_sigma, kw.events,
         p.q_matrix)
 
 
-def _log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
+def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     """Log prior + log likelihood at the non-dimensional vector ``theta`` (module docstring);
     the offsets and the robust model's nuisance ``ν`` are integrated out exactly. The thrust and
     centre-of-mass coordinates are ``N(0, 1)`` a priori (a rotation of the prior-whitened
     ``log F`` and offset keeps them so,
-    :func:`~cassini_bayes.inference.thrust.coords._physical`); in impulse-bit coordinates
+    :func:`~cassini_bayes.inference.thrust.coords.physical`); in impulse-bit coordinates
     (``kw.bit_width`` given) the prior is that of the physical point's whitened ``(log F, δ)``
     (the map has Jacobian 1)."""
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, com_z, tau_z, noise_z, inertia_z = _unpack(theta, n_f, n_c, n_ev, sample_inertia)
-    _, log_prior_tau = _tau_from_z(tau_z, kw)
+    f_z, com_z, tau_z, noise_z, inertia_z = unpack(theta, n_f, n_c, n_ev, sample_inertia)
+    _, log_prior_tau = tau_from_z(tau_z, kw)
     prior_com = n_c > 0
     if kw.bit_width is not None:     # impulse-bit coordinates: the prior at the physical point
-        f_z = _physical(theta, kw, n_f, n_c, sample_inertia).whitened
+        f_z = physical(theta, kw, n_f, n_c, sample_inertia).whitened
         prior_com = False
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
-                 + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / _NOISE_STEP).log_prob(noise_z)))
+                 + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / NOISE_STEP).log_prob(noise_z)))
     if prior_com:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(com_z))
     if sample_inertia:
@@ -60,7 +60,7 @@ def _log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
 
 
 @lru_cache(maxsize=None)
-def _nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
+def nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
     """Jitted ``(w (S, P), eps (S, R), kw) -> ν (S, R)``: a draw of ``ν`` from its exact Gaussian
     conditional given each draw of the sampled parameters (:func:`nuisance_marginal`), so that
     ``(θ, ν)`` are draws of the joint posterior. Batched to bound the memory (``n × 3 × R`` per
@@ -80,11 +80,11 @@ def _nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
 
 
 @lru_cache(maxsize=None)
-def _laplace_density(n_f: int, n_c: int, sample_inertia: bool):
+def laplace_density(n_f: int, n_c: int, sample_inertia: bool):
     """``f(θ, kw)`` for :func:`~cassini_bayes.inference.laplace.laplace`, one function object
     per layout so that its compiled derivatives are reused."""
     def f(theta, kw):
-        return _log_density(theta, kw, n_f, n_c, sample_inertia)
+        return log_density(theta, kw, n_f, n_c, sample_inertia)
 
     return f
 
@@ -101,8 +101,8 @@ def _model(kw, *, mode: str, sample_inertia: bool):
     n_f, n_c = thrust_sizes(mode, kw)
     w = numpyro.sample("w", dist.ImproperUniform(constraints.real_vector, (), kw.centre.shape))
     theta = kw.centre + kw.tril @ w
-    numpyro.factor("log_density", _log_density(theta, kw, n_f, n_c, sample_inertia))
-    p = _physical(theta, kw, n_f, n_c, sample_inertia)
+    numpyro.factor("log_density", log_density(theta, kw, n_f, n_c, sample_inertia))
+    p = physical(theta, kw, n_f, n_c, sample_inertia)
     if mode == "thruster":
         numpyro.deterministic("F", p.thrust)
         for i, name in enumerate(COM_NAMES):

@@ -28,8 +28,8 @@ __all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inerti
 MODES = ("mean", "branch", "thruster")
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
-_NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
-_HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
+NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
+HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
 _BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
 
 
@@ -59,7 +59,7 @@ class TauPrior(NamedTuple):
 
     def median(self) -> np.ndarray:
         """(3,) s: the prior medians of ``τd, τr, τf`` (half-normal median 0.6745 σ)."""
-        return np.r_[_HALF_NORMAL_MEDIAN * self.delay_scale, np.exp(self.log_mean)]
+        return np.r_[HALF_NORMAL_MEDIAN * self.delay_scale, np.exp(self.log_mean)]
 
     def central(self, mass: float) -> np.ndarray:
         """(3, 2) s: the central interval of each time constant holding ``mass`` of the prior."""
@@ -147,7 +147,7 @@ def thrust_names(mode: str) -> tuple[str, ...]:
     raise InputError(f"{arg('mode', mode, cli_quote=True)}: choose one of {', '.join(MODES)}")
 
 
-def _thrust_index(mode: str, n_thrusters: int) -> np.ndarray:
+def thrust_index(mode: str, n_thrusters: int) -> np.ndarray:
     """(M,) index of the thrust parameter that drives each thruster (``branch``: Cassini's eight
     of Feldman & Lee Eq 16, Z1..Z4 then Y1..Y4)."""
     return {"mean": lambda: np.zeros(n_thrusters, int), "branch": lambda: _BRANCH_INDEX,
@@ -161,7 +161,7 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     n_ev = kw.log_noise_hat.shape[0]
     n_f = problem.n_f
     f_z = jax.random.normal(k_f, (n, n_f + (3 if problem.mode == "thruster" else 0)))
-    noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / _NOISE_STEP
+    noise_z = jax.random.normal(k_s, (n, n_ev, 1)) * NOISE_PRIOR_LOG_SD / NOISE_STEP
     thrust = np.exp(np.log(problem.thrust_pred) + THRUST_PRIOR_LOG_SD * np.asarray(f_z[:, :n_f]))
     tau = np.asarray(draw_tau_prior(k_t, problem.tau, (n,)))
     if problem.mode == "thruster":
@@ -171,7 +171,7 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     else:
         out = {name: thrust[:, i] for i, name in enumerate(problem.names)}
     out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
-    sig = np.exp(np.asarray(kw.log_noise_hat)[None] + _NOISE_STEP * np.asarray(noise_z))
+    sig = np.exp(np.asarray(kw.log_noise_hat)[None] + NOISE_STEP * np.asarray(noise_z))
     out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]
     if problem.inertia is not None:
         z = np.asarray(jax.random.normal(k_i, (n, 6)))
