@@ -6,6 +6,16 @@ from __future__ import annotations
 from _tables import Records, coverage_cell, kind, read_json, read_jsonl, share_cell
 
 
+def _families(records: list[dict]):
+    """``(family, i, model, seeds, fits)`` per family and model of open-world records, in their
+    order: ``seeds`` the family's records, ``fits`` the model's fit in each (``i`` the model's
+    index within the family)."""
+    for family in dict.fromkeys(r["family"] for r in records):
+        seeds = [r for r in records if r["family"] == family]
+        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
+            yield family, i, model, seeds, [r["fits"][model] for r in seeds if model in r["fits"]]
+
+
 @kind("closed_world_inertia")
 def closed_world_inertia(args: list[Records]) -> str:
     """Closed-world coverage of the robust inertia model per family
@@ -64,23 +74,20 @@ def open_world_inertia(args: list[Records]) -> str:
     rows = ["| family | model | 90 % coverage (binomial sd; seed-clustered sd) | per entry Ixx "
             "Iyy Izz Ixy Ixz Iyz | budget | adequacy ok | max \\|z\\| |", "|" + "---|" * 7]
     records = [r for group in args for path in group for r in read_jsonl(path)]
-    for family in dict.fromkeys(r["family"] for r in records):
-        seeds = [r for r in records if r["family"] == family]
-        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
-            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
-            n_seeds, per_entry = len(fits), list(zip(*(f["hit"] for f in fits), strict=True))
-            hits = [h for f in fits for h in f["hit"]]
-            k, n = sum(hits), len(hits)
-            cov = k / n
-            se = (cov * (1 - cov) / n) ** 0.5 if 0 < cov < 1 else (0.09 / n) ** 0.5
-            clustered = stdev(sum(f["hit"]) / len(f["hit"]) for f in fits) / n_seeds ** 0.5
-            z = max(abs(x) for f in fits for x in f["z"])
-            first = f"| `{family}` |" if i == 0 else "| |"
-            rows.append(f"{first} {model} | {cov:.3f} ± {se:.3f}; {clustered:.3f} ({k}/{n}) | "
-                        + " ".join(share_cell(sum(e) / n_seeds) for e in per_entry)
-                        + f" | {sum(f['budget'] for f in fits)}/{n_seeds} | "
-                        f"{sum(f['adequacy_ok'] for f in fits)}/{n_seeds} | "
-                        + (f"{z:.1f}" if z < 10 else f"{z:.0f}") + " |")
+    for family, i, model, seeds, fits in _families(records):
+        n_seeds, per_entry = len(fits), list(zip(*(f["hit"] for f in fits), strict=True))
+        hits = [h for f in fits for h in f["hit"]]
+        k, n = sum(hits), len(hits)
+        cov = k / n
+        se = (cov * (1 - cov) / n) ** 0.5 if 0 < cov < 1 else (0.09 / n) ** 0.5
+        clustered = stdev(sum(f["hit"]) / len(f["hit"]) for f in fits) / n_seeds ** 0.5
+        z = max(abs(x) for f in fits for x in f["z"])
+        first = f"| `{family}` |" if i == 0 else "| |"
+        rows.append(f"{first} {model} | {cov:.3f} ± {se:.3f}; {clustered:.3f} ({k}/{n}) | "
+                    + " ".join(share_cell(sum(e) / n_seeds) for e in per_entry)
+                    + f" | {sum(f['budget'] for f in fits)}/{n_seeds} | "
+                    f"{sum(f['adequacy_ok'] for f in fits)}/{n_seeds} | "
+                    + (f"{z:.1f}" if z < 10 else f"{z:.0f}") + " |")
     return "\n".join(rows)
 
 
@@ -93,19 +100,16 @@ def open_world_rwa4(args: list[Records]) -> str:
     rows = ["| family | model | 90 % cone covers | axis error median / worst | median 90 % cone "
             "| budget | adequacy ok | max R-hat, divergences |", "|" + "---|" * 8]
     records = [r for group in args for path in group for r in read_jsonl(path)]
-    for family in dict.fromkeys(r["family"] for r in records):
-        seeds = [r for r in records if r["family"] == family]
-        for i, model in enumerate(dict.fromkeys(m for r in seeds for m in r["fits"])):
-            fits = [r["fits"][model] for r in seeds if model in r["fits"]]
-            n, err = len(fits), [f["error"][0] for f in fits]
-            first = f"| `{family}` |" if i == 0 else "| |"
-            rows.append(f"{first} {model} | {coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
-                        f"{median(err):#.3g}° / {max(err):#.3g}° | "
-                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
-                        f"{sum(f['budget'] for f in fits)}/{n} | "
-                        f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
-                        f"{max(f['r_hat'] for f in fits):.3f}, "
-                        f"{sum(f['divergences'] for f in fits)} |")
+    for family, i, model, seeds, fits in _families(records):
+        n, err = len(fits), [f["error"][0] for f in fits]
+        first = f"| `{family}` |" if i == 0 else "| |"
+        rows.append(f"{first} {model} | {coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
+                    f"{median(err):#.3g}° / {max(err):#.3g}° | "
+                    f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                    f"{sum(f['budget'] for f in fits)}/{n} | "
+                    f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
+                    f"{max(f['r_hat'] for f in fits):.3f}, "
+                    f"{sum(f['divergences'] for f in fits)} |")
     return "\n".join(rows)
 
 
@@ -121,24 +125,21 @@ def open_world_thrust(args: list[Records]) -> str:
             "divergences |", "|" + "---|" * 9]
     for group in args:
         records = [r for path in group for r in read_jsonl(path)]
-        for family in dict.fromkeys(r["family"] for r in records):
-            seeds = [r for r in records if r["family"] == family]
-            for model in dict.fromkeys(m for r in seeds for m in r["fits"]):
-                fits = [r["fits"][model] for r in seeds if model in r["fits"]]
-                n = len(fits)
-                hits = [h for f in fits for h in f["hit"]]
-                per = " ".join(share_cell(sum(e) / n)
-                               for e in zip(*(f["hit"] for f in fits), strict=True))
-                err = [100 * abs(f["error"][0]) / f["truth"][0] for f in fits]
-                sd = [100 * abs(f["error"][0] / f["z"][0]) / f["truth"][0] for f in fits]
-                zcell = f"{max((f['z'][0] for f in fits), key=abs):+.1f}".replace("-", "−")
-                rows.append(
-                    f"| `{family}` | {model}, {n} | {coverage_cell(sum(hits), len(hits))} | "
-                    f"{per} | "
-                    f"{median(err):.2f} % / {quantiles(err, n=10, method='inclusive')[-1]:.2f} % "
-                    f"/ {max(err):.2f} % | {zcell} | {median(sd):.2f} % | "
-                    f"{sum(f['budget'] for f in fits)}/{n} | "
-                    f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
+        for family, i, model, seeds, fits in _families(records):
+            n = len(fits)
+            hits = [h for f in fits for h in f["hit"]]
+            per = " ".join(share_cell(sum(e) / n)
+                           for e in zip(*(f["hit"] for f in fits), strict=True))
+            err = [100 * abs(f["error"][0]) / f["truth"][0] for f in fits]
+            sd = [100 * abs(f["error"][0] / f["z"][0]) / f["truth"][0] for f in fits]
+            zcell = f"{max((f['z'][0] for f in fits), key=abs):+.1f}".replace("-", "−")
+            rows.append(
+                f"| `{family}` | {model}, {n} | {coverage_cell(sum(hits), len(hits))} | "
+                f"{per} | "
+                f"{median(err):.2f} % / {quantiles(err, n=10, method='inclusive')[-1]:.2f} % "
+                f"/ {max(err):.2f} % | {zcell} | {median(sd):.2f} % | "
+                f"{sum(f['budget'] for f in fits)}/{n} | "
+                f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
     return "\n".join(rows)
 
 
@@ -194,23 +195,20 @@ def open_world_wheel_axis(args: list[Records]) -> str:
             "|" + "---|" * 11]
     for group in args:
         records = [r for path in group for r in read_jsonl(path)]
-        for family in dict.fromkeys(r["family"] for r in records):
-            seeds = [r for r in records if r["family"] == family]
-            for model in dict.fromkeys(m for r in seeds for m in r["fits"]):
-                fits = [r["fits"][model] for r in seeds if model in r["fits"]]
-                n, err = len(fits), [f["error"][0] for f in fits]
-                comp = [h for f in fits for h in f["component_hit"]]
-                per = " ".join(share_cell(sum(e) / n)
-                               for e in zip(*(f["component_hit"] for f in fits), strict=True))
-                rows.append(f"| `{family}` ({fits[0]['wheel']}) | {_setting(seeds[0]['options'])}"
-                            f"{'' if model == 'per_wheel' else ', ' + model} | "
-                            f"{coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
-                            f"{per} | {coverage_cell(sum(comp), len(comp))} | "
-                            f"{median(err):#.3g}° / {max(err):#.3g}° | "
-                            f"{sum(e <= 0.5 for e in err)}/{n} | "
-                            f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
-                            f"{sum(f['budget'] for f in fits)}/{n} | "
-                            f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
-                            f"{max(f['r_hat'] for f in fits):.3f}, "
-                            f"{sum(f['divergences'] for f in fits)} |")
+        for family, i, model, seeds, fits in _families(records):
+            n, err = len(fits), [f["error"][0] for f in fits]
+            comp = [h for f in fits for h in f["component_hit"]]
+            per = " ".join(share_cell(sum(e) / n)
+                           for e in zip(*(f["component_hit"] for f in fits), strict=True))
+            rows.append(f"| `{family}` ({fits[0]['wheel']}) | {_setting(seeds[0]['options'])}"
+                        f"{'' if model == 'per_wheel' else ', ' + model} | "
+                        f"{coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
+                        f"{per} | {coverage_cell(sum(comp), len(comp))} | "
+                        f"{median(err):#.3g}° / {max(err):#.3g}° | "
+                        f"{sum(e <= 0.5 for e in err)}/{n} | "
+                        f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
+                        f"{sum(f['budget'] for f in fits)}/{n} | "
+                        f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
+                        f"{max(f['r_hat'] for f in fits):.3f}, "
+                        f"{sum(f['divergences'] for f in fits)} |")
     return "\n".join(rows)

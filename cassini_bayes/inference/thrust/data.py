@@ -372,8 +372,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     names = thrust_names(mode)
     spacecraft.require_thrusters("thrust calibration", eq16=(mode == "branch"))
     tels, logs = _checked_events(events)
-    n_ev = len(tels)
-    n_thr = len(spacecraft.thrusters)
+    n_ev, n_thr = len(tels), len(spacecraft.thrusters)
     i_fixed = np.asarray(spacecraft.inertia, float)
     i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
     for tel, log in zip(tels, logs):
