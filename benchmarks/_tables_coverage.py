@@ -16,6 +16,13 @@ def _families(records: list[dict]):
             yield family, i, model, seeds, [r["fits"][model] for r in seeds if model in r["fits"]]
 
 
+def _axis_fit_cells(fits: list[dict]) -> str:
+    """The axis tables' last cells: budget met, adequacy ok, max R-hat and divergences."""
+    n = len(fits)
+    return (f"{sum(f['budget'] for f in fits)}/{n} | {sum(f['adequacy_ok'] for f in fits)}/{n} | "
+            f"{max(f['r_hat'] for f in fits):.3f}, {sum(f['divergences'] for f in fits)} |")
+
+
 @kind("closed_world_inertia")
 def closed_world_inertia(args: list[Records]) -> str:
     """Closed-world coverage of the robust inertia model per family
@@ -106,10 +113,7 @@ def open_world_rwa4(args: list[Records]) -> str:
         rows.append(f"{first} {model} | {coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
                     f"{median(err):#.3g}° / {max(err):#.3g}° | "
                     f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
-                    f"{sum(f['budget'] for f in fits)}/{n} | "
-                    f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
-                    f"{max(f['r_hat'] for f in fits):.3f}, "
-                    f"{sum(f['divergences'] for f in fits)} |")
+                    + _axis_fit_cells(fits))
     return "\n".join(rows)
 
 
@@ -207,8 +211,5 @@ def open_world_wheel_axis(args: list[Records]) -> str:
                         f"{median(err):#.3g}° / {max(err):#.3g}° | "
                         f"{sum(e <= 0.5 for e in err)}/{n} | "
                         f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
-                        f"{sum(f['budget'] for f in fits)}/{n} | "
-                        f"{sum(f['adequacy_ok'] for f in fits)}/{n} | "
-                        f"{max(f['r_hat'] for f in fits):.3f}, "
-                        f"{sum(f['divergences'] for f in fits)} |")
+                        + _axis_fit_cells(fits))
     return "\n".join(rows)
