@@ -31,6 +31,7 @@ DOCS = ROOT / "docs"
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import _tables_coverage  # noqa: E402,F401  (each module registers its kinds)
+import _tables_evidence  # noqa: E402,F401
 import _tables_performance  # noqa: E402,F401
 import _tables_planning  # noqa: E402,F401
 import _tables_sbc  # noqa: E402,F401

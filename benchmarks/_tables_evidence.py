@@ -1,0 +1,46 @@
+"""Table kinds of records that docs/ summarised by hand until issue 30 (docs/evidence.md lists
+every table and where it comes from); registered in :mod:`_tables` by import."""
+
+from __future__ import annotations
+
+import math
+
+from _tables import Records, kind, read_json
+
+
+def _angle_deg(a: list[float], b: list[float]) -> float:
+    """The angle between two directions (degrees)."""
+    na, nb = math.hypot(*a), math.hypot(*b)
+    return math.degrees(math.acos(min(1.0, sum(x * y for x, y in zip(a, b)) / (na * nb))))
+
+
+@kind("rcs_posterior")
+def rcs_posterior(args: list[Records]) -> str:
+    """Before against after of ``benchmarks/rcs_slow_spinup.py posterior`` records (arguments:
+    BEFORE AFTER), per case: the mean axes' angle against the combined Monte Carlo se of the
+    axis along that shift; each cone radius before → after with the difference in combined
+    Monte Carlo se; the largest inertia-mean difference in combined se and in posterior sd."""
+    (before,), (after,) = args
+    b_recs, a_recs = read_json(before)["records"], read_json(after)["records"]
+    rows = ["| case | axis shift / MC se | cone 50 % | cone 90 % | cone 95 % | inertia means |",
+            "|---|---|---|---|---|---|"]
+    for case, b in b_recs.items():
+        a = a_recs[case]
+        name, _, prior = case.partition(" (")
+        shift = [x - y for x, y in zip(a["mean"], b["mean"])]
+        norm = math.hypot(*shift)
+        se = math.degrees(math.sqrt(sum((sa ** 2 + sb ** 2) * (d / norm) ** 2 for sa, sb, d
+                                        in zip(a["mean_mcse"], b["mean_mcse"], shift))))
+        cones = []
+        for level in ("50", "90", "95"):
+            (rb, eb), (ra, ea) = b["cone_deg"][level], a["cone_deg"][level]
+            cones.append(f"{rb:.3f} → {ra:.3f} ({(ra - rb) / math.hypot(ea, eb):+.1f})"
+                         .replace("-", "−"))
+        z = max(abs(a["inertia"][n][0] - b["inertia"][n][0])
+                / math.hypot(a["inertia"][n][1], b["inertia"][n][1]) for n in b["inertia"])
+        in_sd = max(abs(a["inertia"][n][0] - b["inertia"][n][0]) / a["inertia"][n][2]
+                    for n in b["inertia"])
+        rows.append(f"| `{name}`, {prior.rstrip(')')} prior | "
+                    f"{_angle_deg(a['mean'], b['mean']):.3f}° / {se:.3f}° | {' | '.join(cones)}"
+                    f" | ≤ {z:.1f} se (≤ {in_sd:.3f} sd) |")
+    return "\n".join(rows)
