@@ -44,3 +44,27 @@ def rcs_posterior(args: list[Records]) -> str:
                     f"{_angle_deg(a['mean'], b['mean']):.3f}° / {se:.3f}° | {' | '.join(cones)}"
                     f" | ≤ {z:.1f} se (≤ {in_sd:.3f} sd) |")
     return "\n".join(rows)
+
+
+def _sd(x: float) -> str:
+    """A posterior sd: three significant digits, at least four decimals."""
+    return f"{x:.{max(4, 2 - math.floor(math.log10(x)))}f}"
+
+
+@kind("basilisk_plan")
+def basilisk_plan(args: list[Records]) -> str:
+    """Predicted against achieved posterior sd of a planned manoeuvre flown in Basilisk
+    (``validation/basilisk_espa.py --cases plan`` records, one per seed, pooled in one argument):
+    the six inertia entries; a ratio cell in bold where a seed is off by more than 10 %."""
+    seeds = [read_json(p)["plan"]["plan_vs_achieved"][:6] for group in args for p in group]
+    rows = ["| parameter | predicted sd | achieved sd, seeds "
+            f"{', '.join(str(i + 1) for i in range(len(seeds)))} | achieved / predicted | "
+            "achieved / predicted at the Basilisk truth |", "|---|---|---|---|---|"]
+    for entries in zip(*seeds, strict=True):
+        ratios = []
+        for key in ("ratio", "ratio_at_truth"):
+            cell = ", ".join(f"{e[key]:.3f}" for e in entries)
+            ratios.append(f"**{cell}**" if any(abs(e[key] - 1) > 0.1 for e in entries) else cell)
+        rows.append(f"| {entries[0]['param']} | {_sd(entries[0]['predicted_sd'])} | "
+                    f"{', '.join(_sd(e['achieved_sd']) for e in entries)} | {' | '.join(ratios)} |")
+    return "\n".join(rows)

@@ -2,6 +2,7 @@
 
     python benchmarks/docs_tables.py           # rewrite every table block that differs
     python benchmarks/docs_tables.py --check   # exit 1, naming each block that differs
+    python benchmarks/docs_tables.py --list    # every table: its heading, generated or by hand
 
 A table block in a markdown file under ``docs/`` is, each marker on a line of its own,
 
@@ -41,6 +42,7 @@ from _tables import KINDS, Records  # noqa: E402
 
 BLOCK = re.compile(r"^<!-- table: (?P<spec>[^\n]*?) -->\n(?P<body>.*?)^<!-- /table -->$",
                    re.DOTALL | re.MULTILINE)
+TABLE_RULE = re.compile(r"^\|(\s*:?-+:?\s*\|)+\s*$")
 OPEN, CLOSE = (re.compile(r"^<!-- table:", re.MULTILINE),
                re.compile(r"^<!-- /table -->$", re.MULTILINE))
 
@@ -88,6 +90,27 @@ def blocks(text: str, md: Path) -> list[tuple[re.Match, str, list[Records]]]:
     return out
 
 
+def inventory(text: str) -> list[tuple[int, str, str | None]]:
+    """Each markdown table of ``text`` outside code fences: its first line, the heading it sits
+    under and the marker spec that generates it (None: written by hand; docs/evidence.md)."""
+    spans = [(m.start(), m.end(), m["spec"]) for m in BLOCK.finditer(text)]
+    lines = text.split("\n")
+    starts = [0]
+    for line in lines:
+        starts.append(starts[-1] + len(line) + 1)
+    out, heading, fence = [], "", False
+    for i, line in enumerate(lines):
+        fence ^= line.startswith("```")
+        if fence:
+            continue
+        if line.startswith("#"):
+            heading = line.lstrip("#").strip()
+        if (i and TABLE_RULE.match(line) and lines[i - 1].startswith("|")
+                and not (i > 1 and lines[i - 2].startswith("|"))):
+            out.append((i, heading, next((s for a, b, s in spans if a <= starts[i] < b), None)))
+    return out
+
+
 def render(md: Path) -> tuple[str, list[str]]:
     """The text of ``md`` with every table block regenerated, and the blocks that changed."""
     text = md.read_text(encoding="utf-8")
@@ -106,10 +129,17 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true",
                     help="change nothing; exit 1 if a table differs from its records")
+    ap.add_argument("--list", action="store_true",
+                    help="change nothing; print every table: file:line, heading, its kind or "
+                    "'by hand'")
     ap.add_argument("--docs", type=Path, default=DOCS, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     differ = []
     for md in sorted(args.docs.rglob("*.md")):
+        if args.list:
+            for line, heading, spec in inventory(md.read_text(encoding="utf-8")):
+                print(f"{_rel(md)}:{line}\t{heading}\t{spec.split()[0] if spec else 'by hand'}")
+            continue
         text, changed = render(md)
         differ += changed
         if changed and not args.check:
