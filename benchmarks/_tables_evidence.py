@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+from _provenance import manifest_path
 from _tables import Records, kind, read_json
 
 
@@ -67,4 +68,56 @@ def basilisk_plan(args: list[Records]) -> str:
             ratios.append(f"**{cell}**" if any(abs(e[key] - 1) > 0.1 for e in entries) else cell)
         rows.append(f"| {entries[0]['param']} | {_sd(entries[0]['predicted_sd'])} | "
                     f"{', '.join(_sd(e['achieved_sd']) for e in entries)} | {' | '.join(ratios)} |")
+    return "\n".join(rows)
+
+
+def _at_least(ps: list[float]) -> str:
+    """``= p`` where every probability rounds to the same three decimals, else ``≥ min``."""
+    cells = {f"{p:.3f}" for p in ps}
+    return f"= {cells.pop()}" if len(cells) == 1 else f"≥ {min(ps):.3f}"
+
+
+@kind("leak_answers")
+def leak_answers(args: list[Records]) -> str:
+    """The leak monitor's answers against the truth with the simulation's model
+    (``cassini_post_probe``; benchmarks/verdict_false_alarms.py leak records, one monitor per
+    argument, labelled by its onset rule and the commit its manifest names): on the stretches
+    with a leak, then on those without."""
+    from statistics import median
+
+    rows = ["| monitor (code) | stretches | alarms | right thruster | wrong thruster | "
+            "fraction's 90 % interval covers | fraction error, median / max (% of thrust) | "
+            "CPU s per stretch, median |", "|" + "---|" * 8]
+    for leak in (True, False):
+        for (path,) in args:
+            rec, man = read_json(path), read_json(manifest_path(path))
+            step = rec["args"].get("onset_step")
+            label = (f"{step:g} s onset grid" if step else "continuous onset") + \
+                f" ({man['runs'][0]['commit'].split()[0].rstrip(',')})"
+            sel = [s for s in rec["raw"]["stretches"] if s["leak"] == leak]
+            ans = [s["cassini_post_probe"] for s in sel]
+            cells = [f"{len(sel)} {'with a 10 % leak' if leak else 'without'}",
+                     str(sum(a["detection_time_s"] is not None for a in ans))]
+            if leak:
+                wrong: dict[tuple[str, str], list[int]] = {}
+                for s, a in zip(sel, ans):
+                    if a["thruster"] != s["truth"]["thruster"]:
+                        wrong.setdefault((a["thruster"], s["truth"]["thruster"]), []).append(
+                            s["seed"])
+                bad = [a["p_thruster"] for s, a in zip(sel, ans)
+                       if a["thruster"] != s["truth"]["thruster"]]
+                err = [100 * abs(a["fraction_mean"] - a["fraction_truth"]) for a in ans]
+                cover = sum(lo <= a["fraction_truth"] <= hi
+                            for a in ans for lo, hi in [a["fraction_interval"]])
+                cells += [f"{len(ans) - len(bad)}/{len(ans)}",
+                          (f"{len(bad)}, P {_at_least(bad)}: " + ", ".join(
+                              f"{named} for {truth} (seed{'s' * (len(seeds) > 1)} "
+                              f"{', '.join(map(str, seeds))})"
+                              for (named, truth), seeds in wrong.items())) if bad else "0",
+                          f"{cover}/{len(ans)}",
+                          f"{median(err):.3g} / {max(err):.3g}"]
+            else:
+                cells += ["–"] * 4
+            rows.append(f"| {label} | {' | '.join(cells)} | "
+                        f"{median(a['cpu_s'] for a in ans):.2f} |")
     return "\n".join(rows)
