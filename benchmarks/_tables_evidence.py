@@ -121,3 +121,39 @@ def leak_answers(args: list[Records]) -> str:
             rows.append(f"| {label} | {' | '.join(cells)} | "
                         f"{median(a['cpu_s'] for a in ans):.2f} |")
     return "\n".join(rows)
+
+
+@kind("plan_open_world_gain")
+def plan_open_world_gain(args: list[Records]) -> str:
+    """A planned manoeuvre against the shipped one over open-world truths
+    (benchmarks/plan_prediction.py --open-world records), a row per three arguments: SHIPPED
+    PLAN PLAN_DIR (the plan's run directory; its summary.json gives the inertia budgets): the
+    plan's sites whose median fitted/predicted sd is within 25 % (range over sites), its
+    inertia 90 % coverage, and the fitted largest sd/budget over the six inertia entries,
+    median over seeds, shipped → plan, as reported and its data part (the wheels' common
+    scale divided out)."""
+    from statistics import median
+
+    rows = ["| plan, open-world seeds | sites within ±25 % (range) | inertia 90 % coverage | "
+            "fitted largest sd/budget, median: shipped → plan (reported; data part) |",
+            "|---|---|---|---|"]
+    names = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+    for (shipped,), (plan,), (plan_dir,) in zip(*[iter(args)] * 3, strict=True):
+        params = read_json(plan_dir / "summary.json")["plan"]["parameters"]
+        budget = [params[n]["budget"] for n in names]
+        (ship,), (own,) = read_json(shipped)["results"], read_json(plan)["results"]
+
+        def worst(result: dict, key: str) -> float:
+            return median(max(s / b for s, b in zip(fit[key][:6], budget, strict=True))
+                          for fit in result["fits"])
+
+        gains = []
+        for key in ("sd", "sd_data"):
+            a, b = worst(ship, key), worst(own, key)
+            gains.append(f"{a:.3f} → {b:.3f} (×{a / b:.2f})")
+        med = [s["ratio_median"] for s in own["sites"].values()]
+        rows.append(f"| `{plan_dir.name}` against `{ship['scenario']}`, {own['seeds']} seeds | "
+                    f"{sum(abs(m - 1) <= 0.25 for m in med)}/{len(med)} "
+                    f"({min(med):.2f}–{max(med):.2f}) | {own['coverage90']:.3f} | "
+                    f"{'; '.join(gains)} |")
+    return "\n".join(rows)
