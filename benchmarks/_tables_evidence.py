@@ -157,3 +157,31 @@ def plan_open_world_gain(args: list[Records]) -> str:
                     f"({min(med):.2f}–{max(med):.2f}) | {own['coverage90']:.3f} | "
                     f"{'; '.join(gains)} |")
     return "\n".join(rows)
+
+
+@kind("plan_vs_shipped")
+def plan_vs_shipped(args: list[Records]) -> str:
+    """A plan against the shipped manoeuvre, predicted and fitted (benchmarks/plan_prediction.py
+    records of the shipped scenario and the plan's scenario.toml, in that order; arguments:
+    RECORD PLAN_DIR, whose summary.json gives the inertia budgets): the largest sd/budget over
+    the six inertia entries, as reported and its data part (the wheels' common scale divided
+    out), fitted as the largest of the entries' medians over seeds."""
+    (record,), (plan_dir,) = args
+    params = read_json(plan_dir / "summary.json")["plan"]["parameters"]
+    ship, plan = read_json(record)["results"]
+    names = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+    rows = [f"| largest sd/budget | shipped `{ship['scenario']}` | plan | plan vs shipped |",
+            "|---|---|---|---|"]
+    for label, part, key in (("predicted, as reported", "sites", "predicted"),
+                             (f"fitted, as reported ({plan['seeds']} seeds)", "sites",
+                              "fitted_median"),
+                             ("predicted, data part", "data_part", "predicted"),
+                             (f"fitted, data part ({plan['seeds']} seeds)", "data_part",
+                              "fitted_median")):
+        cells = []
+        for result in (ship, plan):
+            worst, name = max((result[part][n][key] / params[n]["budget"], n) for n in names)
+            cells.append((worst, f"{worst:.3f}" + (f" ({name})" if part == "data_part" else "")))
+        rows.append(f"| {label} | {cells[0][1]} | {cells[1][1]} | "
+                    f"×{cells[0][0] / cells[1][0]:.3g} |")
+    return "\n".join(rows)
