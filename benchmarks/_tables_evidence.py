@@ -185,3 +185,51 @@ def plan_vs_shipped(args: list[Records]) -> str:
         rows.append(f"| {label} | {cells[0][1]} | {cells[1][1]} | "
                     f"×{cells[0][0] / cells[1][0]:.3g} |")
     return "\n".join(rows)
+
+
+_BODY = {"sun": "Sun", "earth": "Earth", "jupiter": "Jupiter", "saturn": "Saturn",
+         "titan": "Titan"}
+
+
+@kind("ivp_conics")
+def ivp_conics(args: list[Records]) -> str:
+    """The largest angle (µrad) of a fitted conic per vector and span, and how long the
+    osculating conic of ``t = 0`` holds the requirement (the ``ivp_titan_flyby`` experiment's
+    results.json)."""
+    (path,), = args
+    rec = read_json(path)
+    res, months = rec["results"], rec["settings"]["months_days"]
+    spans = res["conics"][0]["spans_days"]
+    rows = ["| vector | " + " | ".join(f"{d:g} d" for d in spans) + " | osculating holds |",
+            "|" + "---|" * (len(spans) + 2)]
+    for c in res["conics"]:
+        holds = (f"> {months:g} d" if c["osculating_holds_days"] is None
+                 else f"{c['osculating_holds_days']:.2g} d")
+        rows.append(f"| {_BODY[c['base']]} → {_BODY[c['head']]} | "
+                    + " | ".join(f"{x:#.3g}" for x in c["fitted_max_urad"]) + f" | {holds} |")
+    return "\n".join(rows)
+
+
+def _sci(x: float) -> str:
+    mantissa, exponent = f"{x:.1e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+@kind("ivp_flyby")
+def ivp_flyby(args: list[Records]) -> str:
+    """Spacecraft → Titan over the flyby span: one conic about Titan, one about Saturn, and the
+    Chebyshev segments (the ``ivp_titan_flyby`` experiment's results.json)."""
+    (path,), = args
+    rec = read_json(path)
+    res, step = rec["results"], rec["settings"]["dense_step_s"]
+    seg, bounds = res["segments"], res["segments"]["bounds_s"]
+    hours = [(b - a) / 3600 for a, b in zip(bounds, bounds[1:])]
+    conic = res["spacecraft_conic_max_urad"]
+    return "\n".join([
+        "| model | numbers | largest angle |", "|---|---|---|",
+        f"| one conic about Titan (fitted r0, v0) | 7 | {_sci(conic['titan'])} µrad |",
+        f"| one conic about Saturn (fitted r0, v0) | 7 | {_sci(conic['saturn'])} µrad |",
+        f"| {seg['count']} Chebyshev segments, orders {', '.join(map(str, seg['orders']))} ("
+        + ", ".join(f"{h:.0f} h" if h >= 10 else f"{h:.1f} h" for h in hours)
+        + f") | {seg['n_coefficients']} | {seg['dense_max_error_urad']:.1f} µrad on a grid "
+        f"every {step:g} s off the nodes |"])
