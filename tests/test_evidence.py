@@ -94,3 +94,25 @@ def test_a_bad_table_marker_is_a_one_line_error(docs_tables, tmp_path, block, me
     (docs / "page.md").write_text("# A page\n\n" + block, encoding="utf-8")
     with pytest.raises(SystemExit, match=message):
         docs_tables.main(["--check", "--docs", str(docs)])
+
+
+def test_list_names_every_table_generated_or_by_hand(docs_tables, tmp_path, capsys):
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "page.md").write_text(
+        "# Page\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n```\n| fenced |\n|---|\n```\n\n"
+        "## Measured\n\n<!-- table: some_kind rec.json -->\n| c |\n|:-:|\n| 3 |\n"
+        "<!-- /table -->\n\n| not a table: no rule |\n", encoding="utf-8")
+    assert docs_tables.main(["--list", "--docs", str(docs)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split("\t") for line in lines] == [
+        [f"{docs / 'page.md'}:3", "Page", "by hand"],
+        [f"{docs / 'page.md'}:15", "Measured", "some_kind"]]
+
+
+def test_every_table_in_the_docs_is_listed(docs_tables, capsys):
+    assert docs_tables.main(["--list"]) == 0
+    listed = [line.split("\t") for line in capsys.readouterr().out.splitlines()]
+    generated = [kind for _, _, kind in listed if kind != "by hand"]
+    assert len(listed) > 100 and len(generated) > 40
+    assert set(generated) <= set(docs_tables.KINDS)
