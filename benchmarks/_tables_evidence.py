@@ -292,3 +292,20 @@ def open_world_budgets(args: list[Records]) -> str:
                     f"{max(f['error'][0] for _, f in fits):#.2g}°) | "
                     f"{_met(fits, lambda r, f: f['hit'][0])} |")
     return "\n".join(rows)
+
+
+@kind("health_model_choice")
+def health_model_choice(args: list[Records]) -> str:
+    """The log Bayes factor of the change point over a random walk per campaign and seed, then
+    its median and range per campaign (benchmarks/health_model_choice.py records, pooled)."""
+    from statistics import median
+
+    rows = ["| campaign | seed | log BF (change point − random walk) |", "|---|---|---|"]
+    records = [r for group in args for path in group for r in read_json(path)["rows"]]
+    rows += [f"| {r['campaign']} | {r['seed']} | {r['log_bf']:.2f} |" for r in records]
+    rows += ["| **median, min, max** | | |"]
+    for campaign in dict.fromkeys(r["campaign"] for r in records):
+        bf = [r["log_bf"] for r in records if r["campaign"] == campaign]
+        rows.append(f"| {campaign} | all {len(bf)} | {median(bf):.2f}, {min(bf):.2f}, "
+                    f"{max(bf):.2f} |")
+    return "\n".join(rows)

@@ -10,19 +10,23 @@ For each seed the degradation and control campaigns' event summaries (as
   log-uniform on 1e-4 … 1e-2 per √day (a 7 % drift takes ~50 … 500 000 days) and ``σ_k`` on the
   change-point model's grid, both marginalised exactly over their grids.
 
-The log Bayes factor (change point − random walk) is printed per campaign and seed.
+The log Bayes factor (change point − random walk) is printed per campaign and seed; ``--json``
+writes them as a record with its manifest (docs/health/model_choice.md).
 
-    python benchmarks/health_model_choice.py [--seeds 10]
+    python benchmarks/health_model_choice.py [--seeds 10] [--json FILE.json]
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.special import logsumexp
 
 from cassini_bayes.api._health import campaign_summaries
+from cassini_bayes.files import json_text, write_text
 from cassini_bayes.inference.health import HealthPrior, health_posterior
 from cassini_bayes.inference.health.changepoint import SCATTER_GRID
 
@@ -56,20 +60,30 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--first-seed", type=int, default=300)
+    ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args(argv)
+    if args.json:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     prior = HealthPrior()
     print("| campaign | seed | log BF (change point − random walk) |\n|---|---|---|")
-    out = {"health_degradation": [], "health_control": []}
+    out: dict[str, list[float]] = {"health_degradation": [], "health_control": []}
+    rows: list[dict] = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
         for name in out:
             t, y, s = campaign_summaries(name, seed)
             bf = (health_posterior(t, y, s, prior).log_evidence
                   - random_walk_log_evidence(t, y, s, prior))
             out[name].append(bf)
+            rows.append({"campaign": name, "seed": seed, "log_bf": bf})
             print(f"| {name} | {seed} | {bf:.2f} |", flush=True)
     for name, v in out.items():
         print(f"{name}: median log BF {np.median(v):.2f}, min {np.min(v):.2f}, "
               f"max {np.max(v):.2f}")
+    if args.json:
+        write_text(args.json, json_text({"p_change": prior.p_change, "rows": rows}))
 
 
 if __name__ == "__main__":
