@@ -309,3 +309,17 @@ def health_model_choice(args: list[Records]) -> str:
         rows.append(f"| {campaign} | all {len(bf)} | {median(bf):.2f}, {min(bf):.2f}, "
                     f"{max(bf):.2f} |")
     return "\n".join(rows)
+
+
+@kind("startup_imports")
+def startup_imports(args: list[Records]) -> str:
+    """Per case of benchmarks/startup_imports.py (a record per argument): the summed self time
+    of the imports and the process's wall time (medians of the record's repeats), the watched
+    packages it imported, and the 1-minute load average when measured."""
+    rows = ["| case | imports | wall | imported (of jax numpy scipy numpyro arviz xarray "
+            "matplotlib rich typer) | load |", "|---|---|---|---|---|"]
+    for path in (p for group in args for p in group):
+        for r in read_json(path)["rows"]:
+            rows.append(f"| `{r['case']}` | {r['imports_s']:.2f} s | {r['wall_s']:.2f} s | "
+                        f"{' '.join(r['imported']) or '–'} | {r['load_1min']:.1f} |")
+    return "\n".join(rows)
