@@ -323,3 +323,19 @@ def startup_imports(args: list[Records]) -> str:
             rows.append(f"| `{r['case']}` | {r['imports_s']:.2f} s | {r['wall_s']:.2f} s | "
                         f"{' '.join(r['imported']) or '–'} | {r['load_1min']:.1f} |")
     return "\n".join(rows)
+
+
+@kind("bench_ivp")
+def bench_ivp(args: list[Records]) -> str:
+    """Vector evaluations per second of the inertial vector propagator, after compilation
+    (benchmarks/bench_ivp.py records: the batch over the median time of the repeats)."""
+    labels = {"conic": "conic by Goodyear's method (random elliptic/hyperbolic states, each "
+                       "solving Kepler's equation)",
+              "chebyshev": "Chebyshev, order 12, 5 segments (segment lookup + Eq 16 recurrence)",
+              "numpy_chebval": "NumPy `chebval` baseline, same segments"}
+    rows = ["| evaluation | vectors/s |", "|---|---|"]
+    for path in (p for group in args for p in group):
+        rec = read_json(path)
+        rows += [f"| {labels[r['evaluation']]} | {_sci(rec['n'] / r['median_s'])} |"
+                 for r in rec["rows"]]
+    return "\n".join(rows)
