@@ -339,3 +339,23 @@ def bench_ivp(args: list[Records]) -> str:
         rows += [f"| {labels[r['evaluation']]} | {_sci(rec['n'] / r['median_s'])} |"
                  for r in rec["rows"]]
     return "\n".join(rows)
+
+
+@kind("compile_cache")
+def compile_cache(args: list[Records]) -> str:
+    """Per run of benchmarks/compile_cache.py (records pooled): wall time, start-up, XLA
+    compilation (or cache loading), tracing, lowering, the rest, programs, cache hits and
+    misses (– with the cache off), and the 1-minute load average at the run's start."""
+    rows = ["| run | wall | start-up (imports) | XLA compile / load | trace | lower | rest "
+            "(sampling, checks, files, report) | programs | hits | misses | load |",
+            "|" + "---|" * 11]
+    for path in (p for group in args for p in group):
+        for r in read_json(path)["runs"]:
+            rest = r["cli_s"] - r["compile_s"] - r["trace_s"] - r["lower_s"]
+            cache = (["–", "–"] if r["hits"] is None or " off" in r["run"]
+                     else [str(r["hits"]), str(r["misses"])])
+            rows.append(f"| {r['run'].removeprefix('fit ')} | {r['wall_s']:.1f} s | "
+                        f"{r['wall_s'] - r['cli_s']:.1f} s | {r['compile_s']:.1f} s | "
+                        f"{r['trace_s']:.1f} s | {r['lower_s']:.1f} s | {rest:.1f} s | "
+                        f"{r['programs']} | {' | '.join(cache)} | {r['load_1min']:.1f} |")
+    return "\n".join(rows)
