@@ -359,3 +359,25 @@ def compile_cache(args: list[Records]) -> str:
                         f"{r['trace_s']:.1f} s | {r['lower_s']:.1f} s | {rest:.1f} s | "
                         f"{r['programs']} | {' | '.join(cache)} | {r['load_1min']:.1f} |")
     return "\n".join(rows)
+
+
+@kind("thrust_design_events")
+def thrust_design_events(args: list[Records]) -> str:
+    """The per-thruster impulse design of simulated events (benchmarks/thrust_design_events.py
+    records): pulses per thruster, rank of the parameters, thrusters identified, identified
+    combinations of the others, and the centre of mass's linearised contraction."""
+    designs = [d for group in args for path in group for d in read_json(path)["designs"]]
+    names = designs[0]["thrusters"]
+    rows = [f"| event | pulses per thruster {names[0]}..{names[-1]} | rank | identified | "
+            "combinations | centre of mass (linearised contraction x, y, z) |",
+            "|---|---|---|---|---|---|"]
+    for d in designs:
+        ident = d["identified"]
+        idcell = f"all {len(ident)}" if len(ident) == len(d["thrusters"]) else ", ".join(ident)
+        combos = ", ".join(f"`{c['label']}`" for c in d["combinations"]) or "none"
+        if d["not_fired"]:
+            combos += f" ({len(d['not_fired'])} never fire)"
+        rows.append(f"| `{d['scenario']}` | {' '.join(str(d['pulses'][n]) for n in names)} | "
+                    f"{d['rank']} of {d['parameters']} | {idcell or '–'} | {combos} | "
+                    + ", ".join(f"{c:.2f}" for c in d["com_contraction"].values()) + " |")
+    return "\n".join(rows)
