@@ -26,7 +26,10 @@ thruster/external torques held (zero-order hold, as the flight software commands
 * the attitude increment ``φ`` (rotation vector, ``q(t+dt) = rotvec_to_quat(φ) ⊗ q(t)``) is found
   by a Runge-Kutta-Munthe-Kaas step of order 4 on ``φ̇ = dexp⁻¹_φ(ω)``;
 * the body-axis impulse of the step (thrusters: the exact integral of the pulse profile over the
-  step) is rotated to inertial axes with the attitude at mid-step.
+  step) is rotated to inertial axes with the attitude at mid-step;
+* inside the step the RK stages see the momentum the body impulse has delivered by their time:
+  the exact impulse to mid-step when the caller gives it (a pulse's profile is not linear over a
+  step: its delay and fall put a tail into the next step), else half of the step's.
 
 Consequences used by the tests: without torques ``H_N`` is constant to round-off (the conservation
 the inertia method relies on); with torques ``ΔH_N`` equals the accumulated inertial impulse
@@ -148,7 +151,8 @@ def _rotate(phi: Array, v: Array) -> Array:
 
 
 def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
-         body_impulse: Array, inertial_torque: Array) -> tuple[DynState, Array]:
+         body_impulse: Array, inertial_torque: Array,
+         body_impulse_half: Array | None = None) -> tuple[DynState, Array]:
     """Advance the state by ``dt`` seconds (see the module docstring).
 
     Parameters
@@ -160,6 +164,8 @@ def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
     body_impulse : (3,) angular impulse delivered in body axes over the step (thrusters plus any
         body-fixed external torque times ``dt``), N m s.
     inertial_torque : (3,) constant external torque in inertial axes, N m.
+    body_impulse_half : (3,) the part of ``body_impulse`` delivered by mid-step, N m s (default
+        half of it: an impulse spread evenly over the step).
 
     Returns
     -------
@@ -167,19 +173,23 @@ def step(state: DynState, plant: Plant, dt: float, motor_torque: Array,
         ``body_impulse`` (rotated with the mid-step attitude), N m s.
     """
     a0 = dcm(state.q)
-    # First guess of the momentum ramp inside the step (body impulse rotated at the start).
-    dh_n = a0.T @ body_impulse + inertial_torque * dt
+    if body_impulse_half is None:
+        body_impulse_half = 0.5 * body_impulse
+    # The momentum delivered inside the step by mid-step and by its end (body impulse rotated
+    # at the start: a first guess, second order in the step's rotation).
+    dh_half = a0.T @ body_impulse_half + inertial_torque * (0.5 * dt)
+    dh_end = a0.T @ body_impulse + inertial_torque * dt
 
-    def rate(phi, s):
-        h_body = _rotate(phi, a0 @ (state.h_inertial + s * dh_n))
+    def rate(phi, s, dh):
+        h_body = _rotate(phi, a0 @ (state.h_inertial + dh))
         # I ω̇ + ω × (I ω + H_w) + Ḣ_w = T  in the form ω = I_s⁻¹ (A H_N − Σ h_k g_k)
         return _omega(plant, h_body, state.h_wheels + (s * dt) * motor_torque)
 
     # Runge-Kutta-Munthe-Kaas, classical RK4 tableau on φ̇ = dexp⁻¹_φ(ω(φ, t)).
-    k1 = _dexpinv(jnp.zeros(3), rate(jnp.zeros(3), 0.0))
-    k2 = _dexpinv(0.5 * dt * k1, rate(0.5 * dt * k1, 0.5))
-    k3 = _dexpinv(0.5 * dt * k2, rate(0.5 * dt * k2, 0.5))
-    k4 = _dexpinv(dt * k3, rate(dt * k3, 1.0))
+    k1 = _dexpinv(jnp.zeros(3), rate(jnp.zeros(3), 0.0, 0.0))
+    k2 = _dexpinv(0.5 * dt * k1, rate(0.5 * dt * k1, 0.5, dh_half))
+    k3 = _dexpinv(0.5 * dt * k2, rate(0.5 * dt * k2, 0.5, dh_half))
+    k4 = _dexpinv(dt * k3, rate(dt * k3, 1.0, dh_end))
     phi = (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
     q1 = quat_normalize(quat_multiply(rotvec_to_quat(phi), state.q))
     # A(q_mid)ᵀ b with A(q_mid) = R(φ/2) A0, and R(φ/2)ᵀ b = R(−φ/2) b

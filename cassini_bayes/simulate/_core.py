@@ -80,8 +80,9 @@ def _wheel_torques(q, omega, rho, row, truth: TruthParams, carr, cfg: _Config, o
 def _thruster_step(t, q, omega, row, rings, truth: TruthParams, carr, cfg: _Config):
     """The thrusters over the step from ``t``: the commanded pulses (with ``control = "rcs"``
     also the RCS controller's) enter each thruster's ring of its last :data:`PULSE_RING` pulses.
-    Returns the impulse (m,) N s and on-time (m,) s of each thruster over the step, its command
-    units (int8) and the rings ``(ring_t, ring_w, ring_g, free_at)`` after it."""
+    Returns the impulse (m,) N s of each thruster over the step and to its middle, its on-time
+    (m,) s over the step, its command units (int8) and the rings ``(ring_t, ring_w, ring_g,
+    free_at)`` after it."""
     ring_t, ring_w, ring_g, free_at = rings
     dt, m = cfg.dt, carr["q_matrix"].shape[1]
     td, tr, tf = truth.tau_s[0], truth.tau_s[1], truth.tau_s[2]
@@ -109,14 +110,16 @@ def _thruster_step(t, q, omega, row, rings, truth: TruthParams, carr, cfg: _Conf
 
     def pulse_step(ring_g):
         g1 = pulse_impulse_until(t + dt - ring_t, ring_w, td, tr, tf)
+        g_half = pulse_impulse_until(t + 0.5 * dt - ring_t, ring_w, td, tr, tf)
         over = jnp.clip(jnp.minimum(t + dt, ring_t + ring_w) - jnp.maximum(t, ring_t), 0.0)
-        return truth.thrust_n * jnp.sum(g1 - ring_g, axis=1), g1, jnp.sum(over, axis=1)
+        return (truth.thrust_n * jnp.sum(g1 - ring_g, axis=1),
+                truth.thrust_n * jnp.sum(g_half - ring_g, axis=1), g1, jnp.sum(over, axis=1))
 
     def idle(ring_g):
-        return jnp.zeros(m), ring_g, jnp.zeros(m)
+        return jnp.zeros(m), jnp.zeros(m), ring_g, jnp.zeros(m)
 
-    j_step, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (m,) N s
-    return j_step, on_step, units.astype(jnp.int8), (ring_t, ring_w, ring_g, free_at)
+    j_step, j_half, ring_g, on_step = jax.lax.cond(busy, pulse_step, idle, ring_g)  # (m,) N s
+    return j_step, j_half, on_step, units.astype(jnp.int8), (ring_t, ring_w, ring_g, free_at)
 
 
 def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg: _Config):
@@ -143,17 +146,23 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
         u = _wheel_torques(state.q, omega, rho, row, truth, carr, cfg, on)
         body_imp = truth.torque_body_nm * dt
         if cfg.thrusters:
-            j_step, on_step, units, (ring_t, ring_w, ring_g, free_at) = _thruster_step(
+            j_step, j_half, on_step, units, (ring_t, ring_w, ring_g, free_at) = _thruster_step(
                 t, state.q, omega, row, (ring_t, ring_w, ring_g, free_at), truth, carr, cfg)
             cum_on = cum_on + on_step
             cum_thr = cum_thr + j_step
+            # the pulses' impulse by mid-step, for the integrator's stages (a pulse's profile
+            # is not spread evenly over the step)
+            body_half = 0.5 * body_imp + carr["q_matrix"] @ j_half
             body_imp = body_imp + carr["q_matrix"] @ j_step                      # Eq 16
             out_units = units
         else:
+            body_half = 0.5 * body_imp
             out_units = jnp.zeros((m,), jnp.int8)[:0]
         if cfg.leak:
             # stuck-open valve (Lee §3.2): f F_k of thrust, torque f F_k Q[:, k] (Eq 16)
-            body_imp = body_imp + carr["q_matrix"] @ (truth.thrust_n * row[-m:] * dt)
+            leak_imp = carr["q_matrix"] @ (truth.thrust_n * row[-m:] * dt)
+            body_imp = body_imp + leak_imp
+            body_half = body_half + 0.5 * leak_imp
         # linear-in-time inertial torque: its mean over the step is its value at mid-step
         t_n = truth.torque_inertial_nm + truth.torque_inertial_rate_nm_s * (t + 0.5 * dt)
         if cfg.flex:
@@ -162,7 +171,7 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
             u_mode = -d_norm * (w_flex * w_flex * (eta + 0.5 * dt * eta_dot)
                                 + 2.0 * z_flex * w_flex * eta_dot)
             u = jnp.concatenate([u, u_mode[None]])
-        state, imp_n = dynamics.step(state, plant, dt, u, body_imp, t_n)
+        state, imp_n = dynamics.step(state, plant, dt, u, body_imp, t_n, body_half)
         if cfg.flex:
             eta = eta + 0.5 * dt * (eta_dot + eta_rate(state, dynamics.body_rate(state, plant)))
         carry = (state, ring_t, ring_w, ring_g, free_at, cum_on, cum_thr, cum_b + body_imp,
