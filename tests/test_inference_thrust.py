@@ -78,7 +78,19 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
                      rank_one=RankOneRows(np.arange(n), (np.zeros((0, n)),) * 3),
                      lhs_wheels=basis[0],
                      lhs_inertia=basis[1:], nu_stats=column_statistics(none, np.ones(n)),
-                     omega_mid=_interval_means(omega), h_mid=_interval_means(h))
+                     omega_mid=_interval_means(omega), h_mid=_interval_means(h),
+                     **_second_order(t, omega, h, t_on, thr, width, slot))
+
+
+def _second_order(t, omega, h, t_on, thr, width, slot) -> dict:
+    """The second-order rate-step fields of :class:`EventData` (the data's changes per interval
+    and the thrusters' moments at Feldman & Lee's time constants)."""
+    from cassini_bayes.physics.rate_step_moments import interval_moments
+
+    m, p = interval_moments(t, t_on, thr, width, slot, 2, 8, (0.005, 0.020, 0.065))
+    change = lambda x: np.diff(x, axis=0, prepend=x[:1]).T  # noqa: E731
+    return dict(d_omega=change(omega), d_h=change(h), dt=np.diff(t, prepend=t[:1]),
+                step_moments=m, step_pairs=p)
 
 
 def _interval_means(x):
@@ -297,6 +309,7 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
     from cassini_bayes.physics.momentum import inertia_matrix
     from cassini_bayes.physics.pulse import (pulse_impulse_area, pulse_impulse_until,
                                              thrust_profile)
+    from cassini_bayes.physics.rate_step_moments import interval_moments, second_order_correction
 
     # host copies: data, not traced (a jitted function's captured arrays are traced)
     ev = jax.tree.map(np.asarray, problem.data.events)
@@ -324,7 +337,14 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
         w_m, h_m = (_interval_means(x[e][:n]).T for x in (ev.omega, ev.h_wheels))
         step = (jnp.cross(jnp.linalg.solve(inertia, a.T).T, w_m @ inertia.T + h_m)
                 + jnp.cross(w_m, a))
-        v = v + jnp.cumsum(step, 0)
+        # its second-order part, every pulse over every interval (moments at the prior's τ)
+        with jax.ensure_compile_time_eval():      # data: computed, not traced
+            m2, p2 = interval_moments(t, t_on, thr, width, np.searchsorted(t, t_on), n, 8,
+                                      tau_median)
+        second = second_order_correction(
+            inertia, q * f8[None, :], m2, p2, np.diff(ev.omega[e][:n], axis=0, prepend=0.0).T,
+            np.diff(ev.h_wheels[e][:n], axis=0, prepend=0.0).T, np.diff(t, prepend=t[0]))
+        v = v + jnp.cumsum(step, 0) + jnp.cumsum(second, 1).T
         r = v - (j * f8[None, :]) @ q.T
         rates = time_tag_sd * thrust_profile(t[:, None] - t_on[None, :],
                                              width[None, :], *tau_median) @ one_hot

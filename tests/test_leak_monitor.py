@@ -98,8 +98,9 @@ def test_monitor_finds_z1_in_a_simulated_leak(leak_run):
     assert p["Z1"] > 0.99
     assert post.thruster == "Z1"
     assert ONSET_S < post.detection_time_s <= ONSET_S + 60.0
-    # the fraction of the model's 0.699 N: 0.1 * 0.72 / 0.699
-    assert post.fraction_mean == pytest.approx(0.1 * 0.72 / 0.699, rel=0.01)
+    # the fraction of the model's 0.699 N, 0.1 * 0.72 / 0.699, within 3 posterior sd (0.3 %
+    # of data sets fail it; its sd is 2-3 % of the fraction, keys 3-5 fall 0.3-1.1 sd off)
+    assert abs(post.fraction_mean - 0.1 * 0.72 / 0.699) < 3.0 * post.fraction_sd
     assert abs(post.onset_s - ONSET_S) <= 1.0            # posterior sd 0.05 s
     # before the onset no check called a leak
     assert np.all(post.p_leak[post.t_check < ONSET_S] < 0.5)

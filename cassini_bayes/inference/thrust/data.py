@@ -28,6 +28,7 @@ from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior,
                                                   tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
+from cassini_bayes.physics.rate_step_moments import interval_moments
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
 
@@ -322,12 +323,25 @@ _impulse_per_newton = jax.jit(jax.vmap(
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
 
 
-def _rate_steps(kw: dict) -> dict:
+def _interval_changes(x: np.ndarray) -> np.ndarray:
+    """(E, 3, n): ``x[i] − x[i − 1]`` of ``x`` (E, n, 3) at ``i`` (0 at ``i = 0``)."""
+    return np.ascontiguousarray(np.swapaxes(np.diff(x, axis=-2, prepend=x[..., :1, :]), -1, -2))
+
+
+def _rate_steps(kw: dict, k_slots: int, n_thr: int, tau) -> dict:
     """The :class:`EventData` fields of the trapezoidal ``ΔG``'s correction across the pulses'
-    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`): the intervals'
-    mean rates and wheel momenta."""
+    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`, first order: the
+    intervals' mean rates and wheel momenta;
+    :mod:`~cassini_bayes.physics.rate_step_moments`, second order: their changes and the
+    thrusters' moments at the time constants ``tau``)."""
+    moments = [interval_moments(*(kw[f][e] for f in ("t", "t_on", "thruster", "width", "slot")),
+                                k_slots, n_thr, tau) for e in range(kw["t"].shape[0])]
     return dict(omega_mid=np.ascontiguousarray(interval_means(kw["omega"])),
-                h_mid=np.ascontiguousarray(interval_means(kw["h_wheels"])))
+                h_mid=np.ascontiguousarray(interval_means(kw["h_wheels"])),
+                d_omega=_interval_changes(kw["omega"]), d_h=_interval_changes(kw["h_wheels"]),
+                dt=np.diff(kw["t"], axis=-1, prepend=kw["t"][..., :1]),
+                step_moments=np.stack([m for m, _ in moments]),
+                step_pairs=np.stack([p for _, p in moments]))
 
 
 def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
@@ -406,7 +420,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
     derived = dict(time_tag_rates=tag_rates, rank_one=rank_one, pulses=layout_e,
                    lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], nu_cols=nu_cols,
-                   **_rate_steps(kw),
+                   **_rate_steps(kw, k_slots, n_thr, tp.median()),
                    nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
                                              np.stack([x.total for x in stats])))
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per

@@ -14,6 +14,7 @@ import numpy as np
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.impulse import rate_step_correction
+from cassini_bayes.physics.rate_step_moments import second_order_correction
 from cassini_bayes.physics.pulse import (pulse_impulse, pulse_impulse_area, pulse_impulse_until,
                                          thrust_profile)
 
@@ -49,6 +50,11 @@ class EventData(NamedTuple):
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
     omega_mid: jax.Array       # (3, n) rad/s, body rate at the middle of the interval ending at i
     h_mid: jax.Array           # (3, n) N m s, wheel momentum there
+    d_omega: jax.Array         # (3, n) rad/s, the body rate's change over that interval
+    d_h: jax.Array             # (3, n) N m s, the wheel momentum's
+    dt: jax.Array              # (n,) s, its length (0 at i = 0)
+    step_moments: jax.Array    # (M, n) s², the thrusters' rate-step moments (rate_step_moments)
+    step_pairs: jax.Array      # (M, M, n) s³, their products
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
 
 
@@ -128,10 +134,15 @@ def jump_area(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
 
 def _jump_correction(inertia, q_f, tau, ev: EventData):
     """(3, n) N m s: the trapezoidal ``ΔG``'s error across the pulses' rate steps at ``q_f = Q
-    diag(F)`` (3, M) and the time constants ``tau``
-    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`)."""
-    return rate_step_correction(inertia, jump_area(ev.pulses, q_f, *tau), ev.omega_mid,
-                                ev.h_mid)
+    diag(F)`` (3, M) and the time constants ``tau``: first order
+    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`) and second
+    (:func:`~cassini_bayes.physics.rate_step_moments.second_order_correction`, its moments at
+    the prior's time constants: a change of ``τ`` moves this small term by less still)."""
+    first = rate_step_correction(inertia, jump_area(ev.pulses, q_f, *tau), ev.omega_mid,
+                                 ev.h_mid)
+    second = second_order_correction(inertia, q_f, ev.step_moments, ev.step_pairs, ev.d_omega,
+                                     ev.d_h, ev.dt)
+    return first + jnp.cumsum(second, 1)
 
 
 def _event_residual(pi, q_f, tau, ev: EventData):
