@@ -75,7 +75,7 @@ def _slopes(data, u, pi):
 
 def test_slopes_vanish_at_the_truth_without_torque(still):
     """No torque, no noise: each window's slope is 0 to 1e-9 of the solved wheel's momentum
-    spread over a window (measured 1e-15: the simulator's integration error)."""
+    spread over a window (measured 6e-16: the simulator's integration error)."""
     data, _, _, u, pi, h_scale = still
     s = _slopes(data, u, pi)
     assert s.shape == (2, 3)
@@ -83,9 +83,9 @@ def test_slopes_vanish_at_the_truth_without_torque(still):
 
 
 def test_slopes_measure_the_inertial_torque():
-    """With an inertial torque the slopes at the truth are that torque (1e-9 relative; the
-    slope row that ignores it fails by 100 %), and the inertial-torque nuisance column's slope
-    cancels it."""
+    """With an inertial torque the slopes at the truth are that torque (1e-9 relative, measured
+    7e-12; a slope row that ignored it would fail by 100 %), and the inertial-torque nuisance
+    column's slope cancels it."""
     torque = np.array([5e-5, -3e-5, 2e-5])
     data, nuis, layout, u, pi, _ = _fly(inertial=tuple(torque))
     s = _slopes(data, u, pi)
@@ -99,7 +99,7 @@ def test_slopes_measure_the_inertial_torque():
 def test_slope_columns_cancel_body_torque_and_drift():
     """A body-fixed torque and an inertial torque rate: the slope rows' nuisance columns (the
     slopes of ``−A(q_t) ∫ A(q_s)ᵀ ds`` and ``−A(q_t)(t − t₀)²/2``) cancel them to 1e-6 of the
-    torque (trapezoid rule against the simulator's integration; measured 2e-9), while the slopes
+    torque (trapezoid rule against the simulator's integration; measured 1.2e-9), while the slopes
     alone are the torque's size."""
     body, rate = np.array([-4e-5, 6e-5, 3e-5]), np.array([2e-8, -1e-8, 3e-8])
     data, nuis, layout, u, pi, _ = _fly(body=tuple(body), rate=tuple(rate))
