@@ -136,7 +136,10 @@ def test_plan_evaluate_wheel_axis_prints_the_cones(run_cli, tmp_path):
     assert s["calibration"] == "wheel-axis"
     pr = s["prediction"]
     assert pr["wheel"] == "RW2" and len(pr["windows_s"]) == 2 and "wheel_speed" in pr["usage"]
-    assert pr["variance_shares"]["inertial_torque"] > 0.1     # the bus is torque-limited
+    # the quiet windows' slopes measure the torques (Euler dH/dt = T), so the bus is limited by
+    # the known wheels' axis tilts (share 0.99; the torques carried 0.56-0.59 by the means alone)
+    shares = pr["variance_shares"]
+    assert shares["wheel_axes"] > 0.5 and shares["inertial_torque"] < 0.1, shares
     assert "--window-a" in pr["fit_windows"]
     assert "u4_x" in (tmp_path / "ev" / "report.html").read_text()
 

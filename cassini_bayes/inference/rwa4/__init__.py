@@ -19,12 +19,20 @@ do not match to the gyro-noise level, so the window means, Brown's own informati
 * RCS method (Eq 1): one pair, "Time A" before and "Time B" after the RWA4 spin-up while the
   spacecraft drifts; RWA4 is the only wheel and ``I ω`` carries the balance, so the inertia matters.
 * RWA method (Eq 3): one pair per slew pair (quiescent windows at two attitudes), RWA2 and RWA3
-  known; ``I ω`` is small but kept.
+  known; ``I ω`` is small but kept. Each quiet window adds its momentum's least-squares *slope*
+  against time, ``s_w = Σ_i w_i A(q_i)ᵀ c_i``, ``w_i = (t_i − t̄_w)/Σ(t − t̄_w)²`` (N m): under
+  RWA control the wheels absorb the external torque, so ``dH/dt = T`` (Euler's law, Feldman &
+  Lee Eq 2 with the wheels' momentum) makes ``s_w`` the torque at the window, zero for a perfect
+  model (:func:`~cassini_bayes.inference.rwa4.likelihood.slopes`). The means see a torque only
+  through its integral between the windows, known as well as its prior; the slopes measure it.
+  Not for the RCS method, whose Time B drifts with thrusters and dead-band.
 
 Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives the body covariance
 ``B = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` (``g_4 = u4``) per sample, rotated to inertial axes and
-averaged over each window; the levels are fixed at the data's own white-noise estimates σ̂ (three
-numbers per pair cannot estimate them).
+averaged over each window (a slope: weighted by ``w_i²``); the levels are fixed at the data's own
+white-noise estimates σ̂ (three numbers per pair cannot estimate them). A window's mean and slope
+weights are orthogonal (``Σ_i (t_i − t̄_w) = 0``), so their noise is uncorrelated to first order
+(exactly for a constant ``A_iᵀ B A_i``) and the covariance is block diagonal.
 
 Robust model (the default)
 --------------------------
@@ -38,10 +46,12 @@ wheels' axes (the solved wheel's axis is the unknown), a body-fixed external tor
 inertial one (``T_I Δt``: solar and RTG torques, Feldman & Lee App. A; over the RWA method's
 long windows a few tens of µN m move the axis by more than the idealised cone). With
 zero-mean Normal priors they are integrated out exactly: ``d ~ N(0, C + D Σ_ν Dᵀ)`` over all
-pairs together (one effect is shared by every pair). The RWA method feels them most: 0.2° tilts
-of RWA2 and RWA3, whose momenta match RWA4's, move Brown's axis by tenths of a degree, 20–50× the
-idealised posterior's width on ``rwa4_rwa_real``; :func:`axis_sensitivity` reports each effect's
-shift. ``robust=False`` is Brown's idealised model.
+pairs and slopes together (one effect is shared by every row; a slope row's columns are the
+slopes of the same per-sample columns, so a torque enters it as its value at the window). The
+RWA method feels them most: 0.2° tilts of RWA2 and RWA3, whose momenta match RWA4's, move
+Brown's axis by tenths of a degree, 20–50× the idealised posterior's width on
+``rwa4_rwa_real``; :func:`axis_sensitivity` reports each effect's shift. ``robust=False`` is
+Brown's idealised model.
 
 Priors
 ------

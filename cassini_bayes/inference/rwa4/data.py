@@ -46,8 +46,11 @@ class Rwa4Data(NamedTuple):
         wheel's rate (rad/s), and times the known wheels' momentum (N m s); the sample counts;
         the attitude products; the solved wheel's spin inertia (kg m²); ``Σ J² g gᵀ`` of the
         known wheels.
-    nu_cols, nu_sd, nu_wheel : the robust model's nuisance columns (G, 3, R), prior sds (R,) and
-        solved-wheel marks (R,) (:func:`_nuisance_means`; ``R = 0`` in the idealised model).
+    m_pi_s, r_u_s, k_h_s, n_s, t_aa_s : the same per window's least-squares slope against time
+        (S = 2G windows, RWA method; S = 0, RCS), ``n_s = 1/Σ w²`` of the slope weights ``w``.
+    nu_cols, nu_cols_s, nu_sd, nu_wheel : the robust model's nuisance columns of the pairs
+        (G, 3, R) and of the slopes (S, 3, R), prior sds (R,) and solved-wheel marks (R,)
+        (:func:`_nuisance_means`; ``R = 0`` in the idealised model).
     u0, basis : the gnomonic chart's centre (3,) and tangent basis (2, 3).
     pi_mean, pi_chol : the inertia prior's mean (6,) kg m² and Cholesky factor (6, 6).
     log_noise_hat : (3,) log noise levels (rad/s, rad/s, rad).
@@ -68,7 +71,13 @@ class Rwa4Data(NamedTuple):
     t_aa: object
     j4: object
     known_cov: object
+    m_pi_s: object
+    r_u_s: object
+    k_h_s: object
+    n_s: object
+    t_aa_s: object
     nu_cols: object
+    nu_cols_s: object
     nu_sd: object
     nu_wheel: object
     u0: object
@@ -162,32 +171,64 @@ def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
     return floored([*np.median(levels, axis=0), s_q], (*RATE_FLOORS, ATTITUDE_FLOOR))
 
 
-def _window_means(q, omega, rates, axes, js, k_u, known, masks) -> dict:
-    """The window averages of :func:`loglik` (its docstring), as JAX arrays."""
+def _window_weights(t, masks) -> tuple[list, list]:
+    """Per window (A, B of each pair in order) ``(mask, weights)`` of its mean, ``1/n``, and,
+    given the sample times ``t`` (s), of its least-squares slope against time,
+    ``(t_i − t̄_w)/Σ(t − t̄_w)²`` (1/s); no slopes without ``t``. The two are orthogonal
+    (``Σ_i (t_i − t̄_w) = 0``), so the slope's white noise is independent of the mean's."""
+    means, slopes = [], []
+    for m in (m for pair in masks for m in pair):
+        means.append((m, np.full(int(m.sum()), 1.0 / m.sum())))
+        if t is not None:
+            dt = np.asarray(t, float)[m] - np.mean(np.asarray(t, float)[m])
+            slopes.append((m, dt / np.sum(dt * dt)))
+    return means, slopes
+
+
+_SHAPES = {"m_pi": (3, 6), "r_u": (3, 3), "k_h": (3,), "n": (), "t_aa": (3, 3, 3, 3)}
+
+
+def _weighted_sums(a_all, reg, rho, h_known, weights) -> dict:
+    """Per window ``(mask, w)`` the weighted sums ``Σ_i w_i x_i`` of the per-sample quantities
+    of :func:`loglik` (``x = Aᵀ Y(ω)``, ``ρ_4 Aᵀ``, ``Aᵀ h_known``), ``n = 1/Σ w²`` and
+    ``t_aa = Σ w² A⊗A / Σ w²`` (white noise of a weighted sum: ``Σ w_i² C_i = ⟨C⟩_w²/n``)."""
+    out = {k: [] for k in _SHAPES}
+    for m, w in weights:
+        at = np.swapaxes(a_all[m], -1, -2)                              # body → inertial
+        w2 = float(np.sum(w * w))
+        out["m_pi"].append(np.einsum("n,nij,njk->ik", w, at, reg[m]))
+        out["r_u"].append(np.einsum("n,nij->ij", w * rho[m], at))
+        out["k_h"].append(np.einsum("n,nij,nj->i", w, at, h_known[m]))
+        out["n"].append(1.0 / w2)
+        out["t_aa"].append(np.einsum("n,nja,nkb->jakb", w * w, a_all[m], a_all[m]) / w2)
+    return {k: jnp.asarray(np.stack(v) if v else np.zeros((0, *_SHAPES[k])))
+            for k, v in out.items()}
+
+
+def _window_means(q, omega, rates, axes, js, k_u, known, masks, t=None) -> dict:
+    """The window averages of :func:`loglik` (its docstring), as JAX arrays; with the sample
+    times ``t`` (s; the RWA method's quiet windows) also each window's least-squares slope
+    against time (the ``*_s`` arrays), else none (``S = 0``)."""
     a_all = np.asarray(dcm(jnp.asarray(q)))
     h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
                    else np.zeros((q.shape[0], 3)))
     reg = np.asarray(regressor(jnp.asarray(omega)))
     rho = np.nan_to_num(rates[:, k_u])
-    m_pi, r_u, k_h, n_w, t_aa = [], [], [], [], []
-    for ma, mb in masks:
-        for m in (ma, mb):
-            at = np.swapaxes(a_all[m], -1, -2)                          # body → inertial
-            m_pi.append(np.einsum("nij,njk->ik", at, reg[m]) / m.sum())
-            r_u.append(np.einsum("n,nij->ij", rho[m], at) / m.sum())
-            k_h.append(np.einsum("nij,nj->i", at, h_known_all[m]) / m.sum())
-            n_w.append(float(m.sum()))
-            t_aa.append(np.einsum("nja,nkb->jakb", a_all[m], a_all[m]) / m.sum())
+    means, slopes = _window_weights(t, masks)
+    data = _weighted_sums(a_all, reg, rho, h_known_all, means)
+    data["n_w"] = data.pop("n")
+    data.update({f"{k}_s": v for k, v in
+                 _weighted_sums(a_all, reg, rho, h_known_all, slopes).items()})
     known_cov = sum((js[k]**2 * np.outer(axes[k], axes[k]) for k in known), np.zeros((3, 3)))
-    return dict(m_pi=jnp.asarray(np.stack(m_pi)), r_u=jnp.asarray(np.stack(r_u)),
-                k_h=jnp.asarray(np.stack(k_h)), n_w=jnp.asarray(np.array(n_w)),
-                t_aa=jnp.asarray(np.stack(t_aa)), j4=jnp.asarray(js[k_u]),
-                known_cov=jnp.asarray(known_cov))
+    return dict(data, j4=jnp.asarray(js[k_u]), known_cov=jnp.asarray(known_cov))
 
 
 def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
-                    t, inertia) -> dict:
-    """The robust model's nuisance columns of ``d_g`` (:func:`loglik`), as JAX arrays.
+                    t, inertia, slopes: bool = False) -> dict:
+    """The robust model's nuisance columns of ``d_g`` (:func:`loglik`), as JAX arrays; with
+    ``slopes``, also those of each window's slope, ``nu_cols_s`` (S, 3, R): the same per-sample
+    inertial columns' slopes against time (:func:`_window_weights`), so an external torque
+    enters as its value at the window (Euler: ``dH/dt = T``).
 
     The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
     and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
@@ -206,17 +247,23 @@ def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, na
     cols = robust_columns(layout, 0, inertia, omega, h_known, wheel_h, a_all, t)
     inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
     diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
+    slope = [np.einsum("n,nir->ir", w, inertial[m])
+             for m, w in _window_weights(t if slopes else None, masks)[1]]
     one_hot = np.zeros(layout.size)
     one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
     if layout.has_common:                   # the shared scale reaches the solved wheel too
         one_hot[layout.slices["wheel_inertia_common"]] = 1.0
-    return dict(nu_cols=jnp.asarray(np.stack(diff)), nu_sd=jnp.asarray(layout.sd),
-                nu_wheel=jnp.asarray(one_hot))
+    return dict(nu_cols=jnp.asarray(np.stack(diff)),
+                nu_cols_s=jnp.asarray(np.stack(slope) if slope
+                                      else np.zeros((0, 3, layout.size))),
+                nu_sd=jnp.asarray(layout.sd), nu_wheel=jnp.asarray(one_hot))
 
 
-def no_nuisance(n_pairs: int) -> dict:
-    """The idealised model: no nuisance columns (R = 0)."""
-    return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
+def no_nuisance(n_pairs: int, n_slopes: int = 0) -> dict:
+    """The idealised model: no nuisance columns (R = 0) for ``n_pairs`` pair rows and
+    ``n_slopes`` slope rows."""
+    return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_cols_s=jnp.zeros((n_slopes, 3, 0)),
+                nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
 
 
 def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
@@ -406,12 +453,14 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     u_ls = _least_squares_axis(method, q, omega, rates, axes, js, i_pred, masks, k_u)
 
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
-    data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
+    slopes = method == "rwa"      # quiet windows: the wheels absorb the external torque
+    data = _window_means(q, omega, rates, axes, js, k_u, known, masks, t if slopes else None)
     layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
                              wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
                              inertial_torque=True, torque_rate=True)
-    nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred)
-    data.update(nuisance if robust else no_nuisance(len(pairs)))
+    nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred,
+                               slopes)
+    data.update(nuisance if robust else no_nuisance(len(pairs), data["n_s"].shape[0]))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),
               log_noise_hat=jnp.asarray(np.log(noise)),

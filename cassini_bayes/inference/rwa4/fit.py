@@ -13,7 +13,7 @@ from cassini_bayes.diagnostics import Diagnostics
 from cassini_bayes.inference.idata import replace_groups
 from cassini_bayes.inference.inertia import InertiaGaussian
 from cassini_bayes.inference.rwa4.data import N_COORDS, Rwa4Problem, no_nuisance, prepare_rwa4
-from cassini_bayes.inference.rwa4.likelihood import balance, noise_cov, nuisance_cols
+from cassini_bayes.inference.rwa4.likelihood import DATA_KEYS, rows
 from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL, rwa4_model
 from cassini_bayes.inference.rwa4.prior import sample_rwa4_prior
 from cassini_bayes.inference.rwa4.windows import WHEEL, Window
@@ -29,7 +29,7 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     """RMS shift of the axis (deg) each nuisance effect of prior size would cause in a model that
     leaves it out (Lee §4.1 made quantitative, as :mod:`~cassini_bayes.inference.sensitivity`).
 
-    Linearised at the Laplace centre ``θ*``: the data ``d`` (:func:`balance`) gain ``D_e ν_e``
+    Linearised at the Laplace centre ``θ*``: the data ``d`` (:func:`rows`) gain ``D_e ν_e``
     from effect ``e``, which moves the idealised model's mode by
     ``Δθ = H⁻¹ Jᵀ C⁻¹ D_e ν_e`` (``H`` the idealised log density's negative Hessian, ``J`` =
     ∂d/∂θ, ``C`` the noise covariance); with ``ν_e ~ N(0, diag sd_e²)`` the axis shift ``U Δθ``
@@ -37,29 +37,24 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     """
     kw = problem.data
     centre = kw.centre
-    ideal = kw._replace(**no_nuisance(len(problem.pairs)))
+    ideal = kw._replace(**no_nuisance(len(problem.pairs), kw.n_s.shape[0]))
     physical = PHYSICAL[problem.chart]
     log_density = LOG_DENSITY[problem.chart]
+    data = {k: getattr(kw, k) for k in DATA_KEYS}
+    data.update({k: problem.nuisance[k] for k in ("nu_cols", "nu_cols_s", "nu_sd", "nu_wheel")})
 
-    def balance_at(theta):
+    def rows_at(theta):
         u, pi, _, _ = physical(theta, kw)
-        return balance(u, pi, m_pi=kw.m_pi, r_u=kw.r_u, k_h=kw.k_h, j4=kw.j4).ravel()
+        return rows(u, pi, kw.log_noise_hat, **data)
 
-    u, pi, _, _ = physical(centre, kw)
     hess = -np.asarray(jax.hessian(lambda th: log_density(th, ideal))(centre))
-    jac = np.asarray(jax.jacfwd(balance_at)(centre))
+    jac = np.asarray(jax.jacfwd(lambda th: rows_at(th)[0])(centre))
     jac_u = np.asarray(jax.jacfwd(lambda th: physical(th, kw)[0])(centre))
-    noise = jax.scipy.linalg.block_diag(*noise_cov(
-        u, pi, kw.log_noise_hat, n_w=kw.n_w, t_aa=kw.t_aa, j4=kw.j4,
-        known_cov=kw.known_cov))
-    cols = np.asarray(nuisance_cols(u, r_u=kw.r_u, j4=kw.j4,
-                                     nu_cols=problem.nuisance["nu_cols"],
-                                     nu_wheel=problem.nuisance["nu_wheel"]))
-    cols = cols.reshape(jac.shape[0], -1)
+    _, noise, cols = (np.asarray(x) for x in rows_at(centre))        # cols: D diag(sd)
     gain = jac_u @ np.linalg.solve(hess, jac.T @ np.linalg.solve(np.asarray(noise), cols))
     out = {}
     for effect, sl in problem.layout.slices.items():
-        k = gain[:, sl] * problem.layout.sd[sl]
+        k = gain[:, sl]
         if k.size:
             out[effect] = float(np.degrees(np.sqrt(np.sum(k * k))))
     return out

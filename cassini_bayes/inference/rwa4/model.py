@@ -14,7 +14,7 @@ import numpyro.distributions as dist
 from numpyro.distributions import constraints
 
 from cassini_bayes.inference.inertia import pi_from_cholesky_params
-from cassini_bayes.inference.rwa4.likelihood import loglik
+from cassini_bayes.inference.rwa4.likelihood import DATA_KEYS, loglik
 from cassini_bayes.inference.rwa4.prior import log_physical_factor
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
 
@@ -108,7 +108,7 @@ def _log_density_with(physical, theta, kw):
     log_prior = -0.5 * jnp.sum(xi**2) + log_jac
     angle = jnp.arccos(jnp.clip(u @ kw.cone_axis, -1.0, 1.0))
     log_prior += -0.5 * kw.cone_weight * ((angle - kw.cone_angle) / kw.cone_sd) ** 2
-    data = {k: getattr(kw, k) for k in _DATA_KEYS}
+    data = {k: getattr(kw, k) for k in DATA_KEYS}
     return log_prior + loglik(u, pi, kw.log_noise_hat, **data)
 
 
@@ -122,8 +122,6 @@ def _log_density_rwa(theta, kw):
     return _log_density_with(_physical_rwa, theta, kw)
 
 
-_DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov", "nu_cols", "nu_sd",
-              "nu_wheel")
 LOG_DENSITY = {"rcs": _log_density_rcs, "rwa": _log_density_rwa}
 PHYSICAL = {"rcs": _physical_rcs, "rwa": _physical_rwa}
 
