@@ -8,10 +8,13 @@ an open-world truth (:func:`cassini_bayes.simulate.open_world.draw_open_world` w
 drawn: non-Normal sensor and wheel errors 1.5× wider than the robust priors, external torques
 1.5× the prior's and a drift, a flexible mode, time-tag errors and stale samples), simulated with
 noise and fitted by the default robust ``fit thrust`` (NUTS). Per site: the fitted sd over the
-predicted (median over the seeds, range) and the 90 % coverage of the truth. Not a test.
+predicted (median over the seeds, range) and the 90 % coverage of the truth; per fit, the
+learned noise levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's
+sensors'. ``--nominal``: the scenario itself simulated with its noise, no open-world error (the
+prediction's own assumptions). Not a test.
 
-    python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:mean
-        [--seeds 10] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
+    python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
+        [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
 """
 
 from __future__ import annotations
@@ -42,12 +45,13 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
     return d.std(0).tolist(), d
 
 
-def run(case: str, seeds: int, settings, partial=None) -> dict:
+def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) -> dict:
     import jax
     import numpy as np
 
     from cassini_bayes.inference.thrust import fit_thrust
     from cassini_bayes.plan.thrust import _truth, evaluate_thrust
+    from cassini_bayes.plan.wheel_axis import scenario_noise
     from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
     from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world
 
@@ -62,10 +66,16 @@ def run(case: str, seeds: int, settings, partial=None) -> dict:
     fits = []
     for seed in range(seeds):
         k_sim, k_fit = jax.random.split(jax.random.key(3200 + seed))
-        ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
-        si = scenario_from_dict(ow.scenario, src=s.source)
-        sim = simulate(k_sim, si)
-        tel = apply_time_tags(sim.telemetry, ow)
+        if nominal:
+            si = s
+            sim = simulate(k_sim, si)
+            tel = sim.telemetry
+        else:
+            ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
+            si = scenario_from_dict(ow.scenario, src=s.source)
+            sim = simulate(k_sim, si)
+            tel = apply_time_tags(sim.telemetry, ow)
+        sensor = np.asarray(scenario_noise(si)[:2], float)
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -75,17 +85,22 @@ def run(case: str, seeds: int, settings, partial=None) -> dict:
         truth = _truth(si, post.problem, names)
         lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
         fits.append({"seed": seed, "sd": sd, "hit90": ((lo <= truth) & (truth <= hi)).tolist(),
+                     "noise_over_sensor": [
+                         float(np.median(np.asarray(post.idata.posterior[k].values)) / sensor[j])
+                         for j, k in enumerate(("sigma_omega", "sigma_rho"))],
                      "r_hat": float(post.diagnostics.max_r_hat),
                      "divergences": int(post.diagnostics.divergences),
                      "seconds": time.perf_counter() - t0})
         print(f"{name} seed {seed}: {fits[-1]['seconds']:.0f} s, R-hat {fits[-1]['r_hat']:.3f}, "
-              f"div {fits[-1]['divergences']}", file=sys.stderr, flush=True)
+              f"div {fits[-1]['divergences']}, noise/sensor "
+              + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"]),
+              file=sys.stderr, flush=True)
         if partial is not None:
-            partial(_summary(case, s, mode, pred, t_pred, names, fits))
-    return _summary(case, s, mode, pred, t_pred, names, fits)
+            partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal))
+    return _summary(case, s, mode, pred, t_pred, names, fits, nominal)
 
 
-def _summary(case, s, mode, pred, t_pred, names, fits) -> dict:
+def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False) -> dict:
     import numpy as np
 
     sd = np.array([f["sd"] for f in fits])
@@ -100,6 +115,7 @@ def _summary(case, s, mode, pred, t_pred, names, fits) -> dict:
              for i, n in enumerate(names)}
     med = np.median(ratio, 0)
     return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
+            "truths": "nominal" if nominal else "open_world", "floored": int(pred.floored),
             "predict_seconds": t_pred, "predicted_max_ratio": pred.max_ratio,
             "predicted_worst": pred.worst, "n_pulses": pred.n_pulses,
             "pulse_widths_s": list(pred.pulse_widths_s), "sites": sites, "fits": fits,
@@ -114,6 +130,8 @@ def main(argv=None) -> None:
     ap.add_argument("--case", action="append", required=True,
                     help="SCENARIO[:MODE] (mode mean, branch or thruster; default mean)")
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--nominal", action="store_true",
+                    help="the scenario's own truth and noise, no open-world error")
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
     ap.add_argument("--draws", type=int, default=300)
@@ -140,9 +158,10 @@ def main(argv=None) -> None:
 
     for case in a.case:
         done = list(out["results"])
-        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]))
+        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal)
         out["results"].append(r)
-        print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} open-world seeds "
+        kind = "nominal" if a.nominal else "open-world"
+        print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "
               f"(min–max); {r['within_25pct']}/{r['n_sites']} sites within 25 %; 90 % "
               f"coverage {r['coverage90']:.3f}; R-hat <= {r['max_r_hat']:.3f}, "
               f"{r['divergences']} divergences")
