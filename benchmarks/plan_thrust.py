@@ -15,6 +15,12 @@ prediction's own assumptions). Not a test.
 
     python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
         [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
+        [--without flex ...] [--resume]
+
+``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
+without`; every other draw unchanged). ``--resume`` keeps the fits of an interrupted ``--json``
+record (same options; the prediction is re-made, noise-free and deterministic) and fits the seeds
+it lacks.
 """
 
 from __future__ import annotations
@@ -45,7 +51,10 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
     return d.std(0).tolist(), d
 
 
-def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) -> dict:
+def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
+        fits: list | None = None, off: tuple = ()) -> dict:
+    """One case: the prediction, then the fits of seeds ``len(fits) .. seeds - 1`` (``fits``:
+    those of a resumed record, kept)."""
     import jax
     import numpy as np
 
@@ -53,7 +62,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) ->
     from cassini_bayes.plan.thrust import _truth, evaluate_thrust
     from cassini_bayes.plan.wheel_axis import scenario_noise
     from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
-    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world
+    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
 
     name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
     s = load_scenario(name)
@@ -63,8 +72,8 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) ->
     names = list(pred.sites)
     print(f"{name} ({mode}): predicted in {t_pred:.0f} s: " + ", ".join(
         f"{n} {sd:.3g}" for n, sd in zip(names, pred.site_sd)), file=sys.stderr, flush=True)
-    fits = []
-    for seed in range(seeds):
+    fits = list(fits or [])
+    for seed in range(len(fits), seeds):
         k_sim, k_fit = jax.random.split(jax.random.key(3200 + seed))
         if nominal:
             si = s
@@ -72,6 +81,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) ->
             tel = sim.telemetry
         else:
             ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
+            ow = without(ow, off) if off else ow
             si = scenario_from_dict(ow.scenario, src=s.source)
             sim = simulate(k_sim, si)
             tel = apply_time_tags(sim.telemetry, ow)
@@ -96,11 +106,11 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False) ->
               + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"]),
               file=sys.stderr, flush=True)
         if partial is not None:
-            partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal))
-    return _summary(case, s, mode, pred, t_pred, names, fits, nominal)
+            partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal, off))
+    return _summary(case, s, mode, pred, t_pred, names, fits, nominal, off)
 
 
-def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False) -> dict:
+def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) -> dict:
     import numpy as np
 
     sd = np.array([f["sd"] for f in fits])
@@ -115,7 +125,8 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False) -> dict:
              for i, n in enumerate(names)}
     med = np.median(ratio, 0)
     return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
-            "truths": "nominal" if nominal else "open_world", "floored": int(pred.floored),
+            "truths": "nominal" if nominal else "open_world", "without": sorted(off),
+            "floored": int(pred.floored),
             "predict_seconds": t_pred, "predicted_max_ratio": pred.max_ratio,
             "predicted_worst": pred.worst, "n_pulses": pred.n_pulses,
             "pulse_widths_s": list(pred.pulse_widths_s), "sites": sites, "fits": fits,
@@ -132,18 +143,29 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--nominal", action="store_true",
                     help="the scenario's own truth and noise, no open-world error")
+    ap.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
+                    help="open-world effects to switch off (open_world.EFFECTS_OFF)")
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
     ap.add_argument("--draws", type=int, default=300)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the fits of the --json record and fit the seeds it lacks")
     a = ap.parse_args(argv)
+    before = {}
+    if a.resume:
+        if not (a.json and a.json.is_file()):
+            sys.exit("--resume: give --json with the record to resume")
+        before = {r["case"]: r["fits"] for r in json.loads(a.json.read_text())["results"]}
     if a.json:
         from _provenance import start
 
         a.json.parent.mkdir(parents=True, exist_ok=True)
-        start(a.json, vars(a), argv, replace=True)
+        start(a.json, {k: v for k, v in vars(a).items() if k != "resume"}, argv,
+              replace=not a.resume)
     sys.path.insert(0, str(ROOT))
     import cassini_bayes
+    from cassini_bayes.files import write_text
     from cassini_bayes.inference.runner import SamplerSettings
 
     cassini_bayes.setup_jax()
@@ -153,12 +175,12 @@ def main(argv=None) -> None:
            "results": []}
     def write(results):
         if a.json:
-            a.json.parent.mkdir(parents=True, exist_ok=True)
-            a.json.write_text(json.dumps({**out, "results": results}, indent=1))
+            write_text(a.json, json.dumps({**out, "results": results}, indent=1))
 
     for case in a.case:
         done = list(out["results"])
-        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal)
+        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
+                fits=before.get(case), off=tuple(a.without))
         out["results"].append(r)
         kind = "nominal" if a.nominal else "open-world"
         print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "
