@@ -95,7 +95,13 @@ def main(argv=None) -> None:
             row[label] = noise_scale(s, si, apply_time_tags(sim.telemetry, w), sim.pulses, mode)
             print(f"seed {seed} {label:10s} σ/σ_sensor at the truth {row[label]:.2f}",
                   file=sys.stderr, flush=True)
-        out["seeds"].append({"seed": seed, "noise_over_sensor": row})
+        fm = ow.record["flex_mode"]
+        share = float(np.asarray(fm["coupling"]) @ np.linalg.solve(
+            np.asarray(scenario_from_dict(ow.scenario, src=s.source).truth.inertia),
+            np.asarray(fm["coupling"])))
+        out["seeds"].append({"seed": seed, "noise_over_sensor": row,
+                             "flex": {"freq_hz": fm["freq_hz"], "damping": fm["damping"],
+                                      "share": share}})
         if a.json:
             write_text(a.json, json.dumps(out, indent=1))
 
