@@ -96,6 +96,58 @@ def plan_thrust(args: list[Records]) -> str:
     return "\n".join(rows)
 
 
+@kind("plan_thrust_thruster")
+def plan_thrust_thruster(args: list[Records]) -> str:
+    """Mode ``thruster`` records of benchmarks/plan_thrust.py: fitted over predicted sd, median
+    over the seeds (range over the sites of a group), 90 % coverage, and the learned noise
+    levels over the sensors' (median over the fits)."""
+    from statistics import median
+
+    groups = (("F[…]", lambda n: n.startswith("F[")), ("com", lambda n: n.startswith("com_")),
+              ("τd/τr/τf", lambda n: n.startswith("tau_")),
+              ("Ixx…Izz", lambda n: n in ("Ixx", "Iyy", "Izz")),
+              ("Ixy…Iyz", lambda n: n in ("Ixy", "Ixz", "Iyz")))
+    rows = ["| scenario | truths, seeds | " + " | ".join(g for g, _ in groups)
+            + " | sites within ±25 % | 90 % coverage: all (least site) | learned σ_ω, σ_ρ / "
+            "sensors' | R-hat, divergences |", "|" + "---|" * 11]
+    for r in _results(args):
+        sites = r["sites"]
+        cells = []
+        for _, pick in groups:
+            med = [v["ratio_median"] for n, v in sites.items() if pick(n)]
+            cells.append(" / ".join(_ratio(m) for m in med) if len(med) <= 3
+                         else f"{_ratio(min(med))}–{_ratio(max(med))}")
+        k = sum(abs(v["ratio_median"] - 1.0) <= 0.25 for v in sites.values())
+        within = f"{k}/{len(sites)}"
+        least = min(sites, key=lambda n: sites[n]["coverage90"])
+        noise = [median(f["noise_over_sensor"][j] for f in r["fits"]) for j in (0, 1)]
+        truths = r["truths"].replace("_", "-") + "".join(f", no {e}" for e in r.get("without", []))
+        rows.append(f"| `{_scenario_label(r['scenario'])}` | {truths}, {r['seeds']} | "
+                    + " | ".join(cells)
+                    + f" | {f'**{within}**' if k == len(sites) else within} | "
+                    f"{r['coverage90']:.2f} ({least} {sites[least]['coverage90']:.2f}) | "
+                    f"{noise[0]:.2f}, {noise[1]:.2f} | ≤ {r['max_r_hat']:.3f}, "
+                    f"{r['divergences']} |")
+    return "\n".join(rows)
+
+
+@kind("thrust_noise_at_truth")
+def thrust_noise_at_truth(args: list[Records]) -> str:
+    """The noise scale the thrust fit's density puts at an open-world truth, over the sensors'
+    (benchmarks/thrust_noise_at_truth.py records): every effect, none, and each alone."""
+    recs = [read_json(path) for group in args for path in group]
+    cols = list(recs[0]["seeds"][0]["noise_over_sensor"])
+    rows = ["| case, seed | " + " | ".join(c.replace("_", " ") for c in cols) + " |",
+            "|" + "---|" * (len(cols) + 1)]
+    for r in recs:
+        for row in r["seeds"]:
+            v = row["noise_over_sensor"]
+            rows.append(f"| `{_scenario_label(r['case'])}`, {row['seed']} | "
+                        + " | ".join(f"**{v[c]:.2f}**" if v[c] > 1.25 else f"{v[c]:.2f}"
+                                     for c in cols) + " |")
+    return "\n".join(rows)
+
+
 def _scenario_label(scenario: str) -> str:
     """A scenario's name, or the folder of a written scenario.toml."""
     return Path(scenario).parent.name if scenario.endswith(".toml") else scenario

@@ -8,10 +8,19 @@ an open-world truth (:func:`cassini_bayes.simulate.open_world.draw_open_world` w
 drawn: non-Normal sensor and wheel errors 1.5× wider than the robust priors, external torques
 1.5× the prior's and a drift, a flexible mode, time-tag errors and stale samples), simulated with
 noise and fitted by the default robust ``fit thrust`` (NUTS). Per site: the fitted sd over the
-predicted (median over the seeds, range) and the 90 % coverage of the truth. Not a test.
+predicted (median over the seeds, range) and the 90 % coverage of the truth; per fit, the
+learned noise levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's
+sensors'. ``--nominal``: the scenario itself simulated with its noise, no open-world error (the
+prediction's own assumptions). Not a test.
 
-    python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:mean
-        [--seeds 10] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
+    python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
+        [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
+        [--without flex ...] [--resume]
+
+``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
+without`; every other draw unchanged). ``--resume`` keeps the fits of an interrupted ``--json``
+record (same options; the prediction is re-made, noise-free and deterministic) and fits the seeds
+it lacks.
 """
 
 from __future__ import annotations
@@ -42,14 +51,18 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
     return d.std(0).tolist(), d
 
 
-def run(case: str, seeds: int, settings, partial=None) -> dict:
+def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
+        fits: list | None = None, off: tuple = ()) -> dict:
+    """One case: the prediction, then the fits of seeds ``len(fits) .. seeds - 1`` (``fits``:
+    those of a resumed record, kept)."""
     import jax
     import numpy as np
 
     from cassini_bayes.inference.thrust import fit_thrust
     from cassini_bayes.plan.thrust import _truth, evaluate_thrust
+    from cassini_bayes.plan.wheel_axis import scenario_noise
     from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
-    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world
+    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
 
     name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
     s = load_scenario(name)
@@ -59,13 +72,20 @@ def run(case: str, seeds: int, settings, partial=None) -> dict:
     names = list(pred.sites)
     print(f"{name} ({mode}): predicted in {t_pred:.0f} s: " + ", ".join(
         f"{n} {sd:.3g}" for n, sd in zip(names, pred.site_sd)), file=sys.stderr, flush=True)
-    fits = []
-    for seed in range(seeds):
+    fits = list(fits or [])
+    for seed in range(len(fits), seeds):
         k_sim, k_fit = jax.random.split(jax.random.key(3200 + seed))
-        ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
-        si = scenario_from_dict(ow.scenario, src=s.source)
-        sim = simulate(k_sim, si)
-        tel = apply_time_tags(sim.telemetry, ow)
+        if nominal:
+            si = s
+            sim = simulate(k_sim, si)
+            tel = sim.telemetry
+        else:
+            ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
+            ow = without(ow, off) if off else ow
+            si = scenario_from_dict(ow.scenario, src=s.source)
+            sim = simulate(k_sim, si)
+            tel = apply_time_tags(sim.telemetry, ow)
+        sensor = np.asarray(scenario_noise(si)[:2], float)
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -75,17 +95,22 @@ def run(case: str, seeds: int, settings, partial=None) -> dict:
         truth = _truth(si, post.problem, names)
         lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
         fits.append({"seed": seed, "sd": sd, "hit90": ((lo <= truth) & (truth <= hi)).tolist(),
+                     "noise_over_sensor": [
+                         float(np.median(np.asarray(post.idata.posterior[k].values)) / sensor[j])
+                         for j, k in enumerate(("sigma_omega", "sigma_rho"))],
                      "r_hat": float(post.diagnostics.max_r_hat),
                      "divergences": int(post.diagnostics.divergences),
                      "seconds": time.perf_counter() - t0})
         print(f"{name} seed {seed}: {fits[-1]['seconds']:.0f} s, R-hat {fits[-1]['r_hat']:.3f}, "
-              f"div {fits[-1]['divergences']}", file=sys.stderr, flush=True)
+              f"div {fits[-1]['divergences']}, noise/sensor "
+              + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"]),
+              file=sys.stderr, flush=True)
         if partial is not None:
-            partial(_summary(case, s, mode, pred, t_pred, names, fits))
-    return _summary(case, s, mode, pred, t_pred, names, fits)
+            partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal, off))
+    return _summary(case, s, mode, pred, t_pred, names, fits, nominal, off)
 
 
-def _summary(case, s, mode, pred, t_pred, names, fits) -> dict:
+def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) -> dict:
     import numpy as np
 
     sd = np.array([f["sd"] for f in fits])
@@ -100,6 +125,8 @@ def _summary(case, s, mode, pred, t_pred, names, fits) -> dict:
              for i, n in enumerate(names)}
     med = np.median(ratio, 0)
     return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
+            "truths": "nominal" if nominal else "open_world", "without": sorted(off),
+            "floored": int(pred.floored),
             "predict_seconds": t_pred, "predicted_max_ratio": pred.max_ratio,
             "predicted_worst": pred.worst, "n_pulses": pred.n_pulses,
             "pulse_widths_s": list(pred.pulse_widths_s), "sites": sites, "fits": fits,
@@ -114,18 +141,31 @@ def main(argv=None) -> None:
     ap.add_argument("--case", action="append", required=True,
                     help="SCENARIO[:MODE] (mode mean, branch or thruster; default mean)")
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--nominal", action="store_true",
+                    help="the scenario's own truth and noise, no open-world error")
+    ap.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
+                    help="open-world effects to switch off (open_world.EFFECTS_OFF)")
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--warmup", type=int, default=300)
     ap.add_argument("--draws", type=int, default=300)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the fits of the --json record and fit the seeds it lacks")
     a = ap.parse_args(argv)
+    before = {}
+    if a.resume:
+        if not (a.json and a.json.is_file()):
+            sys.exit("--resume: give --json with the record to resume")
+        before = {r["case"]: r["fits"] for r in json.loads(a.json.read_text())["results"]}
     if a.json:
         from _provenance import start
 
         a.json.parent.mkdir(parents=True, exist_ok=True)
-        start(a.json, vars(a), argv, replace=True)
+        start(a.json, {k: v for k, v in vars(a).items() if k != "resume"}, argv,
+              replace=not a.resume)
     sys.path.insert(0, str(ROOT))
     import cassini_bayes
+    from cassini_bayes.files import write_text
     from cassini_bayes.inference.runner import SamplerSettings
 
     cassini_bayes.setup_jax()
@@ -135,14 +175,15 @@ def main(argv=None) -> None:
            "results": []}
     def write(results):
         if a.json:
-            a.json.parent.mkdir(parents=True, exist_ok=True)
-            a.json.write_text(json.dumps({**out, "results": results}, indent=1))
+            write_text(a.json, json.dumps({**out, "results": results}, indent=1))
 
     for case in a.case:
         done = list(out["results"])
-        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]))
+        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
+                fits=before.get(case), off=tuple(a.without))
         out["results"].append(r)
-        print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} open-world seeds "
+        kind = "nominal" if a.nominal else "open-world"
+        print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "
               f"(min–max); {r['within_25pct']}/{r['n_sites']} sites within 25 %; 90 % "
               f"coverage {r['coverage90']:.3f}; R-hat <= {r['max_r_hat']:.3f}, "
               f"{r['divergences']} divergences")
