@@ -85,12 +85,12 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
 def _second_order(t, omega, h, t_on, thr, width, slot) -> dict:
     """The second-order rate-step fields of :class:`EventData` (the data's changes per interval
     and the thrusters' moments at Feldman & Lee's time constants)."""
-    from cassini_bayes.physics.rate_step_moments import interval_moments
+    from cassini_bayes.physics.rate_step_moments import interval_moments, step_pairs
 
     m, p = interval_moments(t, t_on, thr, width, slot, 2, 8, (0.005, 0.020, 0.065))
     change = lambda x: np.diff(x, axis=0, prepend=x[:1]).T  # noqa: E731
     return dict(d_omega=change(omega), d_h=change(h), dt=np.diff(t, prepend=t[:1]),
-                step_moments=m, step_pairs=p)
+                step_moments=m, step_pairs=step_pairs(p))
 
 
 def _interval_means(x):
@@ -309,7 +309,8 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
     from cassini_bayes.physics.momentum import inertia_matrix
     from cassini_bayes.physics.pulse import (pulse_impulse_area, pulse_impulse_until,
                                              thrust_profile)
-    from cassini_bayes.physics.rate_step_moments import interval_moments, second_order_correction
+    from cassini_bayes.physics.rate_step_moments import (interval_moments,
+                                                         second_order_correction, step_pairs)
 
     # host copies: data, not traced (a jitted function's captured arrays are traced)
     ev = jax.tree.map(np.asarray, problem.data.events)
@@ -342,7 +343,8 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
             m2, p2 = interval_moments(t, t_on, thr, width, np.searchsorted(t, t_on), n, 8,
                                       tau_median)
         second = second_order_correction(
-            inertia, q * f8[None, :], m2, p2, np.diff(ev.omega[e][:n], axis=0, prepend=0.0).T,
+            inertia, q * f8[None, :], m2, step_pairs(p2),
+            np.diff(ev.omega[e][:n], axis=0, prepend=0.0).T,
             np.diff(ev.h_wheels[e][:n], axis=0, prepend=0.0).T, np.diff(t, prepend=t[0]))
         v = v + jnp.cumsum(step, 0) + jnp.cumsum(second, 1).T
         r = v - (j * f8[None, :]) @ q.T

@@ -8,7 +8,8 @@ import numpy as np
 import cassini_bayes
 from cassini_bayes.physics.impulse import rate_step_correction
 from cassini_bayes.physics.pulse import pulse_impulse_area, pulse_impulse_until
-from cassini_bayes.physics.rate_step_moments import interval_moments, second_order_correction
+from cassini_bayes.physics.rate_step_moments import (interval_moments,
+                                                     second_order_correction, step_pairs)
 
 # an ESPA-class body (kg m²), Feldman & Lee §V time constants (s), three pulses in one 1-s
 # interval (one begun before it), wheels changing by a few hundredths of a newton-metre-second
@@ -42,8 +43,8 @@ def _errors():
     t = np.array([0.0, 1.0])
     m, p = interval_moments(t, T_ON, np.arange(3), WIDTH, np.searchsorted(t, T_ON), 3, 3, TAU)
     second = np.asarray(second_order_correction(
-        INERTIA, Q, m, p, np.c_[np.zeros(3), omega[-1] - omega[0]], np.c_[np.zeros(3), DH],
-        t - np.r_[0.0, t[:-1]]))[:, 1]
+        INERTIA, Q, m, step_pairs(p), np.c_[np.zeros(3), omega[-1] - omega[0]],
+        np.c_[np.zeros(3), DH], t - np.r_[0.0, t[:-1]]))[:, 1]
     return exact - trap - first, exact - trap - first - second
 
 

@@ -25,9 +25,11 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from typing import NamedTuple
+
 from cassini_bayes.physics.pulse import pulse_impulse_until
 
-__all__ = ["interval_moments", "second_order_correction"]
+__all__ = ["StepPairs", "interval_moments", "second_order_correction", "step_pairs"]
 
 SUBSTEPS = 64
 """Simpson panels per interval for the moments: a pulse's rise and fall (tens of ms) against a
@@ -72,18 +74,39 @@ def interval_moments(t, t_on, thruster, width, slot, k: int, n_thrusters: int,
     return m, p
 
 
-def second_order_correction(inertia: Array, q_f: Array, m: Array, p: Array, d_omega: Array,
-                            d_h: Array, dt: Array) -> Array:
+class StepPairs(NamedTuple):
+    """The non-zero products ``P_kl`` of :func:`interval_moments`: thrusters ``k``, ``l`` (r,)
+    firing in the interval ending at sample ``at`` (r,), ``value`` (r,) s³ (padding: 0)."""
+
+    k: Array
+    l: Array  # noqa: E741 - the second thruster index of P_kl
+    at: Array
+    value: Array
+
+
+def step_pairs(p: np.ndarray, size: int | None = None) -> StepPairs:
+    """:class:`StepPairs` of ``p`` (M, M, n), padded with zeros to ``size`` entries (default:
+    as many as are non-zero, at least one): thrusters fire in few intervals and few together."""
+    k, l_, at = np.nonzero(p)
+    size = max(1, k.size) if size is None else size
+    pad = size - k.size
+    return StepPairs(np.r_[k, np.zeros(pad, int)], np.r_[l_, np.zeros(pad, int)],
+                     np.r_[at, np.zeros(pad, int)], np.r_[p[k, l_, at], np.zeros(pad)])
+
+
+def second_order_correction(inertia: Array, q_f: Array, m: Array, pairs: StepPairs,
+                            d_omega: Array, d_h: Array, dt: Array) -> Array:
     """(3, n) N m s per interval (not accumulated): what the trapezoidal ``ΔG`` and
     :func:`~cassini_bayes.physics.impulse.rate_step_correction` miss at second order (module
-    docstring). ``q_f = Q diag(F)`` (3, M) N m; ``m`` (M, n), ``p`` (M, M, n) from
-    :func:`interval_moments`; ``d_omega`` (3, n) rad/s, ``d_h`` (3, n) N m s the samples'
-    changes over each interval; ``dt`` (n,) s its length."""
+    docstring). ``q_f = Q diag(F)`` (3, M) N m; ``m`` (M, n) and ``pairs`` from
+    :func:`interval_moments` and :func:`step_pairs`; ``d_omega`` (3, n) rad/s, ``d_h`` (3, n)
+    N m s the samples' changes over each interval; ``dt`` (n,) s its length."""
     i_inv = jnp.linalg.inv(inertia)
     mu = i_inv @ (q_f @ m)                                                 # (3, n) rad
     b = inertia @ d_omega + d_h
     trap = -(jnp.asarray(dt)[None, :] / 6.0) * jnp.cross(d_omega, b, axis=0)
     first = jnp.cross(mu, b, axis=0) + jnp.cross(d_omega, inertia @ mu, axis=0)
-    pair = jnp.cross((i_inv @ q_f)[:, :, None], q_f[:, None, :], axis=0)  # (3, M, M)
-    return trap + first + jnp.einsum("xkl,kln->xn", pair, p)
+    a = (i_inv @ q_f)[:, pairs.k]                                          # (3, r)
+    pair = jnp.cross(a, q_f[:, pairs.l], axis=0) * pairs.value[None, :]
+    return trap + first + jnp.zeros_like(trap).at[:, pairs.at].add(pair)
 

@@ -28,7 +28,7 @@ from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior,
                                                   tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
-from cassini_bayes.physics.rate_step_moments import interval_moments
+from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
 
@@ -336,12 +336,16 @@ def _rate_steps(kw: dict, k_slots: int, n_thr: int, tau) -> dict:
     thrusters' moments at the time constants ``tau``)."""
     moments = [interval_moments(*(kw[f][e] for f in ("t", "t_on", "thruster", "width", "slot")),
                                 k_slots, n_thr, tau) for e in range(kw["t"].shape[0])]
+    # padded as the pulses are (a few thruster pairs per pulse): similar events, one program
+    bucket = 4 * _PULSE_BUCKET
+    size = max(1, -(-max(int(np.count_nonzero(p)) for _, p in moments) // bucket) * bucket)
+    pairs = [step_pairs(p, size) for _, p in moments]
     return dict(omega_mid=np.ascontiguousarray(interval_means(kw["omega"])),
                 h_mid=np.ascontiguousarray(interval_means(kw["h_wheels"])),
                 d_omega=_interval_changes(kw["omega"]), d_h=_interval_changes(kw["h_wheels"]),
                 dt=np.diff(kw["t"], axis=-1, prepend=kw["t"][..., :1]),
                 step_moments=np.stack([m for m, _ in moments]),
-                step_pairs=np.stack([p for _, p in moments]))
+                step_pairs=StepPairs(*(np.stack(x) for x in zip(*pairs))))
 
 
 def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:

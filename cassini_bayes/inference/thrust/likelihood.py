@@ -14,7 +14,7 @@ import numpy as np
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.impulse import rate_step_correction
-from cassini_bayes.physics.rate_step_moments import second_order_correction
+from cassini_bayes.physics.rate_step_moments import StepPairs, second_order_correction
 from cassini_bayes.physics.pulse import (pulse_impulse, pulse_impulse_area, pulse_impulse_until,
                                          thrust_profile)
 
@@ -54,7 +54,7 @@ class EventData(NamedTuple):
     d_h: jax.Array             # (3, n) N m s, the wheel momentum's
     dt: jax.Array              # (n,) s, its length (0 at i = 0)
     step_moments: jax.Array    # (M, n) s², the thrusters' rate-step moments (rate_step_moments)
-    step_pairs: jax.Array      # (M, M, n) s³, their products
+    step_pairs: StepPairs      # their products, the non-zero ones (padded to the events')
     nu_stats: ColumnStatistics  # sums of ``nu_cols`` (gaussian.column_statistics)
 
 
