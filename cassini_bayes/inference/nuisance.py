@@ -59,6 +59,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.names import EFFECTS
+from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt_basis",
@@ -286,8 +287,7 @@ def robust_columns(layout: NuisanceLayout, f: int, inertia: np.ndarray, omega: n
             for j in range(2):
                 cols[:, :, a0 + 2 * k + j] = wheel_h[name][:, None] * layout.tilt_u[k, j]
     at = np.swapaxes(a, -1, -2)
-    steps = 0.5 * (at[1:] + at[:-1]) * np.diff(t)[:, None, None]
-    c_t = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(steps, 0)])   # ∫ A(q_s)ᵀ ds
+    c_t = cumulative_trapezoid(at, t)                                  # ∫ A(q_s)ᵀ ds
     t0 = sl["body_torque"].start + 3 * f
     cols[:, :, t0:t0 + 3] = -np.einsum("nij,njk->nik", a, c_t)         # −A(q_t) C_t T_B
     dt = (t - t[0])[:, None, None]

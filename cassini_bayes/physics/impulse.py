@@ -32,6 +32,7 @@ from jax import Array
 from cassini_bayes.names import THRUSTER_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.pulse import pulse_impulse_area, pulse_impulse_until
+from cassini_bayes.physics.quadrature import cumulative_trapezoid
 
 __all__ = [
     "THRUSTER_NAMES",
@@ -81,9 +82,7 @@ def gyroscopic_impulse(t_s: Array, omega_rad_s: Array, inertia: Array,
     t = jnp.asarray(t_s)
     w = jnp.asarray(omega_rad_s)
     h_body = jnp.einsum("ij,nj->ni", jnp.asarray(inertia), w) + jnp.asarray(h_wheels_body)
-    f = jnp.cross(w, h_body)
-    steps = 0.5 * (f[1:] + f[:-1]) * jnp.diff(t)[:, None]
-    return jnp.concatenate([jnp.zeros_like(f[:1]), jnp.cumsum(steps, 0)], 0)
+    return cumulative_trapezoid(jnp.cross(w, h_body), t)
 
 
 def jump_areas(t: Array, t_on: Array, thruster: Array, width: Array, slot: Array, k: int,

@@ -35,6 +35,7 @@ from cassini_bayes.inference.inertia.gls import full_prior
 from cassini_bayes.inference.noise import ATTITUDE_FLOOR, RATE_FLOORS
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix, regressor
+from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import Telemetry
 
@@ -112,8 +113,7 @@ def _columns(model: InertiaModel, t, a, omega, wheel_h, inertia):
         for m in range(2):
             cols.append((wheel_h[:, k][:, None] * layout.tilt_u[kk, m][None])[:, :, None])
     at = jnp.swapaxes(a, -1, -2)
-    steps = 0.5 * (at[1:] + at[:-1]) * jnp.diff(t)[:, None, None]
-    c_t = jnp.concatenate([jnp.zeros((1, 3, 3)), jnp.cumsum(steps, 0)])  # ∫ A(q_s)ᵀ ds
+    c_t = cumulative_trapezoid(at, t)                                     # ∫ A(q_s)ᵀ ds
     cols.append(-jnp.einsum("nij,njk->nik", a, c_t))                      # body torque T_B
     cols.append(-a * (0.5 * dt**2)[:, None, None])                        # torque rate Ṫ_N
     out = jnp.concatenate(cols, -1)

@@ -28,6 +28,7 @@ from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior,
                                                   tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
+from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
@@ -166,8 +167,7 @@ def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia:
     cols = np.zeros((n, 3, layout.size))
     sl = layout.slices
     dt = (t - t[0])[:, None]
-    c_t = np.concatenate([np.zeros((1, 3)),
-                          np.cumsum(0.5 * (h[1:] + h[:-1]) * np.diff(t)[:, None], 0)])
+    c_t = cumulative_trapezoid(h, t)
     b0 = sl["gyro_bias"].start + 3 * e
     cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
     cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
@@ -190,8 +190,7 @@ def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray) -> 
     :func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`): a wheel's momentum enters the
     left side of Eq 17 through ``H`` and through ``ΔG``, so an error in it does both."""
     f = np.einsum("nij,njw->niw", np.asarray(skew(omega)), momentum)     # ω × δH
-    steps = 0.5 * (f[1:] + f[:-1]) * np.diff(t)[:, None, None]
-    return momentum + np.concatenate([np.zeros_like(f[:1]), np.cumsum(steps, 0)])
+    return momentum + cumulative_trapezoid(f, t)
 
 
 def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
