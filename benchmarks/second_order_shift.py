@@ -85,6 +85,7 @@ def run(name: str, key: int, leak: bool, health: bool, duration_s: float | None 
         out["leak"] = {
             "max_abs_prob_change": float(np.max(np.abs(a.prob - b.prob))),
             "p_leak_last": [float(a.p_leak[-1]), float(b.p_leak[-1])],
+            "p_leak_max": [float(a.p_leak.max()), float(b.p_leak.max())],
             "detection_time_s": [a.detection_time_s, b.detection_time_s],
             "thruster": [a.thruster, b.thruster],
             "fraction_mean": [a.fraction_mean, b.fraction_mean],
@@ -117,7 +118,8 @@ def main(argv=None) -> int:
     if "leak" in row:
         m = row["leak"]
         print(f"{a.scenario} key {a.key} leak: max |dP| {m['max_abs_prob_change']:.3g}; "
-              f"P(leak) {m['p_leak_last'][0]:.6g} -> {m['p_leak_last'][1]:.6g}; detection "
+              f"P(leak) {m['p_leak_last'][0]:.6g} -> {m['p_leak_last'][1]:.6g} (largest "
+              f"{m['p_leak_max'][0]:.3g} -> {m['p_leak_max'][1]:.3g}); detection "
               f"{m['detection_time_s'][0]} -> {m['detection_time_s'][1]} s "
               f"({m['thruster'][0]} -> {m['thruster'][1]}); fraction "
               f"{m['fraction_mean'][0]:.6g} -> {m['fraction_mean'][1]:.6g} "
