@@ -113,6 +113,10 @@ def main(argv=None) -> int:
                          "which the health regression does not model)")
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
+    if a.json:
+        from _provenance import start
+
+        start(a.json, vars(a), argv, replace=True)
     from cassini_bayes.simulate import load_scenario
 
     out = []

@@ -114,6 +114,10 @@ def main(argv=None) -> int:
     ap.add_argument("--clean", action="store_true", help="without the scenario's leak")
     ap.add_argument("--json", default=None)
     a = ap.parse_args(argv)
+    if a.json:
+        from _provenance import start
+
+        start(a.json, vars(a), argv, replace=True)
     row = run(a.scenario, a.key, a.leak, a.health, a.duration, a.clean)
     if "leak" in row:
         m = row["leak"]
