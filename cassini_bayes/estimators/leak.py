@@ -18,8 +18,11 @@ import numpy as np
 
 from cassini_bayes.physics.impulse import (angular_impulse, impulse_lhs, jump_areas,
                                            rate_step_correction)
+from cassini_bayes.physics.rate_step_moments import (interval_moments, second_order_correction,
+                                                     step_pairs)
 
-__all__ = ["residual_momentum", "rate_step_columns", "rate_step_units", "leak_torque",
+__all__ = ["residual_momentum", "rate_step_columns", "rate_step_units",
+           "rate_step_second_order", "leak_torque",
            "momentum_correction", "threshold_monitor", "ThresholdResult", "LEAK_THRESHOLD_NMS",
            "T_LIMIT_CRUISE_S", "ETA", "Z_ARM_M"]
 
@@ -103,15 +106,71 @@ def rate_step_columns(t_s, omega_rad_s, inertia, h_wheels_body, pulses, tau,
     n = t.size
     if n < 2 or t_on.size == 0:
         return np.zeros((n, 3, n_thrusters, 3))
-    td, _, tf = (float(x) for x in tau)
-    k = int(np.ceil((float(np.max(width)) + td + _TAIL_TAUS * tf)
-                    / float(np.min(np.diff(t))))) + 1
-    slot = np.searchsorted(t, t_on, side="left")
+    slot, k = _slots(t, t_on, width, tau)
     eps = np.asarray(_jump_areas(t, t_on, np.asarray(thr, int), width, slot, k, n_thrusters,
                                  tuple(float(x) for x in tau)))                   # (M, n) s²
     if units is None:
         units = rate_step_units(t, omega_rad_s, inertia, h_wheels_body)
     return np.cumsum(np.einsum("sn,abn->nbsa", eps, units), axis=0)               # (n, 3, M, 3)
+
+
+def _slots(t: np.ndarray, t_on: np.ndarray, width: np.ndarray, tau) -> tuple[np.ndarray, int]:
+    """Each pulse's first sample at or after its command, and the samples its thrust lasts."""
+    td, _, tf = (float(x) for x in tau)
+    k = int(np.ceil((float(np.max(width)) + td + _TAIL_TAUS * tf)
+                    / float(np.min(np.diff(t))))) + 1
+    return np.searchsorted(t, t_on, side="left"), k
+
+
+_BUCKET = 128
+"""Pulses, samples and pulse pairs are padded to multiples of this (padding adds nothing): events
+and stretches of similar size share one compiled program."""
+_second_order = jax.jit(second_order_correction)
+
+
+def _bucket(n: int) -> int:
+    return max(1, -(-n // _BUCKET)) * _BUCKET
+
+
+def rate_step_second_order(t_s, omega_rad_s, inertia, h_wheels_body, pulses, tau,
+                           q_f) -> np.ndarray:
+    """(n, 3) N m s: what the trapezoidal ``ΔG`` (Feldman & Lee Eq 15) and
+    :func:`rate_step_columns` miss at second order across the pulses' rate steps, accumulated to
+    each sample (:func:`~cassini_bayes.physics.rate_step_moments.second_order_correction`); add
+    it to Eq 17's left side.
+
+    Evaluated at the thrusts ``q_f = Q diag(F)`` (3, M) N m and the time constants ``tau`` (3,)
+    s given, as a known offset: the term is quadratic in the thrusts, which a linear
+    least-squares design cannot carry, and a thrust error ``δ`` changes it by a fraction ``~δ``
+    of a term that is already second order. ``pulses`` ``(t_on, thruster, width)``; other
+    arguments as :func:`~cassini_bayes.physics.impulse.impulse_lhs`. Its trapezoid-of-two-lines
+    part needs no pulse: it is carried on every interval, as the thrust likelihood carries it."""
+    t = np.asarray(t_s, float)
+    q_f = np.asarray(q_f, float)
+    n, n_thr = t.size, q_f.shape[1]
+    if n < 2:
+        return np.zeros((n, 3))
+    t_on, thr, width = (np.asarray(x) for x in pulses)
+    size = _bucket(n)
+    m, p = np.zeros((n_thr, n)), np.zeros((n_thr, n_thr, n))
+    if t_on.size:
+        pad = _bucket(t_on.size) - t_on.size          # width 0 after the end: no impulse
+        t_on = np.r_[t_on.astype(float), np.full(pad, t[-1] + 1.0)]
+        thr, width = np.r_[thr.astype(int), np.zeros(pad, int)], np.r_[width.astype(float),
+                                                                         np.zeros(pad)]
+        slot, k = _slots(t, t_on, width, tau)
+        m, p = interval_moments(t, t_on, thr, width, slot, k, n_thr,
+                                tuple(float(x) for x in tau))
+    pairs = step_pairs(p, _bucket(int(np.count_nonzero(p))))
+
+    def change(x):
+        x = np.asarray(x, float)
+        return np.pad(np.diff(x, axis=0, prepend=x[:1]).T, ((0, 0), (0, size - n)))
+
+    c = _second_order(np.asarray(inertia, float), q_f, np.pad(m, ((0, 0), (0, size - n))), pairs,
+                      change(omega_rad_s), change(h_wheels_body),
+                      np.pad(np.diff(t, prepend=t[0]), (0, size - n)))
+    return np.cumsum(np.asarray(c)[:, :n], axis=1).T
 
 
 def leak_torque(q_matrix, thruster: int, leak_fraction: float, thrust_n: float = 1.0) -> np.ndarray:

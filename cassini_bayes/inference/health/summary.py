@@ -49,7 +49,8 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
-from cassini_bayes.estimators.leak import rate_step_columns, rate_step_units
+from cassini_bayes.estimators.leak import (rate_step_columns, rate_step_second_order,
+                                           rate_step_units)
 from cassini_bayes.estimators.thrust import combination_label, regression_inputs
 from cassini_bayes.physics.impulse import impulse_from_pulses, impulse_lhs
 from cassini_bayes.telemetry import pulses_in_span
@@ -331,15 +332,24 @@ def event_design(tel, pulses, spacecraft, *, channels: HealthChannels | None = N
     """The regression inputs of one event under the spacecraft model (its inertia, wheels,
     thruster geometry and time constants); refuses an event that identifies no channel.
 
+    ``v`` carries the rate steps' second-order terms at the model's thrusts
+    (:func:`~cassini_bayes.estimators.leak.rate_step_second_order`) as a known offset: they
+    are quadratic in the thrusts, which the linear design's columns cannot hold, and an event
+    that moves the thrusts by ``δ`` moves them by a fraction ``~δ`` of a term that is itself
+    second order.
+
     ``channels``: those of all the events fitted together (:func:`event_channels`); by default
     this event's own."""
     v, j, log, tau, h = _inputs(tel, pulses, spacecraft)
-    # the rate steps at the model's inertia and time constants (channel_design)
+    # the rate steps at the model's inertia and time constants (channel_design); their second
+    # order, quadratic in the thrusts, at the model's thrusts on the left side
     units = rate_step_units(tel.t, tel.omega, spacecraft.inertia, h)
     steps = rate_step_columns(tel.t, tel.omega, spacecraft.inertia, h,
                               _padded(log, float(np.asarray(tel.t)[-1])), tau,
                               len(spacecraft.thrusters), units)
     q = spacecraft.moment_matrix
+    v = v + rate_step_second_order(tel.t, tel.omega, spacecraft.inertia, h, log, tau,
+                                   q * spacecraft.thrust_per_thruster[None, :])
     if channels is None:
         channels = health_channels([j], spacecraft.thruster_names, q)
     counts = np.bincount(np.asarray(log[1], int), minlength=len(channels.thrusters))

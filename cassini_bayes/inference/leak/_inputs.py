@@ -12,7 +12,8 @@ import numpy as np
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.estimators.baseline import wheel_momentum
-from cassini_bayes.estimators.leak import rate_step_columns, residual_momentum
+from cassini_bayes.estimators.leak import (rate_step_columns, rate_step_second_order,
+                                           residual_momentum)
 from cassini_bayes.physics.impulse import THRUSTER_NAMES, impulse_from_on_times
 from cassini_bayes.physics.pulse import pulse_impulse_until
 from cassini_bayes.spacecraft import Spacecraft
@@ -192,7 +193,8 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
     (:func:`~cassini_bayes.telemetry.pulses_in_span`).
 
     With a pulse log the residual has the trapezoidal ``ΔG``'s error across the pulses' rate
-    steps put back (:func:`~cassini_bayes.estimators.leak.rate_step_columns`) at the model's
+    steps put back (:func:`~cassini_bayes.estimators.leak.rate_step_columns`, and its second
+    order, :func:`~cassini_bayes.estimators.leak.rate_step_second_order`) at the model's
     thrusts, time constants and inertia: the thrust errors ``δ`` move it by their own fraction
     only (second order), and without it a bus whose wheels hold N m s while its dead band
     fires carries a slow wander of the residual the white model cannot hold. On-times alone
@@ -210,6 +212,10 @@ def leak_inputs(tel: Telemetry, pulses: PulseLog | None, spacecraft: Spacecraft)
                                   (pulses.t_on, pulses.thruster, pulses.width),
                                   (p.tau_delay, p.tau_rise, p.tau_fall), len(spacecraft.thrusters))
         r = r + np.einsum("nbsa,as,s->nb", steps, q, spacecraft.thrust_per_thruster)
+        r = r + rate_step_second_order(tel.t, tel.omega, spacecraft.inertia, h,
+                                       (pulses.t_on, pulses.thruster, pulses.width),
+                                       (p.tau_delay, p.tau_rise, p.tau_fall),
+                                       q * spacecraft.thrust_per_thruster[None, :])
     return LeakInputs(np.asarray(tel.t, float), r, j, q, spacecraft.thrust_per_thruster,
                       spacecraft.knowledge.torque_sd_nm, tel.source, spacecraft.thruster_names,
                       offset_sd_nms=spacecraft.momentum_capacity_nms,
