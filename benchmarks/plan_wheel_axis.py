@@ -144,10 +144,10 @@ def main(argv=None) -> None:
     from _provenance import start
 
     for name in a.scenarios:
-        r = run(name, a.seeds, settings, a.first_seed, a.wheel)
         stem = Path(name).parent.name if name.endswith(".toml") else name
         path = a.out / f"wheel_axis_{stem}.json"
-        start(path, {**vars(a), "scenarios": [name]}, argv, replace=True)
+        start(path, {**vars(a), "scenarios": [name]}, argv, replace=True)   # commit, load now
+        r = run(name, a.seeds, settings, a.first_seed, a.wheel)
         path.write_text(json.dumps(r, indent=1) + "\n", encoding="utf-8")
         print(f"{name}: sd_dir ratio median {r['sd_direction_ratio_median']:.3f}, cone90 "
               f"coverage {r['coverage_cone90']:.2f}, sites "
