@@ -173,7 +173,7 @@ def plan_wheel_axis_vs_baseline(args: list[Records]) -> str:
     for label, (b, p) in (("largest angular sd", med("sd_direction_deg")),
                           ("90 % cone", med("cone_deg", "90")),
                           ("error of the posterior mean", med("error_deg"))):
-        rows.append(f"| {label} | {b:.3f}° | {p:.3f}° | ×{b / p:.2f} |")
+        rows.append(f"| {label} | {b:.4f}° | {p:.4f}° | ×{b / p:.2f} |")
     rows.append(f"| 90 % cone coverage | {recs[0]['coverage_cone90']:.2f} | "
                 f"{recs[1]['coverage_cone90']:.2f} | |")
     axis = ("u4_x", "u4_y", "u4_z")
@@ -197,9 +197,9 @@ def plan_wheel_axis_predicted(args: list[Records]) -> str:
     b, p = s["baseline"], s["plan"]
     rows = [f"| {s['wheel']} axis, predicted | baseline, same limits | plan | plan vs baseline |",
             "|---|---|---|---|",
-            f"| largest angular sd | {b['sd_direction_deg']:.3f}° | {p['sd_direction_deg']:.3f}° "
+            f"| largest angular sd | {b['sd_direction_deg']:.4f}° | {p['sd_direction_deg']:.4f}° "
             f"| ×{s['improvement']['sd_direction']:.2f} |",
-            f"| 90 % cone | {b['cone_deg']['90']:.3f}° | {p['cone_deg']['90']:.3f}° | "
+            f"| 90 % cone | {b['cone_deg']['90']:.4f}° | {p['cone_deg']['90']:.4f}° | "
             f"×{s['improvement']['cone90']:.2f} |"]
     share = [", ".join(f"{k.replace('_', ' ')} {v:.2f}" for k, v in sorted(
         r["variance_shares"].items(), key=lambda kv: -kv[1])[:3]) for r in (b, p)]
