@@ -209,9 +209,9 @@ def test_plan_wheel_axis_writes_a_scenario_that_flies_within_its_limits(run_cli,
 def test_prediction_matches_a_nuts_fit_of_noisy_data():
     """One NUTS fit of the short ESPA manoeuvre (fixed keys) against the prediction made before
     it: each axis component's posterior sd within ±25 %. This fit is 1.01–1.03 of it; over 20
-    open-world seeds of the full manoeuvre the medians are 0.88–0.93 and one fit of 60 components
-    is beyond ±25 % (docs/planning.md), so a false failure needs a nominal fit like the open
-    world's worst. It can fail: the prediction with the wheel-tilt knowledge doubled (the short
+    open-world seeds of the full manoeuvre the medians are 0.88–0.93 and one fit of 20 is beyond
+    ±25 % (docs/planning.md), so a false failure needs a nominal fit like the open world's
+    worst. It can fail: the prediction with the wheel-tilt knowledge doubled (the short
     manoeuvre's limiting error, share 0.99) is 1.63–1.89× the fit's."""
     from cassini_bayes.inference.rwa4 import fit_rwa4
     from cassini_bayes.inference.runner import SamplerSettings
