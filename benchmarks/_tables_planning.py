@@ -173,7 +173,7 @@ def plan_wheel_axis_vs_baseline(args: list[Records]) -> str:
     for label, (b, p) in (("largest angular sd", med("sd_direction_deg")),
                           ("90 % cone", med("cone_deg", "90")),
                           ("error of the posterior mean", med("error_deg"))):
-        rows.append(f"| {label} | {b:.3f}° | {p:.3f}° | ×{b / p:.2f} |")
+        rows.append(f"| {label} | {b:.4f}° | {p:.4f}° | ×{b / p:.2f} |")
     rows.append(f"| 90 % cone coverage | {recs[0]['coverage_cone90']:.2f} | "
                 f"{recs[1]['coverage_cone90']:.2f} | |")
     axis = ("u4_x", "u4_y", "u4_z")
@@ -191,21 +191,19 @@ def plan_wheel_axis_vs_baseline(args: list[Records]) -> str:
 @kind("plan_wheel_axis_predicted")
 def plan_wheel_axis_predicted(args: list[Records]) -> str:
     """A wheel-axis plan's prediction against its baseline's (a ``plan wheel-axis`` run
-    directory's summary.json): sd, cone, the variance shares of the torques, limits used."""
+    directory's summary.json): sd, cone, the three largest variance shares, limits used."""
     ((run,),) = args
     s = read_json(run / "summary.json")
     b, p = s["baseline"], s["plan"]
     rows = [f"| {s['wheel']} axis, predicted | baseline, same limits | plan | plan vs baseline |",
             "|---|---|---|---|",
-            f"| largest angular sd | {b['sd_direction_deg']:.3f}° | {p['sd_direction_deg']:.3f}° "
+            f"| largest angular sd | {b['sd_direction_deg']:.4f}° | {p['sd_direction_deg']:.4f}° "
             f"| ×{s['improvement']['sd_direction']:.2f} |",
-            f"| 90 % cone | {b['cone_deg']['90']:.3f}° | {p['cone_deg']['90']:.3f}° | "
+            f"| 90 % cone | {b['cone_deg']['90']:.4f}° | {p['cone_deg']['90']:.4f}° | "
             f"×{s['improvement']['cone90']:.2f} |"]
-    share = [f"{r['variance_shares']['body_torque']:.2f} / "
-             f"{r['variance_shares']['inertial_torque']:.2f}, "
-             f"{r['variance_shares']['torque_rate']:.2f}" for r in (b, p)]
-    rows.append(f"| variance share: body / inertial torque, torque rate | {share[0]} | "
-                f"{share[1]} | |")
+    share = [", ".join(f"{k.replace('_', ' ')} {v:.2f}" for k, v in sorted(
+        r["variance_shares"].items(), key=lambda kv: -kv[1])[:3]) for r in (b, p)]
+    rows.append(f"| largest variance shares | {share[0]} | {share[1]} | |")
     used = [", ".join(f"{r['usage'][k]:.2f}" for k in ("body_rate", "wheel_speed",
                                                          "wheel_torque")) for r in (b, p)]
     rows.append(f"| limits used: body rate, wheel speed, wheel torque | {used[0]} | {used[1]} | |")

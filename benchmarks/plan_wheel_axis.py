@@ -11,7 +11,8 @@ the prior's box; the solved wheel keeps the scenario's true axis), simulates it 
 fits it with the default robust RWA-method model, given the windows of the plan (those the
 prediction detected on the nominal flight: an operator plans them,
 ``--window-a/--window-b``). Per site: fitted posterior
-sd over predicted; the 90 % cone's and each site's 90 % interval's coverage. Writes
+sd over predicted; the 90 % cone's and each site's 90 % interval's coverage; the prediction's
+variance shares (which effects limit the axis). Writes
 ``docs/planning/wheel_axis_<scenario>.json`` (or ``--out``).
 """
 
@@ -106,7 +107,8 @@ def run(name: str, seeds: int, settings, first: int = 0, wheel: str | None = Non
             "predict_seconds": t_pred,
             "predicted": {"sites": dict(zip(AXIS_SITES, pred.site_sd.tolist())),
                           "prior_sd": dict(zip(AXIS_SITES, pred.site_prior_sd.tolist())),
-                          "sd_direction_deg": pred.sd_direction_deg, "cone_deg": pred.cone_deg},
+                          "sd_direction_deg": pred.sd_direction_deg, "cone_deg": pred.cone_deg,
+                          "variance_shares": pred.shares},
             "ratio_median": dict(zip(AXIS_SITES, np.median(ratio, 0).tolist())),
             "ratio_min": dict(zip(AXIS_SITES, ratio.min(0).tolist())),
             "ratio_max": dict(zip(AXIS_SITES, ratio.max(0).tolist())),
@@ -144,10 +146,10 @@ def main(argv=None) -> None:
     from _provenance import start
 
     for name in a.scenarios:
-        r = run(name, a.seeds, settings, a.first_seed, a.wheel)
         stem = Path(name).parent.name if name.endswith(".toml") else name
         path = a.out / f"wheel_axis_{stem}.json"
-        start(path, {**vars(a), "scenarios": [name]}, argv, replace=True)
+        start(path, {**vars(a), "scenarios": [name]}, argv, replace=True)   # commit, load now
+        r = run(name, a.seeds, settings, a.first_seed, a.wheel)
         path.write_text(json.dumps(r, indent=1) + "\n", encoding="utf-8")
         print(f"{name}: sd_dir ratio median {r['sd_direction_ratio_median']:.3f}, cone90 "
               f"coverage {r['coverage_cone90']:.2f}, sites "

@@ -3,20 +3,22 @@
 The fit (:mod:`cassini_bayes.inference.rwa4`, ``fit wheel-axis --method rwa``) samples the wheel's
 axis ``u`` (gnomonic chart ``v``) and the inertia ``π`` (log-Cholesky chart ``ζ``), ``θ = (v, ζ)``;
 the robust model's nuisance effects (gyro bias and scale factor, spin-inertia scales, the known
-wheels' tilts, body and inertial torques) enter the window-mean balance linearly and are
-integrated out exactly in its likelihood. So its posterior is a density in eight coordinates, and
-the prediction is its Laplace approximation on the telemetry flown without noise:
+wheels' tilts, body and inertial torques) enter the window-mean balances and each quiet
+window's momentum slope (the RWA method's torque measurement) linearly and are integrated out
+exactly in its likelihood. So its posterior is a density in eight coordinates, and the
+prediction is its Laplace approximation on the telemetry flown without noise:
 
 1. the scenario is simulated with every sensor error off (:func:`noise_free_telemetry`);
 2. the fit's own data preparation (:func:`~cassini_bayes.inference.rwa4.prepare_rwa4`: windows
-   detected as the fit detects them, window means, nuisance columns, charts) runs on it, and the
-   white-noise levels it would estimate from noisy data are replaced by the scenario's sensors'
-   (:func:`~cassini_bayes.plan.inertia.noise_sigmas`, floored as the fit floors them);
+   detected as the fit detects them, window means and slopes, nuisance columns, charts) runs on
+   it, and the white-noise levels it would estimate from noisy data are replaced by the
+   scenario's sensors' (:func:`~cassini_bayes.plan.inertia.noise_sigmas`, floored as the fit
+   floors them);
 3. the mode is found by the fit's own :func:`~cassini_bayes.inference.laplace.laplace`, and the
    negative Hessian of the fit's own log density (``jax.hessian``: prior, chart Jacobians and the
    likelihood with the nuisances integrated out) there is the posterior precision: on noise-free
-   data the balances vanish at the truth, so it is the expected Fisher information plus the prior
-   (the noise covariance's own dependence on ``θ`` aside, which is second order);
+   data the balances and slopes vanish at the truth, so it is the expected Fisher information
+   plus the prior (the noise covariance's own dependence on ``θ`` aside, which is second order);
 4. every posterior site (``u4_x … u4_z``, ``Ixx … Iyz``) follows by the delta method through the
    chart (``jax.jacfwd``), and the direction's spread from the tangent-plane covariance of ``u``
    (:func:`cone_radii`).
