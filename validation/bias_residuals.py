@@ -11,10 +11,12 @@ measured attitude. What remains should be white sensor noise: ``σ_ω I`` and ``
 sample (the likelihood's ``B``), plus the gyro noise's random walk through ``ΔG``.
 
 Prints, per axis: the residual rms, the per-sample noise sd ``sqrt(diag B)``, the same without
-the rate-step correction (``jump_area``), and the rms of the residual's increments over
+the rate-step correction (``jump_area``), the rms of its second-order terms
+(``physics/rate_step_moments.py``) over that sd, and the rms of the residual's increments over
 intervals in which a pulse fires against quiet ones. Also the residuals' least-squares
 projection on the thrusts and the centre of mass (what a fit with the other parameters at the
-truth would move them by). Needs only this package (not Basilisk):
+truth would move them by), with and without the second-order terms. Needs only this package
+(not Basilisk):
 
     python validation/bias_residuals.py runs/bskbias_dt0.5_s1/bias [--json out.json]
 """
@@ -128,6 +130,12 @@ def analyse(run: Path, model_path: Path) -> dict:
     bare = problem._replace(data=problem.data._replace(events=ev._replace(
         omega_mid=jax.numpy.zeros_like(ev.omega_mid), h_mid=jax.numpy.zeros_like(ev.h_mid))))
     r_bare = resid(bare)
+    # the second-order rate-step terms (physics/rate_step_moments.py) off: every input zero
+    first_only = problem._replace(data=problem.data._replace(events=ev._replace(
+        d_omega=jax.numpy.zeros_like(ev.d_omega), d_h=jax.numpy.zeros_like(ev.d_h),
+        step_moments=jax.numpy.zeros_like(ev.step_moments),
+        step_pairs=ev.step_pairs._replace(value=jax.numpy.zeros_like(ev.step_pairs.value)))))
+    r_second = r - resid(first_only)
     wheel_cov = np.asarray(ev.wheel_cov[0])
     b = NOISE["gyro_rad_s"] ** 2 * sc.inertia @ sc.inertia + sd_rho ** 2 * wheel_cov
     noise_sd = np.sqrt(np.diag(b))
@@ -138,21 +146,28 @@ def analyse(run: Path, model_path: Path) -> dict:
     d = np.diff(r, axis=0)
     inc_ratio = np.sqrt(np.mean(d[fired] ** 2, 0) / np.mean(d[~fired] ** 2, 0))
 
-    # linearised least squares of the residuals on (F, com) with the rest at the truth,
-    # weighted by the per-sample noise: what the data would move them by
-    cols, eps = [], 1e-4
-    for k in range(len(names)):
-        f = f_true.copy()
-        f[k] += eps
-        cols.append((resid(problem, thrust=f) - r).ravel() / eps)
-    for k in range(3):
-        c = com.copy()
-        c[k] += 1e-4
-        cols.append((resid(problem, c=c) - r).ravel() / 1e-4)
-    w = np.tile(1.0 / noise_sd, n)
-    a = -np.stack(cols, 1) * w[:, None]
-    step, *_ = np.linalg.lstsq(a, r.ravel() * w, rcond=None)
-    cov = np.linalg.inv(a.T @ a)
+    def lsq(prob):
+        """Linearised least squares of the residuals on (F, com) with the rest at the truth,
+        weighted by the per-sample noise: what the data would move them by, and its cov."""
+        r0, cols, eps = resid(prob), [], 1e-4
+        for k in range(len(names)):
+            f = f_true.copy()
+            f[k] += eps
+            cols.append((resid(prob, thrust=f) - r0).ravel() / eps)
+        for k in range(3):
+            c = com.copy()
+            c[k] += eps
+            cols.append((resid(prob, c=c) - r0).ravel() / eps)
+        w = np.tile(1.0 / noise_sd, n)
+        a = -np.stack(cols, 1) * w[:, None]
+        return np.linalg.lstsq(a, r0.ravel() * w, rcond=None)[0], np.linalg.inv(a.T @ a)
+
+    def per_entry(v):
+        return {**{f"F[{nm}]_pct": 100 * v[k] / f_true[k] for k, nm in enumerate(names)},
+                **{f"com_{ax}_mm": 1e3 * v[len(names) + k] for k, ax in enumerate("xyz")}}
+
+    step, cov = lsq(problem)
+    step_first, _ = lsq(first_only)
     out = {"common_scale_profile": common_scale_profile(r, sc.inertia, wheel_cov, sigma[0]),
            "run": str(run), "package": cassini_bayes.__file__, "n_samples": n,
            "sample_period_s": float(np.median(np.diff(t))), "n_pulses": int(np.size(log.t_on)),
@@ -162,14 +177,11 @@ def analyse(run: Path, model_path: Path) -> dict:
            "residual_rms_without_step_correction_nms":
                np.sqrt(np.mean(r_bare ** 2, 0)).tolist(),
            "fired_over_quiet_increment_rms": inc_ratio.tolist(),
-           "lsq_shift_at_truth": {
-               **{f"F[{nm}]_pct": 100 * step[k] / f_true[k] for k, nm in enumerate(names)},
-               **{f"com_{ax}_mm": 1e3 * step[len(names) + k] for k, ax in enumerate("xyz")}},
-           "lsq_sd_white": {
-               **{f"F[{nm}]_pct": 100 * np.sqrt(cov[k, k]) / f_true[k]
-                  for k, nm in enumerate(names)},
-               **{f"com_{ax}_mm": 1e3 * np.sqrt(cov[len(names) + k, len(names) + k])
-                  for k, ax in enumerate("xyz")}}}
+           "second_order_rms_over_noise":
+               (np.sqrt(np.mean(r_second ** 2, 0)) / noise_sd).tolist(),
+           "lsq_shift_at_truth": per_entry(step),
+           "lsq_shift_at_truth_without_second_order": per_entry(step_first),
+           "lsq_sd_white": per_entry(np.sqrt(np.diag(cov)))}
     return out
 
 
@@ -184,13 +196,16 @@ def main(argv=None) -> None:
         print(f"\n{o['run']}: {o['n_samples']} samples every {o['sample_period_s']:g} s, "
               f"{o['n_pulses']} pulses")
         for k in ("residual_rms_nms", "noise_sd_nms", "rms_over_noise",
-                  "residual_rms_without_step_correction_nms", "fired_over_quiet_increment_rms"):
+                  "residual_rms_without_step_correction_nms", "second_order_rms_over_noise",
+                  "fired_over_quiet_increment_rms"):
             print(f"  {k:>42}: " + ", ".join(f"{v:.3g}" for v in o[k]))
         print("  common-scale profile log-likelihood (k: Δ): " + ", ".join(
             f"{k} {v['delta']:+.2f}" for k, v in o["common_scale_profile"].items()))
         sd = o["lsq_sd_white"]
         print("  least-squares shift at the truth (white noise; sd): " + ", ".join(
             f"{k} {v:+.2f} ({sd[k]:.2f})" for k, v in o["lsq_shift_at_truth"].items()))
+        print("  the same without the second-order rate-step terms: " + ", ".join(
+            f"{k} {v:+.2f}" for k, v in o["lsq_shift_at_truth_without_second_order"].items()))
     if a.json:
         a.json.write_text(json.dumps(res, indent=2))
 
