@@ -2,8 +2,9 @@
 
 Prints the compile time, the wall time per 10⁵ draws of the jitted JAX analysis
 (:func:`cassini_bayes.analysis.mass_property.mass_property_mc`, median of repeats) and, as a
-baseline in the same process, the same computation written directly in vectorised NumPy (draws, tensors,
-``numpy.linalg.solve``, angles). docs/design.md §8 target: 10⁵ draws in under a second.
+baseline in the same process, the same computation written directly in vectorised NumPy
+(draws, tensors, ``numpy.linalg.solve``, angles). docs/design.md §8 target: 10⁵ draws in
+under a second.
 
     python benchmarks/bench_mass_property.py [--draws 100000] [--repeats 7]
 """

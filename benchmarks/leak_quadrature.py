@@ -60,7 +60,7 @@ def _stretches(seeds):
 
 
 def _grid_module(commit: str):
-    """The leak module of ``commit``, imported from ``git show`` under the name ``_leak_<commit>``."""
+    """The leak module of ``commit``, imported from ``git show`` as ``_leak_<commit>``."""
     src = subprocess.run(["git", "-C", str(ROOT), "show",
                           f"{commit}:cassini_bayes/inference/leak.py"],
                          check=True, capture_output=True, text=True).stdout

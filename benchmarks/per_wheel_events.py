@@ -35,7 +35,8 @@ def _thrust(post, sc, sim):
     lo, hi = np.quantile(f, [0.05, 0.95])
     taus = ", ".join(f"sd({n}) {1e3 * float(p[n].std()):.2f} ms" for n in TAU_NAMES)
     return (f"F 90 % [{lo:.5f}, {hi:.5f}] (truth {f_true:.5f}) "
-            f"{'covers' if lo <= f_true <= hi else 'MISSES'}  z {(f.mean() - f_true) / f.std():+.2f}"
+            f"{'covers' if lo <= f_true <= hi else 'MISSES'}"
+            f"  z {(f.mean() - f_true) / f.std():+.2f}"
             f"  sd(F) {100 * f.std() / f.mean():.3f} %  {taus}")
 
 
