@@ -15,8 +15,8 @@ def load_arviz() -> ModuleType:
     Numba, where installed, is hidden from ArviZ's import: ArviZ would compile a numba ufunc for
     ECDF bands at import (most of a second of every fit's start-up) and route its diagnostics
     through numba kernels, one of which fails under NumPy 2 (``mcse(method="sd")``). Its NumPy
-    paths compute the same diagnostics, as they do wherever numba is absent. A process that imported numba or ArviZ itself keeps
-    them as they are, and numba stays importable afterwards.
+    paths compute the same diagnostics, as they do wherever numba is absent. A process that
+    imported numba or ArviZ itself keeps them as they are, and numba stays importable afterwards.
 
     ArviZ's log line "Shape validation failed" is silenced: a one-chain run's R-hat is
     undefined, which ``summary.json`` and the command's result line say in words.

@@ -50,7 +50,8 @@ def skew(v: Array) -> Array:
 
 
 def dcm(q: Array) -> Array:
-    """Direction-cosine matrix ``A(q)``, inertial → body (Brown Eq 2, the matrix inside the inverse).
+    """Direction-cosine matrix ``A(q)``, inertial → body (Brown Eq 2, the matrix inside the
+    inverse).
 
     ``q`` need not be normalised: it is normalised first, so ``dcm`` is always a rotation.
     """

@@ -146,7 +146,8 @@ def assert_within_tolerance(pin: dict, summary: dict, where: str = "summary", *,
 def _compare(a, b, rule, run_rule, where: str, other_seed: bool, failures: list[str]) -> None:
     if isinstance(a, dict):
         if not (isinstance(b, dict) and set(a) == set(b)):
-            failures.append(f"{where}: keys differ: {set(a) ^ set(b) if isinstance(b, dict) else b}")
+            failures.append(
+                f"{where}: keys differ: {set(a) ^ set(b) if isinstance(b, dict) else b}")
             return
         for k in a:
             _compare(a[k], b[k], rule[k], None if run_rule is None else run_rule[k],
@@ -337,8 +338,9 @@ def _mcse_by_label(idata) -> dict[str, dict[str, float]]:
         extra = [d for d in da.dims if d not in ("chain", "draw")]
         if extra:
             stacked = da.stack(_e=extra).transpose("chain", "draw", "_e")
-            items = [(f"{name}[{','.join(str(i) for i in (ix if isinstance(ix, tuple) else (ix,)))}]",
-                      stacked.values[..., j]) for j, ix in enumerate(stacked["_e"].values)]
+            items = [
+                (f"{name}[{','.join(str(i) for i in (ix if isinstance(ix, tuple) else (ix,)))}]",
+                 stacked.values[..., j]) for j, ix in enumerate(stacked["_e"].values)]
         else:
             items = [(name, da.values)]
         for label, x in items:

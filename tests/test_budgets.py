@@ -37,7 +37,7 @@ Z90 = 1.6448536269514722  # standard-normal 95th percentile
 EST = np.asarray(TABLE1["post_probe"]["est"], float)
 
 
-# --- propagation -----------------------------------------------------------------------------------
+# --- propagation -------------------------------------------------------------------------------
 
 
 def test_a_linear_line_of_gaussians_gives_the_analytic_interval_and_shares():
@@ -139,7 +139,7 @@ def test_control_line_quasi_static_error_is_analytic():
     np.testing.assert_array_equal(m.wheel_axes, axes)
 
 
-# --- the papers' numbers still reproduce -----------------------------------------------------------
+# --- the papers' numbers still reproduce -------------------------------------------------------
 
 
 def _rows(budget, name):

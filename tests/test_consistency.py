@@ -280,9 +280,9 @@ def test_an_unsigned_tachometer_is_refused_in_a_file_without_thrusters(runs):
     unsigned = _edit_wheel(tel, name, lambda r, i: r.__setitem__((slice(None), i), np.abs(r[:, i])))
     axes = cons.wheel_momentum_scale(tel, sc).axes
     assert tel.on_times is None and axes.alignment >= 0.998 and axes.swing_nms > 5.0
-    with pytest.raises(InputError, match=rf"do not balance the body's even with a free axis per "
-                                         rf"wheel \(alignment 0\.\d+; .*{name.lower()} stays on one "
-                                         r"side of 0 rpm yet reaches"):
+    with pytest.raises(InputError, match=rf"do not balance the body's even with a free axis "
+                                         rf"per wheel \(alignment 0\.\d+; .*{name.lower()} stays "
+                                         r"on one side of 0 rpm yet reaches"):
         cons.check_telemetry_data(unsigned, sc, log)
 
 

@@ -273,7 +273,6 @@ def test_four_wheel_method_recovers_axis_and_its_angle_from_rwa3():
     n = 400
     t = np.arange(n) * 1.0
     rho4 = np.repeat([0.0, 300.0, -200.0, 500.0], n // 4) * RPM
-    q = np.tile(Q0, (n, 1))
     h_fixed = dcm_np(Q0) @ H_N - np.outer(J4[3] * rho4, U4)
     r123 = np.linalg.solve(CASSINI_WHEEL_AXES.T, h_fixed.T).T / J4[:3]
     rates = np.column_stack([r123, rho4])

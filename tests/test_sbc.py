@@ -1,4 +1,5 @@
-"""Simulation-based calibration statistics (``cassini_bayes.analysis.sbc``) and SBC of the toy model.
+"""Simulation-based calibration statistics (``cassini_bayes.analysis.sbc``) and SBC of the toy
+model.
 
 Statistical tests here use fixed keys/seeds, so each is deterministic; the false-failure rate (FFR)
 stated with each is the probability, over the choice of key, that a correct implementation fails.

@@ -18,8 +18,11 @@ import numpy as np
 import pytest
 
 from cassini_bayes.analysis.sbc_models import THRUST_SCENARIO, ModelSpec, build_model
-from cassini_bayes.analysis.sbc_models._thrust_robust import (THRUST_ESPA_SCENARIO, robust_thrust_truth,
-                                                      simulate_robust_thrust)
+from cassini_bayes.analysis.sbc_models._thrust_robust import (
+    THRUST_ESPA_SCENARIO,
+    robust_thrust_truth,
+    simulate_robust_thrust,
+)
 from cassini_bayes.errors import InputError
 from cassini_bayes.simulate.scenario import load_scenario
 

@@ -1,5 +1,6 @@
-"""Optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections of a spacecraft model (priors of the
-robust models' nuisance parameters): defaults, values read, bad values rejected clearly."""
+"""Optional ``[gyro]``, ``[wheel_knowledge]`` and ``[telemetry_knowledge]`` sections of a
+spacecraft model (priors of the robust models' nuisance parameters): defaults, values read, bad
+values rejected clearly."""
 
 from __future__ import annotations
 

@@ -154,7 +154,8 @@ def axis_on_cone(phi_rad, cone_rad: float = ARTICULATION_CONE_RAD) -> Array:
 
 
 def inertia_matrix(moments, products) -> Array:
-    """Symmetric (..., 3, 3) tensor from (..., 3) moments (Ixx, Iyy, Izz), products (Ixy, Ixz, Iyz)."""
+    """Symmetric (..., 3, 3) tensor from (..., 3) moments (Ixx, Iyy, Izz) and products
+    (Ixy, Ixz, Iyz)."""
     m, p = jnp.asarray(moments), jnp.asarray(products)
     xx, yy, zz = m[..., 0], m[..., 1], m[..., 2]
     xy, xz, yz = p[..., 0], p[..., 1], p[..., 2]

@@ -2,11 +2,11 @@
 
 Simulation-based calibration (SBC, Talts et al. 2018, "Validating Bayesian inference algorithms
 with simulation-based calibration", arXiv:1804.06788) checks a whole inference pipeline — prior,
-simulator, likelihood, sampler — on synthetic truth. For replicate ``n``: draw ``θ̃ ~ p(θ)``, simulate
-``ỹ ~ p(y | θ̃)``, draw ``L`` (thinned, nearly independent) posterior draws ``θ_1..θ_L ~ p(θ | ỹ)``
-and record the rank ``r = #{l : θ_l < θ̃} ∈ {0, …, L}``. If the posterior is right, ``r`` is
-discrete-uniform on ``{0, …, L}`` for every parameter (Talts et al. 2018, Theorem 1). This module is
-the statistics of that check, independent of any model:
+simulator, likelihood, sampler — on synthetic truth. For replicate ``n``: draw ``θ̃ ~ p(θ)``,
+simulate ``ỹ ~ p(y | θ̃)``, draw ``L`` (thinned, nearly independent) posterior draws
+``θ_1..θ_L ~ p(θ | ỹ)`` and record the rank ``r = #{l : θ_l < θ̃} ∈ {0, …, L}``. If the posterior
+is right, ``r`` is discrete-uniform on ``{0, …, L}`` for every parameter (Talts et al. 2018,
+Theorem 1). This module is the statistics of that check, independent of any model:
 
 - :func:`ranks` — the rank of the truth among the draws, ties broken at random with a key;
 - :func:`chi2_uniformity` — Pearson's chi-square on ``B`` bins of ranks, ``p`` from

@@ -1,10 +1,11 @@
 """The public Python API, re-exported by :mod:`cassini_bayes` (docs/api.md).
 
 Read inputs (:func:`read_telemetry`, :func:`read_pulses`, :func:`load_spacecraft`), make
-synthetic ones (:func:`simulate`), and fit what ``cassini-bayes fit inertia|thrust|wheel-axis|rwa4`` fits
-(:func:`fit_inertia`, :func:`fit_thrust`, :func:`fit_wheel_axis`, :func:`fit_rwa4`): each returns a :class:`FitResult`
-whose ``summary()`` is the run's ``summary.json`` and whose ``save(dir)`` writes the run
-directory the command writes. The command line is a thin layer over these functions.
+synthetic ones (:func:`simulate`), and fit what
+``cassini-bayes fit inertia|thrust|wheel-axis|rwa4`` fits (:func:`fit_inertia`, :func:`fit_thrust`,
+:func:`fit_wheel_axis`, :func:`fit_rwa4`): each returns a :class:`FitResult` whose ``summary()``
+is the run's ``summary.json`` and whose ``save(dir)`` writes the run directory the command
+writes. The command line is a thin layer over these functions.
 
 Also here, for the experiments and the CLI: the per-model summary builders
 (:func:`inertia_summary`, :func:`thrust_summary`, :func:`rwa4_summary`), the run writer

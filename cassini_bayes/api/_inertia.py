@@ -46,8 +46,9 @@ def inertia_baseline(telemetries: Sequence[Telemetry], spacecraft: Spacecraft
             [f"baseline: {m}" for m in fit.warnings])
 
 
-def inertia_summary(post: InertiaPosterior, *, seed: int, torque: bool, robust: bool, wheel_errors: str,
-                    baseline: dict | None, warnings: Sequence[str] = ()) -> dict:
+def inertia_summary(post: InertiaPosterior, *, seed: int, torque: bool, robust: bool,
+                    wheel_errors: str, baseline: dict | None,
+                    warnings: Sequence[str] = ()) -> dict:
     """``summary.json`` of an inertia posterior (``InertiaPosterior``): parameters, baseline,
     diagnostics, adequacy, nuisance, ``model``, ``wheel_errors`` and ``sensitivity``."""
     from cassini_bayes.inference.adequacy import inertia_adequacy
@@ -74,7 +75,8 @@ def inertia_summary(post: InertiaPosterior, *, seed: int, torque: bool, robust: 
 
 @jax_entry
 @shows_progress
-def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: int = 0, chains: int = 4, warmup: int = 1000,
+def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: int = 0,
+                chains: int = 4, warmup: int = 1000,
                 draws: int = 1000, target_accept: float = 0.9, robust: bool = True,
                 wheel_errors: WheelErrors = "per_wheel", torque: bool = True,
                 progress: bool = False) -> FitResult:

@@ -98,7 +98,8 @@ def _items(x: Any, name: str) -> list:
                      f"{type(x).__name__}")
 
 
-def telemetry_inputs(telemetry: TelemetriesArg, name: str = "telemetry", spacecraft: Spacecraft | None = None
+def telemetry_inputs(telemetry: TelemetriesArg, name: str = "telemetry",
+                     spacecraft: Spacecraft | None = None
                      ) -> tuple[list[Telemetry], list[dict], list[Path]]:
     """``(telemetries, config records, input paths)`` of a telemetry argument: a
     :class:`~cassini_bayes.telemetry.Telemetry` or a file path, or a list of them; files are read
@@ -198,7 +199,8 @@ def one_pulse_log(pulses: PulsesArg, name: str = "pulses", *,
     return read_pulses(pulses, spacecraft=spacecraft)
 
 
-def pulse_inputs(pulses: PulseLogsArg | None, name: str = "pulses", spacecraft: Spacecraft | None = None
+def pulse_inputs(pulses: PulseLogsArg | None, name: str = "pulses",
+                 spacecraft: Spacecraft | None = None
                  ) -> tuple[list[PulseLog], list[dict], list[Path]]:
     """``(pulse logs, config records, input paths)`` of a pulse-log argument: a
     :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list of them (thrusters of

@@ -197,7 +197,7 @@ def fit_per_thruster(v, j, q_matrix, names, combinations=None) -> ThrustFit:
     residual = y - u[:, fired] @ f[fired]
 
     def estimable(w):
-        ws = np.asarray(w, float)[fired] / scale[fired]                 # the weights in scaled units
+        ws = np.asarray(w, float)[fired] / scale[fired]             # the weights in scaled units
         n = np.linalg.norm(ws)
         return n > 0 and not np.any(np.asarray(w, float)[~fired]) and (
             np.linalg.norm(ws - row.T @ (row @ ws)) <= 1e-6 * n)

@@ -280,9 +280,9 @@ def _tables(results, names, settings, f_true, tau_true, td) -> tuple:
                "posterior mean ± sd"), tuple(rows),
               note=f"Ours on simulated events with true thrust {f_true:g} N and τ = "
                    f"{', '.join(f'{1e3 * x:g}' for x in tau_true)} ms (delay, rise, fall). The "
-                   "paper's columns are flight data: its unadjusted ~0.8 N and adjusted 0.57-0.70 N "
-                   "are reproduced by the impulse-ratio experiment; here the same ~1.3-1.4× "
-                   "inflation of the unadjusted estimate shows on our data."),
+                   "paper's columns are flight data: its unadjusted ~0.8 N and adjusted "
+                   "0.57-0.70 N are reproduced by the impulse-ratio experiment; here the same "
+                   "~1.3-1.4× inflation of the unadjusted estimate shows on our data."),
         Table("Pooled posterior of the time constants (ms)",
               ("constant", "truth", "posterior mean", "posterior sd"),
               tuple((n, f"{1e3 * t:.1f}", f"{1e3 * m:.2f}", f"{1e3 * s:.2f}")

@@ -241,7 +241,8 @@ def propagate_conic(r0: ArrayLike, v0: ArrayLike, mu: ArrayLike, dt: ArrayLike) 
     a zero ``r0``, a non-finite value, a last axis not of length 3); traced ones (inside
     ``jit``/``grad``) are not.
     """
-    from cassini_bayes.ivp._checks import check_finite, check_mu, check_nonzero_vectors, check_vectors
+    from cassini_bayes.ivp._checks import (check_finite, check_mu, check_nonzero_vectors,
+                                           check_vectors)
 
     c_r0, c_v0, c_mu, c_dt = (_concrete(x) for x in (r0, v0, mu, dt))
     if c_r0 is not None:

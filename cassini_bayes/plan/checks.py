@@ -43,8 +43,10 @@ def usage(t, omega, wheel_rates, axes, j, on, limits: Limits) -> dict:
     if np.all(np.isfinite(axis_max)):
         out["axis_rate"] = xp.max(xp.abs(omega) / axis_max[None], -1)
     if np.isfinite(limits.wheel_momentum_max_nms):
-        out["wheel_momentum"] = xp.max(xp.abs(rho) * np.asarray(j, float)[None], -1) / limits.wheel_momentum_max_nms
-    absolute = (rho + omega @ np.asarray(axes, float).T) * np.asarray(j, float)[None]          # h_k = J_k (ρ_k + g_k·ω)
+        out["wheel_momentum"] = (xp.max(xp.abs(rho) * np.asarray(j, float)[None], -1)
+                                 / limits.wheel_momentum_max_nms)
+    # h_k = J_k (ρ_k + g_k·ω)
+    absolute = (rho + omega @ np.asarray(axes, float).T) * np.asarray(j, float)[None]
     torque = xp.abs(xp.diff(absolute, axis=0)) / xp.diff(t)[:, None]
     out["wheel_torque"] = xp.max(torque * on[None], -1) / limits.wheel_torque_max_nm
     return out

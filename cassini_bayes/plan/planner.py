@@ -151,7 +151,10 @@ def plan_inertia_slews(limits: Limits, base: Scenario, spacecraft_path: str, *,
 def slews_of(p: InertiaPlan) -> Slews:
     """The plan's slews (NumPy, SI)."""
     rows = p.scenario["slew"]
-    f = lambda k: np.array([r[k] for r in rows], float)
+
+    def f(k):
+        return np.array([r[k] for r in rows], float)
+
     rate, acc, ang = f("rate_mrad_s") * 1e-3, f("accel_mrad_s2") * 1e-3, np.deg2rad(f("angle_deg"))
     dur = np.array([slew_duration(a, r, c) for a, r, c in zip(ang, rate, acc)])
     return Slews(f("t_start_s"), np.array([r["axis"] for r in rows], float), ang, rate, acc, dur)

@@ -12,7 +12,8 @@ from matplotlib.figure import Figure
 from cassini_bayes.report.figures import png_bytes
 from cassini_bayes.report.html import figure, html_page, meta_list, paragraph, section, table
 
-__all__ = ["segment_errors_png", "equioscillation_png", "most_uniform_segment", "errors_png", "ivp_fit_page"]
+__all__ = ["segment_errors_png", "equioscillation_png", "most_uniform_segment", "errors_png",
+           "ivp_fit_page"]
 
 REQ_COLOR = "#c0392b"
 _MAX_PANELS = 12

@@ -209,8 +209,9 @@ def budget_check(label: str, draws: np.ndarray) -> BudgetCheck | None:
     """The papers' budget of one calibrated quantity, judged on its posterior draws (module
     docstring); ``None`` for a quantity the papers give no budget for.
 
-    A moment of inertia: Feldman & Lee Eq 12, ``100 |Î − I| / I`` against ±1 % (Feldman & Lee §VI); a
-    thrust (any parameter in newtons): ``100 |F̂ − F| / F`` against ±10 % (Feldman & Lee §V, §VI).
+    A moment of inertia: Feldman & Lee Eq 12, ``100 |Î − I| / I`` against ±1 % (Feldman & Lee
+    §VI); a thrust (any parameter in newtons): ``100 |F̂ − F| / F`` against ±10 % (Feldman & Lee
+    §V, §VI).
     """
     from cassini_bayes.analysis import budget_lines as bl
 

@@ -64,13 +64,14 @@ def thruster_sets(sc: Spacecraft) -> np.ndarray:
     (the others are backups), torque ``τ = Σ F_s Q_s`` (Feldman & Lee Eq 16) and net force
     ``f = Σ F_s d_s`` at the model's nominal thrusts. A set is usable for an axis and sign when
     each of its thrusters turns the spacecraft that way by at least 5 % of the strongest
-    thruster's torque (no passengers) and its off-axis torque ``|τ_off| ≤ 0.5 τ_on``. Score ``τ_on − |τ_off| − σ_e |f|`` (``σ_e`` the
-    centre-of-mass knowledge: the torque the net force may add); ties go to the smaller net
-    force, then to fewer thrusters, then to the thrusters listed first. An axis whose best sets
-    both ways are force-free couples (``|f| ≤ 10 %`` of the summed thrust) keeps those thrusters;
-    the other axes choose among the remaining thrusters when those give a usable set: Cassini's
-    Y-facing couples turn about Z, its Z-facing thrusters about X and Y (Feldman & Lee §II).
-    Raises :class:`InputError` naming the model and the axis when no set is usable.
+    thruster's torque (no passengers) and its off-axis torque ``|τ_off| ≤ 0.5 τ_on``. Score
+    ``τ_on − |τ_off| − σ_e |f|`` (``σ_e`` the centre-of-mass knowledge: the torque the net force may
+    add); ties go to the smaller net force, then to fewer thrusters, then to the thrusters listed
+    first. An axis whose best sets both ways are force-free couples (``|f| ≤ 10 %`` of the summed
+    thrust) keeps those thrusters; the other axes choose among the remaining thrusters when those
+    give a usable set: Cassini's Y-facing couples turn about Z, its Z-facing thrusters about X and Y
+    (Feldman & Lee §II). Raises :class:`InputError` naming the model and the axis when no set is
+    usable.
     """
     m = len(sc.thrusters)
     branches = [t.branch for t in sc.thrusters]

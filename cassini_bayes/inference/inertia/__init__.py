@@ -34,17 +34,17 @@ earlier model), two small tilts of each active wheel's spin axis, a body-fixed t
 torques change as the slews turn the sun line). All enter the residual linearly to first order
 (:mod:`cassini_bayes.inference.nuisance`), so the sufficient-statistics likelihood below keeps
 its O(P²) cost (P grows by 9F + 4 + 3K). The common scale ``c = c_s + mean_k d_k`` does not
-enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and every wheel inertia together leaves every momentum balance unchanged (Psiaki 2005). Dividing the
-balance by ``1 + c`` shows what the data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and
-the wheel scales relative to the common one, ``δ_k = (c_k − c)/(1 + c)``, which enter linearly
-(column ``J_k ρ_k g_k``) and are exact: ``(1 + c_k)/(1 + c) = 1 + δ_k``. The model sets
-``π = (1 + c) π̃`` and ``c_k = c + (1 + c) δ_k``; ``c`` keeps its prior and the moments'
-posterior sd carries it (prior sd ``√(σ_s² + σ_J²/K)``: 0.58 % for three wheels at the default
-0.5 % shared and 0.5 % each; 0.5 % in the common model), while the ``δ_k`` are learned from
-slews about several axes. The constant external torque ``T_N``
-is in both models (``torque=True``), prior sd the model file's ``[torque_knowledge] sd_nm``
-per axis (default 15 µN m, the Feldman & Lee App. A bound; Brown quotes solar/gas torques of the
-same few-µN m order).
+enter the likelihood at all: scaling ``I``, ``H_0``, ``T_N`` and every wheel inertia together leaves
+every momentum balance unchanged (Psiaki 2005). Dividing the balance by ``1 + c`` shows what the
+data see: ``π̃ = π/(1 + c)`` (likewise ``H_0``, ``T_N``) and the wheel scales relative to the common
+one, ``δ_k = (c_k − c)/(1 + c)``, which enter linearly (column ``J_k ρ_k g_k``) and are exact:
+``(1 + c_k)/(1 + c) = 1 + δ_k``. The model sets ``π = (1 + c) π̃`` and ``c_k = c + (1 + c) δ_k``;
+``c`` keeps its prior and the moments' posterior sd carries it (prior sd ``√(σ_s² + σ_J²/K)``:
+0.58 % for three wheels at the default 0.5 % shared and 0.5 % each; 0.5 % in the common model),
+while the ``δ_k`` are learned from slews about several axes. The constant external torque ``T_N`` is
+in both models (``torque=True``), prior sd the model file's ``[torque_knowledge] sd_nm`` per axis
+(default 15 µN m, the Feldman & Lee App. A bound; Brown quotes solar/gas torques of the same
+few-µN m order).
 
 Physical inertia by construction
 --------------------------------

@@ -40,8 +40,9 @@ noise and the seed. Unknown keys, missing required values and impossible values 
                 (:class:`FlexMode`; off when the section is absent)
     [[window]]  name, t0_s, t1_s      (quiet windows reported in truth.json)
     [leak]      thruster (of the truth model), fraction (0 < f ≤ 1 of the true thrust),
-                t_start_s: from ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a stuck-open valve leaking
-                ``f`` of thruster ``k``'s thrust, Lee §3.2; off when the section is absent)
+                t_start_s: from ``t_start_s`` on, a constant torque ``f F_k Q[:, k]`` (a
+                stuck-open valve leaking ``f`` of thruster ``k``'s thrust, Lee §3.2; off when the
+                section is absent)
 
 Thrusters: RCS control (``control = "rcs"``) flies any model whose thrusters can turn it about
 each body axis both ways (the sets of :func:`~cassini_bayes.simulate.controllers.thruster_sets`,
