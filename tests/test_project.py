@@ -18,6 +18,15 @@ def test_layers_import_contract():
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_code_passes_the_linter():
+    """pycodestyle errors and warnings and pyflakes (ruff's E, F, W; line length 100,
+    pyproject's [tool.ruff]) over the package and the tests: no line past 100, no unused name."""
+    proc = subprocess.run([sys.executable, "-m", "ruff", "check", "--select", "E,F,W",
+                           "--output-format", "concise", "cassini_bayes", "tests"],
+                          cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
 def test_ci_runs_exactly_the_readme_test_command():
     readme = (ROOT / "README.md").read_text()
     blocks = re.findall(r"```bash\n(.*?)\n```", readme, re.S)

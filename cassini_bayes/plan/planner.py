@@ -19,7 +19,7 @@ import numpy as np
 from cassini_bayes.errors import InputError
 from cassini_bayes.plan.evaluate import InertiaPrediction, evaluate_inertia
 from cassini_bayes.plan.limits import Limits, base_scenario_dict
-from cassini_bayes.plan.manoeuvre import Slews, accel_limit, rate_limit, slew_table
+from cassini_bayes.plan.manoeuvre import accel_limit, rate_limit, slew_table
 from cassini_bayes.plan.optimise import (
     SLEW_COUNTS,
     TARGETS,
@@ -146,15 +146,3 @@ def plan_inertia_slews(limits: Limits, base: Scenario, spacecraft_path: str, *,
         bd, name = None, f"scenario {baseline.name}"
     base_pred = evaluate_inertia(baseline, limits)
     return InertiaPlan(limits, d, pred, base_pred, name, bd, target, tuple(search))
-
-
-def slews_of(p: InertiaPlan) -> Slews:
-    """The plan's slews (NumPy, SI)."""
-    rows = p.scenario["slew"]
-
-    def f(k):
-        return np.array([r[k] for r in rows], float)
-
-    rate, acc, ang = f("rate_mrad_s") * 1e-3, f("accel_mrad_s2") * 1e-3, np.deg2rad(f("angle_deg"))
-    dur = np.array([slew_duration(a, r, c) for a, r, c in zip(ang, rate, acc)])
-    return Slews(f("t_start_s"), np.array([r["axis"] for r in rows], float), ang, rate, acc, dur)
