@@ -213,3 +213,42 @@ def open_world_wheel_axis(args: list[Records]) -> str:
                         f"{median(f['cone90_deg'] for f in fits):#.3g}° | "
                         + _axis_fit_cells(fits))
     return "\n".join(rows)
+
+
+@kind("open_world_per_thruster")
+def open_world_per_thruster(args: list[Records]) -> str:
+    """Open-world per-thruster thrust coverage per record (coverage_open_world.py records of
+    ``espa_bias*``): the setting (effects switched off), seeds, 90 % coverage over all entries
+    and per group (thrusts, impulse bits, centre of mass, time constants), every thrust within
+    the 3 % budget, converged fits (R-hat ≤ 1.01, no divergence), adequacy, and whether every
+    fit covering under half its entries was flagged (not converged or adequacy failed)."""
+    import json as _json
+
+    from _provenance import manifest_path
+
+    groups = (("F[", "thrusts"), ("bit[", "bits"), ("com_", "com"), ("tau_", "τ"))
+    rows = ["| record | setting | seeds | all entries | thrusts | impulse bits | centre of mass "
+            "| time constants | thrusts within 3 % | converged | adequacy ok | bad fits flagged "
+            "|", "|" + "---|" * 12]
+    for group in args:
+        records = [r for path in group for r in read_jsonl(path)
+                   if group.seeds is None or r["seed"] in group.seeds]
+        opts = _json.loads(manifest_path(group[0]).read_text())["options"]
+        fits = [r["fits"]["per_wheel"] for r in records]
+        seeds = sorted(r["seed"] for r in records)
+        cells = []
+        for prefix, _ in groups:
+            hits = [h for f in fits for e, h in zip(f["entries"], f["hit"], strict=True)
+                    if e.startswith(prefix)]
+            cells.append(coverage_cell(sum(hits), len(hits)) if hits else "—")
+        hits = [h for f in fits for h in f["hit"]]
+        ok = [f["r_hat"] <= 1.01 and not f["divergences"] for f in fits]
+        bad = [i for i, f in enumerate(fits) if sum(f["hit"]) < len(f["hit"]) / 2]
+        flagged = sum(not ok[i] or not fits[i]["adequacy_ok"] for i in bad)
+        span = f"{seeds[0]}–{seeds[-1]}" if len(seeds) > 1 else f"{seeds[0]}"
+        n = len(fits)
+        rows.append(f"| `{'+'.join(p.name for p in group)}` | {_setting(opts)} | {span} ({n}) | "
+                    f"{coverage_cell(sum(hits), len(hits))} | " + " | ".join(cells)
+                    + f" | {sum(f['budget'] for f in fits)}/{n} | {sum(ok)}/{n} | "
+                    f"{sum(f['adequacy_ok'] for f in fits)}/{n} | {flagged}/{len(bad)} |")
+    return "\n".join(rows)
