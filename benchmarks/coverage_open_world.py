@@ -396,11 +396,11 @@ def main(argv=None) -> None:
 
         start(args.out, opts, argv)
         done = {(r["family"], r["seed"]) for r in rows}
-        t0 = time.perf_counter()
         for seed in range(args.first_seed, args.first_seed + args.seeds):
             for family in args.families:
                 if (family, seed) in done:
                     continue
+                t0 = time.perf_counter()
                 if not scenario_path(FAMILIES[family][1]).exists():
                     sys.exit(f"{family}: no scenario {FAMILIES[family][1]}.toml under "
                              "experiments/scenarios/")
