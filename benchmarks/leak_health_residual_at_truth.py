@@ -31,6 +31,7 @@ import sys
 import numpy as np
 
 import cassini_bayes
+from cassini_bayes.files import write_text
 
 
 def flight(name: str, sample_period_s: float | None = None):
@@ -137,8 +138,7 @@ def main(argv=None) -> int:
                          + f"; health estimate - truth max {m['health_offset_max_abs']:.2f} "
                          "white sd"))
     if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        write_text(a.json, json.dumps(out, indent=1))
     return 0
 
 

@@ -22,6 +22,7 @@ import sys
 import numpy as np
 
 import cassini_bayes
+from cassini_bayes.files import write_text
 
 _USERS = ("cassini_bayes.inference.leak._inputs", "cassini_bayes.inference.health.summary")
 
@@ -138,8 +139,7 @@ def main(argv=None) -> int:
               f"{np.max(np.abs(d)):.3g} sd over {d.size} channels; sd ratio "
               f"{min(m['sd_ratio']):.4f}-{max(m['sd_ratio']):.4f}")
     if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(row, fh, indent=1)
+        write_text(a.json, json.dumps(row, indent=1))
     return 0
 
 

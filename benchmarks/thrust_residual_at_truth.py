@@ -23,6 +23,7 @@ import jax
 import numpy as np
 
 import cassini_bayes
+from cassini_bayes.files import write_text
 
 
 def residuals(name: str, sample_period_s: float | None = None):
@@ -102,8 +103,7 @@ def main(argv=None) -> int:
         print("  least-squares shift at the truth (white sd): " + ", ".join(
             f"{k} {v:+.2f}" for k, v in row["shift_in_white_sd"].items()))
     if a.json:
-        with open(a.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        write_text(a.json, json.dumps(out, indent=1))
     return 0
 
 
