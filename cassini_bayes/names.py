@@ -29,7 +29,8 @@ INERTIA_NOISE_NAMES = ("sigma_omega", "sigma_rho", "sigma_theta")
 EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
            "wheel_inertia": "wheel_scale", "wheel_inertia_common": "wheel_scale_common",
            "wheel_axes": "wheel_tilt", "body_torque": "T_body",
-           "inertial_torque": "T_inertial", "torque_rate": "T_N_rate"}
+           "inertial_torque": "T_inertial", "torque_rate": "T_N_rate",
+           "flex_mode": "flex_inertia"}
 """Robust nuisance effect → its posterior site name."""
 
 

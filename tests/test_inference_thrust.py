@@ -155,7 +155,7 @@ def test_event_likelihood_is_the_density_of_the_rates():
     from scipy.linalg import block_diag
     from scipy.stats import multivariate_normal
 
-    from cassini_bayes.inference.thrust.likelihood import (event_loglik, _event_residual,
+    from cassini_bayes.inference.thrust.likelihood import (event_loglik, event_residual,
                                                            _noise_cov)
     from cassini_bayes.spacecraft import eq16_moment_matrix as moment_matrix
     from cassini_bayes.physics.momentum import inertia_vector
@@ -175,7 +175,7 @@ def test_event_likelihood_is_the_density_of_the_rates():
     ev = _event(t, omega, h, rates.T, wheel_cov)
     pi = inertia_vector(jnp.asarray(inertia))
     st = event_loglik(pi, jnp.full(8, 0.7), (0.005, 0.02, 0.065), jnp.asarray(log_sigma), ev, q)
-    r = np.asarray(_event_residual(pi, 0.7 * q, (0.005, 0.02, 0.065), ev)).T
+    r = np.asarray(event_residual(pi, 0.7 * q, (0.005, 0.02, 0.065), ev)).T
     i_inv = np.linalg.inv(inertia)
     b = np.asarray(_noise_cov(jnp.asarray(inertia), jnp.asarray(log_sigma),
                               jnp.asarray(wheel_cov)))

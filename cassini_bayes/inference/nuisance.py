@@ -35,6 +35,9 @@ Every effect is small, so it enters the momentum model to first order, and linea
   line in body axes; the prior lets the App. A bound (15 µN m) change by its whole size within
   an hour (``[torque_knowledge] rate_sd_nm_per_h``). Without it a torque that drifts within the run
   leaks into the products of inertia (``docs/robust/open_world.md``).
+* **a flexible or slosh mode** (the thrust model, where the events show one): the momentum
+  ``M y(t)`` it holds, linear in the six entries of ``M = δ δᵀ`` (kg m²) at the mode's frequency
+  and damping (:mod:`cassini_bayes.inference.thrust.flex`, :func:`with_flex_mode`).
 
 What the data cannot separate stays prior-dominated by construction: scaling ``I``, ``H_0`` and
 ``T_N`` by ``(1 + c)`` together with every wheel inertia leaves every momentum balance unchanged
@@ -62,7 +65,8 @@ from cassini_bayes.names import EFFECTS
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
-__all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "tilt_basis",
+__all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with_flex_mode",
+           "tilt_basis",
            "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
            "site_prior_sd", "prior_wheel_errors"]
 
@@ -75,13 +79,13 @@ class NuisanceLayout(NamedTuple):
     """Order and prior of the robust nuisance vector ``ν`` (appended to the model's θ).
 
     ``ν = (b_0 (3), …, b_{F−1} (3), s (3), c_0 … c_{S−1} (S), [c_s (1)], a_0 (2), …, a_{K−1} (2),
-    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …])``; ``S`` = the number of scaled wheels (per
+    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …], [M (6)])``; ``S`` = the number of scaled wheels (per
     wheel) or 1 (common); the bracketed effects only where the layout has them.
 
     Attributes
     ----------
     n_files : F; ``wheels`` the K wheel names (active in any file) that get tilts.
-    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s).
+    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s, kg m²).
     slices : effect name (:data:`EFFECTS`) → slice of ``ν``, for the effects the layout has.
     tilt_u : (K, 2, 3) the unit vectors ``u_k1, u_k2`` perpendicular to each spin axis.
     wheel_errors : ``"per_wheel"`` or ``"common"`` (:data:`WHEEL_ERRORS`).
@@ -215,12 +219,20 @@ def nuisance_layout(spacecraft: Spacecraft, n_files: int, wheels, *,
                           scale_axes)
 
 
+def with_flex_mode(layout: NuisanceLayout, sd_kg_m2: float) -> NuisanceLayout:
+    """``layout`` with the six entries of a flexible mode's ``M = δ δᵀ`` appended, prior sd
+    ``sd_kg_m2`` each."""
+    r = layout.size
+    return layout._replace(sd=np.r_[layout.sd, np.full(6, float(sd_kg_m2))],
+                           slices={**layout.slices, "flex_mode": slice(r, r + 6)})
+
+
 def split_nuisance(nu, layout: NuisanceLayout) -> dict:
     """The robust nuisance vectors ``ν`` (..., R) as named posterior sites: ``gyro_bias``
     (..., F, 3) rad/s, ``gyro_scale`` (..., 3), ``wheel_scale`` (..., S) each wheel's total
     scale ``c_k`` per wheel or (...) common, ``wheel_scale_common`` (...) the shared ``c_s``,
     ``wheel_tilt`` (..., K, 2) rad, ``T_body``/``T_inertial`` (..., F, 3) N m, ``T_N_rate``
-    (..., F, 3) N m/s."""
+    (..., F, 3) N m/s, ``flex_inertia`` (..., 6) kg m² (a flexible mode's ``δ δᵀ``)."""
     nu = np.asarray(nu)
     lead, sl = nu.shape[:-1], layout.slices
     out = {EFFECTS["gyro_bias"]: nu[..., sl["gyro_bias"]].reshape(lead + (layout.n_files, 3)),
@@ -231,6 +243,8 @@ def split_nuisance(nu, layout: NuisanceLayout) -> dict:
         out[EFFECTS["wheel_inertia_common"]] = nu[..., sl["wheel_inertia_common"]][..., 0]
     for effect in layout.torque_effects:
         out[EFFECTS[effect]] = nu[..., sl[effect]].reshape(lead + (layout.n_files, 3))
+    if "flex_mode" in sl:
+        out[EFFECTS["flex_mode"]] = nu[..., sl["flex_mode"]]
     return out
 
 

@@ -74,6 +74,10 @@ class Knowledge:
     per hour (solar and RTG torques change as the slews turn the sun line). Where the torques the
     calibration windows cannot measure may be larger (another epoch, outgassing, a leak), say so
     here: the RWA4 axis's cone rests on this prior (``docs/robust/open_world.md``).
+    A flexible appendage or slosh mode (``[flex_knowledge]``: ``share_sd``, ``freq_hz``,
+    ``damping``): the thrust fit searches the given frequency (Hz) and damping-ratio ranges for
+    one (Feldman & Lee §II: Cassini's booms ring at 0.13 and 0.7 Hz, damped 0.2-1 %) and gives
+    each entry of its ``δ δᵀ`` a prior sd of ``share_sd`` × the mean principal moment (1 %).
     """
 
     gyro_bias_sd_rad_s: float = 5e-7
@@ -84,6 +88,9 @@ class Knowledge:
     wheel_common_inertia_sd_frac: float = 0.005
     torque_sd_nm: float = 15e-6
     torque_rate_sd_nm_per_h: float = 15e-6
+    flex_share_sd: float = 0.01
+    flex_freq_hz: tuple[float, float] = (0.05, 1.0)
+    flex_damping: tuple[float, float] = (0.002, 0.05)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from cassini_bayes.spacecraft._model import (
 
 _TOP_KEYS = {"name", "description", "source", "inertia", "wheel", "thrusters", "thruster",
              "center_of_mass", "pulse", "thrust", "mass", "gyro", "wheel_knowledge",
-             "telemetry_knowledge", "torque_knowledge"}
+             "telemetry_knowledge", "torque_knowledge", "flex_knowledge"}
 _GYRO_KEYS = {"bias_sd_rad_s": "gyro_bias_sd_rad_s", "scale_factor_sd": "gyro_scale_factor_sd"}
 _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "common_inertia_sd_frac": "wheel_common_inertia_sd_frac",
@@ -78,6 +78,8 @@ WHEEL_SPEED_MAX_RPM = 1e5
 """Largest ``wheel.max_speed_rpm`` (CubeSat wheels run to ~1e4 rpm, Cassini's to ~2000)."""
 WHEEL_TORQUE_MAX_NM = 100.0
 """Largest ``wheel.max_torque_nm`` (CubeSat wheels give ~1e-3 N m, large CMGs ~1e2)."""
+FLEX_FREQ_MAX_HZ = 50.0
+"""Highest ``[flex_knowledge] freq_hz`` (structural modes a pulse of milliseconds can ring)."""
 TORQUE_HOLD_MIN_S = 60.0
 """``[torque_knowledge] sd_nm`` (and ``rate_sd_nm_per_h``) are at most the wheels' momentum
 capacity over this time, N m: a torque that would fill the wheels within a minute is no
@@ -347,7 +349,21 @@ def _knowledge(top: TomlTable, capacity_nms: float) -> Knowledge:
     if kw["time_tag_sd_s"] > 1.0:
         raise InputError("'telemetry_knowledge.time_tag_sd_s' is a time-tag error in seconds "
                          f"(<= 1), got {kw['time_tag_sd_s']}", path=src)
-    return Knowledge(**kw)
+    return Knowledge(**kw, **_flex_knowledge(top, src))
+
+
+def _flex_knowledge(top: TomlTable, src: str) -> dict:
+    """The optional ``[flex_knowledge]`` section: ``share_sd`` (a fraction, 0-1), ``freq_hz``
+    and ``damping`` (``[low, high]``, at most :data:`FLEX_FREQ_MAX_HZ` and 0.5)."""
+    base = Knowledge()
+    table = top.sub("flex_knowledge", {"share_sd", "freq_hz", "damping"})
+    share = table.num("share_sd", base.flex_share_sd)
+    if not 0.0 <= share < 1.0:
+        raise InputError("'flex_knowledge.share_sd' is a fraction of the inertia (0.01 = 1 %), "
+                         f"got {share}", path=src)
+    return {"flex_share_sd": share,
+            "flex_freq_hz": table.interval("freq_hz", base.flex_freq_hz, FLEX_FREQ_MAX_HZ, "Hz"),
+            "flex_damping": table.interval("damping", base.flex_damping, 0.5, "of critical")}
 
 
 def load_spacecraft(path: str | os.PathLike) -> Spacecraft:

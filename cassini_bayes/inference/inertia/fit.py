@@ -39,7 +39,8 @@ class InertiaPosterior(NamedTuple):
 AXES = ("x", "y", "z")
 # Posterior sites of the robust nuisance vector ν (nuisance.py); a problem's own are
 # :func:`robust_sites`.
-ROBUST_SITES = tuple(site for effect, site in EFFECTS.items() if effect != "inertial_torque")
+ROBUST_SITES = tuple(site for effect, site in EFFECTS.items()
+                     if effect not in ("inertial_torque", "flex_mode"))
 
 
 def robust_sites(layout) -> list[str]:

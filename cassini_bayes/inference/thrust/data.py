@@ -17,12 +17,15 @@ from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
-from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
+from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
+                                              with_flex_mode)
 from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
-from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
-                                                       thruster_impulse, time_tag_rates,
-                                                       time_tag_rows)
+from cassini_bayes.inference.thrust.flex import (ModeSearch, mode_event, mode_nuisance_columns,
+                                                 search_mode)
+from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, event_residual,
+                                                       pulse_layout, thruster_impulse,
+                                                       time_tag_rates, time_tag_rows)
 from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
@@ -116,6 +119,8 @@ class ThrustProblem(NamedTuple):
     thrusters : the spacecraft's thruster names (M).
     design : :class:`~cassini_bayes.inference.thrust.design.ThrustDesign` in mode
         ``thruster``, else ``None``.
+    flex_mode : the search for a flexible mode (:class:`~cassini_bayes.inference.thrust.flex.
+        ModeSearch`; robust model), else ``None``.
     """
 
     data: ThrustData
@@ -133,6 +138,7 @@ class ThrustProblem(NamedTuple):
     layout: object = None
     thrusters: tuple[str, ...] = ()
     design: ThrustDesign | None = None
+    flex_mode: ModeSearch | None = None
 
     @property
     def n_f(self) -> int:
@@ -372,13 +378,16 @@ def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
-                   noise_hat=None) -> ThrustProblem:
+                   noise_hat=None, flex="auto") -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
 
     ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
     external torque); ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel
     spin-inertia model. ``noise_hat`` (E, 2) rad/s replaces the white-noise levels estimated
     from the data (a plan's noise-free telemetry has none; :mod:`cassini_bayes.plan.thrust`).
+    ``flex`` (robust model): ``"auto"`` searches the events for a flexible mode and integrates
+    its momentum out where they show one (:mod:`~cassini_bayes.inference.thrust.flex`),
+    ``"off"`` does not, ``(freq_hz, damping)`` puts a mode there without a search.
 
     Raises
     ------
@@ -410,20 +419,26 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
                             k_slots, n_thr) for e in range(n_ev)]
     layout_e = PulseLayout(*(np.stack(x) for x in zip(*layouts)))
     tau_med = tuple(jax.device_put(x) for x in tp.median())
+    basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
+    basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
+    steps = _rate_steps(kw, k_slots, n_thr, tp.median())
     rates = np.asarray(_time_tag_rates(jax.device_put(layout_e), tau_med, jax.device_put(sd_t),
                                        n_thr))
+    mode_search = None
+    if robust and flex != "off":
+        mode_search, kw["nu_cols"], layout = _flex_mode(
+            flex, kw, steps, basis, layout_e, tels, logs, spacecraft, thrust_pred, tp, i_lin,
+            inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
     rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * thrust_pred, noise, i_lin)
     design, extra = None, {}
     if per_thruster:
         design, extra = _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft,
                                              thrust_pred, fired)
-    basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
-    basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
     nu_cols = kw.pop("nu_cols")
     stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
     derived = dict(time_tag_rates=tag_rates, rank_one=rank_one, pulses=layout_e,
                    lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], nu_cols=nu_cols,
-                   **_rate_steps(kw, k_slots, n_thr, tp.median()),
+                   **steps,
                    nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
                                              np.stack([x.total for x in stats])))
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per
@@ -448,7 +463,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
         fired=fired, noise_hat=noise, layout=layout if robust else None,
-        thrusters=spacecraft.thruster_names, design=design)
+        thrusters=spacecraft.thruster_names, design=design, flex_mode=mode_search)
 
 
 def _inertia_mean_tril(inertia: InertiaGaussian | None, i_fixed: np.ndarray):
@@ -476,3 +491,64 @@ def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacec
                            THRUST_PRIOR_LOG_SD, spacecraft.com_sd_m,
                            spacecraft.thruster_names, fired)
     return design, dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
+
+
+FLEX_CHOICES = ("auto", "off")
+
+
+def _flex_residual(q_mat, d_mat, n_thr: int):
+    """Eq 17's residual (E, 3, n) of every event at ``p = (π (6), log F (M), δ (3), τ (3))``."""
+    def residual(p, ev):
+        pi, log_f = p[:6], p[6:6 + n_thr]
+        com, tau = p[6 + n_thr:9 + n_thr], p[9 + n_thr:]
+        q = q_mat - jnp.cross(com[:, None], d_mat, axis=0)               # Feldman & Lee Eq 16
+        q_f = q * jnp.exp(log_f)[None, :]
+        return jax.vmap(lambda e: event_residual(pi, q_f, (tau[0], tau[1], tau[2]), e))(ev)
+    return residual
+
+
+def _flex_mode(flex, kw: dict, steps: dict, basis, layout_e, tels, logs, spacecraft: Spacecraft,
+               thrust_pred, tp: TauPrior, i_lin, inertia: InertiaGaussian | None, noise,
+               layout, tag_sd):
+    """The search for a flexible mode (:func:`~cassini_bayes.inference.thrust.flex.search_mode`)
+    and, where one is found or given, the robust columns and layout with its ``M`` appended.
+    ``tag_sd`` (E, 3, n) N m s: each sample's time-tag term at the predicted thrust."""
+    k = spacecraft.knowledge
+    n_thr = len(spacecraft.thrusters)
+    if inertia is None:
+        pi_mean, pi_sd = np.asarray(inertia_vector(jnp.asarray(i_lin)), float), np.zeros(6)
+    else:
+        pi_mean = np.asarray(inertia.mean, float)
+        pi_sd = np.sqrt(np.diag(np.asarray(inertia.cov, float)))
+    thrust = np.broadcast_to(np.asarray(thrust_pred, float), (n_thr,))
+    q_mat = spacecraft.moment_matrix
+    events = []
+    for e, (tel, log) in enumerate(zip(tels, logs)):
+        n, m = tel.n, len(log.t_on)
+        cov = noise[e, 0]**2 * i_lin @ i_lin + noise[e, 1]**2 * kw["wheel_cov"][e]
+        events.append(mode_event(kw["t"][e, :n], kw["omega"][e, :n], kw["h_wheels"][e, :n],
+                                 kw["t_on"][e, :m], kw["thruster"][e, :m], kw["width"][e, :m],
+                                 q_mat, thrust, i_lin, cov, tag_sd[e][:, :n],
+                                 k.time_tag_sd_s))
+    prior_sd = k.flex_share_sd * float(np.trace(i_lin)) / 3.0
+    if isinstance(flex, str) and flex not in FLEX_CHOICES:
+        raise InputError(f"flex = {flex!r}: choose one of {', '.join(FLEX_CHOICES)} or give "
+                         "(freq_hz, damping)")
+    if flex == "auto":
+        ev = EventData(**{f: None for f in EventData._fields})._replace(
+            lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], pulses=layout_e, **steps)
+        dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
+        p0 = np.r_[pi_mean, np.log(thrust), np.zeros(3), tp.median()]
+        p_sd = np.r_[pi_sd, np.full(n_thr, THRUST_PRIOR_LOG_SD),
+                     np.full(3, spacecraft.com_sd_m), np.sqrt(tp.variance())]
+        search, cols = search_mode(ev, _flex_residual(q_mat, dirs, n_thr), p0, p_sd, n_thr,
+                                   kw["nu_cols"], layout.sd, kw["mask"], events, tp.median(),
+                                   k.flex_freq_hz, k.flex_damping, prior_sd)
+    else:
+        freq_hz, damping = (float(x) for x in flex)
+        search = ModeSearch(freq_hz, damping, float("nan"), float("nan"), True, prior_sd)
+        cols = mode_nuisance_columns(events, freq_hz, damping, tp.median(), kw["mask"])
+    if cols is None:
+        return search, kw["nu_cols"], layout
+    return (search, np.concatenate([kw["nu_cols"], cols], 1),
+            with_flex_mode(layout, prior_sd))

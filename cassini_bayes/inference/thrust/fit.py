@@ -23,6 +23,7 @@ from cassini_bayes.inference.thrust.prior import (COM_NAMES, THRUST_PRIOR_LOG_SD
                                                   tau_identification)
 from cassini_bayes.inference.thrust.pulses import pulse_impulses
 from cassini_bayes.names import EFFECTS, INERTIA_NAMES, TAU_NAMES
+from cassini_bayes.physics.flex_mode import MODE_ENTRIES
 from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import Spacecraft
@@ -186,7 +187,7 @@ def _data_groups(problem: ThrustProblem, d: np.ndarray) -> dict:
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                mode: str = "mean", inertia: InertiaGaussian | str | None = None, settings=None,
                prior_draws: int = 500, robust: bool = True,
-               wheel_errors: str = "per_wheel") -> ThrustPosterior:
+               wheel_errors: str = "per_wheel", flex="auto") -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
     Parameters
@@ -213,6 +214,10 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         papers' idealised model (clean simulations, comparisons with the papers).
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` (default, one scale
         per active wheel, site ``wheel_scale`` (wheel)) or ``"common"`` (one scalar scale).
+    flex : robust model's flexible mode: ``"auto"`` (default) searches the events for one and,
+        where they show it, integrates out the momentum it holds (site ``flex_inertia``
+        (mode_entry), kg m²; the search on ``problem.flex_mode``); ``"off"``; or ``(freq_hz,
+        damping)`` to put one there (:mod:`~cassini_bayes.inference.thrust.flex`).
 
     Returns
     -------
@@ -242,7 +247,7 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     inertia = resolve_inertia(inertia, spacecraft, robust)
     with step("preparing: events, Laplace approximation (mode and curvature)"):
         problem = prepare_thrust(events, spacecraft, mode=mode, inertia=inertia, robust=robust,
-                                 wheel_errors=wheel_errors)
+                                 wheel_errors=wheel_errors, flex=flex)
     unfired = [s for s, f in zip(problem.thrusters, problem.fired) if not f]
     if mode == "thruster" and unfired:
         warnings.warn(f"thrusters {', '.join(unfired)} never fire: their thrust is "
@@ -293,6 +298,9 @@ def _coords_dims(problem, mode: str, robust: bool, wheel_errors: str):
     if robust:
         coords.update({"axis": ["x", "y", "z"], "wheel": list(problem.layout.wheels),
                        "tilt": ["u1", "u2"]})
+        if problem.layout.slices.get("flex_mode") is not None:
+            coords["mode_entry"] = list(MODE_ENTRIES)
+            dims[EFFECTS["flex_mode"]] = ["mode_entry"]
         dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
                      EFFECTS["wheel_axes"]: ["wheel", "tilt"],
                      EFFECTS["body_torque"]: ["event", "axis"],

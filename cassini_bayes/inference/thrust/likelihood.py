@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
 __all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "jump_area",
+           "event_residual",
            "time_tag_rates",
            "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals", "moment_matrix_at"]
 
@@ -145,7 +146,7 @@ def _jump_correction(inertia, q_f, tau, ev: EventData):
     return first + jnp.cumsum(second, 1)
 
 
-def _event_residual(pi, q_f, tau, ev: EventData):
+def event_residual(pi, q_f, tau, ev: EventData):
     """``r = V(t_i) − Q (F ⊙ j(t_i))`` (3, n) N m s: Feldman & Lee Eq 17, left minus right;
     ``V`` from its basis in the inertia ``pi`` (6,) kg m²
     (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`) with the gyroscopic impulse's
@@ -182,7 +183,7 @@ def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     """
     inertia = inertia_matrix(pi)
     q_f = q_matrix * f_m[None, :]
-    r = _event_residual(pi, q_f, tau, ev)
+    r = event_residual(pi, q_f, tau, ev)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
                          q_f @ ev.time_tag_rates, ev.mask, ev.rank_one, ev.nu_cols, ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * _log_abs_det3(inertia)
@@ -251,7 +252,7 @@ def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix):
     q_f = q_matrix * f_m[None, :]
 
     def one(log_sigma, ev):
-        r = _event_residual(pi, q_f, tau, ev) - jnp.tensordot(nu, ev.nu_cols, 1)
+        r = event_residual(pi, q_f, tau, ev) - jnp.tensordot(nu, ev.nu_cols, 1)
         none = ColumnStatistics(jnp.zeros((0, 0, 3, 3)), jnp.zeros((3, 0)))
         rank_one = ev.rank_one._replace(cols=tuple(c[:0] for c in ev.rank_one.cols))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov),

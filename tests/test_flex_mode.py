@@ -1,0 +1,60 @@
+"""The flexible mode's momentum (physics/flex_mode.py) against the mode's equation integrated
+numerically, and the thrust fit's search for it (inference/thrust/flex.py)."""
+
+import numpy as np
+
+from cassini_bayes.physics.flex_mode import mode_columns, mode_rate_response, profile_transform
+from cassini_bayes.physics.pulse import thrust_profile
+
+TAU = (0.004, 0.015, 0.035)
+
+
+def _convolved(t, t_on, width, accel, om, zeta, smooth, ds=1e-4):
+    """``y(t_i) = ∫ g(t_i − s) ω̇(s) ds`` by the trapezoid on a fine grid (the reference)."""
+    s = np.arange(0.0, t[-1] + ds / 2, ds)
+    wdot = np.zeros((s.size, 3))
+    for k in range(t_on.size):
+        wdot += np.asarray(thrust_profile(np.clip(s - t_on[k], 0, None), width[k], *TAU)
+                           * (s >= t_on[k]))[:, None] * accel[k]
+    idx = np.clip(np.searchsorted(t, s, side="left"), 1, t.size - 1)
+    wdot += smooth[idx]
+    om_d = om * np.sqrt(1 - zeta**2)
+    lam = -zeta * om + 1j * om_d
+    out = []
+    for ti in t:
+        m = s <= ti
+        g = np.imag(lam * np.exp(lam * (ti - s[m]))) / om_d
+        out.append(np.trapezoid(g[:, None] * wdot[m], s[m], axis=0))
+    return np.array(out)
+
+
+def test_profile_transform_is_the_integral_of_the_thrust_profile():
+    lam = -0.03 + 2.9j
+    u = np.linspace(0.0, 1.0, 400_001)
+    p = np.asarray(thrust_profile(u, 0.25, *TAU)) * np.exp(-lam * u)
+    for s in (0.1, 0.25, 0.26, 1.0):
+        m = u <= s
+        assert abs(profile_transform(s, 0.25, TAU, lam) - np.trapezoid(p[m], u[m])) < 1e-6
+
+
+def test_mode_response_matches_the_mode_equation():
+    rng = np.random.default_rng(1)
+    t = np.arange(0.0, 30.0, 1.0) + rng.uniform(0, 0.2, 30).cumsum() * 0   # 1 s samples
+    t_on = np.sort(rng.uniform(0, 25, 6))
+    width = rng.choice([0.125, 0.25, 0.5], 6)
+    accel = rng.normal(size=(6, 3)) * 1e-3
+    smooth = np.zeros((30, 3))
+    smooth[8:20] = [1e-4, -2e-4, 0.5e-4]
+    for om, zeta in ((2.3, 0.01), (0.7, 0.002)):
+        y = mode_rate_response(t, t_on, width, accel, TAU, [om], [zeta], smooth)[0]
+        ref = _convolved(t, t_on, width, accel, om, zeta, smooth)
+        assert np.max(np.abs(y - ref)) < 2e-3 * np.max(np.abs(ref))
+
+
+def test_mode_columns_are_the_symmetric_product():
+    rng = np.random.default_rng(2)
+    y = rng.normal(size=(5, 3))
+    m = rng.normal(size=(3, 3))
+    m = m + m.T
+    entries = np.array([m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2]])
+    np.testing.assert_allclose(mode_columns(y) @ entries, y @ m.T, rtol=1e-12)
