@@ -88,7 +88,7 @@ THRUST_BUDGET = 0.10      # Feldman & Lee §V: F known to ±10 %
 
 
 def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | None,
-         inertia=None, wheel: str = "RWA4"):
+         inertia=None, wheel: str = "RWA4", flex: str = "auto"):
     """Fit one model; returns (posterior, adequacy). The adequacy checks get the sites the CLI
     gives them (``cassini_bayes/api/_inertia.py``, ``_thrust.py``, ``_rwa4.py``)."""
     from cassini_bayes.inference import adequacy as adq
@@ -110,7 +110,8 @@ def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | No
         from cassini_bayes.names import COM_NAMES
 
         post = fit_thrust(key, [(tel, sim.pulses)], prior, mode="thruster", robust=robust,
-                          wheel_errors=wheel_errors, settings=settings, prior_draws=200)
+                          wheel_errors=wheel_errors, settings=settings, prior_draws=200,
+                          flex=flex)
         sampled = list(INERTIA_NAMES) if "Ixx" in post.idata.posterior else []
         return post, adq.thrust_adequacy(post, ["F", *COM_NAMES, *TAU_NAMES, *sampled,
                                                 *nuisance])
@@ -312,13 +313,16 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             post, ad = _fit(kind, k_fit, sim, tel, prior, model, settings, method, inertia,
-                            wheel)
+                            wheel, opts.get("flex", "auto"))
         rec = _score(kind, post, sim, scenario, method, wheel)
         worst = {c.name: (c.statistic, c.parameter) for c in ad.checks if not c.ok}
         rec |= {"r_hat": float(post.diagnostics.max_r_hat),
                 "divergences": int(post.diagnostics.divergences),
                 "adequacy_ok": bool(ad.ok), "adequacy_failed": worst,
                 "seconds": time.perf_counter() - t0}
+        search = getattr(post.problem, "flex_mode", None)
+        if search is not None:
+            rec["flex_mode"] = search.to_dict()
         out["fits"][model] = rec
     return out
 
@@ -382,6 +386,8 @@ def main(argv=None) -> None:
                     "the law still uniform); every other draw stays the same")
     ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
                     help="switch these open-world effects off (the other draws stay the same)")
+    ap.add_argument("--flex", default="auto", choices=["auto", "off"],
+                    help="the per-thruster thrust fit's flexible mode (fit_thrust(flex=))")
     ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
     ap.add_argument("--report", action="store_true", help="only print the table of --out")
     args = ap.parse_args(argv)
@@ -391,7 +397,7 @@ def main(argv=None) -> None:
 
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
                                               "off", "torque_sd_nm", "target_accept",
-                                              "time_tag_scale")}
+                                              "time_tag_scale", "flex")}
         from _provenance import start
 
         start(args.out, opts, argv)

@@ -7,7 +7,7 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["axis_label", "INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "COM_NAMES", "INERTIA_NOISE_NAMES", "EFFECTS", "unit_of", "a_kind"]
+           "COM_NAMES", "INERTIA_NOISE_NAMES", "EFFECTS", "FLEX_CHOICES", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
@@ -32,6 +32,8 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
            "inertial_torque": "T_inertial", "torque_rate": "T_N_rate",
            "flex_mode": "flex_inertia"}
 """Robust nuisance effect → its posterior site name."""
+FLEX_CHOICES = ("auto", "off")
+"""The thrust fit's flexible mode: searched for and integrated out where found, or not."""
 
 
 def unit_of(name: str) -> str | None:

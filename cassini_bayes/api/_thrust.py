@@ -20,7 +20,7 @@ from cassini_bayes.api._inputs import (
 )
 from cassini_bayes.api._result import FitResult, collect_warnings, fit_config
 from cassini_bayes.errors import InputError, arg, as_flag
-from cassini_bayes.names import a_kind
+from cassini_bayes.names import FLEX_CHOICES, a_kind
 
 if TYPE_CHECKING:
     from cassini_bayes.api._inputs import (
@@ -167,6 +167,14 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     summary["mode"] = mode
     summary["model"] = "robust" if robust else "idealised"
     summary["wheel_errors"] = wheel_errors if robust else None
+    search = post.problem.flex_mode
+    summary["flex_mode"] = None if search is None else search.to_dict()
+    if search is not None and search.found:
+        summary["warnings"].append(
+            f"the events ring with a flexible or slosh mode at {search.freq_hz:.4g} Hz (damping "
+            f"{search.damping:.2g}, log Bayes factor {search.log_bayes_factor:.3g} against "
+            f"{search.log_cells:.3g} for the frequencies searched): its momentum is integrated "
+            "out (site flex_inertia, kg m^2)")
     if robust:
         summary["sensitivity"] = thrust_sensitivity(post)
     design = post.problem.design
@@ -238,7 +246,8 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                inertia_posterior: FitArg | None = None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
                target_accept: float = 0.9, robust: bool = True,
-               wheel_errors: WheelErrors = "per_wheel", progress: bool = False) -> FitResult:
+               wheel_errors: WheelErrors = "per_wheel", flex: Literal["auto", "off"] = "auto",
+               progress: bool = False) -> FitResult:
     """Posterior of the thrust and the pulse time constants from biasing events; what
     ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
     and thrust).
@@ -266,6 +275,9 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     robust : gyro, wheel and external-torque errors as nuisance parameters; ``False`` is the
         papers' idealised model.
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
+    flex : robust model's flexible mode: ``"auto"`` searches the events for one and integrates
+        out the momentum it holds where they show it (``summary["flex_mode"]``; site
+        ``flex_inertia``, kg m²), ``"off"`` does not look.
 
     Returns
     -------
@@ -284,6 +296,7 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     robust, fix_inertia = as_flag(robust, "robust"), as_flag(fix_inertia, "fix_inertia")
     mode = choice("mode", mode, MODES)
     wheel_errors = choice("wheel_errors", wheel_errors, WHEEL_ERRORS)
+    flex = choice("flex", flex, FLEX_CHOICES)
     settings = sampler_settings(chains, warmup, draws, target_accept, progress)
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     sc.require_thrusters("fit thrust" + (" --mode branch" if mode == "branch" else ""),
@@ -295,7 +308,7 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
         post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
-                             robust=robust, wheel_errors=wheel_errors)
+                             robust=robust, wheel_errors=wheel_errors, flex=flex)
     with step("summaries, baseline and adequacy checks"):
         design = post.problem.design
         baseline, base_warns = thrust_baseline(
@@ -308,7 +321,8 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                                 "spacecraft": sc_record, **inertia_input},
                         options={"mode": mode, "model": "robust" if robust else "idealised",
                                  "inertia": _inertia_option(inertia_posterior, post),
-                                 "wheel_errors": wheel_errors})
+                                 "wheel_errors": wheel_errors,
+                                 "flex": flex if robust else None})
     return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,
                      (*tel_paths, *log_paths, *sc_paths, *inertia_paths))
 

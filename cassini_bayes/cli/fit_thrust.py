@@ -50,6 +50,10 @@ def fit_thrust_cmd(
                                         "parameters, priors from the spacecraft model's \\[gyro] "
                                         "and \\[wheel_knowledge])."),
     wheel_errors: str = WHEEL_ERRORS,
+    flex: str = typer.Option("auto", "--flex", help="auto (search the events for a flexible "
+                             "or slosh mode and integrate out the momentum it holds where they "
+                             "show one; ranges and prior from the model's [flex_knowledge]) or "
+                             "off."),
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""
     from cassini_bayes._paths import model_path
@@ -72,7 +76,7 @@ def fit_thrust_cmd(
     result = fit_thrust(telemetry, pulses, spacecraft, mode=mode,
                         inertia_posterior=inertia_posterior, fix_inertia=fix_inertia, seed=seed,
                         robust=not idealised,
-                        wheel_errors=wheel_errors_name(wheel_errors, idealised),
+                        wheel_errors=wheel_errors_name(wheel_errors, idealised), flex=flex,
                         **sampler_options(chains, warmup, draws, target_accept))
     write_fit_run(result, out, force=force, strict=strict)
 

@@ -283,7 +283,7 @@ def noise_free_problem(s: Scenario, mode: str = "mean"):
     sc = s.prior
     problem = prepare_thrust([(tel, sim.pulses)], sc, mode=mode,
                              inertia=resolve_inertia(None, sc, True), robust=True,
-                             noise_hat=sig[None])
+                             noise_hat=sig[None], flex="off")
     return sim, problem, sig
 
 

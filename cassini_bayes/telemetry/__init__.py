@@ -13,7 +13,8 @@ One idea a module; import the names from here:
 - ``_validate``: :func:`validate_telemetry` (arrays, shared by the readers and in-memory data);
 - ``_files``: :func:`read_telemetry`, :func:`read_telemetry_many`, :func:`write_telemetry`;
 - ``_pulses``: pulse logs, the telemetry span, cumulative on-times;
-- ``_noise``: :func:`white_noise_sd`, the package's one white-noise estimator.
+- ``_noise``: :func:`white_noise_sd`, the package's one white-noise estimator;
+- ``_stale``: stale samples (a packet repeating its neighbour's data), found and left out.
 """
 
 from cassini_bayes.names import THRUSTER_NAMES as THRUSTER_NAMES
@@ -35,6 +36,9 @@ from cassini_bayes.telemetry._pulses import read_pulses as read_pulses
 from cassini_bayes.telemetry._pulses import validate_pulses as validate_pulses
 from cassini_bayes.telemetry._pulses import with_on_times as with_on_times
 from cassini_bayes.telemetry._pulses import write_pulses as write_pulses
+from cassini_bayes.telemetry._stale import StaleSamplesWarning as StaleSamplesWarning
+from cassini_bayes.telemetry._stale import stale_samples as stale_samples
+from cassini_bayes.telemetry._stale import without_stale_samples as without_stale_samples
 from cassini_bayes.telemetry._tables import _fail_nonfinite as _fail_nonfinite
 from cassini_bayes.telemetry._tables import _read_numeric_csv as _read_numeric_csv
 from cassini_bayes.telemetry._types import IDLE_NOISE_SD as IDLE_NOISE_SD
@@ -80,6 +84,7 @@ __all__ = [
     "PulseLog",
     "PulseSpanWarning",
     "PulsesDroppedWarning",
+    "StaleSamplesWarning",
     "Telemetry",
     "check_model_names",
     "check_pulses_in_span",
@@ -89,8 +94,10 @@ __all__ = [
     "read_pulses",
     "read_telemetry",
     "read_telemetry_many",
+    "stale_samples",
     "validate_pulses",
     "validate_telemetry",
+    "without_stale_samples",
     "white_noise_sd",
     "with_on_times",
     "write_pulses",

@@ -30,11 +30,13 @@ from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
+from cassini_bayes.names import FLEX_CHOICES
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span
+from cassini_bayes.telemetry import (PulseLog, Telemetry, pulses_in_span,
+                                     without_stale_samples)
 
 __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
@@ -218,6 +220,7 @@ def _checked_events(events) -> tuple[list[Telemetry], list[PulseLog]]:
                              + ", columns t_on, thruster, width)", path=tel.source)
         if tel.n < 10:
             raise InputError(f"only {tel.n} samples; a biasing event needs many", path=tel.source)
+        tel = without_stale_samples(tel)                 # a warning naming them
         log = pulses_in_span(log, tel, tail_s=_TAIL_S)   # a warning per pulse left out
         if log.t_on.size == 0:
             raise InputError(f"no pulse of {log.source} falls inside the telemetry span "
@@ -492,8 +495,6 @@ def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacec
                            spacecraft.thruster_names, fired)
     return design, dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
 
-
-FLEX_CHOICES = ("auto", "off")
 
 
 def _flex_residual(q_mat, d_mat, n_thr: int):
