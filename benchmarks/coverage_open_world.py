@@ -88,7 +88,7 @@ THRUST_BUDGET = 0.10      # Feldman & Lee §V: F known to ±10 %
 
 
 def _fit(kind: str, key, sim, tel, prior, model: str, settings, method: str | None,
-         inertia=None, wheel: str = "RWA4", flex: str = "auto"):
+         inertia=None, wheel: str = "RWA4", flex: str = "check"):
     """Fit one model; returns (posterior, adequacy). The adequacy checks get the sites the CLI
     gives them (``cassini_bayes/api/_inertia.py``, ``_thrust.py``, ``_rwa4.py``)."""
     from cassini_bayes.inference import adequacy as adq
@@ -313,7 +313,7 @@ def run_seed(family: str, seed: int, opts: dict) -> dict:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             post, ad = _fit(kind, k_fit, sim, tel, prior, model, settings, method, inertia,
-                            wheel, opts.get("flex", "auto"))
+                            wheel, opts.get("flex", "check"))
         rec = _score(kind, post, sim, scenario, method, wheel)
         worst = {c.name: (c.statistic, c.parameter) for c in ad.checks if not c.ok}
         rec |= {"r_hat": float(post.diagnostics.max_r_hat),
@@ -386,7 +386,7 @@ def main(argv=None) -> None:
                     "the law still uniform); every other draw stays the same")
     ap.add_argument("--off", nargs="*", default=[], choices=list(EFFECTS_OFF),
                     help="switch these open-world effects off (the other draws stay the same)")
-    ap.add_argument("--flex", default="auto", choices=["auto", "off"],
+    ap.add_argument("--flex", default="check", choices=["check", "model", "off"],
                     help="the per-thruster thrust fit's flexible mode (fit_thrust(flex=))")
     ap.add_argument("--out", type=Path, required=True, help="JSON lines, one per (family, seed)")
     ap.add_argument("--report", action="store_true", help="only print the table of --out")

@@ -32,8 +32,9 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
            "inertial_torque": "T_inertial", "torque_rate": "T_N_rate",
            "flex_mode": "flex_inertia"}
 """Robust nuisance effect → its posterior site name."""
-FLEX_CHOICES = ("auto", "off")
-"""The thrust fit's flexible mode: searched for and integrated out where found, or not."""
+FLEX_CHOICES = ("check", "model", "off")
+"""The thrust fit's flexible mode: searched for and judged (an adequacy check), searched for and
+integrated out where found, or neither."""
 
 
 def unit_of(name: str) -> str | None:

@@ -169,7 +169,7 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     summary["wheel_errors"] = wheel_errors if robust else None
     search = post.problem.flex_mode
     summary["flex_mode"] = None if search is None else search.to_dict()
-    if search is not None and search.found:
+    if search is not None and search.found and search.modelled:
         summary["warnings"].append(
             f"the events ring with a flexible or slosh mode at {search.freq_hz:.4g} Hz (damping "
             f"{search.damping:.2g}, log Bayes factor {search.log_bayes_factor:.3g} against "
@@ -246,7 +246,7 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                inertia_posterior: FitArg | None = None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
                target_accept: float = 0.9, robust: bool = True,
-               wheel_errors: WheelErrors = "per_wheel", flex: Literal["auto", "off"] = "auto",
+               wheel_errors: WheelErrors = "per_wheel", flex: Literal["check", "model", "off"] = "check",
                progress: bool = False) -> FitResult:
     """Posterior of the thrust and the pulse time constants from biasing events; what
     ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
@@ -275,9 +275,11 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     robust : gyro, wheel and external-torque errors as nuisance parameters; ``False`` is the
         papers' idealised model.
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` or ``"common"``.
-    flex : robust model's flexible mode: ``"auto"`` searches the events for one and integrates
-        out the momentum it holds where they show it (``summary["flex_mode"]``; site
-        ``flex_inertia``, kg m²), ``"off"`` does not look.
+    flex : robust model's flexible mode: ``"check"`` searches the events for one
+        (``summary["flex_mode"]``) and judges it (adequacy check ``flex_ringing``),
+        ``"model"`` also integrates out the momentum it holds where they show it (site
+        ``flex_inertia``, kg m²; on the open-world ESPA event it lowered coverage,
+        docs/flex_mode.md), ``"off"`` does not look.
 
     Returns
     -------

@@ -50,10 +50,11 @@ def fit_thrust_cmd(
                                         "parameters, priors from the spacecraft model's \\[gyro] "
                                         "and \\[wheel_knowledge])."),
     wheel_errors: str = WHEEL_ERRORS,
-    flex: str = typer.Option("auto", "--flex", help="auto (search the events for a flexible "
-                             "or slosh mode and integrate out the momentum it holds where they "
-                             "show one; ranges and prior from the model's [flex_knowledge]) or "
-                             "off."),
+    flex: str = typer.Option("check", "--flex", help="check (search the events for a flexible "
+                             "or slosh mode; the adequacy check flex_ringing fails where it "
+                             "rings above the noise), model (also integrate out the momentum it "
+                             "holds; docs/flex_mode.md) or off. Ranges and prior: the model's "
+                             "\[flex_knowledge]."),
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""
     from cassini_bayes._paths import model_path

@@ -25,6 +25,10 @@ Each check returns one number, ``statistic``, compared with a ``threshold`` (``o
   of the smallest Bonferroni-adjusted p-value; every other sample is tested, against the
   regressors interpolated from its neighbours, so the measurement noise that the residual and
   the regressors share does not make the statistic grow with the number of samples.
+* ``flex_ringing`` (thrust fits) — the events searched for a flexible or slosh mode
+  (:mod:`cassini_bayes.inference.thrust.flex`); the statistic is the rms momentum of a mode found
+  and not modelled, in noise sds: above 1 the fit's noise level absorbs it and, on a small
+  spacecraft, its intervals do not cover.
 * ``balance_fit`` (RWA4 fits) — the window-mean momentum balances at the posterior mean against
   the likelihood's own covariance (noise plus the integrated-out nuisance effects): ``χ²`` on
   ``3G − 2`` degrees of freedom (G window pairs), as the normal deviate of its upper tail.
@@ -34,19 +38,20 @@ Statistics expressed as normal deviates (held-out, regression, balance) fail bey
 autocorrelation beyond 0.5.
 """
 
-from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, PRIOR_CONFLICT_SD, Z_THRESHOLD,
-                                                    Adequacy, Check, normal_deviate,
+from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, PRIOR_CONFLICT_SD, RING_MAX,
+                                                    Z_THRESHOLD, Adequacy, Check, normal_deviate,
                                                     not_applicable)
 from cassini_bayes.inference.adequacy.held_out import gaussian_held_out, inertia_held_out
-from cassini_bayes.inference.adequacy.models import (balance_fit, inertia_adequacy,
-                                                     rwa4_adequacy, thrust_adequacy)
+from cassini_bayes.inference.adequacy.models import (balance_fit, flex_ringing,
+                                                     inertia_adequacy, rwa4_adequacy,
+                                                     thrust_adequacy)
 from cassini_bayes.inference.adequacy.prior_conflict import common_wheel_scale, prior_data_conflict
 from cassini_bayes.inference.adequacy.residuals import (residual_autocorrelation,
                                                         residual_regression)
 from cassini_bayes.inference.nuisance import site_prior_sd as nuisance_prior_sd
 
-__all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX",
+__all__ = ["Check", "Adequacy", "PRIOR_CONFLICT_SD", "Z_THRESHOLD", "AUTOCORR_MAX", "RING_MAX",
            "normal_deviate", "nuisance_prior_sd", "prior_data_conflict", "common_wheel_scale",
            "gaussian_held_out",
            "inertia_held_out", "residual_autocorrelation", "residual_regression", "not_applicable",
-           "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy", "balance_fit"]
+           "inertia_adequacy", "thrust_adequacy", "rwa4_adequacy", "balance_fit", "flex_ringing"]

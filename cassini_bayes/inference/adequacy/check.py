@@ -13,6 +13,7 @@ from scipy import stats
 PRIOR_CONFLICT_SD = 4.0   # prior sd between the posterior mean and the prior mean
 Z_THRESHOLD = 4.0         # normal deviate of the regression and held-out checks (two-sided 6e-5)
 AUTOCORR_MAX = 0.5        # largest lag-1 autocorrelation of the residuals
+RING_MAX = 1.0            # largest rms momentum of an unmodelled flexible mode, in noise sds
 
 
 class Check(NamedTuple):

@@ -10,8 +10,9 @@ from typing import Sequence
 import numpy as np
 from scipy import stats
 
-from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, Z_THRESHOLD, Adequacy, Check,
-                                                    z_check, normal_deviate, not_applicable)
+from cassini_bayes.inference.adequacy.check import (AUTOCORR_MAX, RING_MAX, Z_THRESHOLD,
+                                                    Adequacy, Check, normal_deviate,
+                                                    not_applicable, z_check)
 from cassini_bayes.inference.adequacy.held_out import inertia_held_out
 from cassini_bayes.inference.adequacy.prior_conflict import common_wheel_scale, prior_data_conflict
 from cassini_bayes.inference.adequacy.residuals import residual_autocorrelation, residual_regression
@@ -75,11 +76,35 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
     sd = nuisance_prior_sd(pb.layout) if pb.layout is not None else {}
     derived = common_wheel_scale(post.idata, pb.layout)
     return Adequacy((prior_data_conflict(post.idata, sites, prior_sd=sd, derived=derived), held,
+                     flex_ringing(getattr(pb, "flex_mode", None)),
                      *_residual_checks(post.idata, None, None, "event",
                                        [f"{t} + {p}" for t, p in pb.sources],
                                        no_regression="not used for thrust fits: the model's "
                                        "own approximations correlate the residuals with the "
                                        "wheel momentum (docs/adequacy.md)")))
+
+
+def flex_ringing(search, threshold: float = RING_MAX) -> Check:
+    """Whether the events ring with a flexible or slosh mode the fit does not model
+    (:class:`~cassini_bayes.inference.thrust.flex.ModeSearch`): fails when one is found whose
+    rms momentum exceeds ``threshold`` noise sds. The fit's noise level then absorbs a
+    structured residual, and on a small spacecraft its intervals do not cover
+    (docs/flex_mode.md)."""
+    name = "flex_ringing"
+    if search is None:
+        return not_applicable(name, threshold, "no search for a flexible mode (--flex off, "
+                              "or the idealised model)")
+    if search.modelled:
+        return not_applicable(name, threshold, f"the mode at {search.freq_hz:.4g} Hz is "
+                              "modelled (--flex model)")
+    if not search.found:
+        return Check(name, 0.0, threshold, True, note="no mode found in the events")
+    ring = float(search.ring_over_noise)
+    return Check(name, ring, threshold, ring <= threshold, parameter=f"{search.freq_hz:.4g} Hz",
+                 note=(f"a flexible or slosh mode at {search.freq_hz:.4g} Hz (damping "
+                       f"{search.damping:.2g}) holds {ring:.3g} noise sds of momentum that the "
+                       "fit does not model: its noise level absorbs it, and its intervals may "
+                       "not cover (docs/flex_mode.md)"))
 
 
 def _mean_axis(post) -> np.ndarray:

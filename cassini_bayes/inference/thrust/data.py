@@ -381,16 +381,17 @@ def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, 
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
-                   noise_hat=None, flex="auto") -> ThrustProblem:
+                   noise_hat=None, flex="check") -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
 
     ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
     external torque); ``wheel_errors`` (``"per_wheel"`` or ``"common"``) picks the wheel
     spin-inertia model. ``noise_hat`` (E, 2) rad/s replaces the white-noise levels estimated
     from the data (a plan's noise-free telemetry has none; :mod:`cassini_bayes.plan.thrust`).
-    ``flex`` (robust model): ``"auto"`` searches the events for a flexible mode and integrates
-    its momentum out where they show one (:mod:`~cassini_bayes.inference.thrust.flex`),
-    ``"off"`` does not, ``(freq_hz, damping)`` puts a mode there without a search.
+    ``flex`` (robust model): ``"check"`` searches the events for a flexible mode (the result on
+    ``problem.flex_mode``, judged by the adequacy checks), ``"model"`` also integrates its
+    momentum out where they show one (:mod:`~cassini_bayes.inference.thrust.flex`), ``"off"``
+    does neither, ``(freq_hz, damping)`` puts a mode there without a search.
 
     Raises
     ------
@@ -535,7 +536,7 @@ def _flex_mode(flex, kw: dict, steps: dict, basis, layout_e, tels, logs, spacecr
     if isinstance(flex, str) and flex not in FLEX_CHOICES:
         raise InputError(f"flex = {flex!r}: choose one of {', '.join(FLEX_CHOICES)} or give "
                          "(freq_hz, damping)")
-    if flex == "auto":
+    if flex in ("check", "model"):
         ev = EventData(**{f: None for f in EventData._fields})._replace(
             lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], pulses=layout_e, **steps)
         dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
@@ -549,7 +550,7 @@ def _flex_mode(flex, kw: dict, steps: dict, basis, layout_e, tels, logs, spacecr
         freq_hz, damping = (float(x) for x in flex)
         search = ModeSearch(freq_hz, damping, float("nan"), float("nan"), True, prior_sd)
         cols = mode_nuisance_columns(events, freq_hz, damping, tp.median(), kw["mask"])
-    if cols is None:
+    if cols is None or flex == "check":
         return search, kw["nu_cols"], layout
-    return (search, np.concatenate([kw["nu_cols"], cols], 1),
+    return (search._replace(modelled=True), np.concatenate([kw["nu_cols"], cols], 1),
             with_flex_mode(layout, prior_sd))

@@ -187,7 +187,7 @@ def _data_groups(problem: ThrustProblem, d: np.ndarray) -> dict:
 def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                mode: str = "mean", inertia: InertiaGaussian | str | None = None, settings=None,
                prior_draws: int = 500, robust: bool = True,
-               wheel_errors: str = "per_wheel", flex="auto") -> ThrustPosterior:
+               wheel_errors: str = "per_wheel", flex="check") -> ThrustPosterior:
     """Posterior of the thrust and the pulse time constants from one or more biasing events.
 
     Parameters
@@ -214,10 +214,11 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
         papers' idealised model (clean simulations, comparisons with the papers).
     wheel_errors : robust model's wheel spin-inertia errors: ``"per_wheel"`` (default, one scale
         per active wheel, site ``wheel_scale`` (wheel)) or ``"common"`` (one scalar scale).
-    flex : robust model's flexible mode: ``"auto"`` (default) searches the events for one and,
-        where they show it, integrates out the momentum it holds (site ``flex_inertia``
-        (mode_entry), kg m²; the search on ``problem.flex_mode``); ``"off"``; or ``(freq_hz,
-        damping)`` to put one there (:mod:`~cassini_bayes.inference.thrust.flex`).
+    flex : robust model's flexible mode: ``"check"`` (default) searches the events for one (on
+        ``problem.flex_mode``; the adequacy check ``flex_ringing``); ``"model"`` also integrates
+        out the momentum it holds where they show it (site ``flex_inertia`` (mode_entry), kg
+        m²); ``"off"``; or ``(freq_hz, damping)`` to put one there
+        (:mod:`~cassini_bayes.inference.thrust.flex`).
 
     Returns
     -------

@@ -55,7 +55,10 @@ _DAMPING_GRID = 3
 
 
 class ModeSearch(NamedTuple):
-    """The result of :func:`search_mode` (``summary.json``'s ``flex_mode`` block)."""
+    """The result of :func:`search_mode` (``summary.json``'s ``flex_mode`` block):
+    ``ring_over_noise`` is the rms momentum of the mode at its fitted ``M`` over the residual's
+    noise sd (what the fit's noise level absorbs when the mode is not modelled); ``modelled``
+    whether the fit integrates the mode out."""
 
     freq_hz: float
     damping: float
@@ -63,11 +66,14 @@ class ModeSearch(NamedTuple):
     log_cells: float
     found: bool
     prior_sd: float
+    ring_over_noise: float = float("nan")
+    modelled: bool = False
 
     def to_dict(self) -> dict:
-        return {"found": bool(self.found), "freq_hz": self.freq_hz, "damping": self.damping,
+        return {"found": bool(self.found), "modelled": bool(self.modelled),
+                "freq_hz": self.freq_hz, "damping": self.damping,
                 "log_bayes_factor": self.log_bayes_factor, "log_cells_searched": self.log_cells,
-                "prior_sd_kg_m2": self.prior_sd,
+                "ring_over_noise": self.ring_over_noise, "prior_sd_kg_m2": self.prior_sd,
                 "rule": ("a mode enters the fit when its log Bayes factor at the best (freq, "
                          "damping) exceeds the log of the number of (freq, damping) cells "
                          "searched; its coupling M = delta delta^T is then integrated out")}
@@ -329,9 +335,13 @@ def search_mode(ev_data, residual_fn, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask
     cells = (om_hi - om_lo) * span / (2.0 * np.pi) * (1.0 + np.log(damping_range[1]
                                                                    / damping_range[0]))
     log_cells = float(np.log(max(cells, 1.0)))
+    x = columns(np.array([o]), np.array([z]))[0]
+    xp = base.project(x)
+    coef = np.linalg.solve(xp.T @ base.solve(xp) + np.eye(6) / prior_sd**2, x.T @ cinv_d)
+    ring = float(np.sqrt(np.mean((xp @ coef)**2)))           # whitened: in noise sds
     found = -best.fun > log_cells
     search = ModeSearch(float(o / (2.0 * np.pi)), float(z), float(-best.fun), log_cells,
-                        bool(found), float(prior_sd))
+                        bool(found), float(prior_sd), ring)
     if not found:
         return search, None
     return search, mode_nuisance_columns(events, search.freq_hz, z, tau, mask)
