@@ -246,7 +246,8 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                inertia_posterior: FitArg | None = None, fix_inertia: bool = False, seed: int = 0,
                chains: int = 4, warmup: int = 1000, draws: int = 1000,
                target_accept: float = 0.9, robust: bool = True,
-               wheel_errors: WheelErrors = "per_wheel", flex: Literal["check", "model", "off"] = "check",
+               wheel_errors: WheelErrors = "per_wheel",
+               flex: Literal["check", "model", "off"] = "check",
                progress: bool = False) -> FitResult:
     """Posterior of the thrust and the pulse time constants from biasing events; what
     ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants

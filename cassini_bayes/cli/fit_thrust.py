@@ -54,7 +54,7 @@ def fit_thrust_cmd(
                              "or slosh mode; the adequacy check flex_ringing fails where it "
                              "rings above the noise), model (also integrate out the momentum it "
                              "holds; docs/flex_mode.md) or off. Ranges and prior: the model's "
-                             "\[flex_knowledge]."),
+                             "\\[flex_knowledge]."),
 ) -> None:
     """Posterior of the thrust and the pulse time constants from biasing events."""
     from cassini_bayes._paths import model_path

@@ -14,6 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from cassini_bayes.telemetry._noise import white_noise_sd
 from cassini_bayes.telemetry._types import Telemetry
 
 __all__ = ["StaleSamplesWarning", "stale_samples", "without_stale_samples"]
@@ -31,7 +32,11 @@ def _same_as(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def stale_samples(tel: Telemetry) -> np.ndarray:
     """(n,) bool: the samples whose attitude, body rates and wheel rates all equal those of the
     sample before or after them (module docstring). Both of an equal pair: which of the two times
-    the data belong to, the data cannot tell."""
+    the data belong to, the data cannot tell. None where a gyro axis shows no noise (noise-free
+    or synthetic telemetry, whose quiet samples may repeat)."""
+    omega = np.asarray(tel.omega, float)
+    if tel.n < 3 or not all(white_noise_sd(omega[:, a]) > 0 for a in range(3)):
+        return np.zeros(tel.n, bool)
     data = np.concatenate([np.asarray(tel.q, float), np.asarray(tel.omega, float),
                            np.asarray(tel.wheel_rates, float)], axis=1)
     same = _same_as(data[1:], data[:-1]) if tel.n > 1 else np.zeros(0, bool)

@@ -23,19 +23,18 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import minimize
 
 from cassini_bayes.physics.flex_mode import MODE_ENTRIES, mode_columns, mode_rate_response
-from cassini_bayes.physics.momentum import inertia_matrix
 
-__all__ = ["ModeSearch", "ModeEvent", "mode_event", "search_mode", "mode_nuisance_columns", "MODE_ENTRIES", "GRID_STEP", "PEAKS", "GAUSS_NEWTON", "ALIAS_CYCLES",
-           "TAG_WIDEN", "TAG_MIN"]
+__all__ = ["ModeSearch", "ModeEvent", "mode_event", "search_mode", "mode_nuisance_columns",
+           "MODE_ENTRIES", "GRID_STEP", "PEAKS", "GAUSS_NEWTON", "ALIAS_CYCLES", "TAG_WIDEN",
+           "TAG_MIN"]
 
 GRID_STEP = 1.0
 """Spacing of the frequency grid, rad/s × the longest event's duration (s): a ring as long as
-the event dephases by half a radian between two grid points."""
+the event dephases by one radian between two grid points (the peaks are then refined)."""
 PEAKS = 3
 """Peaks of the grid refined by the exact marginal likelihood."""
 GAUSS_NEWTON = 2
