@@ -174,13 +174,18 @@ def rcs_family(args: list[Records]) -> str:
 
 
 def _setting(opts: dict) -> str:
-    """A campaign record's open-world setting in words: the widening, the effects switched off
-    and the fits' stated torque knowledge (coverage_open_world.py options)."""
+    """A campaign record's open-world setting in words: the widening, the effects switched off,
+    the fits' stated torque knowledge and what the thrust fit did with a flexible mode
+    (coverage_open_world.py options; ``flex`` ``auto`` is today's ``model``)."""
     parts = [f"widen {opts.get('widen', 1.5):g}"]
     if opts.get("off"):
         parts.append("off " + " ".join(opts["off"]))
     if opts.get("torque_sd_nm"):
         parts.append(f"torque prior {opts['torque_sd_nm']:g} N m")
+    flex = {"auto": "mode modelled", "model": "mode modelled", "check": "mode checked",
+            "off": "no mode search"}.get(opts.get("flex"))
+    if flex:
+        parts.append(flex)
     return ", ".join(parts)
 
 

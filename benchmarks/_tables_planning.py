@@ -142,7 +142,8 @@ def thrust_noise_at_truth(args: list[Records]) -> str:
     for r in recs:
         for row in r["seeds"]:
             v = row["noise_over_sensor"]
-            rows.append(f"| `{_scenario_label(r['case'])}`, {row['seed']} | "
+            flex = ", mode modelled" if r.get("flex") == "model" else ""
+            rows.append(f"| `{_scenario_label(r['case'])}`{flex}, {row['seed']} | "
                         + " | ".join(f"**{v[c]:.2f}**" if v[c] > 1.25 else f"{v[c]:.2f}"
                                      for c in cols) + " |")
     return "\n".join(rows)

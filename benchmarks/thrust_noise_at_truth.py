@@ -13,7 +13,7 @@ data at the truth are what the likelihood assumes; well above 1, residuals the m
 term for, which the fit absorbs into its noise level and so into every sd. No sampling.
 
     python benchmarks/thrust_noise_at_truth.py --case biasing_espa_bus:thruster --seeds 0 1
-        [--json out.json]
+        [--flex model] [--json out.json]
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 GRID = (-15.0, 40.0, 111)   # the noise coordinate (log σ = log σ̂ + NOISE_STEP z): σ/σ̂ 0.2-55
 
 
-def noise_scale(s, si, tel, pulses, mode: str) -> float:
+def noise_scale(s, si, tel, pulses, mode: str, flex: str = "off") -> float:
     """σ/σ_sensor at the maximum of the fit's log density over the noise coordinate, every other
     coordinate at the truth of ``si`` (``s`` the nominal scenario: the model file)."""
     import jax
@@ -43,7 +43,7 @@ def noise_scale(s, si, tel, pulses, mode: str) -> float:
     sig = np.asarray(scenario_noise(si)[:2], float)
     problem = prepare_thrust([(tel, pulses)], s.prior, mode=mode,
                              inertia=resolve_inertia(None, s.prior, True), robust=True,
-                             noise_hat=sig[None])
+                             noise_hat=sig[None], flex=flex)
     names = _site_names(problem)
     x = jnp.asarray(_truth_vector(problem, names, _truth(si, problem, names)), float)
     k = problem.n_f + problem.n_c + 3
@@ -63,6 +63,8 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", required=True, help="SCENARIO:MODE")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
+    ap.add_argument("--flex", default="off", choices=["off", "model"],
+                    help="the fit's flexible mode: none, or the one its search finds modelled")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args(argv)
     if a.json:
@@ -82,7 +84,7 @@ def main(argv=None) -> None:
     cassini_bayes.setup_jax()
     name, mode = a.case.rsplit(":", 1)
     s = load_scenario(name)
-    out = {"case": a.case, "grid": GRID, "seeds": []}
+    out = {"case": a.case, "grid": GRID, "flex": a.flex, "seeds": []}
     for seed in a.seeds:
         k_sim, _ = jax.random.split(jax.random.key(3200 + seed))     # plan_thrust.py's keys
         ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
@@ -92,7 +94,8 @@ def main(argv=None) -> None:
             w = without(ow, off)
             si = scenario_from_dict(w.scenario, src=s.source)
             sim = simulate(k_sim, si)
-            row[label] = noise_scale(s, si, apply_time_tags(sim.telemetry, w), sim.pulses, mode)
+            row[label] = noise_scale(s, si, apply_time_tags(sim.telemetry, w), sim.pulses, mode,
+                                     a.flex)
             print(f"seed {seed} {label:10s} σ/σ_sensor at the truth {row[label]:.2f}",
                   file=sys.stderr, flush=True)
         fm = ow.record["flex_mode"]
