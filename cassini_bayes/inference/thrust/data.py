@@ -497,7 +497,6 @@ def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacec
     return design, dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
 
 
-
 def _flex_residual(q_mat, d_mat, n_thr: int):
     """Eq 17's residual (E, 3, n) of every event at ``p = (π (6), log F (M), δ (3), τ (3))``."""
     def residual(p, ev):
