@@ -218,6 +218,8 @@ def tolerances(summary: dict, idata) -> dict:
             out[key] = _adequacy_rules(value)
         elif key == "sensitivity":
             out[key] = _sensitivity_rules(summary, value)
+        elif key == "flex_mode":
+            out[key] = _flex_rules(value)
         elif key == "direction":
             u = np.stack([idata.posterior[n].values.ravel() for n in ("u4_x", "u4_y", "u4_z")])
             axis = u.mean(axis=1) / np.linalg.norm(u.mean(axis=1))
@@ -292,6 +294,23 @@ def _adequacy_rules(adequacy: dict) -> dict:
         checks[name] = rules
     stable = all(r["ok"]["compare"] == "verdict" for r in checks.values())
     return {"ok": {"compare": "verdict" if stable else "skip"}, "checks": checks}
+
+
+def _flex_rules(search: dict | None) -> dict:
+    """The flexible-mode search (data only, no sampling): its verdicts exactly; its optimum,
+    reached by Nelder-Mead on a likelihood whose last bits differ between CPUs, coarsely; where
+    nothing is found the optimum is any local one, and not compared."""
+    if search is None:
+        return {"compare": "exact", "why": "no search"}
+    found = search["found"]
+    out = {k: {"compare": "skip", "why": "the best of nothing found"} if not found else
+           {"compare": "coarse", "atol": 1e-3 * max(abs(v), 1.0),
+            "why": "an optimum: 1e-3 relative"}
+           for k, v in search.items() if isinstance(v, float)}
+    out.update({k: _exact(1e-9) for k in ("found", "modelled", "prior_sd_kg_m2",
+                                           "log_cells_searched")})
+    out["rule"] = {"compare": "text"}
+    return out
 
 
 def _sensitivity_rules(summary: dict, sensitivity: dict) -> dict:

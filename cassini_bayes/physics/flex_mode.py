@@ -94,14 +94,14 @@ def mode_rate_response(t, t_on, width, accel, tau, freq_rad_s, damping, smooth=N
         k = np.flatnonzero(keep)
         lag = t[done[k]] - t_on[k]
         c = profile_transform(settle[k], width[k], tau, lam) * np.exp(lam * lag)   # (G, m')
-        np.add.at(inputs, (slice(None), done[k]), c[..., None] * accel[k][None])
+        inputs += _scatter(c, accel[k], done[k], n)
     direct = np.zeros((g, n, 3), complex)                      # samples inside a pulse
     for j in range(int(np.max(done - first, initial=0))):
         k = np.flatnonzero(first + j < done)
         i = first[k] + j
         lag = t[i] - t_on[k]
         c = profile_transform(lag, width[k], tau, lam) * np.exp(lam * lag)
-        np.add.at(direct, (slice(None), i), c[..., None] * accel[k][None])
+        direct += _scatter(c, accel[k], i, n)
     if smooth is not None:
         gain = np.expm1(lam * np.diff(t)[None, :]) / lam       # ∫ e^{λ(t_i − s)} ds, a step
         inputs[:, 1:] += gain[..., None] * np.asarray(smooth, float)[None, 1:]
@@ -120,6 +120,13 @@ def mode_rate_response(t, t_on, width, accel, tau, freq_rad_s, damping, smooth=N
         state[:, start:stop] = ph[..., None] * (carry[:, None] + inner)
         carry, start = state[:, stop - 1], stop
     return np.imag((lam / om_d[:, None])[..., None] * (state + direct))
+
+
+def _scatter(c, accel, rows, n: int) -> np.ndarray:
+    """(G, n, 3): ``Σ_k c[g, k] accel[k]`` summed into sample ``rows[k]``."""
+    out = np.zeros((c.shape[0], n, 3), complex)
+    np.add.at(out, (slice(None), rows), c[..., None] * accel[None])
+    return out
 
 
 def mode_columns(y) -> np.ndarray:

@@ -20,6 +20,11 @@ from cassini_bayes.telemetry._types import Telemetry
 __all__ = ["StaleSamplesWarning", "stale_samples", "without_stale_samples"]
 
 
+NOISE_MIN_REL = 1e-9
+"""A gyro axis whose white noise is below this fraction of the largest rate shows float rounding,
+not sensor noise: its telemetry is noise-free, and quiet samples may repeat."""
+
+
 class StaleSamplesWarning(UserWarning):
     """Samples that repeat a neighbour's data exactly were left out of a fit."""
 
@@ -32,14 +37,19 @@ def _same_as(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def stale_samples(tel: Telemetry) -> np.ndarray:
     """(n,) bool: the samples whose attitude, body rates and wheel rates all equal those of the
     sample before or after them (module docstring). Both of an equal pair: which of the two times
-    the data belong to, the data cannot tell. None where a gyro axis shows no noise (noise-free
-    or synthetic telemetry, whose quiet samples may repeat)."""
+    the data belong to, the data cannot tell. None where a gyro axis shows no noise
+    (:data:`NOISE_MIN_REL`) or three samples in a row are equal: noise-free or synthetic
+    telemetry, whose quiet samples repeat."""
     omega = np.asarray(tel.omega, float)
-    if tel.n < 3 or not all(white_noise_sd(omega[:, a]) > 0 for a in range(3)):
+    scale = float(np.max(np.abs(omega), initial=0.0))
+    if tel.n < 3 or not all(white_noise_sd(omega[:, a]) > NOISE_MIN_REL * scale
+                            for a in range(3)):
         return np.zeros(tel.n, bool)
     data = np.concatenate([np.asarray(tel.q, float), np.asarray(tel.omega, float),
                            np.asarray(tel.wheel_rates, float)], axis=1)
-    same = _same_as(data[1:], data[:-1]) if tel.n > 1 else np.zeros(0, bool)
+    same = _same_as(data[1:], data[:-1])
+    if np.any(same[1:] & same[:-1]):
+        return np.zeros(tel.n, bool)      # three equal samples: noise-free where it is quiet
     return np.r_[same, False] | np.r_[False, same]
 
 

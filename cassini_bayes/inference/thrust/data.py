@@ -497,15 +497,18 @@ def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacec
     return design, dict(f_basis=design.basis, com_sd=float(spacecraft.com_sd_m), d_matrix=dirs)
 
 
-def _flex_residual(q_mat, d_mat, n_thr: int):
+def _flex_residual_at(p, ev, q_mat, d_mat, n_thr: int):
     """Eq 17's residual (E, 3, n) of every event at ``p = (π (6), log F (M), δ (3), τ (3))``."""
-    def residual(p, ev):
-        pi, log_f = p[:6], p[6:6 + n_thr]
-        com, tau = p[6 + n_thr:9 + n_thr], p[9 + n_thr:]
-        q = q_mat - jnp.cross(com[:, None], d_mat, axis=0)               # Feldman & Lee Eq 16
-        q_f = q * jnp.exp(log_f)[None, :]
-        return jax.vmap(lambda e: event_residual(pi, q_f, (tau[0], tau[1], tau[2]), e))(ev)
-    return residual
+    pi, log_f = p[:6], p[6:6 + n_thr]
+    com, tau = p[6 + n_thr:9 + n_thr], p[9 + n_thr:]
+    q = q_mat - jnp.cross(com[:, None], d_mat, axis=0)                   # Feldman & Lee Eq 16
+    q_f = q * jnp.exp(log_f)[None, :]
+    return jax.vmap(lambda e: event_residual(pi, q_f, (tau[0], tau[1], tau[2]), e))(ev)
+
+
+# compiled once per shape class, not once per problem
+_flex_residual = jax.jit(_flex_residual_at, static_argnums=4)
+_flex_jacobian = jax.jit(jax.jacfwd(_flex_residual_at), static_argnums=4)
 
 
 def _flex_mode(flex, kw: dict, steps: dict, basis, layout_e, tels, logs, spacecraft: Spacecraft,
@@ -542,7 +545,9 @@ def _flex_mode(flex, kw: dict, steps: dict, basis, layout_e, tels, logs, spacecr
         p0 = np.r_[pi_mean, np.log(thrust), np.zeros(3), tp.median()]
         p_sd = np.r_[pi_sd, np.full(n_thr, THRUST_PRIOR_LOG_SD),
                      np.full(3, spacecraft.com_sd_m), np.sqrt(tp.variance())]
-        search, cols = search_mode(ev, _flex_residual(q_mat, dirs, n_thr), p0, p_sd, n_thr,
+        fns = (lambda p, e: _flex_residual(p, e, q_mat, dirs, n_thr),
+               lambda p, e: _flex_jacobian(p, e, q_mat, dirs, n_thr))
+        search, cols = search_mode(ev, fns, p0, p_sd, n_thr,
                                    kw["nu_cols"], layout.sd, kw["mask"], events, tp.median(),
                                    k.flex_freq_hz, k.flex_damping, prior_sd)
     else:

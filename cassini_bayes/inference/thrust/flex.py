@@ -1,28 +1,28 @@
-"""A flexible or slosh mode in the thrust likelihood: found in the events, then integrated out.
+"""A flexible or slosh mode in the thrust fit: found in the events, judged, or integrated out.
 
 A mode with coupling ``δ`` adds ``M y(t)`` to the residual of Feldman & Lee Eq 17, with
 ``M = δ δᵀ`` (kg m², six entries) and ``y`` the body acceleration filtered by the mode at its
 frequency ``Ω`` and damping ``ζ`` (:mod:`cassini_bayes.physics.flex_mode`). Given ``(Ω, ζ)`` the
 term is linear in ``M``: six more columns of the robust nuisance, zero-mean Normal prior of sd
-``[flex_knowledge] share_sd`` × the mean principal moment, integrated out with the others.
+``[flex_knowledge] share_sd`` × the mean principal moment.
 
 ``(Ω, ζ)`` are found before the fit (:func:`search_mode`), at the largest marginal likelihood
 of the data: the residual at the prior's centre with everything the fit can move to first order
-projected out (inertia, thrusts, centre of mass, time constants, the robust nuisance, the
-offsets), noise-whitened; the mode's columns at every ``(Ω, ζ)`` of a grid over the model file's
-``[flex_knowledge]`` ranges, fine enough in ``Ω`` to follow a ring as long as the event; the best
-peaks refined. The mode enters the fit when its Bayes factor at the best ``(Ω, ζ)`` exceeds the
-number of independent ``(Ω, ζ)`` cells searched — the Laplace estimate of the factor averaged over
-a log-uniform prior on ``(Ω, ζ)`` above 1 — so that a mode the data cannot see leaves the fit as
-it was. ``(Ω, ζ)`` are then held at their estimate: a mode that rings over many samples fixes
-them far more sharply than the momentum it holds.
+integrated out with its priors (inertia, thrusts, centre of mass, time constants, the robust
+nuisance, each sample's time tag; the offsets flat), noise-whitened; the mode's columns at every
+``(Ω, ζ)`` of a grid over the model file's ``[flex_knowledge]`` ranges, fine enough in ``Ω`` to
+follow a ring as long as the event; the best peaks refined. A mode is *found* when its Bayes
+factor at the best ``(Ω, ζ)`` exceeds the number of independent ``(Ω, ζ)`` cells searched — the
+Laplace estimate of the factor averaged over a log-uniform prior on ``(Ω, ζ)`` above 1. The fit
+then judges it (the adequacy check ``flex_ringing``) or, on request, integrates its ``M`` out
+with ``(Ω, ζ)`` held at their estimate (docs/flex_mode.md: on a small spacecraft's single-width
+event that lowered the coverage).
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
 
-import jax
 import numpy as np
 from scipy.optimize import minimize
 
@@ -35,7 +35,7 @@ __all__ = ["ModeSearch", "ModeEvent", "mode_event", "search_mode", "mode_nuisanc
 GRID_STEP = 1.0
 """Spacing of the frequency grid, rad/s × the longest event's duration (s): a ring as long as
 the event dephases by one radian between two grid points (the peaks are then refined)."""
-PEAKS = 3
+PEAKS = 2
 """Peaks of the grid refined by the exact marginal likelihood."""
 GAUSS_NEWTON = 2
 """Gauss-Newton steps of the fit's first-order span before the search."""
@@ -73,9 +73,11 @@ class ModeSearch(NamedTuple):
                 "freq_hz": self.freq_hz, "damping": self.damping,
                 "log_bayes_factor": self.log_bayes_factor, "log_cells_searched": self.log_cells,
                 "ring_over_noise": self.ring_over_noise, "prior_sd_kg_m2": self.prior_sd,
-                "rule": ("a mode enters the fit when its log Bayes factor at the best (freq, "
-                         "damping) exceeds the log of the number of (freq, damping) cells "
-                         "searched; its coupling M = delta delta^T is then integrated out")}
+                "rule": ("a mode is found when its log Bayes factor at the best (freq, damping) "
+                         "exceeds the log of the number of (freq, damping) cells searched; the "
+                         "adequacy check flex_ringing fails when a found mode the fit does not "
+                         "model rings above the noise; --flex model integrates M = delta "
+                         "delta^T out")}
 
 
 class ModeEvent(NamedTuple):
@@ -102,9 +104,8 @@ def mode_event(t, omega, h, t_on, thruster, width, q_mat, thrust, inertia,
     gyroscopic impulse (Feldman & Lee Eq 15) by ``½ δ_i (f_{i−1} + f_i)`` at sample ``i`` and by
     ``½ δ_i (f_{i−1} − f_{i+1})`` at every later one, ``f = ω × (I ω + H)``: across a pulse's
     rate step on a spacecraft whose wheels hold momentum, comparable to the sample noise. Each
-    pulse's body acceleration per
-    unit profile is ``I⁻¹ Q_k F_k``; the wheel and gyroscopic torques' is their mean over each
-    sample interval."""
+    pulse's body acceleration per unit profile is ``I⁻¹ Q_k F_k``; the wheel and gyroscopic
+    torques' is their mean over each sample interval."""
     t, omega, h = (np.asarray(x, float) for x in (t, omega, h))
     inertia = np.asarray(inertia, float)
     inv = np.linalg.inv(inertia)
@@ -129,9 +130,17 @@ def mode_event(t, omega, h, t_on, thruster, width, q_mat, thrust, inertia,
 
 
 def _whitened(y, ev: ModeEvent) -> np.ndarray:
-    """(..., n·3, 6) whitened mode columns of responses ``y`` (..., n, 3)."""
-    cols = mode_columns(y)                                     # (..., n, 3, 6)
-    cols = np.einsum("ab,...nbk->...nak", ev.white, cols)
+    """(..., n·3, 6) whitened mode columns of responses ``y`` (..., n, 3): ``white @ E_k y`` per
+    sample for the six symmetric unit matrices ``E_k`` of :data:`MODE_ENTRIES`."""
+    w = ev.white
+    x, yy, z = (y[..., a, None] for a in range(3))
+    cols = np.empty(y.shape[:-1] + (3, 6))
+    cols[..., 0] = x * w[:, 0]
+    cols[..., 1] = yy * w[:, 1]
+    cols[..., 2] = z * w[:, 2]
+    cols[..., 3] = yy * w[:, 0] + x * w[:, 1]
+    cols[..., 4] = z * w[:, 0] + x * w[:, 2]
+    cols[..., 5] = z * w[:, 1] + yy * w[:, 2]
     return cols.reshape(cols.shape[:-3] + (-1, 6))
 
 
@@ -197,8 +206,8 @@ def _peaks(stat: np.ndarray, k: int) -> np.ndarray:
 def _whitened_design(ev_data, fns, p, reduce, nu_cols, mask, events):
     """The whitened residual (N,) at ``p``, its derivatives along the columns of ``reduce``
     (N, P'), the robust columns and the time-tag columns (N, R + T) and each event's offset
-    (N, 3E). A sample's time-tag term is a column of its own (prior sd 1): the likelihood's
-    rank-one covariance ``B + m mᵀ``."""
+    (N, 3E). A sample's time-tag term is a column of its own (prior sd :data:`TAG_WIDEN`): the
+    likelihood's rank-one covariance ``B + m mᵀ`` with the gyroscopic part added."""
     residual, jacobian = fns
     r0 = np.asarray(residual(p, ev_data))                              # (E, 3, n)
     jac = np.asarray(jacobian(p, ev_data)) @ reduce                    # (E, 3, n, P')
@@ -249,11 +258,10 @@ def _without_common_thrust(n_p: int, n_thr: int) -> np.ndarray:
     return out
 
 
-def _base(ev_data, residual_fn, p0, p_sd, n_thr, nu_cols, nu_sd, mask, events) -> _Base:
+def _base(ev_data, fns, p0, p_sd, n_thr, nu_cols, nu_sd, mask, events) -> _Base:
     """:class:`_Base` at the MAP point of the fit's first-order span (:data:`GAUSS_NEWTON`
     steps from the prior's centre ``p0``, prior sds ``p_sd`` and ``nu_sd``: a flat span would
     take the ring with a gyro scale factor of one and the time constants' freedom)."""
-    fns = jax.jit(residual_fn), jax.jit(jax.jacfwd(residual_fn))
     reduce = _without_common_thrust(p0.size, n_thr)
     a = np.zeros(reduce.shape[1])
     for _ in range(GAUSS_NEWTON + 1):
@@ -279,17 +287,18 @@ def _alias_hz(freq_hz, period_s: float):
     return np.abs(freq_hz - np.round(freq_hz * period_s) / period_s)
 
 
-def search_mode(ev_data, residual_fn, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask,
+def search_mode(ev_data, fns, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask,
                 events: list[ModeEvent], tau, freq_hz_range, damping_range, prior_sd: float):
     """Find the flexible mode of the module docstring; returns the :class:`ModeSearch` and,
     when found, its columns (E, 6, 3, n) in the layout of the robust nuisance (per kg m² of
     each entry of ``M``, :data:`MODE_ENTRIES`), else ``None``.
 
-    ``residual_fn(p, ev_data)`` (E, 3, n) is Eq 17's residual at the physical parameters ``p``
-    = (π (6), log F (``n_thr``), δ (3), τ (3)), differentiable; ``p0`` the prior's centre and
+    ``fns = (residual, jacobian)``: ``residual(p, ev_data)`` (E, 3, n) is Eq 17's residual at
+    the physical parameters ``p`` = (π (6), log F (``n_thr``), δ (3), τ (3)), ``jacobian`` its
+    derivative (E, 3, n, P); ``p0`` the prior's centre and
     ``p_sd`` its sds; ``nu_cols`` (E, R, 3, n) the robust nuisance columns, ``nu_sd`` (R,)
     their prior sds."""
-    base = _base(ev_data, residual_fn, np.asarray(p0, float), np.asarray(p_sd, float), n_thr,
+    base = _base(ev_data, fns, np.asarray(p0, float), np.asarray(p_sd, float), n_thr,
                  nu_cols, np.asarray(nu_sd, float), mask, events)
     cinv_d = base.solve(base.d[:, None])[:, 0]
     span = max(float(ev.t[-1] - ev.t[0]) for ev in events)
@@ -319,6 +328,8 @@ def search_mode(ev_data, residual_fn, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask
         return -float(_log_bf(columns(np.array([o]), np.array([z])), base, cinv_d,
                               prior_sd)[0])
 
+    if n_om == 0:                      # every frequency aliases to a slow trend: nothing to find
+        return ModeSearch(float("nan"), float("nan"), 0.0, 0.0, False, float(prior_sd), 0.0), None
     bounds = [(np.log(om_lo), np.log(om_hi)), tuple(np.log(damping_range))]
     best = None
     for i in _peaks(stat, PEAKS):
@@ -326,7 +337,7 @@ def search_mode(ev_data, residual_fn, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask
         x0 = np.log([om[i], z0])
         simplex = x0 + np.array([[0.0, 0.0], [GRID_STEP / (span * om[i]), 0.0], [0.0, 0.5]])
         res = minimize(neg, x0, method="Nelder-Mead", bounds=bounds,
-                       options={"xatol": 1e-7, "fatol": 1e-3, "maxiter": 200,
+                       options={"xatol": 1e-5, "fatol": 0.05, "maxiter": 80,
                                 "initial_simplex": simplex})
         if best is None or res.fun < best.fun:
             best = res
