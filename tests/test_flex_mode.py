@@ -58,6 +58,8 @@ def test_mode_columns_are_the_symmetric_product():
     m = m + m.T
     entries = np.array([m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2]])
     np.testing.assert_allclose(mode_columns(y) @ entries, y @ m.T, rtol=1e-12)
+    white = rng.normal(size=(3, 3))
+    np.testing.assert_allclose(mode_columns(y, white) @ entries, y @ m.T @ white.T, rtol=1e-12)
 
 
 def test_stale_samples_are_found_and_left_out():

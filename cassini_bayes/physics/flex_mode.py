@@ -129,13 +129,19 @@ def _scatter(c, accel, rows, n: int) -> np.ndarray:
     return out
 
 
-def mode_columns(y) -> np.ndarray:
+def mode_columns(y, white=None) -> np.ndarray:
     """(..., n, 3, 6): ``M y`` is ``columns @ (M_xx, M_yy, M_zz, M_xy, M_xz, M_yz)``
-    (:data:`MODE_ENTRIES`) for the response ``y`` (..., n, 3)."""
+    (:data:`MODE_ENTRIES`) for the response ``y`` (..., n, 3); with ``white`` (3, 3) the columns
+    are ``white @ E_k y``, ``E_k`` the symmetric unit matrices (written out: an einsum over the
+    unwhitened columns costs several times more in the mode search)."""
     y = np.asarray(y, float)
-    x, yy, z = y[..., 0], y[..., 1], y[..., 2]
-    o = np.zeros_like(x)
-    rows = [np.stack([x, o, o, yy, z, o], -1),
-            np.stack([o, yy, o, x, o, z], -1),
-            np.stack([o, o, z, o, x, yy], -1)]
-    return np.stack(rows, -2)
+    w = np.eye(3) if white is None else np.asarray(white, float)
+    x, yy, z = (y[..., a, None] for a in range(3))
+    cols = np.empty(y.shape[:-1] + (3, 6))
+    cols[..., 0] = x * w[:, 0]
+    cols[..., 1] = yy * w[:, 1]
+    cols[..., 2] = z * w[:, 2]
+    cols[..., 3] = yy * w[:, 0] + x * w[:, 1]
+    cols[..., 4] = z * w[:, 0] + x * w[:, 2]
+    cols[..., 5] = z * w[:, 1] + yy * w[:, 2]
+    return cols

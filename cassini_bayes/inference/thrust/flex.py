@@ -129,21 +129,6 @@ def mode_event(t, omega, h, t_on, thruster, width, q_mat, thrust, inertia,
                      white, here, later)
 
 
-def _whitened(y, ev: ModeEvent) -> np.ndarray:
-    """(..., n·3, 6) whitened mode columns of responses ``y`` (..., n, 3): ``white @ E_k y`` per
-    sample for the six symmetric unit matrices ``E_k`` of :data:`MODE_ENTRIES`."""
-    w = ev.white
-    x, yy, z = (y[..., a, None] for a in range(3))
-    cols = np.empty(y.shape[:-1] + (3, 6))
-    cols[..., 0] = x * w[:, 0]
-    cols[..., 1] = yy * w[:, 1]
-    cols[..., 2] = z * w[:, 2]
-    cols[..., 3] = yy * w[:, 0] + x * w[:, 1]
-    cols[..., 4] = z * w[:, 0] + x * w[:, 2]
-    cols[..., 5] = z * w[:, 1] + yy * w[:, 2]
-    return cols.reshape(cols.shape[:-3] + (-1, 6))
-
-
 def _responses(events, om, zeta, tau) -> list[np.ndarray]:
     return [mode_rate_response(ev.t, ev.t_on, ev.width, ev.accel, tau, om, zeta, ev.smooth)
             for ev in events]
@@ -313,7 +298,8 @@ def search_mode(ev_data, fns, p0, p_sd, n_thr: int, nu_cols, nu_sd, mask,
 
     def columns(o, z):
         ys = _responses(events, o, z, tau)
-        return np.concatenate([_whitened(y, ev) for y, ev in zip(ys, events)], 1)
+        return np.concatenate([mode_columns(y, ev.white).reshape(y.shape[0], -1, 6)
+                               for y, ev in zip(ys, events)], 1)
 
     stat = np.zeros((n_om, zetas.size))
     for j, z in enumerate(zetas):
