@@ -85,26 +85,31 @@ def thrust_adequacy(post, sites: Sequence[str]) -> Adequacy:
 
 
 def flex_ringing(search, threshold: float = RING_MAX) -> Check:
-    """Whether the events ring with a flexible or slosh mode the fit does not model
+    """Whether the events ring with a flexible or slosh mode
     (:class:`~cassini_bayes.inference.thrust.flex.ModeSearch`): fails when one is found whose
-    rms momentum exceeds ``threshold`` noise sds. The fit's noise level then absorbs a
-    structured residual, and on a small spacecraft its intervals do not cover
-    (docs/flex_mode.md)."""
+    rms momentum exceeds ``threshold`` noise sds. Not modelled, the fit's noise level absorbs a
+    structured residual; modelled (``--flex model``, its frequency and damping held at their
+    estimate), the ring's size is still a judge: on a small spacecraft's open-world events such
+    fits did not cover either (docs/flex_mode.md)."""
     name = "flex_ringing"
     if search is None:
         return not_applicable(name, threshold, "no search for a flexible mode (--flex off, "
                               "or the idealised model)")
-    if search.modelled:
-        return not_applicable(name, threshold, f"the mode at {search.freq_hz:.4g} Hz is "
-                              "modelled (--flex model)")
     if not search.found:
         return Check(name, 0.0, threshold, True, note="no mode found in the events")
     ring = float(search.ring_over_noise)
+    if not np.isfinite(ring):
+        return not_applicable(name, threshold, f"the mode at {search.freq_hz:.4g} Hz was given, "
+                              "not searched: its ring is not measured")
+    what = ("that the fit models with its frequency and damping held at their estimate: on "
+            "the ESPA bus's open-world events such fits did not cover"
+            if search.modelled else
+            "that the fit does not model: its noise level absorbs it, and its intervals may "
+            "not cover")
     return Check(name, ring, threshold, ring <= threshold, parameter=f"{search.freq_hz:.4g} Hz",
                  note=(f"a flexible or slosh mode at {search.freq_hz:.4g} Hz (damping "
-                       f"{search.damping:.2g}) holds {ring:.3g} noise sds of momentum that the "
-                       "fit does not model: its noise level absorbs it, and its intervals may "
-                       "not cover (docs/flex_mode.md)"))
+                       f"{search.damping:.2g}) holds {ring:.3g} noise sds of momentum {what} "
+                       "(docs/flex_mode.md)"))
 
 
 def _mean_axis(post) -> np.ndarray:

@@ -14,7 +14,7 @@ nuisance, each sample's time tag; the offsets flat), noise-whitened; the mode's 
 follow a ring as long as the event; the best peaks refined. A mode is *found* when its Bayes
 factor at the best ``(Ω, ζ)`` exceeds the number of independent ``(Ω, ζ)`` cells searched — the
 Laplace estimate of the factor averaged over a log-uniform prior on ``(Ω, ζ)`` above 1. The fit
-then judges it (the adequacy check ``flex_ringing``) or, on request, integrates its ``M`` out
+then judges it (the adequacy check ``flex_ringing``) and, on request, integrates its ``M`` out
 with ``(Ω, ζ)`` held at their estimate (docs/flex_mode.md: on a small spacecraft's single-width
 event that lowered the coverage).
 """
@@ -75,8 +75,8 @@ class ModeSearch(NamedTuple):
                 "ring_over_noise": self.ring_over_noise, "prior_sd_kg_m2": self.prior_sd,
                 "rule": ("a mode is found when its log Bayes factor at the best (freq, damping) "
                          "exceeds the log of the number of (freq, damping) cells searched; the "
-                         "adequacy check flex_ringing fails when a found mode the fit does not "
-                         "model rings above the noise; --flex model integrates M = delta "
+                         "adequacy check flex_ringing fails when a found mode, modelled or not, "
+                         "rings above the noise; --flex model integrates M = delta "
                          "delta^T out")}
 
 
