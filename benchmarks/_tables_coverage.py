@@ -175,13 +175,15 @@ def rcs_family(args: list[Records]) -> str:
 
 def _setting(opts: dict) -> str:
     """A campaign record's open-world setting in words: the widening, the effects switched off,
-    the fits' stated torque knowledge and what the thrust fit did with a flexible mode
+    the fits' stated torque knowledge, the drawn time tags' scale and what the thrust fit did with a flexible mode
     (coverage_open_world.py options; ``flex`` ``auto`` is today's ``model``)."""
     parts = [f"widen {opts.get('widen', 1.5):g}"]
     if opts.get("off"):
         parts.append("off " + " ".join(opts["off"]))
     if opts.get("torque_sd_nm"):
         parts.append(f"torque prior {opts['torque_sd_nm']:g} N m")
+    if opts.get("time_tag_scale", 1.0) != 1.0:
+        parts.append(f"time tags × {opts['time_tag_scale']:.3g}")
     flex = {"auto": "mode modelled", "model": "mode modelled", "check": "mode checked",
             "off": "no mode search"}.get(opts.get("flex"))
     if flex:
