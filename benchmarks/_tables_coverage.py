@@ -175,8 +175,9 @@ def rcs_family(args: list[Records]) -> str:
 
 def _setting(opts: dict) -> str:
     """A campaign record's open-world setting in words: the widening, the effects switched off,
-    the fits' stated torque knowledge, the drawn time tags' scale and what the thrust fit did with a flexible mode
-    (coverage_open_world.py options; ``flex`` ``auto`` is today's ``model``)."""
+    the fits' stated torque knowledge, the drawn time tags' scale and what the thrust fit did
+    with a flexible mode (coverage_open_world.py options; ``flex`` ``auto`` is today's
+    ``model``)."""
     parts = [f"widen {opts.get('widen', 1.5):g}"]
     if opts.get("off"):
         parts.append("off " + " ".join(opts["off"]))

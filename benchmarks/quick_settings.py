@@ -81,7 +81,7 @@ def main() -> None:
     rows = []
     for scenario in args.scenarios:
         for seed in args.seeds:
-            sim = cb.simulate(scenario, seed=seed)
+            sim = cb.simulate_scenario(scenario, seed=seed)
             for warmup in args.warmups:
                 settings = SamplerSettings(chains=max(args.chains), warmup=warmup,
                                            draws=max(args.draws))

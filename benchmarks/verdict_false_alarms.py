@@ -48,7 +48,7 @@ MODELS = ("cassini_post_probe", "cassini_pre_soi")
 
 def _health(seed: int, campaign: str, n_events: int) -> dict:
     """{model: {check: statistic}} of one campaign."""
-    from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.api import simulate_scenario
     from cassini_bayes.inference.health import HealthPrior, event_channels, event_summary
     from cassini_bayes.inference.health.adequacy import health_adequacy, inertia_probe
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
@@ -56,7 +56,7 @@ def _health(seed: int, campaign: str, n_events: int) -> dict:
 
     camp = dataclasses.replace(load_campaign(campaign), n_events=n_events)
     events = campaign_events(camp, seed)
-    sims = [simulate(ev.scenario) for ev in events]
+    sims = [simulate_scenario(ev.scenario) for ev in events]
     dates = [ev.date_days for ev in events]
     out = {}
     for model in MODELS:
@@ -184,10 +184,10 @@ def _budget(seed: int, settings: dict) -> dict:
         warnings.simplefilter("ignore")
         runs = {}
         for name, scenario in (("post", "slews_post_probe_real"), ("pre", "slews_pre_soi_real")):
-            sim = cb.simulate(scenario, seed=seed)
+            sim = cb.simulate_scenario(scenario, seed=seed)
             runs[name] = cb.fit_inertia(sim.telemetry, "cassini_post_probe", seed=seed,
                                         **settings).save(Path(d) / name)
-        ev = cb.simulate("biasing_day028_real", seed=seed)
+        ev = cb.simulate_scenario("biasing_day028_real", seed=seed)
         runs["thrust"] = cb.fit_thrust(ev.telemetry, ev.pulses, "cassini_post_probe", seed=seed,
                                        **settings).save(Path(d) / "thrust")
         draws = run_inertia_draws(runs)

@@ -24,7 +24,6 @@ uses the package's modules directly calls ``cassini_bayes.setup_jax()`` once aft
 """
 
 import importlib as _importlib
-import sys as _sys
 import types as _types
 import typing as _typing
 
@@ -57,14 +56,14 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time the names load
         read_telemetry,
         request_host_devices,
         setup_jax,
-        simulate,
         simulate_health_campaign,
+        simulate_scenario,
     )
     from cassini_bayes.errors import InputError
 
 __all__ = [  # noqa: RUF022  (grouped as docs/api.md lists them)
     "__version__",
-    "read_telemetry", "read_pulses", "load_spacecraft", "simulate",
+    "read_telemetry", "read_pulses", "load_spacecraft", "simulate_scenario",
     "fit_inertia", "fit_thrust", "fit_rwa4", "fit_wheel_axis",
     "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
     "InputError", "setup_jax", "request_host_devices",
@@ -95,22 +94,3 @@ def __dir__() -> list[str]:
     """The public names (``__all__``) and the module's own dunders: no helpers, no imported
     modules, no subpackages."""
     return sorted(set(__all__) | {n for n in globals() if n.startswith("__") and n.endswith("__")})
-
-
-class _Package(_types.ModuleType):
-    """The module type of this package, for one name: ``cassini_bayes.simulate`` is the public
-    :func:`~cassini_bayes.api.simulate` function, although the simulator's subpackage has the
-    same name (import from it as usual: ``from cassini_bayes.simulate import load_scenario``;
-    ``import cassini_bayes.simulate.run as m`` does not work)."""
-
-    @property
-    def simulate(self) -> object:
-        return _api().simulate
-
-    @simulate.setter
-    def simulate(self, module: _types.ModuleType) -> None:
-        """The import system binds the subpackage here when it is first imported; it stays
-        reachable in ``sys.modules``, the name keeps the function."""
-
-
-_sys.modules[__name__].__class__ = _Package

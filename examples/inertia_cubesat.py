@@ -28,7 +28,7 @@ NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 
 def main(args):
-    sim = cb.simulate(args.scenario, seed=args.seed)
+    sim = cb.simulate_scenario(args.scenario, seed=args.seed)
     truth = sim.truth()["inertia_kgm2"]
     spacecraft = sim.prior          # models/cubesat_12u.toml, the scenario's [prior] model
     print(f"{spacecraft.name}: wheels {', '.join(spacecraft.wheel_names)}, "

@@ -29,7 +29,7 @@ NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 
 def main(args):
     # Synthetic telemetry of the bus's slews; ``truth()`` is what truth.json records (SI units).
-    sim = cb.simulate(args.scenario, seed=args.seed)
+    sim = cb.simulate_scenario(args.scenario, seed=args.seed)
     truth = sim.truth()["inertia_kgm2"]
 
     # The calibration starts from the scenario's [prior] model: models/espa_bus.toml.

@@ -30,7 +30,7 @@ NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 def main(args):
     # Synthetic telemetry: the scenario's slews through the simulator (dynamics, controller,
     # gyro/star-tracker/tach noise). ``truth()`` is what truth.json records, SI units.
-    sim = cb.simulate(args.scenario, seed=args.seed)
+    sim = cb.simulate_scenario(args.scenario, seed=args.seed)
     truth = sim.truth()["inertia_kgm2"]
 
     # The spacecraft model the calibration starts from: the scenario's [prior] model (its

@@ -38,7 +38,7 @@ def main(args):
         scenario, duration_s=args.hours * 3600.0,
         leak=Leak(THRUSTER_NAMES.index(args.thruster), args.fraction, args.onset))
     with tempfile.TemporaryDirectory() as scratch:
-        sim = cb.simulate(scenario, seed=args.seed).save(Path(scratch) / "sim")
+        sim = cb.simulate_scenario(scenario, seed=args.seed).save(Path(scratch) / "sim")
 
         # Both monitors on the same telemetry and pulse log.
         res = cb.monitor_leak(sim / "telemetry.csv", "cassini_post_probe",

@@ -39,7 +39,7 @@ def angle_deg(u, v):
 
 def main(args):
     scenario = args.scenario or SCENARIOS[args.method]
-    sim = cb.simulate(scenario, seed=args.seed)
+    sim = cb.simulate_scenario(scenario, seed=args.seed)
     true_axis = sim.truth()["rwa4_axis"]
 
     # The Time A / Time B windows are detected from the telemetry's quiet periods (pass

@@ -29,7 +29,7 @@ def main(args):
     sampler = dict(seed=args.seed, chains=args.chains, warmup=args.warmup, draws=args.draws)
 
     # 1. The inertia from RWA slews; the scenario's [prior] model is where the calibration starts.
-    slews = cb.simulate(args.slews, seed=args.seed)
+    slews = cb.simulate_scenario(args.slews, seed=args.seed)
     inertia_fit = cb.fit_inertia(slews.telemetry, slews.prior, **sampler)
     inertia = inertia_fit.summary()["parameters"]
     true_inertia = slews.truth()["inertia_kgm2"]
@@ -40,7 +40,7 @@ def main(args):
 
     # 2. The biasing event: telemetry plus the log of every commanded pulse (t_on, thruster,
     #    width). The inertia posterior replaces the model's inertia prior.
-    event = cb.simulate(args.event, seed=args.seed)
+    event = cb.simulate_scenario(args.event, seed=args.seed)
     fit = cb.fit_thrust(event.telemetry, event.pulses, event.prior,
                         inertia_posterior=inertia_fit, **sampler)
 

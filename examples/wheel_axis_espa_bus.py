@@ -37,7 +37,7 @@ def angle_deg(u, v):
 
 
 def main(args):
-    sim = cb.simulate(args.scenario, seed=args.seed)
+    sim = cb.simulate_scenario(args.scenario, seed=args.seed)
     wheels = {w["name"]: w for w in sim.truth()["wheels"]}
     true_axis = wheels[args.wheel.upper()]["axis"]
     model_axis = sim.prior.wheel(args.wheel).axis

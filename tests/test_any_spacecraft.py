@@ -211,7 +211,7 @@ def test_the_cubesat_check_sees_its_gyro_bias_and_no_thrusters(tmp_path, run_cli
     turn-on bias lies within 4 standard errors of the truth on every axis (the scenario's seed;
     with 9 degrees of freedom beyond 4 se is 0.3 % per axis). ``check`` says the model has no
     thrusters instead of asking for a pulse log."""
-    from cassini_bayes.api import simulate as simulate_scenario
+    from cassini_bayes.api import simulate_scenario
     from cassini_bayes.consistency import gyro_bias_estimate
 
     sim = simulate_scenario("slews_cubesat_12u")

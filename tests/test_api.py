@@ -202,13 +202,13 @@ def test_check_and_leak_monitor_take_loaded_objects(inputs):
 
 
 def test_simulate_wraps_the_command(tmp_path, run_cli):
-    """``cb.simulate`` writes what ``cassini-bayes simulate`` writes, byte for byte."""
+    """``cb.simulate_scenario`` writes what ``cassini-bayes simulate`` writes, byte for byte."""
     from cassini_bayes.simulate.scenario import scenario_path
 
     code, _, err = run_cli("simulate", scenario_path("fsds_biasing"), "--out",
                            tmp_path / "cli", "--seed", "3")
     assert code == 0, err
-    sim = cb.simulate("fsds_biasing", seed=3)
+    sim = cb.simulate_scenario("fsds_biasing", seed=3)
     assert sim.pulses is not None and sim.truth()["seed"] == 3
     out = sim.save(tmp_path / "api")
     for name in ("telemetry.csv", "pulses.csv", "truth.json"):
@@ -233,7 +233,7 @@ def test_import_is_cheap_and_leaves_jax_alone():
     ones."""
     code = ("import sys, cassini_bayes as cb\n"
             "assert 'jax' not in sys.modules and 'numpy' not in sys.modules\n"
-            "cb.fit_inertia, cb.fit_thrust, cb.fit_rwa4, cb.simulate, cb.FitResult\n"
+            "cb.fit_inertia, cb.fit_thrust, cb.fit_rwa4, cb.simulate_scenario, cb.FitResult\n"
             "cb.propagate_conic, cb.VectorTree, cb.setup_jax\n"
             "assert 'numpyro' not in sys.modules and 'arviz' not in sys.modules\n"
             "import jax\n"
@@ -241,9 +241,10 @@ def test_import_is_cheap_and_leaves_jax_alone():
             "      jax.local_device_count(), sorted(cb.__all__))")
     out = _python(code).split(maxsplit=3)
     assert out[:3] == ["False", "None", "1"]
-    assert set(cb.__all__) >= {"read_telemetry", "read_pulses", "load_spacecraft", "simulate",
+    assert set(cb.__all__) >= {"read_telemetry", "read_pulses", "load_spacecraft",
+                               "simulate_scenario",
                                "fit_inertia", "fit_thrust", "fit_rwa4", "FitResult"}
-    assert callable(cb.simulate)
+    assert callable(cb.simulate_scenario)
 
 
 HEAVY = ("jax", "numpy", "numpyro", "arviz", "xarray", "matplotlib", "scipy")

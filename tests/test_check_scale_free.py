@@ -55,7 +55,7 @@ def flights(tmp_path_factory):
                 w["quiet_tol_rpm"] = r * QUIET_WHEEL_TOL_RPM
         path.write_text(tomli_w.dumps(model))
         d = _slower(scaled_scenario("slews_post_probe", s, str(path)), r)
-        tel = cb.simulate(scenario_from_dict(d, "slews_post_probe"), seed=11).telemetry
+        tel = cb.simulate_scenario(scenario_from_dict(d, "slews_post_probe"), seed=11).telemetry
         out[name] = (tel, str(path))
     return out
 

@@ -124,7 +124,7 @@ def test_draws_agree_with_the_exact_probabilities():
 
 
 def _event(**truth):
-    from cassini_bayes.api import simulate
+    from cassini_bayes.api import simulate_scenario
     from cassini_bayes.simulate import scenario_from_dict
     from cassini_bayes.simulate.scenario import scenario_path
 
@@ -132,7 +132,7 @@ def _event(**truth):
     d["truth"].update(truth)
     for ramp, rpm in zip(d["wheel_ramp"], (640.0, -720.0, 500.0)):
         ramp["target_rpm"] = rpm
-    return simulate(scenario_from_dict(d), seed=11)
+    return simulate_scenario(scenario_from_dict(d), seed=11)
 
 
 @pytest.fixture(scope="module")

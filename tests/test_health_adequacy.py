@@ -83,9 +83,9 @@ def test_held_out_passes_a_clean_campaign_and_names_an_outlier():
 
 @pytest.fixture(scope="module")
 def one_event():
-    from cassini_bayes.api import simulate
+    from cassini_bayes.api import simulate_scenario
 
-    return simulate("health_event", seed=4)
+    return simulate_scenario("health_event", seed=4)
 
 
 def test_inertia_probe_measures_the_moments_and_a_wrong_model_fails(one_event):

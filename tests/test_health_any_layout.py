@@ -9,7 +9,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cassini_bayes.api import simulate
+from cassini_bayes.api import simulate_scenario
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.health import event_summary, health_channels
 from cassini_bayes.simulate import load_scenario
@@ -19,7 +19,7 @@ from cassini_bayes.simulate import load_scenario
 def espa_event():
     """One ESPA-bus biasing event (the health campaign's template; truth thrusts the model's
     1 N, inertia the model's)."""
-    return simulate(load_scenario("health_event_espa_bus"))
+    return simulate_scenario(load_scenario("health_event_espa_bus"))
 
 
 def test_time_constant_sensitivity_is_the_estimators(espa_event):
@@ -173,7 +173,7 @@ def espa_campaign():
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
 
     camp = load_campaign("health_degradation_espa_bus")
-    return [(ev, simulate(ev.scenario)) for ev in campaign_events(camp, camp.seed)[:4]]
+    return [(ev, simulate_scenario(ev.scenario)) for ev in campaign_events(camp, camp.seed)[:4]]
 
 
 def _log_errors_at_the_truth(events) -> np.ndarray:

@@ -60,7 +60,7 @@ def pair(request, tmp_path_factory):
         path = tmp / f"{model}_{scale:g}.toml"
         path.write_text(tomli_w.dumps(scaled_model(model, scale)))
         sc = scenario_from_dict(scaled_scenario(scenario, scale, str(path)), f"{scenario}")
-        tel = cb.simulate(sc, seed=11).telemetry
+        tel = cb.simulate_scenario(sc, seed=11).telemetry
         check = cb.check_telemetry(tel, spacecraft=str(path))
         fit = cb.fit_inertia(tel, str(path), seed=5, **settings)
         out[scale] = {"path": path, "model": cb.load_spacecraft(path), "tel": tel,
@@ -194,7 +194,7 @@ def leak_pair(tmp_path_factory):
         d = scaled_scenario("leak_cruise", scale, str(path))
         d["truth"]["thrust_n"] = [f * scale for f in d["truth"]["thrust_n"]]
         d["run"]["duration_s"] = 1200.0
-        sim = cb.simulate(scenario_from_dict(d, "leak_cruise"), seed=11)
+        sim = cb.simulate_scenario(scenario_from_dict(d, "leak_cruise"), seed=11)
         out[scale] = leak_inputs(sim.telemetry, sim.pulses, cb.load_spacecraft(path))
     return out
 

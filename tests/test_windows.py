@@ -224,7 +224,7 @@ def test_rcs_windows_detected_and_scale_free(scenario, model, wheel, s, tmp_path
         path = tmp_path / f"{model}_{scale:g}.toml"
         path.write_text(tomli_w.dumps(scaled_model(model, scale)))
         sc = scenario_from_dict(scaled_scenario(scenario, scale, str(path)), scenario)
-        tel = cb.simulate(sc, seed=sc.seed).telemetry
+        tel = cb.simulate_scenario(sc, seed=sc.seed).telemetry
         found.append(detect_windows(tel, "rcs", wheel=wheel))
     assert found[0] == found[1]
     (a, b), = found[0]

@@ -1,7 +1,7 @@
 """The public Python API, re-exported by :mod:`cassini_bayes` (docs/api.md).
 
 Read inputs (:func:`read_telemetry`, :func:`read_pulses`, :func:`load_spacecraft`), make
-synthetic ones (:func:`simulate`), and fit what
+synthetic ones (:func:`simulate_scenario`), and fit what
 ``cassini-bayes fit inertia|thrust|wheel-axis|rwa4`` fits (:func:`fit_inertia`, :func:`fit_thrust`,
 :func:`fit_wheel_axis`, :func:`fit_rwa4`): each returns a :class:`FitResult` whose ``summary()``
 is the run's ``summary.json`` and whose ``save(dir)`` writes the run directory the command
@@ -43,7 +43,7 @@ if _typing.TYPE_CHECKING:   # the types for checkers; at run time each name load
         write_run_files,
     )
     from cassini_bayes.api._rwa4 import fit_rwa4, rwa4_sensitivity, rwa4_summary
-    from cassini_bayes.api._simulation import Simulation, simulate, truth_document
+    from cassini_bayes.api._simulation import Simulation, simulate_scenario, truth_document
     from cassini_bayes.api._thrust import (
         fit_thrust,
         thrust_baseline,
@@ -70,7 +70,7 @@ _HOMES = {
                                   "write_run_files"],
     "cassini_bayes.api._rwa4": ["fit_wheel_axis", "fit_rwa4", "rwa4_sensitivity",
                                 "rwa4_summary"],
-    "cassini_bayes.api._simulation": ["Simulation", "simulate", "truth_document"],
+    "cassini_bayes.api._simulation": ["Simulation", "simulate_scenario", "truth_document"],
     "cassini_bayes.api._thrust": ["fit_thrust", "thrust_baseline", "thrust_sensitivity",
                                   "thrust_summary"],
     "cassini_bayes.spacecraft": ["Spacecraft", "load_spacecraft"],
@@ -79,8 +79,9 @@ _HOMES = {
 _HOME = {name: module for module, names in _HOMES.items() for name in names}
 
 __all__ = [
-    "read_telemetry", "read_pulses", "load_spacecraft", "simulate", "fit_inertia", "fit_thrust",
-    "fit_rwa4", "fit_wheel_axis", "FitResult", "Simulation", "Telemetry", "PulseLog", "Spacecraft",
+    "read_telemetry", "read_pulses", "load_spacecraft", "simulate_scenario", "fit_inertia",
+    "fit_thrust", "fit_rwa4", "fit_wheel_axis", "FitResult", "Simulation", "Telemetry",
+    "PulseLog", "Spacecraft",
     "request_host_devices", "setup_jax", "inertia_baseline", "inertia_summary", "thrust_baseline",
     "thrust_sensitivity", "thrust_summary", "rwa4_sensitivity", "rwa4_summary", "write_run",
     "write_run_files", "fit_config", "collect_warnings", "truth_document",

@@ -319,7 +319,7 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
     ``pulses.csv``, ``truth.json``), ``events.csv`` (the event list :func:`fit_health` reads)
     and ``truth.json`` (dates, true thrusts, the degradation); atomically."""
     from cassini_bayes.api._inputs import check_seed
-    from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.api._simulation import simulate_scenario
     from cassini_bayes.rundir import RunDir
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
     from cassini_bayes.telemetry import write_pulses, write_telemetry
@@ -330,7 +330,7 @@ def simulate_health_campaign(campaign: str | os.PathLike, out: str | os.PathLike
     with RunDir(out, force=force) as rd:
         rows = []
         for k, ev in enumerate(events):
-            sim = simulate(ev.scenario)
+            sim = simulate_scenario(ev.scenario)
             d = rd.path / f"event_{k:03d}"
             d.mkdir()
             if sim.pulses is None:
@@ -359,7 +359,7 @@ def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: f
     """In memory, without files: ``(dates (N,), log thrust (N, K), sd (N, K))`` of a simulated
     campaign's events on the channels of all its events (what the benchmark and the tests feed
     :func:`health_posterior`)."""
-    from cassini_bayes.api._simulation import simulate
+    from cassini_bayes.api._simulation import simulate_scenario
     from cassini_bayes.inference.health import event_channels, event_summary
     from cassini_bayes.inference.health.summary import TAU_SD_FRAC
     from cassini_bayes.simulate.health_campaign import campaign_events, load_campaign
@@ -367,7 +367,7 @@ def campaign_summaries(campaign: str | os.PathLike, seed: int, *, tau_sd_frac: f
     camp = campaign if not isinstance(campaign, (str, os.PathLike)) else load_campaign(campaign)
     ys, ss, ds = [], [], []
     events = campaign_events(camp, seed)
-    sims = [simulate(ev.scenario) for ev in events]
+    sims = [simulate_scenario(ev.scenario) for ev in events]
     pairs = [(sim.telemetry, sim.pulses) for sim in sims if sim.pulses is not None]
     if len(pairs) < len(sims):
         raise InputError("every event of a health campaign is a biasing event with firings",

@@ -1,4 +1,5 @@
-"""Synthetic telemetry from a scenario: :func:`simulate`, what ``cassini-bayes simulate`` runs."""
+"""Synthetic telemetry from a scenario: :func:`simulate_scenario`, what ``cassini-bayes simulate``
+runs."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from cassini_bayes.simulate import Scenario, SimResult, quiet_windows
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
-__all__ = ["Simulation", "simulate", "truth_document"]
+__all__ = ["Simulation", "simulate_scenario", "truth_document"]
 
 
 def truth_document(result: SimResult, seed: int) -> dict:
@@ -148,7 +149,8 @@ class Simulation:
 
 
 @jax_entry
-def simulate(scenario: Scenario | str | os.PathLike, *, seed: int | None = None) -> Simulation:
+def simulate_scenario(scenario: Scenario | str | os.PathLike, *,
+                      seed: int | None = None) -> Simulation:
     """Simulate a scenario: the telemetry, pulse log and truth ``cassini-bayes simulate`` writes.
 
     Parameters

@@ -36,7 +36,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
     ) -> None:
         """Simulate a scenario: telemetry.csv, pulses.csv (if thrusters fire), truth.json."""
         console = stderr_console()
-        from cassini_bayes.api import simulate
+        from cassini_bayes.api import simulate_scenario
         from cassini_bayes.simulate import load_scenario
         from cassini_bayes.simulate.scenario import scenario_path
 
@@ -49,7 +49,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         t0 = time.perf_counter()
         with console.status(f"simulating {sc.name}: {sc.n_steps} steps of {sc.dt_s} s, "
                             f"{sc.n_samples} samples (compiling on first use)…"):
-            sim = simulate(sc, seed=seed_)
+            sim = simulate_scenario(sc, seed=seed_)
             sim.save(out, force=force)
         n_p = 0 if sim.pulses is None else sim.pulses.t_on.size
         console.print(f"[green]✓[/green] {escape(sc.name)}: {sc.n_samples} samples, {n_p} pulses, "
