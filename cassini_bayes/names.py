@@ -7,7 +7,8 @@ Pure constants: any layer may import this module.
 from __future__ import annotations
 
 __all__ = ["axis_label", "INERTIA_NAMES", "THRUSTER_NAMES", "F_NAMES", "TAU_NAMES", "U4_NAMES",
-           "COM_NAMES", "INERTIA_NOISE_NAMES", "EFFECTS", "FLEX_CHOICES", "unit_of", "a_kind"]
+           "COM_NAMES", "INERTIA_NOISE_NAMES", "EFFECTS", "FLEX_CHOICES", "THRUST_MODES",
+           "AXIS_METHODS", "AXIS_PRIORS", "WHEEL_ERRORS", "unit_of", "a_kind"]
 
 INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
 """Inertia-tensor entries (kg m²), in the order of every ``π`` vector."""
@@ -35,6 +36,15 @@ EFFECTS = {"gyro_bias": "gyro_bias", "gyro_scale": "gyro_scale",
 FLEX_CHOICES = ("check", "model", "off")
 """The thrust fit's flexible mode: searched for and judged (an adequacy check), searched for and
 integrated out where found, or neither."""
+THRUST_MODES = ("mean", "branch", "thruster")
+"""The thrust fit's sites: one mean thrust, one per branch, or one per thruster."""
+AXIS_METHODS = ("rcs", "rwa")
+"""The wheel-axis calibration's methods: Brown §III.B (a spin-up while the RCS holds the
+attitude) and §III.C (slews under wheel control)."""
+AXIS_PRIORS = ("uniform", "cone")
+"""The wheel-axis prior: uniform on the sphere, or the model file's cone."""
+WHEEL_ERRORS = ("per_wheel", "common")
+"""The robust models' wheel spin-inertia errors: one scale per wheel, or one common scale."""
 
 
 def unit_of(name: str) -> str | None:

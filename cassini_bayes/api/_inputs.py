@@ -13,6 +13,7 @@ import numpy as np
 
 from cassini_bayes.api._limits import MAX_CHAINS, MAX_DRAWS, SEED_MAX
 from cassini_bayes.errors import InputError, arg, as_flag
+from cassini_bayes.names import WHEEL_ERRORS
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry
 
@@ -23,8 +24,6 @@ if TYPE_CHECKING:
 __all__ = ["WHEEL_ERRORS", "SEED_MAX", "spacecraft_input", "telemetry_inputs", "pulse_inputs",
            "one_telemetry", "one_pulse_log", "choice", "number", "sampler_settings",
            "check_seed", "shows_progress"]
-
-WHEEL_ERRORS = ("per_wheel", "common")
 
 PathLike = str | os.PathLike
 

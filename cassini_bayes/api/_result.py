@@ -169,16 +169,23 @@ class FitResult:
         sensitivity, seed, version."""
         return copy.deepcopy(self._summary)
 
-    def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
+    def save(self, out: str | os.PathLike, *, force: bool = False,
+             progress: bool = False) -> Path:
         """Write the run directory ``out`` atomically: ``posterior.nc``, ``summary.json``,
         ``config.toml``, ``report.html``; returns its absolute path.
 
         An existing non-empty ``out`` is replaced only with ``force=True`` and only when
         cassini-bayes wrote it; ``out`` may not hold the fit's input files. A problem building
-        the full report is a warning (a minimal report is written instead).
+        the full report is a warning (a minimal report is written instead). ``progress`` shows
+        the step on the terminal (rich), as the fits' ``progress`` does.
         """
-        final, report_warnings = write_run(out, idata=self.idata, summary=self._summary,
-                                           config=self.config, force=force, inputs=self._inputs)
+        from cassini_bayes.inference.progress import shown, step
+
+        with shown(progress), step(f"writing {out} (posterior.nc, summary.json, config.toml, "
+                                   "report.html)"):
+            final, report_warnings = write_run(out, idata=self.idata, summary=self._summary,
+                                               config=self.config, force=force,
+                                               inputs=self._inputs)
         for line in report_warnings:
             warnings.warn(line, stacklevel=2)
         return final

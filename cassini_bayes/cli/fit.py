@@ -84,11 +84,8 @@ def write_fit_run(result, out: Path, *, force: bool, strict: bool) -> Path:
     from cassini_bayes.cli._verdict import failed_checks, verdict_text
     from cassini_bayes.errors import InadequateModelError, NotConvergedError
 
-    from cassini_bayes.inference.progress import shown, step
-
-    with (collect_warnings() as report_warnings, shown(sys.stderr.isatty()),
-          step(f"writing {out} (posterior.nc, summary.json, config.toml, report.html)")):
-        final = result.save(out, force=force)
+    with collect_warnings() as report_warnings:
+        final = result.save(out, force=force, progress=sys.stderr.isatty())
     summary = result.summary()
     console = stderr_console()
     for line in list(summary.get("warnings", [])) + report_warnings:

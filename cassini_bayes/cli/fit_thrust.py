@@ -60,7 +60,7 @@ def fit_thrust_cmd(
     from cassini_bayes._paths import model_path
     from cassini_bayes.api import fit_thrust
     from cassini_bayes.errors import InputError
-    from cassini_bayes.inference.thrust import MODES
+    from cassini_bayes.names import THRUST_MODES as MODES
     from cassini_bayes.rundir import check_out
 
     if mode not in MODES:

@@ -55,7 +55,7 @@ def run_axis_fit(*, wheel: str, telemetry: Path, spacecraft: str, method: str, o
     from cassini_bayes._paths import model_path
     from cassini_bayes.api import fit_rwa4, fit_wheel_axis
     from cassini_bayes.errors import InputError
-    from cassini_bayes.inference.rwa4 import METHODS, PRIORS
+    from cassini_bayes.names import AXIS_METHODS as METHODS, AXIS_PRIORS as PRIORS
     from cassini_bayes.rundir import check_out
     from cassini_bayes.spacecraft import load_spacecraft
     from cassini_bayes.telemetry import read_telemetry

@@ -61,7 +61,7 @@ from typing import NamedTuple
 import numpy as np
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.names import EFFECTS
+from cassini_bayes.names import EFFECTS, WHEEL_ERRORS
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
@@ -71,8 +71,6 @@ __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with
            "site_prior_sd", "prior_wheel_errors"]
 
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
-# Models of the wheel spin-inertia error: one scale per wheel (default) or one common scale.
-WHEEL_ERRORS = ("per_wheel", "common")
 
 
 class NuisanceLayout(NamedTuple):

@@ -23,6 +23,7 @@ from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL
 from cassini_bayes.inference.rwa4.prior import PRIORS, margin_scale
 from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
                                                   check_windows, wheel_name, detect_windows)
+from cassini_bayes.names import AXIS_METHODS
 from cassini_bayes.physics.momentum import inertia_matrix, regressor
 from cassini_bayes.spacecraft import Spacecraft, WheelCone
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
@@ -30,7 +31,7 @@ from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 __all__ = ["METHODS", "MAX_SD_DIRECTION_DEG", "Rwa4Data", "Rwa4Problem", "check_cone_prior",
            "prepare_rwa4"]
 
-METHODS = ("rcs", "rwa")
+METHODS = AXIS_METHODS
 MAX_SD_DIRECTION_DEG = 20.0  # a wider Laplace direction sd: the data do not determine the axis
 N_COORDS = 8                     # sampler coordinates: 2 direction + 6 inertia (either chart)
 

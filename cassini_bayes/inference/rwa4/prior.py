@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.errors import InputError
-from cassini_bayes.names import INERTIA_NAMES, U4_NAMES
+from cassini_bayes.names import AXIS_PRIORS, INERTIA_NAMES, U4_NAMES
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import WheelCone
 
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
 
 __all__ = ["PRIORS", "cone_log_factor", "sample_inertia_prior", "sample_rwa4_prior"]
 
-PRIORS = ("uniform", "cone")
+PRIORS = AXIS_PRIORS
 _MARGIN_FRACTION = 2.0       # physical-factor scale s = (prior mean's margin) / this
 _FACTOR_POWER = 3            # the physical factor is 1 − exp(−(m/s)^this)
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_prior_gaussian
-from cassini_bayes.names import COM_NAMES, INERTIA_NAMES, TAU_NAMES
+from cassini_bayes.names import COM_NAMES, INERTIA_NAMES, TAU_NAMES, THRUST_MODES
 from cassini_bayes.spacecraft import Spacecraft
 
 if TYPE_CHECKING:
@@ -25,7 +25,7 @@ __all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inerti
            "TauIdentificationWarning", "tau_identification", "draw_tau_prior", "thrust_names",
            "sample_thrust_prior", "COM_NAMES"]
 
-MODES = ("mean", "branch", "thruster")
+MODES = THRUST_MODES
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
