@@ -43,7 +43,7 @@ def main(args):
         write_trajectory(path, Trajectory(t, sol.relative("titan", "spacecraft")(t)))
         fit = cb.fit_trajectory(path, requirement_urad=args.requirement_urad, mu=GM["titan"])
         out = fit.save(args.out, force=True)
-    s = fit.summary
+    s = fit.summary()
     print(f"{s['n_segments']} Chebyshev segments over {args.days:g} days, {s['n_coefficients']} "
           f"numbers; largest angle {s['max_error_samples_urad']:.1f} µrad at the samples "
           f"(requirement {args.requirement_urad:g}); one conic about Titan: "

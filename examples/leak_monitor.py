@@ -43,7 +43,7 @@ def main(args):
         # Both monitors on the same telemetry and pulse log.
         res = cb.monitor_leak(sim / "telemetry.csv", "cassini_post_probe",
                               pulses=sim / "pulses.csv")
-    bayes, lee = res.summary["bayes"], res.summary["lee"]
+    bayes, lee = res.summary()["bayes"], res.summary()["lee"]
 
     print(f"{args.fraction:.3%} leak of {args.thruster} from t = {args.onset:g} s, "
           f"{args.hours:g} h of cruise")

@@ -198,7 +198,7 @@ def test_check_and_leak_monitor_take_loaded_objects(inputs):
     assert by_object.quiet == by_path.quiet and by_object.thrusters == by_path.thrusters
     leak = cb.monitor_leak(tel, sc, pulses=log)
     assert leak.config["inputs"]["spacecraft"] == {"model": sc.name}
-    assert leak.summary["t_end_s"] == float(tel.t[-1])
+    assert leak.summary()["t_end_s"] == float(tel.t[-1])
 
 
 def test_simulate_wraps_the_command(tmp_path, run_cli):

@@ -356,7 +356,7 @@ def test_budget_takes_fit_results(runs, tmp_path):
     fits = {k: _fit_result(runs[k], k, "rwa" if k == "rwa4" else None) for k in runs}
     by_dir = cb.budget(**runs, n_draws=200, seed=3)
     by_fit = cb.budget(**fits, n_draws=200, seed=3)
-    assert by_fit.summary["rows"] == by_dir.summary["rows"]
+    assert by_fit.summary()["rows"] == by_dir.summary()["rows"]
     assert by_fit.config["inputs"]["thrust"] == {"command": "fit thrust", "seed": 7,
                                                  "inputs": {"telemetry": [{"source": "x"}]}}
     out = by_fit.save(tmp_path / "b")

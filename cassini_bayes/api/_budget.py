@@ -9,7 +9,7 @@ attribution to the calibrated parameters, beside the papers' numbers; what
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,9 +33,13 @@ class BudgetResult:
     run directories or fit results, :class:`~cassini_bayes.api.FitResult`)."""
 
     budget: PosteriorBudget
-    summary: dict[str, Any]
+    _summary: dict[str, Any] = field(repr=False)
     config: dict[str, Any]
     runs: dict[str, Any]
+
+    def summary(self) -> dict:
+        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
+        return self._summary
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json`` (with the ``adequacy`` verdict of
@@ -49,7 +53,7 @@ class BudgetResult:
         page = budget_report_html(self)
         inputs = [r for r in self.runs.values() if isinstance(r, Path)]
         with RunDir(out, force=force, inputs=inputs) as rd:
-            write_summary(rd.path, self.summary)
+            write_summary(rd.path, self._summary)
             write_config(rd.path, self.config)
             (rd.path / "budget.csv").write_text(budget_csv(self.budget))
             (rd.path / "report.html").write_text(page, encoding="utf-8")

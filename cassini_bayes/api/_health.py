@@ -11,7 +11,7 @@ import csv
 import json
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
@@ -55,8 +55,12 @@ class HealthResult:
     summaries: tuple
     files: tuple
     fraction: float
-    summary: dict
+    _summary: dict = field(repr=False)
     config: dict
+
+    def summary(self) -> dict:
+        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
+        return self._summary
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their
@@ -70,7 +74,7 @@ class HealthResult:
         png = png_bytes(plot_health(self.posterior, self.fraction), dpi=110)
         page = health_report_html(self, png)
         with RunDir(out, force=force, inputs=[f[1] for f in self.files]) as rd:
-            write_summary(rd.path, self.summary)
+            write_summary(rd.path, self._summary)
             write_config(rd.path, self.config)
             _write_csv(rd.path / "health.csv", *health_table(self))
             _write_csv(rd.path / "thrust_bands.csv", *band_table(self.posterior))
@@ -275,9 +279,9 @@ def health_table(res: HealthResult) -> tuple[list[str], list[list]]:
     names = post.channels
     order = np.argsort([f[0] for f in res.files], kind="stable")
     p = [post.p_down([k], res.fraction) for k in range(len(names))]
-    groups = res.summary.get("p_down_last") or {"any": None}
+    groups = res.summary().get("p_down_last") or {"any": None}
     p_b = {b: post.p_down(list(range(len(names))) if b == "any" else
-                          [names.index(c) for c in _branch_members(res.summary, b)], res.fraction)
+                          [names.index(c) for c in _branch_members(res.summary(), b)], res.fraction)
            for b in groups}
     header = (["date_days", "telemetry"] + [f"thrust_{c}_n" for c in names]
               + [f"sd_log_{c}" for c in names] + [f"p_down_{c}" for c in names]

@@ -10,7 +10,7 @@ or built, as every public function that computes is.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -64,9 +64,13 @@ class TrajectoryFit:
     dense_t_s: np.ndarray
     dense_error_rad: np.ndarray
     sample_error_rad: np.ndarray
-    summary: dict
+    _summary: dict = field(repr=False)
     config: dict
     files: tuple
+
+    def summary(self) -> dict:
+        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
+        return self._summary
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``segments.csv`` (one row per segment: ``t_start_s, t_end_s, order,
@@ -99,11 +103,11 @@ class TrajectoryFit:
                         f"Segment {k + 1}: fitting error of x, y, z against τ (Lee Eq 17); its "
                         f"smallest extremum is {ratio:.2f} of its largest."))
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
-            write_summary(rd.path, self.summary)
+            write_summary(rd.path, self._summary)
             write_config(rd.path, self.config)
             np.savetxt(rd.path / "segments.csv", rows, delimiter=",", fmt="%.17g",
                        header=",".join(header), comments="")
-            (rd.path / "report.html").write_text(ivp_fit_page(self.summary, figures),
+            (rd.path / "report.html").write_text(ivp_fit_page(self._summary, figures),
                                                  encoding="utf-8")
         return rd.final
 

@@ -10,7 +10,7 @@ correction pairs them by name and its 50 N m s threshold is Cassini's); what
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -43,9 +43,13 @@ class LeakResult:
 
     posterior: LeakPosterior
     lee: ThresholdResult | None
-    summary: dict
+    _summary: dict = field(repr=False)
     config: dict
     files: tuple
+
+    def summary(self) -> dict:
+        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
+        return self._summary
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
@@ -58,7 +62,7 @@ class LeakResult:
 
         page = leak_report_html(self)
         with RunDir(out, force=force, inputs=list(self.files)) as rd:
-            write_summary(rd.path, self.summary)
+            write_summary(rd.path, self._summary)
             write_config(rd.path, self.config)
             table = np.column_stack([self.posterior.t_check, self.posterior.prob])
             np.savetxt(rd.path / "probabilities.csv", table, delimiter=",", fmt="%.10g",

@@ -50,7 +50,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         check_out(out, force=force, inputs=[p for p in (inertia, thrust, rwa4) if p])
         res = budget(inertia=inertia, thrust=thrust, rwa4=rwa4, seed=seed, n_draws=draws)
         res.save(out, force=force)
-        s = res.summary
+        s = res.summary()
         for line in s["warnings"]:
             console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         mark = "[green]✓[/green]" if not failed_checks(s) else "[red]✗[/red]"

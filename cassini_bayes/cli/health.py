@@ -57,7 +57,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
             res = fit_health(events, spacecraft, fraction=fraction, p_change=p_change,
                              p_channel=p_channel, step_sd=step_sd)
             res.save(out, force=force)
-        s = res.summary
+        s = res.summary()
         for line in s.get("warnings", []):
             console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         lo, hi = s["change_date_days"]["interval_90"]

@@ -49,7 +49,7 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
         res = fit_trajectory(trajectory, requirement_urad=requirement_urad,
                              max_order=max_order, mu=mu)
         res.save(out, force=force)
-        s = res.summary
+        s = res.summary()
         line = (f"{s['n_segments']} segments, {s['n_coefficients']} coefficients, largest "
                 f"error {max(s['max_error_urad'], s['max_error_samples_urad']):.1f} µrad "
                 f"(requirement {s['requirement_urad']:g})")

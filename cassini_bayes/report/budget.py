@@ -84,7 +84,7 @@ def budget_report_html(res) -> str:
     from cassini_bayes.report.html import (badge, bullet_list, html_page, page_header,
                                            paragraph, section, table)
 
-    s, bud = res.summary, res.budget
+    s, bud = res.summary(), res.budget
     headers, rows, classes = _budget_rows(bud)
     verdicts = [c[6] for c in rows if "pass" in str(c[6]) or "FAIL" in str(c[6])]
     failed = sum("FAIL" in str(v) for v in verdicts)

@@ -89,7 +89,7 @@ def health_report_html(res, png: bytes) -> str:
     from cassini_bayes.report.html import (Raw, badge, details, figure, html_page, page_header,
                                            paragraph, section, table)
 
-    post, s, frac = res.posterior, res.summary, res.fraction
+    post, s, frac = res.posterior, res.summary(), res.fraction
     first = np.exp(post.draws(np.random.default_rng(1), 2000)["b"])    # N, first calibration
     nominal = np.broadcast_to(np.asarray(post.prior.nominal_thrust_n, float),
                               (len(post.channels),))

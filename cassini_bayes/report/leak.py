@@ -80,7 +80,7 @@ def leak_report_html(res) -> str:
     from cassini_bayes.report.html import (badge, bullet_list, figure, html_page, page_header,
                                            paragraph, section, table)
 
-    s, post, lee = res.summary, res.posterior, res.lee
+    s, post, lee = res.summary(), res.posterior, res.lee
     b, lee_s = s["bayes"], s["lee"]
     hypotheses = post.hypotheses
     lee_on = lee_s.get("applies", True)
