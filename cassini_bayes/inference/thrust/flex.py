@@ -23,12 +23,23 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import minimize
 
+from cassini_bayes.errors import InputError
+from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
+from cassini_bayes.inference.nuisance import with_flex_mode
+from cassini_bayes.inference.thrust.likelihood import EventData, event_residual
+from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD, TauPrior
+from cassini_bayes.names import FLEX_CHOICES
 from cassini_bayes.physics.flex_mode import MODE_ENTRIES, mode_columns, mode_rate_response
+from cassini_bayes.physics.momentum import inertia_vector
+from cassini_bayes.spacecraft import Spacecraft
 
 __all__ = ["ModeSearch", "ModeEvent", "mode_event", "search_mode", "mode_nuisance_columns",
+           "flex_mode_columns",
            "MODE_ENTRIES", "GRID_STEP", "PEAKS", "GAUSS_NEWTON", "ALIAS_CYCLES", "TAG_WIDEN",
            "TAG_MIN"]
 
@@ -354,3 +365,68 @@ def mode_nuisance_columns(events: list[ModeEvent], freq_hz: float, damping: floa
     for e, y in enumerate(_responses(events, om, np.array([damping]), tau)):
         cols[e, :, :, :y.shape[1]] = mode_columns(y[0]).transpose(2, 1, 0)
     return cols * mask[:, None, None, :]
+
+
+def _flex_residual_at(p, ev, q_mat, d_mat, n_thr: int):
+    """Eq 17's residual (E, 3, n) of every event at ``p = (π (6), log F (M), δ (3), τ (3))``."""
+    pi, log_f = p[:6], p[6:6 + n_thr]
+    com, tau = p[6 + n_thr:9 + n_thr], p[9 + n_thr:]
+    q = q_mat - jnp.cross(com[:, None], d_mat, axis=0)                   # Feldman & Lee Eq 16
+    q_f = q * jnp.exp(log_f)[None, :]
+    return jax.vmap(lambda e: event_residual(pi, q_f, (tau[0], tau[1], tau[2]), e))(ev)
+
+
+# compiled once per shape class, not once per problem
+_flex_residual = jax.jit(_flex_residual_at, static_argnums=4)
+_flex_jacobian = jax.jit(jax.jacfwd(_flex_residual_at), static_argnums=4)
+
+
+def flex_mode_columns(flex, kw: dict, steps: dict, basis, layout_e, tels, logs,
+                      spacecraft: Spacecraft, thrust_pred, tp: TauPrior, i_lin,
+                      inertia: InertiaGaussian | None, noise, layout, tag_sd):
+    """``(search, nu_cols, layout)``: the search for a flexible mode (:func:`search_mode`) on a
+    thrust problem in preparation (:func:`~cassini_bayes.inference.thrust.prepare_thrust`'s
+    arrays ``kw``), and the robust columns and layout, with the mode's ``M`` appended where one
+    is found and modelled or given. ``tag_sd`` (E, 3, n) N m s: each sample's time-tag term at
+    the predicted thrust."""
+    k = spacecraft.knowledge
+    n_thr = len(spacecraft.thrusters)
+    if inertia is None:
+        pi_mean, pi_sd = np.asarray(inertia_vector(jnp.asarray(i_lin)), float), np.zeros(6)
+    else:
+        pi_mean = np.asarray(inertia.mean, float)
+        pi_sd = np.sqrt(np.diag(np.asarray(inertia.cov, float)))
+    thrust = np.broadcast_to(np.asarray(thrust_pred, float), (n_thr,))
+    q_mat = spacecraft.moment_matrix
+    events = []
+    for e, (tel, log) in enumerate(zip(tels, logs)):
+        n, m = tel.n, len(log.t_on)
+        cov = noise[e, 0]**2 * i_lin @ i_lin + noise[e, 1]**2 * kw["wheel_cov"][e]
+        events.append(mode_event(kw["t"][e, :n], kw["omega"][e, :n], kw["h_wheels"][e, :n],
+                                 kw["t_on"][e, :m], kw["thruster"][e, :m], kw["width"][e, :m],
+                                 q_mat, thrust, i_lin, cov, tag_sd[e][:, :n],
+                                 k.time_tag_sd_s))
+    prior_sd = k.flex_share_sd * float(np.trace(i_lin)) / 3.0
+    if isinstance(flex, str) and flex not in FLEX_CHOICES:
+        raise InputError(f"flex = {flex!r}: choose one of {', '.join(FLEX_CHOICES)} or give "
+                         "(freq_hz, damping)")
+    if flex in ("check", "model"):
+        ev = EventData(**{f: None for f in EventData._fields})._replace(
+            lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], pulses=layout_e, **steps)
+        dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
+        p0 = np.r_[pi_mean, np.log(thrust), np.zeros(3), tp.median()]
+        p_sd = np.r_[pi_sd, np.full(n_thr, THRUST_PRIOR_LOG_SD),
+                     np.full(3, spacecraft.com_sd_m), np.sqrt(tp.variance())]
+        fns = (lambda p, e: _flex_residual(p, e, q_mat, dirs, n_thr),
+               lambda p, e: _flex_jacobian(p, e, q_mat, dirs, n_thr))
+        search, cols = search_mode(ev, fns, p0, p_sd, n_thr,
+                                   kw["nu_cols"], layout.sd, kw["mask"], events, tp.median(),
+                                   k.flex_freq_hz, k.flex_damping, prior_sd)
+    else:
+        freq_hz, damping = (float(x) for x in flex)
+        search = ModeSearch(freq_hz, damping, float("nan"), float("nan"), True, prior_sd)
+        cols = mode_nuisance_columns(events, freq_hz, damping, tp.median(), kw["mask"])
+    if cols is None or flex == "check":
+        return search, kw["nu_cols"], layout
+    return (search._replace(modelled=True), np.concatenate([kw["nu_cols"], cols], 1),
+            with_flex_mode(layout, prior_sd))
