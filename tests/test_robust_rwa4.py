@@ -12,7 +12,7 @@ import pytest
 
 from cassini_bayes.frames import dcm, rotvec_to_quat
 from cassini_bayes.inference.nuisance import nuisance_layout
-from cassini_bayes.inference.rwa4.data import _nuisance_means, _window_means
+from cassini_bayes.inference.rwa4.window_means import nuisance_means, window_means
 from cassini_bayes.inference.rwa4.likelihood import balance, nuisance_cols
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import load_spacecraft
@@ -73,8 +73,8 @@ def _residual(sc, u4, effects, wheel_errors):
     js = np.array([sc.wheel(n).inertia for n in names])
     k_u, known = names.index("RWA4"), [names.index("RWA2")]
     i_star = np.asarray(sc.inertia)
-    data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
-    nuis = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_star)
+    data = window_means(q, omega, rates, axes, js, k_u, known, masks)
+    nuis = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_star)
     pi = jnp.asarray([i_star[0, 0], i_star[1, 1], i_star[2, 2], i_star[0, 1], i_star[0, 2],
                       i_star[1, 2]])
     np.testing.assert_allclose(np.asarray(inertia_matrix(pi)), i_star)
@@ -129,8 +129,8 @@ def test_common_model_misses_opposite_wheel_errors():
     axes = np.stack([sc.wheel(n).axis for n in names])
     js = np.array([sc.wheel(n).inertia for n in names])
     k_u, known = names.index("RWA4"), [names.index("RWA2")]
-    data = _window_means(q, omega, rates, axes, js, k_u, known, masks)
-    nuis = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
+    data = window_means(q, omega, rates, axes, js, k_u, known, masks)
+    nuis = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
                            np.asarray(sc.inertia))
     col = np.asarray(nuisance_cols(jnp.asarray(u4), r_u=data["r_u"], j4=data["j4"],
                                     nu_cols=nuis["nu_cols"], nu_wheel=nuis["nu_wheel"]))[0]

@@ -19,7 +19,7 @@ import pytest
 
 from cassini_bayes.frames import quat_continuous
 from cassini_bayes.inference.nuisance import nuisance_layout
-from cassini_bayes.inference.rwa4.data import _nuisance_means, _window_means
+from cassini_bayes.inference.rwa4.window_means import nuisance_means, window_means
 from cassini_bayes.inference.rwa4.likelihood import DATA_KEYS, loglik, rows, slopes
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.simulate.scenario._types import Noise
@@ -50,11 +50,11 @@ def _fly(**torques):
     masks = [tuple((t >= w[0]) & (t <= w[1]) for w in PAIR)]
     q = np.asarray(quat_continuous(np.asarray(tel.q, float)))
     omega, rates = np.asarray(tel.omega, float), np.asarray(tel.wheel_rates, float)
-    data = _window_means(q, omega, rates, axes, js, k_u, known, masks, t)
-    data["rcs"] = _window_means(q, omega, rates, axes, js, k_u, known, masks)   # no times
+    data = window_means(q, omega, rates, axes, js, k_u, known, masks, t)
+    data["rcs"] = window_means(q, omega, rates, axes, js, k_u, known, masks)   # no times
     layout = nuisance_layout(sc, 1, [names[k] for k in known], scaled=names,
                              inertial_torque=True, torque_rate=True)
-    nuis = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
+    nuis = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
                            np.asarray(sc.inertia), slopes=True)
     truth = s.truth.to_dict()["inertia"]
     pi = jnp.asarray([truth[n] for n in INERTIA_NAMES])

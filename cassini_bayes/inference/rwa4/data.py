@@ -1,5 +1,6 @@
-"""Data preparation of the RWA4 model: window means of the momentum balance, noise levels,
-the robust effects' columns, the chart and its Laplace whitening (:func:`prepare_rwa4`).
+"""Data preparation of the RWA4 model: the windows' means of the momentum balance and the robust
+effects' columns (:mod:`~cassini_bayes.inference.rwa4.window_means`), noise levels, the chart
+and its Laplace whitening (:func:`prepare_rwa4`).
 """
 
 from __future__ import annotations
@@ -12,19 +13,21 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.estimators.rwa4 import fit_axis_rcs, fit_axis_rwa
-from cassini_bayes.frames import dcm, quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
+from cassini_bayes.frames import quat_conjugate, quat_continuous, quat_multiply, quat_to_rotvec
 from cassini_bayes.inference.inertia import (InertiaGaussian, cholesky_params_from_pi,
                                              inertia_prior, is_physical, pi_from_cholesky_params)
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import (ATTITUDE_FLOOR, RATE_FLOORS, floored, rate_noise_levels,
                                            white_noise_sd)
-from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout, robust_columns
+from cassini_bayes.inference.nuisance import NuisanceLayout, nuisance_layout
 from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL
 from cassini_bayes.inference.rwa4.prior import PRIORS, margin_scale
+from cassini_bayes.inference.rwa4.window_means import (no_nuisance, nuisance_means,
+                                                       window_means)
 from cassini_bayes.inference.rwa4.windows import (MIN_SPIN_CHANGE_RPM, WHEEL, Window,
                                                   check_windows, wheel_name, detect_windows)
 from cassini_bayes.names import AXIS_METHODS
-from cassini_bayes.physics.momentum import inertia_matrix, regressor
+from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.spacecraft import Spacecraft, WheelCone
 from cassini_bayes.telemetry import RPM_TO_RAD_S, Telemetry
 
@@ -51,7 +54,8 @@ class Rwa4Data(NamedTuple):
         (S = 2G windows, RWA method; S = 0, RCS), ``n_s = 1/Σ w²`` of the slope weights ``w``.
     nu_cols, nu_cols_s, nu_sd, nu_wheel : the robust model's nuisance columns of the pairs
         (G, 3, R) and of the slopes (S, 3, R), prior sds (R,) and solved-wheel marks (R,)
-        (:func:`_nuisance_means`; ``R = 0`` in the idealised model).
+        (:func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means`; ``R = 0`` in the
+        idealised model).
     u0, basis : the gnomonic chart's centre (3,) and tangent basis (2, 3).
     pi_mean, pi_chol : the inertia prior's mean (6,) kg m² and Cholesky factor (6, 6).
     log_noise_hat : (3,) log noise levels (rad/s, rad/s, rad).
@@ -122,7 +126,8 @@ class Rwa4Problem(NamedTuple):
     wheel : the wheel solved for.
     chart : ``"rcs"`` (balance coordinates) or ``"rwa"`` (direct), module docstring.
     layout : the nuisance layout of the robust model's effects (built for either model).
-    nuisance : their columns (:func:`_nuisance_means`; in ``data`` only when ``robust``).
+    nuisance : their columns (:func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means`;
+        in ``data`` only when ``robust``).
     robust : whether the likelihood integrates the effects out.
     """
 
@@ -170,101 +175,6 @@ def _noise_levels(tel: Telemetry, q: np.ndarray, windows) -> np.ndarray:
     levels = np.array([rate_noise_levels(tel.slice(*w))[:2] for w in windows], float)
     s_q = np.median([_attitude_noise(q[(t >= w[0]) & (t <= w[1])]) for w in windows])
     return floored([*np.median(levels, axis=0), s_q], (*RATE_FLOORS, ATTITUDE_FLOOR))
-
-
-def _window_weights(t, masks) -> tuple[list, list]:
-    """Per window (A, B of each pair in order) ``(mask, weights)`` of its mean, ``1/n``, and,
-    given the sample times ``t`` (s), of its least-squares slope against time,
-    ``(t_i − t̄_w)/Σ(t − t̄_w)²`` (1/s); no slopes without ``t``. The two are orthogonal
-    (``Σ_i (t_i − t̄_w) = 0``), so the slope's white noise is independent of the mean's."""
-    means, slopes = [], []
-    for m in (m for pair in masks for m in pair):
-        means.append((m, np.full(int(m.sum()), 1.0 / m.sum())))
-        if t is not None:
-            dt = np.asarray(t, float)[m] - np.mean(np.asarray(t, float)[m])
-            slopes.append((m, dt / np.sum(dt * dt)))
-    return means, slopes
-
-
-_SHAPES = {"m_pi": (3, 6), "r_u": (3, 3), "k_h": (3,), "n": (), "t_aa": (3, 3, 3, 3)}
-
-
-def _weighted_sums(a_all, reg, rho, h_known, weights) -> dict:
-    """Per window ``(mask, w)`` the weighted sums ``Σ_i w_i x_i`` of the per-sample quantities
-    of :func:`loglik` (``x = Aᵀ Y(ω)``, ``ρ_4 Aᵀ``, ``Aᵀ h_known``), ``n = 1/Σ w²`` and
-    ``t_aa = Σ w² A⊗A / Σ w²`` (white noise of a weighted sum: ``Σ w_i² C_i = ⟨C⟩_w²/n``)."""
-    out = {k: [] for k in _SHAPES}
-    for m, w in weights:
-        at = np.swapaxes(a_all[m], -1, -2)                              # body → inertial
-        w2 = float(np.sum(w * w))
-        out["m_pi"].append(np.einsum("n,nij,njk->ik", w, at, reg[m]))
-        out["r_u"].append(np.einsum("n,nij->ij", w * rho[m], at))
-        out["k_h"].append(np.einsum("n,nij,nj->i", w, at, h_known[m]))
-        out["n"].append(1.0 / w2)
-        out["t_aa"].append(np.einsum("n,nja,nkb->jakb", w * w, a_all[m], a_all[m]) / w2)
-    return {k: jnp.asarray(np.stack(v) if v else np.zeros((0, *_SHAPES[k])))
-            for k, v in out.items()}
-
-
-def _window_means(q, omega, rates, axes, js, k_u, known, masks, t=None) -> dict:
-    """The window averages of :func:`loglik` (its docstring), as JAX arrays; with the sample
-    times ``t`` (s; the RWA method's quiet windows) also each window's least-squares slope
-    against time (the ``*_s`` arrays), else none (``S = 0``)."""
-    a_all = np.asarray(dcm(jnp.asarray(q)))
-    h_known_all = ((np.nan_to_num(rates[:, known]) * js[known]) @ axes[known] if known
-                   else np.zeros((q.shape[0], 3)))
-    reg = np.asarray(regressor(jnp.asarray(omega)))
-    rho = np.nan_to_num(rates[:, k_u])
-    means, slopes = _window_weights(t, masks)
-    data = _weighted_sums(a_all, reg, rho, h_known_all, means)
-    data["n_w"] = data.pop("n")
-    data.update({f"{k}_s": v for k, v in
-                 _weighted_sums(a_all, reg, rho, h_known_all, slopes).items()})
-    known_cov = sum((js[k]**2 * np.outer(axes[k], axes[k]) for k in known), np.zeros((3, 3)))
-    return dict(data, j4=jnp.asarray(js[k_u]), known_cov=jnp.asarray(known_cov))
-
-
-def _nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
-                    t, inertia, slopes: bool = False) -> dict:
-    """The robust model's nuisance columns of ``d_g`` (:func:`loglik`), as JAX arrays; with
-    ``slopes``, also those of each window's slope, ``nu_cols_s`` (S, 3, R): the same per-sample
-    inertial columns' slopes against time (:func:`_window_weights`), so an external torque
-    enters as its value at the window (Euler: ``dH/dt = T``).
-
-    The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
-    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
-    wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
-    ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the momentum,
-    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale columns
-    (per wheel: its own, the layout's last scale, and the shared one; common: the one scale),
-    whose solved-wheel part
-    :func:`nuisance_cols` adds; ``nu_sd`` (R,) the prior sd.
-    """
-    a_all = np.asarray(dcm(jnp.asarray(q)))
-    rho = np.nan_to_num(rates)
-    wheel_h = {names[k]: js[k] * rho[:, k] for k in known}
-    h_known = sum((wheel_h[names[k]][:, None] * axes[k] for k in known),
-                  np.zeros((q.shape[0], 3)))
-    cols = robust_columns(layout, 0, inertia, omega, h_known, wheel_h, a_all, t)
-    inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
-    diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
-    slope = [np.einsum("n,nir->ir", w, inertial[m])
-             for m, w in _window_weights(t if slopes else None, masks)[1]]
-    one_hot = np.zeros(layout.size)
-    one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
-    if layout.has_common:                   # the shared scale reaches the solved wheel too
-        one_hot[layout.slices["wheel_inertia_common"]] = 1.0
-    return dict(nu_cols=jnp.asarray(np.stack(diff)),
-                nu_cols_s=jnp.asarray(np.stack(slope) if slope
-                                      else np.zeros((0, 3, layout.size))),
-                nu_sd=jnp.asarray(layout.sd), nu_wheel=jnp.asarray(one_hot))
-
-
-def no_nuisance(n_pairs: int, n_slopes: int = 0) -> dict:
-    """The idealised model: no nuisance columns (R = 0) for ``n_pairs`` pair rows and
-    ``n_slopes`` slope rows."""
-    return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_cols_s=jnp.zeros((n_slopes, 3, 0)),
-                nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
 
 
 def _balance_map(data: dict, pi_mean: np.ndarray, pi_chol: np.ndarray):
@@ -455,11 +365,11 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
 
     noise = _noise_levels(tel, q, [w for p in pairs for w in p])
     slopes = method == "rwa"      # quiet windows: the wheels absorb the external torque
-    data = _window_means(q, omega, rates, axes, js, k_u, known, masks, t if slopes else None)
+    data = window_means(q, omega, rates, axes, js, k_u, known, masks, t if slopes else None)
     layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
                              wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
                              inertial_torque=True, torque_rate=True)
-    nuisance = _nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred,
+    nuisance = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred,
                                slopes)
     data.update(nuisance if robust else no_nuisance(len(pairs), data["n_s"].shape[0]))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(tangent_basis(u_ls)),

@@ -12,10 +12,11 @@ import numpy as np
 from cassini_bayes.diagnostics import Diagnostics
 from cassini_bayes.inference.idata import replace_groups
 from cassini_bayes.inference.inertia import InertiaGaussian
-from cassini_bayes.inference.rwa4.data import N_COORDS, Rwa4Problem, no_nuisance, prepare_rwa4
+from cassini_bayes.inference.rwa4.data import N_COORDS, Rwa4Problem, prepare_rwa4
 from cassini_bayes.inference.rwa4.likelihood import DATA_KEYS, rows
 from cassini_bayes.inference.rwa4.model import LOG_DENSITY, PHYSICAL, rwa4_model
 from cassini_bayes.inference.rwa4.prior import sample_rwa4_prior
+from cassini_bayes.inference.rwa4.window_means import no_nuisance
 from cassini_bayes.inference.rwa4.windows import WHEEL, Window
 from cassini_bayes.inference.sphere import direction_summary
 from cassini_bayes.names import INERTIA_NAMES, U4_NAMES

@@ -55,8 +55,9 @@ def noise_cov(u, pi, log_sigma, *, n_w, t_aa, j4, known_cov):
 
 def nuisance_cols(u, *, r_u, j4, nu_cols, nu_wheel):
     """(G, 3, R) columns of the robust nuisance vector ``ν`` in ``d_g``: the fixed inertial
-    columns of :func:`_nuisance_means` plus the solved wheel's part of its spin-inertia scale
-    (its own per-wheel scale, or the common one), ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
+    columns of :func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means` plus the solved
+    wheel's part of its spin-inertia scale (its own per-wheel scale, or the common one),
+    ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
     d_r = (r_u[1::2] - r_u[0::2]) @ u                                  # (G, 3)
     return nu_cols + j4 * d_r[:, :, None] * nu_wheel[None, None, :]
 
@@ -69,7 +70,8 @@ def rows(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov, m_pi_s, 
     A window's mean and slope weights are orthogonal, so their white noise is uncorrelated to
     first order (exactly for a constant per-sample covariance): the covariance is block
     diagonal. The slope rows' columns are the slopes of the same per-sample columns
-    (:func:`_nuisance_means`) plus the solved wheel's scale part ``J_4 (Σ w ρ_4 Aᵀ) u4``."""
+    (:func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means`) plus the solved wheel's
+    scale part ``J_4 (Σ w ρ_4 Aᵀ) u4``."""
     d = jnp.concatenate([balance(u, pi, m_pi=m_pi, r_u=r_u, k_h=k_h, j4=j4).ravel(),
                          slopes(u, pi, m_pi_s=m_pi_s, r_u_s=r_u_s, k_h_s=k_h_s, j4=j4).ravel()])
     cov = jax.scipy.linalg.block_diag(
