@@ -64,19 +64,20 @@ def register(app: typer.Typer, groups: dict[str, typer.Typer]) -> None:
                            check_step_s=check_step, eta=eta,
                            threshold_nms=threshold, t_limit_h=t_limit)
         res.save(out, force=force)
-        b, lee = res.summary()["bayes"], res.summary()["lee"]
-        for line in res.summary().get("warnings", []):
+        s = res.summary()
+        b, lee = s["bayes"], s["lee"]
+        for line in s.get("warnings", []):
             console.print(f"[yellow]warning:[/yellow] {escape(line)}")
         said = (f"leak in {b['thruster']} at {b['isolation_time_s']:.0f} s"
                 if b["thruster"] else "leak, thruster not isolated" if b["detection_time_s"]
                 else "no leak")
-        mark = "[green]✓[/green]" if not failed_checks(res.summary()) else "[red]✗[/red]"
+        mark = "[green]✓[/green]" if not failed_checks(s) else "[red]✗[/red]"
         lee_said = ("not run (Cassini's thruster layout only)" if not lee["applies"]
                     else f"{lee['thruster']} at {lee['detection_time_s']:.0f} s"
                     if lee["thruster"] else "no trigger")
         console.print(f"{mark} P(leak) = {b['p_leak']:.3g}: {said}; Lee: {lee_said}"
-                      + f"{verdict_text(res.summary())} (run took "
+                      + f"{verdict_text(s)} (run took "
                       f"{time.perf_counter() - t0:.1f} s) → {escape(str(out))}")
-        enforce_adequacy(res.summary(), out, strict=strict, what="the monitor's model does not "
+        enforce_adequacy(s, out, strict=strict, what="the monitor's model does not "
                          "fit the stretch", hint="check the spacecraft model (its inertia, "
                          "thrust and torque knowledge) and the pulse log")
