@@ -75,6 +75,7 @@ def _event(t, omega, h, rates, wheel_cov, pulses=None):
     return EventData(t=t, omega=omega, h_wheels=h, mask=np.ones(n), t_on=t_on, thruster=thr,
                      width=width, slot=slot, pulses=pulse_layout(t, t_on, thr, width, slot, 2, 8),
                      wheel_cov=wheel_cov, nu_cols=none, time_tag_rates=np.asarray(rates),
+                     time_tag_gyro=np.zeros((3, n)),
                      rank_one=RankOneRows(np.arange(n), (np.zeros((0, n)),) * 3),
                      lhs_wheels=basis[0],
                      lhs_inertia=basis[1:], nu_stats=column_statistics(none, np.ones(n)),

@@ -123,7 +123,7 @@ def thrust_sensitivity(post) -> dict:
     targets.update({n: flat(n)[:, 0] for n in TAU_NAMES})
     prior_sd = site_prior_sd(layout)
     groups = {e: (flat(EFFECTS[e]), prior_sd[EFFECTS[e]])
-              for e in layout.slices if EFFECTS[e] in post_ds}
+              for e in layout.sites if EFFECTS[e] in post_ds}
     units = {n: ("N" if n in thrust_labels else "s") for n in targets}
     return posterior_sensitivity(targets, groups, units)
 
@@ -158,7 +158,7 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     if "Ixx" in post.idata.posterior:   # the inertia was sampled
         nuisance += list(INERTIA_NAMES)
     if robust:
-        nuisance += [EFFECTS[e] for e in post.problem.layout.slices]
+        nuisance += [EFFECTS[e] for e in post.problem.layout.sites]
     priored = names + [n for n in nuisance if not n.startswith("sigma_")]
     summary = build_summary("thrust", post.idata, parameters=names,
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,

@@ -66,6 +66,7 @@ from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with_flex_mode",
+           "with_time_tag_steps",
            "tilt_basis",
            "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
            "site_prior_sd", "prior_wheel_errors"]
@@ -77,14 +78,15 @@ class NuisanceLayout(NamedTuple):
     """Order and prior of the robust nuisance vector ``ν`` (appended to the model's θ).
 
     ``ν = (b_0 (3), …, b_{F−1} (3), s (3), c_0 … c_{S−1} (S), [c_s (1)], a_0 (2), …, a_{K−1} (2),
-    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …], [M (6)])``; ``S`` = the number of scaled wheels (per
-    wheel) or 1 (common); the bracketed effects only where the layout has them.
+    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …], [M (6)], [δ (P)])``; ``S`` = the number of scaled
+    wheels (per wheel) or 1 (common); the bracketed effects only where the layout has them.
 
     Attributes
     ----------
     n_files : F; ``wheels`` the K wheel names (active in any file) that get tilts.
-    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s, kg m²).
-    slices : effect name (:data:`EFFECTS`) → slice of ``ν``, for the effects the layout has.
+    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s, kg m², s).
+    slices : effect name (:data:`EFFECTS`; ``time_tag_steps``: no site) → slice of ``ν``, for
+        the effects the layout has.
     tilt_u : (K, 2, 3) the unit vectors ``u_k1, u_k2`` perpendicular to each spin axis.
     wheel_errors : ``"per_wheel"`` or ``"common"`` (:data:`WHEEL_ERRORS`).
     scale_wheels : the S wheels with their own scale (per wheel; ``()`` for common).
@@ -128,6 +130,12 @@ class NuisanceLayout(NamedTuple):
         (module docstring); ``c_k − c`` they can."""
         return np.r_[np.full(self.n_scales, 1.0 / max(self.n_scales, 1)),
                      np.ones(int(self.has_common))]
+
+    @property
+    def sites(self) -> tuple[str, ...]:
+        """The effects drawn as posterior sites: all but the time-tag steps, one per tagged
+        sample, which are integrated out only (:func:`with_time_tag_steps`)."""
+        return tuple(e for e in self.slices if e != "time_tag_steps")
 
     @property
     def torque_effects(self) -> tuple[str, ...]:
@@ -225,6 +233,17 @@ def with_flex_mode(layout: NuisanceLayout, sd_kg_m2: float) -> NuisanceLayout:
                            slices={**layout.slices, "flex_mode": slice(r, r + 6)})
 
 
+def with_time_tag_steps(layout: NuisanceLayout, n_steps: int,
+                        time_tag_sd_s: float) -> NuisanceLayout:
+    """``layout`` with ``n_steps`` time-tag errors appended, prior sd ``time_tag_sd_s`` each
+    (the thrust model's gyroscopic steps, :mod:`cassini_bayes.inference.thrust.tag_steps`)."""
+    if n_steps == 0:
+        return layout
+    r = layout.size
+    return layout._replace(sd=np.r_[layout.sd, np.full(n_steps, float(time_tag_sd_s))],
+                           slices={**layout.slices, "time_tag_steps": slice(r, r + n_steps)})
+
+
 def split_nuisance(nu, layout: NuisanceLayout) -> dict:
     """The robust nuisance vectors ``ν`` (..., R) as named posterior sites: ``gyro_bias``
     (..., F, 3) rad/s, ``gyro_scale`` (..., 3), ``wheel_scale`` (..., S) each wheel's total
@@ -250,7 +269,7 @@ def site_prior_sd(layout: NuisanceLayout) -> dict[str, np.ndarray]:
     """Posterior site of :func:`split_nuisance` → flat prior sd (zero-mean Normal) of its
     elements; a wheel's total scale ``c_k = d_k + c_s`` has the marginal ``√(σ_k² + σ_s²)``."""
     sd = np.asarray(layout.sd)
-    out = {EFFECTS[e]: sd[s] for e, s in layout.slices.items()}
+    out = {EFFECTS[e]: sd[layout.slices[e]] for e in layout.sites}
     if layout.has_common:
         site = EFFECTS["wheel_inertia"]
         out[site] = np.sqrt(out[site]**2 + sd[layout.slices["wheel_inertia_common"]]**2)

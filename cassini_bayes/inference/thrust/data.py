@@ -14,19 +14,21 @@ from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
-from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, column_statistics
+from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
-from cassini_bayes.inference.nuisance import nuisance_layout, wheel_scale_columns
+from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
+                                              with_time_tag_steps)
 from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.flex import ModeSearch, flex_mode_columns
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
-                                                       thruster_impulse, time_tag_rates,
-                                                       time_tag_rows)
+                                                       thruster_impulse, time_tag_rates)
 from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
+from cassini_bayes.inference.thrust.time_tags import (events_tag_steps, gyro_tag_terms,
+                                                      rank_one_rows)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
@@ -353,28 +355,6 @@ def _rate_steps(kw: dict, k_slots: int, n_thr: int, tau) -> dict:
                 step_pairs=StepPairs(*(np.stack(x) for x in zip(*pairs))))
 
 
-def _rank_one_rows(rates, kw: dict, torque, noise, i_lin) -> tuple[RankOneRows, np.ndarray]:
-    """The samples of each event that keep a time-tag term (:func:`time_tag_rows`), padded to a
-    common count (a multiple of :data:`_PULSE_BUCKET`, as the pulses are): their indices and
-    nuisance columns (:class:`RankOneRows`) and their rates (E, M, p). Padding rows have zero
-    rates, which the likelihood's algebra leaves out exactly."""
-    keep = []
-    for e in range(rates.shape[0]):
-        b_hat = noise[e, 0]**2 * i_lin @ i_lin + noise[e, 1]**2 * kw["wheel_cov"][e]
-        noise_sd = float(np.sqrt(np.linalg.eigvalsh(b_hat)[0]))
-        keep.append(np.flatnonzero(time_tag_rows(rates[e], torque, noise_sd, kw["mask"][e])))
-    p_max = max(1, -(-max(k.size for k in keep) // _PULSE_BUCKET) * _PULSE_BUCKET)
-    rows = np.zeros((len(keep), p_max), int)
-    tag = np.zeros((len(keep), rates.shape[1], p_max))
-    n_ev, n_nu = kw["nu_cols"].shape[:2]
-    cols = np.zeros((n_ev, 3, n_nu, p_max))
-    for e, k in enumerate(keep):
-        rows[e, :k.size] = k
-        tag[e, :, :k.size] = rates[e][:, k]
-        cols[e, ..., :k.size] = kw["nu_cols"][e][..., k].transpose(1, 0, 2)
-    return RankOneRows(rows, (cols[:, 0], cols[:, 1], cols[:, 2])), tag
-
-
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
@@ -430,16 +410,22 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
             flex, kw, steps, basis, layout_e, tels, logs, spacecraft, thrust_pred, tp, i_lin,
             inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
-    rank_one, tag_rates = _rank_one_rows(rates, kw, q_mat * thrust_pred, noise, i_lin)
+    if robust:
+        steps_cols = events_tag_steps(kw, i_lin, noise, sd_t)
+        kw["nu_cols"] = np.concatenate([kw["nu_cols"], steps_cols], 1)
+        layout = with_time_tag_steps(layout, steps_cols.shape[1], sd_t)
+    gyro = gyro_tag_terms(kw, i_lin, noise, sd_t)
+    rank_one, tag_rates, tag_gyro = rank_one_rows(rates, gyro, kw, q_mat * thrust_pred, noise,
+                                                  i_lin, _PULSE_BUCKET)
     design, extra = None, {}
     if per_thruster:
         design, extra = _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft,
                                              thrust_pred, fired)
     nu_cols = kw.pop("nu_cols")
     stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
-    derived = dict(time_tag_rates=tag_rates, rank_one=rank_one, pulses=layout_e,
-                   lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:], nu_cols=nu_cols,
-                   **steps,
+    derived = dict(time_tag_rates=tag_rates, time_tag_gyro=tag_gyro, rank_one=rank_one,
+                   pulses=layout_e, lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:],
+                   nu_cols=nu_cols, **steps,
                    nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
                                              np.stack([x.total for x in stats])))
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per

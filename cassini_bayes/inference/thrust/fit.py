@@ -318,5 +318,5 @@ def _judged_names(problem, sample_inertia: bool, robust: bool) -> list[str]:
     if sample_inertia:
         names += list(INERTIA_NAMES)
     if robust:
-        names += [EFFECTS[e] for e in problem.layout.slices]
+        names += [EFFECTS[e] for e in problem.layout.sites]
     return names

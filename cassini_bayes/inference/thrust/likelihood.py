@@ -46,6 +46,7 @@ class EventData(NamedTuple):
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (R, 3, n) columns of the robust nuisance ν (0 on padding)
     time_tag_rates: jax.Array  # (M, p) s, σ_t ∂j/∂t per thruster at ``rank_one.rows``
+    time_tag_gyro: jax.Array   # (3, p) N m s, ½ σ_t (f_{i−1} + f_i) there (thrust.time_tags)
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]
@@ -167,9 +168,10 @@ def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
-    docstring) and the time-tag term ``m_i = Q (F ⊙ ev.time_tag_rates_i)``, ``σ_t`` times the
-    thrusters' torque at the sample: it scales with the sampled ``F``, as the momentum that a
-    time-tag error moves does (:func:`time_tag_rates`).
+    docstring) and the time-tag term ``m_i = Q (F ⊙ ev.time_tag_rates_i) − ev.time_tag_gyro_i``,
+    ``σ_t`` times the thrusters' torque at the sample less the gyroscopic one
+    (:mod:`~cassini_bayes.inference.thrust.time_tags`): the first scales with the sampled ``F``,
+    as the momentum that a time-tag error moves does (:func:`time_tag_rates`).
     The offset ``b`` (flat prior) is integrated out here, the nuisance ``ν`` by
     :func:`nuisance_marginal` over all events.
 
@@ -185,7 +187,8 @@ def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     q_f = q_matrix * f_m[None, :]
     r = event_residual(pi, q_f, tau, ev)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
-                         q_f @ ev.time_tag_rates, ev.mask, ev.rank_one, ev.nu_cols, ev.nu_stats)
+                         q_f @ ev.time_tag_rates - ev.time_tag_gyro, ev.mask, ev.rank_one,
+                         ev.nu_cols, ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * _log_abs_det3(inertia)
     return st._replace(loglik=st.loglik + log_jacobian)
 
@@ -256,7 +259,8 @@ def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix):
         none = ColumnStatistics(jnp.zeros((0, 0, 3, 3)), jnp.zeros((3, 0)))
         rank_one = ev.rank_one._replace(cols=tuple(c[:0] for c in ev.rank_one.cols))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov),
-                               q_f @ ev.time_tag_rates, ev.mask, rank_one, ev.nu_cols[:0],
+                               q_f @ ev.time_tag_rates - ev.time_tag_gyro, ev.mask, rank_one,
+                               ev.nu_cols[:0],
                                none).resid
 
     return jax.vmap(one)(log_sigma, ev)
