@@ -1,77 +1,85 @@
-"""The time tags' gyroscopic terms of the robust thrust model (inference/thrust/time_tags.py)."""
+"""The time tags' terms of the robust thrust model (inference/thrust/time_tags.py)."""
 
+import jax.numpy as jnp
 import numpy as np
 
-from cassini_bayes.inference.thrust.time_tags import (TAG_VARIANCE_SHARE, events_tag_steps,
-                                                      gyro_tag_terms, tag_step_columns)
-from cassini_bayes.physics.quadrature import cumulative_trapezoid
+from cassini_bayes.estimators.leak import interval_means
+from cassini_bayes.inference.thrust.likelihood import jump_area, pulse_layout
+from cassini_bayes.inference.thrust.time_tags import (TAG_VARIANCE_SHARE, TagSensitivity,
+                                                      tag_sensitivity, tag_step_columns)
+from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
+
+TAU = (0.005, 0.020, 0.065)
+M = 4
 
 
-def _event(n=60, seed=0):
-    """Rates with a step at a few samples (pulses) and a large wheel momentum."""
+def _event(n=40, seed=0):
+    """Rates that step at a few samples (pulses), a large wheel momentum, four thrusters."""
     rng = np.random.default_rng(seed)
-    t = np.arange(n, dtype=float)
-    omega = 1e-3 * np.cumsum(rng.normal(size=(n, 3)) * (rng.random((n, 1)) < 0.2), 0)
+    t = np.arange(n, dtype=float) + 0.01 * rng.random(n)
+    omega = 1e-3 * np.cumsum(rng.normal(size=(n, 3)) * (rng.random((n, 1)) < 0.3), 0)
     h = np.array([20.0, -5.0, 3.0]) + 0.01 * rng.normal(size=(n, 3))
-    return t, omega, h, np.diag([300.0, 250.0, 200.0])
+    t_on = np.sort(rng.uniform(1.0, n - 3.0, 12))
+    pulses = (t_on, rng.integers(0, M, 12), rng.uniform(0.05, 0.4, 12))
+    q_f = rng.normal(size=(3, M))
+    return t, omega, h, pulses, q_f, np.diag([300.0, 250.0, 200.0])
 
 
-def _trapezoid_gyro(t, omega, h, inertia):
+def _left_side(t, omega, h, pulses, q_f, inertia):
+    """The model's left side of Eq 17 with its first-order rate-step correction, (n, 3),
+    everything rebuilt from the tags ``t``."""
+    t_on, thr, width = pulses
+    slot = np.searchsorted(t, t_on)
+    lay = pulse_layout(t, t_on, thr, width, slot, 3, M)
+    mid = [np.asarray(interval_means(x[None]))[0] for x in (omega, h)]
+    return np.asarray(impulse_lhs(jnp.asarray(t), omega, inertia, h)
+                      + rate_step_correction(inertia, jump_area(lay, q_f, *TAU), *mid).T)
+
+
+def _sensitivity(t, omega, h, pulses, q_f, inertia):
+    t_on, thr, width = pulses
+    lay = pulse_layout(t, t_on, thr, width, np.searchsorted(t, t_on), 3, M)
+    mid = [np.asarray(interval_means(x[None]))[0] for x in (omega, h)]
+    return tag_sensitivity(t, omega, h, lay, inertia, q_f, TAU, *mid)
+
+
+def test_sensitivity_is_the_model_left_sides_change_with_the_tags():
+    """Tags moved by δ (1e-7 s, no sample crossing a command) change the model's left side,
+    rebuilt from the moved tags, by Σ δ_i (own at i + step after i) to first order: relative
+    1e-4 of the change (the second order is δ/Δt ~ 1e-7 of it)."""
+    t, omega, h, pulses, q_f, inertia = _event()
+    sens = _sensitivity(t, omega, h, pulses, q_f, inertia)
+    delta = 1e-7 * np.random.default_rng(1).normal(size=t.size)
+    delta[0] = 0.0                                  # the first tag moves the offset only
+    change = (_left_side(t + delta, omega, h, pulses, q_f, inertia)
+              - _left_side(t, omega, h, pulses, q_f, inertia))
+    later = np.tril(np.ones((t.size, t.size)), -1)  # [k, i] = 1 where k > i
+    predicted = sens.own * delta[:, None] + later @ (sens.step * delta[:, None])
+    np.testing.assert_allclose(predicted, change, atol=1e-4 * np.abs(change).max())
+
+
+def test_without_pulses_the_step_is_the_trapezoids():
+    """No pulse: the step at sample i is ½ (f_{i−1} − f_{i+1}), f = ω × (Iω + H) (Eq 15)."""
+    t, omega, h, _, q_f, inertia = _event()
+    none = (np.zeros(1), np.zeros(1, int), np.zeros(1))
+    sens = _sensitivity(t, omega, h, none, q_f, inertia)
     f = np.cross(omega, omega @ inertia.T + h)
-    return np.asarray(cumulative_trapezoid(f, t))
-
-
-def test_columns_and_own_terms_are_the_trapezoids_first_order_change():
-    """Tags moved by δ (none on the first sample) change the trapezoid of ∫ ω × (Iω + H) dt by
-    Σ δ_i (own term at i + step after i), to first order: checked against the trapezoid itself
-    (relative 1e-6 at δ of 1e-6 s; the second order is δ² ~ 1e-12)."""
-    t, omega, h, inertia = _event()
-    n = t.size
-    tiny = np.eye(3) * 1e-30                       # every step and own term kept
-    kw = dict(t=t[None], omega=omega[None], h_wheels=h[None], mask=np.ones((1, n)),
-              wheel_cov=np.zeros((1, 3, 3)))
-    noise = np.array([[1e-15, 0.0]])
-    cols = tag_step_columns(t, omega, h, np.ones(n), inertia, tiny, 1.0)
-    own = gyro_tag_terms(kw, inertia, noise, 1.0)[0]            # (3, n) per second of δ
-    delta = 1e-6 * np.random.default_rng(1).normal(size=n)
-    delta[0] = 0.0
-    change = _trapezoid_gyro(t + delta, omega, h, inertia) - _trapezoid_gyro(t, omega, h, inertia)
-    idx = 1 + np.arange(n - 2)
-    assert cols.shape == (n - 2, 3, n)
-    predicted = np.einsum("p,pan->na", delta[idx], cols) + (own * delta[None, :]).T
-    # the last sample's δ moves only itself (its own term)
-    np.testing.assert_allclose(predicted, change, rtol=1e-6, atol=1e-6 * np.abs(change).max())
+    np.testing.assert_allclose(sens.step[1:-1], 0.5 * (f[:-2] - f[2:]), rtol=1e-9, atol=1e-15)
 
 
 def test_only_the_steps_that_matter_get_columns():
-    """Smooth rates (no pulse) leave a walk far below the noise: no column; a noise level that
-    makes the steps large keeps the largest ones until the rest is below the share."""
-    t = np.arange(50.0)
-    omega = np.tile([1e-4, 0.0, 0.0], (50, 1))
-    h = np.tile([10.0, 0.0, 0.0], (50, 1))
-    inertia = np.diag([300.0, 250.0, 200.0])
-    assert tag_step_columns(t, omega, h, np.ones(50), inertia, np.eye(3) * 1e-8, 0.01).shape[0] == 0
-    t, omega, h, inertia = _event()
-    b = np.eye(3) * 1e-10
-    cols = tag_step_columns(t, omega, h, np.ones(t.size), inertia, b, 0.01)
-    f = np.cross(omega, omega @ inertia.T + h)
-    var = 0.01**2 * np.sum((0.5 * (f[:-2] - f[2:]))**2, 1) / 1e-10
-    assert 0 < cols.shape[0] < t.size - 2
-    left = np.sort(var)[::-1][cols.shape[0]:].sum()
-    assert left <= TAG_VARIANCE_SHARE < left + np.sort(var)[::-1][cols.shape[0] - 1]
-
-
-def test_each_event_gets_its_own_block():
-    """Two events: the second's columns are zero in the first event and the reverse."""
-    t, omega, h, inertia = _event()
-    n = t.size
-    kw = dict(t=np.stack([t, t]), omega=np.stack([omega, 2 * omega]), h_wheels=np.stack([h, h]),
-              mask=np.ones((2, n)), wheel_cov=np.zeros((2, 3, 3)))
-    cols = events_tag_steps(kw, inertia, np.array([[1e-6, 0.0], [1e-6, 0.0]]), 0.01)
-    per = [tag_step_columns(t, w, h, np.ones(n), inertia, 1e-12 * inertia @ inertia, 0.01)
-           for w in (omega, 2 * omega)]
-    p0 = per[0].shape[0]
-    assert cols.shape[1] == p0 + per[1].shape[0]
-    np.testing.assert_array_equal(cols[0, :p0], per[0])
-    np.testing.assert_array_equal(cols[1, p0:], per[1])
-    assert not cols[0, p0:].any() and not cols[1, :p0].any()
+    """Steps kept largest first until the walk of the rest is below the share; none for a
+    still spacecraft."""
+    n = 50
+    still = TagSensitivity(np.zeros((n, 3)), np.full((n, 3), 1e-9))
+    assert tag_step_columns(still, np.ones(n), np.eye(3) * 1e-8, 0.01).shape[0] == 0
+    rng = np.random.default_rng(2)
+    sens = TagSensitivity(np.zeros((n, 3)), rng.normal(size=(n, 3)) * rng.random((n, 1))**4)
+    b = np.eye(3) * 1e-4
+    cols = tag_step_columns(sens, np.ones(n), b, 0.01)
+    var = np.sort(0.01**2 * np.sum(sens.step[1:-1]**2, 1) / 1e-4)[::-1]
+    p = cols.shape[0]
+    assert 0 < p < n - 2
+    assert var[p:].sum() <= TAG_VARIANCE_SHARE < var[p - 1:].sum()
+    first = np.argmax(np.any(cols[0] != 0.0, 0))    # the column starts after its sample
+    assert not cols[0][:, :first].any() and np.all(cols[0][:, first:] == cols[0][:, -1:])

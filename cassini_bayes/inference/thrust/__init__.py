@@ -144,10 +144,11 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   prior's time constants, times the sampled thrust, so that it keeps the likelihood's invariance
   under the common scale of ``I``, ``F`` and the wheels). Without it the time constants'
   intervals miss under the telemetry's real jitter (docs/performance.md, "Thrust model choices,
-  measured"). The same error moves the trapezoid of ``ΔG`` (Eq 15): at the sample, a second
-  rank-one term, and at every later sample a random walk stepping at the pulses, one column of
-  ``ν`` per sample whose step matters (:mod:`~cassini_bayes.inference.thrust.time_tags`; none on
-  Cassini, whose gyroscopic torque is far below its noise).
+  measured"). The same error moves the left side's ``ΔG`` (Eq 15, with its correction across
+  the rate steps): at the sample, a second rank-one term, and at every later sample a random
+  walk stepping at the pulses, one column of ``ν`` per sample whose step matters
+  (:mod:`~cassini_bayes.inference.thrust.time_tags`; none on Cassini, whose gyroscopic torque is
+  far below its noise).
 
 ``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
 rather than sampled (as in the robust RWA4 model): per event the offset is removed

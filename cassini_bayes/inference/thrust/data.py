@@ -27,8 +27,8 @@ from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, p
 from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
-from cassini_bayes.inference.thrust.time_tags import (events_tag_steps, gyro_tag_terms,
-                                                      rank_one_rows)
+from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, events_tag_steps,
+                                                      gyro_tag_terms, rank_one_rows)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
@@ -410,11 +410,14 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
             flex, kw, steps, basis, layout_e, tels, logs, spacecraft, thrust_pred, tp, i_lin,
             inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
+    gyro = np.zeros((n_ev, 3, kw["t"].shape[1]))
     if robust:
-        steps_cols = events_tag_steps(kw, i_lin, noise, sd_t)
+        sens = events_tag_sensitivity(kw, layout_e, i_lin, q_mat * thrust_pred, tp.median(),
+                                      steps)
+        steps_cols = events_tag_steps(sens, kw, i_lin, noise, sd_t)
         kw["nu_cols"] = np.concatenate([kw["nu_cols"], steps_cols], 1)
         layout = with_time_tag_steps(layout, steps_cols.shape[1], sd_t)
-    gyro = gyro_tag_terms(kw, i_lin, noise, sd_t)
+        gyro = gyro_tag_terms(sens, kw, i_lin, noise, sd_t)
     rank_one, tag_rates, tag_gyro = rank_one_rows(rates, gyro, kw, q_mat * thrust_pred, noise,
                                                   i_lin, _PULSE_BUCKET)
     design, extra = None, {}

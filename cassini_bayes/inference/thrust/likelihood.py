@@ -46,7 +46,7 @@ class EventData(NamedTuple):
     wheel_cov: jax.Array       # (3, 3) kg² m⁴, Σ_k J_k² g_k g_kᵀ of the active wheels
     nu_cols: jax.Array         # (R, 3, n) columns of the robust nuisance ν (0 on padding)
     time_tag_rates: jax.Array  # (M, p) s, σ_t ∂j/∂t per thruster at ``rank_one.rows``
-    time_tag_gyro: jax.Array   # (3, p) N m s, ½ σ_t (f_{i−1} + f_i) there (thrust.time_tags)
+    time_tag_gyro: jax.Array   # (3, p) N m s, σ_t ∂V_i/∂t_i there (thrust.time_tags)
     rank_one: RankOneRows      # the samples with a time-tag term (:func:`time_tag_rates`)
     lhs_wheels: jax.Array      # (3, n) N m s, V at I = 0: the wheels' part
     lhs_inertia: jax.Array     # (6, 3, n) N m s, ∂V/∂π: V = lhs_wheels + Σ π_k lhs_inertia[k]

@@ -3,29 +3,36 @@
 A time-tag error ``δ_i`` (s) on sample ``i`` moves the residual of Feldman & Lee Eq 17 three ways:
 
 - the pulses' impulse at the sample, ``−Q (F ⊙ ∂j/∂t) δ_i``;
-- the trapezoid of ``ΔG = ∫ ω × (I ω + H) dt`` (Eq 15) at the sample, ``+½ δ_i (f_{i−1} + f_i)``
-  (``f = ω × (I ω + H)``);
-- that trapezoid at every later sample, ``½ δ_i (f_{i−1} − f_{i+1})``: a random walk that steps
-  where the pulses change the rates.
+- the left side at the sample, ``∂V_i/∂t_i δ_i``: the trapezoid of ``ΔG = ∫ ω × (I ω + H) dt``
+  (Eq 15), ``½ (f_{i−1} + f_i)`` with ``f = ω × (I ω + H)``, and its correction across the
+  pulses' rate steps, which places each pulse inside its interval by the tags;
+- the left side at every later sample, by one step ``∂V_k/∂t_i δ_i`` (``½ (f_{i−1} − f_{i+1})``
+  where no pulse is near): a random walk that steps where the pulses change the rates.
 
 The first two are one rank-one covariance term per sample, ``m_i m_iᵀ`` with
-``m_i = σ_t (Q (F ⊙ ∂j/∂t) − ½ (f_{i−1} + f_i))`` (the likelihood's
+``m_i = σ_t (Q (F ⊙ ∂j/∂t) − ∂V_i/∂t_i)`` (the likelihood's
 :func:`~cassini_bayes.inference.thrust.likelihood.event_loglik`); the walk's steps are robust
 nuisance columns, one per sample whose step matters, prior sd ``σ_t``, integrated out with the
 others. The walk and the sample's own terms are given independent priors (their cross term left
-out). ``f`` holds the measured rates and the inertia's prior mean: the terms are variances, which
-a few per cent of the inertia move by as little.
+out). The derivatives are taken of the left side as the model computes it, at the measured rates
+and the prior's inertia, thrusts and time constants: the terms are variances, which a few per
+cent of those move by as little.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.inference.gaussian import RankOneRows
-from cassini_bayes.inference.thrust.likelihood import time_tag_rows
+from cassini_bayes.inference.thrust.likelihood import PulseLayout, jump_area, time_tag_rows
+from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
 
-__all__ = ["TAG_VARIANCE_SHARE", "gyro_tag_terms", "tag_step_columns", "events_tag_steps",
-           "rank_one_rows"]
+__all__ = ["TAG_VARIANCE_SHARE", "TagSensitivity", "tag_sensitivity", "events_tag_sensitivity",
+           "tag_step_columns", "events_tag_steps", "gyro_tag_terms", "rank_one_rows"]
 
 TAG_VARIANCE_SHARE = 0.01
 """Time-tag terms left out of the model add at most this share of one sample's smallest
@@ -33,49 +40,97 @@ white-noise variance: to the walk at the event's end (the largest steps get colu
 rest is below it), and to a sample's own variance (a sample keeps its ``f_i`` term above it)."""
 
 
-def _gyroscopic(omega, h_wheels, inertia) -> np.ndarray:
-    """(n, 3) N m: ``f = ω × (I ω + H)`` (Feldman & Lee Eq 15's integrand)."""
-    w = np.asarray(omega, float)
-    return np.cross(w, w @ np.asarray(inertia, float).T + np.asarray(h_wheels, float))
-
-
 def _noise_whitener(b_cov) -> np.ndarray:
     """(3, 3) ``L`` with ``|x L|² = xᵀ B⁻¹ x``."""
     return np.linalg.cholesky(np.linalg.inv(np.asarray(b_cov, float)))
 
 
-def tag_step_columns(t, omega, h_wheels, mask, inertia, b_cov, time_tag_sd) -> np.ndarray:
+class TagSensitivity(NamedTuple):
+    """How one event's left side of Eq 17 moves with each sample's time tag (N m, per second of
+    tag error): at the sample itself and, as one step, at every later sample."""
+
+    own: np.ndarray     # (n, 3) ∂V_i/∂t_i
+    step: np.ndarray    # (n, 3) ∂V_k/∂t_i for every k > i (0 at the last sample)
+
+
+def tag_sensitivity(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, omega_mid,
+                    h_mid) -> TagSensitivity:
+    """:class:`TagSensitivity` of one event's left side as the model computes it: the
+    trapezoidal ``ΔG`` (Feldman & Lee Eq 15) with its first-order correction across the pulses'
+    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`), which places each
+    pulse inside its interval by the tags; ``layout`` one event's :class:`PulseLayout`, ``q_f``
+    (3, M) N m the thrusters' torques at the predicted thrust, ``tau`` (3,) s the prior's time
+    constants, ``omega_mid``/``h_mid`` (3, n) the intervals' means. An interval's increment
+    depends on its two ends only, so two derivatives (even and odd samples) give them all."""
+    t = np.asarray(t, float)
+    n = t.size
+    rows = np.where(layout.at < q_f.shape[1] * n, layout.at % n, 0)
+    on = (layout.at < q_f.shape[1] * n).astype(float)
+    first = rows[:, 0]
+    prev_ok = ((first >= 1) & (on[:, 0] > 0)).astype(float)
+    prev = np.maximum(first - 1, 0)
+
+    def increments(tt):
+        moved = tt - t
+        lay = layout._replace(dt=layout.dt + moved[rows] * on,
+                              dt_prev=layout.dt_prev + prev_ok * moved[prev]
+                              + (1.0 - prev_ok) * moved[rows[:, 0]] * on[:, 0])
+        v = impulse_lhs(tt, omega, inertia, h_wheels) + rate_step_correction(
+            inertia, jump_area(lay, q_f, *tau), omega_mid, h_mid).T
+        return jnp.diff(v, axis=0, prepend=v[:1])
+
+    parity = np.arange(n) % 2
+    d = [np.asarray(jax.jvp(increments, (jnp.asarray(t),),
+                            (jnp.asarray((parity == c).astype(float)),))[1]) for c in (0, 1)]
+    own = np.stack([d[parity[i]][i] for i in range(n)])             # ∂g_i/∂t_i
+    nxt = np.zeros((n, 3))
+    nxt[:-1] = np.stack([d[parity[i]][i + 1] for i in range(n - 1)])  # ∂g_{i+1}/∂t_i
+    step = own + nxt
+    step[-1] = 0.0
+    return TagSensitivity(own, step)
+
+
+def tag_step_columns(sens: TagSensitivity, mask, b_cov, time_tag_sd) -> np.ndarray:
     """(P, 3, n) N m: the walk's columns for the ``P`` samples whose step matters, one event
-    (module docstring): ``½ (f_{i−1} − f_{i+1})`` at every sample after ``i``. ``t`` (n,) s,
-    ``omega`` (n, 3) rad/s, ``h_wheels`` (n, 3) N m s body axes, ``mask`` (n,) 1 on samples
-    (padding last), ``inertia`` (3, 3) kg m², ``b_cov`` (3, 3) (N m s)² one sample's
-    white-noise covariance, ``time_tag_sd`` s. The first sample's step is the event's offset,
-    and the last has no later sample: neither gets one."""
+    (module docstring): ``sens.step`` at every sample after ``i``. ``mask`` (n,) 1 on samples
+    (padding last), ``b_cov`` (3, 3) (N m s)² one sample's white-noise covariance,
+    ``time_tag_sd`` s. The first sample's step is the event's offset, and the last has no later
+    sample: neither gets one."""
+    size = np.size(mask)
     n = int(np.sum(np.asarray(mask) > 0))
     if time_tag_sd <= 0.0 or n < 3:
-        return np.zeros((0, 3, np.size(t)))
-    f = _gyroscopic(np.asarray(omega)[:n], np.asarray(h_wheels)[:n], inertia)
-    step = 0.5 * (f[:-2] - f[2:])                                   # samples 1 … n − 2
+        return np.zeros((0, 3, size))
+    step = sens.step[1:n - 1]                                       # samples 1 … n − 2
     var = time_tag_sd**2 * np.sum((step @ _noise_whitener(b_cov))**2, 1)
     order = np.argsort(var)[::-1]
     left = np.cumsum(var[order][::-1])[::-1]                        # the walk from rank k on
     keep = np.sort(order[left > TAG_VARIANCE_SHARE]) + 1            # sample indices
-    cols = np.zeros((keep.size, 3, np.size(t)))
+    cols = np.zeros((keep.size, 3, size))
     later = np.arange(n)[None, :] > keep[:, None]                   # (P, n)
-    cols[:, :, :n] = np.where(later[:, None, :], step[keep - 1][:, :, None], 0.0)
+    cols[:, :, :n] = np.where(later[:, None, :], sens.step[keep][:, :, None], 0.0)
     return cols
 
 
-def gyro_tag_terms(kw: dict, inertia, noise, time_tag_sd) -> np.ndarray:
-    """(E, 3, n) N m s: ``½ σ_t (f_{i−1} + f_i)``, each sample's own gyroscopic time-tag term
-    (module docstring; 0 at the first sample, where ``ΔG`` is 0), zero where its variance is
-    below :data:`TAG_VARIANCE_SHARE` of the sample's smallest white-noise variance and on
-    padding; from a thrust problem's padded arrays ``kw`` and white-noise levels ``noise``
-    (E, 2) rad/s."""
+def events_tag_sensitivity(kw: dict, layouts: PulseLayout, inertia, q_f, tau,
+                           steps: dict) -> list[TagSensitivity]:
+    """Every event's :func:`tag_sensitivity` from a thrust problem's padded arrays ``kw``, its
+    stacked pulse layouts and rate-step fields ``steps`` (``omega_mid``, ``h_mid``)."""
+    return [tag_sensitivity(kw["t"][e], kw["omega"][e], kw["h_wheels"][e],
+                            PulseLayout(*(x[e] for x in layouts)), inertia, q_f, tau,
+                            steps["omega_mid"][e], steps["h_mid"][e])
+            for e in range(len(kw["t"]))]
+
+
+def gyro_tag_terms(sens: list[TagSensitivity], kw: dict, inertia, noise,
+                   time_tag_sd) -> np.ndarray:
+    """(E, 3, n) N m s: ``σ_t ∂V_i/∂t_i``, each sample's own time-tag term of the left side
+    (module docstring; 0 at the first sample, where ``V`` is 0), zero where its variance is below
+    :data:`TAG_VARIANCE_SHARE` of the sample's smallest white-noise variance and on padding;
+    ``noise`` (E, 2) rad/s the white-noise levels."""
     out = np.zeros(np.shape(kw["omega"]))
     for e, b in enumerate(_noise_covs(kw, inertia, noise)):
-        f = _gyroscopic(kw["omega"][e], kw["h_wheels"][e], inertia)
-        term = 0.5 * time_tag_sd * np.concatenate([np.zeros((1, 3)), f[:-1] + f[1:]])
+        term = time_tag_sd * sens[e].own
+        term[0] = 0.0
         small = np.sum((term @ _noise_whitener(b))**2, 1) < TAG_VARIANCE_SHARE
         out[e] = np.where((small | (np.asarray(kw["mask"][e]) <= 0))[:, None], 0.0, term)
     return np.ascontiguousarray(np.swapaxes(out, 1, 2))
@@ -88,12 +143,11 @@ def _noise_covs(kw: dict, inertia, noise) -> list[np.ndarray]:
             for e in range(len(kw["t"]))]
 
 
-def events_tag_steps(kw: dict, inertia, noise, time_tag_sd) -> np.ndarray:
+def events_tag_steps(sens: list[TagSensitivity], kw: dict, inertia, noise,
+                     time_tag_sd) -> np.ndarray:
     """(E, P, 3, n) N m: every event's :func:`tag_step_columns`, one block per event (an event's
-    ``δ_i`` move no other event), from a thrust problem's padded arrays ``kw`` (``t``, ``omega``,
-    ``h_wheels``, ``mask``, ``wheel_cov``) and white-noise levels ``noise`` (E, 2) rad/s."""
-    blocks = [tag_step_columns(kw["t"][e], kw["omega"][e], kw["h_wheels"][e], kw["mask"][e],
-                               inertia, b, time_tag_sd)
+    ``δ_i`` move no other event); ``noise`` (E, 2) rad/s the white-noise levels."""
+    blocks = [tag_step_columns(sens[e], kw["mask"][e], b, time_tag_sd)
               for e, b in enumerate(_noise_covs(kw, inertia, noise))]
     cols = np.zeros((len(blocks), sum(b.shape[0] for b in blocks), 3, np.shape(kw["t"])[1]))
     start = 0
