@@ -135,15 +135,19 @@ def plan_thrust_thruster(args: list[Records]) -> str:
 def thrust_noise_at_truth(args: list[Records]) -> str:
     """The noise scale the thrust fit's density puts at an open-world truth, over the sensors'
     (benchmarks/thrust_noise_at_truth.py records): every effect, none, and each alone."""
-    recs = [read_json(path) for group in args for path in group]
+    paths = [path for group in args for path in group]
+    recs = [read_json(path) for path in paths]
     cols = list(recs[0]["seeds"][0]["noise_over_sensor"])
-    rows = ["| case, seed | " + " | ".join(c.replace("_", " ") for c in cols) + " |",
-            "|" + "---|" * (len(cols) + 1)]
-    for r in recs:
+    many = len(recs) > 1                    # then a column names each row's record
+    rows = [("| record " if many else "") + "| case, seed | "
+            + " | ".join(c.replace("_", " ") for c in cols) + " |",
+            "|" + "---|" * (len(cols) + 1 + many)]
+    for path, r in zip(paths, recs):
         for row in r["seeds"]:
             v = row["noise_over_sensor"]
             flex = ", mode modelled" if r.get("flex") == "model" else ""
-            rows.append(f"| `{_scenario_label(r['case'])}`{flex}, {row['seed']} | "
+            rows.append((f"| `{Path(path).name}` " if many else "")
+                        + f"| `{_scenario_label(r['case'])}`{flex}, {row['seed']} | "
                         + " | ".join(f"**{v[c]:.2f}**" if v[c] > 1.25 else f"{v[c]:.2f}"
                                      for c in cols) + " |")
     return "\n".join(rows)

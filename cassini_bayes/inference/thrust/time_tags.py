@@ -37,7 +37,7 @@ __all__ = ["TAG_VARIANCE_SHARE", "TagSensitivity", "tag_sensitivity", "events_ta
 TAG_VARIANCE_SHARE = 0.01
 """Time-tag terms left out of the model add at most this share of one sample's smallest
 white-noise variance: to the walk at the event's end (the largest steps get columns until the
-rest is below it), and to a sample's own variance (a sample keeps its ``f_i`` term above it)."""
+rest is below it), and to a sample's own variance (a sample keeps its own term above it)."""
 
 
 def _noise_whitener(b_cov) -> np.ndarray:
