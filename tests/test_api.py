@@ -199,6 +199,8 @@ def test_check_and_leak_monitor_take_loaded_objects(inputs):
     leak = cb.monitor_leak(tel, sc, pulses=log)
     assert leak.config["inputs"]["spacecraft"] == {"model": sc.name}
     assert leak.summary()["t_end_s"] == float(tel.t[-1])
+    leak.summary()["t_end_s"] = -1.0                  # a copy: the result keeps its own
+    assert leak.summary()["t_end_s"] == float(tel.t[-1])
 
 
 def test_simulate_wraps_the_command(tmp_path, run_cli):

@@ -8,6 +8,7 @@ attribution to the calibrated parameters, beside the papers' numbers; what
 
 from __future__ import annotations
 
+import copy
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,8 +39,8 @@ class BudgetResult:
     runs: dict[str, Any]
 
     def summary(self) -> dict:
-        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
-        return self._summary
+        """``summary.json`` as a dict (a copy; the same protocol as :meth:`FitResult.summary`)."""
+        return copy.deepcopy(self._summary)
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json`` (with the ``adequacy`` verdict of

@@ -7,6 +7,7 @@ An *event list* is a CSV ``events.csv`` with columns ``date_days`` (days, any or
 
 from __future__ import annotations
 
+import copy
 import csv
 import json
 import os
@@ -59,8 +60,8 @@ class HealthResult:
     config: dict
 
     def summary(self) -> dict:
-        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
-        return self._summary
+        """``summary.json`` as a dict (a copy; the same protocol as :meth:`FitResult.summary`)."""
+        return copy.deepcopy(self._summary)
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``health.csv`` (per event: estimates, their

@@ -9,6 +9,7 @@ or built, as every public function that computes is.
 
 from __future__ import annotations
 
+import copy
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -69,8 +70,8 @@ class TrajectoryFit:
     files: tuple
 
     def summary(self) -> dict:
-        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
-        return self._summary
+        """``summary.json`` as a dict (a copy; the same protocol as :meth:`FitResult.summary`)."""
+        return copy.deepcopy(self._summary)
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``segments.csv`` (one row per segment: ``t_start_s, t_end_s, order,

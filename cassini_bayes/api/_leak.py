@@ -9,6 +9,7 @@ correction pairs them by name and its 50 N m s threshold is Cassini's); what
 
 from __future__ import annotations
 
+import copy
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,8 +49,8 @@ class LeakResult:
     files: tuple
 
     def summary(self) -> dict:
-        """``summary.json`` as a dict (the same protocol as :meth:`FitResult.summary`)."""
-        return self._summary
+        """``summary.json`` as a dict (a copy; the same protocol as :meth:`FitResult.summary`)."""
+        return copy.deepcopy(self._summary)
 
     def save(self, out: str | os.PathLike, *, force: bool = False) -> Path:
         """Write ``summary.json``, ``config.toml``, ``probabilities.csv`` (every check's
