@@ -236,7 +236,7 @@ def with_flex_mode(layout: NuisanceLayout, sd_kg_m2: float) -> NuisanceLayout:
 def with_time_tag_steps(layout: NuisanceLayout, n_steps: int,
                         time_tag_sd_s: float) -> NuisanceLayout:
     """``layout`` with ``n_steps`` time-tag errors appended, prior sd ``time_tag_sd_s`` each
-    (the thrust model's gyroscopic steps, :mod:`cassini_bayes.inference.thrust.tag_steps`)."""
+    (the thrust model's time-tag walk, :mod:`cassini_bayes.inference.thrust.time_tags`)."""
     if n_steps == 0:
         return layout
     r = layout.size
