@@ -327,10 +327,24 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
         t = ev.t[e][:n]
         t_on, thr, width = (x[e][keep] for x in (ev.t_on, ev.thruster, ev.width))
         v = impulse_lhs(t, ev.omega[e][:n], inertia, ev.h_wheels[e][:n])   # Feldman & Lee Eq 17
-        j = impulse_from_pulses(t, t_on, thr, width, *tau)                  # (n, 8) s
         one_hot = (thr[:, None] == np.arange(8)[None, :]).astype(float)
-        # the trapezoidal ΔG's error across the rate steps, every pulse at every sample
         since = t[:, None] - t_on[None, :]
+        # each (sample, pulse)'s time-tag sd, from the layout (pulses sorted by first sample)
+        lay, n_pad = ev.pulses, ev.t[e].shape[0]
+        order = np.argsort(np.asarray(ev.slot[e]), kind="stable")
+        spread = np.zeros((n_pad, ev.width[e].shape[0]))
+        valid = lay.at[e] < 8 * n_pad
+        spread[lay.at[e][valid] % n_pad, order[np.nonzero(valid)[0]]] = lay.tag_spread[e][valid]
+        spread = spread[:n][:, keep]
+
+        def expected(fn, *tau_):
+            return sum(w * fn(since - spread * x, width[None, :], *tau_)
+                       for x, w in zip(lay.tag_nodes[e], lay.tag_weights[e]))
+
+        j = (impulse_from_pulses(t, t_on, thr, width, *tau)                 # (n, 8) s
+             + (expected(pulse_impulse_until, *tau)
+                - pulse_impulse_until(since, width[None, :], *tau)) @ one_hot)
+        # the trapezoidal ΔG's error across the rate steps, every pulse at every sample
         area = pulse_impulse_area(since, width[None, :], *tau) @ one_hot
         j_now = pulse_impulse_until(since, width[None, :], *tau) @ one_hot
         eps = jnp.concatenate([jnp.zeros((1, 8)), jnp.diff(area, axis=0)
@@ -349,8 +363,7 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
             np.diff(ev.h_wheels[e][:n], axis=0, prepend=0.0).T, np.diff(t, prepend=t[0]))
         v = v + jnp.cumsum(step, 0) + jnp.cumsum(second, 1).T
         r = v - (j * f8[None, :]) @ q.T
-        rates = time_tag_sd * thrust_profile(t[:, None] - t_on[None, :],
-                                             width[None, :], *tau_median) @ one_hot
+        rates = time_tag_sd * expected(thrust_profile, *tau_median) @ one_hot
         m = (rates * f8[None, :]) @ q.T                                     # (n, 3) N m s
         b = s2[e, 0] * inertia @ inertia + s2[e, 1] * ev.wheel_cov[e]
         cov = b[None] + m[:, :, None] * m[:, None, :]                       # (n, 3, 3)

@@ -22,13 +22,15 @@ from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_colum
 from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.flex import ModeSearch, flex_mode_columns
-from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, pulse_layout,
-                                                       thruster_impulse, time_tag_rates)
+from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, events_impulse,
+                                                       events_time_tag_rates, noise_covariances,
+                                                       pulse_layout)
 from cassini_bayes.inference.thrust.model import laplace_density, thrust_sizes
 from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior, thrust_index,
                                                   tau_prior, thrust_names)
 from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, events_tag_steps,
-                                                      gyro_tag_terms, rank_one_rows)
+                                                      gyro_tag_terms, rank_one_rows,
+                                                      with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
@@ -320,13 +322,6 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
     return kw, fired, noise
 
 
-# every event's time-tag columns, one XLA program (run eagerly, the vmapped forward-mode
-# derivative compiles some seventy one-operation programs)
-_time_tag_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None, None)),
-                          static_argnums=3)
-# each event's impulse per newton of every thruster (M, n) at given time constants
-_impulse_per_newton = jax.jit(jax.vmap(
-    lambda lay, eye, tau: thruster_impulse(lay, eye, *tau), in_axes=(0, None, None)))
 _lhs_basis = jax.jit(jax.vmap(impulse_lhs_basis))
 
 
@@ -399,12 +394,13 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
                             k_slots, n_thr) for e in range(n_ev)]
     layout_e = PulseLayout(*(np.stack(x) for x in zip(*layouts)))
-    tau_med = tuple(jax.device_put(x) for x in tp.median())
+    if robust:
+        layout_e = with_tag_expectation(layout_e, q_mat * thrust_pred, tp.median(),
+                                        noise_covariances(i_lin, noise, kw["wheel_cov"]), sd_t)
     basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
     basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
     steps = _rate_steps(kw, k_slots, n_thr, tp.median())
-    rates = np.asarray(_time_tag_rates(jax.device_put(layout_e), tau_med, jax.device_put(sd_t),
-                                       n_thr))
+    rates = events_time_tag_rates(layout_e, tp.median(), sd_t, n_thr)
     mode_search = None
     if robust and flex != "off":
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
@@ -422,7 +418,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
                                                   i_lin, _PULSE_BUCKET)
     design, extra = None, {}
     if per_thruster:
-        design, extra = _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft,
+        design, extra = _per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
                                              thrust_pred, fired)
     nu_cols = kw.pop("nu_cols")
     stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
@@ -472,10 +468,8 @@ def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacec
     time constants and the momentum noise), and the data fields its model reads."""
     n_thr = len(spacecraft.thrusters)
     q_mat = spacecraft.moment_matrix
-    j = np.asarray(_impulse_per_newton(jax.device_put(layout_e),
-                                       jax.device_put(np.eye(n_thr)), tau_med))
-    b_cov = (noise[:, 0, None, None]**2 * (i_lin @ i_lin)[None]
-             + noise[:, 1, None, None]**2 * kw["wheel_cov"])
+    j = events_impulse(layout_e, np.eye(n_thr), tau_med)
+    b_cov = noise_covariances(i_lin, noise, kw["wheel_cov"])
     dirs = np.stack([s.direction for s in spacecraft.thrusters], 1)
     design = thrust_design(j, kw["mask"], q_mat, dirs, thrust_pred, b_cov,
                            THRUST_PRIOR_LOG_SD, spacecraft.com_sd_m,

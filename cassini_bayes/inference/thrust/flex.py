@@ -31,7 +31,8 @@ from scipy.optimize import minimize
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
 from cassini_bayes.inference.nuisance import with_flex_mode
-from cassini_bayes.inference.thrust.likelihood import EventData, event_residual
+from cassini_bayes.inference.thrust.likelihood import (EventData, event_residual,
+                                                       noise_covariances)
 from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD, TauPrior
 from cassini_bayes.names import FLEX_CHOICES
 from cassini_bayes.physics.flex_mode import MODE_ENTRIES, mode_columns, mode_rate_response
@@ -399,9 +400,9 @@ def flex_mode_columns(flex, kw: dict, steps: dict, basis, layout_e, tels, logs,
     thrust = np.broadcast_to(np.asarray(thrust_pred, float), (n_thr,))
     q_mat = spacecraft.moment_matrix
     events = []
-    for e, (tel, log) in enumerate(zip(tels, logs)):
+    covs = noise_covariances(i_lin, noise, kw["wheel_cov"])
+    for e, (tel, log, cov) in enumerate(zip(tels, logs, covs)):
         n, m = tel.n, len(log.t_on)
-        cov = noise[e, 0]**2 * i_lin @ i_lin + noise[e, 1]**2 * kw["wheel_cov"][e]
         events.append(mode_event(kw["t"][e, :n], kw["omega"][e, :n], kw["h_wheels"][e, :n],
                                  kw["t_on"][e, :m], kw["thruster"][e, :m], kw["width"][e, :m],
                                  q_mat, thrust, i_lin, cov, tag_sd[e][:, :n],

@@ -21,10 +21,12 @@ from cassini_bayes.physics.pulse import (pulse_impulse, pulse_impulse_area, puls
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["EventData", "PulseLayout", "pulse_layout", "thruster_impulse", "jump_area",
+__all__ = ["EventData", "PulseLayout", "pulse_layout", "tag_expectation", "thruster_impulse",
+           "jump_area",
            "event_residual",
            "time_tag_rates",
-           "time_tag_rows", "TAG_RELATIVE_SD", "impulse_residuals", "moment_matrix_at"]
+           "time_tag_rows", "TAG_RELATIVE_SD", "noise_covariances", "events_time_tag_rates",
+           "events_impulse", "impulse_residuals", "moment_matrix_at"]
 
 
 class EventData(NamedTuple):
@@ -65,7 +67,12 @@ class PulseLayout(NamedTuple):
 
     A pulse changes ``j`` only at its first ``K`` samples at or after its command; from sample
     ``slot + K`` on it has delivered its whole impulse (it has *settled*). Pulses are ordered by
-    that sample, so the pulses settled by any sample are a leading run of them."""
+    that sample, so the pulses settled by any sample are a leading run of them.
+
+    A transient sample's impulse is its expectation over the sample's time-tag error, Normal
+    with sd ``tag_spread`` (0: the impulse at the sample's time), by Gauss–Hermite quadrature
+    on ``tag_nodes`` (standard normal) with ``tag_weights`` (summing to 1); :func:`pulse_layout`
+    gives one node at 0."""
 
     dt: jax.Array        # (m, K) s, each transient sample's time after the command
     dt_prev: jax.Array   # (m,) s, the sample before the first's (= dt[:, 0] when none)
@@ -73,6 +80,9 @@ class PulseLayout(NamedTuple):
     thruster: jax.Array  # (m,) int index into the spacecraft's M thrusters
     at: jax.Array        # (m, K) int, flat index thruster·n + sample into (M, n); M n: none
     settled: jax.Array   # (n,) int, how many pulses have settled by each sample
+    tag_spread: jax.Array   # (m, K) s, the time-tag sd each transient sample is averaged over
+    tag_nodes: jax.Array    # (H,) standard-normal quadrature nodes
+    tag_weights: jax.Array  # (H,) their weights
 
 
 def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> PulseLayout:
@@ -92,7 +102,19 @@ def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> Pu
     prev = np.clip(slot - 1, 0, n - 1)
     dt_prev = np.where((slot >= 1) & (slot < n), t[prev] - t_on, dt[:, 0])
     return PulseLayout(dt, dt_prev, np.asarray(width, float)[order],
-                       np.asarray(thruster)[order], at, settled)
+                       np.asarray(thruster)[order], at, settled, np.zeros_like(dt),
+                       np.zeros(1), np.ones(1))
+
+
+def tag_expectation(fn, layout: PulseLayout, *args):
+    """(m, K): ``E[fn(dt − δ, width, *args)]`` at each pulse's transient samples over their
+    time-tag errors ``δ`` (:class:`PulseLayout`): ``fn`` a pulse's impulse or thrust profile
+    in the time after its command, ``args`` its time constants. The expectation is the
+    statistical linearisation of the tags: the impulse a tag-shifted sample sees on average,
+    and (of the profile) the slope of the impulse's regression on the tag (Stein's lemma)."""
+    dt = (layout.dt[..., None]
+          - layout.tag_spread[..., None] * layout.tag_nodes[None, None, :])  # (m, K, H)
+    return fn(dt, layout.width[:, None, None], *args) @ layout.tag_weights
 
 
 def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
@@ -102,14 +124,15 @@ def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     :func:`~cassini_bayes.physics.impulse.impulse_from_pulses`.
 
     At a pulse's ``K`` transient samples (:class:`PulseLayout`) its impulse so far,
-    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`; from the next sample on the whole
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`, expected over the sample's time
+    tag (:func:`tag_expectation`); from the next sample on the whole
     pulse's, Feldman & Lee §V closed form (:func:`pulse_impulse`), accumulated by one cumulative
     sum over the pulses. ``O(m K + n)`` instead of ``O(n m)`` work; identical to the dense form
     when every pulse has decayed ``K`` samples after its command.
     """
     w = layout.width
     n = layout.settled.shape[0]
-    until = pulse_impulse_until(layout.dt, w[:, None], tau_delay, tau_rise, tau_fall)
+    until = tag_expectation(pulse_impulse_until, layout, tau_delay, tau_rise, tau_fall)
     full = pulse_impulse(w, tau_delay, tau_rise, tau_fall)           # Feldman & Lee §V
     qcol = q_f[:, layout.thruster]                                    # (3, m)
     settled = jnp.cumsum(qcol * full[None, :], 1)
@@ -209,6 +232,16 @@ def _noise_cov(inertia, log_sigma, wheel_cov):
     return s2[0] * inertia @ inertia + s2[1] * wheel_cov
 
 
+def noise_covariances(inertia, noise, wheel_cov) -> np.ndarray:
+    """(E, 3, 3) (N m s)²: each event's ``B`` (:func:`_noise_cov`) in NumPy, at the inertia
+    matrix ``inertia`` (3, 3) kg m², the white-noise levels ``noise`` (E, 2) rad/s and the wheels'
+    ``wheel_cov`` (E, 3, 3) kg² m⁴."""
+    i_sq = np.asarray(inertia, float) @ np.asarray(inertia, float)
+    noise = np.asarray(noise, float)
+    return (noise[:, 0, None, None]**2 * i_sq[None]
+            + noise[:, 1, None, None]**2 * np.asarray(wheel_cov, float))
+
+
 TAG_RELATIVE_SD = 1e-10
 """A sample keeps a time-tag term when its time-tag sd (at the predicted thrust) is at least this
 fraction of its white-noise sd at the data's noise levels (:func:`time_tag_rows`)."""
@@ -219,6 +252,7 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
     thruster's impulse rate per newton at each sample (module docstring, "Robust model"): the
     thrust profile (:func:`~cassini_bayes.physics.pulse.thrust_profile`, the derivative of
     :func:`thruster_impulse` per newton, in the sample times) at each pulse's transient samples,
+    expected over their time tags (:func:`tag_expectation`),
     at the time constants ``τ`` (3,) s, the prior's medians: evaluated once, so the covariance
     does not move with ``τ`` (evaluated at each draw it made some fits take tens of minutes).
 
@@ -228,7 +262,7 @@ def time_tag_rates(layout: PulseLayout, tau, time_tag_sd, n_thrusters: int):
     all three would shrink the residuals a time-tag error leaves but not their stated variance,
     and time tags wider than stated would pull ``F`` down (``benchmarks/time_tag_bias.py``)."""
     n = layout.settled.shape[0]
-    rate = thrust_profile(layout.dt, layout.width[:, None], *tau)
+    rate = tag_expectation(thrust_profile, layout, *tau)
     m = n_thrusters
     return time_tag_sd * jnp.zeros(m * n).at[layout.at].add(rate, mode="drop").reshape(m, n)
 
@@ -247,6 +281,30 @@ def time_tag_rows(rates, torque, noise_sd, mask) -> np.ndarray:
     """
     tag_sd = np.linalg.norm(np.asarray(torque) @ np.asarray(rates), axis=0)
     return (tag_sd >= TAG_RELATIVE_SD * noise_sd) & (np.asarray(mask) > 0)
+
+
+# one XLA program each over the events (run eagerly, the vmapped forward-mode derivative
+# compiles some seventy one-operation programs)
+_events_rates = jax.jit(jax.vmap(time_tag_rates, in_axes=(0, None, None, None)),
+                        static_argnums=3)
+_events_impulse = jax.jit(jax.vmap(lambda lay, q, tau: thruster_impulse(lay, q, *tau),
+                                   in_axes=(0, None, None)))
+
+
+def events_time_tag_rates(layouts: PulseLayout, tau, time_tag_sd,
+                          n_thrusters: int) -> np.ndarray:
+    """(E, M, n) s: :func:`time_tag_rates` of every event's layout (stacked, leading axis E)."""
+    return np.asarray(_events_rates(jax.device_put(layouts),
+                                    tuple(jax.device_put(float(x)) for x in tau),
+                                    jax.device_put(float(time_tag_sd)), n_thrusters))
+
+
+def events_impulse(layouts: PulseLayout, q_f, tau) -> np.ndarray:
+    """(E, R, n): :func:`thruster_impulse` of every event's layout (stacked) at the torques
+    ``q_f`` (R, M) per thruster (the identity: the impulse per newton, s) and the time
+    constants ``tau`` (3,) s."""
+    return np.asarray(_events_impulse(jax.device_put(layouts), jax.device_put(np.asarray(q_f)),
+                                      tuple(jax.device_put(float(x)) for x in tau)))
 
 
 @jax.jit

@@ -17,6 +17,10 @@ others. The walk and the sample's own terms are given independent priors (their 
 out). The derivatives are taken of the left side as the model computes it, at the measured rates
 and the prior's inertia, thrusts and time constants: the terms are variances, which a few per
 cent of those move by as little.
+
+The pulses' impulse is not linear in a tag where a pulse's edge lies within the tag's reach of
+the sample: there (:func:`with_tag_expectation`) the impulse is its expectation over the tag and
+the rank-one term's rate the expected rate, the regression of the impulse on the tag.
 """
 
 from __future__ import annotations
@@ -28,16 +32,54 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.inference.gaussian import RankOneRows
-from cassini_bayes.inference.thrust.likelihood import PulseLayout, jump_area, time_tag_rows
+from cassini_bayes.inference.thrust.likelihood import (PulseLayout, events_impulse,
+                                                       events_time_tag_rates, jump_area,
+                                                       noise_covariances, time_tag_rows)
 from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
 
-__all__ = ["TAG_VARIANCE_SHARE", "TagSensitivity", "tag_sensitivity", "events_tag_sensitivity",
-           "tag_step_columns", "events_tag_steps", "gyro_tag_terms", "rank_one_rows"]
+__all__ = ["TAG_VARIANCE_SHARE", "TAG_NODES", "with_tag_expectation", "TagSensitivity",
+           "tag_sensitivity", "events_tag_sensitivity", "tag_step_columns", "events_tag_steps",
+           "gyro_tag_terms", "rank_one_rows"]
 
 TAG_VARIANCE_SHARE = 0.01
 """Time-tag terms left out of the model add at most this share of one sample's smallest
 white-noise variance: to the walk at the event's end (the largest steps get columns until the
 rest is below it), and to a sample's own variance (a sample keeps its own term above it)."""
+
+
+TAG_NODES = 7
+"""Gauss–Hermite nodes of the expectation over a sample's time tag
+(:func:`~cassini_bayes.inference.thrust.likelihood.tag_expectation`)."""
+
+
+def with_tag_expectation(layouts: PulseLayout, q_f, tau, b_covs, time_tag_sd) -> PulseLayout:
+    """``layouts`` (stacked over the events) with each pulse's impulse and rate at a transient
+    sample expected over the sample's time tag, Normal with sd ``time_tag_sd`` (s), where that
+    matters: where, at the thrusts' torques ``q_f`` (3, M) N m and the time constants ``tau``
+    (3,) s, the expectation moves the sample's impulse or its time-tag term by more than
+    :data:`TAG_VARIANCE_SHARE` of the event's white-noise covariance ``b_covs`` (E, 3, 3)
+    (N m s)². A first-order expansion in the tag fails where a pulse's edge lies within a
+    tag's reach of the sample; elsewhere the expectation is the impulse itself."""
+    if time_tag_sd <= 0.0:
+        return layouts
+    n_ev, n_thr = layouts.dt.shape[0], q_f.shape[1]
+    x, w = np.polynomial.hermite_e.hermegauss(TAG_NODES)
+    nodes = dict(tag_nodes=np.tile(x, (n_ev, 1)), tag_weights=np.tile(w / w.sum(), (n_ev, 1)))
+    spread = layouts._replace(tag_spread=np.full(layouts.dt.shape, float(time_tag_sd)), **nodes)
+    moved = [events_impulse(lay, q_f, tau) for lay in (spread, layouts)]
+    slope = [q_f @ events_time_tag_rates(lay, tau, time_tag_sd, n_thr)
+             for lay in (spread, layouts)]
+    n = layouts.settled.shape[1]
+    keep = np.zeros(layouts.dt.shape, bool)
+    for e, b_cov in enumerate(b_covs):
+        whiten = _noise_whitener(b_cov)
+        change = (np.sum(((moved[0][e] - moved[1][e]).T @ whiten)**2, 1)
+                  + np.sum(((slope[0][e] - slope[1][e]).T @ whiten)**2, 1))
+        at = layouts.at[e]
+        keep[e] = (at < n_thr * n) & (change[at % n] > TAG_VARIANCE_SHARE)
+    if not keep.any():
+        return layouts
+    return layouts._replace(tag_spread=np.where(keep, float(time_tag_sd), 0.0), **nodes)
 
 
 def _noise_whitener(b_cov) -> np.ndarray:
@@ -82,9 +124,10 @@ def tag_sensitivity(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, 
     parity = np.arange(n) % 2
     d = [np.asarray(jax.jvp(increments, (jnp.asarray(t),),
                             (jnp.asarray((parity == c).astype(float)),))[1]) for c in (0, 1)]
-    own = np.stack([d[parity[i]][i] for i in range(n)])             # ∂g_i/∂t_i
+    even = (parity == 0)[:, None]
+    own = np.where(even, d[0], d[1])                                # ∂g_i/∂t_i
     nxt = np.zeros((n, 3))
-    nxt[:-1] = np.stack([d[parity[i]][i + 1] for i in range(n - 1)])  # ∂g_{i+1}/∂t_i
+    nxt[:-1] = np.where(even[:-1], d[0][1:], d[1][1:])              # ∂g_{i+1}/∂t_i
     step = own + nxt
     step[-1] = 0.0
     return TagSensitivity(own, step)
@@ -128,7 +171,7 @@ def gyro_tag_terms(sens: list[TagSensitivity], kw: dict, inertia, noise,
     :data:`TAG_VARIANCE_SHARE` of the sample's smallest white-noise variance and on padding;
     ``noise`` (E, 2) rad/s the white-noise levels."""
     out = np.zeros(np.shape(kw["omega"]))
-    for e, b in enumerate(_noise_covs(kw, inertia, noise)):
+    for e, b in enumerate(noise_covariances(inertia, noise, kw["wheel_cov"])):
         term = time_tag_sd * sens[e].own
         term[0] = 0.0
         small = np.sum((term @ _noise_whitener(b))**2, 1) < TAG_VARIANCE_SHARE
@@ -136,19 +179,12 @@ def gyro_tag_terms(sens: list[TagSensitivity], kw: dict, inertia, noise,
     return np.ascontiguousarray(np.swapaxes(out, 1, 2))
 
 
-def _noise_covs(kw: dict, inertia, noise) -> list[np.ndarray]:
-    """Each event's white-noise covariance of one sample's left side (N m s)²."""
-    i_sq = np.asarray(inertia, float) @ np.asarray(inertia, float)
-    return [noise[e, 0]**2 * i_sq + noise[e, 1]**2 * kw["wheel_cov"][e]
-            for e in range(len(kw["t"]))]
-
-
 def events_tag_steps(sens: list[TagSensitivity], kw: dict, inertia, noise,
                      time_tag_sd) -> np.ndarray:
     """(E, P, 3, n) N m: every event's :func:`tag_step_columns`, one block per event (an event's
     ``δ_i`` move no other event); ``noise`` (E, 2) rad/s the white-noise levels."""
     blocks = [tag_step_columns(sens[e], kw["mask"][e], b, time_tag_sd)
-              for e, b in enumerate(_noise_covs(kw, inertia, noise))]
+              for e, b in enumerate(noise_covariances(inertia, noise, kw["wheel_cov"]))]
     cols = np.zeros((len(blocks), sum(b.shape[0] for b in blocks), 3, np.shape(kw["t"])[1]))
     start = 0
     for e, b in enumerate(blocks):
@@ -166,7 +202,7 @@ def rank_one_rows(rates, gyro, kw: dict, torque, noise, i_lin,
     and gyroscopic terms (E, 3, p). Padding rows have zero terms, which the likelihood's algebra
     leaves out exactly."""
     keep = []
-    for e, b_hat in enumerate(_noise_covs(kw, i_lin, noise)):
+    for e, b_hat in enumerate(noise_covariances(i_lin, noise, kw["wheel_cov"])):
         noise_sd = float(np.sqrt(np.linalg.eigvalsh(b_hat)[0]))
         pulses = time_tag_rows(rates[e], torque, noise_sd, kw["mask"][e])
         keep.append(np.flatnonzero(pulses | np.any(gyro[e] != 0.0, 0)))
