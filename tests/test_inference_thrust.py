@@ -341,9 +341,7 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
             return sum(w * fn(since - spread * x, width[None, :], *tau_)
                        for x, w in zip(lay.tag_nodes[e], lay.tag_weights[e]))
 
-        j = (impulse_from_pulses(t, t_on, thr, width, *tau)                 # (n, 8) s
-             + (expected(pulse_impulse_until, *tau)
-                - pulse_impulse_until(since, width[None, :], *tau)) @ one_hot)
+        j = impulse_from_pulses(t, t_on, thr, width, *tau)                  # (n, 8) s
         # the trapezoidal ΔG's error across the rate steps, every pulse at every sample
         area = pulse_impulse_area(since, width[None, :], *tau) @ one_hot
         j_now = pulse_impulse_until(since, width[None, :], *tau) @ one_hot

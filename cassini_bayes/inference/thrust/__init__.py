@@ -145,12 +145,12 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   under the common scale of ``I``, ``F`` and the wheels). Without it the time constants'
   intervals miss under the telemetry's real jitter (docs/performance.md, "Thrust model choices,
   measured"). Where a pulse's edge lies within a tag's reach of a sample, a first-order
-  expansion fails: there the impulse and its rate are their expectations over the tag
-  (statistical linearisation, :func:`~cassini_bayes.inference.thrust.likelihood.tag_expectation`,
-  chosen by :func:`~cassini_bayes.inference.thrust.time_tags.with_tag_expectation`). The same
-  error moves the left side's ``ΔG`` (Eq 15, with its correction across
-  the rate steps): at the sample, a second rank-one term, and at every later sample a random
-  walk stepping at the pulses, one column of ``ν`` per sample whose step matters
+  expansion fails: there the rate is its expectation over the tag (statistical linearisation,
+  :func:`~cassini_bayes.inference.thrust.likelihood.tag_expectation`, chosen by
+  :func:`~cassini_bayes.inference.thrust.time_tags.with_tag_expectation`). The same error moves
+  the left side's ``ΔG`` (Eq 15, with its correction across the rate steps): at the sample, a
+  second rank-one term, and at every later sample a random walk stepping at the pulses, one
+  column of ``ν`` per sample whose step matters
   (:mod:`~cassini_bayes.inference.thrust.time_tags`; none on Cassini, whose gyroscopic torque is
   far below its noise).
 

@@ -69,10 +69,10 @@ class PulseLayout(NamedTuple):
     ``slot + K`` on it has delivered its whole impulse (it has *settled*). Pulses are ordered by
     that sample, so the pulses settled by any sample are a leading run of them.
 
-    A transient sample's impulse is its expectation over the sample's time-tag error, Normal
-    with sd ``tag_spread`` (0: the impulse at the sample's time), by Gauss–Hermite quadrature
-    on ``tag_nodes`` (standard normal) with ``tag_weights`` (summing to 1); :func:`pulse_layout`
-    gives one node at 0."""
+    A transient sample's time-tag rate (:func:`time_tag_rates`) is its expectation over the
+    sample's time-tag error, Normal with sd ``tag_spread`` (0: the rate at the sample's time),
+    by Gauss–Hermite quadrature on ``tag_nodes`` (standard normal) with ``tag_weights`` (summing
+    to 1); :func:`pulse_layout` gives one node at 0."""
 
     dt: jax.Array        # (m, K) s, each transient sample's time after the command
     dt_prev: jax.Array   # (m,) s, the sample before the first's (= dt[:, 0] when none)
@@ -108,10 +108,10 @@ def pulse_layout(t, t_on, thruster, width, slot, k: int, n_thrusters: int) -> Pu
 
 def tag_expectation(fn, layout: PulseLayout, *args):
     """(m, K): ``E[fn(dt − δ, width, *args)]`` at each pulse's transient samples over their
-    time-tag errors ``δ`` (:class:`PulseLayout`): ``fn`` a pulse's impulse or thrust profile
-    in the time after its command, ``args`` its time constants. The expectation is the
-    statistical linearisation of the tags: the impulse a tag-shifted sample sees on average,
-    and (of the profile) the slope of the impulse's regression on the tag (Stein's lemma)."""
+    time-tag errors ``δ`` (:class:`PulseLayout`): ``fn`` a function of the time after a pulse's
+    command (the thrust profile), ``args`` its time constants. Of the profile it is the slope of
+    the impulse's regression on the tag (Stein's lemma): the statistical linearisation of the
+    tag, which a first-order expansion at the sample misses where an edge is within reach."""
     dt = (layout.dt[..., None]
           - layout.tag_spread[..., None] * layout.tag_nodes[None, None, :])  # (m, K, H)
     return fn(dt, layout.width[:, None, None], *args) @ layout.tag_weights
@@ -124,15 +124,14 @@ def thruster_impulse(layout: PulseLayout, q_f, tau_delay, tau_rise, tau_fall):
     :func:`~cassini_bayes.physics.impulse.impulse_from_pulses`.
 
     At a pulse's ``K`` transient samples (:class:`PulseLayout`) its impulse so far,
-    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`, expected over the sample's time
-    tag (:func:`tag_expectation`); from the next sample on the whole
+    :func:`~cassini_bayes.physics.pulse.pulse_impulse_until`; from the next sample on the whole
     pulse's, Feldman & Lee §V closed form (:func:`pulse_impulse`), accumulated by one cumulative
     sum over the pulses. ``O(m K + n)`` instead of ``O(n m)`` work; identical to the dense form
     when every pulse has decayed ``K`` samples after its command.
     """
     w = layout.width
     n = layout.settled.shape[0]
-    until = tag_expectation(pulse_impulse_until, layout, tau_delay, tau_rise, tau_fall)
+    until = pulse_impulse_until(layout.dt, w[:, None], tau_delay, tau_rise, tau_fall)
     full = pulse_impulse(w, tau_delay, tau_rise, tau_fall)           # Feldman & Lee §V
     qcol = q_f[:, layout.thruster]                                    # (3, m)
     settled = jnp.cumsum(qcol * full[None, :], 1)

@@ -19,8 +19,9 @@ and the prior's inertia, thrusts and time constants: the terms are variances, wh
 cent of those move by as little.
 
 The pulses' impulse is not linear in a tag where a pulse's edge lies within the tag's reach of
-the sample: there (:func:`with_tag_expectation`) the impulse is its expectation over the tag and
-the rank-one term's rate the expected rate, the regression of the impulse on the tag.
+the sample: there (:func:`with_tag_expectation`) the rank-one term's rate is the expected rate
+over the tag, the regression of the impulse on the tag. The impulse itself stays the one at the
+sample's time, so that a stated tag sd wider than the tags widens the variance only.
 """
 
 from __future__ import annotations
@@ -32,8 +33,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from cassini_bayes.inference.gaussian import RankOneRows
-from cassini_bayes.inference.thrust.likelihood import (PulseLayout, events_impulse,
-                                                       events_time_tag_rates, jump_area,
+from cassini_bayes.inference.thrust.likelihood import (PulseLayout, events_time_tag_rates,
+                                                       jump_area,
                                                        noise_covariances, time_tag_rows)
 from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
 
@@ -47,34 +48,30 @@ white-noise variance: to the walk at the event's end (the largest steps get colu
 rest is below it), and to a sample's own variance (a sample keeps its own term above it)."""
 
 
-TAG_NODES = 7
+TAG_NODES = 11
 """Gauss–Hermite nodes of the expectation over a sample's time tag
 (:func:`~cassini_bayes.inference.thrust.likelihood.tag_expectation`)."""
 
 
 def with_tag_expectation(layouts: PulseLayout, q_f, tau, b_covs, time_tag_sd) -> PulseLayout:
-    """``layouts`` (stacked over the events) with each pulse's impulse and rate at a transient
-    sample expected over the sample's time tag, Normal with sd ``time_tag_sd`` (s), where that
+    """``layouts`` (stacked over the events) with each pulse's rate at a transient sample
+    expected over the sample's time tag, Normal with sd ``time_tag_sd`` (s), where that
     matters: where, at the thrusts' torques ``q_f`` (3, M) N m and the time constants ``tau``
-    (3,) s, the expectation moves the sample's impulse or its time-tag term by more than
-    :data:`TAG_VARIANCE_SHARE` of the event's white-noise covariance ``b_covs`` (E, 3, 3)
-    (N m s)². A first-order expansion in the tag fails where a pulse's edge lies within a
-    tag's reach of the sample; elsewhere the expectation is the impulse itself."""
+    (3,) s, it moves the sample's time-tag term by more than :data:`TAG_VARIANCE_SHARE` of the
+    event's white-noise covariance ``b_covs`` (E, 3, 3) (N m s)². Elsewhere the rate at the
+    sample is its expectation."""
     if time_tag_sd <= 0.0:
         return layouts
     n_ev, n_thr = layouts.dt.shape[0], q_f.shape[1]
     x, w = np.polynomial.hermite_e.hermegauss(TAG_NODES)
     nodes = dict(tag_nodes=np.tile(x, (n_ev, 1)), tag_weights=np.tile(w / w.sum(), (n_ev, 1)))
     spread = layouts._replace(tag_spread=np.full(layouts.dt.shape, float(time_tag_sd)), **nodes)
-    moved = [events_impulse(lay, q_f, tau) for lay in (spread, layouts)]
-    slope = [q_f @ events_time_tag_rates(lay, tau, time_tag_sd, n_thr)
-             for lay in (spread, layouts)]
+    term = [q_f @ events_time_tag_rates(lay, tau, time_tag_sd, n_thr)
+            for lay in (spread, layouts)]
     n = layouts.settled.shape[1]
     keep = np.zeros(layouts.dt.shape, bool)
     for e, b_cov in enumerate(b_covs):
-        whiten = _noise_whitener(b_cov)
-        change = (np.sum(((moved[0][e] - moved[1][e]).T @ whiten)**2, 1)
-                  + np.sum(((slope[0][e] - slope[1][e]).T @ whiten)**2, 1))
+        change = np.sum(((term[0][e] - term[1][e]).T @ _noise_whitener(b_cov))**2, 1)
         at = layouts.at[e]
         keep[e] = (at < n_thr * n) & (change[at % n] > TAG_VARIANCE_SHARE)
     if not keep.any():
