@@ -11,6 +11,7 @@ import sys
 import tomllib
 
 import arviz as az
+import numpy as np
 import pytest
 
 import cassini_bayes as cb
@@ -389,3 +390,40 @@ def test_an_inertia_posterior_run_is_recorded_with_its_hash_and_moves_the_baseli
     f_model = thrust_baseline(events, sc, "mean")[0]["F"]
     f_post = thrust_baseline(events, sc, "mean", knowledge)[0]["F"]
     assert f_post != f_model and abs(f_post / f_model - 1) < 0.05
+
+
+class _Sampled(Exception):
+    """Raised in place of the sampler: what the API gave it is all a test needs."""
+
+
+@pytest.mark.parametrize("model", ["inertia", "rwa4"])
+def test_stale_samples_are_left_out_of_inertia_and_wheel_axis_fits(model, inputs, tmp_path,
+                                                                   monkeypatch):
+    """A packet that repeats its neighbour (rows 41 and 42 equal but for the time) reaches
+    neither the checks nor the sampler, as in the thrust fit (the warning that names them:
+    ``test_flex_mode.py``)."""
+    from dataclasses import replace
+
+    import cassini_bayes.inference.inertia as inertia_pkg
+    import cassini_bayes.inference.rwa4 as rwa4_pkg
+    from cassini_bayes.telemetry import read_telemetry, write_telemetry
+
+    tel = read_telemetry(inputs[model]["telemetry"])
+    i = 40
+    rows = [np.array(x, copy=True) for x in (tel.q, tel.omega, tel.wheel_rates)]
+    for x in rows:
+        x[i + 1] = x[i]
+    stale = tmp_path / "stale.csv"
+    write_telemetry(stale, replace(tel, q=rows[0], omega=rows[1], wheel_rates=rows[2]))
+    seen = []
+
+    def sampler(key, data, *args, **kw):
+        seen.append(data)
+        raise _Sampled
+
+    pkg, name = (inertia_pkg, "fit_inertia") if model == "inertia" else (rwa4_pkg, "fit_rwa4")
+    monkeypatch.setattr(pkg, name, sampler)
+    with pytest.raises(_Sampled):
+        _api_fit(model, {"telemetry": stale}, as_objects=False)
+    got = seen[0][0] if model == "inertia" else seen[0]
+    assert got.n == tel.n - 2 and tel.t[i] not in got.t and tel.t[i + 1] not in got.t

@@ -110,6 +110,7 @@ def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: i
     from cassini_bayes.consistency import check_inertia_data
     from cassini_bayes.inference.inertia import fit_inertia as sample_inertia
     from cassini_bayes.inference.progress import step
+    from cassini_bayes.telemetry import without_stale_samples
 
     seed = check_seed(seed)
     robust, torque = as_flag(robust, "robust"), as_flag(torque, "torque")
@@ -118,6 +119,7 @@ def fit_inertia(telemetry: TelemetriesArg, spacecraft: SpacecraftArg, *, seed: i
     sc, sc_record, sc_paths = spacecraft_input(spacecraft)
     tels, records, paths = telemetry_inputs(telemetry, spacecraft=sc)
     with step("checking the data"), collect_warnings() as check_warns:
+        tels = [without_stale_samples(t) for t in tels]   # a warning naming them
         check_inertia_data(tels, sc)  # units and conventions by the physics, before sampling
     key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])

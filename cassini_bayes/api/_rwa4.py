@@ -202,6 +202,7 @@ def _fit_axis(command: str, telemetry: TelemetryArg, spacecraft: SpacecraftArg, 
     from cassini_bayes.inference.progress import step
     from cassini_bayes.inference.rwa4 import METHODS, PRIORS, fit_rwa4 as sample_rwa4
     from cassini_bayes.inference.rwa4.data import check_cone_prior
+    from cassini_bayes.telemetry import without_stale_samples
 
     seed = check_seed(seed)
     robust = as_flag(robust, "robust")
@@ -218,8 +219,8 @@ def _fit_axis(command: str, telemetry: TelemetryArg, spacecraft: SpacecraftArg, 
     if len(tels) != 1:
         raise InputError(f"{arg('telemetry')}: the spin-axis calibration takes one telemetry, "
                          f"got {len(tels)}")
-    tel = tels[0]
     with step("checking the data"), collect_warnings() as check_warns:
+        tel = without_stale_samples(tels[0])               # a warning naming them
         # units, conventions, method vs data, by the physics; a fixed wheel's model axis is
         # good to a mounting error, well inside the checks' 30°-scale tolerance, so they keep it
         # and refuse a flipped tachometer sign (an articulated wheel's is taken as free)
