@@ -350,6 +350,51 @@ def _rate_steps(kw: dict, k_slots: int, n_thr: int, tau) -> dict:
                 step_pairs=StepPairs(*(np.stack(x) for x in zip(*pairs))))
 
 
+def _lhs_basis_events(kw: dict) -> np.ndarray:
+    """(E, 7, 3, n) N m s: every event's left side of Eq 17 at ``I = 0`` and its derivatives in
+    the six inertia entries (:func:`~cassini_bayes.physics.impulse.impulse_lhs_basis`)."""
+    basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
+    return np.ascontiguousarray(basis.transpose(0, 1, 3, 2))
+
+
+def _pulse_layouts(kw: dict, k_slots: int, n_thr: int) -> PulseLayout:
+    """Every event's :func:`pulse_layout`, stacked (leading axis E)."""
+    layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
+                            k_slots, n_thr) for e in range(len(kw["t"]))]
+    return PulseLayout(*(np.stack(x) for x in zip(*layouts)))
+
+
+def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustData:
+    """``data`` with the Laplace approximation's centre and Cholesky factor, which centre and
+    whiten the sampler's coordinates."""
+    n_f, n_c = thrust_sizes(mode, data)
+    dim = n_f + n_c + 3 + data.events.t.shape[0] + (6 if sample_inertia else 0)
+    centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data)
+    return data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
+
+
+def _time_tag_terms(kw: dict, layout, layout_e: PulseLayout, steps: dict, rates, q_f, tau,
+                    i_lin, noise, time_tag_sd):
+    """The robust model's time-tag terms (:mod:`~cassini_bayes.inference.thrust.time_tags`):
+    the walk's columns appended to ``kw["nu_cols"]`` and to the nuisance ``layout``, and the
+    rank-one rows with their rates and gyroscopic terms; the rank-one rows alone where
+    ``time_tag_sd`` is ``None`` (the idealised model)."""
+    gyro = np.zeros((len(kw["t"]), 3, kw["t"].shape[1]))
+    if time_tag_sd is not None:
+        sens = events_tag_sensitivity(kw, layout_e, i_lin, q_f, tau, steps)
+        cols = events_tag_steps(sens, kw, i_lin, noise, time_tag_sd)
+        kw["nu_cols"] = np.concatenate([kw["nu_cols"], cols], 1)
+        layout = with_time_tag_steps(layout, cols.shape[1], time_tag_sd)
+        gyro = gyro_tag_terms(sens, kw, i_lin, noise, time_tag_sd)
+    return layout, rank_one_rows(rates, gyro, kw, q_f, noise, i_lin, _PULSE_BUCKET)
+
+
+def _column_statistics(nu_cols, mask) -> ColumnStatistics:
+    """Every event's :func:`column_statistics` of its nuisance columns, stacked."""
+    stats = [column_statistics(c, m) for c, m in zip(nu_cols, mask)]
+    return ColumnStatistics(np.stack([x.gram for x in stats]), np.stack([x.total for x in stats]))
+
+
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
@@ -385,20 +430,15 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust,
                                       None if noise_hat is None else np.asarray(noise_hat, float))
     q_mat = spacecraft.moment_matrix
-    per_thruster = mode == "thruster"
-    thrust_pred = spacecraft.thrust_per_thruster if per_thruster else float(spacecraft.thrust)
+    thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
     i_mean, i_tril = _inertia_mean_tril(inertia, i_fixed)
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
     k_slots = kw.pop("k_slots")
-    layouts = [pulse_layout(*(kw[k][e] for k in ("t", "t_on", "thruster", "width", "slot")),
-                            k_slots, n_thr) for e in range(n_ev)]
-    layout_e = PulseLayout(*(np.stack(x) for x in zip(*layouts)))
-    if robust:
-        layout_e = with_tag_expectation(layout_e, q_mat * thrust_pred, tp.median(),
-                                        noise_covariances(i_lin, noise, kw["wheel_cov"]), sd_t)
-    basis = np.asarray(_lhs_basis(*jax.device_put([kw["t"], kw["omega"], kw["h_wheels"]])))
-    basis = np.ascontiguousarray(basis.transpose(0, 1, 3, 2))        # (E, 7, 3, n)
+    layout_e = with_tag_expectation(_pulse_layouts(kw, k_slots, n_thr), q_mat * thrust_pred,
+                                    tp.median(), noise_covariances(i_lin, noise, kw["wheel_cov"]),
+                                    sd_t)
+    basis = _lhs_basis_events(kw)
     steps = _rate_steps(kw, k_slots, n_thr, tp.median())
     rates = events_time_tag_rates(layout_e, tp.median(), sd_t, n_thr)
     mode_search = None
@@ -406,27 +446,17 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
             flex, kw, steps, basis, layout_e, tels, logs, spacecraft, thrust_pred, tp, i_lin,
             inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
-    gyro = np.zeros((n_ev, 3, kw["t"].shape[1]))
-    if robust:
-        sens = events_tag_sensitivity(kw, layout_e, i_lin, q_mat * thrust_pred, tp.median(),
-                                      steps)
-        steps_cols = events_tag_steps(sens, kw, i_lin, noise, sd_t)
-        kw["nu_cols"] = np.concatenate([kw["nu_cols"], steps_cols], 1)
-        layout = with_time_tag_steps(layout, steps_cols.shape[1], sd_t)
-        gyro = gyro_tag_terms(sens, kw, i_lin, noise, sd_t)
-    rank_one, tag_rates, tag_gyro = rank_one_rows(rates, gyro, kw, q_mat * thrust_pred, noise,
-                                                  i_lin, _PULSE_BUCKET)
+    layout, (rank_one, tag_rates, tag_gyro) = _time_tag_terms(
+        kw, layout, layout_e, steps, rates, q_mat * thrust_pred, tp.median(), i_lin, noise,
+        sd_t if robust else None)
     design, extra = None, {}
-    if per_thruster:
+    if mode == "thruster":
         design, extra = _per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
                                              thrust_pred, fired)
     nu_cols = kw.pop("nu_cols")
-    stats = [column_statistics(c, m) for c, m in zip(nu_cols, kw["mask"])]
     derived = dict(time_tag_rates=tag_rates, time_tag_gyro=tag_gyro, rank_one=rank_one,
                    pulses=layout_e, lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:],
-                   nu_cols=nu_cols, **steps,
-                   nu_stats=ColumnStatistics(np.stack([x.gram for x in stats]),
-                                             np.stack([x.total for x in stats])))
+                   nu_cols=nu_cols, nu_stats=_column_statistics(nu_cols, kw["mask"]), **steps)
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per
     # shape, every process; Python numbers stay weakly typed either way)
     kw, derived, rest = jax.device_put((kw, derived, dict(
@@ -437,12 +467,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
-    kw.update(rest)
-    data = ThrustData(events=events, **kw)
-    n_f, n_c = thrust_sizes(mode, data)
-    dim = n_f + n_c + 3 + n_ev + (6 if inertia is not None else 0)
-    centre, tril = laplace(laplace_density(n_f, n_c, inertia is not None), np.zeros(dim), data)
-    data = data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
+    data = _with_laplace(ThrustData(events=events, **kw, **rest), mode, inertia is not None)
     return ThrustProblem(
         data=data, mode=mode, names=names, thrust_pred=thrust_pred, tau=tp,
         inertia=inertia, inertia_fixed=i_fixed,
