@@ -58,8 +58,8 @@ def with_tag_expectation(layouts: PulseLayout, q_f, tau, b_covs, time_tag_sd) ->
     expected over the sample's time tag, Normal with sd ``time_tag_sd`` (s), where that
     matters: where, at the thrusts' torques ``q_f`` (3, M) N m and the time constants ``tau``
     (3,) s, it moves the sample's time-tag term by more than :data:`TAG_VARIANCE_SHARE` of the
-    event's white-noise covariance ``b_covs`` (E, 3, 3) (N m s)². Elsewhere the rate at the
-    sample is its expectation."""
+    event's white-noise covariance ``b_covs`` (E, 3, 3) (N m s)². Elsewhere the rate stays the
+    one at the sample's time."""
     if time_tag_sd <= 0.0:
         return layouts
     n_ev, n_thr = layouts.dt.shape[0], q_f.shape[1]
