@@ -249,24 +249,21 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                wheel_errors: WheelErrors = "per_wheel",
                flex: Literal["check", "model", "off"] = "check",
                progress: bool = False) -> FitResult:
-    """Posterior of the thrust and the pulse time constants from biasing events; what
-    ``cassini-bayes fit thrust`` computes. Several events are pooled (shared time constants
-    and thrust).
+    """Posterior of the thrust and the pulse time constants from biasing events (``cassini-bayes
+    fit thrust``); several events share the time constants and the thrust.
 
     Parameters
     ----------
-    telemetry : each event's telemetry: a :class:`~cassini_bayes.telemetry.Telemetry` or a CSV
-        path, or a list of them.
+    telemetry : each event's :class:`~cassini_bayes.telemetry.Telemetry` or CSV path, or a list.
     pulses : each event's pulse log (``t_on`` s, ``thruster``, ``width`` s): a
         :class:`~cassini_bayes.telemetry.PulseLog` or a CSV path, or a list in the order of
         ``telemetry``.
     spacecraft : a :class:`~cassini_bayes.spacecraft.Spacecraft`, a model TOML path or a shipped
         model's name.
-    mode : ``"mean"`` (``F``, one thrust for all thrusters: the papers' Eq 23), ``"branch"``
-        (``F_Z``, ``F_Y``; Cassini's eight thrusters of Eq 16) or ``"thruster"`` (``F[<name>]``
-        per thruster of any layout with the centre-of-mass offset ``com_x``, ``com_y``,
-        ``com_z`` in m, and the identified combinations where the events do not separate the
-        thrusters; ``summary["thrust_design"]``), thrust in N.
+    mode : thrust in N: ``"mean"`` (``F`` for all thrusters, the papers' Eq 23), ``"branch"``
+        (``F_Z``, ``F_Y``; Cassini's Eq 16) or ``"thruster"`` (``F[<name>]`` for any layout,
+        the centre-of-mass offset ``com_x, com_y, com_z`` in m, and the identified combinations
+        where the events do not separate the thrusters: ``summary["thrust_design"]``).
     inertia_posterior : an inertia fit (its :class:`FitResult` or run directory): its posterior
         becomes the inertia prior (default: the spacecraft model's inertia and its stated
         uncertainty).
@@ -279,8 +276,7 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     flex : robust model's flexible mode: ``"check"`` searches the events for one
         (``summary["flex_mode"]``) and judges it (adequacy check ``flex_ringing``),
         ``"model"`` also integrates out the momentum it holds where they show it (site
-        ``flex_inertia``, kg m²; on the open-world ESPA event it lowered coverage,
-        docs/flex_mode.md), ``"off"`` does not look.
+        ``flex_inertia``, kg m²), ``"off"`` does not look.
 
     Returns
     -------
@@ -308,17 +304,14 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
     events, (tel_records, log_records), (tel_paths, log_paths) = _events(telemetry, pulses, sc)
     with step("checking the data"), collect_warnings() as check_warns:
         check_thrust_data(events, sc)  # units, conventions, pulse log vs on_*, by the physics
-    key = jax.random.key(seed)  # the one place the seed becomes a key
     with collect_warnings() as warns:   # after the data checks' (a gyro bias beyond [gyro])
-        post = sample_thrust(key, events, sc, mode=mode, inertia=inertia, settings=settings,
-                             robust=robust, wheel_errors=wheel_errors, flex=flex)
+        post = sample_thrust(jax.random.key(seed), events, sc, mode=mode, inertia=inertia,
+                             settings=settings, robust=robust, wheel_errors=wheel_errors,
+                             flex=flex)
     with step("summaries, baseline and adequacy checks"):
-        design = post.problem.design
-        baseline, base_warns = thrust_baseline(
-            events, sc, mode, inertia, None if design is None else design.combinations)
-        summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
-                                 wheel_errors=wheel_errors, baseline=baseline,
-                                 warnings=list(dict.fromkeys(check_warns + warns + base_warns)))
+        baseline, summary = _baseline_and_summary(
+            post, events, sc, inertia, check_warns + warns, seed=seed, mode=mode, robust=robust,
+            wheel_errors=wheel_errors)
     config = fit_config("fit thrust", seed=seed, spacecraft=sc, settings=settings,
                         inputs={"telemetry": tel_records, "pulses": log_records,
                                 "spacecraft": sc_record, **inertia_input},
@@ -328,6 +321,20 @@ def fit_thrust(telemetry: TelemetriesArg, pulses: PulseLogsArg, spacecraft: Spac
                                  "flex": flex if robust else None})
     return FitResult("thrust", post, baseline, summary.get("sensitivity"), config, summary,
                      (*tel_paths, *log_paths, *sc_paths, *inertia_paths))
+
+
+def _baseline_and_summary(post: Any, events, sc: Spacecraft, inertia, warnings: list[str], *,
+                          seed: int, mode: str, robust: bool,
+                          wheel_errors: str) -> tuple[dict | None, dict]:
+    """The least-squares baseline (with the fit's identified combinations) and the summary,
+    its warnings joined to the fit's without repeats."""
+    design = post.problem.design
+    baseline, base_warns = thrust_baseline(
+        events, sc, mode, inertia, None if design is None else design.combinations)
+    summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
+                             wheel_errors=wheel_errors, baseline=baseline,
+                             warnings=list(dict.fromkeys(warnings + base_warns)))
+    return baseline, summary
 
 
 def _inertia_option(inertia_posterior: FitArg | None, post: Any) -> str:

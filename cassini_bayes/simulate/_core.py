@@ -182,21 +182,13 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
         j, rows, cmd_end = xs
         idx = j * cfg.sps + jnp.arange(cfg.sps)
         carry, units = jax.lax.scan(one_step, carry, (idx, rows))
-        return carry, (_observe(carry, cmd_end), units)
-
-    def _observe(carry, cmd):
-        state = carry[0]
-        omega = dynamics.body_rate(state, plant)
-        rho = jnp.where(on, dynamics.wheel_rates(state, plant, omega)[:k], jnp.nan)
-        err = ctl.attitude_error(state.q, cmd[:4])
-        return (state.q, omega, rho, state.h_inertial, carry[8], carry[7], carry[6], carry[5],
-                err, carry[9])
+        return carry, (_observe(carry, cmd_end, plant, on), units)
 
     zm = jnp.zeros(m)
     carry0 = (state0, jnp.full((m, PULSE_RING), -1e9), jnp.zeros((m, PULSE_RING)),
               jnp.zeros((m, PULSE_RING)), jnp.full(m, -1.0), zm, zm, jnp.zeros(3), jnp.zeros(3),
               jnp.zeros(()))
-    obs0 = _observe(carry0, carr["cmd_samples"][0])
+    obs0 = _observe(carry0, carr["cmd_samples"][0], plant, on)
     _, (obs, units) = jax.lax.scan(one_sample, carry0, (jnp.arange(cfg.n_out), plan,
                                                          carr["cmd_samples"][1:]))
     cols = [jnp.concatenate([o0[None], o], 0) for o0, o in zip(obs0, obs)]
@@ -207,6 +199,17 @@ def _simulate_core(key, truth: TruthParams, noise: NoiseParams, plan, carr, cfg:
     return SimArrays(t, q, omega, rho, q_m, w_m, rho_m, h_n, imp_n, imp_b, thr, on_t, err,
                      units.reshape(-1, m) if cfg.thrusters else jnp.zeros((0, m), jnp.int8),
                      t_m, eta)
+
+
+def _observe(carry, cmd, plant, on):
+    """One output sample from the integrator's carry: attitude, body and wheel rates (NaN where
+    a wheel is off), inertial momentum, the impulses and on-times so far, attitude error, η."""
+    state = carry[0]
+    omega = dynamics.body_rate(state, plant)
+    rho = jnp.where(on, dynamics.wheel_rates(state, plant, omega)[:on.shape[0]], jnp.nan)
+    err = ctl.attitude_error(state.q, cmd[:4])
+    return (state.q, omega, rho, state.h_inertial, carry[8], carry[7], carry[6], carry[5],
+            err, carry[9])
 
 
 _core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))

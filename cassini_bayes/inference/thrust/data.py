@@ -1,6 +1,5 @@
 """Data preparation of the thrust model: the events checked, padded to common lengths and
-turned into the prepared :class:`ThrustProblem` (:func:`prepare_thrust`).
-"""
+turned into the prepared :class:`ThrustProblem` (:func:`prepare_thrust`)."""
 
 from __future__ import annotations
 
@@ -36,8 +35,7 @@ from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
-from cassini_bayes.telemetry import (PulseLog, Telemetry, pulses_in_span,
-                                     without_stale_samples)
+from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span, without_stale_samples
 
 __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 

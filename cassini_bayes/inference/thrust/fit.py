@@ -203,10 +203,9 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     inertia : how the spacecraft inertia enters. An :class:`InertiaGaussian` (e.g.
         :func:`inertia_from_run`, an inertia fit's posterior) or ``"prior"`` (the model file's
         knowledge, :func:`inertia_prior_gaussian`): sampled jointly. ``"fixed"``: held at the
-        model file's prediction. ``None`` (default): ``"prior"`` for the robust model, ``"fixed"``
-        for the idealised one (the papers' model). A fixed inertia that is not the truth is a
-        closed world: the momentum the pulses put into the body rates is ``I Δω``, so an inertia
-        error moves ``F`` with it, through the wheel scale.
+        model file's prediction (an inertia error then moves ``F`` with it: the pulses' momentum
+        is ``I Δω``). ``None`` (default): ``"prior"`` for the robust model, ``"fixed"`` for the
+        idealised one (the papers' model).
     settings : :class:`~cassini_bayes.inference.runner.SamplerSettings`.
     prior_draws : number of prior draws stored in the ``prior`` group.
     robust : add the nuisance parameters (gyro bias and scale, wheel inertia scales and tilts,
