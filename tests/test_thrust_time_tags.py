@@ -7,7 +7,8 @@ from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.inference.thrust.likelihood import jump_area, pulse_layout, tag_expectation
 from cassini_bayes.inference.thrust.time_tags import (TAG_NODES, TAG_VARIANCE_SHARE,
                                                       TagSensitivity, tag_sensitivity,
-                                                      tag_step_columns, with_tag_expectation)
+                                                      tag_step_columns, with_pre_command_rates,
+                                                      with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
 from cassini_bayes.physics.pulse import thrust_profile
 
@@ -131,3 +132,24 @@ def test_tag_expectation_is_kept_where_it_matters():
     assert got.tag_nodes.shape == (1, TAG_NODES) and np.any(got.tag_spread > 0)
     assert with_tag_expectation(stacked, q_f, TAU, b, 0.0) is stacked
     assert with_tag_expectation(stacked, q_f, TAU, b, 1e-9) is stacked
+
+
+def test_the_sample_before_a_command_gets_its_expected_rate():
+    """A pulse commanded 4 ms after a sample (delay 5 ms, tags of 10 ms): that sample's rate is
+    the profile averaged over its tag, against a dense grid of Normal tags (4 % of it); a pulse
+    commanded 0.4 s after its sample adds nothing, nor does a stated tag sd of zero."""
+    t = np.arange(10.0)
+    t_on, thr, width = np.array([3.004, 6.4]), np.array([1, 2]), np.array([0.2, 0.2])
+    lay = pulse_layout(t, t_on, thr, width, np.searchsorted(t, t_on), 3, M)
+    stacked = type(lay)(*(np.asarray(x)[None] for x in lay))
+    q_f, b = np.ones((3, M)), np.eye(3)[None] * 1e-10
+    rates = np.zeros((1, M, t.size))
+    sd = 0.01
+    got = with_pre_command_rates(rates, stacked, q_f, TAU, b, sd)
+    grid = np.linspace(-6 * sd, 6 * sd, 4001)
+    dens = np.exp(-0.5 * (grid / sd)**2)
+    exact = sd * float(np.asarray(thrust_profile(-0.004 - grid, 0.2, *TAU)) @ (dens / dens.sum()))
+    assert exact > 0.05 * sd                 # a tag within reach puts the sample in the pulse
+    np.testing.assert_allclose(got[0, 1, 3], exact, rtol=0.04)  # sample 3 s
+    assert np.count_nonzero(got) == 1        # the pulse 0.4 s after its sample: out of reach
+    assert with_pre_command_rates(rates, stacked, q_f, TAU, b, 0.0) is rates

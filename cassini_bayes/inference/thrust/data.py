@@ -29,7 +29,7 @@ from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior,
                                                   tau_prior, thrust_names)
 from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, events_tag_steps,
                                                       gyro_tag_terms, rank_one_rows,
-                                                      with_tag_expectation)
+                                                      with_pre_command_rates, with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
@@ -39,8 +39,7 @@ from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span, without
 
 __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
-# A pulse's thrust is negligible (e^{-1.5 s / 90 ms} < 1e-7) 1.5 s after its command ends.
-_TAIL_S = 1.5
+_TAIL_S = 1.5   # a pulse's thrust 1.5 s after its command ends: e^{-1.5 s / 90 ms} < 1e-7
 _PULSE_BUCKET = 64
 SPAN_MISS_SHARE = 0.3
 """An event's momentum change outside the torques its fired thrusters can make, as a share of
@@ -433,12 +432,13 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     i_mean, i_tril = _inertia_mean_tril(inertia, i_fixed)
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
     k_slots = kw.pop("k_slots")
+    b_covs = noise_covariances(i_lin, noise, kw["wheel_cov"])
     layout_e = with_tag_expectation(_pulse_layouts(kw, k_slots, n_thr), q_mat * thrust_pred,
-                                    tp.median(), noise_covariances(i_lin, noise, kw["wheel_cov"]),
-                                    sd_t)
+                                    tp.median(), b_covs, sd_t)
     basis = _lhs_basis_events(kw)
     steps = _rate_steps(kw, k_slots, n_thr, tp.median())
-    rates = events_time_tag_rates(layout_e, tp.median(), sd_t, n_thr)
+    rates = with_pre_command_rates(events_time_tag_rates(layout_e, tp.median(), sd_t, n_thr),
+                                   layout_e, q_mat * thrust_pred, tp.median(), b_covs, sd_t)
     mode_search = None
     if robust and flex != "off":
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
@@ -476,8 +476,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
 
 
 def _inertia_mean_tril(inertia: InertiaGaussian | None, i_fixed: np.ndarray):
-    """The inertia prior's mean (6,) kg m² and Cholesky factor: the Gaussian's (jittered by
-    1e-9 kg² m⁴ for the factorisation), or the fixed prediction with a zero factor."""
+    """The inertia prior's mean (6,) kg m² and Cholesky factor (jittered by 1e-9 kg² m⁴), or
+    the fixed prediction with a zero factor."""
     if inertia is not None:
         tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
         return np.asarray(inertia.mean, float), tril

@@ -19,8 +19,9 @@ and the prior's inertia, thrusts and time constants: the terms are variances, wh
 cent of those move by as little.
 
 The pulses' impulse is not linear in a tag where a pulse's edge lies within the tag's reach of
-the sample: there (:func:`with_tag_expectation`) the rank-one term's rate is the expected rate
-over the tag, the regression of the impulse on the tag. The impulse itself stays the one at the
+the sample: there the rank-one term's rate is the expected rate over the tag, the regression of
+the impulse on the tag, at a pulse's transient samples (:func:`with_tag_expectation`) and at
+the sample before its command (:func:`with_pre_command_rates`). The impulse itself stays the one at the
 sample's time, so that a stated tag sd wider than the tags widens the variance only.
 """
 
@@ -37,8 +38,10 @@ from cassini_bayes.inference.thrust.likelihood import (PulseLayout, events_time_
                                                        jump_area,
                                                        noise_covariances, time_tag_rows)
 from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
+from cassini_bayes.physics.pulse import thrust_profile
 
-__all__ = ["TAG_VARIANCE_SHARE", "TAG_NODES", "with_tag_expectation", "TagSensitivity",
+__all__ = ["TAG_VARIANCE_SHARE", "TAG_NODES", "with_tag_expectation", "with_pre_command_rates",
+           "TagSensitivity",
            "tag_sensitivity", "events_tag_sensitivity", "tag_step_columns", "events_tag_steps",
            "gyro_tag_terms", "rank_one_rows"]
 
@@ -51,6 +54,11 @@ rest is below it), and to a sample's own variance (a sample keeps its own term a
 TAG_NODES = 11
 """Gauss–Hermite nodes of the expectation over a sample's time tag
 (:func:`~cassini_bayes.inference.thrust.likelihood.tag_expectation`)."""
+
+
+_TAIL_NODES = 241
+"""Normal-tag grid points (±6 sd) of the rate before a command, whose expectation comes from the
+tail of the tag's distribution alone (Gauss–Hermite's few nodes miss it)."""
 
 
 def with_tag_expectation(layouts: PulseLayout, q_f, tau, b_covs, time_tag_sd) -> PulseLayout:
@@ -77,6 +85,34 @@ def with_tag_expectation(layouts: PulseLayout, q_f, tau, b_covs, time_tag_sd) ->
     if not keep.any():
         return layouts
     return layouts._replace(tag_spread=np.where(keep, float(time_tag_sd), 0.0), **nodes)
+
+
+def with_pre_command_rates(rates, layouts: PulseLayout, q_f, tau, b_covs,
+                           time_tag_sd) -> np.ndarray:
+    """``rates`` (E, M, n) s (:func:`~cassini_bayes.inference.thrust.likelihood.time_tag_rates`
+    of the stacked ``layouts``) with each pulse's rate at the sample before its command, expected
+    over that sample's time tag (Normal, sd ``time_tag_sd`` s): zero at the sample's own time,
+    but a tag within reach puts the sample inside the pulse. Kept where it moves the sample's
+    time-tag term, at the torques ``q_f`` (3, M) N m and time constants ``tau`` (3,) s, by more
+    than :data:`TAG_VARIANCE_SHARE` of the event's white-noise covariance ``b_covs`` (E, 3, 3)."""
+    if time_tag_sd <= 0.0:
+        return rates
+    x = np.linspace(-6.0, 6.0, _TAIL_NODES)       # the tail past the delay: a dense grid
+    w = np.exp(-0.5 * x * x)
+    n_thr, n = q_f.shape[1], rates.shape[2]
+    out = np.array(rates, float)
+    for e, b_cov in enumerate(b_covs):
+        first, dt_prev = np.asarray(layouts.at[e])[:, 0], np.asarray(layouts.dt_prev[e])
+        width = np.asarray(layouts.width[e])
+        ok = (first < n_thr * n) & (dt_prev < 0.0) & (width > 0.0)
+        lag = dt_prev[ok][:, None] - time_tag_sd * x[None, :]
+        rate = time_tag_sd * np.asarray(thrust_profile(lag, width[ok][:, None], *tau)) @ (
+            w / w.sum())
+        thr, prev = first[ok] // n, first[ok] % n - 1
+        term = (q_f[:, thr] * rate[None, :]).T @ _noise_whitener(b_cov)
+        big = np.sum(term**2, 1) > TAG_VARIANCE_SHARE
+        np.add.at(out[e], (thr[big], prev[big]), rate[big])
+    return out
 
 
 def _noise_whitener(b_cov) -> np.ndarray:
