@@ -35,6 +35,7 @@ import _tables_coverage  # noqa: E402,F401  (each module registers its kinds)
 import _tables_evidence  # noqa: E402,F401
 import _tables_performance  # noqa: E402,F401
 import _tables_planning  # noqa: E402,F401
+import _tables_robust  # noqa: E402,F401
 import _tables_sbc  # noqa: E402,F401
 import _tables_validation  # noqa: E402,F401
 from _provenance import manifest_path  # noqa: E402

@@ -1,0 +1,64 @@
+"""Table kinds of the robust models' single-case benchmarks (``docs/robust/``)."""
+
+from __future__ import annotations
+
+from _tables import Records, kind, read_json
+
+ENTRIES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+Z99 = 2.576   # the 99 % interval's edge in sd (a Normal posterior)
+
+
+def _signed(x: float, digits: int) -> str:
+    """``x`` with its sign, the minus as the typographic one (the docs' tables)."""
+    return f"{x:+.{digits}f}".replace("-", "\u2212")
+
+
+def _fit(path, case: str, model: str) -> dict:
+    """One fit of a ``benchmarks/per_wheel_inertia.py`` record."""
+    return next(f for f in read_json(path)["fits"] if f["case"] == case and f["model"] == model)
+
+
+@kind("per_wheel_errors")
+def per_wheel_errors(args: list[Records]) -> str:
+    """Per entry, the per-wheel and common models on the wheels-off case of one
+    ``benchmarks/per_wheel_inertia.py`` record: z (posterior mean − truth in posterior sd), the
+    sd (kg m²), and how far beyond its 99 % interval the common model puts an entry."""
+    path = args[0][0]
+    per, com = (_fit(path, "per-wheel errors", m)["entries"] for m in ("per_wheel", "common"))
+    rows = ["| entry | per-wheel z | per-wheel sd | common z | common sd "
+            "| common: outside 99 % by |", "|---|---|---|---|---|---|"]
+    for n in ENTRIES:
+        p, c = per[n], com[n]
+        out = "—" if c["in99"] else f"{abs(c['z']) - Z99:.1f} sd"
+        z_common = _signed(c["z"], 1) if c["in99"] else f"**{_signed(c['z'], 1)}**"
+        rows.append(f"| {n} | {_signed(p['z'], 2)} | {p['sd']:.3g} | {z_common} | "
+                    f"{c['sd']:.3g} | {out} |")
+    return "\n".join(rows)
+
+
+@kind("per_wheel_models")
+def per_wheel_models(args: list[Records]) -> str:
+    """A row per model on the wheels-off case of each record: z per entry, the largest R-hat
+    and the divergences (``benchmarks/per_wheel_inertia.py``)."""
+    rows = ["| model | " + " | ".join(ENTRIES) + " | R-hat | divergences |",
+            "|---" * (len(ENTRIES) + 3) + "|"]
+    for path in (p for group in args for p in group):
+        for model in ("per_wheel", "common"):
+            f = _fit(path, "per-wheel errors", model)
+            zs = " | ".join(_signed(f["entries"][n]["z"], 2) for n in ENTRIES)
+            rows.append(f"| {model.replace('_', '-')} z | {zs} | {f['max_r_hat']:.4f} | "
+                        f"{f['divergences']} |")
+    return "\n".join(rows)
+
+
+@kind("per_wheel_clean")
+def per_wheel_clean(args: list[Records]) -> str:
+    """Per entry, the posterior sd (kg m²) of the per-wheel and common models on the clean case
+    of one ``benchmarks/per_wheel_inertia.py`` record, and their ratio: the per-wheel model's
+    price where the wheels are as the model file says."""
+    path = args[0][0]
+    per, com = (_fit(path, "clean", m)["entries"] for m in ("per_wheel", "common"))
+    rows = ["| entry | per-wheel sd | common sd | per-wheel / common |", "|---|---|---|---|"]
+    rows += [f"| {n} | {per[n]['sd']:.3g} | {com[n]['sd']:.3g} | "
+             f"{per[n]['sd'] / com[n]['sd']:.2f} |" for n in ENTRIES]
+    return "\n".join(rows)
