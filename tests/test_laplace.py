@@ -34,3 +34,24 @@ def test_laplace_finds_the_mode_and_the_inverse_hessian():
     h = -np.asarray(jax.hessian(_log_density)(jnp.asarray(centre), data))
     np.testing.assert_allclose(tril @ tril.T, np.linalg.inv(h), rtol=1e-7,
                                atol=1e-7 * np.outer(scale, scale).max())
+
+
+def _noise_density(x, data):
+    """A location ``x[0]`` and a log noise scale ``x[1]`` of residuals with sd ``e^{x[1]}``."""
+    r = data["y"] - x[0]
+    return -r.size * x[1] - 0.5 * jnp.sum(r * r) * jnp.exp(-2.0 * x[1]) - 0.5 * x[0] ** 2
+
+
+def test_the_scan_starts_the_search_at_the_best_scale():
+    """``scan`` sets the scale coordinate to the grid value of highest density before any Newton
+    round (``rounds=0`` returns that start): for residuals of sd e³ about 0, the value 3 of the
+    grid 0…6, the location left at its start. With the rounds, the search reaches the mode."""
+    y = jnp.asarray(np.random.default_rng(1).normal(size=400) * np.exp(3.0))
+    data = {"y": y}
+    start, _ = laplace(_noise_density, np.zeros(2), data, rounds=0,
+                       scan=(np.array([1]), np.arange(0.0, 6.5, 1.0)))
+    assert start[0] == 0.0 and start[1] == 3.0
+    centre, _ = laplace(_noise_density, np.zeros(2), data,
+                        scan=(np.array([1]), np.arange(0.0, 6.5, 1.0)))
+    r = np.asarray(y) - centre[0]
+    np.testing.assert_allclose(centre[1], 0.5 * np.log(np.mean(r * r)), atol=1e-6)

@@ -12,9 +12,11 @@ import numpy as np
 from cassini_bayes.errors import InputError, arg
 from cassini_bayes.inference.inertia.prior import inertia_prior
 from cassini_bayes.names import INERTIA_NAMES
+from cassini_bayes.physics.momentum import inertia_vector
 from cassini_bayes.spacecraft import Spacecraft
 
-__all__ = ["InertiaGaussian", "inertia_from_run", "inertia_from_idata", "inertia_prior_gaussian"]
+__all__ = ["InertiaGaussian", "inertia_from_run", "inertia_from_idata", "inertia_prior_gaussian",
+           "inertia_mean_tril"]
 
 
 class InertiaGaussian(NamedTuple):
@@ -59,3 +61,12 @@ def inertia_prior_gaussian(spacecraft: Spacecraft) -> InertiaGaussian:
     tensors, which ±10 % about a physical prediction does not reach)."""
     prior = inertia_prior(spacecraft)
     return InertiaGaussian(prior.mean, np.diag(prior.sd ** 2))
+
+
+def inertia_mean_tril(inertia: InertiaGaussian | None, i_fixed: np.ndarray):
+    """The inertia prior's mean (6,) kg m² and Cholesky factor (jittered by 1e-9 kg² m⁴), or
+    the fixed prediction ``i_fixed`` (3, 3) with a zero factor."""
+    if inertia is not None:
+        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
+        return np.asarray(inertia.mean, float), tril
+    return np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))

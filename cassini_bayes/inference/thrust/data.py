@@ -12,7 +12,7 @@ import numpy as np
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.frames import skew
-from cassini_bayes.inference.inertia.knowledge import InertiaGaussian
+from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_mean_tril
 from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
@@ -31,7 +31,7 @@ from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, ev
                                                       gyro_tag_terms, rank_one_rows,
                                                       with_pre_command_rates, with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
-from cassini_bayes.physics.momentum import inertia_matrix, inertia_vector
+from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
@@ -41,6 +41,7 @@ __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
 _TAIL_S = 1.5   # a pulse's thrust 1.5 s after its command ends: e^{-1.5 s / 90 ms} < 1e-7
 _PULSE_BUCKET = 64
+_NOISE_SCAN = np.arange(-15.0, 41.0, 2.5)   # noise coordinate: σ/σ̂ = e^{0.1 z}, 0.2-55
 SPAN_MISS_SHARE = 0.3
 """An event's momentum change outside the torques its fired thrusters can make, as a share of
 the change: above it (and above :data:`SPAN_MISS_NOISE` noise sd) the model's thrusters cannot
@@ -363,10 +364,14 @@ def _pulse_layouts(kw: dict, k_slots: int, n_thr: int) -> PulseLayout:
 
 def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustData:
     """``data`` with the Laplace approximation's centre and Cholesky factor, which centre and
-    whiten the sampler's coordinates."""
+    whiten the sampler's coordinates; the search starts at the prior's centre with the events'
+    noise coordinate at its best there (:data:`_NOISE_SCAN`)."""
     n_f, n_c = thrust_sizes(mode, data)
-    dim = n_f + n_c + 3 + data.events.t.shape[0] + (6 if sample_inertia else 0)
-    centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data)
+    n_ev = data.events.t.shape[0]
+    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0)
+    noise = np.arange(n_f + n_c + 3, n_f + n_c + 3 + n_ev)     # coords.unpack's order
+    centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data,
+                           scan=(noise, _NOISE_SCAN))
     return data._replace(centre=jax.device_put(centre), tril=jax.device_put(tril))
 
 
@@ -429,7 +434,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     q_mat = spacecraft.moment_matrix
     thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
-    i_mean, i_tril = _inertia_mean_tril(inertia, i_fixed)
+    i_mean, i_tril = inertia_mean_tril(inertia, i_fixed)
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
     k_slots = kw.pop("k_slots")
     b_covs = noise_covariances(i_lin, noise, kw["wheel_cov"])
@@ -473,15 +478,6 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
         fired=fired, noise_hat=noise, layout=layout if robust else None,
         thrusters=spacecraft.thruster_names, design=design, flex_mode=mode_search)
-
-
-def _inertia_mean_tril(inertia: InertiaGaussian | None, i_fixed: np.ndarray):
-    """The inertia prior's mean (6,) kg m² and Cholesky factor (jittered by 1e-9 kg² m⁴), or
-    the fixed prediction with a zero factor."""
-    if inertia is not None:
-        tril = np.linalg.cholesky(np.asarray(inertia.cov) + 1e-9 * np.eye(6))
-        return np.asarray(inertia.mean, float), tril
-    return np.asarray(inertia_vector(i_fixed)), np.zeros((6, 6))
 
 
 def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacecraft,

@@ -21,8 +21,8 @@ cent of those move by as little.
 The pulses' impulse is not linear in a tag where a pulse's edge lies within the tag's reach of
 the sample: there the rank-one term's rate is the expected rate over the tag, the regression of
 the impulse on the tag, at a pulse's transient samples (:func:`with_tag_expectation`) and at
-the sample before its command (:func:`with_pre_command_rates`). The impulse itself stays the one at the
-sample's time, so that a stated tag sd wider than the tags widens the variance only.
+the sample before its command (:func:`with_pre_command_rates`). The impulse itself stays the
+one at the sample's time, so that a stated tag sd wider than the tags widens the variance only.
 """
 
 from __future__ import annotations
