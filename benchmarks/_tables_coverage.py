@@ -229,7 +229,8 @@ def open_world_per_thruster(args: list[Records]) -> str:
     ``espa_bias*``): the setting (effects switched off), seeds, 90 % coverage over all entries
     and per group (thrusts, impulse bits, centre of mass, time constants), every thrust within
     the 3 % budget, converged fits (R-hat ≤ 1.01, no divergence), adequacy, and whether every
-    fit covering under half its entries was flagged (not converged or adequacy failed)."""
+    fit covering under half its entries was flagged (not converged or adequacy failed). In
+    pooled records (``A+B``) a later record's seed replaces an earlier one's: a re-fit."""
     import json as _json
 
     from _provenance import manifest_path
@@ -239,8 +240,9 @@ def open_world_per_thruster(args: list[Records]) -> str:
             "| time constants | thrusts within 3 % | converged | adequacy ok | bad fits flagged "
             "|", "|" + "---|" * 12]
     for group in args:
-        records = [r for path in group for r in read_jsonl(path)
-                   if group.seeds is None or r["seed"] in group.seeds]
+        by_seed = {r["seed"]: r for path in group for r in read_jsonl(path)
+                   if group.seeds is None or r["seed"] in group.seeds}
+        records = [by_seed[s] for s in sorted(by_seed)]
         opts = _json.loads(manifest_path(group[0]).read_text())["options"]
         fits = [r["fits"]["per_wheel"] for r in records]
         seeds = sorted(r["seed"] for r in records)
