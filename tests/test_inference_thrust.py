@@ -540,7 +540,7 @@ def test_pulse_on_at_the_first_sample_is_modelled_after_it_with_a_warning(monkey
     import cassini_bayes.inference.thrust.data as thrust_data
 
     # the sampler's Laplace whitening is not under test: skip its compilation
-    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
+    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw, **_: (x0, np.eye(x0.size)))
     sc = load_spacecraft("models/fsds.toml")
     tel = _quiet_telemetry()
     t_on, width = np.array([-0.2, -0.135, 5.0]), np.array([0.5, 0.125, 0.25])
@@ -590,7 +590,7 @@ def test_pulses_outside_the_telemetry_are_dropped_with_a_warning(monkeypatch):
     import cassini_bayes.inference.thrust.data as thrust_data
     from cassini_bayes.telemetry import PulseSpanWarning, PulsesDroppedWarning
 
-    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw: (x0, np.eye(x0.size)))
+    monkeypatch.setattr(thrust_data, "laplace", lambda f, x0, kw, **_: (x0, np.eye(x0.size)))
     sc = load_spacecraft("models/fsds.toml")
     tel = _quiet_telemetry()                      # t = 0 … 59 s
     log = PulseLog(np.array([5.0, 58.875, 61.0, 70.0, 80.0]), np.array([0, 1, 2, 2, 2]),
