@@ -452,10 +452,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     layout, (rank_one, tag_rates, tag_gyro) = _time_tag_terms(
         kw, layout, layout_e, steps, rates, q_mat * thrust_pred, tp.median(), i_lin, noise,
         sd_t if robust else None)
-    design, extra = None, {}
-    if mode == "thruster":
-        design, extra = _per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
-                                             thrust_pred, fired)
+    design, extra = (_per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
+                                          thrust_pred, fired) if mode == "thruster" else (None, {}))
     nu_cols = kw.pop("nu_cols")
     derived = dict(time_tag_rates=tag_rates, time_tag_gyro=tag_gyro, rank_one=rank_one,
                    pulses=layout_e, lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:],
