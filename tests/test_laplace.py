@@ -45,7 +45,8 @@ def _noise_density(x, data):
 def test_the_scan_starts_the_search_at_the_best_scale():
     """``scan`` sets the scale coordinate to the grid value of highest density before any Newton
     round (``rounds=0`` returns that start): for residuals of sd e³ about 0, the value 3 of the
-    grid 0…6, the location left at its start. With the rounds, the search reaches the mode."""
+    grid 0…6, the location left at its start. With the rounds, the search reaches the mode
+    (within 1e-4 of the scale's posterior sd, 1/√(2n): the Newton decrement's tolerance)."""
     y = jnp.asarray(np.random.default_rng(1).normal(size=400) * np.exp(3.0))
     data = {"y": y}
     start, _ = laplace(_noise_density, np.zeros(2), data, rounds=0,
@@ -54,4 +55,5 @@ def test_the_scan_starts_the_search_at_the_best_scale():
     centre, _ = laplace(_noise_density, np.zeros(2), data,
                         scan=(np.array([1]), np.arange(0.0, 6.5, 1.0)))
     r = np.asarray(y) - centre[0]
-    np.testing.assert_allclose(centre[1], 0.5 * np.log(np.mean(r * r)), atol=1e-6)
+    np.testing.assert_allclose(centre[1], 0.5 * np.log(np.mean(r * r)),
+                               atol=1e-4 / np.sqrt(2 * r.size))

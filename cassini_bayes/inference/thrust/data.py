@@ -41,7 +41,7 @@ __all__ = ["ThrustData", "ThrustProblem", "prepare_thrust"]
 
 _TAIL_S = 1.5   # a pulse's thrust 1.5 s after its command ends: e^{-1.5 s / 90 ms} < 1e-7
 _PULSE_BUCKET = 64
-_NOISE_SCAN = np.arange(-15.0, 41.0, 2.5)   # noise coordinate: σ/σ̂ = e^{0.1 z}, 0.2-55
+_NOISE_SCAN = np.arange(-15.0, 41.0, 2.5)   # noise coordinate (prior.NOISE_STEP): σ/σ̂ 0.2-55
 SPAN_MISS_SHARE = 0.3
 """An event's momentum change outside the torques its fired thrusters can make, as a share of
 the change: above it (and above :data:`SPAN_MISS_NOISE` noise sd) the model's thrusters cannot
