@@ -45,6 +45,7 @@ if TYPE_CHECKING:
 
 __all__ = ["quiet_mask", "quiet_periods", "quiet_rate_max", "quiet_wheel_tol_rpm", "top_rate",
            "QUIET_RATE_FRACTION", "QUIET_NOISE_SD", "QUIET_WHEEL_TOL_RPM", "slew_windows",
+           "joined_rests",
            "split_slews", "parse_window", "clamp_window", "WindowClampWarning"]
 
 Window = tuple[float, float]
@@ -199,6 +200,33 @@ def quiet_periods(
 def slew_windows(quiet: list[Window]) -> list[Window]:
     """The gaps between consecutive quiet periods: ``(end of quiet i, start of quiet i+1)``."""
     return [(a[1], b[0]) for a, b in zip(quiet[:-1], quiet[1:])]
+
+
+def joined_rests(tel: Telemetry, quiet: list[Window], *, rate_max: float | None = None,
+                 smooth_s: float = 10.0) -> list[Window]:
+    """``quiet`` with each rest that a glitch split in two made one again, as its longest piece.
+
+    Consecutive periods belong to one rest when the gap between them holds no slew: the body
+    rate's moving median over ``smooth_s`` never exceeds the quiet bound
+    (:func:`quiet_rate_max`). A wheel-rate step or a gyro spike then cannot put a pairing of
+    rests out of step; the longest piece is kept because the gap's samples failed a quiet rule.
+    """
+    if len(quiet) < 2:
+        return list(quiet)
+    t = np.asarray(tel.t, dtype=float)
+    half = _half(t, smooth_s)
+    rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
+    padded = np.pad(rate, (half, half), mode="edge")
+    median = np.median(sliding_window_view(padded, 2 * half + 1), axis=-1)
+    bound = quiet_rate_max(tel, rate_max, smooth_s)
+    rests = [[quiet[0]]]
+    for a, b in zip(quiet[:-1], quiet[1:]):
+        gap = (t > a[1]) & (t < b[0])
+        if np.any(median[gap] > bound):
+            rests.append([b])
+        else:
+            rests[-1].append(b)
+    return [max(pieces, key=lambda w: w[1] - w[0]) for pieces in rests]
 
 
 def split_slews(

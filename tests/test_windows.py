@@ -234,3 +234,31 @@ def test_rcs_windows_detected_and_scale_free(scenario, model, wheel, s, tmp_path
         assert 30.0 <= a[1] - a[0] and a[1] < 62.0            # before the spin-up at 62 s
         assert 73.0 < b[0] <= 85.0 and b[1] >= 110.0           # after it, holding 85-110 s
         assert len(quiet_periods(tel, min_duration_s=30.0, rate_max=1e-3)) < 2
+
+
+@pytest.mark.parametrize("glitch", ["wheel step", "gyro spike"])
+def test_a_rest_split_by_a_glitch_is_paired_once(glitch):
+    """A wheel-rate step or one gyro spike inside the middle rest splits it in two quiet periods;
+    the RWA method's rests join them (the longer piece), so Time A and Time B keep a slew between
+    them. Without the join the first pair would be two pieces of one rest."""
+    from cassini_bayes.inference.rwa4 import detect_windows
+    from cassini_bayes.windows import joined_rests
+
+    tel, _ = _series(seed=3)
+    t = np.asarray(tel.t)
+    if glitch == "wheel step":
+        rates = np.array(tel.wheel_rates)
+        rates[(t >= 640.0) & (t < 646.0), 0] += 30.0 * RPM_TO_RAD_S
+        tel = Telemetry(t, tel.q, tel.omega, rates, source="synthetic")
+    else:
+        omega = np.array(tel.omega)
+        omega[t == 640.0, 2] = 5e-3
+        tel = Telemetry(t, tel.q, omega, tel.wheel_rates, source="synthetic")
+    quiet = quiet_periods(tel, min_duration_s=60.0)
+    assert len(quiet) == 4 and 630.0 < quiet[1][1] < quiet[2][0] < 660.0
+    rests = joined_rests(tel, quiet)
+    assert rests == [quiet[0], quiet[2], quiet[3]]       # 640-900 s is the longer piece
+    assert detect_windows(tel, "rwa") == [(quiet[0], quiet[2])]
+    clean, _ = _series(seed=3)
+    quiet = quiet_periods(clean, min_duration_s=60.0)
+    assert joined_rests(clean, quiet) == quiet           # slews between: nothing joined

@@ -55,15 +55,16 @@ def detect_windows(tel: Telemetry, method: str, wheel: str = WHEEL,
       rate, with no body-rate rule and at least :data:`RCS_MIN_QUIET_S` long: Brown's Time B is
       a free drift at ``J Δρ / I`` (Brown Eq 1: the body rates carry the balance); what makes it
       quiet is the wheels holding their rates and no thruster firing.
-    * RWA: consecutive quiet periods paired in order, ``(Q0, Q1), (Q2, Q3), …`` — Brown's "Time A"
-      before and "Time B" after the first slew of each slew pair.
+    * RWA: the rests paired in order, ``(Q0, Q1), (Q2, Q3), …`` — Brown's "Time A" before and
+      "Time B" after the first slew of each slew pair; a rest split by a glitch with no slew
+      between its pieces counts once (:func:`cassini_bayes.windows.joined_rests`).
 
     Raises
     ------
     InputError
         Fewer than two quiet periods; for RCS, no spin change of ``MIN_SPIN_CHANGE_RPM``.
     """
-    from cassini_bayes.windows import QUIET_RATE_FRACTION, quiet_periods
+    from cassini_bayes.windows import QUIET_RATE_FRACTION, joined_rests, quiet_periods
 
     wheel = wheel_name(tel, wheel) if method == "rcs" else wheel
 
@@ -72,7 +73,7 @@ def detect_windows(tel: Telemetry, method: str, wheel: str = WHEEL,
                               spacecraft=spacecraft)
         rule = f"≥ {RCS_MIN_QUIET_S:g} s"
     else:
-        quiet = quiet_periods(tel, spacecraft=spacecraft)
+        quiet = joined_rests(tel, quiet_periods(tel, spacecraft=spacecraft))
         rule = f"≥ 60 s, |ω| ≤ {QUIET_RATE_FRACTION:.2g} × the file's top rate"
     if len(quiet) < 2:
         raise InputError(f"found {len(quiet)} quiet period(s) ({rule}, wheels steady, no "
