@@ -238,3 +238,22 @@ def plan_thrust_vs_shipped(args: list[Records]) -> str:
     rows.append(f"| plan vs shipped | ×{pa / pb:.2f} | ×{fa / fb:.2f} | ×{wa / wb:.2f} | "
                 f"×{ga / gb:.2f} |")
     return "\n".join(rows)
+
+
+@kind("plan_weak_z")
+def plan_weak_z(args: list[Records]) -> str:
+    """Predicted sd of the weak manoeuvre over the strong one per inertia entry, the data part
+    and as a fit reports it (benchmarks/plan_weak_z.py records); bold where an entry loses at
+    least 1.5× what the better of Ixx and Iyy loses."""
+    entries = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
+    rows = ["| | " + " | ".join(entries) + " |", "|---" * 7 + "|"]
+    for path in (p for group in args for p in group):
+        r = read_json(path)
+        for part, label in (("sd_data", "data part (common wheel scale known)"),
+                            ("sd", "as the fit reports it")):
+            ratio = r["ratio"][part]
+            floor = 1.5 * max(ratio["Ixx"], ratio["Iyy"])
+            cells = [f"**{ratio[e]:.3g}**" if ratio[e] >= floor else f"{ratio[e]:.3g}"
+                     for e in entries]
+            rows.append(f"| {label} | " + " | ".join(cells) + " |")
+    return "\n".join(rows)
