@@ -223,6 +223,69 @@ def open_world_wheel_axis(args: list[Records]) -> str:
     return "\n".join(rows)
 
 
+@kind("open_world_wheel_axis_settings")
+def open_world_wheel_axis_settings(args: list[Records]) -> str:
+    """The open-world wheel axis's 90 % cone coverage per setting (rows, in record order) and
+    family (columns): the same records as :func:`open_world_wheel_axis`, one cell each, bold
+    at 0.8 or more."""
+    cells: dict[str, dict[str, str]] = {}
+    families: dict[str, str] = {}
+    for group in args:
+        records = [r for path in group for r in read_jsonl(path)]
+        for family, _, model, seeds, fits in _families(records):
+            setting = _setting(seeds[0]["options"]) + ("" if model == "per_wheel"
+                                                       else ", " + model)
+            k, n = sum(f["hit"][0] for f in fits), len(fits)
+            families.setdefault(family, f"`{family}` ({fits[0]['wheel']})")
+            cells.setdefault(setting, {})[family] = (f"**{k}/{n}**" if k >= 0.8 * n
+                                                     else f"{k}/{n}")
+    rows = ["| setting | " + " | ".join(families.values()) + " |",
+            "|" + "---|" * (len(families) + 1)]
+    for setting, row in cells.items():
+        rows.append(f"| {setting} | " + " | ".join(row.get(f, "–") for f in families) + " |")
+    return "\n".join(rows)
+
+
+def _axis_stats(group: Records) -> dict[str, dict]:
+    """Per family, the per-wheel fits' cone hits, axis errors (°) and cones (°) of one record
+    argument (its seeds only, where given)."""
+    records = [r for path in group for r in read_jsonl(path)
+               if group.seeds is None or r["seed"] in group.seeds]
+    out = {}
+    for family, _, model, seeds, fits in _families(records):
+        if model == "per_wheel":
+            out[family] = {"wheel": fits[0].get("wheel", "RWA4"), "n": len(fits),
+                           "hit": sum(f["hit"][0] for f in fits),
+                           "error": [f["error"][0] for f in fits],
+                           "cone": [f["cone90_deg"] for f in fits],
+                           "setting": _setting(seeds[0]["options"])}
+    return out
+
+
+@kind("open_world_wheel_axis_change")
+def open_world_wheel_axis_change(args: list[Records]) -> str:
+    """The open-world wheel axis before → after a change of the fit, per family: arguments in
+    pairs ``BEFORE AFTER`` of coverage_open_world.py records (the same seeds); the per-wheel
+    model's cone coverage, axis error, cone and fits within 0.5°."""
+    from statistics import median
+
+    if len(args) % 2:
+        raise ValueError("open_world_wheel_axis_change takes records in pairs: BEFORE AFTER")
+    rows = ["| family (wheel), setting | cone covers, before → after | axis error median / worst "
+            "| median 90 % cone | within 0.5° |", "|" + "---|" * 5]
+    for before, after in zip(args[::2], args[1::2]):
+        old, new = _axis_stats(before), _axis_stats(after)
+        for family in (f for f in new if f in old):
+            a, b = old[family], new[family]
+            err = [f"{median(x['error']):#.2g}° / {max(x['error']):#.2g}°" for x in (a, b)]
+            within = [sum(e <= 0.5 for e in x["error"]) for x in (a, b)]
+            rows.append(f"| `{family}` ({b['wheel']}), {b['setting']} | {a['hit']}/{a['n']} → "
+                        f"{coverage_cell(b['hit'], b['n'])} | {err[0]} → {err[1]} | "
+                        f"{median(a['cone']):#.2g}° → {median(b['cone']):#.2g}° | "
+                        f"{within[0]}/{a['n']} → {within[1]}/{b['n']} |")
+    return "\n".join(rows)
+
+
 @kind("open_world_per_thruster")
 def open_world_per_thruster(args: list[Records]) -> str:
     """Open-world per-thruster thrust coverage per record (coverage_open_world.py records of
