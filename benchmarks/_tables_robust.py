@@ -62,3 +62,26 @@ def per_wheel_clean(args: list[Records]) -> str:
     rows += [f"| {n} | {per[n]['sd']:.3g} | {com[n]['sd']:.3g} | "
              f"{per[n]['sd'] / com[n]['sd']:.2f} |" for n in ENTRIES]
     return "\n".join(rows)
+
+
+@kind("closed_world_thrust_log")
+def closed_world_thrust_log(args: list[Records]) -> str:
+    """The closed-world thrust campaign's summary per model, read from the printed log of
+    benchmarks/coverage_robust_thrust.py (``MODEL : 90 % coverage F …, tau_delay …; … max R-hat
+    …, min bulk ESS …, divergences …``): covered seeds per parameter, R-hat, ESS, divergences."""
+    import re
+
+    rows = ["| model | F | τd | τr | τf | max R-hat | min bulk ESS | divergences |",
+            "|" + "---|" * 8]
+    line = re.compile(r"^(?P<model>\w+)\s*: 90 % coverage F (?P<F>[\d.]+), "
+                      r"tau_delay (?P<d>[\d.]+), tau_rise (?P<r>[\d.]+), "
+                      r"tau_fall (?P<f>[\d.]+).*max R-hat (?P<rhat>[\d.]+), "
+                      r"min bulk ESS (?P<ess>\d+), divergences (?P<div>\d+)")
+    for path in (p for group in args for p in group):
+        text = path.read_text()
+        n = len(re.findall(r"^seed \d+:", text, re.MULTILINE))
+        for m in filter(None, map(line.match, text.splitlines())):
+            cells = [f"{round(float(m[k]) * n)}/{n}" for k in ("F", "d", "r", "f")]
+            rows.append(f"| {m['model']} | " + " | ".join(cells)
+                        + f" | {m['rhat']} | {m['ess']} | {m['div']} |")
+    return "\n".join(rows)
