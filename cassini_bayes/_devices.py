@@ -137,3 +137,35 @@ def warn_if_vectorised(chains: int) -> None:
         f"vectorised on {have} device(s), about half as fast as in parallel; call "
         "cassini_bayes.request_host_devices() before any JAX computation (right after the "
         "imports) to run them in parallel", stacklevel=6)
+
+
+MAPPING_SHARE = 0.5
+"""Share of the kernel's memory-mapping limit past which :func:`release_compiled_programs`
+drops JAX's in-memory programs."""
+
+
+def release_compiled_programs(share: float = MAPPING_SHARE) -> bool:
+    """Drop JAX's compiled programs held in memory (``jax.clear_caches``) when this process holds
+    more than ``share`` of the kernel's memory-mapping limit (Linux ``vm.max_map_count``); True
+    when it did.
+
+    Every XLA CPU program loaded keeps about three mappings and a fit loads hundreds, so a long
+    campaign whose every replicate compiles its own programs reaches the limit and dies in
+    LLVM ("Cannot allocate memory"). Called between replicates; the next fit reloads what it
+    needs from the compilation cache. Where ``/proc`` is absent it does nothing."""
+    try:
+        with open("/proc/sys/vm/max_map_count", "rb") as f:
+            limit = int(f.read())
+        with open("/proc/self/maps", "rb") as f:
+            held = sum(1 for _ in f)
+    except (OSError, ValueError):
+        return False
+    if held <= share * limit:
+        return False
+    import gc
+
+    import jax
+
+    jax.clear_caches()
+    gc.collect()
+    return True

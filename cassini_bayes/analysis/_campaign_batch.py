@@ -14,7 +14,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from cassini_bayes._devices import jax_entry
+from cassini_bayes._devices import jax_entry, release_compiled_programs
 from cassini_bayes.analysis.sbc import ranks
 from cassini_bayes.analysis.sbc_models import ModelSpec, SbcModel, build_model
 
@@ -154,6 +154,7 @@ def _fit_program(model: SbcModel) -> Callable:
                            int(out.n_divergent))
             except Exception as e:  # noqa: BLE001 - any failure of one fit is recorded
                 _warn_failed(e)
+            release_compiled_programs()
         good = next((o for o in outs if o is not None), None)
         if good is None:
             raise RuntimeError("every fit of the batch failed; see the warnings above")
@@ -226,6 +227,7 @@ def run_batch(spec: ModelSpec, seed: int, batch_index: int, batch_size: int) -> 
     truth = np.asarray(truth)
     failed = ~(np.isfinite(truth).all(axis=1) & np.isfinite(draws).all(axis=(1, 2)))
     rank = np.where(failed[:, None], -1, rank)
+    release_compiled_programs()
     return BatchResult(index, truth, draws, rank, np.asarray(n_div, dtype=np.int64),
                        _split_rhat(kept), _min_ess(chains), failed)._asdict()
 
