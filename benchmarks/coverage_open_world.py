@@ -393,6 +393,7 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     rows = _done(args.out)
     if not args.report:
+        from cassini_bayes._devices import release_compiled_programs
         from cassini_bayes.simulate.scenario import scenario_path
 
         opts = {k: getattr(args, k) for k in ("models", "chains", "warmup", "draws", "widen",
@@ -411,6 +412,7 @@ def main(argv=None) -> None:
                     sys.exit(f"{family}: no scenario {FAMILIES[family][1]}.toml under "
                              "experiments/scenarios/")
                 r = run_seed(family, seed, opts)
+                release_compiled_programs()   # docs/limits.md: mappings of compiled programs
                 r["options"] = opts
                 with args.out.open("a") as fh:
                     fh.write(json.dumps(r) + "\n")
