@@ -75,8 +75,13 @@ def top_rate(rate: np.ndarray, half: int) -> float:
     ``i − half … i + half`` (a slew's coast rate; a lone spike or gap sample does not count)."""
     if half == 0 or rate.size == 0:
         return float(np.max(rate, initial=0.0))
-    padded = np.pad(rate, (half, half), mode="edge")
-    return float(np.max(np.median(sliding_window_view(padded, 2 * half + 1), axis=-1)))
+    return float(np.max(_moving_median(rate, half)))
+
+
+def _moving_median(x: np.ndarray, half: int) -> np.ndarray:
+    """Median of ``x`` over samples ``i − half … i + half`` (edges padded)."""
+    padded = np.pad(x, (half, half), mode="edge")
+    return np.median(sliding_window_view(padded, 2 * half + 1), axis=-1)
 
 
 def _moving_max(x: np.ndarray, half: int) -> np.ndarray:
@@ -215,9 +220,7 @@ def joined_rests(tel: Telemetry, quiet: list[Window], *, rate_max: float | None 
         return list(quiet)
     t = np.asarray(tel.t, dtype=float)
     half = _half(t, smooth_s)
-    rate = np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1)
-    padded = np.pad(rate, (half, half), mode="edge")
-    median = np.median(sliding_window_view(padded, 2 * half + 1), axis=-1)
+    median = _moving_median(np.linalg.norm(np.asarray(tel.omega, dtype=float), axis=1), half)
     bound = quiet_rate_max(tel, rate_max, smooth_s)
     rests = [[quiet[0]]]
     for a, b in zip(quiet[:-1], quiet[1:]):
