@@ -215,12 +215,16 @@ def _observe(carry, cmd, plant, on):
 _core_jit = jax.jit(_simulate_core, static_argnames=("cfg",))
 
 
-def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched, noise_batched=False):
+def _batch_core(keys, truth, noise, plan, carr, cfg, truth_batched, noise_batched=False,
+                carr_batched=()):
     # A shared truth stays unbatched: its mass properties are then hoisted out of the vmapped
-    # loop (the speed-up: docs/design.md, benchmarks).
+    # loop (the speed-up: docs/design.md, benchmarks). ``carr_batched``: the controller arrays
+    # given per replicate.
     axes = 0 if truth_batched else None
+    carr_axes = {k: 0 if k in carr_batched else None for k in carr}
     return jax.vmap(_simulate_core, in_axes=(0, axes, 0 if noise_batched else None, None,
-                                             None, None))(keys, truth, noise, plan, carr, cfg)
+                                             carr_axes, None))(keys, truth, noise, plan, carr, cfg)
 
 
-_batch_jit = jax.jit(_batch_core, static_argnames=("cfg", "truth_batched", "noise_batched"))
+_batch_jit = jax.jit(_batch_core,
+                     static_argnames=("cfg", "truth_batched", "noise_batched", "carr_batched"))

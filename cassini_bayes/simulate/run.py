@@ -69,7 +69,8 @@ def simulate_arrays(key: Array, scenario: Scenario, truth: TruthParams | None = 
 
 
 def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = None,
-                   noise: NoiseParams | None = None, *, noise_batched: bool = False) -> SimArrays:
+                   noise: NoiseParams | None = None, *, noise_batched: bool = False,
+                   believed_axes: np.ndarray | None = None) -> SimArrays:
     """Replicates of a scenario as one compiled, vmapped call.
 
     Parameters
@@ -81,6 +82,9 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
         New draws of the same shape reuse the compiled program (no recompilation).
     noise : optional noise levels and sensor errors, shared; with ``noise_batched`` every field
         has a leading batch axis (b, ...), one set per replicate (e.g. gyro biases drawn for SBC).
+    believed_axes : optional (b, k, 3) wheel axes the RWA controller allocates with, one set per
+        replicate (an SBC that draws a wheel's axis flies it as the controller knows it);
+        default the scenario's.
 
     Returns
     -------
@@ -91,8 +95,16 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     truth = truth_params(scenario) if truth is None else truth
     noise = noise_params(scenario) if noise is None else noise
     plan, carr = _prepared(scenario)
+    carr_batched: tuple[str, ...] = ()
+    if believed_axes is not None:
+        on = np.asarray(scenario.wheels_on, float)[None, :, None]
+        believed = np.asarray(believed_axes, float) * on
+        carr = {**carr, "axes_believed": jnp.asarray(believed),
+                "axes_pinv": jnp.asarray(np.linalg.pinv(np.swapaxes(believed, 1, 2)))}
+        carr_batched = ("axes_believed", "axes_pinv")
     return _batch_jit(keys, truth, noise, plan, carr, cfg=_config(scenario),
-                      truth_batched=batched, noise_batched=noise_batched)
+                      truth_batched=batched, noise_batched=noise_batched,
+                      carr_batched=carr_batched)
 
 
 def _telemetry(s: Scenario, t, q, w, rho, on_times, source) -> Telemetry:

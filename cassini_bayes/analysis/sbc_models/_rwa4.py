@@ -210,13 +210,21 @@ class _Rwa4Replicates:
                                factor)), nz
 
     def simulate_batch(self, prior_keys, sim_keys):
-        """Truths drawn replicate by replicate (rejection in NumPy), flown in one batch."""
+        """Truths drawn replicate by replicate (rejection in NumPy), flown in one batch; an
+        RWA-controlled scenario's controller allocates with each drawn axis."""
+        from cassini_bayes.inference.rwa4 import U4_NAMES
         from cassini_bayes.simulate.run import simulate_batch
 
         drawn = [self.draw(k) for k in prior_keys]
         flown = [self.flown(d) for d in drawn]
+        believed = None
+        if self.scenario.control == "rwa":   # the controller knows the drawn axis: Brown's
+            base = np.asarray(self.scenario.rwa.believed_axes, float)    # slews are flown
+            believed = np.stack([base] * len(drawn))
+            believed[:, self.k4] = [[d[n] for n in U4_NAMES] for d in drawn]
         arrays = simulate_batch(sim_keys, self.scenario, stacked([f[0] for f in flown]),
-                                stacked([f[1] for f in flown]), noise_batched=True)
+                                stacked([f[1] for f in flown]), noise_batched=True,
+                                believed_axes=believed)
         params = {n: np.array([d[n] for d in drawn]) for n in self.names}
         return params, arrays
 
@@ -248,7 +256,9 @@ def _rwa4(spec: ModelSpec) -> SbcModel:
     model's smooth physical factor (:func:`~cassini_bayes.inference.inertia.inertia_prior` of the
     ``[prior]`` model; see :func:`draw_rwa4_truth`). They go into ``TruthParams.wheel_axes``
     (the wheel's row) and ``inertia``; the rest is the scenario's. Data: the scenario (default
-    :data:`RWA4_SCENARIO`) through :func:`~cassini_bayes.simulate.run.simulate_batch`. Fit:
+    :data:`RWA4_SCENARIO`) through :func:`~cassini_bayes.simulate.run.simulate_batch`; in an
+    RWA-controlled scenario (Brown's RWA method) the controller allocates with the drawn axis,
+    so the slews are flown whatever the draw. Fit:
     ``fit_rwa4(method=method, wheel=wheel, robust=robust)`` with the scenario's ``A``/``B``
     windows as the pair (detected from quiet periods when the scenario names none).
 
