@@ -218,8 +218,8 @@ class _Rwa4Replicates:
         drawn = [self.draw(k) for k in prior_keys]
         flown = [self.flown(d) for d in drawn]
         believed = None
-        if self.scenario.control == "rwa":   # the controller knows the drawn axis: Brown's
-            base = np.asarray(self.scenario.rwa.believed_axes, float)    # slews are flown
+        if self.scenario.control == "rwa":   # the controller allocates with the drawn axis
+            base = np.asarray(self.scenario.rwa.believed_axes, float)
             believed = np.stack([base] * len(drawn))
             believed[:, self.k4] = [[d[n] for n in U4_NAMES] for d in drawn]
         arrays = simulate_batch(sim_keys, self.scenario, stacked([f[0] for f in flown]),
