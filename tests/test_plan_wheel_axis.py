@@ -99,7 +99,7 @@ def test_the_prediction_carries_the_window_slopes():
     np.testing.assert_allclose(lap.tangent_cov, p.tangent_cov, rtol=1e-6, atol=1e-18)
     means_only = prob._replace(data=d._replace(
         m_pi_s=d.m_pi_s[:0], r_u_s=d.r_u_s[:0], k_h_s=d.k_h_s[:0], n_s=d.n_s[:0],
-        t_aa_s=d.t_aa_s[:0], nu_cols_s=d.nu_cols_s[:0]))
+        t_aa_s=d.t_aa_s[:0], nu_cols_s=d.nu_cols_s[:0], nu_pi_s=d.nu_pi_s[:0]))
     wide = predict_axis(means_only, scenario_noise(s))
     ratio = np.sqrt(np.trace(wide.tangent_cov) / np.trace(lap.tangent_cov))
     assert ratio > 3.0, ratio

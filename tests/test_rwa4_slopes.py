@@ -20,7 +20,8 @@ import pytest
 from cassini_bayes.frames import quat_continuous
 from cassini_bayes.inference.nuisance import nuisance_layout
 from cassini_bayes.inference.rwa4.window_means import nuisance_means, window_means
-from cassini_bayes.inference.rwa4.likelihood import DATA_KEYS, loglik, rows, slopes
+from cassini_bayes.inference.rwa4.likelihood import (DATA_KEYS, balance, loglik, nuisance_cols,
+                                                      rows, slopes)
 from cassini_bayes.names import INERTIA_NAMES
 from cassini_bayes.simulate.scenario._types import Noise
 
@@ -29,13 +30,14 @@ PAIR = ((0.0, 195.0), (255.0, 445.0))   # the scenario's quiet periods around it
 
 
 def _fly(**torques):
-    """Noise-free telemetry of the shortened scenario with the given torques (all others 0),
-    the window arrays with slopes, the nuisance columns and the truth ``(u, π)``."""
+    """Noise-free telemetry of the shortened scenario with the given torques and gyro bias (all
+    others 0), the window arrays with slopes, the nuisance columns and the truth ``(u, π)``."""
     from cassini_bayes.simulate import load_scenario, simulate
 
     s = load_scenario("wheel_axis_espa_bus")
     zero = (0.0, 0.0, 0.0)
-    s = dataclasses.replace(s, duration_s=450.0, slews=s.slews[:1], noise=Noise(),
+    s = dataclasses.replace(s, duration_s=450.0, slews=s.slews[:1],
+                            noise=Noise(gyro_bias_rad_s=torques.get("gyro_bias", 0.0)),
                             external_torque_inertial_nm=torques.get("inertial", zero),
                             external_torque_body_nm=torques.get("body", zero),
                             external_torque_inertial_rate_nm_s=torques.get("rate", zero))
@@ -55,7 +57,9 @@ def _fly(**torques):
     layout = nuisance_layout(sc, 1, [names[k] for k in known], scaled=names,
                              inertial_torque=True, torque_rate=True)
     nuis = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t,
-                           np.asarray(sc.inertia), slopes=True)
+                           slopes=True)
+    i_star = np.asarray(sc.inertia, float)
+    data["pi_star"] = i_star[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]     # the model file's π
     truth = s.truth.to_dict()["inertia"]
     pi = jnp.asarray([truth[n] for n in INERTIA_NAMES])
     u = jnp.asarray(s.truth.wheel(WHEEL).axis)
@@ -112,6 +116,28 @@ def test_slope_columns_cancel_body_torque_and_drift():
     assert np.abs(res).max() < 1e-6 * np.abs(s).max(), (s, res)
 
 
+def test_gyro_bias_column_is_taken_at_the_sampled_inertia():
+    """A gyro bias ``b`` adds ``I b`` to the measured momentum with the true inertia ``I``: the
+    pair row's bias columns at the true ``π`` cancel it (to 1e-6 of its size). Columns at the
+    model file's tensor ``I*`` (a few per cent off the truth here) leave ``(I − I*) b``, which
+    a fit could only absorb in a bias of the wrong size."""
+    b = np.array([3e-6, -2e-6, 4e-6])
+    data, nuis, layout, u, pi, _ = _fly(gyro_bias=tuple(b))
+    nu = np.zeros(layout.size)
+    nu[layout.slices["gyro_bias"]] = b
+
+    def residual(at):
+        d = balance(u, pi, m_pi=data["m_pi"], r_u=data["r_u"], k_h=data["k_h"], j4=data["j4"])
+        cols = nuisance_cols(u, at, r_u=data["r_u"], j4=data["j4"], nu_cols=nuis["nu_cols"],
+                             nu_pi=nuis["nu_pi"], nu_wheel=nuis["nu_wheel"])
+        return np.asarray(d), np.asarray(d + cols @ nu)
+
+    size, res = residual(pi)
+    assert np.abs(size).max() > 1e-6 and np.abs(res).max() < 1e-6 * np.abs(size).max(), res
+    _, res_star = residual(jnp.asarray(data["pi_star"]))
+    assert np.abs(res_star).max() > 1e-3 * np.abs(size).max(), res_star
+
+
 def test_rows_join_pairs_and_slopes(still):
     """The likelihood's rows: 3 per pair then 3 per window's slope, the white-noise covariance
     block diagonal (mean and slope weights are orthogonal), one shared set of nuisance columns;
@@ -123,5 +149,6 @@ def test_rows_join_pairs_and_slopes(still):
     d, cov, cols = np.asarray(d), np.asarray(cov), np.asarray(cols)
     assert d.shape == (9,) and cov.shape == (9, 9) and cols.shape == (9, nuis["nu_sd"].size)
     assert np.all(cov[:3, 3:] == 0) and np.all(cov[3:6, 6:] == 0)
-    assert np.isfinite(float(loglik(u, pi, log_sigma, **{k: kw[k] for k in DATA_KEYS})))
+    assert np.isfinite(float(loglik(u, pi, log_sigma, u_ref=u, pi_ref=pi,
+                                    **{k: kw[k] for k in DATA_KEYS})))
     assert data["rcs"]["m_pi_s"].shape == (0, 3, 6) and data["rcs"]["t_aa_s"].shape[0] == 0

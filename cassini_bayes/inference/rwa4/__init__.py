@@ -30,7 +30,10 @@ do not match to the gyro-noise level, so the window means, Brown's own informati
 Noise: linearising the gyro (``σ_ω``) and wheel-rate (``σ_ρ``) errors gives the body covariance
 ``B = σ_ω² I I + σ_ρ² Σ_k J_k² g_k g_kᵀ`` (``g_4 = u4``) per sample, rotated to inertial axes and
 averaged over each window (a slope: weighted by ``w_i²``); the levels are fixed at the data's own
-white-noise estimates σ̂ (three numbers per pair cannot estimate them). A window's mean and slope
+white-noise estimates σ̂ (three numbers per pair cannot estimate them). The normalising
+determinant takes that covariance at the prior-mean inertia and the chart's centre axis: the
+noise in ``d`` already moves with ``I`` and ``u4``, so a determinant at the sampled ones would
+count it twice and pull the inertia low (:func:`loglik`). A window's mean and slope
 weights are orthogonal (``Σ_i (t_i − t̄_w) = 0``), so their noise is uncorrelated to first order
 (exactly for a constant ``A_iᵀ B A_i``) and the covariance is block diagonal.
 

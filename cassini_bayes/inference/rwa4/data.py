@@ -52,8 +52,9 @@ class Rwa4Data(NamedTuple):
         known wheels.
     m_pi_s, r_u_s, k_h_s, n_s, t_aa_s : the same per window's least-squares slope against time
         (S = 2G windows, RWA method; S = 0, RCS), ``n_s = 1/Σ w²`` of the slope weights ``w``.
-    nu_cols, nu_cols_s, nu_sd, nu_wheel : the robust model's nuisance columns of the pairs
-        (G, 3, R) and of the slopes (S, 3, R), prior sds (R,) and solved-wheel marks (R,)
+    nu_cols, nu_cols_s, nu_pi, nu_pi_s, nu_sd, nu_wheel : the robust model's nuisance columns
+        of the pairs (G, 3, R) and of the slopes (S, 3, R), the gyro columns per inertia entry
+        (G, 3, R, 6) and (S, 3, R, 6), prior sds (R,) and solved-wheel marks (R,)
         (:func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means`; ``R = 0`` in the
         idealised model).
     u0, basis : the gnomonic chart's centre (3,) and tangent basis (2, 3).
@@ -83,6 +84,8 @@ class Rwa4Data(NamedTuple):
     t_aa_s: object
     nu_cols: object
     nu_cols_s: object
+    nu_pi: object
+    nu_pi_s: object
     nu_sd: object
     nu_wheel: object
     u0: object
@@ -369,8 +372,7 @@ def prepare_rwa4(tel: Telemetry, spacecraft: Spacecraft, *, method: str = "rcs",
     layout = nuisance_layout(spacecraft, 1, [names[k] for k in known],
                              wheel_errors=wheel_errors, scaled=[names[k] for k in known] + [wheel],
                              inertial_torque=True, torque_rate=True)
-    nuisance = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, i_pred,
-                               slopes)
+    nuisance = nuisance_means(layout, q, omega, rates, axes, js, known, names, masks, t, slopes)
     data.update(nuisance if robust else no_nuisance(len(pairs), data["n_s"].shape[0]))
     kw = dict(data, u0=jnp.asarray(u_ls), basis=jnp.asarray(tangent_basis(u_ls)),
               pi_mean=jnp.asarray(i_mean), pi_chol=jnp.asarray(i_chol),

@@ -42,7 +42,8 @@ def axis_sensitivity(problem: Rwa4Problem) -> dict[str, float]:
     physical = PHYSICAL[problem.chart]
     log_density = LOG_DENSITY[problem.chart]
     data = {k: getattr(kw, k) for k in DATA_KEYS}
-    data.update({k: problem.nuisance[k] for k in ("nu_cols", "nu_cols_s", "nu_sd", "nu_wheel")})
+    data.update({k: problem.nuisance[k] for k in ("nu_cols", "nu_cols_s", "nu_pi", "nu_pi_s",
+                                                  "nu_sd", "nu_wheel")})
 
     def rows_at(theta):
         u, pi, _, _ = physical(theta, kw)

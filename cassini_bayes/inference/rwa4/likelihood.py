@@ -53,17 +53,18 @@ def noise_cov(u, pi, log_sigma, *, n_w, t_aa, j4, known_cov):
     return c_w[1::2] + c_w[0::2]
 
 
-def nuisance_cols(u, *, r_u, j4, nu_cols, nu_wheel):
+def nuisance_cols(u, pi, *, r_u, j4, nu_cols, nu_pi, nu_wheel):
     """(G, 3, R) columns of the robust nuisance vector ``ν`` in ``d_g``: the fixed inertial
-    columns of :func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means` plus the solved
-    wheel's part of its spin-inertia scale (its own per-wheel scale, or the common one),
-    ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it depends on ``u4``)."""
+    columns of :func:`~cassini_bayes.inference.rwa4.window_means.nuisance_means`, the gyro
+    columns at the inertia ``π`` (``nu_pi · π``), and the solved wheel's part of its
+    spin-inertia scale (its own per-wheel scale, or the common one), ``J_4 Δ⟨ρ_4 Aᵀ⟩ u4`` (it
+    depends on ``u4``)."""
     d_r = (r_u[1::2] - r_u[0::2]) @ u                                  # (G, 3)
-    return nu_cols + j4 * d_r[:, :, None] * nu_wheel[None, None, :]
+    return nu_cols + nu_pi @ pi + j4 * d_r[:, :, None] * nu_wheel[None, None, :]
 
 
 def rows(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov, m_pi_s, r_u_s, k_h_s,
-         n_s, t_aa_s, nu_cols, nu_cols_s, nu_sd, nu_wheel):
+         n_s, t_aa_s, nu_cols, nu_cols_s, nu_pi, nu_pi_s, nu_sd, nu_wheel):
     """The data vector of :func:`loglik`, ``(d_1 … d_G, s_1 … s_S)`` (N m s, N m), its
     white-noise covariance and its nuisance columns scaled by the prior sds, ``D diag(ν_sd)``.
 
@@ -77,18 +78,23 @@ def rows(u, pi, log_sigma, *, m_pi, r_u, k_h, n_w, t_aa, j4, known_cov, m_pi_s, 
     cov = jax.scipy.linalg.block_diag(
         *noise_cov(u, pi, log_sigma, n_w=n_w, t_aa=t_aa, j4=j4, known_cov=known_cov),
         *window_cov(u, pi, log_sigma, n=n_s, t_aa=t_aa_s, j4=j4, known_cov=known_cov))
-    cols_s = nu_cols_s + j4 * (r_u_s @ u)[:, :, None] * nu_wheel[None, None, :]
+    cols_s = nu_cols_s + nu_pi_s @ pi + j4 * (r_u_s @ u)[:, :, None] * nu_wheel[None, None, :]
     cols = jnp.concatenate([
-        nuisance_cols(u, r_u=r_u, j4=j4, nu_cols=nu_cols, nu_wheel=nu_wheel).reshape(
-            3 * nu_cols.shape[0], nu_sd.size),
+        nuisance_cols(u, pi, r_u=r_u, j4=j4, nu_cols=nu_cols, nu_pi=nu_pi,
+                      nu_wheel=nu_wheel).reshape(3 * nu_cols.shape[0], nu_sd.size),
         cols_s.reshape(3 * nu_cols_s.shape[0], nu_sd.size)])
     return d, cov, cols * nu_sd[None, :]
 
 
-def loglik(u, pi, log_sigma, **data):
+def loglik(u, pi, log_sigma, *, u_ref, pi_ref, **data):
     """Log-likelihood of the window-mean momentum balance of all A/B pairs (Brown Eqs 1, 3) and,
     RWA method, of each quiet window's momentum slope (:func:`slopes`):
-    ``(d, s) ~ N(0, blockdiag(C) + D diag(ν_sd²) Dᵀ)`` (:func:`rows`).
+    ``(d, s) ~ N(0, blockdiag(C) + D diag(ν_sd²) Dᵀ)`` (:func:`rows`), the white-noise part of
+    the normalising determinant taken at the fixed ``(u_ref, pi_ref)``: ``d`` is computed from
+    the measured rates, so its noise already carries ``π`` and ``u`` (``I ε``, ``J₄ δρ₄ u``),
+    and a determinant of ``C(π, u)`` would count that twice (expected score at the truth
+    ``−tr(S⁻¹ ∂C/∂π)``, a pull towards smaller inertia; with gyro noise alone the rates'
+    density ``N(d/I; 0, σ²)`` has no ``I`` in its normaliser).
 
     ``d_g`` is :func:`balance`, its ``C_g`` :func:`noise_cov`, a slope's :func:`window_cov`;
     ``D`` (:func:`nuisance_cols`) holds the robust model's nuisance effects, which enter both
@@ -103,12 +109,13 @@ def loglik(u, pi, log_sigma, **data):
     d, cov, cols = rows(u, pi, log_sigma, **data)
     chol = jnp.linalg.cholesky(cov + cols @ cols.T)
     r = jax.scipy.linalg.solve_triangular(chol, d, lower=True)
-    logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(chol)))
+    _, cov_ref, _ = rows(u_ref, pi_ref, log_sigma, **data)
+    logdet = 2.0 * jnp.sum(jnp.log(jnp.diag(jnp.linalg.cholesky(cov_ref + cols @ cols.T))))
     return -0.5 * (r @ r + logdet + d.shape[0] * jnp.log(2.0 * jnp.pi))
 
 
 DATA_KEYS = ("m_pi", "r_u", "k_h", "n_w", "t_aa", "j4", "known_cov", "m_pi_s", "r_u_s", "k_h_s",
-             "n_s", "t_aa_s", "nu_cols", "nu_cols_s", "nu_sd", "nu_wheel")
+             "n_s", "t_aa_s", "nu_cols", "nu_cols_s", "nu_pi", "nu_pi_s", "nu_sd", "nu_wheel")
 """The :class:`~cassini_bayes.inference.rwa4.data.Rwa4Data` fields :func:`loglik` reads."""
 
 

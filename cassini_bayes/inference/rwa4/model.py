@@ -109,7 +109,7 @@ def _log_density_with(physical, theta, kw):
     angle = jnp.arccos(jnp.clip(u @ kw.cone_axis, -1.0, 1.0))
     log_prior += -0.5 * kw.cone_weight * ((angle - kw.cone_angle) / kw.cone_sd) ** 2
     data = {k: getattr(kw, k) for k in DATA_KEYS}
-    return log_prior + loglik(u, pi, kw.log_noise_hat, **data)
+    return log_prior + loglik(u, pi, kw.log_noise_hat, u_ref=kw.u0, pi_ref=kw.pi_mean, **data)
 
 
 def _log_density_rcs(theta, kw):

@@ -71,44 +71,66 @@ def window_means(q, omega, rates, axes, js, k_u, known, masks, t=None) -> dict:
 
 
 def nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, names, masks,
-                   t, inertia, slopes: bool = False) -> dict:
+                   t, slopes: bool = False) -> dict:
     """The robust model's nuisance columns of ``d_g``
     (:func:`~cassini_bayes.inference.rwa4.likelihood.loglik`), as JAX arrays; with ``slopes``,
     also those of each window's slope, ``nu_cols_s`` (S, 3, R): the same per-sample
     inertial columns' slopes against time (:func:`_window_weights`), so an external torque
     enters as its value at the window (Euler: ``dH/dt = T``).
 
-    The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (gyro bias
-    and scale factor through ``I*`` = ``inertia`` (3, 3), the prior-mean tensor; the known
-    wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
+    The body-axis columns of :func:`~cassini_bayes.inference.nuisance.robust_columns` (the
+    known wheels' spin-inertia scales; the known wheels' axis tilts; a body-fixed torque through
     ``−A(q_t) ∫ A(q_s)ᵀ ds``) rotated to inertial axes and window-averaged like the momentum,
-    B − A per pair: ``nu_cols`` (G, 3, R). ``nu_wheel`` (R,) marks the solved wheel's scale columns
-    (per wheel: its own, the layout's last scale, and the shared one; common: the one scale),
-    whose solved-wheel part :func:`~cassini_bayes.inference.rwa4.likelihood.nuisance_cols` adds;
-    ``nu_sd`` (R,) the prior sd.
+    B − A per pair: ``nu_cols`` (G, 3, R). The gyro bias and scale-factor columns, ``−I b`` and
+    ``−I diag(ω) s``, are linear in the sampled inertia, ``−S(b) π`` (:func:`~cassini_bayes.
+    physics.momentum.regressor`), averaged the same way: ``nu_pi`` (G, 3, R, 6) and ``nu_pi_s``
+    (S, 3, R, 6), whose product with ``π`` the likelihood adds: the measured momentum carries
+    the bias through the true inertia, which a fixed tensor would miss by ``(I − I*) b``.
+    ``nu_wheel`` (R,) marks the solved wheel's scale columns (per wheel: its own, the layout's
+    last scale, and the shared one; common: the one scale), whose solved-wheel part
+    :func:`~cassini_bayes.inference.rwa4.likelihood.nuisance_cols` adds; ``nu_sd`` (R,) the
+    prior sd.
     """
     a_all = np.asarray(dcm(jnp.asarray(q)))
     rho = np.nan_to_num(rates)
     wheel_h = {names[k]: js[k] * rho[:, k] for k in known}
     h_known = sum((wheel_h[names[k]][:, None] * axes[k] for k in known),
                   np.zeros((q.shape[0], 3)))
-    cols = robust_columns(layout, 0, inertia, omega, h_known, wheel_h, a_all, t)
+    cols = robust_columns(layout, 0, np.zeros((3, 3)), omega, h_known, wheel_h, a_all, t)
     inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
-    diff = [inertial[mb].mean(0) - inertial[ma].mean(0) for ma, mb in masks]
-    slope = [np.einsum("n,nir->ir", w, inertial[m])
-             for m, w in _window_weights(t if slopes else None, masks)[1]]
+    by_pi = np.einsum("nji,njrp->nirp", a_all, _gyro_columns(layout, omega))
+    weights = _window_weights(t if slopes else None, masks)[1]
+
+    def reduce(x):
+        diff = [x[mb].mean(0) - x[ma].mean(0) for ma, mb in masks]
+        slope = [np.einsum("n,n...->...", w, x[m]) for m, w in weights]
+        return (jnp.asarray(np.stack(diff)),
+                jnp.asarray(np.stack(slope) if slope else np.zeros((0, *x.shape[1:]))))
+
+    (nu_cols, nu_cols_s), (nu_pi, nu_pi_s) = reduce(inertial), reduce(by_pi)
     one_hot = np.zeros(layout.size)
     one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
     if layout.has_common:                   # the shared scale reaches the solved wheel too
         one_hot[layout.slices["wheel_inertia_common"]] = 1.0
-    return dict(nu_cols=jnp.asarray(np.stack(diff)),
-                nu_cols_s=jnp.asarray(np.stack(slope) if slope
-                                      else np.zeros((0, 3, layout.size))),
+    return dict(nu_cols=nu_cols, nu_cols_s=nu_cols_s, nu_pi=nu_pi, nu_pi_s=nu_pi_s,
                 nu_sd=jnp.asarray(layout.sd), nu_wheel=jnp.asarray(one_hot))
+
+
+def _gyro_columns(layout: NuisanceLayout, omega) -> np.ndarray:
+    """(n, 3, R, 6) body-axis gyro bias and scale-factor columns per unit inertia entry:
+    ``−I e_j = −S(e_j) π`` and ``−I ω_j e_j = −ω_j S(e_j) π`` (``S`` the regressor, Feldman &
+    Lee Eq 10); zero for the other effects."""
+    unit = -np.asarray(regressor(jnp.eye(3)))                          # (3 axes, 3, 6)
+    out = np.zeros((omega.shape[0], 3, layout.size, 6))
+    bias, scale = layout.slices["gyro_bias"], layout.slices["gyro_scale"]
+    out[:, :, bias.start:bias.start + 3] = np.swapaxes(unit, 0, 1)[None]
+    out[:, :, scale] = np.einsum("nj,jap->najp", omega, unit)
+    return out
 
 
 def no_nuisance(n_pairs: int, n_slopes: int = 0) -> dict:
     """The idealised model: no nuisance columns (R = 0) for ``n_pairs`` pair rows and
     ``n_slopes`` slope rows."""
     return dict(nu_cols=jnp.zeros((n_pairs, 3, 0)), nu_cols_s=jnp.zeros((n_slopes, 3, 0)),
+                nu_pi=jnp.zeros((n_pairs, 3, 0, 6)), nu_pi_s=jnp.zeros((n_slopes, 3, 0, 6)),
                 nu_sd=jnp.zeros(0), nu_wheel=jnp.zeros(0))
