@@ -19,7 +19,8 @@ import pytest
 
 from cassini_bayes.frames import quat_continuous
 from cassini_bayes.inference.nuisance import nuisance_layout
-from cassini_bayes.inference.rwa4.window_means import nuisance_means, window_means
+from cassini_bayes.inference.rwa4.window_means import (no_nuisance, nuisance_means,
+                                                        window_means)
 from cassini_bayes.inference.rwa4.likelihood import (DATA_KEYS, balance, loglik, nuisance_cols,
                                                       rows, slopes)
 from cassini_bayes.names import INERTIA_NAMES
@@ -152,3 +153,27 @@ def test_rows_join_pairs_and_slopes(still):
     assert np.isfinite(float(loglik(u, pi, log_sigma, u_ref=u, pi_ref=pi,
                                     **{k: kw[k] for k in DATA_KEYS})))
     assert data["rcs"]["m_pi_s"].shape == (0, 3, 6) and data["rcs"]["t_aa_s"].shape[0] == 0
+
+
+def test_normaliser_does_not_move_with_the_inertia_or_the_axis(still):
+    """The rows are computed from the measured rates, so their noise already moves with ``π``
+    and ``u``; the likelihood's normaliser (its white-noise determinant) must not move with them
+    as well (:func:`~cassini_bayes.inference.rwa4.likelihood.loglik`): with no nuisance columns,
+    ``loglik + ½ dᵀ C⁻¹ d`` is the same at ``π`` and ``1.1 π`` and a tilted axis (to 1e-9),
+    while the determinant at the sampled values moves (by more than 0.3 at ``1.1 π``)."""
+    data, _, _, u, pi, _ = still
+    kw = dict(data, **no_nuisance(1, 2))
+    log_sigma = jnp.log(jnp.asarray([5e-6, 0.05, 3e-5]))
+    keys = {k: kw[k] for k in DATA_KEYS}
+    tilted = u + jnp.asarray([0.0, 0.02, -0.01])
+    tilted = tilted / jnp.linalg.norm(tilted)
+
+    def normaliser(u_, pi_):
+        d, cov, _ = (np.asarray(x) for x in rows(u_, pi_, log_sigma, **keys))
+        ll = float(loglik(u_, pi_, log_sigma, u_ref=u, pi_ref=pi, **keys))
+        return ll + 0.5 * d @ np.linalg.solve(cov, d), np.linalg.slogdet(cov)[1]
+
+    (n0, det0), (n1, det1), (n2, _) = (normaliser(u, pi), normaliser(u, 1.1 * pi),
+                                       normaliser(tilted, pi))
+    assert abs(n1 - n0) < 1e-9 * abs(n0) and abs(n2 - n0) < 1e-9 * abs(n0), (n0, n1, n2)
+    assert abs(det1 - det0) > 0.3, (det0, det1)
