@@ -173,11 +173,11 @@ def rcs_family(args: list[Records]) -> str:
     return "\n".join(rows)
 
 
-def _setting(opts: dict) -> str:
+def _setting(opts: dict, thrust: bool = True) -> str:
     """A campaign record's open-world setting in words: the widening, the effects switched off,
-    the fits' stated torque knowledge, the drawn time tags' scale and what the thrust fit did
-    with a flexible mode (coverage_open_world.py options; ``flex`` ``auto`` is today's
-    ``model``)."""
+    the fits' stated torque knowledge, the drawn time tags' scale and, for a thrust family,
+    what the thrust fit did with a flexible mode (coverage_open_world.py options; ``flex``
+    ``auto`` is today's ``model``; the other fits have no such option)."""
     parts = [f"widen {opts.get('widen', 1.5):g}"]
     if opts.get("off"):
         parts.append("off " + " ".join(opts["off"]))
@@ -187,7 +187,7 @@ def _setting(opts: dict) -> str:
         parts.append(f"time tags × {opts['time_tag_scale']:.3g}")
     flex = {"auto": "mode modelled", "model": "mode modelled", "check": "mode checked",
             "off": "no mode search"}.get(opts.get("flex"))
-    if flex:
+    if flex and thrust:
         parts.append(flex)
     return ", ".join(parts)
 
@@ -212,7 +212,8 @@ def open_world_wheel_axis(args: list[Records]) -> str:
             comp = [h for f in fits for h in f["component_hit"]]
             per = " ".join(share_cell(sum(e) / n)
                            for e in zip(*(f["component_hit"] for f in fits), strict=True))
-            rows.append(f"| `{family}` ({fits[0]['wheel']}) | {_setting(seeds[0]['options'])}"
+            setting = _setting(seeds[0]["options"], False)
+            rows.append(f"| `{family}` ({fits[0]['wheel']}) | {setting}"
                         f"{'' if model == 'per_wheel' else ', ' + model} | "
                         f"{coverage_cell(sum(f['hit'][0] for f in fits), n)} | "
                         f"{per} | {coverage_cell(sum(comp), len(comp))} | "
@@ -233,8 +234,8 @@ def open_world_wheel_axis_settings(args: list[Records]) -> str:
     for group in args:
         records = [r for path in group for r in read_jsonl(path)]
         for family, _, model, seeds, fits in _families(records):
-            setting = _setting(seeds[0]["options"]) + ("" if model == "per_wheel"
-                                                       else ", " + model)
+            setting = _setting(seeds[0]["options"], False) + ("" if model == "per_wheel"
+                                                              else ", " + model)
             k, n = sum(f["hit"][0] for f in fits), len(fits)
             families.setdefault(family, f"`{family}` ({fits[0]['wheel']})")
             cells.setdefault(setting, {})[family] = (f"**{k}/{n}**" if k >= 0.8 * n
@@ -258,7 +259,7 @@ def _axis_stats(group: Records) -> dict[str, dict]:
                            "hit": sum(f["hit"][0] for f in fits),
                            "error": [f["error"][0] for f in fits],
                            "cone": [f["cone90_deg"] for f in fits],
-                           "setting": _setting(seeds[0]["options"])}
+                           "setting": _setting(seeds[0]["options"], False)}
     return out
 
 
