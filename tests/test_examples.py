@@ -20,7 +20,7 @@ import pytest
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 SCRIPTS = ("inertia_from_slews.py", "inertia_espa_bus.py", "inertia_cubesat.py",
            "thrust_with_inertia_posterior.py", "rwa4_axis.py", "sbc_check.py", "leak_monitor.py",
-           "ivp_flyby.py", "wheel_axis_espa_bus.py")
+           "ivp_flyby.py", "wheel_axis_espa_bus.py", "thrust_espa_bus.py")
 SAMPLER_OPTIONS = ("--chains", "--warmup", "--draws")   # every script but the leak monitor's
 TINY = ["--chains", "1", "--warmup", "60", "--draws", "60"]
 
@@ -152,6 +152,29 @@ def test_wheel_axis_espa_bus(tmp_path, monkeypatch, capsys):
     assert summary["kind"] == "rwa4" and summary["wheel"]["name"] == "RW2"
     assert re.search(r"model file .* 1\.000 deg from the truth", out), out
     assert re.search(r"posterior mean .* [0-9.]+ deg from the truth", out)
+
+
+@pytest.mark.slow
+def test_wheel_axis_of_the_cubesat(tmp_path, monkeypatch, capsys):
+    """The same script calibrates the CubeSat's skew wheel (README's command)."""
+    run = tmp_path / "run"
+    out = run_example("wheel_axis_espa_bus.py", [*TINY, "--scenario", "wheel_axis_cubesat_12u",
+                                                 "--wheel", "RWS", "--out", run],
+                      monkeypatch, capsys)
+    summary = _saved_run(out, run)
+    assert summary["kind"] == "rwa4" and summary["wheel"]["name"] == "RWS"
+    assert re.search(r"model file .* 1\.000 deg from the truth", out), out
+
+
+@pytest.mark.slow
+def test_thrust_espa_bus(tmp_path, monkeypatch, capsys):
+    run = tmp_path / "run"
+    out = run_example("thrust_espa_bus.py", [*TINY, "--out", run], monkeypatch, capsys)
+    summary = _saved_run(out, run)
+    assert summary["kind"] == "thrust"
+    assert len(re.findall(r"F\[[AF][1-4]\] .* truth", out)) == 8, out
+    assert re.search(r"com_x .* mm .* truth \+6\.00 mm", out), out
+    assert re.search(r"\d of 8 thrusts inside their 90 % interval", out), out
 
 
 def test_ivp_flyby_fits_segments_and_points_through_the_tree(tmp_path, monkeypatch, capsys):
