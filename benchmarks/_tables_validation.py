@@ -91,3 +91,45 @@ def basilisk_wheel_axis(args: list[Records]) -> str:
                     f"{a['max_r_hat']:.3f} | {a['min_ess_bulk']:.0f} | "
                     f"{'ok' if a['adequacy_ok'] else 'fails'} |")
     return "\n".join(rows)
+
+
+def _fits(args: list[Records], method: str) -> list[dict]:
+    return [r for group in args for p in group for r in read_json(p) if r["method"] == method]
+
+
+@kind("wheel_axis_rwa")
+def wheel_axis_rwa(args: list[Records]) -> str:
+    """One row per RWA-method record of ``benchmarks/wheel_axis_fits.py``: the posterior mean's
+    and the least squares' angle from the true axis, the 90 % cone, the diagnostics and the
+    adequacy verdict."""
+    rows = ["| spacecraft, wheel | posterior mean error | least squares error | 90 % cone | "
+            "max R-hat | divergences | min bulk ESS | adequacy |", "|" + "---|" * 8]
+    for r in _fits(args, "rwa"):
+        d = r["diagnostics"]
+        rows.append(f"| `{r['model']}`, {r['wheel']} | {r['error_deg']:.3f}° | "
+                    f"{r['least_squares_error_deg']:.3f}° | {r['cone_deg']['90']:#.3g}° | "
+                    f"{d['max_r_hat']:.3f} | {d['divergences']} | {d['min_ess_bulk']:.0f} | "
+                    f"{'passed' if r['adequacy_ok'] else 'FAILED'} |")
+    return "\n".join(rows)
+
+
+@kind("wheel_axis_rcs")
+def wheel_axis_rcs(args: list[Records]) -> str:
+    """One row per RCS-method record of ``benchmarks/wheel_axis_fits.py``: the inertia knowledge,
+    the windows (given or detected, s), the errors as ``wheel_axis_rwa``, the 95 % cone (with the
+    budget warning where the fit gave one), the diagnostics and the adequacy verdict."""
+    rows = ["| inertia knowledge | windows A, B (s) | posterior mean error | least squares error | "
+            "95 % cone | max R-hat | divergences | adequacy |", "|" + "---|" * 8]
+    for r in _fits(args, "rcs"):
+        d = r["diagnostics"]
+        knowledge = ("`--inertia-posterior` of a `slews_espa_bus` fit" if r["inertia_posterior"]
+                     else "the model file's (±10 % moments)")
+        w = r["windows"][0]
+        windows = (f"{'given' if r['windows_given'] else 'detected'} "
+                   f"{w['a'][0]:.0f}–{w['a'][1]:.0f}, {w['b'][0]:.0f}–{w['b'][1]:.0f}")
+        warned = " (with the budget warning)" if any("budget" in w for w in r["warnings"]) else ""
+        rows.append(f"| {knowledge} | {windows} | {r['error_deg']:.3f}° | "
+                    f"{r['least_squares_error_deg']:.3f}° | {r['cone_deg']['95']:.2f}°{warned} | "
+                    f"{d['max_r_hat']:.3f} | {d['divergences']} | "
+                    f"{'passed' if r['adequacy_ok'] else 'FAILED'} |")
+    return "\n".join(rows)

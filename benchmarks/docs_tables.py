@@ -117,7 +117,11 @@ def render(md: Path) -> tuple[str, list[str]]:
     text = md.read_text(encoding="utf-8")
     pieces, changed, at = [], [], 0
     for m, name, groups in blocks(text, md):
-        body = KINDS[name](groups) + "\n"
+        try:
+            body = KINDS[name](groups) + "\n"
+        except ValueError as e:
+            line = text.count("\n", 0, m.start()) + 1
+            sys.exit(f"{_rel(md)}:{line}: table {m['spec']!r}: {e}")
         if body != m["body"]:
             changed.append(f"{_rel(md)}:{text.count(chr(10), 0, m.start()) + 1}: "
                            f"table {m['spec']!r} differs from its records")
