@@ -78,7 +78,13 @@ def start(records: Path, options: dict, argv: list[str] | None = None, *,
             sys.exit(f"{records}: records without a manifest; use another --out")
         man = {"records": "." if records.is_dir() else records.name, "options": options,
                "runs": [run]}
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(man, indent=1) + "\n")
-    os.replace(tmp, path)
+    write_json(path, man)
     return man
+
+
+def write_json(path: Path, obj) -> None:
+    """``obj`` as indented JSON at ``path``, atomically (a temporary beside it, then renamed)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(obj, indent=1) + "\n")
+    os.replace(tmp, path)

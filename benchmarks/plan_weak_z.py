@@ -13,7 +13,6 @@ their ratios; the table kind ``plan_weak_z`` (``_tables_planning.py``) reads it.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -49,10 +48,9 @@ def main(argv: list[str] | None = None) -> None:
     for part, label in (("sd_data", "data part"), ("sd", "as reported")):
         print(f"{label:12s} " + "  ".join(f"{e} {ratio[part][e]:.3g}" for e in ENTRIES))
     if args.json:
-        tmp = args.json.with_name(args.json.name + ".tmp")
-        tmp.write_text(json.dumps({"weak": weak, "strong": strong, "ratio": ratio}, indent=1)
-                       + "\n")
-        tmp.replace(args.json)
+        from _provenance import write_json
+
+        write_json(args.json, {"weak": weak, "strong": strong, "ratio": ratio})
 
 
 if __name__ == "__main__":

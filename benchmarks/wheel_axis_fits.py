@@ -111,9 +111,9 @@ def main(argv: list[str] | None = None) -> None:
                   flush=True)
             records.append(r)
     if args.json:
-        tmp = args.json.with_name(args.json.name + ".tmp")
-        tmp.write_text(json.dumps(records, indent=1) + "\n")
-        tmp.replace(args.json)
+        from _provenance import write_json
+
+        write_json(args.json, records)
 
 
 if __name__ == "__main__":
