@@ -98,16 +98,19 @@ def nuisance_means(layout: NuisanceLayout, q, omega, rates, axes, js, known, nam
                   np.zeros((q.shape[0], 3)))
     cols = robust_columns(layout, 0, np.zeros((3, 3)), omega, h_known, wheel_h, a_all, t)
     inertial = np.einsum("nji,njr->nir", a_all, cols)                  # A(q)ᵀ · column
-    by_pi = np.einsum("nji,njrp->nirp", a_all, _gyro_columns(layout, omega))
     weights = _window_weights(t if slopes else None, masks)[1]
 
-    def reduce(x):
-        diff = [x[mb].mean(0) - x[ma].mean(0) for ma, mb in masks]
-        slope = [np.einsum("n,n...->...", w, x[m]) for m, w in weights]
-        return (jnp.asarray(np.stack(diff)),
-                jnp.asarray(np.stack(slope) if slope else np.zeros((0, *x.shape[1:]))))
+    def by_pi(m):                       # the gyro columns of a window's samples only (n × 6 × R)
+        return np.einsum("nji,njrp->nirp", a_all[m], _gyro_columns(layout, omega[m]))
 
-    (nu_cols, nu_cols_s), (nu_pi, nu_pi_s) = reduce(inertial), reduce(by_pi)
+    def reduce(x, shape):
+        diff = [x(mb).mean(0) - x(ma).mean(0) for ma, mb in masks]
+        slope = [np.einsum("n,n...->...", w, x(m)) for m, w in weights]
+        return (jnp.asarray(np.stack(diff)),
+                jnp.asarray(np.stack(slope) if slope else np.zeros((0, *shape))))
+
+    nu_cols, nu_cols_s = reduce(lambda m: inertial[m], (3, layout.size))
+    nu_pi, nu_pi_s = reduce(by_pi, (3, layout.size, 6))
     one_hot = np.zeros(layout.size)
     one_hot[layout.slices["wheel_inertia"].stop - 1] = 1.0
     if layout.has_common:                   # the shared scale reaches the solved wheel too
