@@ -104,3 +104,39 @@ def thrust_shipped_fits(args: list[Records]) -> str:
             f"{tau['tau_delay']['contraction']:.2f} | {d['max_r_hat']:.3f} | "
             f"{d['divergences']} | {d['min_ess_bulk']:.0f} |")
     return "\n".join(rows)
+
+
+@kind("robust_price")
+def robust_price(args: list[Records]) -> str:
+    """The price of the robust models on clean data (``benchmarks/robust_price.py`` record): the
+    thrust's sd (% of its mean) and the rise and fall time constants' sd per model, the RWA4
+    axis's 90 % cone and error by either method, and each column's largest R-hat and
+    divergences."""
+    r = read_json(next(p for group in args for p in group))
+    models = (("idealised", "thrust idealised (inertia fixed)"), ("common", "thrust common"),
+              ("per_wheel", "thrust per_wheel"))
+
+    def f_sd(rec):
+        return f"{100 * rec['F']['sd'] / rec['F']['mean']:#.2g} %"
+
+    def axis(method, m):
+        rec = r[f"rwa4_{method} {m}"]
+        return f"{rec['cone90_deg']:#.2g}° ({rec['error_deg']:#.2g}°)"
+
+    fixed = r["thrust per_wheel (inertia fixed)"]
+    rows = ["| fit | idealised | common | per-wheel (default) |", "|---|---|---|---|",
+            f"| thrust sd(F), clean `biasing_day028` | {f_sd(r[models[0][1]])} (inertia fixed) "
+            f"| {f_sd(r[models[1][1]])} | {f_sd(r[models[2][1]])} "
+            f"(inertia sampled; {f_sd(fixed)} with `--fix-inertia`) |",
+            "| thrust sd(τr), sd(τf) | " + " | ".join(
+                f"{1e3 * r[k]['tau_rise']['sd']:.2f}, {1e3 * r[k]['tau_fall']['sd']:.1f} ms"
+                for _, k in models) + " |"]
+    for method, label in (("rwa", "RWA method"), ("rcs", "RCS method (±10 % inertia)")):
+        rows.append(f"| RWA4 90 % cone (axis error), {label} | "
+                    + " | ".join(axis(method, m) for m, _ in models) + " |")
+    fits = {m: [r[k] for k in r if k.endswith(m) or k.endswith(f"{m} (inertia fixed)")]
+            for m, _ in models}
+    rows.append("| largest R-hat, divergences | " + " | ".join(
+        f"{max(f['r_hat'] for f in fits[m]):.3f}, {sum(f['divergences'] for f in fits[m])}"
+        for m, _ in models) + " |")
+    return "\n".join(rows)

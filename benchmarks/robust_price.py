@@ -11,7 +11,6 @@ data").
 from __future__ import annotations
 
 import argparse
-import json
 import warnings
 
 RWA4_MODELS = {"idealised": dict(robust=False),
@@ -87,8 +86,9 @@ def main(argv=None) -> None:
     settings = SamplerSettings(chains=4, warmup=500, draws=500)
     out = _rwa4(settings) | _thrust(settings)
     if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        from _provenance import write_json
+
+        write_json(args.json, out)
 
 
 if __name__ == "__main__":
