@@ -99,14 +99,21 @@ def _sample_commands(s: Scenario) -> np.ndarray:
     return ctl.command_profile(np.arange(s.n_samples) * s.sample_period_s, s.q0, slews)
 
 
+def believed_allocation(s: Scenario, axes) -> dict[str, Array]:
+    """The RWA controller's ``axes_believed`` (..., k, 3), the wheels that are off zeroed, and
+    their torque allocation ``axes_pinv`` (..., k, 3), the pseudo-inverse of the axes as columns;
+    ``axes`` may carry a leading batch axis (one set per replicate)."""
+    believed = np.asarray(axes, float) * np.asarray(s.wheels_on, float)[:, None]
+    return {"axes_believed": jnp.asarray(believed),
+            "axes_pinv": jnp.asarray(np.linalg.pinv(np.swapaxes(believed, -1, -2)))}
+
+
 def _controller_arrays(s: Scenario) -> dict[str, Array]:
     on = np.array(s.wheels_on, float)
-    believed = np.asarray(s.rwa.believed_axes) * on[:, None]
     limits = _wheel_limits(s)
     return {
         "inertia_ctrl": jnp.asarray(s.prior.inertia),
-        "axes_believed": jnp.asarray(believed),
-        "axes_pinv": jnp.asarray(np.linalg.pinv(believed.T)),
+        **believed_allocation(s, s.rwa.believed_axes),
         "wheel_j_ctrl": jnp.asarray(s.prior.wheel_inertias * on),
         "q_matrix": jnp.asarray(s.truth.moment_matrix),
         "sets": jnp.asarray(ctl.thruster_sets(s.prior) if s.control == "rcs"

@@ -23,7 +23,8 @@ from cassini_bayes._devices import require_x64
 from cassini_bayes.simulate import controllers as ctl
 from cassini_bayes.simulate._arrays import (SimArrays, SimResult, TruthParams, noise_params,
                                             truth_params, with_errors)
-from cassini_bayes.simulate._commands import _config, _controller_arrays, _plan
+from cassini_bayes.simulate._commands import (_config, _controller_arrays, _plan,
+                                              believed_allocation)
 from cassini_bayes.simulate._core import PULSE_RING, _batch_jit, _core_jit, trace_count
 from cassini_bayes.simulate._core import _simulate_core  # noqa: F401  (plan/flight.py's)
 from cassini_bayes.simulate.scenario import Scenario, check_size
@@ -97,10 +98,7 @@ def simulate_batch(keys: Array, scenario: Scenario, truth: TruthParams | None = 
     plan, carr = _prepared(scenario)
     carr_batched: tuple[str, ...] = ()
     if believed_axes is not None:
-        on = np.asarray(scenario.wheels_on, float)[None, :, None]
-        believed = np.asarray(believed_axes, float) * on
-        carr = {**carr, "axes_believed": jnp.asarray(believed),
-                "axes_pinv": jnp.asarray(np.linalg.pinv(np.swapaxes(believed, 1, 2)))}
+        carr = {**carr, **believed_allocation(scenario, believed_axes)}
         carr_batched = ("axes_believed", "axes_pinv")
     return _batch_jit(keys, truth, noise, plan, carr, cfg=_config(scenario),
                       truth_batched=batched, noise_batched=noise_batched,
