@@ -42,3 +42,43 @@ def bench_samplers(args: list[Records]) -> str:
                  for ws in (pkg, nut)]
         rows.append(f"| {label} ({len(pkg)} rounds) | {cells[0]} | {cells[1]} | {ratio} |")
     return "\n".join(rows)
+
+
+@kind("memory_telemetry")
+def memory_telemetry(args: list[Records]) -> str:
+    """Peak memory by file size (benchmarks/memory_telemetry.py's record): a row per size, a
+    column per stage, the wall time beside the prepare stages."""
+    from memory_telemetry import STAGES
+
+    res = [r for group in args for p in group for r in read_json(p)["results"]]
+    rows = ["| rows | `read_telemetry` | + `prepare_inertia` (idealised) | + `prepare_inertia` "
+            "(robust) |", "|---|---|---|---|"]
+    for n in sorted({r["rows"] for r in res}):
+        by = {r["stage"]: r for r in res if r["rows"] == n}
+        cells = [f"{by[s]['peak_mb']:.0f} MB" + (f" ({by[s]['seconds']:.0f} s)" if s != "read"
+                                                  else "") if s in by else "—"
+                 for s in STAGES]
+        rows.append(f"| {n:,} | " + " | ".join(cells) + " |")
+    return "\n".join(rows)
+
+
+COMPILE_TOP = 6
+"""Programs a ``compile_programs`` table lists by name; the rest are one row."""
+
+
+@kind("compile_programs")
+def compile_programs(args: list[Records]) -> str:
+    """What a cold fit compiles (benchmarks/compile_cache.py's record: its first run, cache
+    off): the :data:`COMPILE_TOP` slowest programs with their count and seconds, then the rest."""
+    runs = [r for group in args for p in group for r in read_json(p)["runs"]]
+    per = sorted(runs[0]["per_program"], key=lambda x: -x[2])
+    rows = ["| program | count | seconds |", "|---|---|---|"]
+    rows += [f"| `{name}` | {n} | {s:.1f} |" for name, n, s in per[:COMPILE_TOP]]
+    rest = per[COMPILE_TOP:]
+    if rest:
+        count, secs = sum(n for _, n, _ in rest), sum(s for *_, s in rest)
+        rows.append(f"| {len(rest)} other programs (eager array operations outside `jit` "
+                    f"among them) | {count} | {secs:.1f} |")
+    rows.append(f"| all ({runs[0]['run']}) | {runs[0]['programs']} | "
+                f"{sum(s for *_, s in per):.1f} |")
+    return "\n".join(rows)
