@@ -8,15 +8,19 @@ an open-world truth (:func:`cassini_bayes.simulate.open_world.draw_open_world` w
 drawn: non-Normal sensor and wheel errors 1.5× wider than the robust priors, external torques
 1.5× the prior's and a drift, a flexible mode, time-tag errors and stale samples), simulated with
 noise and fitted by the default robust ``fit thrust`` (NUTS). Per site: the fitted sd over the
-predicted (median over the seeds, range) and the 90 % coverage of the truth; per fit, the
-learned noise levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's
-sensors'. ``--nominal``: the scenario itself simulated with its noise, no open-world error (the
+predicted (median over the seeds, range) and the 90 % coverage of the truth; per fit, each
+site's ``z`` (posterior mean less the truth, over the posterior sd) and the learned noise
+levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's sensors'.
+``--nominal``: the scenario itself simulated with its noise, no open-world error (the
 prediction's own assumptions). Not a test.
 
     python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
         [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
-        [--without flex ...] [--resume]
+        [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD]
 
+``--truths N``: the prediction is the median over the nominal truth and N truths drawn from the
+model file's knowledge (``plan evaluate --truths``). ``--fits-from RECORD``: each case's fits
+are those of another record (same case, settings and truths), only the prediction is made.
 ``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
 without`; every other draw unchanged). ``--resume`` keeps the fits of an interrupted ``--json``
 record (same options; the prediction is re-made, noise-free and deterministic) and fits the seeds
@@ -52,12 +56,13 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
 
 
 def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
-        fits: list | None = None, off: tuple = ()) -> dict:
+        fits: list | None = None, off: tuple = (), truths: int = 0) -> dict:
     """One case: the prediction, then the fits of seeds ``len(fits) .. seeds - 1`` (``fits``:
     those of a resumed record, kept)."""
     import jax
     import numpy as np
 
+    from cassini_bayes._devices import release_compiled_programs
     from cassini_bayes.inference.thrust import fit_thrust
     from cassini_bayes.plan.thrust import _truth, evaluate_thrust
     from cassini_bayes.plan.wheel_axis import scenario_noise
@@ -67,7 +72,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
     name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
     s = load_scenario(name)
     t0 = time.perf_counter()
-    pred = evaluate_thrust(s, mode)
+    pred = evaluate_thrust(s, mode, truths=truths)
     t_pred = time.perf_counter() - t0
     names = list(pred.sites)
     print(f"{name} ({mode}): predicted in {t_pred:.0f} s: " + ", ".join(
@@ -94,7 +99,9 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
         sd, draws = _fitted(post.idata.posterior, names, post.problem.thrusters)
         truth = _truth(si, post.problem, names)
         lo, hi = np.quantile(draws, [0.05, 0.95], axis=0)
+        z = (draws.mean(0) - truth) / np.asarray(sd)
         fits.append({"seed": seed, "sd": sd, "hit90": ((lo <= truth) & (truth <= hi)).tolist(),
+                     "z": z.tolist(),
                      "noise_over_sensor": [
                          float(np.median(np.asarray(post.idata.posterior[k].values)) / sensor[j])
                          for j, k in enumerate(("sigma_omega", "sigma_rho"))],
@@ -105,6 +112,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
               f"div {fits[-1]['divergences']}, noise/sensor "
               + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"]),
               file=sys.stderr, flush=True)
+        release_compiled_programs()   # docs/limits.md: mappings of compiled programs
         if partial is not None:
             partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal, off))
     return _summary(case, s, mode, pred, t_pred, names, fits, nominal, off)
@@ -117,6 +125,9 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) ->
     ratio = sd / pred.site_sd[None, :]
     hits = np.array([f["hit90"] for f in fits], float)
     sites = {n: {"predicted": float(pred.site_sd[i]), "prior": float(pred.site_prior_sd[i]),
+                 **({"predicted_nominal": float(pred.site_sd_nominal[i]),
+                     "predicted_range": [float(x[i]) for x in pred.site_sd_range]}
+                    if pred.truths else {}),
                  "budget": float(pred.budget[i]),
                  "fitted_median": float(np.median(sd[:, i])),
                  "ratio_median": float(np.median(ratio[:, i])),
@@ -126,6 +137,7 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) ->
     med = np.median(ratio, 0)
     return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
             "truths": "nominal" if nominal else "open_world", "without": sorted(off),
+            "predicted_over_truths": int(pred.truths),
             "floored": int(pred.floored),
             "predict_seconds": t_pred, "predicted_max_ratio": pred.max_ratio,
             "predicted_worst": pred.worst, "n_pulses": pred.n_pulses,
@@ -151,8 +163,21 @@ def main(argv=None) -> None:
     ap.add_argument("--json", type=Path)
     ap.add_argument("--resume", action="store_true",
                     help="keep the fits of the --json record and fit the seeds it lacks")
+    ap.add_argument("--truths", type=int, default=0,
+                    help="predict as the median over the nominal truth and N drawn from the "
+                         "model file's knowledge (plan evaluate --truths)")
+    ap.add_argument("--fits-from", type=Path, metavar="RECORD",
+                    help="take the fits of each case from this record (same settings): only "
+                         "the prediction is made")
     a = ap.parse_args(argv)
     before = {}
+    if a.fits_from:
+        rec = json.loads(a.fits_from.read_text())
+        if rec["settings"] != {"chains": a.chains, "warmup": a.warmup, "draws": a.draws}:
+            sys.exit(f"--fits-from {a.fits_from}: made with sampler settings {rec['settings']}")
+        before = {r["case"]: r["fits"] for r in rec["results"]
+                  if r["truths"] == ("nominal" if a.nominal else "open_world")
+                  and r["without"] == sorted(a.without)}
     if a.resume:
         if not (a.json and a.json.is_file()):
             sys.exit("--resume: give --json with the record to resume")
@@ -180,7 +205,7 @@ def main(argv=None) -> None:
     for case in a.case:
         done = list(out["results"])
         r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
-                fits=before.get(case), off=tuple(a.without))
+                fits=before.get(case), off=tuple(a.without), truths=a.truths)
         out["results"].append(r)
         kind = "nominal" if a.nominal else "open-world"
         print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "

@@ -158,17 +158,73 @@ def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
 
 def test_plan_evaluate_cli_on_a_biasing_event(run_cli, tmp_path):
     """``plan evaluate`` recognises a scenario whose thrusters fire as a thrust calibration and
-    prints each thrust site; a spacecraft with other thrusters is refused in one line."""
+    prints each thrust site (``--truths 1``: the median over two truths, with its range); a
+    spacecraft with other thrusters is refused in one line."""
     import tomli_w
 
     p = tmp_path / "small.toml"
     p.write_text(tomli_w.dumps(_small_event()))
     code, out, err = run_cli("plan", "evaluate", p, "--spacecraft", "espa_bus", "--out",
-                             tmp_path / "ev")
+                             tmp_path / "ev", "--truths", "1")
     assert code == 0, err
     assert "robust thrust fit" in out and "tau_rise" in out and "sd/budget" in out
+    assert "median over the nominal truth and 1 drawn" in out
     summary = json.loads((tmp_path / "ev" / "summary.json").read_text())
     assert summary["calibration"] == "thrust" and "F" in summary["prediction"]["sites"]
+    site = summary["prediction"]["sites"]["F"]
+    assert summary["prediction"]["truths"] == 1
+    assert site["sd_range"][0] <= site["sd"] <= site["sd_range"][1]
     assert (tmp_path / "ev" / "report.html").stat().st_size > 1000
     code, _, err = run_cli("plan", "evaluate", p, "--spacecraft", "cassini_post_probe")
     assert code != 0 and "spacecraft" in err
+
+
+def test_knowledge_truths_stay_inside_the_model_files_knowledge():
+    """Each drawn truth has its inertia in the model file's knowledge box, its time constants in
+    the manufacturer's ranges, wheel errors and torques at the stated sds; fixed per seed."""
+    from cassini_bayes.plan.truths import knowledge_truths
+
+    s = scenario_from_dict(_small_event())
+    prior = s.prior
+    ts = knowledge_truths(s, 6, seed=0)
+    assert len(ts) == 6 and knowledge_truths(s, 0) == []
+    i0 = np.asarray(prior.inertia)
+    for t in ts:
+        moments = np.diag(t.truth.inertia)
+        assert np.all(np.abs(moments / np.diag(i0) - 1) <= prior.moi_uncertainty)
+        assert not np.allclose(moments, np.diag(i0))
+        for k in ("tau_delay", "tau_rise", "tau_fall"):
+            lo, hi = getattr(prior.pulse, f"{k}_range")
+            assert lo <= getattr(t.truth.pulse, k) <= hi
+        assert len(t.wheel_inertia_errors) == len(s.truth.wheel_names)
+        assert np.all(np.abs(t.external_torque_body_nm) < 6 * prior.knowledge.torque_sd_nm)
+    again = knowledge_truths(s, 6, seed=0)
+    assert all(np.array_equal(a.truth.inertia, b.truth.inertia) for a, b in zip(ts, again))
+    assert not np.array_equal(knowledge_truths(s, 1, seed=1)[0].truth.inertia,
+                              ts[0].truth.inertia)
+
+
+def test_evaluate_thrust_over_truths_is_the_median_beside_the_nominal():
+    """``truths=2``: each site's sd is the median of three predictions, the nominal one kept
+    beside it and inside the range; ``plan evaluate --truths`` prints and saves it."""
+    from cassini_bayes.plan.thrust import evaluate_thrust
+
+    s = scenario_from_dict(_small_event())
+    nominal = evaluate_thrust(s, "mean")
+    p = evaluate_thrust(s, "mean", truths=2)
+    assert p.truths == 2 and nominal.truths == 0
+    np.testing.assert_array_equal(nominal.site_sd_range[1], nominal.site_sd)
+    np.testing.assert_allclose(p.site_sd_nominal, nominal.site_sd, rtol=1e-9)
+    lo, hi = p.site_sd_range
+    assert np.all(lo <= p.site_sd) and np.all(p.site_sd <= hi)
+    assert np.all(lo <= p.site_sd_nominal) and np.all(p.site_sd_nominal <= hi)
+    assert np.any(hi > 1.01 * lo)           # the truths' flights tell different amounts
+
+
+def test_truths_are_refused_where_they_mean_nothing(tmp_path):
+    from cassini_bayes.api import evaluate_plan
+
+    with pytest.raises(InputError, match="truths"):
+        evaluate_plan("slews_post_prm", truths=2)
+    with pytest.raises(InputError, match="truths"):
+        evaluate_plan("slews_post_prm", truths=-1)

@@ -155,7 +155,7 @@ def _with_model(s: Scenario, spacecraft: PathArg, calibration: str,
 
 
 def _predict(s: Scenario, calibration: str, lim: Any, *, wheel: str | None, prior: str,
-             mode: str) -> tuple[Any, dict[str, Any]]:
+             mode: str, truths: int = 0) -> tuple[Any, dict[str, Any]]:
     """The calibration's predicted posterior and its ``summary.json`` block."""
     pred: Any
     if calibration == "wheel-axis":
@@ -167,7 +167,7 @@ def _predict(s: Scenario, calibration: str, lim: Any, *, wheel: str | None, prio
         from cassini_bayes.plan.thrust import evaluate_thrust
         from cassini_bayes.plan.thrust_planner import pulse_usage
 
-        pred = evaluate_thrust(s, mode, lim)
+        pred = evaluate_thrust(s, mode, lim, truths=truths)
         if lim is not None:
             pred = pred._replace(usage={**pred.usage, **pulse_usage(pred, lim)})
         return pred, thrust_block(pred)
@@ -183,7 +183,8 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
                   calibration: Literal["inertia", "wheel-axis", "thrust"] | None = None,
                   wheel: str | None = None,
                   prior: Literal["uniform", "cone"] = "uniform",
-                  mode: Literal["mean", "branch", "thruster"] = "mean") -> PlanEvaluation:
+                  mode: Literal["mean", "branch", "thruster"] = "mean",
+                  truths: int = 0) -> PlanEvaluation:
     """Predicted posterior sd of every parameter of the robust inertia fit (inertia, momentum,
     torques and each nuisance parameter), or of the RWA-method wheel-axis fit (the axis and the
     inertia, the nuisances integrated out), for the manoeuvre of a scenario: the Laplace
@@ -206,10 +207,15 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     prior : the wheel-axis fit's axis prior (``"uniform"`` or ``"cone"``).
     mode : the thrust fit's mode (``fit thrust --mode``): ``"mean"``, ``"branch"`` or
         ``"thruster"``.
+    truths : thrust only: also predict on this many truths drawn from the model file's
+        knowledge, each flown by its own controller, and give each site's median (a
+        closed-loop biasing event's pulses follow the truth; docs/planning.md).
     """
     from cassini_bayes.plan.limits import load_limits
 
     _check_options(calibration, prior, mode)
+    if not isinstance(truths, int) or truths < 0:
+        raise InputError(f"{arg('truths', truths)}: give a whole number of truths, 0 or more")
     inputs: list[Path] = []
     s = _load_scenario(scenario, inputs)
     calib = _calibration_of(s, calibration, wheel)
@@ -220,7 +226,10 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
     if limits is not None:
         lim, _ = load_limits(limits, sc_path, slews=calib != "thrust")
         inputs.append(Path(lim.source))
-    pred, block = _predict(s, calib, lim, wheel=wheel, prior=prior, mode=mode)
+    if truths and calib != "thrust":
+        raise InputError(f"{arg('truths', truths)}: only a thrust prediction draws truths "
+                         f"(this scenario is a {calib} calibration)")
+    pred, block = _predict(s, calib, lim, wheel=wheel, prior=prior, mode=mode, truths=truths)
     summary = {"kind": "plan", "command": "plan evaluate", "calibration": calib,
                "version": __version__, "scenario": s.name, "spacecraft": sc_path,
                "limits": None if lim is None else lim.to_dict(),
@@ -229,5 +238,5 @@ def evaluate_plan(scenario: PathArg | Scenario, *, spacecraft: PathArg | None = 
               "inputs": {"scenario": s.source, "spacecraft": sc_path,
                          "limits": None if lim is None else lim.source},
               "options": {"calibration": calib, "wheel": wheel, "prior": prior,
-                          "mode": mode}}
+                          "mode": mode, "truths": truths}}
     return PlanEvaluation(pred, s, config, lim, summary, tuple(inputs))

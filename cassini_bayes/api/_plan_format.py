@@ -120,7 +120,12 @@ def thrust_block(p: Any) -> dict:
            "max_ratio": p.max_ratio, "worst": p.worst, "n_pulses": p.n_pulses,
            "pulse_widths_s": list(p.pulse_widths_s), "floored_directions": p.floored,
            "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
-           "duration_s": p.duration_s}
+           "duration_s": p.duration_s, "truths": p.truths}
+    if p.truths:
+        lo, hi = p.site_sd_range
+        for i, n in enumerate(p.sites):
+            out["sites"][n].update(sd_nominal=float(p.site_sd_nominal[i]),
+                                   sd_range=[float(lo[i]), float(hi[i])])
     out.update(usage_fields(p.usage, tol=1e-9))
     return out
 
@@ -128,9 +133,12 @@ def thrust_block(p: Any) -> dict:
 def format_thrust_table(p: Any, title: str) -> str:
     """The predicted sd of each thrust site beside its budget and prior sd, as printed."""
     lines = [title, f"{p.n_pulses} pulses of widths "
-             + ", ".join(f"{w:g}" for w in p.pulse_widths_s) + " s; fit mode " + p.mode,
-             f"{'':10s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
-             f"{'prior sd':>10s} {'sd/prior':>9s}   (N, s, m, kg m^2)"]
+             + ", ".join(f"{w:g}" for w in p.pulse_widths_s) + " s; fit mode " + p.mode]
+    if p.truths:
+        lines.append(f"predicted sd: the median over the nominal truth and {p.truths} drawn from "
+                     "the model file's knowledge (each flown by its own controller)")
+    lines.append(f"{'':10s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
+                 f"{'prior sd':>10s} {'sd/prior':>9s}   (N, s, m, kg m^2)")
     for n, sd, pr, b in zip(p.sites, p.site_sd, p.site_prior_sd, p.budget):
         r = f"{sd / b:10.3f}" if np.isfinite(b) else f"{'-':>10s}"
         bs = f"{b:10.4g}" if np.isfinite(b) else f"{'-':>10s}"

@@ -54,6 +54,9 @@ def _evaluate_cmd(
                                      "whose true axis is off the model's, else RWA4)."),
     prior: str = typer.Option("uniform", "--prior", help="Wheel-axis fit's axis prior: "
                               "uniform or cone."),
+    truths: int = typer.Option(0, "--truths", min=0, help="Thrust: also predict on N truths "
+                               "drawn from the model file's knowledge and give the median "
+                               "(a closed-loop event flies differently for each)."),
     force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
                                "cassini-bayes wrote."),
 ) -> None:
@@ -63,7 +66,8 @@ def _evaluate_cmd(
     if out is not None:
         check_out(out, force=force, inputs=[scenario])
     res = evaluate_plan(str(scenario), spacecraft=spacecraft, limits=limits,
-                        calibration=calibration, wheel=wheel, prior=prior, mode=mode)
+                        calibration=calibration, wheel=wheel, prior=prior, mode=mode,
+                        truths=truths)
     typer.echo(res.table())
     if out is not None:
         res.save(out, force=force)

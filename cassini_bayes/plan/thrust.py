@@ -65,6 +65,9 @@ class ThrustPrediction(NamedTuple):
     distinct widths. duration_s; t, omega, wheel_rpm, wheel_names, pulse_t, pulse_width,
     pulse_thruster : the noise-free flight for the report's figure. floored : the directions
     whose curvature at the truth was below :data:`CURVATURE_MIN` (given unit curvature).
+    truths : the truths drawn from the model file's knowledge besides the nominal one
+    (:func:`evaluate_thrust`); site_sd is the median over them and the nominal truth,
+    site_sd_nominal the nominal truth's, site_sd_range the least and largest.
     """
 
     mode: str
@@ -87,6 +90,9 @@ class ThrustPrediction(NamedTuple):
     pulse_width: np.ndarray
     pulse_thruster: tuple[str, ...]
     floored: int = 0
+    truths: int = 0
+    site_sd_nominal: np.ndarray | None = None
+    site_sd_range: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def ratio(self) -> np.ndarray:
@@ -287,34 +293,38 @@ def noise_free_problem(s: Scenario, mode: str = "mean"):
     return sim, problem, sig
 
 
-def evaluate_thrust(s: Scenario, mode: str = "mean",
-                    limits: Limits | None = None) -> ThrustPrediction:
+def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = None, *,
+                    truths: int = 0, seed: int = 0) -> ThrustPrediction:
     """Predicted posterior of the default robust thrust fit (inertia sampled from the model
     file's knowledge, per-wheel scales) of the biasing event of scenario ``s`` in thrust
-    ``mode`` (module docstring)."""
-    from cassini_bayes.inference.thrust.design import combination_label
+    ``mode`` (module docstring).
+
+    ``truths`` > 0: the prediction is also made on that many truths drawn from the model file's
+    knowledge (:func:`~cassini_bayes.plan.truths.knowledge_truths`, stream ``seed``), each flown
+    by its own controller, and each site's sd is the median over them and the nominal truth (a
+    closed-loop event's pulses, and so what it tells, follow the truth); ``site_sd_nominal`` and
+    ``site_sd_range`` keep the nominal and the spread."""
+    from cassini_bayes.plan.truths import knowledge_truths
 
     sim, problem, sig = noise_free_problem(s, mode)
     s = representable(s, mode)
     sc = s.prior
     names = _site_names(problem)
     truth = _truth(s, problem, names)
-    lap = predict_thrust(problem, sig, at=_truth_vector(problem, names, truth))
-    sd = np.sqrt(np.diag(lap.site_cov))
     prior_sd = _prior_sd(problem, names)
-    budget = thrust_budgets(sc, names, problem.thrust_pred)
-    combos = {}
-    if problem.design is not None and problem.design.combinations.size:
-        m = len(problem.thrusters)
-        cf = lap.site_cov[:m, :m]
-        pred = np.asarray(problem.thrust_pred, float)
-        prior_cov = np.diag(prior_sd[:m] ** 2)
-        for w in problem.design.combinations:
-            lab = combination_label(w, problem.thrusters)
-            if np.count_nonzero(np.abs(w) > 1e-12) < 2:
-                continue      # a single thruster: its own site
-            combos[lab] = (float(np.sqrt(w @ cf @ w)), float(np.sqrt(w @ prior_cov @ w)),
-                           float(0.01 * _thrust_pct() * abs(w @ pred)))
+    lap = predict_thrust(problem, sig, at=_truth_vector(problem, names, truth))
+    sds = [np.sqrt(np.diag(lap.site_cov))]
+    combos = [_combinations(problem, lap.site_cov, prior_sd)]
+    for t in knowledge_truths(s, truths, seed):
+        _, p_t, sig_t = noise_free_problem(t, mode)
+        t = representable(t, mode)
+        lap_t = predict_thrust(p_t, sig_t, at=_truth_vector(p_t, names, _truth(t, p_t, names)))
+        sds.append(np.sqrt(np.diag(lap_t.site_cov)))
+        combos.append(_combinations(p_t, lap_t.site_cov, prior_sd))
+    sd_all = np.array(sds)
+    sd = np.median(sd_all, axis=0)
+    combo = {k: (float(np.median([c[k][0] for c in combos if k in c])), v[1], v[2])
+             for k, v in combos[0].items()}
     arr = sim.arrays
     usage = {}
     if limits is not None:
@@ -324,15 +334,37 @@ def evaluate_thrust(s: Scenario, mode: str = "mean",
                    np.nan)
     log = sim.pulses
     return ThrustPrediction(
-        mode=mode, sites=tuple(names), site_sd=sd, site_prior_sd=prior_sd, budget=budget,
-        truth=truth, combinations=combos, noise=sig, usage=usage,
-        n_pulses=int(log.t_on.size),
+        mode=mode, sites=tuple(names), site_sd=sd, site_prior_sd=prior_sd,
+        budget=thrust_budgets(sc, names, problem.thrust_pred), truth=truth, combinations=combo,
+        noise=sig, usage=usage, n_pulses=int(log.t_on.size),
         pulse_widths_s=tuple(float(x) for x in np.unique(np.round(log.width, 6))),
         duration_s=s.duration_s, t=np.asarray(arr.t), omega=np.asarray(arr.omega),
         wheel_rpm=rpm, wheel_names=tuple(s.wheel_names), pulse_t=np.asarray(log.t_on, float),
         pulse_width=np.asarray(log.width, float),
         pulse_thruster=tuple(log.thruster_names[i] for i in np.asarray(log.thruster)),
-        floored=lap.floored)
+        floored=lap.floored, truths=truths, site_sd_nominal=sds[0],
+        site_sd_range=(sd_all.min(axis=0), sd_all.max(axis=0)))
+
+
+def _combinations(problem, site_cov: np.ndarray, prior_sd: np.ndarray) -> dict:
+    """``{label: (sd, prior sd, budget)}`` of the thrust combinations the design identifies
+    (mode ``thruster``; a single thruster is its own site)."""
+    from cassini_bayes.inference.thrust.design import combination_label
+
+    if problem.design is None or not problem.design.combinations.size:
+        return {}
+    m = len(problem.thrusters)
+    cf = site_cov[:m, :m]
+    pred = np.asarray(problem.thrust_pred, float)
+    prior_cov = np.diag(prior_sd[:m] ** 2)
+    out = {}
+    for w in problem.design.combinations:
+        if np.count_nonzero(np.abs(w) > 1e-12) < 2:
+            continue
+        out[combination_label(w, problem.thrusters)] = (
+            float(np.sqrt(w @ cf @ w)), float(np.sqrt(w @ prior_cov @ w)),
+            float(0.01 * _thrust_pct() * abs(w @ pred)))
+    return out
 
 
 def _truth_vector(problem, names: list[str], truth: np.ndarray) -> np.ndarray:

@@ -42,7 +42,7 @@ from cassini_bayes.spacecraft import check_physical_inertia
 from cassini_bayes.telemetry import Telemetry
 
 __all__ = ["LAWS", "WIDEN", "EFFECTS_OFF", "OpenWorld", "draw_law", "draw_open_world",
-           "without", "apply_time_tags", "base_scenario"]
+           "without", "apply_time_tags", "base_scenario", "inertia_from_knowledge"]
 
 LAWS = ("uniform", "student_t3", "laplace")
 """The non-Normal families, each parametrised by its sd: uniform on ``±√3 sd``, Student-t(3)
@@ -107,11 +107,11 @@ def _effect(rng, name: str, sd: float, size, record: dict) -> np.ndarray:
     return x
 
 
-def _inertia(rng, prior, record: dict) -> dict[str, float]:
-    """True inertia uniform on the prior model's knowledge box about its prediction (redrawn until
-    physical: the triangle inequalities of the principal moments)."""
+def inertia_from_knowledge(rng: np.random.Generator, prior) -> tuple[np.ndarray, np.ndarray]:
+    """A true inertia ``(Ixx … Iyz)`` kg m² uniform on the prior model's knowledge box about its
+    prediction, redrawn until physical (the triangle inequalities of the principal moments);
+    returns it and the box's half-widths."""
     i0 = np.asarray(prior.inertia, float)
-    names = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
     centre = np.array([i0[0, 0], i0[1, 1], i0[2, 2], i0[0, 1], i0[0, 2], i0[1, 2]])
     half = np.concatenate([prior.moi_uncertainty * centre[:3], np.full(3, prior.poi_uncertainty)])
     for _ in range(100):
@@ -121,10 +121,18 @@ def _inertia(rng, prior, record: dict) -> dict[str, float]:
             check_physical_inertia(m, "the drawn inertia", "<open world>")
         except InputError:
             continue
-        record["inertia"] = {"law": "uniform", "half_width": half.tolist(),
-                             "prediction": centre.tolist(), "values": v.tolist()}
-        return dict(zip(names, v.tolist()))
+        return v, half
     raise InputError("no physical inertia in 100 draws from the model file's knowledge box")
+
+
+def _inertia(rng, prior, record: dict) -> dict[str, float]:
+    """True inertia from the prior model's knowledge box (:func:`inertia_from_knowledge`)."""
+    v, half = inertia_from_knowledge(rng, prior)
+    i0 = np.asarray(prior.inertia, float)
+    centre = np.array([i0[0, 0], i0[1, 1], i0[2, 2], i0[0, 1], i0[0, 2], i0[1, 2]])
+    record["inertia"] = {"law": "uniform", "half_width": half.tolist(),
+                         "prediction": centre.tolist(), "values": v.tolist()}
+    return dict(zip(("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"), v.tolist()))
 
 
 def _thrusters(rng, prior, widen: float, record: dict) -> dict[str, Any]:
