@@ -125,7 +125,8 @@ def test_bad_thrust_limits_are_one_line_errors(change, key):
 def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     """``plan thrust`` on a 4-minute ESPA event with the longest pulse 250 ms and two thrusters
     forbidden: the written scenario simulates (noisy, ``simulate``) within every limit, on the
-    telemetry and on the pulse log, and ``plan evaluate`` gives the plan's prediction."""
+    telemetry and on the pulse log, and ``plan evaluate`` gives the plan's prediction (both
+    over the nominal truth and one drawn from the model file's knowledge)."""
     import tomli_w
 
     from cassini_bayes.plan import checks
@@ -136,7 +137,7 @@ def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     lim_file = tmp_path / "limits.toml"
     lim_file.write_text(tomli_w.dumps(d))
     code, out, err = run_cli("plan", "thrust", "--spacecraft", "espa_bus", "--limits", lim_file,
-                             "--out", tmp_path / "p")
+                             "--out", tmp_path / "p", "--truths", "1")
     assert code == 0, err
     s = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert s["plan"]["limits_ok"]
@@ -151,8 +152,10 @@ def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     assert all(v <= 1.0 for v in u.values()), u
     log = read_pulses(tmp_path / "sim" / "pulses.csv", spacecraft=base.prior)
     assert lim.min_pulse_s - 1e-9 <= log.width.min() and log.width.max() <= lim.max_pulse_s + 1e-9
-    code, out, err = run_cli("plan", "evaluate", tmp_path / "p" / "scenario.toml")
+    code, out, err = run_cli("plan", "evaluate", tmp_path / "p" / "scenario.toml",
+                             "--truths", "1")
     assert code == 0, err
+    assert s["plan"]["truths"] == 1
     assert f"{s['plan']['sites']['F']['sd']:.4g}" in out
 
 
@@ -228,3 +231,7 @@ def test_truths_are_refused_where_they_mean_nothing(tmp_path):
         evaluate_plan("slews_post_prm", truths=2)
     with pytest.raises(InputError, match="truths"):
         evaluate_plan("slews_post_prm", truths=-1)
+    from cassini_bayes.api import plan_thrust
+
+    with pytest.raises(InputError, match="truths"):
+        plan_thrust("espa_bus", "thrust_espa_bus", truths=-2)

@@ -87,7 +87,7 @@ def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
                 mode: Literal["mean", "branch", "thruster"] = "mean",
                 target: Literal["max_ratio", "max_ratio_thrust"] = "max_ratio",
                 baseline: PathArg | None = None, goal: float | None = None,
-                progress: bool = False) -> ThrustPlanResult:
+                truths: int = 0, progress: bool = False) -> ThrustPlanResult:
     """Plan a thrust calibration: the wheel-biasing event within ``limits`` (pulse widths,
     spin-up targets) that minimises ``target`` of the robust thrust fit's predicted posterior,
     by a documented search (:mod:`cassini_bayes.plan.thrust_planner`, docs/planning.md).
@@ -102,6 +102,9 @@ def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
     baseline : scenario to compare with (path or shipped name; e.g. the shipped biasing event
         of the same duration).
     goal : the value of ``target`` wanted; a plan that cannot reach it says so.
+    truths : the plan's and the baseline's predictions are the median over the nominal truth
+        and this many drawn from the model file's knowledge (the search itself ranks at the
+        nominal truth): a closed-loop event's pulses follow the truth (docs/planning.md).
     progress : print the search's steps on stderr.
     """
     from dataclasses import replace
@@ -115,12 +118,14 @@ def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
     if target not in THRUST_TARGETS:
         raise InputError(f"{arg('target', target)}: choose one of {', '.join(THRUST_TARGETS)}")
     check_positive("goal", goal, "a positive number (sd over budget)")
+    if not isinstance(truths, int) or truths < 0:
+        raise InputError(f"{arg('truths', truths)}: give a whole number of truths, 0 or more")
     pi = planner_inputs(spacecraft, limits, slews=False)
     bl = load_baseline(baseline, pi.inputs)
     if bl is not None:    # the comparison is fitted with the plan's model as its prior
         bl = replace(bl, prior=load_spacecraft(pi.sc_file), prior_model_path=str(pi.sc_file))
     plan = plan_thrust_event(pi.lim, pi.base, pi.ref, mode=mode, target=target, baseline=bl,
-                             progress=progress_printer(progress))
+                             truths=truths, progress=progress_printer(progress))
     value = target_value(plan.prediction, target)
     warns = []
     if goal is not None and value > goal:
@@ -129,6 +134,6 @@ def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
     summary = _thrust_summary(plan, pi, mode, target, value, goal, warns)
     config = {"command": "plan thrust", "version": __version__,
               "inputs": inputs_config(pi, bl),
-              "options": {"mode": mode, "target": target, "goal": goal}}
+              "options": {"mode": mode, "target": target, "goal": goal, "truths": truths}}
     emit_warnings(warns)
     return ThrustPlanResult(plan, config, summary, tuple(pi.inputs))

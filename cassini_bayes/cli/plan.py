@@ -126,6 +126,9 @@ def _thrust_cmd(
                                         "duration)."),
     goal: float | None = typer.Option(None, "--goal", min=0.0, help="Target value wanted; "
                                       "a plan that cannot reach it says so."),
+    truths: int = typer.Option(0, "--truths", min=0, help="Predict the plan and the "
+                               "comparison as the median over N truths drawn from the model "
+                               "file's knowledge too (the search ranks at the nominal one)."),
     force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
                                "cassini-bayes wrote."),
 ) -> None:
@@ -138,7 +141,7 @@ def _thrust_cmd(
     check_out(out, force=force)
     t0 = time.perf_counter()
     res = plan_thrust(spacecraft, limits, mode=mode, target=target, baseline=baseline,
-                      goal=goal, progress=True)
+                      goal=goal, truths=truths, progress=True)
     s, mark = _saved(res, out, force)
     imp = s["improvement"]
     console.print(f"{mark} {s['target']} {s['target_value']:.3f} ({s['plan']['worst']})"

@@ -169,12 +169,15 @@ def _limits_ok(usage: dict) -> bool:
 def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mode: str = "mean",
                       target: str = "max_ratio", widths: list[float] | None = None,
                       fractions: tuple[float, ...] = WHEEL_FRACTIONS,
-                      baseline: Scenario | None = None,
+                      baseline: Scenario | None = None, truths: int = 0,
                       progress: Callable[[str], None] | None = None) -> ThrustPlan:
     """Search the candidates (module docstring) and return the best that keeps every limit on its
     simulated flight; the comparison is ``baseline`` evaluated with the same model file and
-    limits. Raises :class:`~cassini_bayes.errors.InputError` when no candidate keeps the limits
-    (naming the limit the best one breaks)."""
+    limits. ``truths``: the plan's and the baseline's predictions (not the search's) are the
+    median over the nominal truth and that many drawn from the model file's knowledge
+    (:func:`~cassini_bayes.plan.thrust.evaluate_thrust`). Raises
+    :class:`~cassini_bayes.errors.InputError` when no candidate keeps the limits (naming the
+    limit the best one breaks)."""
     from cassini_bayes.errors import InputError
 
     widths = candidate_widths(limits) if widths is None else widths
@@ -210,9 +213,13 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
                          "flight; widen that limit or lengthen 'limits.duration_s'",
                          path=limits.source)
     _, d, p, c = best
+    if truths:
+        p = evaluate_thrust(scenario_from_dict(copy.deepcopy(d), limits.source), mode, limits,
+                            truths=truths)
+        p = p._replace(usage={**p.usage, **pulse_usage(p, limits)})
     base_pred, base_name, base_dict = None, "", None
     if baseline is not None:
-        base_pred = evaluate_thrust(baseline, mode, limits)
+        base_pred = evaluate_thrust(baseline, mode, limits, truths=truths)
         base_pred = base_pred._replace(usage={**base_pred.usage,
                                               **pulse_usage(base_pred, limits)})
         base_name = f"{baseline.name} (shipped, {baseline.duration_s:g} s)"
