@@ -257,3 +257,35 @@ def plan_weak_z(args: list[Records]) -> str:
                      for e in entries]
             rows.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
+
+
+@kind("plan_thrust_truths")
+def plan_thrust_truths(args: list[Records]) -> str:
+    """Fitted over predicted sd (median over the open-world seeds) against three predictions
+    of benchmarks/plan_thrust.py's records made with ``--truths`` (and ``--matched``): at the
+    nominal truth, the median over the nominal and the drawn knowledge truths (what a plan can
+    know before it flies), and at each seed's own truth."""
+    from statistics import median
+
+    rows = ["| scenario, seeds | prediction | F | tau_delay | tau_rise | tau_fall | Ixx…Izz | "
+            "Ixy…Iyz | sites within ±25 % |", "|" + "---|" * 9]
+    for r in _results(args):
+        names, sites, fits = list(r["sites"]), r["sites"], r["fits"]
+        preds = {"nominal truth": [[sites[n]["predicted_nominal"] for n in names]] * len(fits),
+                 f"median over {r['predicted_over_truths'] + 1} truths":
+                     [[sites[n]["predicted"] for n in names]] * len(fits)}
+        if all("predicted_matched" in f for f in fits):
+            preds["each seed's own truth"] = [f["predicted_matched"] for f in fits]
+        for label, pred in preds.items():
+            med = {n: median(f["sd"][i] / p[i] for f, p in zip(fits, pred))
+                   for i, n in enumerate(names)}
+            k = sum(abs(m - 1.0) <= 0.25 for m in med.values())
+            within = f"{k}/{len(med)}"
+            rows.append(
+                f"| `{r['scenario']}`, {len(fits)} | {label} | "
+                + " | ".join(_ratio(med[t]) for t in ("F", "tau_delay", "tau_rise", "tau_fall"))
+                + " | " + " | ".join(
+                    f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
+                    for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
+                + f" | {f'**{within}**' if k == len(med) else within} |")
+    return "\n".join(rows)

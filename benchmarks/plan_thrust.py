@@ -16,11 +16,13 @@ prediction's own assumptions). Not a test.
 
     python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
         [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
-        [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD]
+        [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD] [--matched]
 
 ``--truths N``: the prediction is the median over the nominal truth and N truths drawn from the
 model file's knowledge (``plan evaluate --truths``). ``--fits-from RECORD``: each case's fits
 are those of another record (same case, settings and truths), only the prediction is made.
+``--matched``: also the prediction at each seed's own open-world truth (its noise-free flight,
+its own pulses), each fit's ``predicted_matched``.
 ``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
 without`; every other draw unchanged). ``--resume`` keeps the fits of an interrupted ``--json``
 record (same options; the prediction is re-made, noise-free and deterministic) and fits the seeds
@@ -55,8 +57,34 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
     return d.std(0).tolist(), d
 
 
+def _open_world(name: str, seed: int, off: tuple, src: str):
+    """The open-world truth of ``seed`` (its draw and its scenario)."""
+    import numpy as np
+
+    from cassini_bayes.simulate import scenario_from_dict
+    from cassini_bayes.simulate.open_world import draw_open_world, without
+
+    ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
+    ow = without(ow, off) if off else ow
+    return ow, scenario_from_dict(ow.scenario, src=src)
+
+
+def matched(fits: list, name: str, mode: str, off: tuple, src: str) -> None:
+    """Add to each fit the prediction at its own truth (``predicted_matched``: the noise-free
+    flight of that truth, its own pulses)."""
+    from cassini_bayes.plan.thrust import evaluate_thrust
+
+    for f in fits:
+        if "predicted_matched" not in f:
+            f["predicted_matched"] = evaluate_thrust(_open_world(name, f["seed"], off, src)[1],
+                                                     mode).site_sd.tolist()
+            print(f"{name} seed {f['seed']}: predicted at its own truth", file=sys.stderr,
+                  flush=True)
+
+
 def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
-        fits: list | None = None, off: tuple = (), truths: int = 0) -> dict:
+        fits: list | None = None, off: tuple = (), truths: int = 0,
+        match: bool = False) -> dict:
     """One case: the prediction, then the fits of seeds ``len(fits) .. seeds - 1`` (``fits``:
     those of a resumed record, kept)."""
     import jax
@@ -66,8 +94,8 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
     from cassini_bayes.inference.thrust import fit_thrust
     from cassini_bayes.plan.thrust import _truth, evaluate_thrust
     from cassini_bayes.plan.wheel_axis import scenario_noise
-    from cassini_bayes.simulate import load_scenario, scenario_from_dict, simulate
-    from cassini_bayes.simulate.open_world import apply_time_tags, draw_open_world, without
+    from cassini_bayes.simulate import load_scenario, simulate
+    from cassini_bayes.simulate.open_world import apply_time_tags
 
     name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
     s = load_scenario(name)
@@ -85,9 +113,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
             sim = simulate(k_sim, si)
             tel = sim.telemetry
         else:
-            ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
-            ow = without(ow, off) if off else ow
-            si = scenario_from_dict(ow.scenario, src=s.source)
+            ow, si = _open_world(name, seed, off, s.source)
             sim = simulate(k_sim, si)
             tel = apply_time_tags(sim.telemetry, ow)
         sensor = np.asarray(scenario_noise(si)[:2], float)
@@ -115,6 +141,8 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
         release_compiled_programs()   # docs/limits.md: mappings of compiled programs
         if partial is not None:
             partial(_summary(case, s, mode, pred, t_pred, names, fits, nominal, off))
+    if match and not nominal:
+        matched(fits, name, mode, off, s.source)
     return _summary(case, s, mode, pred, t_pred, names, fits, nominal, off)
 
 
@@ -135,6 +163,10 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) ->
                  "coverage90": float(hits[:, i].mean())}
              for i, n in enumerate(names)}
     med = np.median(ratio, 0)
+    if fits and all("predicted_matched" in f for f in fits):
+        own = sd / np.array([f["predicted_matched"] for f in fits])
+        for i, n in enumerate(names):
+            sites[n]["ratio_matched_median"] = float(np.median(own[:, i]))
     return {"case": case, "scenario": s.name, "mode": mode, "seeds": len(fits),
             "truths": "nominal" if nominal else "open_world", "without": sorted(off),
             "predicted_over_truths": int(pred.truths),
@@ -166,6 +198,8 @@ def main(argv=None) -> None:
     ap.add_argument("--truths", type=int, default=0,
                     help="predict as the median over the nominal truth and N drawn from the "
                          "model file's knowledge (plan evaluate --truths)")
+    ap.add_argument("--matched", action="store_true",
+                    help="also predict at each seed's own open-world truth")
     ap.add_argument("--fits-from", type=Path, metavar="RECORD",
                     help="take the fits of each case from this record (same settings): only "
                          "the prediction is made")
@@ -205,7 +239,8 @@ def main(argv=None) -> None:
     for case in a.case:
         done = list(out["results"])
         r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
-                fits=before.get(case), off=tuple(a.without), truths=a.truths)
+                fits=before.get(case), off=tuple(a.without), truths=a.truths,
+                match=a.matched)
         out["results"].append(r)
         kind = "nominal" if a.nominal else "open-world"
         print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "
@@ -215,7 +250,9 @@ def main(argv=None) -> None:
         for lab, v in r["sites"].items():
             print(f"  {lab:10s} pred {v['predicted']:10.4g}  fit {v['fitted_median']:10.4g}  "
                   f"ratio {v['ratio_median']:.3f} ({v['ratio_min']:.3f}–{v['ratio_max']:.3f})"
-                  f"  cover90 {v['coverage90']:.2f}  prior {v['prior']:.4g}", flush=True)
+                  f"  cover90 {v['coverage90']:.2f}  prior {v['prior']:.4g}"
+                  + (f"  own truth {v['ratio_matched_median']:.3f}"
+                     if "ratio_matched_median" in v else ""), flush=True)
         write(out["results"])
 
 
