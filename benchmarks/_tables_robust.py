@@ -140,3 +140,28 @@ def robust_price(args: list[Records]) -> str:
         f"{max(f['r_hat'] for f in fits[m]):.3f}, {sum(f['divergences'] for f in fits[m])}"
         for m, _ in models) + " |")
     return "\n".join(rows)
+
+
+@kind("thrust_thruster_fits")
+def thrust_thruster_fits(args: list[Records]) -> str:
+    """Per-thruster thrust fits by seed (benchmarks/thrust_thruster_fits.py records): the
+    largest thrust error, the thrusts' median sd, the centre of mass's error, the 90 %
+    intervals that cover (the ones that miss named), R-hat, divergences and the fit's wall."""
+    rows = ["| seed | max \\|thrust error\\| | thrust sd (posterior, median) | offset error "
+            "x, y, z (mm) | 90 % intervals covering | max R-hat | divergences | wall time |",
+            "|---|---|---|---|---|---|---|---|"]
+    for r in (r for group in args for p in group for r in read_json(p)):
+        th, com, tau = r["thrusts"], r["com"], r["tau"]
+        hits = {f"F[{n}]": t["covered_90"] for n, t in th.items()}
+        hits.update({f"com_{a}": c["covered_90"] for a, c in com.items()})
+        hits.update({n: t["covered_90"] for n, t in tau.items()})
+        missed = [n for n, h in hits.items() if not h]
+        cover = f"{len(hits) - len(missed)}/{len(hits)}" + (
+            f" ({', '.join(missed)} out)" if missed else "")
+        d = r["diagnostics"]
+        err = max(abs(t["error_pct"]) for t in th.values())
+        sd = sorted(t["sd_pct"] for t in th.values())[len(th) // 2]
+        offs = ", ".join(f"{1e3 * c['error_m']:+.2f}" for c in com.values())
+        rows.append(f"| {r['seed']} | {err:.2f} % | {sd:.2f} % | {offs} | {cover} | "
+                    f"{d['max_r_hat']:.4f} | {d['divergences']} | {r['seconds']:.0f} s |")
+    return "\n".join(rows)
