@@ -82,3 +82,17 @@ def compile_programs(args: list[Records]) -> str:
     rows.append(f"| all ({runs[0]['run']}) | {runs[0]['programs']} | "
                 f"{sum(s for *_, s in per):.1f} |")
     return "\n".join(rows)
+
+
+@kind("bench_sbc")
+def bench_sbc(args: list[Records]) -> str:
+    """Warm SBC throughput per model and batch (benchmarks/bench_sbc.py records)."""
+    rows = ["| model | batch | replicates/min (wall) | CPU s/replicate | replicates per "
+            "CPU-minute | load average |", "|---|---|---|---|---|---|"]
+    for r in (r for group in args for p in group for r in read_json(p)):
+        how = "vectorised" if r["vectorized"] else "one by one"
+        lo, hi = r["load"]
+        rows.append(f"| {r['model']} | {r['batch']}, {how} | "
+                    f"{60 / r['wall_s_per_replicate']:.0f} | {r['cpu_s_per_replicate']:.3f} | "
+                    f"{60 / r['cpu_s_per_replicate']:.0f} | {lo:.1f}–{hi:.1f} |")
+    return "\n".join(rows)

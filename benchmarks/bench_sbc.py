@@ -1,7 +1,7 @@
 """Benchmark: SBC replicates per minute, per model and batch size, on this machine.
 
     python benchmarks/bench_sbc.py [--models toy,inertia,thrust,rwa4] [--batches 1,8,16,32]
-        [--fit-batch 4] [--repeat 1] [--mcmc-loop 4]
+        [--fit-batch 4] [--repeat 1] [--mcmc-loop 4] [--json bench_sbc.json]
 
 For each model and batch size ``B`` it runs :func:`cassini_bayes.analysis.campaign.run_batch`
 (the unit of work of every executor: prior draws, vmapped simulation, fits, ranks) once to compile,
@@ -16,7 +16,8 @@ the simulator models 300 warm-up, 300 draws, 2 chains), the ones a campaign uses
 of a campaign: ``N / rate`` minutes on this machine; with a Dask cluster of ``W`` workers on
 ``W`` free cores roughly ``W`` times faster. The load average is printed beside each figure (the
 machine may be shared), and the process's CPU seconds per replicate: on a loaded machine
-``60 / CPU-seconds`` is about the rate the process reaches with a core of its own.
+``60 / CPU-seconds`` is about the rate the process reaches with a core of its own. ``--json``
+writes one record per setting (the table kind ``bench_sbc`` reads it) with its manifest.
 """
 
 from __future__ import annotations
@@ -90,7 +91,13 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=1, help="warm batches timed per setting")
     ap.add_argument("--mcmc-loop", type=int, default=4,
                     help="replicates timed for the MCMC-loop baseline (0: skip)")
+    ap.add_argument("--json", help="write the records here (with a manifest)")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
+    records = []
     warnings.simplefilter("ignore")
     print(f"jax {jax.__version__}, devices {jax.devices()}, cpu count {os.cpu_count()}")
     rows = []
@@ -103,6 +110,10 @@ def main(argv=None) -> int:
             first, warm, cpu = time_batches(spec, b, args.repeat)
             how = "vmapped batch" if build_model(spec).vectorized else "batch (fits one by one)"
             rows.append((name, f"{how} B={b}", first, warm / b, 60 * b / warm))
+            records.append({"model": name, "batch": b,
+                            "vectorized": bool(build_model(spec).vectorized),
+                            "first_s": first, "wall_s_per_replicate": warm / b,
+                            "cpu_s_per_replicate": cpu / b, "load": [load, os.getloadavg()[0]]})
             print(f"{rows[-1][0]:8s} {rows[-1][1]:28s} first {first:7.1f} s   "
                   f"{warm / b:7.3f} s/replicate   {60 * b / warm:8.1f} replicates/min   "
                   f"CPU {cpu / b:6.3f} s/replicate ({60 * b / cpu:7.1f} per CPU-minute)   "
@@ -120,6 +131,10 @@ def main(argv=None) -> int:
     for name, how, _, per, rate in rows:
         if how.startswith("loop") and name in best:
             print(f"{name}: best vmapped batch / MCMC loop = {best[name] / rate:.1f}x")
+    if args.json:
+        from _provenance import write_json
+
+        write_json(args.json, records)
     return 0
 
 
