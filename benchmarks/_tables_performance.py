@@ -96,3 +96,19 @@ def bench_sbc(args: list[Records]) -> str:
                     f"{60 / r['wall_s_per_replicate']:.0f} | {r['cpu_s_per_replicate']:.3f} | "
                     f"{60 / r['cpu_s_per_replicate']:.0f} | {lo:.1f}–{hi:.1f} |")
     return "\n".join(rows)
+
+
+@kind("bench_report")
+def bench_report(args: list[Records]) -> str:
+    """CPU cost of a fit's report (benchmarks/bench_report.py records): ``report DIR`` in a
+    fresh process, and ``build_report`` in a warm one with its figures and the run's reading."""
+    rows = ["| run | `cassini-bayes report DIR`, CPU (wall), median | `build_report` warm, CPU "
+            "| of it: figures and PNG | reading the run | load |", "|---|---|---|---|---|---|"]
+    for r in (r for group in args for p in group for r in read_json(p)):
+        w = r["warm_cpu_s"]
+        figs = sum(v for k, v in w.items() if k.endswith(("_figure", "png_bytes")))
+        rows.append(f"| {r['kind']} (`{r['run']}`) | {r['report_cpu_s']:.2f} s "
+                    f"({r['report_wall_s']:.2f} s), {r['repeat']} runs | "
+                    f"{w['build_report (total)']:.2f} s | {figs:.2f} s | "
+                    f"{w.get('load_run', float('nan')):.2f} s | {r['load']:.1f} |")
+    return "\n".join(rows)

@@ -12,7 +12,11 @@ CPU time rather than wall time: the machine this project runs on is shared (2 co
 so wall times are inflated by the load; the load average is printed with the numbers, and
 before/after comparisons must come from the same conditions. Not a test: nothing is asserted.
 
-    python benchmarks/bench_report.py RUN_DIR [RUN_DIR ...] [--repeat 3]
+    python benchmarks/bench_report.py RUN_DIR [RUN_DIR ...] [--repeat 3] [--json report.json]
+
+``--json`` writes one record per run directory (its name and ``summary.json`` kind, the
+``report`` command's CPU and wall medians, the warm stages) with a manifest; the table kind
+``bench_report`` reads it.
 
 Make a run with ``cassini-bayes simulate experiments/scenarios/slews_post_probe.toml --out SIM``
 and ``cassini-bayes fit inertia --telemetry SIM/telemetry.csv --spacecraft cassini_post_probe
@@ -23,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import json
 import os
 import resource
 import shutil
@@ -96,17 +101,32 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("runs", nargs="+", type=Path, help="fit run directories")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--json", type=Path, help="write the records here (with a manifest)")
     args = ap.parse_args(argv)
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), argv, replace=True)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
+    records = []
     for run in args.runs:
+        load = os.getloadavg()[0]
         cpu, wall = cli_cost(run, args.repeat)
         print(f"{run}: `cassini-bayes report` {cpu:.2f} s CPU, {wall:.2f} s wall "
               f"(median of {args.repeat})")
-    for run in args.runs:
+        summ = json.loads((run / "summary.json").read_text())
+        records.append({"run": run.name, "kind": summ.get("kind"), "report_cpu_s": cpu,
+                        "report_wall_s": wall, "repeat": args.repeat, "load": load})
+    for run, rec in zip(args.runs, records):
         in_process(run)                  # first call: imports and first-use costs
         times = in_process(run)
+        rec["warm_cpu_s"] = times
         print(f"{run}: in a warm process, CPU s: "
               + ", ".join(f"{k} {v:.3f}" for k, v in times.items()))
+    if args.json:
+        from _provenance import write_json
+
+        write_json(args.json, records)
 
 
 if __name__ == "__main__":
