@@ -23,12 +23,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from cassini_bayes.names import TAU_NAMES
 from cassini_bayes.simulate.open_world import inertia_from_knowledge
 from cassini_bayes.simulate.scenario import Scenario
 
 __all__ = ["knowledge_truths"]
-
-TAU = ("tau_delay", "tau_rise", "tau_fall")
 
 
 def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
@@ -43,7 +42,7 @@ def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
         v, _ = inertia_from_knowledge(rng, prior)
         inertia = np.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]])
         pulse = replace(s.truth.pulse, **{k: float(rng.uniform(*getattr(prior.pulse, f"{k}_range")))
-                                          for k in TAU})
+                                          for k in TAU_NAMES})
         torques = rng.normal(0.0, kn.torque_sd_nm, (2, 3))
         out.append(replace(s, truth=replace(s.truth, inertia=inertia, pulse=pulse),
                            wheel_inertia_errors=tuple(rng.normal(0.0, sd_j).tolist()),
