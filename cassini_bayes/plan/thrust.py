@@ -315,9 +315,8 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
     lap = predict_thrust(problem, sig, at=_truth_vector(problem, names, truth))
     sds = [np.sqrt(np.diag(lap.site_cov))]
     combos = [_combinations(problem, lap.site_cov, prior_sd)]
-    for t in knowledge_truths(s, truths, seed):
+    for t in knowledge_truths(s, truths, seed):      # drawn from ``s``: representable already
         _, p_t, sig_t = noise_free_problem(t, mode)
-        t = representable(t, mode)
         lap_t = predict_thrust(p_t, sig_t, at=_truth_vector(p_t, names, _truth(t, p_t, names)))
         sds.append(np.sqrt(np.diag(lap_t.site_cov)))
         combos.append(_combinations(p_t, lap_t.site_cov, prior_sd))
