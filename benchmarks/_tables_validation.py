@@ -61,7 +61,8 @@ def basilisk_inertia(args: list[Records]) -> str:
     rows = ["| seed | param | truth | mean [90 %] | error | covered |", "|---|---|---|---|---|---|"]
     for seed, res in flights:
         for r in res["slews"]["rows"]:
-            err = (f"{r['error']:+.3g} ({100 * r['rel_error']:+.2f} %)"
+            rel = r.get("rel_error", r["error"] / r["truth"])
+            err = (f"{r['error']:+.3g} ({100 * rel:+.2f} %)"
                    if r["param"] in ("Ixx", "Iyy", "Izz") else f"{r['error']:+.3g}")
             rows.append(f"| {seed} | {r['param']} | {r['truth']:.6g} | {r['mean']:.5g} "
                         f"[{r['q05']:.5g}, {r['q95']:.5g}] | {err} | "
@@ -90,6 +91,71 @@ def basilisk_wheel_axis(args: list[Records]) -> str:
                     f"{'yes' if a['within_0p5_deg'] else 'no'} | {a['divergences']} | "
                     f"{a['max_r_hat']:.3f} | {a['min_ess_bulk']:.0f} | "
                     f"{'ok' if a['adequacy_ok'] else 'fails'} |")
+    return "\n".join(rows)
+
+
+@kind("basilisk_rwa4_rcs")
+def basilisk_rwa4_rcs(args: list[Records]) -> str:
+    """Per seed and inertia prior: RWA4's fitted axis against the Basilisk truth, its 90 % cone,
+    Brown's 3° and the fit's diagnostics (``validation/basilisk_crosscheck.py``'s ``rcs`` case)."""
+    rows = ["| seed | inertia prior | angle to truth | 90 % cone | covered | ≤ 3° | divergences | "
+            "max R-hat | adequacy |", "|" + "---|" * 9]
+    for seed, res in _flights(args):
+        for r in res["rcs"]["rows"]:
+            prior = ("the Basilisk slews' posterior (`--inertia-posterior`)"
+                     if "slews" in r["prior"] else "the model file's knowledge (±10 %, ±75 kg m²)")
+            rows.append(f"| {seed} | {prior} | {r['error_deg']:.3f}° | {r['cone90_deg']:.3f}° | "
+                        f"{'yes' if r['covered'] else 'no'} | "
+                        f"{'yes' if r['within_budget'] else 'no'} | {r['divergences']} | "
+                        f"{r['max_r_hat']:.3f} | {'ok' if r['adequacy_ok'] else 'fails'} |")
+    return "\n".join(rows)
+
+
+@kind("basilisk_thrust")
+def basilisk_thrust(args: list[Records]) -> str:
+    """Per seed: the thrust and the pulse time constants against Basilisk's (its ramp table's
+    constants; the τf for which Feldman & Lee §V delivers Basilisk's impulses beside them), then
+    the fit's diagnostics (``basilisk_crosscheck.py``'s ``bias`` case)."""
+    rows = ["| seed | param | Basilisk | mean [90 %] | error | covered |", "|" + "---|" * 6]
+    flights = _flights(args)
+    for seed, res in flights:
+        b = res["bias"]
+        for r in b["rows"]:
+            if r["param"] == "F":
+                truth, est = f"{r['truth']:.5f} N", (f"{r['mean']:.5f} [{r['q05']:.5f}, "
+                                                     f"{r['q95']:.5f}] N")
+                err = f"{r['error']:+.5f} N ({100 * r['error'] / r['truth']:+.2f} %)"
+            else:
+                ms = {k: 1e3 * r[k] for k in ("truth", "mean", "q05", "q95", "error")}
+                truth = f"{ms['truth']:.1f} ms"
+                if r["param"] == "tau_fall":
+                    truth += f" (§V equivalent {1e3 * b['truth']['tau_fall_fl_equivalent']:.1f})"
+                est = f"{ms['mean']:.2f} [{ms['q05']:.2f}, {ms['q95']:.2f}] ms"
+                err = f"{ms['error']:+.2f} ms"
+            rows.append(f"| {seed} | {r['param']} | {truth} | {est} | {err} | "
+                        f"{'yes' if r['covered'] else 'no'} |")
+    rows += ["", "| seed | pulses | divergences | max R-hat | min bulk ESS | converged | "
+             "adequacy |", "|" + "---|" * 7]
+    for seed, res in flights:
+        b = res["bias"]
+        d = b["diagnostics"]
+        rows.append(f"| {seed} | {b['truth']['n_pulses']} | {d['divergences']} | "
+                    f"{d['max_r_hat']:.3f} | {d['min_ess_bulk']:.0f} | "
+                    f"{'yes' if d['converged'] else 'no'} | {_adequacy(b['adequacy'])} |")
+    return "\n".join(rows)
+
+
+@kind("basilisk_impulse")
+def basilisk_impulse(args: list[Records]) -> str:
+    """Per commanded width: the impulse per newton of one pulse Basilisk's thrusters delivered
+    (their output messages), the first-order ramp without delay, and Feldman & Lee §V at
+    Basilisk's table constants (the first record's ``bias`` case)."""
+    _, res = _flights(args)[0]
+    rows = ["| commanded width | pulses | Basilisk delivered | first-order rise + decay, "
+            "no delay | Feldman & Lee §V at the table's constants |", "|" + "---|" * 5]
+    for width, v in res["bias"]["truth"]["impulse_per_newton_by_width"].items():
+        rows.append(f"| {float(width):.3f} s | {v['count']} | {v['basilisk_s']:.4f} | "
+                    f"{v['ramp_no_delay_s']:.4f} | {v['feldman_lee_s']:.4f} |")
     return "\n".join(rows)
 
 
