@@ -95,6 +95,19 @@ def test_flight_test_scenario_flies_rwa1_with_rwa2_rwa3():
     np.testing.assert_allclose(s.truth.wheel("RWA1").axis, s.prior.wheel("RWA1").axis)
 
 
+def test_flight_test_fits_rwa1_without_a_cone(tmp_path):
+    """The full campaign's flight test (quick mode skips it): Cassini's RWA1 is a fixed wheel
+    without an articulation cone, so its posterior takes the uniform prior, not an error."""
+    settings = {"n_runs": 1, "posterior_runs": 1, "chains": 1, "warmup": 30, "draws": 30,
+                "flight_test": True, "prior": "cone", "reports": 0}
+    exp = experiment_from_dict({"kind": "rwa4_rwa_campaign", "settings": settings},
+                               src="flight.toml")
+    run_experiment(exp, tmp_path / "out", seed=0)
+    ft = json.loads((tmp_path / "out" / "results.json").read_text())["results"]["flight_test"]
+    assert ft["prior"] == "uniform"
+    assert ft["post_error_deg"] < 5 * ft["cone_deg"]["90"]
+
+
 @pytest.fixture(scope="module")
 def budget_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("budgets") / "error_budgets"

@@ -368,7 +368,10 @@ def flight_test_scenario(scenario_name: str):
 
 def _flight_test(key, settings) -> dict[str, Any]:
     """The flight-test variant: RWA1's axis by Brown Eq 3 (least squares) and by the posterior
-    (:func:`~cassini_bayes.inference.rwa4.fit_rwa4` with ``wheel="RWA1"``)."""
+    (:func:`~cassini_bayes.inference.rwa4.fit_rwa4` with ``wheel="RWA1"``).
+
+    RWA1 is a fixed wheel: the ``cone`` prior applies only where the model file gives RWA1 an
+    articulation cone, else the posterior takes the uniform prior (``out["prior"]``)."""
     from cassini_bayes.estimators.baseline import fit_rwa4_baseline
     from cassini_bayes.inference.rwa4 import detect_windows, fit_rwa4
     from cassini_bayes.simulate import simulate
@@ -387,13 +390,14 @@ def _flight_test(key, settings) -> dict[str, Any]:
     if settings["posterior_runs"] < 1:
         return out
     seed, fkey = fit_seed(k_fit)
+    prior = settings["prior"] if scenario.prior.wheel("RWA1").cone is not None else "uniform"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        post = fit_rwa4(fkey, tel, scenario.prior, method="rwa", pairs=pairs,
-                        prior=settings["prior"], settings=sampler(settings), wheel="RWA1",
+        post = fit_rwa4(fkey, tel, scenario.prior, method="rwa", pairs=pairs, prior=prior,
+                        settings=sampler(settings), wheel="RWA1",
                         robust=settings["model"] == "robust")
     mean = np.asarray(post.direction["mean"], float)
-    out.update(post_error_deg=_angle_deg(mean, truth),
+    out.update(prior=prior, post_error_deg=_angle_deg(mean, truth),
                cone_deg={k: float(v) for k, v in post.direction["cone_deg"].items()},
                converged=bool(post.diagnostics.converged), seed=seed)
     return out
@@ -446,7 +450,7 @@ def rwa4_rwa_campaign(key, settings, ctx) -> ExperimentOutput:
             extra_checks.append(check_fact(
                 "rwa4_rwa_flight_deg", ft["post_error_deg"],
                 label="flight-test variant: RWA1 error, posterior mean", decimals=3,
-                note=f"90 % cone {ft['cone_deg']['90']:.3f}°"))
+                note=f"90 % cone {ft['cone_deg']['90']:.3f}°, {ft['prior']} prior"))
         extra_notes = [
             "Flight test: Brown's RWA method on the flight spacecraft solved for RWA1 (known) "
             "with RWA2 and RWA3 known and found it 0.41° off. Our simulated version has no "
