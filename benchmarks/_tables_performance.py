@@ -44,6 +44,15 @@ def bench_samplers(args: list[Records]) -> str:
     return "\n".join(rows)
 
 
+@kind("bench_samplers_medians")
+def bench_samplers_medians(args: list[Records]) -> str:
+    """Every system's medians of a benchmarks/bench_samplers.py record (its ``medians``)."""
+    from bench_samplers import table
+
+    (path,), = args
+    return table(read_json(path)["medians"])
+
+
 @kind("memory_telemetry")
 def memory_telemetry(args: list[Records]) -> str:
     """Peak memory by file size (benchmarks/memory_telemetry.py's record): a row per size, a

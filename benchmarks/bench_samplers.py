@@ -263,19 +263,34 @@ def summarise(runs: list[dict]) -> list[dict]:
     return rows
 
 
-def print_table(rows: list[dict]) -> None:
+LABELS = {"pkg_cold": "`fit inertia --idealised`, cold cache",
+          "pkg_warm": "`fit inertia --idealised`, warm cache",
+          "pkg_robust_warm": "`fit inertia` (robust), warm cache",
+          "pymc_cold": "PyMC default NUTS, plain model, empty compile dir",
+          "pymc_warm": "PyMC default NUTS, plain model, warm compile dir",
+          "nutpie": "nutpie, plain model", "numpyro": "plain NumPyro, plain model",
+          "pymc_same": "PyMC, package's model, warm compile dir",
+          "nutpie_same": "nutpie, package's model",
+          "numpyro_same": "plain NumPyro, package's model"}
+
+
+def table(rows: list[dict]) -> str:
+    """The medians of :func:`summarise` as a Markdown table, a row per system (the table kind
+    ``bench_samplers_medians`` of docs_tables.py prints it from a record's ``medians``)."""
     def agree(x):
         return "–" if x is None else f"{x:.3f}"
 
-    print("| system | wall s | sampling s (no compile) | min bulk ESS | max R-hat | ESS/s incl. "
-          "| ESS/s excl. | max abs(Δmean)/sd vs PyMC plain | vs PyMC same model | load avg |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    out = ["| system | runs | wall | sampling (no compile) | min bulk ESS | max R-hat | "
+           "ESS/s, everything | ESS/s, sampling | Δmean/sd vs PyMC, plain model | "
+           "vs PyMC, package's model | load |", "|" + "---|" * 11]
     for r in rows:
-        print(f"| {r['system']} | {r['wall_s']:.1f} | {r['t_sample']:.2f} | "
-              f"{r['min_ess_bulk']:.0f} | {r['max_rhat']:.4f} | {r['ess_per_s_incl']:.0f} | "
-              f"{r['ess_per_s_excl']:.0f} | {agree(r['max_dmean_over_sd_vs_pymc'])} | "
-              f"{agree(r['max_dmean_over_sd_vs_pymc_same'])} | "
-              f"{r['load_min']:.1f}–{r['load_max']:.1f} |")
+        out.append(f"| {LABELS.get(r['system'], r['system'])} | {r['runs']} | "
+                   f"{r['wall_s']:.1f} s | {r['t_sample']:.2f} s | {r['min_ess_bulk']:.0f} | "
+                   f"{r['max_rhat']:.3f} | {r['ess_per_s_incl']:.0f} | "
+                   f"{r['ess_per_s_excl']:.0f} | {agree(r['max_dmean_over_sd_vs_pymc'])} | "
+                   f"{agree(r['max_dmean_over_sd_vs_pymc_same'])} | "
+                   f"{r['load_min']:.1f}–{r['load_max']:.1f} |")
+    return "\n".join(out)
 
 
 def main(argv=None) -> int:
@@ -318,7 +333,7 @@ def main(argv=None) -> int:
             for p in work.glob(f"*_{rnd}_out"):
                 shutil.rmtree(p, ignore_errors=True)
     rows = summarise(runs)
-    print_table(rows)
+    print(table(rows))
     if args.json:
         Path(args.json).write_text(json.dumps({"settings": SETTINGS, "runs": runs,
                                                "medians": rows}, indent=1))

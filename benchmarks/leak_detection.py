@@ -17,7 +17,8 @@ the onset, or on a control run, is a false alarm.
     python benchmarks/leak_detection.py [--hours 4] [--reps 2] [--controls 16] [--out FILE.json]
         [--open-world] [--sizes requirement 10 0.1 none]
 
-Prints a Markdown table (docs/leak.md carries the measured one). Never a timed test.
+Prints the campaign table (``_tables_leak.campaign_table``; docs/leak.md generates it from the
+``--out`` records, kind ``leak_campaign``). Never a timed test.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import time
 import jax
 import numpy as np
 
+from _tables_leak import campaign_table
 from cassini_bayes.estimators.leak import threshold_monitor
 from cassini_bayes.inference.leak import leak_inputs, leak_posterior
 from cassini_bayes.physics.impulse import THRUSTER_NAMES
@@ -113,43 +115,10 @@ def main() -> None:
     ctrl = dataclasses.replace(base, leak=None)
     controls = _run(ctrl, rng, args.controls, int(rng.integers(2**31)), args.open_world)
     print(f"controls: done ({time.time() - t0:.0f} s)", flush=True)
-    report = _report(rows, controls, args.hours)
-    print(report)
+    print(campaign_table([(rows, controls, args.hours)]))
     if args.out:
         with open(args.out, "w") as f:
             json.dump({"args": vars(args), "leak_runs": rows, "controls": controls}, f, indent=1)
-
-
-def _f(fn, a) -> str:
-    return f"{fn(a):.0f}" if a.size else "–"
-
-
-def _report(rows, controls, hours) -> str:
-    lines = ["| leak | monitor | detected | false alarm before onset | correct thruster | "
-             "delay median (s) | delay max (s) | isolation delay median / max (s) |",
-             "|---|---|---|---|---|---|---|---|"]
-    for label in dict.fromkeys(r["size"] for r in rows):
-        sub = [r for r in rows if r["size"] == label]
-        for mon in ("bayes", "lee"):
-            det = [r for r in sub if r[mon][0] is not None and r[mon][0] >= r["onset_s"]]
-            early = [r for r in sub if r[mon][0] is not None and r[mon][0] < r["onset_s"]]
-            iso = [r for r in det if r[mon][2] is not None]
-            ok = sum(r[mon][1] == r["thruster"] for r in iso)
-            d = np.array([r[mon][0] - r["onset_s"] for r in det])
-            di = np.array([r[mon][2] - r["onset_s"] for r in iso])
-            lines.append(f"| {label} | {mon} | {len(det)}/{len(sub)} | {len(early)} | "
-                         f"{ok}/{len(iso)} | {_f(np.median, d)} | {_f(np.max, d)} | "
-                         f"{_f(np.median, di)} / {_f(np.max, di)} |")
-    pre_h = sum(r["onset_s"] for r in rows) / 3600.0
-    tot_h = len(controls) * hours + pre_h
-    for mon in ("bayes", "lee"):
-        fa = sum(c[mon][0] is not None for c in controls)
-        fa += sum(r[mon][0] is not None and r[mon][0] < r["onset_s"] for r in rows)
-        lines.append(f"\n{mon}: {fa} false alarms in {len(controls)} control stretches of "
-                     f"{hours:g} h plus {pre_h:.1f} h before the onsets = {tot_h:.1f} h "
-                     f"({fa / tot_h:.3g} per hour; with none, < {3.0 / tot_h:.3g} per hour at "
-                     "95 %)")
-    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,10 @@ Stretches: those of ``verdict_false_alarms.py leak`` (same seeds, same draws: pe
 Prints Markdown tables for docs/leak.md. Not a test.
 
     python benchmarks/leak_quadrature.py accuracy --seeds 6
-    python benchmarks/leak_quadrature.py cost --seeds 3 --grid-from 3924e41
+    python benchmarks/leak_quadrature.py cost --seeds 3 --grid-from 3924e41 [--json cost.json]
+
+``--json`` writes the cost record with a manifest; the table kind ``leak_quadrature_cost``
+reads it.
 """
 
 from __future__ import annotations
@@ -107,9 +110,9 @@ def accuracy(seeds) -> None:
           + " | ".join(f"**{x:.1e}**" for x in np.max(rows, axis=0)) + " | |")
 
 
-def cost(seeds, grid_from: str | None) -> None:
-    """Print the median and range of CPU seconds per stretch of each monitor and check step,
-    with a leak and without."""
+def cost(seeds, grid_from: str | None) -> dict:
+    """CPU seconds per stretch of each monitor and check step, with a leak and without: the
+    record :func:`cost_table` prints."""
     from cassini_bayes.inference import leak
 
     monitors = {"continuous onset (this code)": lambda inp, cs: leak.leak_posterior(
@@ -129,16 +132,23 @@ def cost(seeds, grid_from: str | None) -> None:
                 t0 = time.process_time()
                 run(inp, cs)
                 cpu.setdefault((name, cs, leak_), []).append(time.process_time() - t0)
-    print("| monitor | checks every | 10 % leak: median (min-max) | no leak: median (min-max) |")
-    print("|---|---|---|---|")
-    for name in monitors:
-        for cs in steps:
-            cells = []
-            for leak_ in (True, False):
-                v = cpu[(name, cs, leak_)]
-                cells.append(f"{np.median(v):.2f} ({min(v):.2f}-{max(v):.2f})")
-            print(f"| {name} | {cs:g} s | " + " | ".join(cells) + " |")
-    print(f"\n(CPU s of leak_posterior per {HOURS:g} h stretch, {len(seeds)} stretches each)")
+    return {"hours": HOURS, "seeds": list(seeds),
+            "rows": [{"monitor": m, "check_step_s": cs, "leak": lk, "cpu_s": v}
+                     for (m, cs, lk), v in cpu.items()]}
+
+
+def cost_table(record: dict) -> str:
+    """Median and range of the CPU seconds per stretch, a row per monitor and check step (the
+    table kind ``leak_quadrature_cost`` of docs_tables.py prints it from the record)."""
+    n = len(record["seeds"])
+    out = [f"| monitor | checks every | {n} stretches with a 10 % leak: median (range) | "
+           f"{n} without: median (range) |", "|---|---|---|---|"]
+    by = {(r["monitor"], r["check_step_s"], r["leak"]): r["cpu_s"] for r in record["rows"]}
+    for name, cs in dict.fromkeys((r["monitor"], r["check_step_s"]) for r in record["rows"]):
+        cells = [f"{np.median(v):.2f} ({min(v):.2f}-{max(v):.2f})"
+                 for v in (by[(name, cs, True)], by[(name, cs, False)])]
+        out.append(f"| {name} | {cs:g} s | " + " | ".join(cells) + " |")
+    return "\n".join(out)
 
 
 def main() -> None:
@@ -148,13 +158,24 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--grid-from", default=None,
                     help="cost: also time the leak module of this commit")
+    ap.add_argument("--json", type=Path, help="cost: write the record here (with a manifest)")
     args = ap.parse_args()
+    if args.json:
+        from _provenance import start
+
+        start(args.json, vars(args), None, replace=True)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     t0 = time.time()
     if args.part == "accuracy":
         accuracy(seeds)
     else:
-        cost(seeds, args.grid_from)
+        record = cost(seeds, args.grid_from)
+        print(cost_table(record))
+        print(f"\n(CPU s of leak_posterior per {HOURS:g} h stretch)")
+        if args.json:
+            from _provenance import write_json
+
+            write_json(args.json, record)
     print(f"\n{time.time() - t0:.0f} s wall")
 
 
