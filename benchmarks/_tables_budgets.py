@@ -54,11 +54,11 @@ def budget_from_posteriors(args: list[Records]) -> str:
         if iv is None:
             continue
         unit = {"%": " %", "deg": "°", "mrad": " mrad"}[row["unit"]]
+        shares = (f"{iv['share_sum']:,.0f}" if iv["share_sum"] >= 100
+                  else f"{iv['share_sum']:.2f}")
         rows.append(f"| {row['budget']} | {row['line']} | {_g(iv['median'])}{unit} "
                     f"[{_g(iv['low'])}, {_g(iv['high'])}] | {row['paper'] or '–'} | "
-                    f"{_least_squares(r, row['budget'], row['line'])} | "
-                    f"{iv['share_sum']:,.0f} |" if iv["share_sum"] >= 100 else
-                    f"{iv['share_sum']:.2f} |")
+                    f"{_least_squares(r, row['budget'], row['line'])} | {shares} |")
     return "\n".join(rows)
 
 

@@ -381,3 +381,46 @@ def thrust_design_events(args: list[Records]) -> str:
                     f"{d['rank']} of {d['parameters']} | {idcell or '–'} | {combos} | "
                     + ", ".join(f"{c:.2f}" for c in d["com_contraction"].values()) + " |")
     return "\n".join(rows)
+
+
+@kind("health_espa")
+def health_espa(args: list[Records]) -> str:
+    """The ESPA bus's health campaign against its truth, then its control
+    (``benchmarks/health_espa.py`` record): the change, its date, the degraded thruster's ratio
+    at the last event and the other channels; the control's false alarm; adequacy, fit time."""
+    (path,), = args
+    rec = read_json(path)
+    deg, ctl = rec["degradation"], rec["control"]
+    s, truth = deg["summary"], deg["truth"]
+    (name,), frac = truth["degradation"]["thrusters"], truth["degradation"]["fraction"]
+    chan = s["channels"][f"F[{name}]"]
+    others = [c for k, c in s["channels"].items() if k != f"F[{name}]"]
+    last = truth["thrust_n"][-1][name] / truth["thrust_n"][0][name]
+    date = s["change_date_days"]
+    rows = ["| quantity | truth | posterior |", "|---|---|---|",
+            f"| P(a change in the span) | a change | {s['p_change']:.6f} |",
+            f"| change date, median and 90 % interval (d) | {truth['degradation']['day']:g} | "
+            f"{date['median']:.0f}, [{date['interval_90'][0]:.1f}, {date['interval_90'][1]:.1f}] |",
+            f"| {name} at the last event / first calibration: mean, 90 % | {1 - frac:.2f} "
+            f"(the step; {last:.3f} with the events' scatter) | {chan['ratio_last_mean']:.3f}, "
+            f"[{chan['ratio_last_90'][0]:.3f}, {chan['ratio_last_90'][1]:.3f}] |",
+            f"| P({name} more than 5 % down at the last event) | down | "
+            f"{chan['p_down_last']:.3f} |",
+            f"| P(step \\| change), the {len(others)} others | none stepped | "
+            f"{min(c['p_step_given_change'] for c in others):.2f}–"
+            f"{max(c['p_step_given_change'] for c in others):.2f} |",
+            f"| the {len(others)} others at the last event: mean ratio, 90 % upper | 1 (no step) | "
+            f"{min(c['ratio_last_mean'] for c in others):.3f}–"
+            f"{max(c['ratio_last_mean'] for c in others):.3f}, ≤ "
+            f"{max(c['ratio_last_90'][1] for c in others):.3f} |",
+            f"| P(more than 5 % down), the {len(others)} others | healthy | ≤ "
+            f"{max(c['p_down_last'] for c in others):.1e} |",
+            "", "| campaign | P(change) | P(any channel more than 5 % down), last event | "
+            "adequacy: inertia_conflict, held_out (threshold 4) | fit |", "|---|---|---|---|---|"]
+    for case, r in (("degradation", deg), ("control (no `[degradation]`)", ctl)):
+        sm, checks = r["summary"], r["summary"]["adequacy"]["checks"]
+        rows.append(f"| {case} | {sm['p_change']:.3g} | {sm['p_down_last']['any']:.2g} | "
+                    f"{'ok' if sm['adequacy']['ok'] else 'fails'}: "
+                    f"{checks['inertia_conflict']['statistic']:.2f}, "
+                    f"{checks['held_out']['statistic']:.2f} | {r['fit_wall_s']:.0f} s |")
+    return "\n".join(rows)
