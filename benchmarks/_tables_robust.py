@@ -165,3 +165,36 @@ def thrust_thruster_fits(args: list[Records]) -> str:
         rows.append(f"| {r['seed']} | {err:.2f} % | {sd:.2f} % | {offs} | {cover} | "
                     f"{d['max_r_hat']:.4f} | {d['divergences']} | {r['seconds']:.0f} s |")
     return "\n".join(rows)
+
+
+@kind("per_wheel_events")
+def per_wheel_events(args: list[Records]) -> str:
+    """The per-wheel model beside the common one on one thrust event and one RWA4 run
+    (``benchmarks/per_wheel_events.py --json`` records): F's 90 % interval against the truth,
+    its z and sd, the time constants' sds; the axis error and cone; R-hat, divergences, wall."""
+    recs = [r for group in args for p in group for r in read_json(p)]
+    models = list(dict.fromkeys(r["model"] for r in recs))
+    rows = ["| fit | " + " | ".join(m.replace("_", "-") for m in models) + " |",
+            "|---|" + "---|" * len(models)]
+
+    def diag(r: dict) -> str:
+        return f"R-hat {r['max_r_hat']:.4f}, {r['divergences']} div., {r['wall_s']:.0f} s"
+
+    for scenario in dict.fromkeys(r["scenario"] for r in recs):
+        by = {r["model"]: r for r in recs if r["scenario"] == scenario}
+        first = by[models[0]]
+        if "error_deg" in first:
+            cells = [f"error {r['error_deg']:.3f}°, 90 % cone {r['cone90_deg']:.3f}°: "
+                     f"{'covers' if r['covered'] else '**misses**'}; {diag(r)}"
+                     for r in (by[m] for m in models)]
+            rows.append(f"| RWA4 axis (`{scenario}`) | " + " | ".join(cells) + " |")
+            continue
+        cells = [f"90 % [{r['q05']:.5f}, {r['q95']:.5f}] "
+                 f"{'covers' if r['covered'] else '**misses**'}, z {r['z']:+.2f}, sd "
+                 f"{r['sd_pct']:.3f} %; {diag(r)}" for r in (by[m] for m in models)]
+        rows.append(f"| thrust `F` (`{scenario}`, truth {first['truth']:.5f} N) | "
+                    + " | ".join(cells) + " |")
+        rows.append("| thrust sd(τd, τr, τf) | " + " | ".join(
+            ", ".join(f"{v:.2f}" for v in by[m]["tau_sd_ms"].values()) + " ms"
+            for m in models) + " |")
+    return "\n".join(rows)
