@@ -96,3 +96,14 @@ def test_bad_key_in_a_registered_experiment_fails_before_running(tmp_path, run_c
                            "--experiments", exp_dir)
     assert code == 2 and "settings.grid" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.slow
+def test_full_reproduce_runs_every_experiment(tmp_path):
+    """The README's main job at its full settings (quick mode skips paths such as the RWA
+    flight test); about 2.5 min on two cores."""
+    from cassini_bayes.cli import main
+
+    assert main(["reproduce", "--out", str(tmp_path / "out")]) == 0
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert not [e["name"] for e in results["experiments"] if not e["ok"]]
