@@ -53,6 +53,52 @@ def bench_samplers_medians(args: list[Records]) -> str:
     return table(read_json(path)["medians"])
 
 
+@kind("api_vs_cli")
+def api_vs_cli(args: list[Records]) -> str:
+    """The API's first example against ``fit inertia`` (benchmarks/api_vs_cli.py records): the
+    wall and CPU medians of the counted runs, the ratio, the chain method and the load."""
+    rows = ["| settings | API wall | CLI wall | API/CLI | API cpu | CLI cpu | chains (API, CLI) | "
+            "load |", "|" + "---|" * 8]
+    for r in (read_json(p) for group in args for p in group):
+        st, med = r["settings"], r["median"]
+        loads = [x["load_1min"] for rs in r["runs"].values() for x in rs]
+        rows.append(f"| {st['chains']} × ({st['warmup']} + {st['draws']}), {st['pairs']} pairs | "
+                    f"{med['api']['wall_s']:.1f} s | {med['cli']['wall_s']:.1f} s | "
+                    f"{r['api_over_cli']:.2f} | {med['api']['cpu_s']:.1f} s | "
+                    f"{med['cli']['cpu_s']:.1f} s | {r['chain_method_used']['api']}, "
+                    f"{r['chain_method_used']['cli']} | {min(loads):.1f}–{max(loads):.1f} |")
+    return "\n".join(rows)
+
+
+@kind("bench_thrust")
+def bench_thrust(args: list[Records]) -> str:
+    """A robust ``fit thrust`` of one long event by phase (benchmarks/bench_thrust.py record): a
+    column per run (the cold one, then the warm ones), wall and CPU seconds, the sampler's
+    leapfrog steps and step sizes, the gradient's cost, the bulk ESS and the load."""
+    (path,), = args
+    runs = read_json(path)["runs"]
+    head = [f"{r['kind']}" + (f" {i}" if r["kind"] == "warm" else "")
+            for i, r in enumerate(runs)]
+    rows = ["| | " + " | ".join(head) + " |", "|---|" + "---|" * len(runs)]
+
+    def row(label, fn):
+        rows.append(f"| {label} | " + " | ".join(fn(r) for r in runs) + " |")
+
+    row("whole fit, wall s", lambda r: f"{r['total_wall']:.1f}")
+    row("whole fit, CPU s", lambda r: f"{r['total_cpu']:.1f}")
+    for phase in ("sampler", "laplace", "nuisance draws, residuals"):
+        row(f"{phase}, wall / CPU s", lambda r, p=phase: f"{r['wall'][p]:.1f} / {r['cpu'][p]:.1f}")
+    row("leapfrog steps per iteration", lambda r: f"{r['leapfrog_per_iteration']:.2f}")
+    row("step sizes", lambda r: f"{min(r['step_size']):.2f}–{max(r['step_size']):.2f}")
+    row("value and gradient of the log density, CPU ms", lambda r: f"{r['gradient_cpu_ms']:.2f}")
+    row("bulk ESS of F, τd, τr, τf", lambda r: ", ".join(
+        f"{r['summary_parameters'][n]['ess_bulk']:.0f}"
+        for n in ("F", "tau_delay", "tau_rise", "tau_fall")))
+    row("divergences", lambda r: f"{r['divergences']}")
+    row("load average (start, end)", lambda r: f"{r['load_start']:.1f}, {r['load_end']:.1f}")
+    return "\n".join(rows)
+
+
 @kind("memory_telemetry")
 def memory_telemetry(args: list[Records]) -> str:
     """Peak memory by file size (benchmarks/memory_telemetry.py's record): a row per size, a
