@@ -91,13 +91,15 @@ def closed_world_thrust_log(args: list[Records]) -> str:
 def thrust_shipped_fits(args: list[Records]) -> str:
     """One row per ``benchmarks/thrust_shipped_fits.py`` record: the thrust's error and sd (% of
     the truth), whether its 90 % interval covers, the rise and fall time constants' posterior
-    means (truth), the delay's contraction, max R-hat, divergences and the least bulk ESS."""
+    means (truth), the delay's contraction, max R-hat, divergences and the least bulk ESS (the
+    simulation key beside the scenario where it is not 0)."""
     rows = ["| scenario | F error | sd(F) | 90 % covers | τr (ms) | τf (ms) | τd contraction | "
             "max R-hat | divergences | min bulk ESS |", "|" + "---|" * 10]
     for r in (r for group in args for p in group for r in read_json(p)):
         d, tau, true = r["diagnostics"], r["tau"], r["tau_true_ms"]
         rows.append(
-            f"| `{r['scenario']}` | {_signed(r['F_error_pct'], 2)} % | {r['F_sd_pct']:.2f} % | "
+            f"| `{r['scenario']}`" + (f", key {r['key']}" if r.get("key") else "")
+            + f" | {_signed(r['F_error_pct'], 2)} % | {r['F_sd_pct']:.2f} % | "
             f"{'yes' if r['F_covered_90'] else 'no'} | "
             f"{1e3 * tau['tau_rise']['mean']:.1f} ({true['tau_rise']:.0f}) | "
             f"{1e3 * tau['tau_fall']['mean']:.1f} ({true['tau_fall']:.0f}) | "
