@@ -286,6 +286,27 @@ def test_an_unsigned_tachometer_is_refused_in_a_file_without_thrusters(runs):
         cons.check_telemetry_data(unsigned, sc, log)
 
 
+def test_a_wheel_still_between_firings_is_not_judged():
+    """The ESPA biasing event spins RW4 up while the thrusters fire: between firings its rates
+    hardly move, so its free vector is the noise's (angular sd tens of degrees) and a correct
+    column must not be refused; the other wheels are judged, and `check` says which was not."""
+    import cassini_bayes as cb
+    from cassini_bayes.api import check_telemetry
+
+    sim = cb.simulate_scenario("biasing_espa_bus", seed=0)
+    sc = cb.load_spacecraft("espa_bus")
+    axes = cons.wheel_momentum_scale(sim.telemetry, sc).axes
+    angle_max = cons.axis_angle_max_deg(sc)
+    assert axes.judged and not axes.determined("RW4", angle_max)
+    assert all(axes.determined(n, angle_max) for n in ("RW1", "RW2", "RW3"))
+    cons.check_telemetry_data(sim.telemetry, sc, sim.pulses)
+    line = check_telemetry(sim.telemetry, pulses=sim.pulses, spacecraft=sc).physics
+    assert "RW4 not checked (too little motion between firings" in line
+    flipped = _flipped(sim.telemetry, "RW1")
+    with pytest.raises(InputError, match=r"column rw1: .* from RW1's axis"):
+        cons.check_telemetry_data(flipped, sc, sim.pulses)
+
+
 def test_wheels_moving_together_are_not_judged(runs):
     """A biasing event's wheels change together: the free vectors are not separable
     (conditioning 0.02–0.05), so swapped columns pass, and `check` says they were not checked."""

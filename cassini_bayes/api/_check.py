@@ -106,7 +106,8 @@ class TelemetryCheck:
 def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | None,
                   spacecraft: Spacecraft | None) -> str:
     """What the physics checks of :mod:`cassini_bayes.consistency` established, on one line."""
-    from cassini_bayes.consistency import AXES_CONDITION_MIN, MOMENTUM_ALIGN_MIN
+    from cassini_bayes.consistency import (AXES_CONDITION_MIN, MOMENTUM_ALIGN_MIN,
+                                           axis_angle_max_deg)
     from cassini_bayes.errors import spelled
 
     if attitude is None:
@@ -117,15 +118,26 @@ def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | 
     if spacecraft is None:
         return text + f"; wheel units not checked (give {spelled('--spacecraft', 'spacecraft')})"
     axes = momentum.axes if momentum is not None else None
-    if axes is not None and axes.judged:
-        worst = max(axes.angle_deg(n, spacecraft.wheel(n).axis) for n in axes.vectors)
-        axes_text = (f"; each wheel's momentum along its axis in the model (within {worst:.1f}°; "
-                     f"scales {min(map(axes.scale, axes.vectors)):.3f}–"
-                     f"{max(map(axes.scale, axes.vectors)):.3f})")
+    angle_max = axis_angle_max_deg(spacecraft)
+    named = ([n for n in axes.vectors if axes.determined(n, angle_max)]
+             if axes is not None and axes.judged else [])
+    if named:
+        worst = max(axes.angle_deg(n, spacecraft.wheel(n).axis) for n in named)
+        which = ("each wheel's momentum along its axis" if len(named) == len(axes.vectors)
+                 else f"the momenta of {', '.join(named)} along their axes")
+        axes_text = (f"; {which} in the model (within {worst:.1f}°; "
+                     f"scales {min(map(axes.scale, named)):.3f}–"
+                     f"{max(map(axes.scale, named)):.3f})")
+        rest = [n for n in axes.vectors if n not in named]
+        if rest:
+            axes_text += (f"; {', '.join(rest)} not checked (too little motion between "
+                          f"firings: angular sd {max(axes.angle_sd_deg[n] for n in rest):.2g}°)")
     elif axes is not None:
         why = (f"the wheels' rates move together: conditioning {axes.conditioning:.2g}"
                if axes.conditioning < AXES_CONDITION_MIN
-               else f"the balance does not fit: alignment {axes.alignment:.2f}")
+               else f"the balance does not fit: alignment {axes.alignment:.2f}"
+               if not axes.judged else "too little motion between firings: angular sd "
+               f"{min(axes.angle_sd_deg.values()):.2g}° or more")
         axes_text = f"; wheel signs and column order not checked ({why})"
     else:
         axes_text = ""

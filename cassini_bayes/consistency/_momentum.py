@@ -51,6 +51,12 @@ model's wheels are closer: half the smallest angle between two of its (non-artic
 lines (:func:`axis_angle_max_deg`), so another wheel's column always lies beyond it."""
 
 
+AXIS_JUDGE_SIGMAS = 5.0
+"""A wheel's fitted momentum is judged only when this many of its angular standard errors (the
+balance's least squares) stay within :func:`axis_angle_max_deg`: a wheel that hardly moves
+between firings leaves its vector to the noise, and a correct column would be refused."""
+
+
 class WheelAxes(NamedTuple):
     """Fit of the momentum balance with each known wheel's momentum a free body vector ``w_k``.
 
@@ -71,6 +77,9 @@ class WheelAxes(NamedTuple):
         noise of the body rates and of each running wheel's rates
         (:func:`cassini_bayes.telemetry.white_noise_sd`, floored at
         :data:`cassini_bayes.telemetry.RATE_NOISE_FLOORS`).
+    angle_sd_deg : per known wheel, the angular standard error of its vector (degrees): the
+        least squares' covariance (residual variance × ``(XᵀX)⁻¹``) across the vector's
+        direction over its length.
     """
 
     alignment: float
@@ -78,12 +87,20 @@ class WheelAxes(NamedTuple):
     vectors: dict[str, np.ndarray]
     swing_nms: float = 0.0
     noise_nms: float = 0.0
+    angle_sd_deg: dict[str, float] = {}
 
     @property
     def judged(self) -> bool:
         """Whether the vectors are determined well enough to judge each wheel on its own."""
         return (self.conditioning >= AXES_CONDITION_MIN
                 and self.alignment >= MOMENTUM_ALIGN_MIN)
+
+    def determined(self, name: str, angle_max_deg: float) -> bool:
+        """Whether wheel ``name``'s vector is known well enough to judge against an angle of
+        ``angle_max_deg``: :attr:`judged`, and :data:`AXIS_JUDGE_SIGMAS` of its angular
+        standard errors within that angle."""
+        sd = self.angle_sd_deg.get(name, 0.0)
+        return self.judged and AXIS_JUDGE_SIGMAS * sd <= angle_max_deg
 
     def angle_deg(self, name: str, axis) -> float:
         """Angle between wheel ``name``'s fitted vector and ``axis``, degrees."""
@@ -213,7 +230,19 @@ def _wheel_axes(bal: _Balance, spacecraft: Spacecraft) -> WheelAxes | None:
     js = [spacecraft.wheel(n).inertia for n in bal.known]
     vectors = {n: theta[3 * k: 3 * k + 3] / js[k] for k, n in enumerate(bal.known)}
     swing = float(np.max(np.linalg.norm(bal.body, axis=1)))
-    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing, bal.noise_nms)
+    resid = bal.body.ravel() - design @ theta
+    dof = max(design.shape[0] - design.shape[1], 1)
+    cov = float(resid @ resid) / dof * np.linalg.pinv(design.T @ design)
+    angle_sd = {}
+    for k, n in enumerate(bal.known):
+        th = theta[3 * k: 3 * k + 3]
+        length = float(np.linalg.norm(th))
+        u = th / length if length > 0 else np.zeros(3)
+        across = np.eye(3) - np.outer(u, u)
+        var = float(np.trace(across @ cov[3 * k: 3 * k + 3, 3 * k: 3 * k + 3] @ across))
+        angle_sd[n] = (float(np.degrees(np.sqrt(max(var, 0.0)) / length)) if length > 0
+                       else 180.0)
+    return WheelAxes(align, float(sv[-1] / sv[0]), vectors, swing, bal.noise_nms, angle_sd)
 
 
 def wheel_momentum_scale(tel: Telemetry, spacecraft: Spacecraft,
@@ -359,13 +388,12 @@ def check_wheel_units(tel: Telemetry, spacecraft: Spacecraft,
             and axes.swing_nms >= SWING_MIN_SNR * axes.noise_nms
             and axes.alignment < AXES_ALIGN_MIN):
         raise _balance_error(tel, axes)
-    if not axes.judged:
-        return fit
     angle_max = axis_angle_max_deg(spacecraft)
-    for name in axes.vectors:
+    named = [n for n in axes.vectors if axes.determined(n, angle_max)]
+    for name in named:
         if axes.angle_deg(name, spacecraft.wheel(name).axis) > angle_max:
             raise _axis_error(name, axes, spacecraft, tel)
-    for name in axes.vectors:
+    for name in named:
         if not lo <= axes.scale(name) <= hi:
             scale, j = axes.scale(name), spacecraft.wheel(name).inertia
             raise _unit_error(f"column {name.lower()}", scale, (
