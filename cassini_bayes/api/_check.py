@@ -121,7 +121,7 @@ def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | 
     angle_max = axis_angle_max_deg(spacecraft)
     named = ([n for n in axes.vectors if axes.determined(n, angle_max)]
              if axes is not None and axes.judged else [])
-    if named:
+    if axes is not None and named:
         worst = max(axes.angle_deg(n, spacecraft.wheel(n).axis) for n in named)
         which = ("each wheel's momentum along its axis" if len(named) == len(axes.vectors)
                  else f"the momenta of {', '.join(named)} along their axes")
