@@ -99,6 +99,24 @@ def bench_thrust(args: list[Records]) -> str:
     return "\n".join(rows)
 
 
+@kind("bench_thrust_commits")
+def bench_thrust_commits(args: list[Records]) -> str:
+    """One row per benchmarks/bench_thrust.py record, in the order given, named by the commit
+    of its manifest's run: the last warm run's wall and CPU seconds, its preparation's and its
+    sampler's CPU, the gradient's CPU ms and the leapfrog steps per iteration."""
+    from _provenance import manifest_path
+
+    rows = ["| code | warm fit, wall | warm fit, CPU | preparation, CPU | sampler, CPU | "
+            "value and gradient, CPU | leapfrog steps per iteration |", "|" + "---|" * 7]
+    for path in (p for group in args for p in group):
+        r = read_json(path)["runs"][-1]
+        commit = read_json(manifest_path(path))["runs"][0]["commit"][:7]
+        rows.append(f"| `{commit}` | {r['total_wall']:.1f} s | {r['total_cpu']:.1f} s | "
+                    f"{r['cpu']['preparation']:.1f} s | {r['cpu']['sampler']:.1f} s | "
+                    f"{r['gradient_cpu_ms']:.2f} ms | {r['leapfrog_per_iteration']:.2f} |")
+    return "\n".join(rows)
+
+
 @kind("memory_telemetry")
 def memory_telemetry(args: list[Records]) -> str:
     """Peak memory by file size (benchmarks/memory_telemetry.py's record): a row per size, a
