@@ -200,3 +200,21 @@ def per_wheel_events(args: list[Records]) -> str:
             ", ".join(f"{v:.2f}" for v in by[m]["tau_sd_ms"].values()) + " ms"
             for m in models) + " |")
     return "\n".join(rows)
+
+
+@kind("thrust_inertia_off")
+def thrust_inertia_off(args: list[Records]) -> str:
+    """The robust thrust fit of an event whose moments are 3 % above the model's prediction,
+    the inertia sampled and fixed (``benchmarks/thrust_inertia_off.py`` records): F against
+    the truth, its z, Ixx's posterior where sampled, R-hat and divergences."""
+    recs = [r for group in args for p in group for r in read_json(p)]
+    rows = [f"| robust model | F (truth {recs[0]['F_true']:.3f} N) | z | Ixx (truth "
+            f"{recs[0]['Ixx_true']:.0f}, predicted {recs[0]['Ixx_pred']:.0f} kg m²) | "
+            "max R-hat, divergences |", "|---|---|---|---|---|"]
+    label = {"sampled": "inertia sampled from the ±10 % prior (default)",
+             "fixed": "inertia fixed at the prediction (`--fix-inertia`)"}
+    for r in recs:
+        ixx = f"{r['Ixx_mean']:.0f} ± {r['Ixx_sd']:.0f}" if "Ixx_mean" in r else "—"
+        rows.append(f"| {label[r['inertia']]} | {r['F_mean']:.4f} ± {r['F_sd']:.4f} | "
+                    f"{_signed(r['z'], 1)} | {ixx} | {r['max_r_hat']:.3f}, {r['divergences']} |")
+    return "\n".join(rows)
