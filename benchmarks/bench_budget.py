@@ -21,8 +21,11 @@ import statistics
 import time
 from pathlib import Path
 
-FITS = {"inertia": "inertia_table1/fits/post_probe", "thrust": "thrust_table2/fits/pooled",
-        "rwa4 (rwa)": "rwa4_rwa_campaign/fits/run00", "rwa4 (rcs)": "rwa4_rcs_campaign/fits/run00"}
+FITS = {"inertia": ("inertia", "inertia_table1/fits/post_probe"),
+        "thrust": ("thrust", "thrust_table2/fits/pooled"),
+        "rwa4 (rwa)": ("rwa4", "rwa4_rwa_campaign/fits/run00"),
+        "rwa4 (rcs)": ("rwa4", "rwa4_rcs_campaign/fits/run00")}
+"""Per posterior: its kind and its run directory under the ``reproduce`` run."""
 
 
 def timed(fn, repeat: int) -> dict[str, float]:
@@ -49,11 +52,10 @@ def measure(run: Path, repeat: int) -> dict:
     from cassini_bayes.experiments.error_budgets import thrust_inertia_sensitivity
     from cassini_bayes.names import INERTIA_NAMES
 
-    kinds = {"inertia": "inertia", "thrust": "thrust", "rwa4 (rwa)": "rwa4", "rwa4 (rcs)": "rwa4"}
     post, steps = {}, {}
-    for name, sub in FITS.items():
+    for name, (kind, sub) in FITS.items():
         steps[f"read the {name} posterior"] = timed(
-            lambda n=name, s=sub: post.__setitem__(n, load_posterior(run / s, kinds[n])), repeat)
+            lambda n=name, k=kind, s=sub: post.__setitem__(n, load_posterior(run / s, k)), repeat)
     key = jax.random.PRNGKey(0)
     steps["thrust sensitivity (biasing_day028 simulated and solved)"] = timed(
         lambda: thrust_inertia_sensitivity(key, "biasing_day028"), repeat)

@@ -19,6 +19,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 SCENARIO = "health_degradation_espa_bus"
@@ -30,20 +31,17 @@ def _cli(*args: str) -> None:
 
 
 def _control_file(work: Path) -> Path:
-    """The degradation file less its ``[degradation]`` table, beside its event template."""
+    """The degradation file less its ``[degradation]`` table, its event template by path."""
+    from cassini_bayes.files import toml_text
     from cassini_bayes.simulate.scenario import scenario_path
 
     src = scenario_path(SCENARIO)
-    lines, skip = [], False
-    for line in src.read_text().splitlines():
-        if line.strip().startswith("["):
-            skip = line.strip() == "[degradation]"
-        if not skip:
-            lines.append(line)
+    d = tomllib.loads(src.read_text())
+    d.pop("degradation")
+    d["name"] = "health_control_espa_bus"
+    d["event"] = str(src.with_name(d["event"]))
     out = work / "health_control_espa_bus.toml"
-    out.write_text("\n".join(lines).replace(f'name = "{SCENARIO}"',
-                                            'name = "health_control_espa_bus"') + "\n")
-    shutil.copy(src.with_name("health_event_espa_bus.toml"), work)
+    out.write_text(toml_text(d))
     return out
 
 

@@ -120,7 +120,7 @@ def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | 
     axes = momentum.axes if momentum is not None else None
     angle_max = axis_angle_max_deg(spacecraft)
     named = ([n for n in axes.vectors if axes.determined(n, angle_max)]
-             if axes is not None and axes.judged else [])
+             if axes is not None else [])
     if axes is not None and named:
         worst = max(axes.angle_deg(n, spacecraft.wheel(n).axis) for n in named)
         which = ("each wheel's momentum along its axis" if len(named) == len(axes.vectors)
@@ -133,11 +133,13 @@ def _physics_line(attitude: AttitudeAgreement | None, momentum: MomentumScale | 
             axes_text += (f"; {', '.join(rest)} not checked (too little motion between "
                           f"firings: angular sd {max(axes.angle_sd_deg[n] for n in rest):.2g}°)")
     elif axes is not None:
-        why = (f"the wheels' rates move together: conditioning {axes.conditioning:.2g}"
-               if axes.conditioning < AXES_CONDITION_MIN
-               else f"the balance does not fit: alignment {axes.alignment:.2f}"
-               if not axes.judged else "too little motion between firings: angular sd "
-               f"{min(axes.angle_sd_deg.values()):.2g}° or more")
+        if axes.conditioning < AXES_CONDITION_MIN:
+            why = f"the wheels' rates move together: conditioning {axes.conditioning:.2g}"
+        elif not axes.judged:
+            why = f"the balance does not fit: alignment {axes.alignment:.2f}"
+        else:
+            why = (f"too little motion between firings: angular sd "
+                   f"{min(axes.angle_sd_deg.values()):.2g}° or more")
         axes_text = f"; wheel signs and column order not checked ({why})"
     else:
         axes_text = ""
