@@ -15,8 +15,9 @@ noise ``σ_ω √diag(I I)``:
   with the residual levels at the gyro noise): what the noise-free event moves a fit by.
 
 Each with the rate-step correction's second-order terms
-(:func:`~cassini_bayes.estimators.leak.rate_step_second_order`) and without them (that term
-taken off again)::
+(:func:`~cassini_bayes.estimators.leak.rate_step_second_order`, ``second``), without them (that
+term taken off again, ``first``) and, for the health regression, with no rate-step correction at
+all (the design's columns without their rate steps, ``none``)::
 
     python benchmarks/leak_health_residual_at_truth.py biasing_espa_bus [--json out.json]
 """
@@ -91,16 +92,18 @@ def measure(name: str, sample_period_s: float | None = None, health: bool = True
     xw = des.x * np.sqrt(w)[None, :, None]
     sd = np.sqrt(np.diag(np.linalg.inv(np.einsum("tap,taq->pq", xw, xw))))
     out = {}
-    for label, r, v in (("first", r2 - second, des.v - second), ("second", r2, des.v)):
-        r = r - basis @ np.linalg.lstsq(basis, r, rcond=None)[0]
-        e = v - np.einsum("tap,p->ta", des.x, f_true)
+    for label, r, v, x in (("none", None, des.v - second, x0),
+                           ("first", r2 - second, des.v - second, des.x),
+                           ("second", r2, des.v, des.x)):
+        e = v - np.einsum("tap,p->ta", x, f_true)
         e = e - e.mean(0)
-        f_hat = weighted_fit(des.x, v, w)[0]
-        off = (f_hat - f_true) / sd
-        out[label] = {"leak_rms_over_noise": (np.sqrt((r**2).mean(0)) / noise).tolist(),
-                      "health_rms_over_noise": (np.sqrt((e**2).mean(0)) / noise).tolist(),
+        off = (weighted_fit(x, v, w)[0] - f_true) / sd
+        out[label] = {"health_rms_over_noise": (np.sqrt((e**2).mean(0)) / noise).tolist(),
                       "health_offset_in_white_sd": off.tolist(),
                       "health_offset_max_abs": float(np.max(np.abs(off)))}
+        if r is not None:       # the monitor's residual always carries the first order
+            r = r - basis @ np.linalg.lstsq(basis, r, rcond=None)[0]
+            out[label]["leak_rms_over_noise"] = (np.sqrt((r**2).mean(0)) / noise).tolist()
     return out
 
 
@@ -129,10 +132,10 @@ def main(argv=None) -> int:
                    **measure(name, period, not a.leak_only)}
             out.append(row)
             at = "" if period is None else f", every {step:g} s"
-            for label in ("first", "second"):
+            for label in ("first", "second") if a.leak_only else ("none", "first", "second"):
                 m = row[label]
                 print(f"{name} [{label} order{at}]: rms/noise leak "
-                      + " ".join(f"{v:.3g}" for v in m["leak_rms_over_noise"])
+                      + " ".join(f"{v:.3g}" for v in m.get("leak_rms_over_noise", []))
                       + ("" if a.leak_only else
                          "; health " + " ".join(f"{v:.3g}" for v in m["health_rms_over_noise"])
                          + f"; health estimate - truth max {m['health_offset_max_abs']:.2f} "
