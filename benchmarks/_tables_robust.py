@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import statistics
+
 from _tables import Records, kind, read_json
 
 ENTRIES = ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
@@ -218,3 +220,40 @@ def thrust_inertia_off(args: list[Records]) -> str:
         rows.append(f"| {label[r['inertia']]} | {r['F_mean']:.4f} ± {r['F_sd']:.4f} | "
                     f"{_signed(r['z'], 1)} | {ixx} | {r['max_r_hat']:.3f}, {r['divergences']} |")
     return "\n".join(rows)
+
+
+@kind("coverage_robust_inertia")
+def coverage_robust_inertia(args: list[Records]) -> str:
+    """Per family (``coverage_robust_inertia.py --json``): each model's 90 % coverage of the six
+    inertia entries with its binomial sd and its seed-clustered sd (the sd of the per-seed
+    coverage over the seeds, /√seeds: one seed's six intervals are correlated), the error-budget
+    pass rate, the drawn common wheel error of the seeds whose robust fit fails the budget (where
+    the record has it), the largest R-hat and the divergences."""
+    (path,), = args
+    rec = read_json(path)
+    models = [m for m in ("robust", "idealised") if m in rec["options"]["models"]]
+    head = ["family", "seeds"] + [f"{m}: {c}" for m in models for c in
+                                  ("90 % coverage; seed-clustered sd", "budget")]
+    drawn = all("wheel_error_mean" in r for r in rec["results"])
+    if drawn:
+        head.append("drawn common wheel error where the robust budget fails")
+    lines = ["| " + " | ".join(head) + " | R-hat (largest), divergences |",
+             "|" + "---|" * (len(head) + 1)]
+    for family in dict.fromkeys(r["family"] for r in rec["results"]):
+        rows = [r for r in rec["results"] if r["family"] == family]
+        cells, worst, div = [], 0.0, 0
+        for m in models:
+            per_seed = [sum(r[m]["hit"]) / len(r[m]["hit"]) for r in rows]
+            n = sum(len(r[m]["hit"]) for r in rows)
+            p = sum(per_seed) / len(per_seed)
+            clustered = statistics.stdev(per_seed) / len(per_seed) ** 0.5 if len(rows) > 1 else 0
+            cells += [f"{p:.3f} ± {(p * (1 - p) / n) ** 0.5:.3f}; {clustered:.3f}",
+                      f"{sum(r[m]['budget'] for r in rows)}/{len(rows)}"]
+            worst = max(worst, *(r[m]["r_hat"] for r in rows))
+            div += sum(r[m]["divergences"] for r in rows)
+        if drawn:
+            cells.append(", ".join(f"{100 * r['wheel_error_mean']:+.2f} %" for r in rows
+                                   if "robust" in r and not r["robust"]["budget"]) or "–")
+        lines.append(f"| `{family}` | {len(rows)} | " + " | ".join(cells)
+                     + f" | {worst:.4f}, {div} |")
+    return "\n".join(lines)

@@ -21,20 +21,18 @@ posterior mean, so a small sampler run gives them (default 2 chains × 200 warm-
 their Monte Carlo error is ~0.1 posterior sd); at 200 000 rows the fit's cost is the
 preparation (noise levels and iterated least squares, O(N)), a few minutes per file on the
 shared 2-core machine. Results are saved after every fit to ``--json`` (rerun with the same
-file to resume). ``--docs`` writes the table, with this command line and the commit, between
-the markers in docs/adequacy.md.
+file to resume; the manifest beside it lists every run). The table kind ``adequacy_by_size``
+reads the records.
 
     python benchmarks/adequacy_by_size.py --seeds 20 --cases clean --json by_size.json
     python benchmarks/adequacy_by_size.py --seeds 3 --cases sign tach clean2 \\
         --json misfit.json
-    python benchmarks/adequacy_by_size.py --seeds 0 --json by_size.json --also misfit.json --docs
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import time
 import warnings
@@ -49,8 +47,6 @@ DT_S = 0.1
 PERIODS_S = {2000: 10.0, 20000: 1.0, 200000: 0.1}   # nominal rows -> sample period
 CASES = ("clean", "clean2", "sign", "tach")
 TACH_SCALE = 1.03
-DOCS = ROOT / "docs" / "adequacy.md"
-BEGIN, END = "<!-- adequacy_by_size:begin -->", "<!-- adequacy_by_size:end -->"
 
 
 def scenario(rows: int):
@@ -111,60 +107,28 @@ def run_one(case: str, rows: int, seed: int, settings, save: Path | None = None)
     return out
 
 
-def _commit() -> str:
-    try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
-                              capture_output=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                               cwd=ROOT, text=True, capture_output=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + (" with uncommitted changes" if dirty else "")
+def table(records: list[dict]) -> str:
+    """Markdown table of the records (``--json``, pooled): per case and size, each check's
+    failures (median and largest statistic) and the fits failing any check."""
+    from adequacy_false_alarms import CHECKS, any_cell, check_cell
 
-
-def table(results: dict) -> str:
-    """Markdown table: per case and size, each check's failures (median and largest statistic)
-    and the fits failing any check, with the binomial 95 % bound ``3/n`` when none of ten or
-    more does."""
-    import numpy as np
-    from adequacy_false_alarms import rates
-
-    names = ["prior_data_conflict", "held_out", "residual_autocorrelation",
-             "residual_regression"]
-    lines = ["| case | rows | fits | " + " | ".join(f"`{n}`" for n in names) + " | any check |",
-             "|---|---|---|" + "---|" * (len(names) + 1)]
+    results: dict = {}
+    for rec in records:
+        for case, by_rows in rec["results"].items():
+            for rows, seeds in by_rows.items():
+                results.setdefault(case, {}).setdefault(rows, {}).update(seeds)
+    lines = ["| case | rows | fits | " + " | ".join(f"`{n}`" for n in CHECKS) + " | any check |",
+             "|---|---|---|" + "---|" * (len(CHECKS) + 1)]
     for case in CASES:
         for rows in PERIODS_S:
             rs = results.get(case, {}).get(str(rows), {})
             if not rs:
                 continue
             res = [rs[k] for k in sorted(rs, key=int)]
-            n = len(res)
-            cells = []
-            for name in names:
-                st = [r["checks"][name]["statistic"] for r in res]
-                if all(s is None for s in st):
-                    cells.append("n/a")
-                    continue
-                k = sum(not r["checks"][name]["ok"] for r in res)
-                st = [s for s in st if s is not None]
-                cells.append(f"{k}/{n} ({np.median(st):.2g}, {max(st):.2g})")
-            r_any = rates(res)["any"]
-            k_any = sum(not r["ok"] for r in res)
-            bound = f" (≤ {r_any['upper95']:.2f} at 95 %)" if k_any == 0 and n >= 10 else ""
-            lines.append(f"| `{case}` | {res[0]['rows']} | {n} | " + " | ".join(cells)
-                         + f" | **{k_any}/{n}**{bound} |")
+            lines.append(f"| `{case}` | {res[0]['rows']} | {len(res)} | "
+                         + " | ".join(check_cell(res, n) for n in CHECKS)
+                         + f" | {any_cell(res)} |")
     return "\n".join(lines)
-
-
-def write_docs(text: str) -> None:
-    from cassini_bayes.files import write_text
-
-    doc = DOCS.read_text(encoding="utf-8")
-    if BEGIN not in doc or END not in doc:
-        raise SystemExit(f"{DOCS}: markers {BEGIN} … {END} not found")
-    head, rest = doc.split(BEGIN, 1)
-    write_text(DOCS, head + BEGIN + "\n" + text + "\n" + END + rest.split(END, 1)[1])
 
 
 def main(argv=None) -> None:
@@ -178,9 +142,6 @@ def main(argv=None) -> None:
     ap.add_argument("--draws", type=int, default=200)
     ap.add_argument("--json", type=Path, default=None, help="results, saved after every fit; "
                     "an existing file is resumed")
-    ap.add_argument("--also", nargs="+", type=Path, default=[],
-                    help="results of other runs (their --json) to add to the table")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/adequacy.md")
     ap.add_argument("--save-residuals", type=Path, default=None,
                     help="folder for each fit's residuals and regressors (.npz)")
     args = ap.parse_args(argv)
@@ -196,10 +157,6 @@ def main(argv=None) -> None:
         start(args.json, {k: getattr(args, k) for k in ("chains", "warmup", "draws")}, argv)
     saved = json.loads(args.json.read_text()) if args.json and args.json.exists() else {}
     results = saved.get("results", {})
-    command = "python benchmarks/adequacy_by_size.py " + " ".join(
-        argv if argv is not None else sys.argv[1:])
-    runs = saved.get("runs", [])
-    this_run = {"command": command, "commit": _commit()}
     t0 = time.perf_counter()
     for case in args.cases:
         for rows in args.sizes:
@@ -214,28 +171,9 @@ def main(argv=None) -> None:
                     for k, c in r["checks"].items())
                 print(f"{case:6s} {r['rows']:6d} rows seed {seed:2d} ok {int(r['ok'])}  {stats}"
                       f"  ({r['seconds']:.0f} s; {time.perf_counter() - t0:.0f} s)", flush=True)
-                if this_run not in runs:
-                    runs.append(this_run)
                 if args.json is not None:
-                    write_text(args.json, json.dumps({"runs": runs, "results": results},
-                                                       indent=1) + "\n")
-    merged = {case: {rows: dict(seeds) for rows, seeds in by_rows.items()}
-              for case, by_rows in results.items()}
-    for other in args.also:
-        more = json.loads(other.read_text())
-        runs = runs + [r for r in more.get("runs", []) if r not in runs]
-        for case, by_rows in more["results"].items():
-            for rows, seeds in by_rows.items():
-                merged.setdefault(case, {}).setdefault(rows, {}).update(seeds)
-    text = table(merged)
-    print(text)
-    if args.docs:
-        made = "; ".join(f"`{r['command']}` at commit {r['commit']}" for r in runs)
-        write_docs(f"Measured by {made} (sampler {args.chains} chains × {args.warmup} warm-up × "
-                   f"{args.draws} draws); table written by `{command}` at commit {_commit()}. "
-                   "Each cell: fits failing the check out of fits (median, largest statistic)."
-                   "\n\n" + text)
-
+                    write_text(args.json, json.dumps({"results": results}, indent=1) + "\n")
+    print(table([{"results": results}]))
 
 if __name__ == "__main__":
     main()

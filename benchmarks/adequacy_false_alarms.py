@@ -119,6 +119,49 @@ def rates(results: list[dict]) -> dict:
     return out
 
 
+CHECKS = ("prior_data_conflict", "held_out", "residual_autocorrelation", "residual_regression")
+
+
+def check_cell(results: list[dict], name: str) -> str:
+    """``k/n (median, largest statistic)`` of one check over ``results`` (adequacy blocks), with
+    the parameter a failing check names when every failure names the same one; ``n/a`` where
+    the check did not run."""
+    import numpy as np
+
+    stats = [r["checks"][name]["statistic"] for r in results if name in r["checks"]]
+    stats = [s for s in stats if s is not None]
+    if not stats:
+        return "n/a"
+    fails = [r["checks"][name] for r in results if not r["checks"][name]["ok"]]
+    named = {c.get("parameter") for c in fails}
+    where = f", always `{named.pop()}`" if fails and len(named) == 1 and None not in named else ""
+    return f"{len(fails)}/{len(results)} ({np.median(stats):.2g}, {max(stats):.2g}){where}"
+
+
+def any_cell(results: list[dict]) -> str:
+    """Fits failing any check, with the rule-of-three 95 % bound when none of ten or more did,
+    else the rate and its binomial sd."""
+    n, k = len(results), sum(not r["ok"] for r in results)
+    if k == 0:
+        return f"**0/{n}**" + (f" (≤ {3.0 / n:.2f} at 95 %)" if n >= 10 else "")
+    if k == n:
+        return f"**{k}/{n}**"
+    p = k / n
+    return f"**{k}/{n} = {p:.2f} ± {(p * (1 - p) / n) ** 0.5:.2f}**"
+
+
+def table(records: list[dict]) -> str:
+    """Per case of the records (``--json``): each check's failures and the fits failing any."""
+    lines = ["| case | seeds | " + " | ".join(f"`{n}`" for n in CHECKS) + " | any check |",
+             "|---|---|" + "---|" * (len(CHECKS) + 1)]
+    for rec in records:
+        for case, results in rec["results"].items():
+            lines.append(f"| `{case}` | {len(results)} | "
+                         + " | ".join(check_cell(results, n) for n in CHECKS)
+                         + f" | {any_cell(results)} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=20)

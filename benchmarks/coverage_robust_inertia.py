@@ -69,6 +69,17 @@ def _errors(key, scenario, drawn: bool):
                        gyro_scale_factor=scale)
 
 
+def _wheel_error_mean(key, scenario) -> float:
+    """The mean of the wheels' drawn spin-inertia errors (``c_s + mean d_k``) of :func:`_errors`
+    with ``key``: the common scale the momentum balance cannot see."""
+    import jax
+    import numpy as np
+
+    from cassini_bayes.inference.nuisance import prior_wheel_errors
+
+    return float(np.mean(prior_wheel_errors(scenario.prior, jax.random.split(key, 4)[2])))
+
+
 def _run_one(job) -> dict:
     """Simulate one (family, seed) and fit both models; returns plain numbers."""
     family, seed, opts = job
@@ -95,6 +106,8 @@ def _run_one(job) -> dict:
     s = SamplerSettings(chains=opts["chains"], warmup=opts["warmup"], draws=opts["draws"],
                         chain_method="vectorized")
     out = {"family": family, "seed": seed, "truth": truth.tolist()}
+    if opts["errors"] == "drawn":
+        out["wheel_error_mean"] = _wheel_error_mean(k_err, scenario)
     for model in opts["models"]:
         t0 = time.perf_counter()
         with warnings.catch_warnings():

@@ -31,7 +31,8 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-import _tables_budgets  # noqa: E402,F401  (each module registers its kinds)
+import _tables_adequacy  # noqa: E402,F401  (each module registers its kinds)
+import _tables_budgets  # noqa: E402,F401
 import _tables_coverage  # noqa: E402,F401
 import _tables_evidence  # noqa: E402,F401
 import _tables_leak  # noqa: E402,F401

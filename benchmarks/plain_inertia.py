@@ -34,9 +34,10 @@ plainly: the check that the package's speed is not bought with a different answe
 Samplers at their defaults: PyMC ``pm.sample`` (NUTS, ``jitter+adapt_diag``, target acceptance
 0.8; chains in ``cores = os.cpu_count()`` processes — PyMC's own default takes half the CPUs,
 one on a 2-core machine, and would run the chains one after the other); nutpie
-``compile_pymc_model`` + ``sample`` (numba backend, chains in threads); NumPyro ``MCMC(NUTS(model))`` (diagonal mass matrix, target 0.8,
-``init_to_uniform``), chains in parallel on four host devices and 64-bit floats (a careful user's
-two lines: without them the chains run one after the other in float32).
+``compile_pymc_model`` + ``sample`` (numba backend, chains in threads); NumPyro
+``MCMC(NUTS(model))`` (diagonal mass matrix, target 0.8, ``init_to_uniform``), chains in
+parallel on four host devices and 64-bit floats (a careful user's two lines: without them the
+chains run one after the other in float32).
 
 Timings written: ``t_import`` (process start of the script to the framework imported),
 ``t_fit`` (the sampling call, including whatever it compiles), ``t_sample`` (the sampling loop,
