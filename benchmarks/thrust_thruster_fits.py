@@ -47,7 +47,7 @@ def fit_one(scenario: str, seed: int, sampler: dict) -> dict:
         com[axis] = {"truth_m": float(c_true), "error_m": q["mean"] - float(c_true),
                      "sd_m": q["sd"], "covered_90": bool(q["q05"] <= c_true <= q["q95"])}
     tau_true = {n: float(truth[f"{n}_s"]) for n in TAU}
-    tau = {n: {"truth_s": tau_true[n],
+    tau = {n: {"truth_s": tau_true[n], "mean_s": p[n]["mean"], "sd_s": p[n]["sd"],
                "covered_90": bool(p[n]["q05"] <= tau_true[n] <= p[n]["q95"])} for n in TAU}
     return {"scenario": scenario, "seed": seed, "thrusts": thrusts, "com": com, "tau": tau,
             "diagnostics": summ["diagnostics"], "adequacy_ok": summ["adequacy"]["ok"],

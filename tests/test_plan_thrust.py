@@ -125,8 +125,9 @@ def test_bad_thrust_limits_are_one_line_errors(change, key):
 def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     """``plan thrust`` on a 4-minute ESPA event with the longest pulse 250 ms and two thrusters
     forbidden: the written scenario simulates (noisy, ``simulate``) within every limit, on the
-    telemetry and on the pulse log, and ``plan evaluate`` gives the plan's prediction (both
-    over the nominal truth and one drawn from the model file's knowledge)."""
+    telemetry and on the pulse log, and ``plan evaluate`` gives the plan's prediction; the
+    search ranks, and both predict, over the nominal truth and one drawn from the model file's
+    knowledge."""
     import tomli_w
 
     from cassini_bayes.plan import checks
@@ -142,6 +143,7 @@ def test_plan_thrust_flies_within_its_limits(run_cli, tmp_path):
     s = json.loads((tmp_path / "p" / "summary.json").read_text())
     assert s["plan"]["limits_ok"]
     assert len(s["search"]) >= 4
+    assert all(c["truths"] == 1 for c in s["search"])      # ranked over the truths too
     code, _, err = run_cli("simulate", tmp_path / "p" / "scenario.toml", "--out",
                            tmp_path / "sim", "--seed", "3")
     assert code == 0, err

@@ -102,9 +102,10 @@ def plan_thrust(spacecraft: PathArg, limits: PathArg, *,
     baseline : scenario to compare with (path or shipped name; e.g. the shipped biasing event
         of the same duration).
     goal : the value of ``target`` wanted; a plan that cannot reach it says so.
-    truths : the plan's and the baseline's predictions are the median over the nominal truth
-        and this many drawn from the model file's knowledge (the search itself ranks at the
-        nominal truth): a closed-loop event's pulses follow the truth (docs/planning.md).
+    truths : every prediction (each candidate's, the plan's, the baseline's) is the median over
+        the nominal truth and this many drawn from the model file's knowledge, so the search
+        ranks on them too: a closed-loop event's pulses follow the truth (docs/planning.md).
+        Each candidate then costs ``truths + 1`` predictions.
     progress : print the search's steps on stderr.
     """
     from dataclasses import replace

@@ -126,9 +126,10 @@ def _thrust_cmd(
                                         "duration)."),
     goal: float | None = typer.Option(None, "--goal", min=0.0, help="Target value wanted; "
                                       "a plan that cannot reach it says so."),
-    truths: int = typer.Option(0, "--truths", min=0, help="Predict the plan and the "
-                               "comparison as the median over N truths drawn from the model "
-                               "file's knowledge too (the search ranks at the nominal one)."),
+    truths: int = typer.Option(0, "--truths", min=0, help="Rank the candidates, and predict "
+                               "the plan and the comparison, as the median over the nominal "
+                               "truth and N drawn from the model file's knowledge (N + 1 "
+                               "predictions a candidate)."),
     force: bool = typer.Option(False, "--force", help="Replace --out if it is a directory "
                                "cassini-bayes wrote."),
 ) -> None:

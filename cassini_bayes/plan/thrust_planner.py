@@ -16,7 +16,8 @@ what the search varies, is discrete or bounded:
   alternating signs so that the thrusters push both ways about the axes.
 
 Each candidate is flown without noise and scored by the predicted posterior
-(:func:`~cassini_bayes.plan.thrust.evaluate_thrust`): the largest sd over its budget (target
+(:func:`~cassini_bayes.plan.thrust.evaluate_thrust`, at the nominal truth or as the median over
+truths drawn from the model file's knowledge): the largest sd over its budget (target
 ``max_ratio``), or over the thrust sites only (``max_ratio_thrust``). A candidate is admitted only
 when its simulated flight keeps every limit: body rate and wheel speed, momentum and torque on the
 telemetry (:func:`~cassini_bayes.plan.checks.largest_usage`), pulse widths within ``min_pulse_s …
@@ -173,9 +174,10 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
                       progress: Callable[[str], None] | None = None) -> ThrustPlan:
     """Search the candidates (module docstring) and return the best that keeps every limit on its
     simulated flight; the comparison is ``baseline`` evaluated with the same model file and
-    limits. ``truths``: the plan's and the baseline's predictions (not the search's) are the
-    median over the nominal truth and that many drawn from the model file's knowledge
-    (:func:`~cassini_bayes.plan.thrust.evaluate_thrust`). Raises
+    limits. ``truths``: every prediction, each candidate's included, is the median over the
+    nominal truth and that many drawn from the model file's knowledge, the same draws for every
+    candidate (:func:`~cassini_bayes.plan.thrust.evaluate_thrust`): a closed-loop event's
+    pulses follow the truth, so the ranking does too (``truths + 1`` times the cost). Raises
     :class:`~cassini_bayes.errors.InputError` when no candidate keeps the limits (naming the
     limit the best one breaks)."""
     from cassini_bayes.errors import InputError
@@ -188,12 +190,13 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
         t0 = time.perf_counter()
         d = thrust_event_dict(limits, base, spacecraft_ref, c)
         s = scenario_from_dict(copy.deepcopy(d), limits.source)
-        p = evaluate_thrust(s, mode, limits)
+        p = evaluate_thrust(s, mode, limits, truths=truths)
         usage = {**p.usage, **pulse_usage(p, limits)}
         p = p._replace(usage=usage)
         value = target_value(p, target)
         ok = _limits_ok(usage)
-        rec = {**c._asdict(), "target_value": value, "worst": p.worst, "limits_ok": ok,
+        rec = {**c._asdict(), "target_value": value, "truths": truths, "worst": p.worst,
+               "limits_ok": ok,
                "n_pulses": p.n_pulses, "pulse_widths_s": list(p.pulse_widths_s),
                "largest_usage": max(usage, key=usage.get), "seconds": time.perf_counter() - t0}
         search.append(rec)
@@ -213,10 +216,6 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
                          "flight; widen that limit or lengthen 'limits.duration_s'",
                          path=limits.source)
     _, d, p, c = best
-    if truths:
-        p = evaluate_thrust(scenario_from_dict(copy.deepcopy(d), limits.source), mode, limits,
-                            truths=truths)
-        p = p._replace(usage={**p.usage, **pulse_usage(p, limits)})
     base_pred, base_name, base_dict = None, "", None
     if baseline is not None:
         base_pred = evaluate_thrust(baseline, mode, limits, truths=truths)
