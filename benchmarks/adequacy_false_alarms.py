@@ -128,11 +128,11 @@ def check_cell(results: list[dict], name: str) -> str:
     the check did not run."""
     import numpy as np
 
-    stats = [r["checks"][name]["statistic"] for r in results if name in r["checks"]]
-    stats = [s for s in stats if s is not None]
+    checks = [r["checks"][name] for r in results if name in r["checks"]]
+    stats = [c["statistic"] for c in checks if c["statistic"] is not None]
     if not stats:
         return "n/a"
-    fails = [r["checks"][name] for r in results if not r["checks"][name]["ok"]]
+    fails = [c for c in checks if not c["ok"]]
     named = {c.get("parameter") for c in fails}
     where = f", always `{named.pop()}`" if fails and len(named) == 1 and None not in named else ""
     return f"{len(fails)}/{len(results)} ({np.median(stats):.2g}, {max(stats):.2g}){where}"
@@ -151,14 +151,16 @@ def any_cell(results: list[dict]) -> str:
 
 
 def table(records: list[dict]) -> str:
-    """Per case of the records (``--json``): each check's failures and the fits failing any."""
-    lines = ["| case | seeds | " + " | ".join(f"`{n}`" for n in CHECKS) + " | any check |",
-             "|---|---|" + "---|" * (len(CHECKS) + 1)]
-    for rec in records:
-        for case, results in rec["results"].items():
-            lines.append(f"| `{case}` | {len(results)} | "
-                         + " | ".join(check_cell(results, n) for n in CHECKS)
-                         + f" | {any_cell(results)} |")
+    """Per case of the records (``--json``): each check's failures (every check any fit ran)
+    and the fits failing any."""
+    cases = [(c, res) for rec in records for c, res in rec["results"].items()]
+    names = list(dict.fromkeys(n for _, res in cases for r in res for n in r["checks"]))
+    lines = ["| case | seeds | " + " | ".join(f"`{n}`" for n in names) + " | any check |",
+             "|---|---|" + "---|" * (len(names) + 1)]
+    for case, results in cases:
+        lines.append(f"| `{case}` | {len(results)} | "
+                     + " | ".join(check_cell(results, n) for n in names)
+                     + f" | {any_cell(results)} |")
     return "\n".join(lines)
 
 
