@@ -257,3 +257,12 @@ def coverage_robust_inertia(args: list[Records]) -> str:
         lines.append(f"| `{family}` | {len(rows)} | " + " | ".join(cells)
                      + f" | {worst:.4f}, {div} |")
     return "\n".join(lines)
+
+
+@kind("thrust_tag_statement")
+def thrust_tag_statement(args: list[Records]) -> str:
+    """The single-width event's thrusts against the stated and the flown time-tag sd
+    (``benchmarks/thrust_time_tag_statement.py --json``)."""
+    from thrust_time_tag_statement import table
+
+    return table([r for group in args for p in group for r in read_json(p)])
