@@ -252,7 +252,7 @@ def coverage_robust_inertia(args: list[Records]) -> str:
             worst = max(worst, *(r[m]["r_hat"] for r in rows))
             div += sum(r[m]["divergences"] for r in rows)
         if drawn:
-            cells.append(", ".join(f"{100 * r['wheel_error_mean']:+.2f} %" for r in rows
+            cells.append(", ".join(f"{_signed(100 * r['wheel_error_mean'], 2)} %" for r in rows
                                    if "robust" in r and not r["robust"]["budget"]) or "–")
         lines.append(f"| `{family}` | {len(rows)} | " + " | ".join(cells)
                      + f" | {worst:.4f}, {div} |")
