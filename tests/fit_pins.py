@@ -27,9 +27,10 @@ machine. Draws are bit-identical on one CPU only: XLA's code differs between ins
 The API-vs-CLI comparison in one process (``tests/test_api.py``) stays exact: same machine, same
 seed, same numbers (:func:`assert_same`).
 
-Record with ``python tests/fit_pins.py`` (re-record only for a deliberate change of the numbers,
-and say why in the commit); ``python tests/fit_pins.py --check-seeds 5`` fits the same inputs
-with other seeds and compares them with the pins by these rules (the false-failure check).
+Record with ``python tests/fit_pins.py [MODEL ...]`` (re-record only for a deliberate change of
+the numbers, and say why in the commit); ``python tests/fit_pins.py --check-seeds 5 [MODEL ...]``
+fits the same inputs with other seeds and compares them with the pins by these rules (the
+false-failure check).
 """
 
 from __future__ import annotations
@@ -383,14 +384,16 @@ def _fit(model: str, files: dict, out: Path, seed: int | None = None) -> tuple[d
     return summary, load_arviz().from_netcdf(out / "posterior.nc")
 
 
-def record() -> None:  # pragma: no cover - run by hand
+def record(models: list[str]) -> None:  # pragma: no cover - run by hand
+    """Re-record the pins of ``models`` (all where empty); the others keep theirs."""
     import os
     import tempfile
 
     os.environ.setdefault("XLA_FLAGS", "--xla_force_host_platform_device_count=4")
-    pins = {"about": __doc__.split("\n\n")[0].replace("\n", " ")}
+    pins = json.loads(PINS.read_text()) if models and PINS.exists() else {}
+    pins["about"] = __doc__.split("\n\n")[0].replace("\n", " ")
     with tempfile.TemporaryDirectory() as tmp:
-        for model in RECIPES:
+        for model in models or RECIPES:
             files = write_inputs(model, Path(tmp) / model)
             summary, idata = _fit(model, files, Path(tmp) / f"{model}-run")
             pins[model] = {"summary": summary, "tolerance": tolerances(summary, idata)}
@@ -399,9 +402,9 @@ def record() -> None:  # pragma: no cover - run by hand
     PINS.write_text(json.dumps(pins, indent=1) + "\n")
 
 
-def check_other_seeds(n: int) -> int:  # pragma: no cover - run by hand
-    """Fit each recipe with ``n`` other seeds and compare with the pins: every failure printed;
-    returns their count (the rules' false-failure check)."""
+def check_other_seeds(n: int, models: list[str]) -> int:  # pragma: no cover - run by hand
+    """Fit each recipe of ``models`` (all where empty) with ``n`` other seeds and compare with
+    the pins: every failure printed; returns their count (the rules' false-failure check)."""
     import os
     import tempfile
 
@@ -409,7 +412,7 @@ def check_other_seeds(n: int) -> int:  # pragma: no cover - run by hand
     pins = json.loads(PINS.read_text())
     failures = 0
     with tempfile.TemporaryDirectory() as tmp:
-        for model in RECIPES:
+        for model in models or RECIPES:
             files = write_inputs(model, Path(tmp) / model)
             for k in range(1, n + 1):
                 seed = RECIPES[model][4] + 100 * k
@@ -427,5 +430,5 @@ def check_other_seeds(n: int) -> int:  # pragma: no cover - run by hand
 
 if __name__ == "__main__":  # pragma: no cover
     if len(sys.argv) > 2 and sys.argv[1] == "--check-seeds":
-        sys.exit(1 if check_other_seeds(int(sys.argv[2])) else 0)
-    record()
+        sys.exit(1 if check_other_seeds(int(sys.argv[2]), sys.argv[3:]) else 0)
+    record(sys.argv[1:])

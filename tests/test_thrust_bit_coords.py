@@ -111,23 +111,3 @@ def test_impulse_bit_draws_and_their_report():
         "thrusters": names, "identified": names, "not_fired": ["A2"], "combinations": [],
         "com_told": {}, "impulse_bits": block}}))
     assert "impulse bit" in html and "0.1712" in html and "125" in html
-
-
-def test_a_single_width_fit_warns_that_the_stated_time_tags_move_its_thrusts():
-    """A robust fit whose events fire every thruster at one width warns that the stated
-    time-tag sd moves its thrusts (docs/thrust_any_layout.md); not where the widths differ, the
-    model is idealised, or no tag error is stated."""
-    import dataclasses
-
-    from cassini_bayes.api._thrust import single_width_tag_warning
-    from cassini_bayes.spacecraft import load_spacecraft
-
-    sc = load_spacecraft("espa_bus")
-    bits = {"thrust_design": {"impulse_bits": {"width_s": {"A1": 0.125}}}}
-    warn = single_width_tag_warning(bits, sc, robust=True)
-    assert warn and "time_tag_sd_s" in warn and "10 ms" in warn and "\n" not in warn
-    assert single_width_tag_warning({"thrust_design": {}}, sc, robust=True) is None
-    assert single_width_tag_warning(bits, sc, robust=False) is None
-    exact = dataclasses.replace(sc, knowledge=dataclasses.replace(sc.knowledge,
-                                                                  time_tag_sd_s=0.0))
-    assert single_width_tag_warning(bits, exact, robust=True) is None

@@ -1,7 +1,11 @@
 """The time tags' terms of the robust thrust model (inference/thrust/time_tags.py)."""
 
+import tempfile
+from pathlib import Path
+
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.inference.thrust.likelihood import jump_area, pulse_layout, tag_expectation
@@ -153,3 +157,50 @@ def test_the_sample_before_a_command_gets_its_expected_rate():
     np.testing.assert_allclose(got[0, 1, 3], exact, rtol=0.04)  # sample 3 s
     assert np.count_nonzero(got) == 1        # the pulse 0.4 s after its sample: out of reach
     assert with_pre_command_rates(rates, stacked, q_f, TAU, b, 0.0) is rates
+
+
+def test_the_tag_scale_prior_is_split_at_the_stated_sd():
+    """The stated sd is the prior median; the log scale falls with slope 1.5 below it and
+    rises with slope 0.5 above (TAG_SCALE_LOG_SD), smoothly and monotonically."""
+    from cassini_bayes.inference.thrust.prior import TAG_SCALE_LOG_SD, tag_log_scale
+
+    z = np.linspace(-4.0, 4.0, 801)
+    x = np.asarray(tag_log_scale(jnp.asarray(z)))
+    assert x[400] == 0.0 and np.all(np.diff(x) > 0)
+    assert (x[1] - x[0]) / 0.01 == pytest.approx(TAG_SCALE_LOG_SD[0], rel=0.01)
+    assert (x[-1] - x[-2]) / 0.01 == pytest.approx(TAG_SCALE_LOG_SD[1], rel=0.01)
+
+
+def _espa_problem(flown_s: float):
+    """The robust per-thruster problem of the single-width ESPA biasing event, flown with time
+    tags of sd ``flown_s`` and fitted at the model file's default 10 ms."""
+    import tomllib
+
+    import cassini_bayes as cb
+    from cassini_bayes.files import toml_text
+    from cassini_bayes.inference.thrust.data import prepare_thrust
+    from cassini_bayes.simulate.scenario import scenario_path
+
+    d = tomllib.loads(scenario_path("biasing_espa_bus").read_text())
+    d["noise"]["time_tag_jitter_s"] = flown_s
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "espa.toml"
+        path.write_text(toml_text(d))
+        sim = cb.simulate_scenario(path, seed=1)
+    assert sim.prior.knowledge.time_tag_sd_s == pytest.approx(0.01)
+    return sim, prepare_thrust([(sim.telemetry, sim.pulses)], sim.prior, mode="thruster",
+                               robust=True, flex="off")
+
+
+@pytest.mark.parametrize("flown_s, low, high", [(0.0, 0.0, 0.1), (0.01, 0.6, 1.8)])
+def test_the_tags_sd_is_learned_from_the_events(flown_s, low, high):
+    """At the Laplace centre the time tags' sd over the stated 10 ms follows the tags flown:
+    exact tags take it below 0.1 (seen 0.016), 10-ms tags to 0.6-1.8 (seen 1.28). A scale
+    held at the stated sd (1) fails the first bound."""
+    from cassini_bayes.inference.thrust.coords import physical
+
+    _, problem = _espa_problem(flown_s)
+    kw = problem.data
+    assert kw.tag_sd is not None and kw.tag_walk.sum() > 0
+    p = physical(kw.centre, kw, problem.n_f, problem.n_c, False)
+    assert low < float(p.tag_scale) < high

@@ -155,6 +155,8 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
         names += list(COM_NAMES)
     names += list(TAU_NAMES)
     nuisance = ["sigma_omega", "sigma_rho"]
+    if "time_tag_sd" in post.idata.posterior:   # the robust model learns the tags' sd
+        nuisance.append("time_tag_sd")
     if "Ixx" in post.idata.posterior:   # the inertia was sampled
         nuisance += list(INERTIA_NAMES)
     if robust:
@@ -334,25 +336,7 @@ def _baseline_and_summary(post: Any, events, sc: Spacecraft, inertia, warnings: 
     summary = thrust_summary(post, seed=seed, mode=mode, robust=robust,
                              wheel_errors=wheel_errors, baseline=baseline,
                              warnings=list(dict.fromkeys(warnings + base_warns)))
-    warn = single_width_tag_warning(summary, sc, robust)
-    if warn:
-        summary["warnings"].append(warn)
     return baseline, summary
-
-
-def single_width_tag_warning(summary: dict, sc: Spacecraft, robust: bool) -> str | None:
-    """The warning of a robust fit whose events fire every thruster at one width
-    (``thrust_design.impulse_bits``): its thrusts rest on the pulse shape, which the time-tag
-    term's stated sd moves, so a statement other than the telemetry's moves every thrust by
-    one factor."""
-    tag_sd = sc.knowledge.time_tag_sd_s
-    if not (robust and tag_sd > 0 and "impulse_bits" in summary.get("thrust_design", {})):
-        return None
-    return ("every thruster fires at one width, so the thrusts rest on the pulse shape, and the "
-            f"time-tag term's stated sd ({1e3 * tag_sd:.3g} ms, the model file's "
-            "[telemetry_knowledge] time_tag_sd_s) moves them all by one factor where it differs "
-            "from the telemetry's: trust the impulse bits bit[<name>], state the tags' sd, or "
-            "fly more than one width (docs/thrust_any_layout.md)")
 
 
 def _inertia_option(inertia_posterior: FitArg | None, post: Any) -> str:

@@ -177,6 +177,8 @@ def truth_coordinates(problem, thrust, com, tau, inertia) -> np.ndarray:
     if problem.inertia is not None:
         parts.append(np.linalg.solve(np.asarray(kw.inertia_tril, float),
                                      np.asarray(inertia, float) - np.asarray(kw.inertia_mean)))
+    if kw.tag_sd is not None:
+        parts.append(np.zeros(1))                        # the time tags at the stated sd
     return np.concatenate(parts)
 
 

@@ -136,7 +136,11 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   momentum enters ``ΔG``, Eq 15, too); ``"common"``: one ``c`` for all, ``− c (H_w + ∫ ω × H_w
   dt)``;
 * wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj (J_k ρ_k u_kj + ∫ ω × J_k ρ_k u_kj dt)``;
-* telemetry time-tag errors (white, sd ``σ_t`` = ``Knowledge.time_tag_sd_s``, 10 ms by default):
+* telemetry time-tag errors (white, sd ``σ_t``: ``Knowledge.time_tag_sd_s``, 10 ms by default,
+  times a scale the sampler learns, log-normal-like with median 1 and log sds 1.5 below and 0.5
+  above, :data:`~cassini_bayes.inference.thrust.prior.TAG_SCALE_LOG_SD`; posterior site
+  ``time_tag_sd``, s; a statement held fixed pulls the thrusts of a single-width event along the
+  ridge ``F j(τ) = const`` wherever it differs from the telemetry's):
   a sample tagged ``δ`` late is compared with the impulse delivered by ``t_i + δ``, off by the
   thrusters' torque at ``t_i`` times ``δ`` — noise only on the samples taken during a pulse, which
   carry the timing information of the time constants, so it enters the sample's covariance
@@ -159,7 +163,7 @@ rather than sampled (as in the robust RWA4 model): per event the offset is remov
 (:func:`offset_marginal`), leaving a log-likelihood quadratic in ``ν``; the events' terms add,
 and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 16 for one
 event with three wheels). The sampler keeps the idealised model's coordinates (5 for one event
-and one ``F``); :func:`fit_thrust` then draws ``ν`` from its exact Gaussian conditional at each
+and one ``F``) and the time tags' scale; :func:`fit_thrust` then draws ``ν`` from its exact Gaussian conditional at each
 draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead
 (21 coordinates on one event), the time-tag term left a banana: the conditional mean of the
 torque about Z moved with ``τr²`` by about one conditional sd per unit of whitened ``τr``, which

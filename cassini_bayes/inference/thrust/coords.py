@@ -13,7 +13,7 @@ import numpy as np
 import numpyro.distributions as dist
 
 from cassini_bayes.inference.thrust.prior import (HALF_NORMAL_MEDIAN, NOISE_STEP,
-                                                  THRUST_PRIOR_LOG_SD)
+                                                  THRUST_PRIOR_LOG_SD, tag_log_scale)
 from cassini_bayes.physics.pulse import pulse_impulse
 
 __all__ = ["C_SCALE_S", "A_LOG_SCALE", "long_pulse_excess", "rise_deficit"]
@@ -22,17 +22,31 @@ C_SCALE_S = 0.01              # long-pulse excess c (s) per unit of its sampler 
 A_LOG_SCALE = 0.4             # log of the rise deficit a per unit of its sampler coordinate
 
 
-def unpack(theta, n_f: int, n_c: int, n_ev: int, sample_inertia: bool):
-    """Split the sampler vector into ``f_z`` (n_f,), ``com_z`` (n_c,), ``tau_z`` (3,) =
-    ``(s_z, a_z, c_z)``, ``noise_z`` (E,) and ``inertia_z`` (6,) or ``None``."""
-    f_z = theta[:n_f]
-    com_z = theta[n_f:n_f + n_c]
+class Coordinates(NamedTuple):
+    """The sampler vector's parts (:func:`unpack`), in its order."""
+
+    f_z: jax.Array        # (n_f,)
+    com_z: jax.Array      # (n_c,)
+    tau_z: jax.Array      # (3,) (s_z, a_z, c_z), tau_from_z
+    noise_z: jax.Array    # (E,)
+    inertia_z: object     # (6,), or None where the inertia is fixed
+    tag_z: jax.Array      # (K,): the time-tag scale's coordinate (prior.tag_log_scale)
+
+
+def n_tag(kw) -> int:
+    """1 where the model learns the time tags' sd (``kw.tag_sd`` given), else 0 (static)."""
+    return 0 if kw.tag_sd is None else 1
+
+
+def unpack(theta, n_f: int, n_c: int, n_ev: int, sample_inertia: bool,
+           n_tags: int = 0) -> Coordinates:
+    """Split the sampler vector into its :class:`Coordinates`."""
     k = n_f + n_c
-    tau_z = theta[k:k + 3]
-    noise_z = theta[k + 3:k + 3 + n_ev]
-    k += 3 + n_ev
-    inertia_z = theta[k:k + 6] if sample_inertia else None
-    return f_z, com_z, tau_z, noise_z, inertia_z
+    noise_end = k + 3 + n_ev
+    inertia_end = noise_end + (6 if sample_inertia else 0)
+    return Coordinates(theta[:n_f], theta[n_f:k], theta[k:k + 3], theta[k + 3:noise_end],
+                       theta[noise_end:inertia_end] if sample_inertia else None,
+                       theta[inertia_end:inertia_end + n_tags])
 
 
 def long_pulse_excess(tau_delay, tau_rise, tau_fall):
@@ -168,6 +182,7 @@ class Physical(NamedTuple):
     log_sigma: jax.Array    # (E, 2) log rad/s
     inertia: jax.Array      # (6,) kg m²
     whitened: jax.Array     # (n_f + n_c,) prior-whitened (log F, δ): N(0, 1) a priori
+    tag_scale: jax.Array    # the time tags' sd over the model file's (1 where not learned)
 
 
 def physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
@@ -190,7 +205,8 @@ def physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     ``p_F(log F(b, τ)) p(τ)``: :attr:`Physical.whitened` is ``N(0, 1)`` a priori.
     """
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, com_z, tau_z, noise_z, inertia_z = unpack(theta, n_f, n_c, n_ev, sample_inertia)
+    f_z, com_z, tau_z, noise_z, inertia_z, tag_z = unpack(theta, n_f, n_c, n_ev,
+                                                          sample_inertia, n_tag(kw))
     q = kw.q_matrix
     com = com_z
     if kw.f_basis is not None:
@@ -207,4 +223,4 @@ def physical(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> Physical:
     if sample_inertia:
         pi = pi + kw.inertia_tril @ inertia_z
     return Physical(thrust, thrust[kw.f_index], q, com, tau, log_sigma, pi,
-                    jnp.concatenate([f_z, com_z]))
+                    jnp.concatenate([f_z, com_z]), jnp.exp(tag_log_scale(jnp.sum(tag_z))))

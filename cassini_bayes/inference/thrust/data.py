@@ -18,7 +18,8 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
                                               with_time_tag_steps)
-from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
+                                                  rise_deficit)
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.flex import ModeSearch, flex_mode_columns
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, events_impulse,
@@ -76,6 +77,10 @@ class ThrustData(NamedTuple):
     bit_width : (n_f,) s, each thrust parameter's one pulse width where the events fire every
         parameter at one width (the sampler then sees the impulse bits,
         :func:`~cassini_bayes.inference.thrust.coords.bit_widths`), else ``None``.
+    tag_sd, tag_walk : the robust model with a time-tag sd: (1,) s, the model file's sd, which
+        the sampler scales (the last coordinate, prior
+        :data:`~cassini_bayes.inference.thrust.prior.TAG_SCALE_LOG_SD`), and (R,) 1 on the
+        time-tag walk's nuisance columns, whose prior sd scales with it; else ``None``.
     """
 
     events: EventData
@@ -97,6 +102,8 @@ class ThrustData(NamedTuple):
     com_sd: object = None
     d_matrix: object = None
     bit_width: object = None
+    tag_sd: object = None
+    tag_walk: object = None
 
 
 class ThrustProblem(NamedTuple):
@@ -368,7 +375,7 @@ def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustDa
     noise coordinate at its best there (:data:`_NOISE_SCAN`)."""
     n_f, n_c = thrust_sizes(mode, data)
     n_ev = data.events.t.shape[0]
-    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0)
+    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0) + n_tag(data)
     noise = np.arange(n_f + n_c + 3, n_f + n_c + 3 + n_ev)     # coords.unpack's order
     centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data,
                            scan=(noise, _NOISE_SCAN))
@@ -455,6 +462,11 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     design, extra = (_per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
                                           thrust_pred, fired) if mode == "thruster" else (None, {}))
     nu_cols = kw.pop("nu_cols")
+    tags = {}
+    if robust and sd_t > 0.0:
+        walk = np.zeros(layout.sd.shape[0])
+        walk[layout.slices.get("time_tag_steps", slice(0, 0))] = 1.0
+        tags = dict(tag_sd=np.array([sd_t]), tag_walk=walk)
     derived = dict(time_tag_rates=tag_rates, time_tag_gyro=tag_gyro, rank_one=rank_one,
                    pulses=layout_e, lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:],
                    nu_cols=nu_cols, nu_stats=_column_statistics(nu_cols, kw["mask"]), **steps)
@@ -465,7 +477,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
         f_mu=np.log(thrust_pred), f_index=thrust_index(mode, n_thr), inertia_mean=i_mean,
         bit_width=bit_widths(kw["width"], kw["thruster"], thrust_index(mode, n_thr)),
-        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra)))
+        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra, **tags)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
     data = _with_laplace(ThrustData(events=events, **kw, **rest), mode, inertia is not None)

@@ -20,6 +20,7 @@ from cassini_bayes.inference.thrust.model import nuisance_sampler, thrust_model
 from cassini_bayes.inference.thrust.prior import (COM_NAMES, THRUST_PRIOR_LOG_SD,
                                                   TauIdentificationWarning,
                                                   resolve_inertia, sample_thrust_prior,
+                                                  tag_scale_warning,
                                                   tau_identification)
 from cassini_bayes.inference.thrust.pulses import pulse_impulses
 from cassini_bayes.names import EFFECTS, INERTIA_NAMES, TAU_NAMES
@@ -136,12 +137,14 @@ def _posterior_mean_residuals(problem: ThrustProblem, post, sample_inertia: bool
     tau = np.concatenate([flat(n) for n in TAU_NAMES], 1)
     sig = np.stack([flat("sigma_omega"), flat("sigma_rho")], -1)          # (S, E, 2)
     pi = np.concatenate([flat(n) for n in INERTIA_NAMES], 1) if sample_inertia else None
+    scale = (flat("time_tag_sd")[:, 0] / float(problem.data.tag_sd[0])
+             if "time_tag_sd" in post else np.ones(n_s))
     total = 0.0
     for i in pick:
         total = total + impulse_residuals(problem, f[i], tau[i], sig[i],
                                           None if pi is None else pi[i],
                                           None if nu_draws is None else nu_draws[i],
-                                          None if com is None else com[i])
+                                          None if com is None else com[i], scale[i])
     return total / pick.size
 
 
@@ -262,6 +265,9 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
     _complete(key, idata, problem, robust, sample_inertia, coords, dims)
     for line in tau_identification(idata.posterior, problem.tau):
         warnings.warn(line, TauIdentificationWarning, stacklevel=2)
+    if kw.tag_sd is not None:
+        for line in tag_scale_warning(idata.posterior, float(kw.tag_sd[0])):
+            warnings.warn(line, stacklevel=2)
     return ThrustPosterior(idata, diagnostics(idata, _judged_names(problem, sample_inertia,
                                                                    robust)), problem)
 
@@ -318,4 +324,6 @@ def _judged_names(problem, sample_inertia: bool, robust: bool) -> list[str]:
         names += list(INERTIA_NAMES)
     if robust:
         names += [EFFECTS[e] for e in problem.layout.sites]
+    if problem.data.tag_sd is not None:
+        names.append("time_tag_sd")
     return names

@@ -184,9 +184,10 @@ def event_residual(pi, q_f, tau, ev: EventData):
     return v - thruster_impulse(ev.pulses, q_f, *tau)                # Feldman & Lee Eq 17
 
 
-def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
+def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix, tag_scale=1.0):
     """Offset-marginal statistics of one event (:func:`offset_marginal`) at ``ν = 0``; ``pi``
-    (6,) kg m² the inertia.
+    (6,) kg m² the inertia, ``tag_scale`` the time tags' sd over the one the event's terms were
+    prepared with.
 
     Residual ``r_i = V(t_i) − Q (F ⊙ j(t_i)) − cols_i ν − b`` (Feldman & Lee Eq 17 plus the
     robust terms) with covariance ``B + m_i m_iᵀ``: white gyro and wheel-rate noise ``B`` (module
@@ -209,7 +210,8 @@ def event_loglik(pi, f_m, tau, log_sigma, ev: EventData, q_matrix):
     q_f = q_matrix * f_m[None, :]
     r = event_residual(pi, q_f, tau, ev)
     st = offset_marginal(r, _noise_cov(inertia, log_sigma, ev.wheel_cov),
-                         q_f @ ev.time_tag_rates - ev.time_tag_gyro, ev.mask, ev.rank_one,
+                         tag_scale * (q_f @ ev.time_tag_rates - ev.time_tag_gyro), ev.mask,
+                         ev.rank_one,
                          ev.nu_cols, ev.nu_stats)
     log_jacobian = (jnp.sum(ev.mask) - 1.0) * _log_abs_det3(inertia)
     return st._replace(loglik=st.loglik + log_jacobian)
@@ -307,7 +309,7 @@ def events_impulse(layouts: PulseLayout, q_f, tau) -> np.ndarray:
 
 
 @jax.jit
-def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix):
+def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix, tag_scale):
     i_m = inertia_matrix(pi)
     q_f = q_matrix * f_m[None, :]
 
@@ -316,7 +318,8 @@ def _residuals_jit(pi, f_m, tau, log_sigma, nu, ev: EventData, q_matrix):
         none = ColumnStatistics(jnp.zeros((0, 0, 3, 3)), jnp.zeros((3, 0)))
         rank_one = ev.rank_one._replace(cols=tuple(c[:0] for c in ev.rank_one.cols))
         return offset_marginal(r, _noise_cov(i_m, log_sigma, ev.wheel_cov),
-                               q_f @ ev.time_tag_rates - ev.time_tag_gyro, ev.mask, rank_one,
+                               tag_scale * (q_f @ ev.time_tag_rates - ev.time_tag_gyro),
+                               ev.mask, rank_one,
                                ev.nu_cols[:0],
                                none).resid
 
@@ -333,11 +336,12 @@ def moment_matrix_at(kw, com=None) -> np.ndarray:
 
 
 def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
-                      nu=None, com=None) -> np.ndarray:
+                      nu=None, com=None, tag_scale=1.0) -> np.ndarray:
     """Offset-free residuals ``V − Q (F ⊙ j) − cols ν − b̂`` (E, n_max, 3) N m s at given
     parameters (thrust per parameter of the mode, ``tau`` (3,) s, ``sigma`` (E, 2), robust
     nuisance ``nu`` (R,), default 0, centre-of-mass offset ``com`` (3,) m of the per-thruster
-    model, default 0); padded rows are 0."""
+    model, default 0, the time tags' sd over the prepared one ``tag_scale``); padded rows
+    are 0."""
     kw = problem.data
     idx = np.asarray(kw.f_index)
     f_m = np.asarray(thrust, float).ravel()[idx]
@@ -346,5 +350,6 @@ def impulse_residuals(problem: ThrustProblem, thrust, tau, sigma, pi=None,
     d = _residuals_jit(jax.device_put(pi), jax.device_put(f_m),
                        tuple(jax.device_put(float(x)) for x in tau),
                        jnp.log(jax.device_put(np.asarray(sigma, float))), jax.device_put(nu),
-                       kw.events, jax.device_put(moment_matrix_at(kw, com)))
+                       kw.events, jax.device_put(moment_matrix_at(kw, com)),
+                       jax.device_put(float(tag_scale)))
     return np.swapaxes(np.asarray(d), 1, 2) * np.asarray(kw.events.mask)[..., None]

@@ -15,7 +15,7 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.inference.gaussian import (OffsetMarginal, nuisance_log_marginal,
                                               nuisance_marginal)
-from cassini_bayes.inference.thrust.coords import physical, tau_from_z, unpack
+from cassini_bayes.inference.thrust.coords import n_tag, physical, tau_from_z, unpack
 from cassini_bayes.inference.thrust.likelihood import event_loglik
 from cassini_bayes.inference.thrust.prior import (NOISE_STEP, COM_NAMES, NOISE_PRIOR_LOG_SD,
                                                   thrust_names)
@@ -26,9 +26,18 @@ __all__ = ["thrust_model", "thrust_sizes"]
 def _event_stats(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
     p = physical(theta, kw, n_f, n_c, sample_inertia)
-    return jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None))(
+    return jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
         p.inertia, p.per_thruster, (p.tau[0], p.tau[1], p.tau[2]), p.log_sigma, kw.events,
-        p.q_matrix)
+        p.q_matrix, p.tag_scale)
+
+
+def nuisance_sd(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
+    """(R,) the robust nuisance's prior sds at ``theta``: the time-tag walk's columns
+    (``kw.tag_walk``) scaled with the time tags' sd."""
+    if kw.tag_sd is None:
+        return kw.nu_sd
+    scale = physical(theta, kw, n_f, n_c, sample_inertia).tag_scale
+    return kw.nu_sd * (1.0 + (scale - 1.0) * kw.tag_walk)
 
 
 def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
@@ -40,7 +49,8 @@ def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     (``kw.bit_width`` given) the prior is that of the physical point's whitened ``(log F, δ)``
     (the map has Jacobian 1)."""
     n_ev = kw.log_noise_hat.shape[0]
-    f_z, com_z, tau_z, noise_z, inertia_z = unpack(theta, n_f, n_c, n_ev, sample_inertia)
+    f_z, com_z, tau_z, noise_z, inertia_z, tag_z = unpack(theta, n_f, n_c, n_ev,
+                                                          sample_inertia, n_tag(kw))
     _, log_prior_tau = tau_from_z(tau_z, kw)
     prior_com = n_c > 0
     if kw.bit_width is not None:     # impulse-bit coordinates: the prior at the physical point
@@ -52,10 +62,12 @@ def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(com_z))
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
+    log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(tag_z))
     st = _event_stats(theta, kw, n_f, n_c, sample_inertia)
     out = log_prior + jnp.sum(st.loglik)
     if kw.nu_sd.shape[0]:
-        out += nuisance_log_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
+        out += nuisance_log_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0),
+                                     nuisance_sd(theta, kw, n_f, n_c, sample_inertia))
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
 
@@ -67,10 +79,12 @@ def nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
     draw)."""
     def one(args, kw):
         w, eps = args
-        st = _event_stats(kw.centre + kw.tril @ w, kw, n_f, n_c, sample_inertia)
-        _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), kw.nu_sd)
+        theta = kw.centre + kw.tril @ w
+        st = _event_stats(theta, kw, n_f, n_c, sample_inertia)
+        sd = nuisance_sd(theta, kw, n_f, n_c, sample_inertia)
+        _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), sd)
         z = mean + jax.scipy.linalg.solve_triangular(chol.T, eps, lower=False)
-        return kw.nu_sd * z
+        return sd * z
 
     @jax.jit
     def draws(w, eps, kw):
@@ -115,6 +129,8 @@ def _model(kw, *, mode: str, sample_inertia: bool):
     sig = jnp.exp(p.log_sigma)
     numpyro.deterministic("sigma_omega", sig[:, 0])
     numpyro.deterministic("sigma_rho", sig[:, 1])
+    if kw.tag_sd is not None:
+        numpyro.deterministic("time_tag_sd", kw.tag_sd[0] * p.tag_scale)
     if sample_inertia:
         for i, name in enumerate(INERTIA_NAMES):
             numpyro.deterministic(name, p.inertia[i])
@@ -127,7 +143,8 @@ def thrust_model(mode: str, sample_inertia: bool = False):
     Call it with ``data=ThrustProblem.data``. Posterior sites: the thrust names of the mode
     (N; mode ``"thruster"``: ``F`` along the spacecraft's thrusters and the centre-of-mass
     offset ``com_x``, ``com_y``, ``com_z``, m), ``tau_delay``, ``tau_rise``, ``tau_fall`` (s),
-    ``sigma_omega``, ``sigma_rho`` (event) rad/s, ``Ixx … Iyz`` (kg m²) when
+    ``sigma_omega``, ``sigma_rho`` (event) rad/s, ``time_tag_sd`` (s, the robust model with
+    a stated time-tag sd), ``Ixx … Iyz`` (kg m²) when
     ``sample_inertia``, and the sampler's whitened ``w`` (the robust model's nuisance ``ν`` is
     integrated out; :func:`fit_thrust` adds its draws).
     """

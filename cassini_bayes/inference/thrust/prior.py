@@ -6,6 +6,7 @@ the data leave at their prior (:mod:`cassini_bayes.inference.thrust`, "Priors").
 
 from __future__ import annotations
 
+from statistics import NormalDist
 from typing import TYPE_CHECKING, NamedTuple
 
 import jax
@@ -20,7 +21,9 @@ from cassini_bayes.spacecraft import Spacecraft
 if TYPE_CHECKING:
     from cassini_bayes.inference.thrust.data import ThrustProblem
 
-__all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "resolve_inertia", "TauPrior",
+__all__ = ["MODES", "THRUST_PRIOR_LOG_SD", "NOISE_PRIOR_LOG_SD", "TAG_SCALE_LOG_SD",
+           "TAG_SCALE_KINK", "TAG_SCALE_WARN_MASS", "tag_log_scale", "tag_scale_warning",
+           "resolve_inertia", "TauPrior",
            "tau_prior", "CONTRACTION_UNIDENTIFIED", "PRIOR_CONFLICT_MASS",
            "TauIdentificationWarning", "tau_identification", "draw_tau_prior", "thrust_names",
            "sample_thrust_prior", "COM_NAMES"]
@@ -29,6 +32,43 @@ MODES = THRUST_MODES
 THRUST_PRIOR_LOG_SD = 0.3     # sd of log F (flight history 0.97 → 0.69 N, Feldman & Lee §V)
 NOISE_PRIOR_LOG_SD = 1.0      # sd of log σ around the data's own noise level σ̂
 NOISE_STEP = 0.1             # log σ per unit of the sampled noise coordinate
+TAG_SCALE_LOG_SD = (1.5, 0.5)
+"""sds of the log of the time tags' sd below and above the model file's stated one (its
+median): the data correct the statement as they do the noise level, and a scale held at it
+moves the thrusts where the tags differ. Tags far better than stated are common (exact clocks);
+far worse is rarer than a misfit at the pulses that the scale would otherwise absorb."""
+TAG_SCALE_KINK = 0.2
+"""Width (in the sampler's coordinate) over which the log scale's slope turns from the lower sd
+to the upper (:func:`tag_log_scale`)."""
+TAG_SCALE_WARN_MASS = 0.05
+"""A learned time-tag sd whose posterior median lies above its prior's ``1 −`` this quantile
+is reported (:func:`tag_scale_warning`)."""
+
+
+def tag_log_scale(z):
+    """``log s`` of the time tags' sd over the stated one at the sampler coordinate ``z``
+    (``N(0, 1)`` a priori): slope :data:`TAG_SCALE_LOG_SD` ``[0]`` below 0 and ``[1]`` above,
+    joined smoothly over :data:`TAG_SCALE_KINK` (a kink would break the sampler's gradients)."""
+    low, high = TAG_SCALE_LOG_SD
+    eps = TAG_SCALE_KINK
+    return 0.5 * (high + low) * z + 0.5 * (high - low) * (jnp.sqrt(z * z + eps * eps) - eps)
+
+
+def tag_scale_warning(post, stated_s: float) -> list[str]:
+    """One line where the learned ``time_tag_sd`` (posterior group) sits above its prior's
+    upper :data:`TAG_SCALE_WARN_MASS` tail: a misfit at the pulses taken for tag errors."""
+    if "time_tag_sd" not in post:
+        return []
+    median = float(np.median(np.asarray(post["time_tag_sd"].values)))
+    z = NormalDist().inv_cdf(1.0 - TAG_SCALE_WARN_MASS)
+    top = stated_s * float(jnp.exp(tag_log_scale(z)))
+    if median <= top:
+        return []
+    return [f"time_tag_sd: posterior median {1e3 * median:.3g} ms lies above the prior's "
+            f"{100 * (1 - TAG_SCALE_WARN_MASS):g} % ({1e3 * top:.3g} ms; stated "
+            f"{1e3 * stated_s:.3g} ms, [telemetry_knowledge] time_tag_sd_s): a misfit at the "
+            "pulses may be taken for time-tag errors; check the adequacy, the thrust mode and "
+            "the pulse log"]
 HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
 _BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
 
@@ -173,6 +213,9 @@ def sample_thrust_prior(key, problem: ThrustProblem, n: int) -> dict[str, np.nda
     out.update({name: tau[:, i] for i, name in enumerate(TAU_NAMES)})
     sig = np.exp(np.asarray(kw.log_noise_hat)[None] + NOISE_STEP * np.asarray(noise_z))
     out["sigma_omega"], out["sigma_rho"] = sig[..., 0], sig[..., 1]
+    if kw.tag_sd is not None:
+        z = np.asarray(jax.random.normal(jax.random.fold_in(k_s, 1), (n,)))
+        out["time_tag_sd"] = float(kw.tag_sd[0]) * np.exp(np.asarray(tag_log_scale(z)))
     if problem.inertia is not None:
         z = np.asarray(jax.random.normal(k_i, (n, 6)))
         pi = np.asarray(problem.inertia.mean) + z @ np.linalg.cholesky(
