@@ -163,12 +163,12 @@ rather than sampled (as in the robust RWA4 model): per event the offset is remov
 (:func:`offset_marginal`), leaving a log-likelihood quadratic in ``ν``; the events' terms add,
 and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 16 for one
 event with three wheels). The sampler keeps the idealised model's coordinates (5 for one event
-and one ``F``) and the time tags' scale; :func:`fit_thrust` then draws ``ν`` from its exact Gaussian conditional at each
-draw, so the posterior's nuisance sites are joint posterior draws. Sampled instead
-(21 coordinates on one event), the time-tag term left a banana: the conditional mean of the
-torque about Z moved with ``τr²`` by about one conditional sd per unit of whitened ``τr``, which
-no affine whitening removes; integrated out, it leaves none (docs/performance.md, "Thrust model
-choices, measured").
+and one ``F``) and the time tags' scale; :func:`fit_thrust` then draws ``ν`` from its exact
+Gaussian conditional at each draw, so the posterior's nuisance sites are joint posterior
+draws. Sampled instead (21 coordinates on one event), the time-tag term left a banana: the
+conditional mean of the torque about Z moved with ``τr²`` by about one conditional sd per unit of
+whitened ``τr``, which no affine whitening removes; integrated out, it leaves none
+(docs/performance.md, "Thrust model choices, measured").
 
 The common part of the wheel scales is confounded with the thrust scale (``F`` balances the
 wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the

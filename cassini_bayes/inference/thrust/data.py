@@ -18,8 +18,7 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
                                               with_time_tag_steps)
-from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
-                                                  rise_deficit)
+from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.flex import ModeSearch, flex_mode_columns
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, events_impulse,
@@ -30,6 +29,7 @@ from cassini_bayes.inference.thrust.prior import (THRUST_PRIOR_LOG_SD, TauPrior,
                                                   tau_prior, thrust_names)
 from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, events_tag_steps,
                                                       gyro_tag_terms, rank_one_rows,
+                                                      tag_scale_fields,
                                                       with_pre_command_rates, with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix
@@ -77,10 +77,8 @@ class ThrustData(NamedTuple):
     bit_width : (n_f,) s, each thrust parameter's one pulse width where the events fire every
         parameter at one width (the sampler then sees the impulse bits,
         :func:`~cassini_bayes.inference.thrust.coords.bit_widths`), else ``None``.
-    tag_sd, tag_walk : the robust model with a time-tag sd: (1,) s, the model file's sd, which
-        the sampler scales (the last coordinate, prior
-        :data:`~cassini_bayes.inference.thrust.prior.TAG_SCALE_LOG_SD`), and (R,) 1 on the
-        time-tag walk's nuisance columns, whose prior sd scales with it; else ``None``.
+    tag_sd, tag_walk : the stated time-tag sd (1,) s, which the sampler scales, and (R,) 1 on its
+        walk's columns (:func:`~cassini_bayes.inference.thrust.time_tags.tag_scale_fields`).
     """
 
     events: EventData
@@ -375,7 +373,7 @@ def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustDa
     noise coordinate at its best there (:data:`_NOISE_SCAN`)."""
     n_f, n_c = thrust_sizes(mode, data)
     n_ev = data.events.t.shape[0]
-    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0) + n_tag(data)
+    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0) + int(data.tag_sd is not None)
     noise = np.arange(n_f + n_c + 3, n_f + n_c + 3 + n_ev)     # coords.unpack's order
     centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data,
                            scan=(noise, _NOISE_SCAN))
@@ -462,11 +460,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     design, extra = (_per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
                                           thrust_pred, fired) if mode == "thruster" else (None, {}))
     nu_cols = kw.pop("nu_cols")
-    tags = {}
-    if robust and sd_t > 0.0:
-        walk = np.zeros(layout.sd.shape[0])
-        walk[layout.slices.get("time_tag_steps", slice(0, 0))] = 1.0
-        tags = dict(tag_sd=np.array([sd_t]), tag_walk=walk)
+    tags = tag_scale_fields(layout, sd_t) if robust and sd_t > 0.0 else {}
     derived = dict(time_tag_rates=tag_rates, time_tag_gyro=tag_gyro, rank_one=rank_one,
                    pulses=layout_e, lhs_wheels=basis[:, 0], lhs_inertia=basis[:, 1:],
                    nu_cols=nu_cols, nu_stats=_column_statistics(nu_cols, kw["mask"]), **steps)

@@ -263,13 +263,19 @@ def fit_thrust(key, events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Sp
                      prior=lambda k, n: sample_thrust_prior(k, problem, n),
                      prior_draws=prior_draws)
     _complete(key, idata, problem, robust, sample_inertia, coords, dims)
-    for line in tau_identification(idata.posterior, problem.tau):
-        warnings.warn(line, TauIdentificationWarning, stacklevel=2)
-    if kw.tag_sd is not None:
-        for line in tag_scale_warning(idata.posterior, float(kw.tag_sd[0])):
-            warnings.warn(line, stacklevel=2)
+    _warn_identification(idata.posterior, problem)
     return ThrustPosterior(idata, diagnostics(idata, _judged_names(problem, sample_inertia,
                                                                    robust)), problem)
+
+
+def _warn_identification(post, problem: ThrustProblem) -> None:
+    """Warn of the time constants the data leave at or against their prior, and of a learned
+    time-tag sd far above the statement."""
+    for line in tau_identification(post, problem.tau):
+        warnings.warn(line, TauIdentificationWarning, stacklevel=3)
+    if problem.data.tag_sd is not None:
+        for line in tag_scale_warning(post, float(problem.data.tag_sd[0])):
+            warnings.warn(line, stacklevel=3)
 
 
 def _complete(key, idata, problem, robust: bool, sample_inertia: bool, coords, dims) -> None:

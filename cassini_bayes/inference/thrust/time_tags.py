@@ -43,7 +43,7 @@ from cassini_bayes.physics.pulse import thrust_profile
 __all__ = ["TAG_VARIANCE_SHARE", "TAG_NODES", "with_tag_expectation", "with_pre_command_rates",
            "TagSensitivity",
            "tag_sensitivity", "events_tag_sensitivity", "tag_step_columns", "events_tag_steps",
-           "gyro_tag_terms", "rank_one_rows"]
+           "gyro_tag_terms", "rank_one_rows", "tag_scale_fields"]
 
 TAG_VARIANCE_SHARE = 0.01
 """Time-tag terms left out of the model add at most this share of one sample's smallest
@@ -251,3 +251,13 @@ def rank_one_rows(rates, gyro, kw: dict, torque, noise, i_lin,
         own[e, :, :k.size] = gyro[e][:, k]
         cols[e, ..., :k.size] = kw["nu_cols"][e][..., k].transpose(1, 0, 2)
     return RankOneRows(rows, (cols[:, 0], cols[:, 1], cols[:, 2])), tag, own
+
+
+def tag_scale_fields(layout, time_tag_sd: float) -> dict[str, np.ndarray]:
+    """The thrust data's fields of the learned time-tag scale: ``tag_sd`` (1,) s, the stated sd
+    the sampler's last coordinate scales (prior :func:`~cassini_bayes.inference.thrust.prior.
+    tag_log_scale`), and ``tag_walk`` (R,), 1 on the walk's columns of the nuisance ``layout``,
+    whose prior sd scales with it; the rank-one terms scale in the likelihood."""
+    walk = np.zeros(layout.sd.shape[0])
+    walk[layout.slices.get("time_tag_steps", slice(0, 0))] = 1.0
+    return dict(tag_sd=np.array([float(time_tag_sd)]), tag_walk=walk)
