@@ -3,8 +3,9 @@
 ``biasing_espa_bus`` (every pulse 125 ms) flown with the time tags' white error ``--flown`` (s;
 the shipped scenario flies none) and fitted per thruster (``fit_thrust(..., mode="thruster")``)
 with the model file's ``[telemetry_knowledge] time_tag_sd_s`` replaced by ``--stated`` (s; the
-package's default is 10 ms), each pair once, one noise seed, a small sampler. Per pair: every
-thrust's error, its sd and coverage, the time constants' posterior. The table kind
+package's default is 10 ms; the prior median of the sd the fit learns), each pair once, one
+noise seed, a small sampler. Per pair: the learned tag sd, every thrust's error, its sd and
+coverage, the time constants' posterior. The table kind
 ``thrust_tag_statement`` reads the record. Not a test: nothing is asserted.
 
     python benchmarks/thrust_time_tag_statement.py --pairs 0.0001:0 0.01:0 0.01:0.01 \\

@@ -35,7 +35,7 @@ def test_options_and_ranked_names():
     assert names[4:10] == ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
     assert names[10:] == ("gyro_scale[x]", "gyro_scale[y]", "gyro_scale[z]", "gyro_bias[x]",
                           "gyro_bias[y]", "gyro_bias[z]", "wheel_scale[RWA1]",
-                          "wheel_scale[RWA2]", "wheel_scale[RWA3]")
+                          "wheel_scale[RWA2]", "wheel_scale[RWA3]", "time_tag_sd")
     small = build_model(ModelSpec.make("thrust", robust=True, rank_inertia=False,
                                        rank_nuisance=False))
     assert small.parameter_names == ("F", "tau_delay", "tau_rise", "tau_fall")
@@ -57,14 +57,16 @@ def test_truth_follows_the_fits_prior(mode):
     about the model's (per-thruster) nominal with sd THRUST_PRIOR_LOG_SD, the centre of mass with
     ``[center_of_mass] sd_m`` (mode ``thruster``), ``log τr``, ``log τf`` by the ``[pulse]``
     prior, ``τd/σ_d`` half-normal (mean √(2/π)), the inertia whitened by its Gaussian's Cholesky
-    factor, and the nuisance by the ``nu_sd`` of the layout ``prepare_thrust`` builds for the
-    scenario's running wheels (sorted, as it sorts them). Per component the mean within 4 se
-    (se = 1/√1000) and the sd within 10 % (sd of a sample sd ≈ 2.2 %: 4.5 se); up to 45
+    factor, the nuisance by the ``nu_sd`` of the layout ``prepare_thrust`` builds for the
+    scenario's running wheels (sorted, as it sorts them), and the time tags' sd by the inverse
+    of ``tag_log_scale`` about the stated sd. Per component the mean within 4 se
+    (se = 1/√1000) and the sd within 10 % (sd of a sample sd ≈ 2.2 %: 4.5 se); up to 46
     components × 2 checks at ≥ 4 se: false-failure rate below 0.5 %. A wrong sd, a missing wheel
     or a thrust about the wrong nominal fails."""
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
     from cassini_bayes.inference.nuisance import nuisance_layout
     from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, tau_prior
+    from cassini_bayes.inference.thrust.prior import tag_log_scale
 
     path = THRUST_SCENARIO if mode == "mean" else THRUST_ESPA_SCENARIO
     sc = load_scenario(path)
@@ -97,6 +99,9 @@ def test_truth_follows_the_fits_prior(mode):
                          np.array([x["T_body"] for x in d])], 1)
     assert nu.shape[1] == layout.size
     cols.append(nu / layout.sd)
+    grid = np.linspace(-8.0, 8.0, 16001)
+    log_scale = np.log(np.array([x["time_tag_sd"] for x in d]) / sp.knowledge.time_tag_sd_s)
+    cols.append(np.interp(log_scale, np.asarray(tag_log_scale(grid)), grid)[:, None])
     z = np.concatenate(cols, 1)
     se = 1.0 / np.sqrt(N_DRAWS)
     assert np.all(np.abs(z.mean(0)) < 4 * se), z.mean(0)
@@ -111,8 +116,8 @@ def test_truth_reaches_the_simulator():
     thrusts' impulses, centre-of-mass offset ``δ`` (``Q(δ)_s = (r_s − e − δ) × d_s``) and body
     torque, to 1e-6 of its size (without ``δ`` it is off by more than 1e-5); each thruster's
     impulse is its drawn thrust times the pulse log's accumulated pulse impulses at the drawn
-    time constants (Feldman & Lee §V); the recorded sample times are jittered with the model's
-    10 ms time-tag sd (sample sd within 25 % over 81 samples, ~3 se)."""
+    time constants (Feldman & Lee §V); the recorded sample times are jittered with the drawn
+    time-tag sd (sample sd within 25 % over 81 samples, ~3 se)."""
     from helpers import replicate_of
     from cassini_bayes.physics.pulse import pulse_impulse_until
     from cassini_bayes.simulate.run import pulse_log
@@ -138,7 +143,7 @@ def test_truth_reaches_the_simulator():
         np.testing.assert_allclose(imp, np.bincount(log.thruster, per_pulse, minlength=8)
                                    * d["thrust"], rtol=1e-6, atol=1e-9)
         jitter = np.std(a.t_meas - a.t)
-        assert abs(jitter / sc.prior.knowledge.time_tag_sd_s - 1.0) < 0.25
+        assert abs(jitter / d["time_tag_sd"] - 1.0) < 0.25
 
 
 @pytest.mark.slow

@@ -22,8 +22,9 @@ Drawn per replicate, for the scenario's ``[prior]`` spacecraft and its running w
   builds for one event (gyro bias and scale factor, each running wheel's spin-inertia scale with
   the shared part, the wheels' axis tilts, a body-fixed torque), ``layout.sd · N(0, 1)``, flown by
   :func:`~cassini_bayes.simulate.with_errors` and ``TruthParams.torque_body_nm``;
-* the telemetry's time tags jittered with the model's ``[telemetry_knowledge] time_tag_sd_s``
-  (the sd the likelihood's time-tag term states; the fit reads the jittered times).
+* the time tags' sd from the fit's prior about the model's ``[telemetry_knowledge]
+  time_tag_sd_s`` (:func:`~cassini_bayes.inference.thrust.prior.tag_log_scale`), the telemetry's
+  time tags jittered with it (the fit reads the jittered times).
 
 The noise levels stay the scenario's: the fit's noise scale is centred on the data's own
 white-noise levels (empirical Bayes), which no prior draw can be made from.
@@ -33,7 +34,7 @@ reference event identifies, and each identified combination of the others, label
 labels them; :func:`reference_design`), ``com_x com_y com_z`` (mode ``thruster``), ``tau_delay
 tau_rise tau_fall``, with ``rank_inertia`` (default True) ``Ixx … Iyz``, and with
 ``rank_nuisance`` (default True) the gyro scale factors and biases and each wheel's scale
-``c_k`` (the nuisance sites the fit draws from their exact conditional).
+``c_k`` (the nuisance sites the fit draws from their exact conditional) and ``time_tag_sd``.
 """
 
 from __future__ import annotations
@@ -86,13 +87,14 @@ def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence
     thruster's; ``com`` (3,) m (zero unless mode ``thruster``); ``tau`` (3,) s; ``inertia`` (6,)
     kg m²; the one event's nuisance sites of :func:`~cassini_bayes.inference.nuisance.
     split_nuisance` (``gyro_bias`` (3,), ``gyro_scale`` (3,), ``wheel_scale`` (K,) each wheel's
-    total ``c_k``, ``wheel_scale_common``, ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m); and
-    ``wheels``, the K wheel names in the layout's order.
+    total ``c_k``, ``wheel_scale_common``, ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m);
+    ``time_tag_sd`` s (0 where the model states none); and ``wheels``, the K wheel names in the
+    layout's order.
     """
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
     from cassini_bayes.inference.nuisance import nuisance_layout, split_nuisance
     from cassini_bayes.inference.thrust import THRUST_PRIOR_LOG_SD, draw_tau_prior, tau_prior
-    from cassini_bayes.inference.thrust.prior import thrust_index, thrust_names
+    from cassini_bayes.inference.thrust.prior import tag_log_scale, thrust_index, thrust_names
 
     k_f, k_c, k_t, k_i, k_n = jax.random.split(key, 5)
     n_thr = len(spacecraft.thrusters)
@@ -114,8 +116,10 @@ def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence
     out = split_nuisance(nu, layout)
     for site in ("gyro_bias", "T_body"):
         out[site] = np.asarray(out[site])[0]                    # the one event
+    z_tag = jax.random.normal(jax.random.fold_in(key, 6), ())
+    tag_sd = float(spacecraft.knowledge.time_tag_sd_s) * float(jnp.exp(tag_log_scale(z_tag)))
     out.update(thrust=thrust, thrust_n=thrust[index], com=com, tau=tau, inertia=inertia,
-               wheels=layout.wheels)
+               wheels=layout.wheels, time_tag_sd=tag_sd)
     return out
 
 
@@ -159,7 +163,7 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
     each without ``pulse_dynamics``: ideal rectangular pulses), inertia and body torque into
     :class:`~cassini_bayes.simulate.run.TruthParams` (no inertial torque), the wheel and gyro
     errors by :func:`~cassini_bayes.simulate.with_errors`, the time tags jittered with the
-    model's ``time_tag_sd_s``, and the centre-of-mass offset as the truth model's centre of mass
+    drawn ``time_tag_sd``, and the centre-of-mass offset as the truth model's centre of mass
     (a scenario of its own per replicate: the thrusters' torques are the simulator's
     per-scenario arrays; one compiled program serves them all). Returns the drawn truths and the
     runs' :class:`~cassini_bayes.simulate.run.SimArrays` stacked along a leading batch axis."""
@@ -169,8 +173,7 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
     spacecraft = scenario.prior
     wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
     base = truth_params(scenario)
-    base_noise = noise_params(scenario)._replace(
-        time_tag_jitter_s=jnp.asarray(float(spacecraft.knowledge.time_tag_sd_s)))
+    base_noise = noise_params(scenario)
     drawn, runs = [], []
     for p_key, s_key in zip(prior_keys, sim_keys):
         d = robust_thrust_truth(p_key, spacecraft, wheels, mode)
@@ -180,7 +183,8 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
                            tau_s=jnp.asarray(tau), torque_body_nm=jnp.asarray(d["T_body"]),
                            torque_inertial_nm=jnp.zeros(3),
                            torque_inertial_rate_nm_s=jnp.zeros(3))
-        tp, nz = with_errors(scenario, tp, base_noise,
+        noise = base_noise._replace(time_tag_jitter_s=jnp.asarray(d["time_tag_sd"]))
+        tp, nz = with_errors(scenario, tp, noise,
                              wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),
                              wheel_tilt_rad=dict(zip(d["wheels"], d["wheel_tilt"])),
                              gyro_bias_rad_s=d["gyro_bias"], gyro_scale_factor=d["gyro_scale"])
@@ -255,7 +259,13 @@ class _RobustReplicates:
 
         return (self.f_names + (tuple(COM_NAMES) if self.mode == "thruster" else ())
                 + tuple(TAU_NAMES) + (tuple(INERTIA_NAMES) if self.opts["rank_inertia"] else ())
-                + (nuisance_names(self.wheels) if self.opts["rank_nuisance"] else ()))
+                + (nuisance_names(self.wheels) + self._tag if self.opts["rank_nuisance"]
+                   else ()))
+
+    @property
+    def _tag(self) -> tuple[str, ...]:
+        """``time_tag_sd`` where the fit learns it (the model states a time-tag sd)."""
+        return ("time_tag_sd",) if self.scenario.prior.knowledge.time_tag_sd_s > 0 else ()
 
     def ranked(self, d: dict[str, Any]) -> dict[str, Any]:
         """The ranked scalars of a drawn truth (:func:`robust_thrust_truth`)."""
@@ -270,6 +280,7 @@ class _RobustReplicates:
             out.update(zip(INERTIA_NAMES, d["inertia"]))
         if self.opts["rank_nuisance"]:
             out.update(truth_nuisance_scalars(d, self.wheels))
+            out.update({n: d[n] for n in self._tag})
         return out
 
     def prior_sample(self, key) -> dict[str, Any]:
