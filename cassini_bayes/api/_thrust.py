@@ -161,7 +161,10 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
         nuisance += list(INERTIA_NAMES)
     if robust:
         nuisance += [EFFECTS[e] for e in post.problem.layout.sites]
-    priored = names + [n for n in nuisance if not n.startswith("sigma_")]
+    # the learned scales are not judged against their priors: the noise's is the data's own, and
+    # tags far better than stated are a pessimistic statement, not a misfit (far worse warns)
+    priored = names + [n for n in nuisance
+                       if not n.startswith("sigma_") and n != "time_tag_sd"]
     summary = build_summary("thrust", post.idata, parameters=names,
                             diagnostics=post.diagnostics, baseline=baseline, seed=seed,
                             nuisance=nuisance, warnings=list(warnings),

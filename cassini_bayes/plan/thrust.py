@@ -116,22 +116,25 @@ class ThrustPrediction(NamedTuple):
 
 @lru_cache(maxsize=None)
 def _held_density(n_f: int, n_c: int, sample_inertia: bool, n_ev: int):
-    """The fit's log density with every event's noise coordinate held at 0: ``f(x, kw)``, ``x``
-    the sampler vector without them (one function object per layout: compiled once)."""
+    """The fit's log density with every event's noise coordinate and the time tags' scale
+    held at 0 (the data's noise, the stated tag sd: variances, which noise-free data do not
+    inform): ``f(x, kw)``, ``x`` the sampler vector without them (one function object per
+    layout: compiled once)."""
+    from cassini_bayes.inference.thrust.coords import n_tag
     from cassini_bayes.inference.thrust.model import log_density
 
     k = n_f + n_c + 3
 
     def f(x, kw):
-        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
+        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:], jnp.zeros(n_tag(kw))])
         return log_density(theta, kw, n_f, n_c, sample_inertia)
 
     return f
 
 
-def _held(theta: np.ndarray, n_f: int, n_c: int, n_ev: int) -> np.ndarray:
+def _held(theta: np.ndarray, n_f: int, n_c: int, n_ev: int, n_tags: int) -> np.ndarray:
     k = n_f + n_c + 3
-    return np.concatenate([theta[:k], theta[k + n_ev:]])
+    return np.concatenate([theta[:k], theta[k + n_ev:theta.size - n_tags]])
 
 
 class _Laplace(NamedTuple):
@@ -151,10 +154,10 @@ prediction says how many (``ThrustPrediction.floored``)."""
 
 
 def truth_coordinates(problem, thrust, com, tau, inertia) -> np.ndarray:
-    """The sampler vector of the fit (noise coordinates left out, :func:`_held_density`) at the
-    physical parameters ``thrust`` (n_f,) N, ``com`` (3,) m (mode ``thruster``), ``tau`` (3,) s
-    and ``inertia`` (6,) kg m² (when sampled): the inverse of the fit's ``coords.physical`` and
-    ``coords.tau_from_z``."""
+    """The sampler vector of the fit (noise and tag-scale coordinates left out,
+    :func:`_held_density`) at the physical parameters ``thrust`` (n_f,) N, ``com`` (3,) m (mode
+    ``thruster``), ``tau`` (3,) s and ``inertia`` (6,) kg m² (when sampled): the inverse of the
+    fit's ``coords.physical`` and ``coords.tau_from_z``."""
     from cassini_bayes.inference.thrust.coords import A_LOG_SCALE, C_SCALE_S, log_bit_shift
     from cassini_bayes.inference.thrust.prior import THRUST_PRIOR_LOG_SD
 
@@ -177,8 +180,6 @@ def truth_coordinates(problem, thrust, com, tau, inertia) -> np.ndarray:
     if problem.inertia is not None:
         parts.append(np.linalg.solve(np.asarray(kw.inertia_tril, float),
                                      np.asarray(inertia, float) - np.asarray(kw.inertia_mean)))
-    if kw.tag_sd is not None:
-        parts.append(np.zeros(1))                        # the time tags at the stated sd
     return np.concatenate(parts)
 
 
@@ -200,7 +201,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     if at is None:
         from cassini_bayes.inference.laplace import laplace
 
-        x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev)
+        x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev, int(kw0.tag_sd is not None))
         at, _ = laplace(f, x0, kw)
     centre = jnp.asarray(at, float)
     hess = -np.asarray(jax.hessian(f)(centre, kw))
@@ -211,7 +212,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     k = n_f + n_c + 3
 
     def sites(x):
-        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])
+        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])    # tag scale at 1
         p = physical(theta, kw, n_f, n_c, si)
         parts = [p.thrust, p.com, p.tau] + ([p.inertia] if si else [])
         return jnp.concatenate(parts)
