@@ -99,8 +99,9 @@ def plan_thrust(args: list[Records]) -> str:
 @kind("plan_thrust_thruster")
 def plan_thrust_thruster(args: list[Records]) -> str:
     """Mode ``thruster`` records of benchmarks/plan_thrust.py: fitted over predicted sd, median
-    over the seeds (range over the sites of a group), 90 % coverage, and the learned noise
-    levels over the sensors' (median over the fits)."""
+    over the seeds (range over the sites of a group), 90 % coverage, the learned noise
+    levels over the sensors' and the learned time-tag sd over the flown (median over the fits;
+    — where a record predates the learned tag sd)."""
     from statistics import median
 
     groups = (("F[…]", lambda n: n.startswith("F[")), ("com", lambda n: n.startswith("com_")),
@@ -109,7 +110,7 @@ def plan_thrust_thruster(args: list[Records]) -> str:
               ("Ixy…Iyz", lambda n: n in ("Ixy", "Ixz", "Iyz")))
     rows = ["| scenario | truths, seeds | " + " | ".join(g for g, _ in groups)
             + " | sites within ±25 % | 90 % coverage: all (least site) | learned σ_ω, σ_ρ / "
-            "sensors' | R-hat, divergences |", "|" + "---|" * 11]
+            "sensors' | learned tag sd / flown | R-hat, divergences |", "|" + "---|" * 12]
     for r in _results(args):
         sites = r["sites"]
         cells = []
@@ -121,12 +122,15 @@ def plan_thrust_thruster(args: list[Records]) -> str:
         within = f"{k}/{len(sites)}"
         least = min(sites, key=lambda n: sites[n]["coverage90"])
         noise = [median(f["noise_over_sensor"][j] for f in r["fits"]) for j in (0, 1)]
+        tags = [f["tag_sd_learned_s"] / f["tag_sd_flown_s"] for f in r["fits"]
+                if f.get("tag_sd_flown_s")]
+        tag = f"{median(tags):.2f}" if tags else "—"
         truths = r["truths"].replace("_", "-") + "".join(f", no {e}" for e in r.get("without", []))
         rows.append(f"| `{_scenario_label(r['scenario'])}` | {truths}, {r['seeds']} | "
                     + " | ".join(cells)
                     + f" | {f'**{within}**' if k == len(sites) else within} | "
                     f"{r['coverage90']:.2f} ({least} {sites[least]['coverage90']:.2f}) | "
-                    f"{noise[0]:.2f}, {noise[1]:.2f} | ≤ {r['max_r_hat']:.3f}, "
+                    f"{noise[0]:.2f}, {noise[1]:.2f} | {tag} | ≤ {r['max_r_hat']:.3f}, "
                     f"{r['divergences']} |")
     return "\n".join(rows)
 

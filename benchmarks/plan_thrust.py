@@ -10,7 +10,8 @@ drawn: non-Normal sensor and wheel errors 1.5× wider than the robust priors, ex
 noise and fitted by the default robust ``fit thrust`` (NUTS). Per site: the fitted sd over the
 predicted (median over the seeds, range) and the 90 % coverage of the truth; per fit, each
 site's ``z`` (posterior mean less the truth, over the posterior sd) and the learned noise
-levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's sensors'.
+levels (``sigma_omega``, ``sigma_rho``, posterior median) over the scenario's sensors', and the
+learned time-tag sd beside the sd of the tag errors flown.
 ``--nominal``: the scenario itself simulated with its noise, no open-world error (the
 prediction's own assumptions). Not a test.
 
@@ -55,6 +56,17 @@ def _fitted(post, names: list[str], thrusters) -> tuple[list[float], object]:
         cols.append(v)
     d = np.stack(cols, 1)
     return d.std(0).tolist(), d
+
+
+def _tag_sds(post, flown_s: float) -> dict:
+    """The learned time-tag sd (posterior median, s) beside the sd of the tag errors flown
+    ``flown_s``, where the fit learns it."""
+    import numpy as np
+
+    if "time_tag_sd" not in post:
+        return {}
+    return {"tag_sd_learned_s": float(np.median(np.asarray(post["time_tag_sd"].values))),
+            "tag_sd_flown_s": float(flown_s)}
 
 
 def _open_world(name: str, seed: int, off: tuple, src: str):
@@ -131,12 +143,17 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
                      "noise_over_sensor": [
                          float(np.median(np.asarray(post.idata.posterior[k].values)) / sensor[j])
                          for j, k in enumerate(("sigma_omega", "sigma_rho"))],
+                     **_tag_sds(post.idata.posterior, si.noise.time_tag_jitter_s if nominal
+                                else np.std(ow.time_tag_error_s)),
                      "r_hat": float(post.diagnostics.max_r_hat),
                      "divergences": int(post.diagnostics.divergences),
                      "seconds": time.perf_counter() - t0})
         print(f"{name} seed {seed}: {fits[-1]['seconds']:.0f} s, R-hat {fits[-1]['r_hat']:.3f}, "
               f"div {fits[-1]['divergences']}, noise/sensor "
-              + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"]),
+              + "/".join(f"{x:.2f}" for x in fits[-1]["noise_over_sensor"])
+              + (f", tag sd {1e3 * fits[-1]['tag_sd_learned_s']:.3g} ms learned, "
+                 f"{1e3 * fits[-1]['tag_sd_flown_s']:.3g} flown"
+                 if "tag_sd_learned_s" in fits[-1] else ""),
               file=sys.stderr, flush=True)
         release_compiled_programs()   # docs/limits.md: mappings of compiled programs
         if partial is not None:

@@ -171,6 +171,34 @@ def test_the_tag_scale_prior_is_split_at_the_stated_sd():
     assert (x[-1] - x[-2]) / 0.01 == pytest.approx(TAG_SCALE_LOG_SD[1], rel=0.01)
 
 
+def test_the_learned_tag_sd_is_warned_of_above_the_prior_upper_tail():
+    """The warning fires where the posterior median of ``time_tag_sd`` lies above the prior's
+    95 % (about 2.5 × the statement), names the site and the statement, and is silent below it
+    and where the site is absent."""
+    from statistics import NormalDist
+
+    import xarray as xr
+
+    from cassini_bayes.inference.thrust.prior import (TAG_SCALE_WARN_MASS, tag_log_scale,
+                                                      tag_scale_warning)
+
+    stated = 0.010
+    top = stated * float(np.exp(tag_log_scale(NormalDist().inv_cdf(1 - TAG_SCALE_WARN_MASS))))
+    assert 2.0 * stated < top < 3.0 * stated
+
+    def group(median_s):
+        draws = median_s * np.exp(0.1 * np.random.default_rng(0).standard_normal((2, 201)))
+        draws = draws * median_s / np.median(draws)
+        return xr.Dataset({"time_tag_sd": (("chain", "draw"), draws)})
+
+    assert tag_scale_warning(group(0.95 * top), stated) == []
+    lines = tag_scale_warning(group(1.05 * top), stated)
+    assert len(lines) == 1 and lines[0].startswith("time_tag_sd:")
+    assert "10 ms" in lines[0] and "time_tag_sd_s" in lines[0]
+    assert tag_scale_warning(xr.Dataset({"tau_rise": (("chain", "draw"), np.ones((2, 3)))}),
+                             stated) == []
+
+
 def _espa_problem(flown_s: float):
     """The robust per-thruster problem of the single-width ESPA biasing event, flown with time
     tags of sd ``flown_s`` and fitted at the model file's default 10 ms."""

@@ -190,7 +190,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     by :func:`~cassini_bayes.inference.laplace.laplace`): the point, the covariance of the
     sampler coordinates, and the sites' covariance (thrusts, ``com_*``, ``tau_*``, the inertia
     when sampled) by the delta method."""
-    from cassini_bayes.inference.thrust.coords import physical
+    from cassini_bayes.inference.thrust.coords import n_tag, physical
 
     kw0 = problem.data
     n_ev = kw0.log_noise_hat.shape[0]
@@ -201,7 +201,7 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     if at is None:
         from cassini_bayes.inference.laplace import laplace
 
-        x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev, int(kw0.tag_sd is not None))
+        x0 = _held(np.asarray(kw0.centre, float), n_f, n_c, n_ev, n_tag(kw0))
         at, _ = laplace(f, x0, kw)
     centre = jnp.asarray(at, float)
     hess = -np.asarray(jax.hessian(f)(centre, kw))

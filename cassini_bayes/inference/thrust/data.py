@@ -18,7 +18,8 @@ from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
                                               with_time_tag_steps)
-from cassini_bayes.inference.thrust.coords import bit_widths, long_pulse_excess, rise_deficit
+from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
+                                                  rise_deficit)
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
 from cassini_bayes.inference.thrust.flex import ModeSearch, flex_mode_columns
 from cassini_bayes.inference.thrust.likelihood import (EventData, PulseLayout, events_impulse,
@@ -368,12 +369,11 @@ def _pulse_layouts(kw: dict, k_slots: int, n_thr: int) -> PulseLayout:
 
 
 def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustData:
-    """``data`` with the Laplace approximation's centre and Cholesky factor, which centre and
-    whiten the sampler's coordinates; the search starts at the prior's centre with the events'
-    noise coordinate at its best there (:data:`_NOISE_SCAN`)."""
+    """``data`` with the Laplace centre and Cholesky factor that whiten the sampler's vector;
+    the search starts at the prior's centre, each event's noise at best (:data:`_NOISE_SCAN`)."""
     n_f, n_c = thrust_sizes(mode, data)
     n_ev = data.events.t.shape[0]
-    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0) + int(data.tag_sd is not None)
+    dim = n_f + n_c + 3 + n_ev + (6 if sample_inertia else 0) + n_tag(data)
     noise = np.arange(n_f + n_c + 3, n_f + n_c + 3 + n_ev)     # coords.unpack's order
     centre, tril = laplace(laplace_density(n_f, n_c, sample_inertia), np.zeros(dim), data,
                            scan=(noise, _NOISE_SCAN))

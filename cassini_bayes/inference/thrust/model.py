@@ -15,7 +15,8 @@ from numpyro.distributions import constraints
 
 from cassini_bayes.inference.gaussian import (OffsetMarginal, nuisance_log_marginal,
                                               nuisance_marginal)
-from cassini_bayes.inference.thrust.coords import n_tag, physical, tau_from_z, unpack
+from cassini_bayes.inference.thrust.coords import (Physical, n_tag, physical, tau_from_z,
+                                                  unpack)
 from cassini_bayes.inference.thrust.likelihood import event_loglik
 from cassini_bayes.inference.thrust.prior import (NOISE_STEP, COM_NAMES, NOISE_PRIOR_LOG_SD,
                                                   thrust_names)
@@ -23,21 +24,19 @@ from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 
 __all__ = ["thrust_model", "thrust_sizes"]
 
-def _event_stats(theta, kw, n_f: int, n_c: int, sample_inertia: bool) -> OffsetMarginal:
-    """:class:`OffsetMarginal` of every event (leading axis E) at the sampler vector ``theta``."""
-    p = physical(theta, kw, n_f, n_c, sample_inertia)
+def _event_stats(p: Physical, kw) -> OffsetMarginal:
+    """:class:`OffsetMarginal` of every event (leading axis E) at the physical point ``p``."""
     return jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
         p.inertia, p.per_thruster, (p.tau[0], p.tau[1], p.tau[2]), p.log_sigma, kw.events,
         p.q_matrix, p.tag_scale)
 
 
-def nuisance_sd(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
-    """(R,) the robust nuisance's prior sds at ``theta``: the time-tag walk's columns
-    (``kw.tag_walk``) scaled with the time tags' sd."""
+def nuisance_sd(p: Physical, kw):
+    """(R,) the robust nuisance's prior sds at the physical point ``p``: the time-tag walk's
+    columns (``kw.tag_walk``) scaled with the time tags' sd."""
     if kw.tag_sd is None:
         return kw.nu_sd
-    scale = physical(theta, kw, n_f, n_c, sample_inertia).tag_scale
-    return kw.nu_sd * (1.0 + (scale - 1.0) * kw.tag_walk)
+    return kw.nu_sd * (1.0 + (p.tag_scale - 1.0) * kw.tag_walk)
 
 
 def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
@@ -52,9 +51,10 @@ def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     f_z, com_z, tau_z, noise_z, inertia_z, tag_z = unpack(theta, n_f, n_c, n_ev,
                                                           sample_inertia, n_tag(kw))
     _, log_prior_tau = tau_from_z(tau_z, kw)
+    p = physical(theta, kw, n_f, n_c, sample_inertia)
     prior_com = n_c > 0
     if kw.bit_width is not None:     # impulse-bit coordinates: the prior at the physical point
-        f_z = physical(theta, kw, n_f, n_c, sample_inertia).whitened
+        f_z = p.whitened
         prior_com = False
     log_prior = (jnp.sum(dist.Normal(0.0, 1.0).log_prob(f_z)) + log_prior_tau
                  + jnp.sum(dist.Normal(0.0, NOISE_PRIOR_LOG_SD / NOISE_STEP).log_prob(noise_z)))
@@ -63,11 +63,11 @@ def log_density(theta, kw, n_f: int, n_c: int, sample_inertia: bool):
     if sample_inertia:
         log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(inertia_z))
     log_prior += jnp.sum(dist.Normal(0.0, 1.0).log_prob(tag_z))
-    st = _event_stats(theta, kw, n_f, n_c, sample_inertia)
+    st = _event_stats(p, kw)
     out = log_prior + jnp.sum(st.loglik)
     if kw.nu_sd.shape[0]:
         out += nuisance_log_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0),
-                                     nuisance_sd(theta, kw, n_f, n_c, sample_inertia))
+                                     nuisance_sd(p, kw))
     return jnp.where(jnp.isfinite(out), out, -jnp.inf)
 
 
@@ -80,8 +80,9 @@ def nuisance_sampler(n_f: int, n_c: int, sample_inertia: bool):
     def one(args, kw):
         w, eps = args
         theta = kw.centre + kw.tril @ w
-        st = _event_stats(theta, kw, n_f, n_c, sample_inertia)
-        sd = nuisance_sd(theta, kw, n_f, n_c, sample_inertia)
+        p = physical(theta, kw, n_f, n_c, sample_inertia)
+        st = _event_stats(p, kw)
+        sd = nuisance_sd(p, kw)
         _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), sd)
         z = mean + jax.scipy.linalg.solve_triangular(chol.T, eps, lower=False)
         return sd * z

@@ -69,6 +69,8 @@ def tag_scale_warning(post, stated_s: float) -> list[str]:
             f"{1e3 * stated_s:.3g} ms, [telemetry_knowledge] time_tag_sd_s): a misfit at the "
             "pulses may be taken for time-tag errors; check the adequacy, the thrust mode and "
             "the pulse log"]
+
+
 HALF_NORMAL_MEDIAN = 0.6744897501960817   # Φ⁻¹(3/4): median of a unit half-normal
 _BRANCH_INDEX = np.array([0, 0, 0, 0, 1, 1, 1, 1])
 
