@@ -167,3 +167,34 @@ def verdict_budget(args: list[Records]) -> str:
                                for case in ("clean", "epochs")},
                               {"shared_inertia": Z_THRESHOLD})
     return "\n".join(rows)
+
+
+@kind("sbc_trial_noise")
+def sbc_trial_noise(args: list[Records]) -> str:
+    """The noise centre of a few thrust SBC replicates (benchmarks/sbc_thrust_trial.py)."""
+    ((path,),) = args
+    rows = ["| replicate | pulses / samples | pulse-free 2nd differences | σ̂_ω / gyro noise | "
+            "σ̂_ρ / tach noise |", "|---|---|---|---|---|"]
+    for r in read_json(path)["replicates"]:
+        w, t = r["noise_over_sensor"]
+        rows.append(f"| {r['replicate']} | {r['pulses']} / {r['samples']} | {r['unbent']} of "
+                    f"{r['differences']} | {w:.2f} | {t:.2f} |")
+    return "\n".join(rows)
+
+
+@kind("sbc_trial_common_scale")
+def sbc_trial_common_scale(args: list[Records]) -> str:
+    """The drawn common scale of a few thrust SBC replicates and where their posteriors put the
+    truth (benchmarks/sbc_thrust_trial.py, with ``--fit``)."""
+    ((path,),) = args
+    rows = ["| replicate | mean `c_k` | z of the common scale | Φ(z) (its rank if the data add "
+            "nothing) | fraction of draws below the truth: moments, wheel scales |",
+            "|---|---|---|---|---|"]
+    for r in read_json(path)["replicates"]:
+        below = r["fraction_below"]
+        groups = [[v for k, v in below.items() if k.startswith("I")],
+                  [v for k, v in below.items() if k.startswith("wheel_scale")]]
+        rows.append(f"| {r['replicate']} | {100 * r['mean_wheel_scale']:+.2f} % | "
+                    f"{r['z_common']:+.2f} | {r['phi_z_common']:.3g} | "
+                    + ", ".join(f"{min(g):.2f}–{max(g):.2f}" for g in groups) + " |")
+    return "\n".join(rows)
