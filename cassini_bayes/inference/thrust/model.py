@@ -24,6 +24,7 @@ from cassini_bayes.names import INERTIA_NAMES, TAU_NAMES
 
 __all__ = ["thrust_model", "thrust_sizes"]
 
+
 def _event_stats(p: Physical, kw) -> OffsetMarginal:
     """:class:`OffsetMarginal` of every event (leading axis E) at the physical point ``p``."""
     return jax.vmap(event_loglik, in_axes=(None, None, None, 0, 0, None, None))(
