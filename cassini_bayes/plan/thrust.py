@@ -123,13 +123,17 @@ def _held_density(n_f: int, n_c: int, sample_inertia: bool, n_ev: int):
     from cassini_bayes.inference.thrust.coords import n_tag
     from cassini_bayes.inference.thrust.model import log_density
 
-    k = n_f + n_c + 3
-
     def f(x, kw):
-        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:], jnp.zeros(n_tag(kw))])
-        return log_density(theta, kw, n_f, n_c, sample_inertia)
+        return log_density(_unheld(x, n_f, n_c, n_ev, n_tag(kw)), kw, n_f, n_c, sample_inertia)
 
     return f
+
+
+def _unheld(x, n_f: int, n_c: int, n_ev: int, n_tags: int):
+    """The fit's sampler vector from ``x`` (:func:`_held_density`'s): the noise and tag-scale
+    coordinates put back at 0; the inverse of :func:`_held`."""
+    k = n_f + n_c + 3
+    return jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:], jnp.zeros(n_tags)])
 
 
 def _held(theta: np.ndarray, n_f: int, n_c: int, n_ev: int, n_tags: int) -> np.ndarray:
@@ -209,11 +213,9 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
     flat = lam < CURVATURE_MIN
     cov = (vec / np.where(flat, 1.0, lam)) @ vec.T
     floored = int(np.sum(flat))
-    k = n_f + n_c + 3
 
     def sites(x):
-        theta = jnp.concatenate([x[:k], jnp.zeros(n_ev), x[k:]])    # tag scale at 1
-        p = physical(theta, kw, n_f, n_c, si)
+        p = physical(_unheld(x, n_f, n_c, n_ev, n_tag(kw)), kw, n_f, n_c, si)
         parts = [p.thrust, p.com, p.tau] + ([p.inertia] if si else [])
         return jnp.concatenate(parts)
 
