@@ -17,11 +17,14 @@ prediction's own assumptions). Not a test.
 
     python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
         [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
-        [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD] [--matched]
+        [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD ...] [--matched]
+        [--first-seed K]
 
 ``--truths N``: the prediction is the median over the nominal truth and N truths drawn from the
-model file's knowledge (``plan evaluate --truths``). ``--fits-from RECORD``: each case's fits
-are those of another record (same case, settings and truths), only the prediction is made.
+model file's knowledge (``plan evaluate --truths``). ``--fits-from RECORD ...``: each case's fits
+are those of other records (same case, settings and truths; their fits joined in seed order),
+only the prediction is made. ``--first-seed K``: fit seeds K .. ``--seeds`` − 1 only (two
+processes share a campaign; ``--fits-from`` joins their records).
 ``--matched``: also the prediction at each seed's own open-world truth (its noise-free flight,
 its own pulses), each fit's ``predicted_matched``.
 ``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
@@ -96,9 +99,9 @@ def matched(fits: list, name: str, mode: str, off: tuple, src: str) -> None:
 
 def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
         fits: list | None = None, off: tuple = (), truths: int = 0,
-        match: bool = False) -> dict:
-    """One case: the prediction, then the fits of seeds ``len(fits) .. seeds - 1`` (``fits``:
-    those of a resumed record, kept)."""
+        match: bool = False, first: int = 0) -> dict:
+    """One case: the prediction, then the fits of seeds ``first + len(fits) .. seeds - 1``
+    (``fits``: those of a resumed record, kept)."""
     import jax
     import numpy as np
 
@@ -118,7 +121,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
     print(f"{name} ({mode}): predicted in {t_pred:.0f} s: " + ", ".join(
         f"{n} {sd:.3g}" for n, sd in zip(names, pred.site_sd)), file=sys.stderr, flush=True)
     fits = list(fits or [])
-    for seed in range(len(fits), seeds):
+    for seed in range(first + len(fits), seeds):
         k_sim, k_fit = jax.random.split(jax.random.key(3200 + seed))
         if nominal:
             si = s
@@ -217,18 +220,26 @@ def main(argv=None) -> None:
                          "model file's knowledge (plan evaluate --truths)")
     ap.add_argument("--matched", action="store_true",
                     help="also predict at each seed's own open-world truth")
-    ap.add_argument("--fits-from", type=Path, metavar="RECORD",
-                    help="take the fits of each case from this record (same settings): only "
-                         "the prediction is made")
+    ap.add_argument("--fits-from", type=Path, nargs="+", metavar="RECORD",
+                    help="take the fits of each case from these records (same settings; joined "
+                         "in seed order): only the prediction is made")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="fit seeds from this one (another process fits the ones before)")
     a = ap.parse_args(argv)
     before = {}
     if a.fits_from:
-        rec = json.loads(a.fits_from.read_text())
-        if rec["settings"] != {"chains": a.chains, "warmup": a.warmup, "draws": a.draws}:
-            sys.exit(f"--fits-from {a.fits_from}: made with sampler settings {rec['settings']}")
-        before = {r["case"]: r["fits"] for r in rec["results"]
-                  if r["truths"] == ("nominal" if a.nominal else "open_world")
-                  and r["without"] == sorted(a.without)}
+        for path in a.fits_from:
+            rec = json.loads(path.read_text())
+            if rec["settings"] != {"chains": a.chains, "warmup": a.warmup, "draws": a.draws}:
+                sys.exit(f"--fits-from {path}: made with sampler settings {rec['settings']}")
+            for r in rec["results"]:
+                if (r["truths"] == ("nominal" if a.nominal else "open_world")
+                        and r["without"] == sorted(a.without)):
+                    before.setdefault(r["case"], []).extend(r["fits"])
+        for case, fits in before.items():
+            fits.sort(key=lambda f: f["seed"])
+            if len({f["seed"] for f in fits}) < len(fits):
+                sys.exit(f"--fits-from: {case} has a seed in two records")
     if a.resume:
         if not (a.json and a.json.is_file()):
             sys.exit("--resume: give --json with the record to resume")
@@ -237,7 +248,8 @@ def main(argv=None) -> None:
         from _provenance import start
 
         a.json.parent.mkdir(parents=True, exist_ok=True)
-        start(a.json, {k: v for k, v in vars(a).items() if k != "resume"}, argv,
+        start(a.json, {k: v for k, v in vars(a).items()
+                       if k != "resume" and not (k == "first_seed" and v == 0)}, argv,
               replace=not a.resume)
     sys.path.insert(0, str(ROOT))
     import cassini_bayes
@@ -256,7 +268,7 @@ def main(argv=None) -> None:
     for case in a.case:
         done = list(out["results"])
         r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
-                fits=before.get(case), off=tuple(a.without), truths=a.truths,
+                fits=before.get(case), off=tuple(a.without), truths=a.truths, first=a.first_seed,
                 match=a.matched)
         out["results"].append(r)
         kind = "nominal" if a.nominal else "open-world"

@@ -741,22 +741,27 @@ def test_default_settings_converge(fsds):
 
 @pytest.mark.parametrize("wheel_errors", ["per_wheel", "common"])
 def test_robust_columns_torque_and_wheel_scale(wheel_errors):
-    """The external-torque columns are (t − t0)·1 and the wheel-scale columns are −J_k ρ_k g_k per
-    wheel (common: one column −H_w): the linear terms of the predicted Eq 17 left side (module
-    docstring)."""
+    """The external-torque columns are (t − t0)·1, the torque-rate columns ½ (t − t0)²·1, and the
+    wheel-scale columns are −J_k ρ_k g_k per wheel (common: one column −H_w): the linear terms of
+    the predicted Eq 17 left side (module docstring)."""
     from cassini_bayes.inference.nuisance import nuisance_layout
-    from cassini_bayes.inference.thrust.data import _nuisance_columns
+    from cassini_bayes.inference.thrust.columns import nuisance_columns
     from cassini_bayes.spacecraft import load_spacecraft
 
     sc = load_spacecraft("cassini_post_probe")
-    layout = nuisance_layout(sc, 2, ("RWA1", "RWA2"), wheel_errors=wheel_errors)
+    layout = nuisance_layout(sc, 2, ("RWA1", "RWA2"), wheel_errors=wheel_errors,
+                             torque_rate=True)
     t = np.linspace(10.0, 20.0, 11)
     per_wheel = {"RWA1": np.linspace(0.0, 5.0, 11), "RWA2": np.linspace(1.0, -2.0, 11)}
     h = sum(per_wheel[n][:, None] * sc.wheel(n).axis for n in per_wheel)
-    cols = _nuisance_columns(layout, 1, t, np.zeros((11, 3)), np.asarray(sc.inertia), h,
-                             per_wheel)
+    cols = nuisance_columns(layout, 1, t, np.zeros((11, 3)), np.asarray(sc.inertia), h,
+                            per_wheel)
     tq = layout.slices["body_torque"].start + 3
     np.testing.assert_allclose(cols[:, :, tq:tq + 3], (t - 10.0)[:, None, None] * np.eye(3))
+    tr = layout.slices["torque_rate"].start + 3
+    np.testing.assert_allclose(cols[:, :, tr:tr + 3],
+                               0.5 * (t - 10.0)[:, None, None]**2 * np.eye(3))
+    assert not cols[:, :, tr - 3:tr].any()
     wheel = cols[:, :, layout.slices["wheel_inertia"]]
     if wheel_errors == "per_wheel":
         for k, n in enumerate(("RWA1", "RWA2")):

@@ -60,7 +60,7 @@ def test_truth_follows_the_fits_prior(mode):
     factor, the nuisance by the ``nu_sd`` of the layout ``prepare_thrust`` builds for the
     scenario's running wheels (sorted, as it sorts them), and the time tags' sd by the inverse
     of ``tag_log_scale`` about the stated sd. Per component the mean within 4 se
-    (se = 1/√1000) and the sd within 10 % (sd of a sample sd ≈ 2.2 %: 4.5 se); up to 46
+    (se = 1/√1000) and the sd within 10 % (sd of a sample sd ≈ 2.2 %: 4.5 se); up to 49
     components × 2 checks at ≥ 4 se: false-failure rate below 0.5 %. A wrong sd, a missing wheel
     or a thrust about the wrong nominal fails."""
     from cassini_bayes.inference.inertia.knowledge import inertia_prior_gaussian
@@ -74,7 +74,7 @@ def test_truth_follows_the_fits_prior(mode):
     wheels = tuple(sorted(n for n, on in zip(sc.wheel_names, sc.wheels_on) if on))
     d = [robust_thrust_truth(k, sp, wheels, mode)
          for k in jax.random.split(jax.random.key(3), N_DRAWS)]
-    layout = nuisance_layout(sp, 1, wheels)
+    layout = nuisance_layout(sp, 1, wheels, torque_rate=True)
     assert d[0]["wheels"] == wheels == layout.wheels
     f_pred = sp.thrust_per_thruster if mode == "thruster" else np.array([sp.thrust])
     cols = [_z(np.log([x["thrust"] for x in d]), np.log(f_pred), THRUST_PRIOR_LOG_SD)]
@@ -96,7 +96,8 @@ def test_truth_follows_the_fits_prior(mode):
                          np.array([x["wheel_scale"] for x in d]) - common[:, None],
                          common[:, None],
                          np.array([np.ravel(x["wheel_tilt"]) for x in d]),
-                         np.array([x["T_body"] for x in d])], 1)
+                         np.array([x["T_body"] for x in d]),
+                         np.array([x["T_N_rate"] for x in d])], 1)
     assert nu.shape[1] == layout.size
     cols.append(nu / layout.sd)
     grid = np.linspace(-8.0, 8.0, 16001)
@@ -116,9 +117,12 @@ def test_truth_reaches_the_simulator():
     thrusts' impulses, centre-of-mass offset ``δ`` (``Q(δ)_s = (r_s − e − δ) × d_s``) and body
     torque, to 1e-6 of its size (without ``δ`` it is off by more than 1e-5); each thruster's
     impulse is its drawn thrust times the pulse log's accumulated pulse impulses at the drawn
-    time constants (Feldman & Lee §V); the recorded sample times are jittered with the drawn
-    time-tag sd (sample sd within 25 % over 81 samples, ~3 se)."""
+    time constants (Feldman & Lee §V); the inertial momentum gains ``½ Ṫ t²`` beside that
+    impulse, ``Ṫ`` the drawn torque rate in inertial axes (to 1e-6 of the impulse); the recorded
+    sample times are jittered with the drawn time-tag sd (sample sd within 25 % over 81 samples,
+    ~3 se)."""
     from helpers import replicate_of
+    from cassini_bayes.frames import dcm_body_to_inertial
     from cassini_bayes.physics.pulse import pulse_impulse_until
     from cassini_bayes.simulate.run import pulse_log
     from cassini_bayes.spacecraft import moment_matrix
@@ -142,6 +146,11 @@ def test_truth_reaches_the_simulator():
         per_pulse = np.asarray(pulse_impulse_until(a.t[-1] - log.t_on, log.width, *d["tau"]))
         np.testing.assert_allclose(imp, np.bincount(log.thruster, per_pulse, minlength=8)
                                    * d["thrust"], rtol=1e-6, atol=1e-9)
+        drift = (a.h_inertial[-1] - a.h_inertial[0] - a.impulse_inertial[-1]
+                 + a.impulse_inertial[0])
+        rate = np.asarray(dcm_body_to_inertial(np.asarray(sc.q0))) @ d["T_N_rate"]
+        np.testing.assert_allclose(drift, 0.5 * rate * (a.t[-1]**2 - a.t[0]**2),
+                                   atol=1e-6 * scale)
         jitter = np.std(a.t_meas - a.t)
         assert abs(jitter / d["time_tag_sd"] - 1.0) < 0.25
 

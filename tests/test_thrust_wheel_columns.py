@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cassini_bayes.inference.nuisance import nuisance_layout
-from cassini_bayes.inference.thrust.data import _nuisance_columns, _wheel_momentum
+from cassini_bayes.inference.thrust.columns import nuisance_columns, wheel_momentum
 from cassini_bayes.physics.impulse import impulse_lhs
 from cassini_bayes.simulate import load_scenario, simulate
 
@@ -21,10 +21,10 @@ def espa_columns():
     scenario = load_scenario("biasing_espa_bus")
     tel = simulate(jax.random.key(0), scenario).telemetry
     sc = scenario.prior
-    h, _, per_wheel = _wheel_momentum(tel, sc)
+    h, _, per_wheel = wheel_momentum(tel, sc)
     layout = nuisance_layout(sc, 1, sorted(tel.active_wheels()))
-    cols = _nuisance_columns(layout, 0, np.asarray(tel.t), np.asarray(tel.omega),
-                             np.asarray(sc.inertia), h, per_wheel)
+    cols = nuisance_columns(layout, 0, np.asarray(tel.t), np.asarray(tel.omega),
+                            np.asarray(sc.inertia), h, per_wheel)
     wheels = {w.name: (np.asarray(w.axis, float), float(w.inertia)) for w in sc.wheels
               if w.name in layout.wheels}
     return sc, tel, layout, cols - cols[:1], wheels      # the offset absorbs the first row

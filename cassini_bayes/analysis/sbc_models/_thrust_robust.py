@@ -20,8 +20,10 @@ Drawn per replicate, for the scenario's ``[prior]`` spacecraft and its running w
   (:func:`~cassini_bayes.inference.inertia.knowledge.inertia_prior_gaussian`, the fit's prior);
 * the nuisance vector ``ν`` of the layout :func:`~cassini_bayes.inference.thrust.prepare_thrust`
   builds for one event (gyro bias and scale factor, each running wheel's spin-inertia scale with
-  the shared part, the wheels' axis tilts, a body-fixed torque), ``layout.sd · N(0, 1)``, flown by
-  :func:`~cassini_bayes.simulate.with_errors` and ``TruthParams.torque_body_nm``;
+  the shared part, the wheels' axis tilts, a body-fixed torque and its rate), ``layout.sd ·
+  N(0, 1)``, flown by :func:`~cassini_bayes.simulate.with_errors`, ``TruthParams.torque_body_nm``
+  and, turned to inertial axes at the initial attitude (the dead band holds it),
+  ``torque_inertial_rate_nm_s``;
 * the time tags' sd from the fit's prior about the model's ``[telemetry_knowledge]
   time_tag_sd_s`` (:func:`~cassini_bayes.inference.thrust.prior.tag_log_scale`), the telemetry's
   time tags jittered with it (the fit reads the jittered times).
@@ -87,7 +89,8 @@ def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence
     thruster's; ``com`` (3,) m (zero unless mode ``thruster``); ``tau`` (3,) s; ``inertia`` (6,)
     kg m²; the one event's nuisance sites of :func:`~cassini_bayes.inference.nuisance.
     split_nuisance` (``gyro_bias`` (3,), ``gyro_scale`` (3,), ``wheel_scale`` (K,) each wheel's
-    total ``c_k``, ``wheel_scale_common``, ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m);
+    total ``c_k``, ``wheel_scale_common``, ``wheel_tilt`` (K, 2) rad, ``T_body`` (3,) N m,
+    ``T_N_rate`` (3,) N m/s, the body torque's rate);
     ``time_tag_sd`` s (0 where the model states none); and ``wheels``, the K wheel names in the
     layout's order.
     """
@@ -111,10 +114,11 @@ def robust_thrust_truth(key: jax.Array, spacecraft: Spacecraft, wheels: Sequence
     gauss = inertia_prior_gaussian(spacecraft)
     chol = np.linalg.cholesky(np.asarray(gauss.cov) + 1e-9 * np.eye(6))   # as sample_thrust_prior
     inertia = np.asarray(gauss.mean, float) + chol @ np.asarray(jax.random.normal(k_i, (6,)))
-    layout = nuisance_layout(spacecraft, 1, tuple(wheels), wheel_errors="per_wheel")
+    layout = nuisance_layout(spacecraft, 1, tuple(wheels), wheel_errors="per_wheel",
+                             torque_rate=True)
     nu = layout.sd * np.asarray(jax.random.normal(k_n, (layout.size,)))
     out = split_nuisance(nu, layout)
-    for site in ("gyro_bias", "T_body"):
+    for site in ("gyro_bias", "T_body", "T_N_rate"):
         out[site] = np.asarray(out[site])[0]                    # the one event
     z_tag = jax.random.normal(jax.random.fold_in(key, 6), ())
     tag_sd = float(spacecraft.knowledge.time_tag_sd_s) * float(jnp.exp(tag_log_scale(z_tag)))
@@ -161,12 +165,14 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
     wheels sorted as :func:`~cassini_bayes.inference.thrust.prepare_thrust` sorts them) and fly
     each with its ``sim_keys`` noise: the thrusts (times ``thrust_factor``), time constants (1 µs
     each without ``pulse_dynamics``: ideal rectangular pulses), inertia and body torque into
-    :class:`~cassini_bayes.simulate.run.TruthParams` (no inertial torque), the wheel and gyro
+    :class:`~cassini_bayes.simulate.run.TruthParams` (the torque's rate in inertial axes at the
+    initial attitude, no constant inertial torque), the wheel and gyro
     errors by :func:`~cassini_bayes.simulate.with_errors`, the time tags jittered with the
     drawn ``time_tag_sd``, and the centre-of-mass offset as the truth model's centre of mass
     (a scenario of its own per replicate: the thrusters' torques are the simulator's
     per-scenario arrays; one compiled program serves them all). Returns the drawn truths and the
     runs' :class:`~cassini_bayes.simulate.run.SimArrays` stacked along a leading batch axis."""
+    from cassini_bayes.frames import dcm_body_to_inertial
     from cassini_bayes.simulate.run import noise_params, simulate_arrays, truth_params
     from cassini_bayes.simulate.run import with_errors
 
@@ -174,6 +180,7 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
     wheels = tuple(sorted(n for n, on in zip(scenario.wheel_names, scenario.wheels_on) if on))
     base = truth_params(scenario)
     base_noise = noise_params(scenario)
+    to_inertial = dcm_body_to_inertial(jnp.asarray(scenario.q0))
     drawn, runs = [], []
     for p_key, s_key in zip(prior_keys, sim_keys):
         d = robust_thrust_truth(p_key, spacecraft, wheels, mode)
@@ -182,7 +189,7 @@ def simulate_robust_thrust(prior_keys: jax.Array, sim_keys: jax.Array, scenario:
                            thrust_n=jnp.asarray(d["thrust_n"] * thrust_factor),
                            tau_s=jnp.asarray(tau), torque_body_nm=jnp.asarray(d["T_body"]),
                            torque_inertial_nm=jnp.zeros(3),
-                           torque_inertial_rate_nm_s=jnp.zeros(3))
+                           torque_inertial_rate_nm_s=to_inertial @ jnp.asarray(d["T_N_rate"]))
         noise = base_noise._replace(time_tag_jitter_s=jnp.asarray(d["time_tag_sd"]))
         tp, nz = with_errors(scenario, tp, noise,
                              wheel_scale=dict(zip(d["wheels"], d["wheel_scale"])),

@@ -125,7 +125,10 @@ sections (:func:`cassini_bayes.inference.nuisance.nuisance_layout`, the same lay
 the robust inertia model), each entering the predicted left side of Eq 17 linearly:
 
 * body-fixed external torque ``T_e`` (N m, per event): ``+ T_e (t − t_0)`` (the attitude is held in
-  the dead-band, so body and inertial axes agree to milliradians);
+  the dead-band, so body and inertial axes agree to milliradians), and its rate ``Ṫ_e`` (N m/s,
+  per event; site ``T_N_rate``, prior ``[torque_knowledge] rate_sd_nm_per_h``):
+  ``+ ½ Ṫ_e (t − t_0)²``: a small spacecraft's environment torque changes within an event, and
+  unmodelled its drift moves the centre of mass and the inertia;
 * gyro bias ``b_e`` (rad/s, per event): the integrated gyroscopic term gains
   ``∫ b × H_w dt = −[C_t]_× b``, ``C_t = ∫_{t_0}^{t} H_w ds`` (the constant ``I b`` is absorbed by
   the offset);
@@ -161,7 +164,7 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
 ``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
 rather than sampled (as in the robust RWA4 model): per event the offset is removed
 (:func:`offset_marginal`), leaving a log-likelihood quadratic in ``ν``; the events' terms add,
-and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 16 for one
+and :func:`nuisance_marginal` integrates the Gaussian (an R × R Cholesky; R = 22 for one
 event with three wheels). The sampler keeps the idealised model's coordinates (5 for one event
 and one ``F``) and the time tags' scale; :func:`fit_thrust` then draws ``ν`` from its exact
 Gaussian conditional at each draw, so the posterior's nuisance sites are joint posterior

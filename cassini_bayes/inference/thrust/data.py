@@ -11,13 +11,12 @@ import numpy as np
 
 from cassini_bayes.errors import InputError, spelled
 from cassini_bayes.estimators.leak import interval_means
-from cassini_bayes.frames import skew
 from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_mean_tril
 from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
-from cassini_bayes.inference.nuisance import (nuisance_layout, wheel_scale_columns,
-                                              with_time_tag_steps)
+from cassini_bayes.inference.nuisance import nuisance_layout, with_time_tag_steps
+from cassini_bayes.inference.thrust.columns import nuisance_columns, wheel_momentum
 from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
                                                   rise_deficit)
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
@@ -34,7 +33,6 @@ from cassini_bayes.inference.thrust.time_tags import (events_tag_sensitivity, ev
                                                       with_pre_command_rates, with_tag_expectation)
 from cassini_bayes.physics.impulse import impulse_lhs, impulse_lhs_basis
 from cassini_bayes.physics.momentum import inertia_matrix
-from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.physics.rate_step_moments import StepPairs, interval_moments, step_pairs
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import PulseLog, Telemetry, pulses_in_span, without_stale_samples
@@ -158,54 +156,6 @@ class ThrustProblem(NamedTuple):
         return thrust_sizes(self.mode, self.data)[1]
 
 
-def _wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
-    """Body wheel momentum (n, 3) N m s, the wheel noise matrix Σ J² g gᵀ (3, 3) and each active
-    wheel's ``J_k ρ_k`` (n,) N m s."""
-    h = np.zeros((tel.n, 3))
-    wcov = np.zeros((3, 3))
-    per_wheel = {}
-    for name in tel.active_wheels():
-        w = spacecraft.wheel(name)
-        rate = np.nan_to_num(np.asarray(tel.wheel_rate(name), float))
-        per_wheel[name] = w.inertia * rate
-        h += w.inertia * rate[:, None] * w.axis[None, :]
-        wcov += w.inertia**2 * np.outer(w.axis, w.axis)
-    return h, wcov, per_wheel
-
-
-def _nuisance_columns(layout, e: int, t: np.ndarray, omega: np.ndarray, inertia: np.ndarray,
-                      h: np.ndarray, per_wheel: dict) -> np.ndarray:
-    """(n, 3, R) columns of ``ν`` in the predicted left side of event ``e`` (module docstring)."""
-    n = t.shape[0]
-    cols = np.zeros((n, 3, layout.size))
-    sl = layout.slices
-    dt = (t - t[0])[:, None]
-    c_t = cumulative_trapezoid(h, t)
-    b0 = sl["gyro_bias"].start + 3 * e
-    cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
-    cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
-    cols[:, :, layout.wheel_block] = -wheel_scale_columns(layout, h, per_wheel)  # −J_k ρ_k g_k
-    a0 = sl["wheel_axes"].start
-    for k, name in enumerate(layout.wheels):
-        if name in per_wheel:
-            for j in range(2):
-                cols[:, :, a0 + 2 * k + j] = -per_wheel[name][:, None] * layout.tilt_u[k, j]
-    wheel = np.r_[np.arange(layout.size)[layout.wheel_block], np.arange(a0, sl["wheel_axes"].stop)]
-    cols[:, :, wheel] = _with_gyroscopic(cols[:, :, wheel], omega, t)
-    t0 = sl["body_torque"].start + 3 * e
-    cols[:, :, t0:t0 + 3] = dt[:, :, None] * np.eye(3)[None]              # T_e (t − t_0)
-    return cols
-
-
-def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(n, 3, W) wheel-momentum columns ``δH`` plus their gyroscopic impulse ``∫ ω × δH dt``
-    (Feldman & Lee Eq 15, the cumulative trapezoid of
-    :func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`): a wheel's momentum enters the
-    left side of Eq 17 through ``H`` and through ``ΔG``, so an error in it does both."""
-    f = np.einsum("nij,njw->niw", np.asarray(skew(omega)), momentum)     # ω × δH
-    return momentum + cumulative_trapezoid(f, t)
-
-
 def _pulse_slots(t: np.ndarray, log: PulseLog) -> np.ndarray:
     """Sample index of each pulse's first sample at or after its command (n when none)."""
     return np.searchsorted(t, log.t_on, side="left")
@@ -252,7 +202,7 @@ def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
     rank = int(np.sum(sv > 1e-6 * max(float(np.max(sv, initial=0.0)), 1e-300)))
     if rank == 3:
         return
-    h, _, _ = _wheel_momentum(tel, spacecraft)
+    h, _, _ = wheel_momentum(tel, spacecraft)
     v = np.asarray(impulse_lhs(tel.t, tel.omega, inertia, h))    # (n, 3) N m s
     miss = (v - v[0]) @ u[:, rank:]                              # outside the torques' span
     swing = float(np.max(np.linalg.norm(v - v[0], axis=1)))
@@ -301,10 +251,10 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
     for e, (tel, log) in enumerate(zip(tels, logs)):
         n, m = tel.n, len(log.t_on)
         t = np.asarray(tel.t, float)
-        h, wc, per_wheel = _wheel_momentum(tel, spacecraft)
+        h, wc, per_wheel = wheel_momentum(tel, spacecraft)
         if robust:
-            nu_cols[e, :n] = _nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
-                                               h, per_wheel)
+            nu_cols[e, :n] = nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
+                                              h, per_wheel)
         # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
         t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
         w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
@@ -433,7 +383,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         _check_torque_span(tel, log, spacecraft, i_lin)
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
-                             wheel_errors=wheel_errors)
+                             wheel_errors=wheel_errors, torque_rate=robust)
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust,
                                       None if noise_hat is None else np.asarray(noise_hat, float))
     q_mat = spacecraft.moment_matrix

@@ -316,6 +316,7 @@ def _coords_dims(problem, mode: str, robust: bool, wheel_errors: str):
         dims.update({EFFECTS["gyro_bias"]: ["event", "axis"], EFFECTS["gyro_scale"]: ["axis"],
                      EFFECTS["wheel_axes"]: ["wheel", "tilt"],
                      EFFECTS["body_torque"]: ["event", "axis"],
+                     EFFECTS["torque_rate"]: ["event", "axis"],
                      **({EFFECTS["wheel_inertia"]: ["wheel"]}
                         if wheel_errors == "per_wheel" else {})})
     return coords, dims
