@@ -100,8 +100,8 @@ def matched(fits: list, name: str, mode: str, off: tuple, src: str) -> None:
 def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
         fits: list | None = None, off: tuple = (), truths: int = 0,
         match: bool = False, first: int = 0) -> dict:
-    """One case: the prediction, then the fits of seeds ``first + len(fits) .. seeds - 1``
-    (``fits``: those of a resumed record, kept)."""
+    """One case: the prediction, then the fits of the seeds ``first .. seeds - 1`` that ``fits``
+    (those of a resumed or joined record, kept) lacks."""
     import jax
     import numpy as np
 
@@ -121,7 +121,8 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
     print(f"{name} ({mode}): predicted in {t_pred:.0f} s: " + ", ".join(
         f"{n} {sd:.3g}" for n, sd in zip(names, pred.site_sd)), file=sys.stderr, flush=True)
     fits = list(fits or [])
-    for seed in range(first + len(fits), seeds):
+    have = {f["seed"] for f in fits}
+    for seed in (k for k in range(first, seeds) if k not in have):
         k_sim, k_fit = jax.random.split(jax.random.key(3200 + seed))
         if nominal:
             si = s
@@ -267,12 +268,12 @@ def main(argv=None) -> None:
 
     for case in a.case:
         done = list(out["results"])
-        r = run(case, a.seeds, settings, partial=lambda r: write(done + [r]), nominal=a.nominal,
-                fits=before.get(case), off=tuple(a.without), truths=a.truths, first=a.first_seed,
-                match=a.matched)
+        r = run(case, 0 if a.fits_from else a.seeds, settings,
+                partial=lambda r: write(done + [r]), nominal=a.nominal, fits=before.get(case),
+                off=tuple(a.without), truths=a.truths, first=a.first_seed, match=a.matched)
         out["results"].append(r)
         kind = "nominal" if a.nominal else "open-world"
-        print(f"\n{case}: fitted sd / predicted sd, median over {a.seeds} {kind} seeds "
+        print(f"\n{case}: fitted sd / predicted sd, median over {r['seeds']} {kind} seeds "
               f"(min–max); {r['within_25pct']}/{r['n_sites']} sites within 25 %; 90 % "
               f"coverage {r['coverage90']:.3f}; R-hat <= {r['max_r_hat']:.3f}, "
               f"{r['divergences']} divergences")
