@@ -158,15 +158,16 @@ def test_truth_reaches_the_simulator():
 @pytest.mark.slow
 def test_tiny_campaign_through_the_cli(run_cli, tmp_path):
     """``cassini-bayes sbc thrust --set robust=true -n 2`` with a tiny sampler (Cassini, mode
-    mean): exit 0, 19 ranked parameters, no failure, the options recorded (90 s at load ~13
-    on the 2-core machine, most of it compiling the simulator and the sampler)."""
+    mean): exit 0, 20 ranked parameters (``time_tag_sd`` the last), no failure, the options
+    recorded (90 s at load ~13 on the 2-core machine, most of it compiling the simulator and
+    the sampler)."""
     out = tmp_path / "sbc"
     code, _, stderr = run_cli("sbc", "thrust", "-n", 2, "--batch", 2, "--seed", 3,
                               "--set", "robust=true", "--set", "num_warmup=60",
                               "--set", "num_draws=30", "--out", out)
     assert code == 0, stderr
     s = json.loads((out / "summary.json").read_text())
-    assert s["replicates"] == 2 and s["failures"] == 0 and len(s["parameters"]) == 19
+    assert s["replicates"] == 2 and s["failures"] == 0 and len(s["parameters"]) == 20
     assert s["settings"]["robust"] is True and s["settings"]["mode"] == "mean"
 
 
