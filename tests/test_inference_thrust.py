@@ -709,7 +709,9 @@ def test_unfired_thrusters_are_prior_dominated(fsds):
 
 @pytest.mark.slow
 def test_pooled_events_learn_tau_fall_better(days):
-    """Two Table 2 events of different pulse mixes constrain τf better than one."""
+    """Two Table 2 events of different pulse mixes constrain τf better than one, and the pooled
+    thrust lies within 4 posterior sd of the truth (a calibrated posterior fails that with
+    probability 6e-5; a 0.1 % bias of F, 4.5 of its 0.02 % sd, fails it)."""
     from cassini_bayes.inference.thrust import fit_thrust
 
     (sc, ev1), (_, ev2) = days
@@ -720,7 +722,7 @@ def test_pooled_events_learn_tau_fall_better(days):
     sd_both = float(both.idata.posterior["tau_fall"].std())
     assert sd_both < sd_one
     f = both.idata.posterior["F"].values.ravel()
-    assert np.quantile(f, 0.01) < 0.699 < np.quantile(f, 0.99)
+    assert abs(f.mean() - 0.699) < 4.0 * f.std()
 
 
 @pytest.mark.slow
