@@ -303,9 +303,13 @@ def plan_thrust_truths(args: list[Records]) -> str:
                    for i, n in enumerate(names)}
             k = sum(abs(m - 1.0) <= 0.25 for m in med.values())
             within = f"{k}/{len(med)}"
+            thrusts = [n for n in names if n == "F" or n.startswith("F[")]
+            f_cell = (_ratio(med[thrusts[0]]) if len(thrusts) == 1 else
+                      f"{_ratio(min(med[n] for n in thrusts))}–"
+                      f"{_ratio(max(med[n] for n in thrusts))}")
             rows.append(
-                f"| `{r['scenario']}`, {len(fits)} | {label} | "
-                + " | ".join(_ratio(med[t]) for t in ("F", "tau_delay", "tau_rise", "tau_fall"))
+                f"| `{r['scenario']}`, {len(fits)} | {label} | {f_cell} | "
+                + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall"))
                 + " | " + " | ".join(
                     f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
                     for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
