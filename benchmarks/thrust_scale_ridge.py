@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,12 +38,13 @@ WIDE = 30.0             # the wheel scales' prior sd multiplier of the ``no whee
 VARIANTS = {"as fitted": "", "wheel noise follows": "w", "wheel momentum follows": "wh"}
 
 
-def ridge(case: str) -> dict:
-    """The log density along the ridge for each variant (module docstring)."""
+def ridge(case: str, variants: dict = VARIANTS, wides=(False, True)) -> dict:
+    """The log density along the ridge for each variant (module docstring); ``prior_sd`` the
+    wheel prior's sd of the common scale (``NuisanceLayout.scale_weights``)."""
+    import jax
     import jax.numpy as jnp
     import numpy as np
 
-    from cassini_bayes.inference.nuisance import wheel_inertia_sd
     from cassini_bayes.inference.thrust.model import log_density
     from cassini_bayes.plan.thrust import (_site_names, _truth, _truth_vector,
                                            noise_free_problem, representable)
@@ -51,37 +53,41 @@ def ridge(case: str) -> dict:
     name, mode = case.rsplit(":", 1)
     sc = load_scenario(name)
     _, problem, _ = noise_free_problem(sc, mode)
-    s = representable(sc, mode)
     names = _site_names(problem)
-    truth = _truth(s, problem, names)
+    truth = _truth(representable(sc, mode), problem, names)
     scaled = np.array([n.startswith("F") or n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
                        for n in names])
     k = problem.n_f + problem.n_c + 3
-    data0 = problem.data
     layout = problem.layout
     wheel_idx = np.arange(layout.size)[layout.wheel_block]      # c_0 … c_{S−1} and c_s
 
-    def density(factor: float, mods: str, wide: bool) -> float:
-        ev = data0.events
-        rep = {}
-        if "w" in mods:
-            rep["wheel_cov"] = ev.wheel_cov * factor**2
-        if "h" in mods:
-            rep.update(h_mid=ev.h_mid * factor, d_h=ev.d_h * factor)
-        data = data0._replace(events=ev._replace(**rep))
-        if wide:
-            data = data._replace(nu_sd=data.nu_sd.at[wheel_idx].multiply(WIDE))
-        x = np.where(scaled, truth * factor, truth)
-        theta = jnp.asarray(_truth_vector(problem, names, x), float)
-        theta = jnp.concatenate([theta[:k], jnp.zeros(1), theta[k:]])   # noise at the sensors'
-        return float(log_density(theta, data, problem.n_f, problem.n_c, True))
+    def theta(factor: float) -> np.ndarray:
+        x = _truth_vector(problem, names, np.where(scaled, truth * factor, truth))
+        return np.r_[x[:k], 0.0, x[k:]]                          # the noise at the sensors'
+
+    @partial(jax.jit, static_argnames="mods")
+    def density(thetas, factors, kw, mods: str):
+        def one(t, f):
+            ev, rep = kw.events, {}
+            if "w" in mods:
+                rep["wheel_cov"] = ev.wheel_cov * f**2
+            if "h" in mods:
+                rep.update(h_mid=ev.h_mid * f, d_h=ev.d_h * f)
+            return log_density(t, kw._replace(events=ev._replace(**rep)), problem.n_f,
+                               problem.n_c, True)
+        return jax.vmap(one)(thetas, factors)
 
     steps = STEP * np.array([-2.0, -1.0, 1.0, 2.0])
+    factors = 1.0 + np.r_[0.0, steps]
+    thetas = jnp.asarray(np.stack([theta(f) for f in factors]), float)
     rows = []
-    for wide in (False, True):
-        for label, mods in VARIANTS.items():
-            base = density(1.0, mods, wide)
-            lp = np.array([density(1.0 + d, mods, wide) for d in steps]) - base
+    for wide in wides:
+        data = problem.data
+        if wide:
+            data = data._replace(nu_sd=data.nu_sd.at[wheel_idx].multiply(WIDE))
+        for label, mods in variants.items():
+            dens = np.asarray(density(thetas, jnp.asarray(factors), data, mods))
+            lp = dens[1:] - dens[0]
             coef = np.polyfit(steps, lp, 2)              # lp ≈ −b d² + a d
             b, a = -coef[0], coef[1]
             rows.append({"variant": label + (", no wheel prior" if wide else ""),
@@ -90,9 +96,8 @@ def ridge(case: str) -> dict:
                          "peak_offset": float(a / (2.0 * b)) if b > 0 else None})
             print(f"{case} {rows[-1]['variant']:40s} sd {rows[-1]['sd']}, peak at "
                   f"{rows[-1]['peak_offset']}", file=sys.stderr, flush=True)
-    sd = np.array([wheel_inertia_sd(sc.prior, w) for w in layout.wheels])
-    common = sc.prior.knowledge.wheel_common_inertia_sd_frac if layout.has_common else 0.0
-    prior_sd = float(np.sqrt(common**2 + 1.0 / np.sum(1.0 / sd**2)))
+    weights = layout.scale_weights
+    prior_sd = float(np.sqrt(weights**2 @ np.asarray(layout.sd)[layout.wheel_block]**2))
     return {"case": case, "steps": steps.tolist(), "prior_sd": prior_sd, "rows": rows}
 
 

@@ -711,7 +711,7 @@ def test_unfired_thrusters_are_prior_dominated(fsds):
 def test_pooled_events_learn_tau_fall_better(days):
     """Two Table 2 events of different pulse mixes constrain τf better than one, and the pooled
     thrust lies within 4 posterior sd of the truth (a calibrated posterior fails that with
-    probability 6e-5; a 0.1 % bias of F, 4.5 of its 0.02 % sd, fails it)."""
+    probability 6e-5)."""
     from cassini_bayes.inference.thrust import fit_thrust
 
     (sc, ev1), (_, ev2) = days
