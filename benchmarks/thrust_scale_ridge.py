@@ -1,25 +1,21 @@
-"""Does the robust thrust fit's likelihood keep the common-scale ridge flat?
+"""Does the robust thrust fit's density hold the common-scale ridge where the wheels put it?
 
 Scaling the inertia, every thrust and every wheel's spin inertia by one factor ``s`` leaves the
 measured rates and wheel speeds of a biasing event unchanged (Feldman & Lee Eq 17 is
 homogeneous in them), so the data cannot tell ``s``: only the priors can (the wheels' spin
-inertias, about 0.5 %). The fit samples the inertia and the thrusts and integrates the wheel
-scales out as the linear nuisance ``ν``; this script puts its own log density
-(``inference/thrust/model.py::log_density``) on the event flown without noise at its truth and
-moves along the ridge (``F`` and ``I`` × ``s``, the wheel scales following in ``ν``), and
-reports the curvature as an sd of ``s`` and the slope as the offset of the maximum:
+inertias, about 0.5 %). The fit (``ThrustProblem.scale_free``) holds the wheels at the model
+file's common scale in its likelihood (the nuisance ``ν`` keeps each wheel's deviation from it),
+draws the common scale ``u`` from its prior and reports the thrusts and the inertia times
+``1 + u``. This script puts the fit's own log density (``inference/thrust/model.py::
+log_density``) on the event flown without noise at its truth, moves ``F`` and ``I`` × ``s`` with
+the wheels held, and reports the curvature as an sd of ``s`` and the slope as the offset of the
+maximum. Held consistently, the maximum is at the truth and the sd is what the event measures of
+the inertia and thrusts against the wheels, narrower than the prior of ``u``
+(``prior_sd``), which the fit adds.
 
-* ``as fitted`` — the fit's density;
-* ``wheel noise follows`` — the white wheel-rate noise of the left side, ``σ_ρ² Σ J_k² g_k
-  g_kᵀ``, taken at ``s J_k`` (the fit holds it at the model file's ``J_k``);
-* ``wheel momentum follows`` — and the wheel momentum of the rate-step corrections (``h_mid``,
-  ``d_h``) at ``s J_k`` too;
-* the same three with the wheel scales' prior sds × 30 (``no wheel prior``): what is left is
-  what the likelihood itself says about ``s``.
-
-A ridge the likelihood keeps flat gives, with the wheel prior, the prior's own sd along it
-(``prior_sd``) and, without it, an sd set only by the inertia and thrust priors (tens of per
-cent). No sampling.
+Before that change (record ``docs/planning/thrust_scale_ridge.json``) the common scale was a
+column of ``ν`` while the left side's wheel-rate noise and the rate-step corrections stayed at
+the file's spin inertias; the same probe then moved along the ridge and found it tilted.
 
     python benchmarks/thrust_scale_ridge.py --case biasing_espa_bus:thruster [--json out.json]
 """
@@ -29,18 +25,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from functools import partial
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-STEP = 0.005            # the ridge's step, a fraction of s; evaluated at ±STEP and ±2 STEP
-WIDE = 30.0             # the wheel scales' prior sd multiplier of the ``no wheel prior`` rows
-VARIANTS = {"as fitted": "", "wheel noise follows": "w", "wheel momentum follows": "wh"}
+STEP = 0.0002           # the probe's step, a fraction of s; evaluated at ±STEP and ±2 STEP
 
 
-def ridge(case: str, variants: dict = VARIANTS, wides=(False, True)) -> dict:
-    """The log density along the ridge for each variant (module docstring); ``prior_sd`` the
-    wheel prior's sd of the common scale (``NuisanceLayout.scale_weights``)."""
+def ridge(case: str) -> dict:
+    """The fit's log density along ``F``, ``I`` × ``s`` at the model file's wheels (module
+    docstring): ``sd`` and ``peak_offset`` of ``s``, ``prior_sd`` the prior sd of the common
+    scale ``u`` (``NuisanceLayout.common_scale_sd``)."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -58,47 +52,26 @@ def ridge(case: str, variants: dict = VARIANTS, wides=(False, True)) -> dict:
     scaled = np.array([n.startswith("F") or n in ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz")
                        for n in names])
     k = problem.n_f + problem.n_c + 3
-    layout = problem.layout
-    wheel_idx = np.arange(layout.size)[layout.wheel_block]      # c_0 … c_{S−1} and c_s
 
     def theta(factor: float) -> np.ndarray:
         x = _truth_vector(problem, names, np.where(scaled, truth * factor, truth))
         return np.r_[x[:k], 0.0, x[k:]]                          # the noise at the sensors'
 
-    @partial(jax.jit, static_argnames="mods")
-    def density(thetas, factors, kw, mods: str):
-        def one(t, f):
-            ev, rep = kw.events, {}
-            if "w" in mods:
-                rep["wheel_cov"] = ev.wheel_cov * f**2
-            if "h" in mods:
-                rep.update(h_mid=ev.h_mid * f, d_h=ev.d_h * f)
-            return log_density(t, kw._replace(events=ev._replace(**rep)), problem.n_f,
-                               problem.n_c, True)
-        return jax.vmap(one)(thetas, factors)
-
+    density = jax.jit(jax.vmap(lambda t, kw: log_density(t, kw, problem.n_f, problem.n_c, True),
+                               in_axes=(0, None)))
     steps = STEP * np.array([-2.0, -1.0, 1.0, 2.0])
-    factors = 1.0 + np.r_[0.0, steps]
-    thetas = jnp.asarray(np.stack([theta(f) for f in factors]), float)
-    rows = []
-    for wide in wides:
-        data = problem.data
-        if wide:
-            data = data._replace(nu_sd=data.nu_sd.at[wheel_idx].multiply(WIDE))
-        for label, mods in variants.items():
-            dens = np.asarray(density(thetas, jnp.asarray(factors), data, mods))
-            lp = dens[1:] - dens[0]
-            coef = np.polyfit(steps, lp, 2)              # lp ≈ −b d² + a d
-            b, a = -coef[0], coef[1]
-            rows.append({"variant": label + (", no wheel prior" if wide else ""),
-                         "log_density": lp.tolist(),
-                         "sd": float(1.0 / np.sqrt(2.0 * b)) if b > 0 else None,
-                         "peak_offset": float(a / (2.0 * b)) if b > 0 else None})
-            print(f"{case} {rows[-1]['variant']:40s} sd {rows[-1]['sd']}, peak at "
-                  f"{rows[-1]['peak_offset']}", file=sys.stderr, flush=True)
-    weights = layout.scale_weights
-    prior_sd = float(np.sqrt(weights**2 @ np.asarray(layout.sd)[layout.wheel_block]**2))
-    return {"case": case, "steps": steps.tolist(), "prior_sd": prior_sd, "rows": rows}
+    thetas = jnp.asarray(np.stack([theta(f) for f in 1.0 + np.r_[0.0, steps]]), float)
+    dens = np.asarray(density(thetas, problem.data))
+    lp = dens[1:] - dens[0]
+    coef = np.polyfit(steps, lp, 2)                      # lp ≈ −b d² + a d
+    b, a = -coef[0], coef[1]
+    row = {"variant": "as fitted, the wheels at the file's common scale",
+           "log_density": lp.tolist(),
+           "sd": float(1.0 / np.sqrt(2.0 * b)) if b > 0 else None,
+           "peak_offset": float(a / (2.0 * b)) if b > 0 else None}
+    print(f"{case}: sd {row['sd']}, peak at {row['peak_offset']}", file=sys.stderr, flush=True)
+    return {"case": case, "steps": steps.tolist(), "prior_sd": problem.layout.common_scale_sd,
+            "rows": [row]}
 
 
 def main(argv=None) -> None:
@@ -114,7 +87,7 @@ def main(argv=None) -> None:
     from cassini_bayes.files import write_text
 
     cassini_bayes.setup_jax()
-    out = {"step": STEP, "wide": WIDE, "cases": [ridge(c) for c in a.case]}
+    out = {"step": STEP, "cases": [ridge(c) for c in a.case]}
     if a.json:
         write_text(a.json, json.dumps(out, indent=1))
 

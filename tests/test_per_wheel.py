@@ -20,7 +20,8 @@ import pytest
 
 from cassini_bayes.errors import InputError
 from cassini_bayes.inference.inertia import fit_inertia
-from cassini_bayes.inference.nuisance import nuisance_layout, robust_columns, wheel_scale_columns
+from cassini_bayes.inference.nuisance import (nuisance_layout, robust_columns, wheel_scale_columns,
+                                              without_common_scale)
 from cassini_bayes.inference.runner import SamplerSettings
 from cassini_bayes.physics.momentum import INERTIA_NAMES, inertia_vector
 from cassini_bayes.spacecraft import load_spacecraft, spacecraft_from_dict
@@ -76,6 +77,40 @@ def test_per_wheel_columns_sum_to_the_common_column(sc):
     # a wheel not running in the file has a zero column
     only = wheel_scale_columns(per, h_w, {"RWA2": wheel_h["RWA2"]})
     assert not only[:, :, [0, 2]].any() and only[:, :, 1].any()
+
+
+def test_without_common_scale_keeps_the_deviations(sc):
+    """The thrust fit's wheel block with the common scale taken out: no combination of its
+    parameters moves every wheel alike any more (the shared scale's column is zero), and the
+    deviations from the precision-weighted mean keep their columns, with that mean independent
+    of them a priori (unequal knowledge: the weights are not the plain mean)."""
+    rng = np.random.default_rng(1)
+    n, wheels = 40, ("RWA1", "RWA2", "RWA3")
+    knowledge = {"RWA1": 0.002, "RWA2": 0.005, "RWA3": 0.01}
+    sc2 = replace(sc, wheels=tuple(replace(w, inertia_sd_frac=knowledge.get(w.name))
+                                   for w in sc.wheels))
+    lay = nuisance_layout(sc2, 1, wheels)
+    wheel_h = {w: rng.normal(size=n) for w in wheels}
+    h_w = sum(wheel_h[w][:, None] * sc.wheel(w).axis for w in wheels)
+    cols = robust_columns(lay, 0, np.asarray(sc.inertia), rng.normal(size=(n, 3)) * 1e-3, h_w,
+                          wheel_h, np.tile(np.eye(3), (n, 1, 1)), np.arange(n, dtype=float))
+    out = without_common_scale(cols, lay)
+    blk = lay.wheel_block
+    w = lay.common_scale_weights
+    prec = 1.0 / np.array(list(knowledge.values()))**2
+    np.testing.assert_allclose(w, np.r_[prec / prec.sum(), 1.0], rtol=1e-12)
+    scale = np.abs(cols[..., blk]).max()
+    np.testing.assert_allclose(out[..., blk.stop - 1], 0.0, atol=1e-14 * scale)   # c_s: none
+    np.testing.assert_allclose(out[..., blk][..., :3].sum(-1), 0.0, atol=1e-14 * scale)
+    d = rng.normal(size=3)
+    e = d - w[:3] @ d                     # the deviations from the weighted mean
+    np.testing.assert_allclose(out[..., blk][..., :3] @ d, cols[..., blk][..., :3] @ e,
+                               atol=1e-12)
+    sd = np.asarray(lay.sd)[blk][:3]
+    np.testing.assert_allclose((np.eye(3) - w[:3][None, :]) @ (sd**2 * w[:3]), 0.0, atol=1e-18)
+    assert lay.common_scale_sd == pytest.approx(np.sqrt(0.005**2 + 1.0 / prec.sum()), rel=1e-12)
+    rest = np.setdiff1d(np.arange(lay.size), np.arange(lay.size)[blk])
+    np.testing.assert_array_equal(out[..., rest], cols[..., rest])
 
 
 def test_prior_sd_per_wheel_from_the_model_file(sc):

@@ -79,12 +79,16 @@ def test_prediction_matches_a_differenced_hessian():
 
     jac = np.stack([(sites(x0 + 1e-4 * w[:, i]) - sites(x0 - 1e-4 * w[:, i])) / 2e-4
                     for i in range(d)], 1) @ np.linalg.inv(w)
-    sd_fd = np.sqrt(np.diag(jac @ cov_fd @ jac.T))
+    # the fit's draws times 1 + u, u the wheels' common scale from its prior (ThrustProblem.
+    # scale_free): the thrust and the inertia gain x² var(u)
+    x = np.r_[truth[:n_f], np.zeros(3), truth[n_f + 3:]]
+    u_cov = problem.layout.common_scale_sd**2 * np.outer(x, x)
+    sd_fd = np.sqrt(np.diag(jac @ cov_fd @ jac.T + u_cov))
     np.testing.assert_allclose(sd_fd, np.sqrt(np.diag(lap.site_cov)), rtol=1e-3)
     # the point is the truth: the sites there are the scenario's true values
     np.testing.assert_allclose(lap.site_mean, truth, rtol=1e-9)
-    # the check can fail: with the noise doubled the sites the noise limits (not F, which the
-    # wheels' common scale limits here) move by far more than the tolerance
+    # the check can fail: with the noise doubled the sites the noise limits (not F and the
+    # inertia, which the wheels' common scale limits here) move by far more than the tolerance
     lap2 = predict_thrust(problem, 2 * sig, at=at)
     assert not np.allclose(np.sqrt(np.diag(lap2.site_cov)), sd_fd, rtol=0.2)
 

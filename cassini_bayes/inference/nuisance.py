@@ -45,13 +45,14 @@ What the data cannot separate stays prior-dominated by construction: scaling ``I
 ``σ``; in the linearised model these are exact null directions of the likelihood, so the common
 wheel scale ``c = c_s + mean_k d_k`` (:data:`NuisanceLayout.scale_weights`) and the common part
 of ``s`` keep their priors and the overall scale of ``I`` widens by their prior sd instead of
-drifting. The differences ``c_k − c`` are learned from slews about several axes. With
-independent per-wheel priors of sd ``σ_J`` alone the common part would have prior sd
-``σ_J/√K`` (K wheels): 0.29 % for three wheels at 0.5 %, a claim that the wheels' errors
-average out which no data can check; the shared term makes it ``√(σ_s² + σ_J²/K)`` (0.58 % at
-the defaults). The priors (zero-mean Normal, one sd each) come from the spacecraft model's
-:class:`~cassini_bayes.spacecraft.Knowledge` and, per wheel, its ``[[wheel]] inertia_sd_frac``
-(:func:`wheel_inertia_sd`).
+drifting (the thrust fit takes the common wheel scale out of ``ν`` and scales its draws,
+:func:`without_common_scale`). The differences ``c_k − c`` are learned from slews about
+several axes. With independent per-wheel priors of sd ``σ_J`` alone the common part would
+have prior sd ``σ_J/√K`` (K wheels): 0.29 % for three wheels at 0.5 %, a claim that the
+wheels' errors average out which no data can check; the shared term makes it
+``√(σ_s² + σ_J²/K)`` (0.58 % at the defaults). The priors (zero-mean Normal, one sd each)
+come from the spacecraft model's :class:`~cassini_bayes.spacecraft.Knowledge` and, per wheel,
+its ``[[wheel]] inertia_sd_frac`` (:func:`wheel_inertia_sd`).
 """
 
 from __future__ import annotations
@@ -68,7 +69,8 @@ from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with_flex_mode",
            "with_time_tag_steps",
            "tilt_basis",
-           "wheel_inertia_sd", "wheel_scale_columns", "robust_columns", "split_nuisance",
+           "wheel_inertia_sd", "wheel_scale_columns", "without_common_scale", "robust_columns",
+           "split_nuisance",
            "site_prior_sd", "prior_wheel_errors"]
 
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
@@ -130,6 +132,25 @@ class NuisanceLayout(NamedTuple):
         (module docstring); ``c_k − c`` they can."""
         return np.r_[np.full(self.n_scales, 1.0 / max(self.n_scales, 1)),
                      np.ones(int(self.has_common))]
+
+    @property
+    def common_scale_weights(self) -> np.ndarray:
+        """Weights ``ω`` over :attr:`wheel_block` of the common scale as the prior splits it,
+        ``u = Σ ω_j w_j``, so that every wheel's ``c_k = u + e_k`` with deviations ``e_k``
+        independent of ``u`` a priori: the per-wheel parameters' precision-weighted mean plus the
+        shared one (the common model: its one scale). Equal to :attr:`scale_weights` where the
+        wheels' knowledge is equal."""
+        if self.wheel_errors == "common":
+            return np.ones(1)
+        prec = np.asarray(self.sd, float)[self.slices["wheel_inertia"]] ** -2.0
+        return np.r_[prec / max(float(prec.sum()), 1e-300), np.ones(int(self.has_common))]
+
+    @property
+    def common_scale_sd(self) -> float:
+        """Prior sd (a fraction) of the common scale ``u`` (:attr:`common_scale_weights`):
+        ``√(σ_s² + 1/Σ_k σ_k⁻²)`` per wheel."""
+        w = self.common_scale_weights
+        return float(np.sqrt(np.sum((w * np.asarray(self.sd, float)[self.wheel_block])**2)))
 
     @property
     def sites(self) -> tuple[str, ...]:
@@ -290,6 +311,22 @@ def wheel_scale_columns(layout: NuisanceLayout, h_wheels: np.ndarray,
     if layout.has_common:
         cols[:, :, -1] = cols[:, :, :-1].sum(-1)                      # c_s: every wheel's
     return cols
+
+
+def without_common_scale(cols: np.ndarray, layout: NuisanceLayout) -> np.ndarray:
+    """``cols`` (..., R) with the common scale taken out of the wheel block: each wheel-scale
+    column ``W_j − C ω_j`` (``C`` the column of a unit common scale: every per-wheel column's sum,
+    or the common model's one; ``ω`` :attr:`NuisanceLayout.common_scale_weights`). ``ν`` then
+    holds the deviations ``e_k = c_k − u`` alone, and the likelihood sees the wheels at the model
+    file's common scale (``u = 0``); for a model whose balance is homogeneous in the inertia, the
+    thrust and the wheels (Feldman & Lee Eq 17, the inertia sampled) ``u`` keeps its prior, and
+    the fit scales what it reports by ``1 + u``."""
+    out = np.array(cols, float, copy=True)
+    block = out[..., layout.wheel_block]
+    unit = np.r_[np.ones(layout.n_scales if layout.wheel_errors == "per_wheel" else 1),
+                 np.zeros(int(layout.has_common))]
+    out[..., layout.wheel_block] = block - (block @ unit)[..., None] * layout.common_scale_weights
+    return out
 
 
 def robust_columns(layout: NuisanceLayout, f: int, inertia: np.ndarray, omega: np.ndarray,

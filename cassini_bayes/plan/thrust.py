@@ -21,11 +21,14 @@ prediction is that density's Laplace approximation on the event flown without no
    of the fit's own log density there is the precision: on noise-free data the residuals vanish
    at the truth, so it is the expected Fisher information plus the prior's curvature (the
    dependence of the time-tag covariance on ``F`` and ``τ`` aside, second order). The truth,
-   not the mode: on noise-free data the two differ by the prior's pull only, and a mode search
-   of the ridge that ``F``, the inertia and the wheels' common scale make took minutes;
+   not the mode: on noise-free data the two differ by the prior's pull only;
 5. every site (thrusts, ``com_*``, ``tau_*``, ``Ixx … Iyz``) follows by the delta method through
    the fit's own map to the physical parameters (``jax.jacfwd``); in mode ``thruster`` also each
-   identified combination of thrusts (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`).
+   identified combination of thrusts (:class:`~cassini_bayes.inference.thrust.design.ThrustDesign`);
+6. the fit's density holds the wheels at the model file's common spin-inertia scale ``u`` and
+   reports its thrusts and inertia times ``1 + u``, ``u`` from its prior
+   (:attr:`~cassini_bayes.inference.thrust.ThrustProblem.scale_free`): their covariance gains
+   ``x xᵀ var(u)``, ``x`` the thrusts and inertia at the truth.
 """
 
 from __future__ import annotations
@@ -220,8 +223,12 @@ def predict_thrust(problem, sigmas, at=None) -> _Laplace:
         return jnp.concatenate(parts)
 
     jac = np.asarray(jax.jacfwd(sites)(centre))
-    return _Laplace(np.asarray(centre), cov, jac @ cov @ jac.T, np.asarray(sites(centre)),
-                    floored)
+    mean = np.asarray(sites(centre))
+    site_cov = jac @ cov @ jac.T
+    if problem.scale_free:     # the fit's draws times 1 + u, u the wheels' common scale
+        scaled = np.r_[mean[:n_f], np.zeros(n_c + 3), mean[n_f + n_c + 3:]]
+        site_cov = site_cov + problem.layout.common_scale_sd**2 * np.outer(scaled, scaled)
+    return _Laplace(np.asarray(centre), cov, site_cov, mean, floored)
 
 
 def _site_names(problem) -> list[str]:

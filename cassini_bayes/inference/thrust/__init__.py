@@ -174,9 +174,18 @@ whitened ``τr``, which no affine whitening removes; integrated out, it leaves n
 (docs/performance.md, "Thrust model choices, measured").
 
 The common part of the wheel scales is confounded with the thrust scale (``F`` balances the
-wheel momentum the event builds): the thrust posterior widens by about its prior sd (0.5 % in the
-common model; ``√(σ_s² + σ_J²/K)`` per wheel with K wheels built up, 0.58 % at the defaults)
-instead of claiming the 0.01 % that the idealised model claims on clean data.
+wheel momentum the event builds). With the inertia sampled (the robust default) Eq 17 is
+homogeneous in the inertia, the thrusts, the torques and every wheel's spin inertia, so the data
+cannot tell their common scale ``u``: the likelihood holds the wheels at the model file's common
+scale (``ν`` keeps each wheel's deviation from it,
+:func:`~cassini_bayes.inference.nuisance.without_common_scale`), and :func:`fit_thrust` draws
+``u`` from its prior (``√(σ_s² + 1/Σ_k σ_k⁻²)``, 0.58 % for three wheels at the defaults) and
+reports the thrusts, the inertia and the torques times ``1 + u``
+(:attr:`ThrustProblem.scale_free`). A common-scale column in ``ν`` instead would leave the
+left side's wheel-rate noise and its rate-step corrections at the file's wheels while the column
+scaled them, which tilts the ridge where the tachometers' noise is as large in momentum as the
+gyro's (docs/planning.md, "The thrust fit's common scale"). With the inertia fixed the common
+scale is one column of ``ν`` like the others. The idealised model claims 0.01 % on clean data.
 
 Pulse family (what the data can and cannot say about the shape)
 ---------------------------------------------------------------

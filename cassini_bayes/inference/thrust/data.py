@@ -15,7 +15,8 @@ from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_m
 from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
-from cassini_bayes.inference.nuisance import nuisance_layout, with_time_tag_steps
+from cassini_bayes.inference.nuisance import (nuisance_layout, with_time_tag_steps,
+                                              without_common_scale)
 from cassini_bayes.inference.thrust.columns import nuisance_columns, wheel_momentum
 from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
                                                   rise_deficit)
@@ -151,6 +152,17 @@ class ThrustProblem(NamedTuple):
         return thrust_sizes(self.mode, self.data)[0]
 
     @property
+    def scale_free(self) -> bool:
+        """Whether the likelihood holds the wheels at the model file's common spin-inertia scale
+        (:func:`~cassini_bayes.inference.nuisance.without_common_scale`): the robust model with
+        the inertia sampled, whose balance (Feldman & Lee Eq 17) is unchanged when the inertia,
+        the thrusts, the torques and every wheel scale by one factor, so the data cannot tell the
+        common scale ``u`` and the fit draws it from its prior and scales what it reports by
+        ``1 + u``. Held in the likelihood instead, its noise covariance and rate-step terms would
+        stay at the file's wheels while the sampled scale moved, and tilt the ridge."""
+        return self.layout is not None and self.inertia is not None
+
+    @property
     def n_c(self) -> int:
         """Number of centre-of-mass coordinates the sampler sees (3 in mode ``thruster``)."""
         return thrust_sizes(self.mode, self.data)[1]
@@ -222,10 +234,11 @@ def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
 
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
                    layout, i_lin: np.ndarray, robust: bool,
-                   noise_hat=None) -> tuple[dict, np.ndarray, np.ndarray]:
+                   noise_hat=None, scale_free: bool = False) -> tuple[dict, np.ndarray, np.ndarray]:
     """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
     thrusters that fired (M,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
-    inertia the robust columns are linear around."""
+    inertia the robust columns are linear around; ``scale_free``: the wheels' common scale is
+    taken out of them (:attr:`ThrustProblem.scale_free`)."""
     n_max = max(t.n for t in tels)
     # pulse arrays padded to a multiple of _PULSE_BUCKET: events whose pulse counts differ a
     # little (seeds of one scenario, SBC replicates) share shapes, so one compiled sampler
@@ -255,6 +268,8 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         if robust:
             nu_cols[e, :n] = nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
                                               h, per_wheel)
+            if scale_free:
+                nu_cols[e, :n] = without_common_scale(nu_cols[e, :n], layout)
         # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
         t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
         w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
@@ -266,7 +281,7 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
         slot[e, :m] = _pulse_slots(t, log)
         wcov[e] = wc
         noise[e] = (rate_noise_levels(tel, pulse_bent(t, log.t_on, log.width))
-                    if noise_hat is None else noise_hat[e])
+                    if noise_hat is None else np.asarray(noise_hat, float)[e])
         fired[np.unique(log.thruster)] = True
 
     kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
@@ -384,8 +399,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors, torque_rate=robust)
-    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust,
-                                      None if noise_hat is None else np.asarray(noise_hat, float))
+    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust, noise_hat,
+                                      scale_free=robust and inertia is not None)
     q_mat = spacecraft.moment_matrix
     thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)

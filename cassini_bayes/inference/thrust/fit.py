@@ -65,6 +65,34 @@ def _add_nuisance_draws(key, idata, problem: ThrustProblem, sample_inertia: bool
     return nu
 
 
+SCALED_EFFECTS = ("body_torque", "torque_rate", "flex_mode")
+"""Nuisance effects in N m, N m/s or kg m²: with the inertia and the thrusts, the quantities the
+wheels' common spin-inertia scale multiplies (:func:`_at_common_scale`)."""
+
+
+def _at_common_scale(idata, problem: ThrustProblem, nu: np.ndarray) -> None:
+    """Where the likelihood holds the wheels at the model file's common scale
+    (:attr:`ThrustProblem.scale_free`), put the reported draws at the drawn one: each draw's
+    thrusts, inertia and torques times ``1 + u``, ``u`` its common scale
+    (:attr:`~cassini_bayes.inference.nuisance.NuisanceLayout.common_scale_weights` of its
+    ``ν``, which the data leave at their prior). Feldman & Lee Eq 17 is homogeneous in them and
+    the wheels' inertias, so the scaled draws fit the data as the held ones do."""
+    import xarray as xr
+
+    if not problem.scale_free:
+        return
+    lay = problem.layout
+    post = idata.posterior
+    u = nu[:, lay.wheel_block] @ lay.common_scale_weights
+    one = xr.DataArray(1.0 + u.reshape(post.sizes["chain"], post.sizes["draw"]),
+                       dims=("chain", "draw"))
+    names = list(problem.names) + list(INERTIA_NAMES) + [EFFECTS[e] for e in SCALED_EFFECTS]
+    for name in names:
+        if name in post:
+            post[name] = (post[name] * one).transpose(*post[name].dims).assign_attrs(
+                post[name].attrs)
+
+
 def _add_combinations(idata, problem: ThrustProblem) -> None:
     """Add ``F_combination`` (N) along ``combination`` to the posterior and prior groups: each
     identified combination ``Σ_s w_s F_s`` of thrusters the events do not separate
@@ -279,15 +307,12 @@ def _warn_identification(post, problem: ThrustProblem) -> None:
 
 
 def _complete(key, idata, problem, robust: bool, sample_inertia: bool, coords, dims) -> None:
-    """Add to the sampled ``idata`` what is computed from its draws: the identified thrust
-    combinations, the robust model's nuisance draws (from their exact conditional), the
-    posterior-mean residuals and the data groups, each pulse group's impulses."""
+    """Add to the sampled ``idata`` what is computed from its draws: the robust model's nuisance
+    draws (from their exact conditional), the posterior-mean residuals and the data groups, each
+    pulse group's impulses (at the likelihood's wheels), the draws at the common wheel scale
+    (:func:`_at_common_scale`), the identified thrust combinations and the impulse bits."""
     from cassini_bayes.inference.progress import step
 
-    if problem.design is not None and problem.design.combinations.size:
-        _add_combinations(idata, problem)
-    if problem.mode == "thruster" and problem.data.bit_width is not None:
-        _add_impulse_bits(idata, problem)
     with step("nuisance draws and residuals"):
         nu_draws = None
         if robust:
@@ -295,8 +320,15 @@ def _complete(key, idata, problem, robust: bool, sample_inertia: bool, coords, d
                                            sample_inertia, coords, dims)
         post = idata.posterior
         d = _posterior_mean_residuals(problem, post, sample_inertia, nu_draws)
-    replace_groups(idata, _data_groups(problem, d)
-                   | {"pulse_impulses": pulse_impulses(problem, post, nu_draws)})
+        groups = _data_groups(problem, d) | {"pulse_impulses": pulse_impulses(problem, post,
+                                                                              nu_draws)}
+    if robust:
+        _at_common_scale(idata, problem, nu_draws)
+    if problem.design is not None and problem.design.combinations.size:
+        _add_combinations(idata, problem)
+    if problem.mode == "thruster" and problem.data.bit_width is not None:
+        _add_impulse_bits(idata, problem)
+    replace_groups(idata, groups)
 
 
 def _coords_dims(problem, mode: str, robust: bool, wheel_errors: str):
