@@ -161,7 +161,8 @@ def thrust_noise_at_truth(args: list[Records]) -> str:
 def thrust_scale_ridge(args: list[Records]) -> str:
     """The thrust fit's density along the common-scale ridge of ``F``, ``I`` and the wheels'
     spin inertias (benchmarks/thrust_scale_ridge.py records): the sd of the scale it implies and
-    the offset of its maximum, per variant, beside the wheel prior's own sd along the ridge."""
+    the offset of its maximum, per variant, beside the wheel prior's own sd along the ridge (two
+    significant digits: the fixed density's width is hundredths of a per cent)."""
     rows = ["| case | variant | sd of the scale | its maximum at | the wheel prior's sd |",
             "|---|---|---|---|---|"]
     for path in (p for group in args for p in group):
@@ -169,8 +170,8 @@ def thrust_scale_ridge(args: list[Records]) -> str:
             for r in case["rows"]:
                 sd, peak = r["sd"], r["peak_offset"]
                 rows.append(f"| `{case['case']}` | {r['variant']} | "
-                            + (f"{100 * sd:.2f} %" if sd is not None else "flat") + " | "
-                            + (f"{100 * peak:+.2f} %" if peak is not None else "—")
+                            + (f"{100 * sd:.2g} %" if sd is not None else "flat") + " | "
+                            + (f"{100 * peak:+.2g} %" if peak is not None else "—")
                             + f" | {100 * case['prior_sd']:.2f} % |")
     return "\n".join(rows)
 

@@ -774,6 +774,45 @@ def test_robust_columns_torque_and_wheel_scale(wheel_errors):
     assert not cols[:, :, tq - 3:tq].any()
 
 
+def test_reported_draws_carry_the_common_wheel_scale():
+    """With the inertia sampled the likelihood holds the wheels at the model file's common scale
+    ``u``; the fit reports each draw's thrusts, inertia and torques times ``1 + u``, ``u`` from
+    the draw's wheel block (its prior), and leaves the rest (gyro bias, time constants) alone. A
+    problem with the inertia fixed keeps its draws."""
+    import arviz as az
+
+    from cassini_bayes.inference.nuisance import nuisance_layout
+    from cassini_bayes.inference.thrust.fit import _at_common_scale
+
+    sc = load_spacecraft("espa_bus")
+    lay = nuisance_layout(sc, 1, tuple(w.name for w in sc.wheels), torque_rate=True)
+    rng = np.random.default_rng(3)
+    nu = rng.normal(size=(2 * 2000, lay.size)) * lay.sd
+    post = {"F": np.full((2, 2000, 8), 0.7), "Ixx": np.full((2, 2000), 25.0),
+            "tau_rise": np.full((2, 2000), 0.02), "T_body": np.full((2, 2000, 1, 3), 1e-5),
+            "gyro_bias": np.full((2, 2000, 1, 3), 1e-6)}
+
+    def reported(scale_free):
+        idata = az.from_dict(posterior={k: v.copy() for k, v in post.items()})
+        _at_common_scale(idata, SimpleNamespace(scale_free=scale_free, layout=lay, names=("F",)),
+                         nu)
+        return idata.posterior
+
+    out = reported(True)
+    u = nu[:, lay.wheel_block] @ lay.common_scale_weights
+    np.testing.assert_allclose(out["F"].values[..., 3].ravel(), 0.7 * (1 + u), rtol=1e-12)
+    np.testing.assert_allclose(out["Ixx"].values.ravel(), 25.0 * (1 + u), rtol=1e-12)
+    np.testing.assert_allclose(out["T_body"].values[..., 0, 2].ravel(), 1e-5 * (1 + u),
+                               rtol=1e-12)
+    assert out["F"].dims == ("chain", "draw", "F_dim_0")
+    for name in ("tau_rise", "gyro_bias"):
+        np.testing.assert_array_equal(out[name].values, post[name])
+    # u has the prior of the wheels' common scale (four wheels: √(0.5² + 0.5²/4) %), to 5 %
+    assert np.std(u) == pytest.approx(lay.common_scale_sd, rel=0.05)
+    assert lay.common_scale_sd == pytest.approx(0.005 * np.sqrt(1.25), rel=1e-9)
+    np.testing.assert_array_equal(reported(False)["F"].values, post["F"])
+
+
 @pytest.mark.slow
 def test_robust_model_covers_what_the_idealised_misses():
     """Robust against idealised on a Table 2 event whose true wheels are 1 % heavier than the model
