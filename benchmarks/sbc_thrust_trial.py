@@ -52,17 +52,17 @@ def _noise_centre(arrays, scenario) -> dict:
 
 
 def _common_scale(truth: dict, scenario, wheels: tuple[str, ...]) -> dict:
-    """The drawn wheels' mean scale and its z under the prior ``c_s + mean d_k``."""
+    """The drawn wheels' common scale ``u`` (``NuisanceLayout.common_scale_weights``: their
+    precision-weighted mean scale, the plain mean where their knowledge is equal) and its z
+    under its prior."""
     import numpy as np
 
     from cassini_bayes.inference.nuisance import nuisance_layout
 
     layout = nuisance_layout(scenario.prior, 1, wheels, wheel_errors="per_wheel")
-    sd = np.asarray(layout.sd)
-    var = (sd[layout.slices["wheel_inertia_common"]][0]**2
-           + np.mean(sd[layout.slices["wheel_inertia"]]**2) / len(wheels))
-    mean = float(np.mean([truth[f"wheel_scale[{w}]"] for w in wheels]))
-    return {"mean_wheel_scale": mean, "z_common": mean / float(np.sqrt(var))}
+    weights = layout.common_scale_weights[:layout.n_scales]
+    mean = float(weights @ np.array([truth[f"wheel_scale[{w}]"] for w in wheels]))
+    return {"mean_wheel_scale": mean, "z_common": mean / layout.common_scale_sd}
 
 
 def main(argv: list[str] | None = None) -> None:
