@@ -184,8 +184,9 @@ reports the thrusts, the inertia and the torques times ``1 + u``
 (:attr:`ThrustProblem.scale_free`). A common-scale column in ``ν`` instead would leave the
 left side's wheel-rate noise and its rate-step corrections at the file's wheels while the column
 scaled them, which tilts the ridge where the tachometers' noise is as large in momentum as the
-gyro's (docs/planning.md, "The thrust fit's common scale"). With the inertia fixed the common
-scale is one column of ``ν`` like the others. The idealised model claims 0.01 % on clean data.
+gyro's (docs/planning.md, "The fit's density did not keep that ridge flat"). With the inertia
+fixed the common scale is one column of ``ν`` like the others. The idealised model claims
+0.01 % on clean data.
 
 Pulse family (what the data can and cannot say about the shape)
 ---------------------------------------------------------------
