@@ -121,6 +121,10 @@ def thrust_block(p: Any) -> dict:
            "pulse_widths_s": list(p.pulse_widths_s), "floored_directions": p.floored,
            "noise": {"gyro_rad_s": float(p.noise[0]), "wheel_rate_rad_s": float(p.noise[1])},
            "duration_s": p.duration_s, "truths": p.truths}
+    if p.site_sd_mode is not None:
+        for n, sd in zip(p.sites, p.site_sd_mode):
+            out["sites"][n]["sd_at_mode"] = float(sd)
+    out["non_gaussian"] = list(p.non_gaussian)
     if p.truths:
         lo, hi = p.site_sd_range
         for i, n in enumerate(p.sites):
@@ -149,6 +153,13 @@ def format_thrust_table(p: Any, title: str) -> str:
         lines.append(f"{p.floored} direction(s) of the fit's coordinates have no curvature at "
                      "the truth (left at a prior that is not log-concave there): given the "
                      "prior's order of sd, the Laplace prediction is rough for them")
+    if p.non_gaussian:
+        ratio = dict(zip(p.sites, p.sd_mode_ratio))
+        lines.append("not Gaussian on this event: sd at the noise-free posterior's mode over sd "
+                     "at the truth " + ", ".join(f"{n} {ratio[n]:.2f}" for n in p.non_gaussian)
+                     + "; these sites share the ridge of thrust and pulse shape, where each "
+                     "flight's noise moves the fit: their predicted sd is indicative (more "
+                     "pulse widths break the ridge)")
     lines.append(f"largest sd/budget {p.max_ratio:.3f} ({p.worst}); budgets: thrust "
                  "+-10 % (Feldman & Lee), time constants half the model file's manufacturer "
                  "range")

@@ -28,7 +28,13 @@ prediction is that density's Laplace approximation on the event flown without no
 6. the fit's density holds the wheels at the model file's common spin-inertia scale ``u`` and
    reports its thrusts and inertia times ``1 + u``, ``u`` from its prior
    (:attr:`~cassini_bayes.inference.thrust.ThrustProblem.scale_free`): their covariance gains
-   ``x xᵀ var(u)``, ``x`` the thrusts and inertia at the truth.
+   ``x xᵀ var(u)``, ``x`` the thrusts and inertia at the truth;
+7. the same at the noise-free posterior's mode: a site whose sd there is not within
+   :data:`NON_GAUSSIAN_SHARE` of its sd at the truth sits on a ridge the prior shapes (the
+   thrust against the pulse shape where every pulse has one width), whose posterior is not
+   Gaussian: each flight's noise puts the fit elsewhere on it, with another sd, so the
+   prediction names the event's thrust and time-constant sites as indicative
+   (:attr:`ThrustPrediction.non_gaussian`).
 """
 
 from __future__ import annotations
@@ -49,9 +55,14 @@ from cassini_bayes.plan.wheel_axis import noise_free_telemetry, scenario_noise
 from cassini_bayes.simulate.scenario import Scenario
 
 __all__ = ["ThrustPrediction", "evaluate_thrust", "noise_free_problem", "predict_thrust",
-           "representable", "truth_coordinates"]
+           "representable", "sd_at_mode", "truth_coordinates"]
 
 _PRIOR_DRAWS = 4000       # prior draws for the sites' prior sd (fixed key)
+
+NON_GAUSSIAN_SHARE = 0.25
+"""Largest share by which a site's predicted sd at the noise-free posterior's mode may differ
+from the one at the truth (either way) before the prediction calls the posterior not Gaussian
+(module docstring, step 7): the ±25 % to which a prediction is held against fits."""
 
 
 class ThrustPrediction(NamedTuple):
@@ -68,6 +79,8 @@ class ThrustPrediction(NamedTuple):
     distinct widths. duration_s; t, omega, wheel_rpm, wheel_names, pulse_t, pulse_width,
     pulse_thruster : the noise-free flight for the report's figure. floored : the directions
     whose curvature at the truth was below :data:`CURVATURE_MIN` (given unit curvature).
+    site_sd_mode : each site's sd at the noise-free posterior's mode (nominal truth; ``None``
+    where not checked); see :attr:`non_gaussian`.
     truths : the truths drawn from the model file's knowledge besides the nominal one
     (:func:`evaluate_thrust`); site_sd is the median over them and the nominal truth,
     site_sd_nominal the nominal truth's, site_sd_range the least and largest.
@@ -96,6 +109,25 @@ class ThrustPrediction(NamedTuple):
     truths: int = 0
     site_sd_nominal: np.ndarray | None = None
     site_sd_range: tuple[np.ndarray, np.ndarray] | None = None
+    site_sd_mode: np.ndarray | None = None
+
+    @property
+    def sd_mode_ratio(self) -> np.ndarray | None:
+        """Each site's sd at the noise-free posterior's mode over its sd at the nominal truth."""
+        if self.site_sd_mode is None:
+            return None
+        nominal = self.site_sd if self.site_sd_nominal is None else self.site_sd_nominal
+        return self.site_sd_mode / nominal
+
+    @property
+    def non_gaussian(self) -> tuple[str, ...]:
+        """The thrust and time-constant sites, where any site's :attr:`sd_mode_ratio` is outside
+        ``1 ± NON_GAUSSIAN_SHARE`` (module docstring, step 7): they share the ridge of thrust and
+        pulse shape, so their predicted sd is indicative; empty otherwise."""
+        r = self.sd_mode_ratio
+        if r is None or np.all(np.abs(np.log(r)) <= np.log1p(NON_GAUSSIAN_SHARE)):
+            return ()
+        return tuple(n for n in self.sites if n in TAU_NAMES or n.startswith("F"))
 
     @property
     def ratio(self) -> np.ndarray:
@@ -306,7 +338,7 @@ def noise_free_problem(s: Scenario, mode: str = "mean"):
 
 
 def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = None, *,
-                    truths: int = 0, seed: int = 0) -> ThrustPrediction:
+                    truths: int = 0, seed: int = 0, check_mode: bool = True) -> ThrustPrediction:
     """Predicted posterior of the default robust thrust fit (inertia sampled from the model
     file's knowledge, per-wheel scales) of the biasing event of scenario ``s`` in thrust
     ``mode`` (module docstring).
@@ -315,7 +347,8 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
     knowledge (:func:`~cassini_bayes.plan.truths.knowledge_truths`, stream ``seed``), each flown
     by its own controller, and each site's sd is the median over them and the nominal truth (a
     closed-loop event's pulses, and so what it tells, follow the truth); ``site_sd_nominal`` and
-    ``site_sd_range`` keep the nominal and the spread."""
+    ``site_sd_range`` keep the nominal and the spread. ``check_mode``: also the sd at the
+    noise-free posterior's mode (module docstring, step 7; one more mode search)."""
     from cassini_bayes.plan.truths import knowledge_truths
 
     sim, problem, sig = noise_free_problem(s, mode)
@@ -332,6 +365,7 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
         lap_t = predict_thrust(p_t, sig_t, at=_truth_vector(p_t, names, _truth(t, p_t, names)))
         sds.append(np.sqrt(np.diag(lap_t.site_cov)))
         combos.append(_combinations(p_t, lap_t.site_cov, prior_sd))
+    sd_mode = sd_at_mode(problem, sig) if check_mode else None
     sd_all = np.array(sds)
     sd = np.median(sd_all, axis=0)
     combo = {k: (float(np.median([c[k][0] for c in combos if k in c])), v[1], v[2])
@@ -354,7 +388,14 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
         pulse_width=np.asarray(log.width, float),
         pulse_thruster=tuple(log.thruster_names[i] for i in np.asarray(log.thruster)),
         floored=lap.floored, truths=truths, site_sd_nominal=sds[0],
-        site_sd_range=(sd_all.min(axis=0), sd_all.max(axis=0)))
+        site_sd_range=(sd_all.min(axis=0), sd_all.max(axis=0)), site_sd_mode=sd_mode)
+
+
+def sd_at_mode(problem, sig) -> np.ndarray | None:
+    """Each site's predicted sd at the mode of the fit's density on the noise-free ``problem``
+    (:func:`predict_thrust` from the fit's own start); ``None`` where no finite one is found."""
+    sd = np.sqrt(np.diag(predict_thrust(problem, sig).site_cov))
+    return sd if np.all(np.isfinite(sd)) and np.all(sd > 0) else None
 
 
 def _combinations(problem, site_cov: np.ndarray, prior_sd: np.ndarray) -> dict:

@@ -35,7 +35,8 @@ import numpy as np
 
 from cassini_bayes.plan.checks import WHEEL_MARGIN
 from cassini_bayes.plan.limits import ACCEL_TORQUE_SHARE, Limits, base_scenario_dict
-from cassini_bayes.plan.thrust import ThrustPrediction, evaluate_thrust
+from cassini_bayes.plan.thrust import (ThrustPrediction, evaluate_thrust, noise_free_problem,
+                                       sd_at_mode)
 from cassini_bayes.simulate.controllers import COMMAND_RESOLUTION_S
 from cassini_bayes.simulate.scenario import Scenario, scenario_from_dict
 
@@ -190,7 +191,7 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
         t0 = time.perf_counter()
         d = thrust_event_dict(limits, base, spacecraft_ref, c)
         s = scenario_from_dict(copy.deepcopy(d), limits.source)
-        p = evaluate_thrust(s, mode, limits, truths=truths)
+        p = evaluate_thrust(s, mode, limits, truths=truths, check_mode=False)
         usage = {**p.usage, **pulse_usage(p, limits)}
         p = p._replace(usage=usage)
         value = target_value(p, target)
@@ -206,7 +207,7 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
                      f"{p.n_pulses} pulses, limits {'ok' if ok else 'EXCEEDED'} "
                      f"({rec['seconds']:.0f} s)")
         if ok and (best is None or value < best[0]):
-            best = (value, d, p, c)
+            best = (value, d, p, c, s)
         if least_bad is None or max(usage.values()) < max(least_bad.values()):
             least_bad = usage
     if best is None:
@@ -215,7 +216,9 @@ def plan_thrust_event(limits: Limits, base: Scenario, spacecraft_ref: str, *, mo
                          f"best uses {least_bad[worst]:.3g} of '{worst}' on its simulated "
                          "flight; widen that limit or lengthen 'limits.duration_s'",
                          path=limits.source)
-    _, d, p, c = best
+    _, d, p, c, s = best
+    _, problem, sig = noise_free_problem(s, mode)
+    p = p._replace(site_sd_mode=sd_at_mode(problem, sig))
     base_pred, base_name, base_dict = None, "", None
     if baseline is not None:
         base_pred = evaluate_thrust(baseline, mode, limits, truths=truths)
