@@ -110,9 +110,10 @@ def test_evaluate_thrust_reports_every_site_beside_budget_and_prior():
 
 
 def test_sites_on_a_ridge_are_named_not_gaussian():
-    """The rule of ``ThrustPrediction.non_gaussian``: one site's sd at the noise-free mode 30 %
-    off the truth's (either way) names every thrust and time-constant site, the centre of mass
-    and the inertia not; 20 % off names none; the table and summary.json say so."""
+    """The rule of ``ThrustPrediction.non_gaussian``: one time-constant site's sd at the
+    noise-free mode 30 % off the truth's (either way) names every thrust and time-constant site,
+    the centre of mass and the inertia not; 20 % off names none; an inertia site 30 % off names
+    itself alone; the table and summary.json say so."""
     from cassini_bayes.api._plan_format import format_thrust_table, thrust_block
     from cassini_bayes.plan.thrust import evaluate_thrust
 
@@ -123,6 +124,10 @@ def test_sites_on_a_ridge_are_named_not_gaussian():
     for share, named in ((1.3, ridge), (1 / 1.3, ridge), (1.2, ()), (1 / 1.2, ())):
         q = p._replace(site_sd_mode=p.site_sd * np.where(np.arange(len(p.sites)) == i, share, 1))
         assert q.non_gaussian == named
+    j = p.sites.index("Ixz")
+    q = p._replace(site_sd_mode=p.site_sd * np.where(np.arange(len(p.sites)) == j, 1.3, 1))
+    assert q.non_gaussian == ("Ixz",) and p.ridge_sites == ridge
+    assert "Ixz 1.30: their predicted sd is indicative" in format_thrust_table(q, "t")
     q = p._replace(site_sd_mode=p.site_sd * np.where(np.arange(len(p.sites)) == i, 0.5, 1))
     assert "not Gaussian on this event" in format_thrust_table(q, "t") and "tau_rise 0.50" in \
         format_thrust_table(q, "t")

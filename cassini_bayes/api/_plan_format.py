@@ -155,11 +155,13 @@ def format_thrust_table(p: Any, title: str) -> str:
                      "prior's order of sd, the Laplace prediction is rough for them")
     if p.non_gaussian:
         ratio = dict(zip(p.sites, p.sd_mode_ratio))
+        ridge = bool(set(p.non_gaussian) & set(p.ridge_sites))
         lines.append("not Gaussian on this event: sd at the noise-free posterior's mode over sd "
                      "at the truth " + ", ".join(f"{n} {ratio[n]:.2f}" for n in p.non_gaussian)
-                     + "; these sites share the ridge of thrust and pulse shape, where each "
-                     "flight's noise moves the fit: their predicted sd is indicative (more "
-                     "pulse widths break the ridge)")
+                     + ("; these sites share the ridge of thrust and pulse shape, where each "
+                        "flight's noise moves the fit: their predicted sd is indicative (more "
+                        "pulse widths break the ridge)" if ridge else
+                        ": their predicted sd is indicative"))
     lines.append(f"largest sd/budget {p.max_ratio:.3f} ({p.worst}); budgets: thrust "
                  "+-10 % (Feldman & Lee), time constants half the model file's manufacturer "
                  "range")

@@ -121,12 +121,22 @@ class ThrustPrediction(NamedTuple):
 
     @property
     def non_gaussian(self) -> tuple[str, ...]:
-        """The thrust and time-constant sites, where any site's :attr:`sd_mode_ratio` is outside
-        ``1 ± NON_GAUSSIAN_SHARE`` (module docstring, step 7): they share the ridge of thrust and
-        pulse shape, so their predicted sd is indicative; empty otherwise."""
+        """The sites whose :attr:`sd_mode_ratio` is outside ``1 ± NON_GAUSSIAN_SHARE`` (module
+        docstring, step 7), their predicted sd indicative; where one is a thrust or
+        time-constant site, every thrust and time-constant site (they share the ridge of thrust
+        and pulse shape)."""
         r = self.sd_mode_ratio
-        if r is None or np.all(np.abs(np.log(r)) <= np.log1p(NON_GAUSSIAN_SHARE)):
+        if r is None:
             return ()
+        off = {n for n, x in zip(self.sites, r)
+               if abs(np.log(x)) > np.log1p(NON_GAUSSIAN_SHARE)}
+        ridge = set(self.ridge_sites)
+        named = off | ridge if off & ridge else off
+        return tuple(n for n in self.sites if n in named)
+
+    @property
+    def ridge_sites(self) -> tuple[str, ...]:
+        """The thrust and time-constant sites: one pulse width leaves them on one ridge."""
         return tuple(n for n in self.sites if n in TAU_NAMES or n.startswith("F"))
 
     @property
