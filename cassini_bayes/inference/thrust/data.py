@@ -160,7 +160,7 @@ class ThrustProblem(NamedTuple):
         common scale ``u`` and the fit draws it from its prior and scales what it reports by
         ``1 + u``. Held in the likelihood instead, its noise covariance and rate-step terms would
         stay at the file's wheels while the sampled scale moved, and tilt the ridge."""
-        return self.layout is not None and self.inertia is not None
+        return _scale_free(self.layout is not None, self.inertia)
 
     @property
     def n_c(self) -> int:
@@ -367,6 +367,12 @@ def _column_statistics(nu_cols, mask) -> ColumnStatistics:
     return ColumnStatistics(np.stack([x.gram for x in stats]), np.stack([x.total for x in stats]))
 
 
+def _scale_free(robust: bool, inertia) -> bool:
+    """:attr:`ThrustProblem.scale_free` of a fit that is ``robust`` with ``inertia`` sampled
+    (``None``: fixed)."""
+    return robust and inertia is not None
+
+
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
@@ -400,7 +406,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors, torque_rate=robust)
     kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust, noise_hat,
-                                      scale_free=robust and inertia is not None)
+                                      scale_free=_scale_free(robust, inertia))
     q_mat = spacecraft.moment_matrix
     thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
