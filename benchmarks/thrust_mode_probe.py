@@ -1,0 +1,124 @@
+"""Where the robust thrust fit's mode lies on one open-world flight, without sampling: a probe of
+which error moves the time constants, about a minute a variant where a NUTS fit takes 10-20.
+
+    python benchmarks/thrust_mode_probe.py --case biasing_espa_bus_mixed_widths:thruster
+        --seed 4 [--variant OFF:TAGS ...] [--json PATH]
+
+Each variant flies the open-world truth of ``--seed`` (the draw of ``plan_thrust.py``, the same
+keys) with the effects ``OFF`` switched off (comma-separated, ``open_world.EFFECTS_OFF``;
+``none``) and the telemetry's time-tag errors (times ``--tag-factor``) kept only on the samples
+``TAGS`` names:
+
+- ``all``: every sample (the open world); ``none``: the true sample times;
+- ``near`` / ``far``: the samples within / beyond :data:`NEAR_S` of a pulse's command or end;
+- ``start`` / ``end``: the samples at a pulse's command / end time (to a microsecond).
+
+It prints the time constants and the time tags' learned scale at the mode of the fit's density
+(the Laplace mode its preparation finds, ``ThrustProblem.data.centre``), with the fit's default
+model (robust, inertia sampled). The mode moves as the posterior does; where the posterior is
+not Gaussian the two can differ by several of its sds (the NUTS fits of the same seeds are in
+``plan_thrust.py``'s records). Not a test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+NEAR_S = 0.2
+TAGS = ("all", "none", "near", "far", "start", "end")
+
+
+def _kept(t, pulses, which: str):
+    """(n,) bool: the samples of true times ``t`` whose time-tag error is kept."""
+    import numpy as np
+
+    t_on = np.asarray(pulses.t_on, float)
+    t_off = t_on + np.asarray(pulses.width, float)
+    gap = {k: np.min(np.abs(e[None, :] - t[:, None]), 1)
+           for k, e in (("start", t_on), ("end", t_off))}
+    near = np.minimum(gap["start"], gap["end"]) < NEAR_S
+    return {"all": np.ones(t.size, bool), "none": np.zeros(t.size, bool), "near": near,
+            "far": ~near, "start": gap["start"] < 1e-6, "end": gap["end"] < 1e-6}[which]
+
+
+def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> dict:
+    """One variant: the mode's time constants (s) and tag scale, the truth's, the kept count."""
+    import jax
+    import numpy as np
+    from plan_thrust import _open_world
+
+    from cassini_bayes.inference.thrust import prepare_thrust, resolve_inertia
+    from cassini_bayes.inference.thrust.coords import physical
+    from cassini_bayes.simulate import load_scenario, simulate
+    from cassini_bayes.simulate.open_world import apply_time_tags
+
+    name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
+    s = load_scenario(name)
+    k_sim, _ = jax.random.split(jax.random.key(3200 + seed))   # plan_thrust.py's keys
+    ow, si = _open_world(name, seed, off, s.source)
+    sim = simulate(k_sim, si)
+    tel = apply_time_tags(sim.telemetry, ow)
+    t = np.asarray(sim.telemetry.t, float)
+    keep = _kept(t, sim.pulses, tags)
+    tel = replace(tel, t=t + factor * (np.asarray(tel.t, float) - t) * keep)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = prepare_thrust([(tel, sim.pulses)], s.prior, mode=mode, robust=True,
+                           inertia=resolve_inertia(None, s.prior, True))
+    at = physical(p.data.centre, p.data, p.n_f, p.n_c, True)
+    return {"seed": seed, "without": sorted(off), "tags": tags, "tag_factor": factor,
+            "tagged": int(keep.sum()),
+            "largest_tag_s": float(np.max(np.abs(np.asarray(tel.t, float) - t))),
+            "samples": int(t.size), "tau_mode_s": np.asarray(at.tau, float).tolist(),
+            "tau_truth_s": np.asarray(sim.params.tau_s, float).tolist(),
+            "tag_scale_mode": float(at.tag_scale), "seconds": time.perf_counter() - t0}
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--case", required=True, help="SCENARIO[:MODE]")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--variant", nargs="+", default=["flex:all"], metavar="OFF:TAGS")
+    ap.add_argument("--tag-factor", type=float, default=1.0,
+                    help="the kept time-tag errors times this factor")
+    ap.add_argument("--json", type=Path)
+    a = ap.parse_args(argv)
+    variants = []
+    for v in a.variant:
+        off, _, tags = v.partition(":")
+        if tags not in TAGS:
+            sys.exit(f"--variant {v}: TAGS is one of {', '.join(TAGS)}")
+        variants.append((tuple(x for x in off.split(",") if x and x != "none"), tags))
+    if a.json:
+        from _provenance import start
+
+        start(a.json, vars(a), argv)
+    sys.path.insert(0, str(ROOT))
+    import cassini_bayes
+    from cassini_bayes.files import write_text
+
+    cassini_bayes.setup_jax()
+    out = []
+    for off, tags in variants:
+        r = probe(a.case, a.seed, off, tags, a.tag_factor)
+        out.append(r)
+        ms = ", ".join(f"{1e3 * m:.2f} ({1e3 * x:g})" for m, x in
+                       zip(r["tau_mode_s"], r["tau_truth_s"]))
+        print(f"seed {a.seed}, without {','.join(r['without']) or 'none'}, tags on {tags} "
+              f"({r['tagged']}/{r['samples']}, largest {1e3 * r['largest_tag_s']:.3g} ms): "
+              f"tau_delay, rise, fall at the mode (truth) ms "
+              f"{ms}; tag scale {r['tag_scale_mode']:.3g} ({r['seconds']:.0f} s)", flush=True)
+        if a.json:
+            write_text(a.json, json.dumps({"case": a.case, "results": out}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
