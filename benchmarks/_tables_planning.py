@@ -316,3 +316,35 @@ def plan_thrust_truths(args: list[Records]) -> str:
                     for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
                 + f" | {f'**{within}**' if k == len(med) else within} |")
     return "\n".join(rows)
+
+
+_PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",
+               "near": "the {n} within 0.2 s of a pulse's command or end",
+               "far": "the {n} 0.2 s or more from a pulse's command or end",
+               "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end"}
+
+
+@kind("thrust_mode_probe")
+def thrust_mode_probe(args: list[Records]) -> str:
+    """The thrust fit's Laplace mode on one open-world flight (benchmarks/thrust_mode_probe.py
+    records): the time constants and the tag scale, per variant of the effects and the samples
+    that keep their time-tag errors."""
+    from cassini_bayes.simulate.open_world import EFFECTS_OFF
+
+    rows = ["| case, seed | time tags kept on (largest) | other open-world effects | "
+            "τd, τr, τf at the mode, ms (truth) | tag scale |", "|---|---|---|---|---|"]
+    for path in (p for group in args for p in group):
+        rec = read_json(path)
+        for r in rec["results"]:
+            off = set(r["without"]) - {"time_tags"}
+            others = ("none" if off == set(EFFECTS_OFF) - {"time_tags"} else
+                      "all but " + ", ".join(sorted(off)) if off else "all")
+            tags = _PROBE_TAGS[r["tags"]].format(n=r["tagged"])
+            if r["tags"] != "none":
+                factor = "" if r["tag_factor"] == 1.0 else f" × {r['tag_factor']:g}"
+                tags += f"{factor} ({1e3 * r['largest_tag_s']:.1f} ms)"
+            tau = ", ".join(f"{1e3 * m:.1f}" for m in r["tau_mode_s"])
+            truth = ", ".join(f"{1e3 * x:g}" for x in r["tau_truth_s"])
+            rows.append(f"| `{_scenario_label(rec['case'].rsplit(':', 1)[0])}`, {r['seed']} | "
+                        f"{tags} | {others} | {tau} ({truth}) | {r['tag_scale_mode']:.2g} |")
+    return "\n".join(rows)
