@@ -11,7 +11,10 @@ keys) with the effects ``OFF`` switched off (comma-separated, ``open_world.EFFEC
 
 - ``all``: every sample (the open world); ``none``: the true sample times;
 - ``near`` / ``far``: the samples within / beyond :data:`NEAR_S` of a pulse's command or end;
-- ``start`` / ``end``: the samples at a pulse's command / end time (to a microsecond).
+- ``start`` / ``end``: the samples at a pulse's command / end time (to a microsecond);
+- ``grid``: every sample's tag, then the labels put on their least-squares regular grid (a
+  straight line in the sample index): what a fit could do if it knew the clock regular, with
+  the grid's own error (an offset and a rate, about ``σ_t/√n``) left.
 
 It prints the time constants and the time tags' learned scale at the mode of the fit's density
 (the Laplace mode its preparation finds, ``ThrustProblem.data.centre``), with the fit's default
@@ -32,7 +35,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 NEAR_S = 0.2
-TAGS = ("all", "none", "near", "far", "start", "end")
+TAGS = ("all", "none", "near", "far", "start", "end", "grid")
 
 
 def _kept(t, pulses, which: str):
@@ -44,7 +47,8 @@ def _kept(t, pulses, which: str):
     gap = {k: np.min(np.abs(e[None, :] - t[:, None]), 1)
            for k, e in (("start", t_on), ("end", t_off))}
     near = np.minimum(gap["start"], gap["end"]) < NEAR_S
-    return {"all": np.ones(t.size, bool), "none": np.zeros(t.size, bool), "near": near,
+    every = np.ones(t.size, bool)
+    return {"all": every, "grid": every, "none": ~every, "near": near,
             "far": ~near, "start": gap["start"] < 1e-6, "end": gap["end"] < 1e-6}[which]
 
 
@@ -68,6 +72,9 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
     t = np.asarray(sim.telemetry.t, float)
     keep = _kept(t, sim.pulses, tags)
     tel = replace(tel, t=t + factor * (np.asarray(tel.t, float) - t) * keep)
+    if tags == "grid":
+        k = np.arange(t.size)
+        tel = replace(tel, t=np.polyval(np.polyfit(k, np.asarray(tel.t, float), 1), k))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -77,6 +84,7 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
     return {"seed": seed, "without": sorted(off), "tags": tags, "tag_factor": factor,
             "tagged": int(keep.sum()),
             "largest_tag_s": float(np.max(np.abs(np.asarray(tel.t, float) - t))),
+            "mean_tag_s": float(np.mean(np.asarray(tel.t, float) - t)),
             "samples": int(t.size), "tau_mode_s": np.asarray(at.tau, float).tolist(),
             "tau_truth_s": np.asarray(sim.params.tau_s, float).tolist(),
             "tag_scale_mode": float(at.tag_scale), "seconds": time.perf_counter() - t0}

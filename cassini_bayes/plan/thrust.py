@@ -33,8 +33,8 @@ prediction is that density's Laplace approximation on the event flown without no
    :data:`NON_GAUSSIAN_SHARE` of its sd at the truth sits on a ridge the prior shapes (the
    thrust against the pulse shape where every pulse has one width), whose posterior is not
    Gaussian: each flight's noise puts the fit elsewhere on it, with another sd, so the
-   prediction names the event's thrust and time-constant sites as indicative
-   (:attr:`ThrustPrediction.non_gaussian`).
+   prediction names the sites that are off as indicative, and every ridge site (thrusts, time
+   constants) when one of them is (:attr:`ThrustPrediction.non_gaussian`).
 """
 
 from __future__ import annotations
