@@ -321,7 +321,8 @@ def plan_thrust_truths(args: list[Records]) -> str:
 _PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",
                "near": "the {n} within 0.2 s of a pulse's command or end",
                "far": "the {n} 0.2 s or more from a pulse's command or end",
-               "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end"}
+               "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end",
+               "grid": ""}
 
 
 @kind("thrust_mode_probe")
@@ -340,7 +341,10 @@ def thrust_mode_probe(args: list[Records]) -> str:
             others = ("none" if off == set(EFFECTS_OFF) - {"time_tags"} else
                       "all but " + ", ".join(sorted(off)) if off else "all")
             tags = _PROBE_TAGS[r["tags"]].format(n=r["tagged"])
-            if r["tags"] != "none":
+            if r["tags"] == "grid":
+                tags = ("every sample, the labels then on their fitted grid (its error: mean "
+                        f"{1e3 * r['mean_tag_s']:.2f}, largest {1e3 * r['largest_tag_s']:.1f} ms)")
+            elif r["tags"] != "none":
                 factor = "" if r["tag_factor"] == 1.0 else f" × {r['tag_factor']:g}"
                 tags += f"{factor} ({1e3 * r['largest_tag_s']:.1f} ms)"
             tau = ", ".join(f"{1e3 * m:.1f}" for m in r["tau_mode_s"])
