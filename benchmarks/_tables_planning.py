@@ -322,7 +322,8 @@ _PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",
                "near": "the {n} within 0.2 s of a pulse's command or end",
                "far": "the {n} 0.2 s or more from a pulse's command or end",
                "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end",
-               "grid": ""}
+               "grid": "every sample, the labels then on their fitted grid (its error: mean "
+                       "{mean:.2f}, largest {largest:.1f} ms)"}
 
 
 @kind("thrust_mode_probe")
@@ -340,11 +341,9 @@ def thrust_mode_probe(args: list[Records]) -> str:
             off = set(r["without"]) - {"time_tags"}
             others = ("none" if off == set(EFFECTS_OFF) - {"time_tags"} else
                       "all but " + ", ".join(sorted(off)) if off else "all")
-            tags = _PROBE_TAGS[r["tags"]].format(n=r["tagged"])
-            if r["tags"] == "grid":
-                tags = ("every sample, the labels then on their fitted grid (its error: mean "
-                        f"{1e3 * r['mean_tag_s']:.2f}, largest {1e3 * r['largest_tag_s']:.1f} ms)")
-            elif r["tags"] != "none":
+            tags = _PROBE_TAGS[r["tags"]].format(n=r["tagged"], mean=1e3 * r.get("mean_tag_s", 0.0),
+                                                 largest=1e3 * r["largest_tag_s"])
+            if r["tags"] not in ("none", "grid"):
                 factor = "" if r["tag_factor"] == 1.0 else f" × {r['tag_factor']:g}"
                 tags += f"{factor} ({1e3 * r['largest_tag_s']:.1f} ms)"
             tau = ", ".join(f"{1e3 * m:.1f}" for m in r["tau_mode_s"])
