@@ -18,7 +18,7 @@ prediction's own assumptions). Not a test.
     python benchmarks/plan_thrust.py --case biasing_day028:mean --case PLAN/scenario.toml:thruster
         [--seeds 10] [--nominal] [--chains 4] [--warmup 300] [--draws 300] [--json out.json]
         [--without flex ...] [--resume] [--truths 8] [--fits-from RECORD ...] [--matched]
-        [--first-seed K]
+        [--first-seed K] [--regular-clock]
 
 ``--truths N``: the prediction is the median over the nominal truth and N truths drawn from the
 model file's knowledge (``plan evaluate --truths``). ``--fits-from RECORD ...``: each case's fits
@@ -27,6 +27,8 @@ only the prediction is made. ``--first-seed K``: fit seeds K .. ``--seeds`` − 
 processes share a campaign; ``--fits-from`` joins their records).
 ``--matched``: also the prediction at each seed's own open-world truth (its noise-free flight,
 its own pulses), each fit's ``predicted_matched``.
+``--regular-clock``: the model file states the telemetry's clock regular (``[telemetry_knowledge]
+regular_clock``), in the prediction and the fits alike.
 ``--without``: those open-world effects switched off (:func:`cassini_bayes.simulate.open_world.
 without`; every other draw unchanged). ``--resume`` keeps the fits of an interrupted ``--json``
 record (same options; the prediction is re-made, noise-free and deterministic) and fits the seeds
@@ -72,6 +74,18 @@ def _tag_sds(post, flown_s: float) -> dict:
             "tag_sd_flown_s": float(flown_s)}
 
 
+CLOCK = {"regular": False}
+"""Whether the model file is taken to state a regular clock (``--regular-clock``)."""
+
+
+def _stated(s):
+    """Scenario ``s`` with its model file's clock as ``--regular-clock`` states it."""
+    from dataclasses import replace
+
+    k = replace(s.prior.knowledge, regular_clock=CLOCK["regular"])
+    return replace(s, prior=replace(s.prior, knowledge=k))
+
+
 def _open_world(name: str, seed: int, off: tuple, src: str):
     """The open-world truth of ``seed`` (its draw and its scenario)."""
     import numpy as np
@@ -81,7 +95,7 @@ def _open_world(name: str, seed: int, off: tuple, src: str):
 
     ow = draw_open_world(name, np.random.default_rng([seed, 3232]), draw_inertia=True)
     ow = without(ow, off) if off else ow
-    return ow, scenario_from_dict(ow.scenario, src=src)
+    return ow, _stated(scenario_from_dict(ow.scenario, src=src))
 
 
 def matched(fits: list, name: str, mode: str, off: tuple, src: str) -> None:
@@ -113,7 +127,7 @@ def run(case: str, seeds: int, settings, partial=None, nominal: bool = False,
     from cassini_bayes.simulate.open_world import apply_time_tags
 
     name, mode = case.rsplit(":", 1) if ":" in case else (case, "mean")
-    s = load_scenario(name)
+    s = _stated(load_scenario(name))
     t0 = time.perf_counter()
     pred = evaluate_thrust(s, mode, truths=truths)
     t_pred = time.perf_counter() - t0
@@ -201,6 +215,12 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) ->
             "divergences": int(sum(f["divergences"] for f in fits))}
 
 
+def _settings(a) -> dict:
+    """The record's sampler settings, and the clock where stated regular."""
+    out = {"chains": a.chains, "warmup": a.warmup, "draws": a.draws}
+    return {**out, "regular_clock": True} if a.regular_clock else out
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--case", action="append", required=True,
@@ -226,12 +246,15 @@ def main(argv=None) -> None:
                          "in seed order): only the prediction is made")
     ap.add_argument("--first-seed", type=int, default=0,
                     help="fit seeds from this one (another process fits the ones before)")
+    ap.add_argument("--regular-clock", action="store_true",
+                    help="the model file states the telemetry's clock regular")
     a = ap.parse_args(argv)
+    CLOCK["regular"] = a.regular_clock
     before = {}
     if a.fits_from:
         for path in a.fits_from:
             rec = json.loads(path.read_text())
-            if rec["settings"] != {"chains": a.chains, "warmup": a.warmup, "draws": a.draws}:
+            if rec["settings"] != _settings(a):
                 sys.exit(f"--fits-from {path}: made with sampler settings {rec['settings']}")
             for r in rec["results"]:
                 if (r["truths"] == ("nominal" if a.nominal else "open_world")
@@ -260,8 +283,7 @@ def main(argv=None) -> None:
     cassini_bayes.setup_jax()
     settings = SamplerSettings(chains=a.chains, warmup=a.warmup, draws=a.draws,
                                chain_method="vectorized")
-    out = {"settings": {"chains": a.chains, "warmup": a.warmup, "draws": a.draws},
-           "results": []}
+    out = {"settings": _settings(a), "results": []}
     def write(results):
         if a.json:
             write_text(a.json, json.dumps({**out, "results": results}, indent=1))

@@ -14,7 +14,10 @@ keys) with the effects ``OFF`` switched off (comma-separated, ``open_world.EFFEC
 - ``start`` / ``end``: the samples at a pulse's command / end time (to a microsecond);
 - ``grid``: every sample's tag, then the labels put on their least-squares regular grid (a
   straight line in the sample index): what a fit could do if it knew the clock regular, with
-  the grid's own error (an offset and a rate, about ``σ_t/√n``) left.
+  the grid's own error (an offset and a rate, about ``σ_t/√n``) left;
+- ``clock``: every sample's tag, and the model file stating a regular clock
+  (``[telemetry_knowledge] regular_clock``): the fit puts the labels on their grid itself and
+  integrates the grid's offset and period errors out.
 
 It prints the time constants and the time tags' learned scale at the mode of the fit's density
 (the Laplace mode its preparation finds, ``ThrustProblem.data.centre``), with the fit's default
@@ -35,7 +38,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 NEAR_S = 0.2
-TAGS = ("all", "none", "near", "far", "start", "end", "grid")
+TAGS = ("all", "none", "near", "far", "start", "end", "grid", "clock")
 
 
 def _kept(t, pulses, which: str):
@@ -48,7 +51,7 @@ def _kept(t, pulses, which: str):
            for k, e in (("start", t_on), ("end", t_off))}
     near = np.minimum(gap["start"], gap["end"]) < NEAR_S
     every = np.ones(t.size, bool)
-    return {"all": every, "grid": every, "none": ~every, "near": near,
+    return {"all": every, "grid": every, "clock": every, "none": ~every, "near": near,
             "far": ~near, "start": gap["start"] < 1e-6, "end": gap["end"] < 1e-6}[which]
 
 
@@ -75,17 +78,23 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
     if tags == "grid":
         k = np.arange(t.size)
         tel = replace(tel, t=np.polyval(np.polyfit(k, np.asarray(tel.t, float), 1), k))
+    prior = s.prior
+    if tags == "clock":
+        prior = replace(prior, knowledge=replace(prior.knowledge, regular_clock=True))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        p = prepare_thrust([(tel, sim.pulses)], s.prior, mode=mode, robust=True,
-                           inertia=resolve_inertia(None, s.prior, True))
+        p = prepare_thrust([(tel, sim.pulses)], prior, mode=mode, robust=True,
+                           inertia=resolve_inertia(None, prior, True))
     at = physical(p.data.centre, p.data, p.n_f, p.n_c, True)
+    jac = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, True).tau)(
+        p.data.centre)) @ np.asarray(p.data.tril)
     return {"seed": seed, "without": sorted(off), "tags": tags, "tag_factor": factor,
             "tagged": int(keep.sum()),
             "largest_tag_s": float(np.max(np.abs(np.asarray(tel.t, float) - t))),
             "mean_tag_s": float(np.mean(np.asarray(tel.t, float) - t)),
             "samples": int(t.size), "tau_mode_s": np.asarray(at.tau, float).tolist(),
+            "tau_laplace_sd_s": np.sqrt(np.sum(jac**2, 1)).tolist(),
             "tau_truth_s": np.asarray(sim.params.tau_s, float).tolist(),
             "tag_scale_mode": float(at.tag_scale), "seconds": time.perf_counter() - t0}
 
@@ -118,11 +127,11 @@ def main(argv=None) -> None:
     for off, tags in variants:
         r = probe(a.case, a.seed, off, tags, a.tag_factor)
         out.append(r)
-        ms = ", ".join(f"{1e3 * m:.2f} ({1e3 * x:g})" for m, x in
-                       zip(r["tau_mode_s"], r["tau_truth_s"]))
+        ms = ", ".join(f"{1e3 * m:.2f} ± {1e3 * d:.2f} ({1e3 * x:g})" for m, d, x in
+                       zip(r["tau_mode_s"], r["tau_laplace_sd_s"], r["tau_truth_s"]))
         print(f"seed {a.seed}, without {','.join(r['without']) or 'none'}, tags on {tags} "
               f"({r['tagged']}/{r['samples']}, largest {1e3 * r['largest_tag_s']:.3g} ms): "
-              f"tau_delay, rise, fall at the mode (truth) ms "
+              f"tau_delay, rise, fall at the mode ± Laplace sd (truth) ms "
               f"{ms}; tag scale {r['tag_scale_mode']:.3g} ({r['seconds']:.0f} s)", flush=True)
         if a.json:
             write_text(a.json, json.dumps({"case": a.case, "results": out}, indent=1))

@@ -67,7 +67,7 @@ from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft, wheel_tilt_basis
 
 __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with_flex_mode",
-           "with_time_tag_steps",
+           "with_time_tag_steps", "with_clock_errors",
            "tilt_basis",
            "wheel_inertia_sd", "wheel_scale_columns", "without_common_scale", "robust_columns",
            "split_nuisance",
@@ -76,19 +76,24 @@ __all__ = ["EFFECTS", "WHEEL_ERRORS", "NuisanceLayout", "nuisance_layout", "with
 _TORQUE_EFFECTS = ("body_torque", "inertial_torque", "torque_rate")
 
 
+_UNDRAWN = ("time_tag_steps", "clock")
+
+
 class NuisanceLayout(NamedTuple):
     """Order and prior of the robust nuisance vector ``ν`` (appended to the model's θ).
 
     ``ν = (b_0 (3), …, b_{F−1} (3), s (3), c_0 … c_{S−1} (S), [c_s (1)], a_0 (2), …, a_{K−1} (2),
-    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …], [M (6)], [δ (P)])``; ``S`` = the number of scaled
-    wheels (per wheel) or 1 (common); the bracketed effects only where the layout has them.
+    T_B,0 (3), …, [T_I,0 (3), …], [Ṫ_0 (3), …], [M (6)], [δ (P)], [clock (2F)])``; ``S`` = the
+    number of scaled wheels (per wheel) or 1 (common); the bracketed effects only where the
+    layout has them.
 
     Attributes
     ----------
     n_files : F; ``wheels`` the K wheel names (active in any file) that get tilts.
-    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s, kg m², s).
-    slices : effect name (:data:`EFFECTS`; ``time_tag_steps``: no site) → slice of ``ν``, for
-        the effects the layout has.
+    sd : (R,) prior standard deviations (rad/s, 1, 1, 1, rad, N m, N m, N m/s, kg m², s; the
+        clock's s and s per sample).
+    slices : effect name (:data:`EFFECTS`; ``time_tag_steps``, ``clock``: no site) → slice of
+        ``ν``, for the effects the layout has.
     tilt_u : (K, 2, 3) the unit vectors ``u_k1, u_k2`` perpendicular to each spin axis.
     wheel_errors : ``"per_wheel"`` or ``"common"`` (:data:`WHEEL_ERRORS`).
     scale_wheels : the S wheels with their own scale (per wheel; ``()`` for common).
@@ -155,8 +160,9 @@ class NuisanceLayout(NamedTuple):
     @property
     def sites(self) -> tuple[str, ...]:
         """The effects drawn as posterior sites: all but the time-tag steps, one per tagged
-        sample, which are integrated out only (:func:`with_time_tag_steps`)."""
-        return tuple(e for e in self.slices if e != "time_tag_steps")
+        sample, and the clock's errors, which are integrated out only
+        (:func:`with_time_tag_steps`, :func:`with_clock_errors`)."""
+        return tuple(e for e in self.slices if e not in _UNDRAWN)
 
     @property
     def torque_effects(self) -> tuple[str, ...]:
@@ -263,6 +269,16 @@ def with_time_tag_steps(layout: NuisanceLayout, n_steps: int,
     r = layout.size
     return layout._replace(sd=np.r_[layout.sd, np.full(n_steps, float(time_tag_sd_s))],
                            slices={**layout.slices, "time_tag_steps": slice(r, r + n_steps)})
+
+
+def with_clock_errors(layout: NuisanceLayout, sd: np.ndarray) -> NuisanceLayout:
+    """``layout`` with each event's regular-clock offset (s) and period error (s per sample)
+    appended, prior sds ``sd`` (2E,) in that order (the thrust model's grid,
+    :mod:`cassini_bayes.inference.thrust.clock`)."""
+    r = layout.size
+    sd = np.asarray(sd, float)
+    return layout._replace(sd=np.r_[layout.sd, sd],
+                           slices={**layout.slices, "clock": slice(r, r + sd.size)})
 
 
 def split_nuisance(nu, layout: NuisanceLayout) -> dict:

@@ -12,7 +12,8 @@ prediction is that density's Laplace approximation on the event flown without no
 2. the fit's own preparation (:func:`~cassini_bayes.inference.thrust.prepare_thrust`: pulse
    layout, nuisance columns, time-tag rows, the per-thruster design) runs on it with the white-noise
    levels of the scenario's sensors (:func:`~cassini_bayes.plan.wheel_axis.scenario_noise`) in
-   place of the levels it would estimate from noisy data;
+   place of the levels it would estimate from noisy data, and a regular clock's grid errors
+   at the model file's time-tag sd in place of the scatter noise-free labels lack;
 3. the event's noise scale is held at 1 (``noise_z = 0``): on noise-free data its curvature is the
    prior's and its cross-curvature with every other coordinate vanishes at the truth (it multiplies
    residuals that are zero), so holding it changes no other sd;
@@ -343,7 +344,8 @@ def noise_free_problem(s: Scenario, mode: str = "mean"):
     sc = s.prior
     problem = prepare_thrust([(tel, sim.pulses)], sc, mode=mode,
                              inertia=resolve_inertia(None, sc, True), robust=True,
-                             noise_hat=sig[None], flex="off")
+                             noise_hat=sig[None], flex="off",
+                             clock_sd_s=sc.knowledge.time_tag_sd_s)
     return sim, problem, sig
 
 

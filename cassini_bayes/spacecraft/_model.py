@@ -58,9 +58,9 @@ class Knowledge:
     The priors of the robust models' nuisance parameters (``cassini_bayes.inference.nuisance``).
     From the optional model-file sections ``[gyro]`` (``bias_sd_rad_s``, ``scale_factor_sd``),
     ``[wheel_knowledge]`` (``inertia_sd_frac``, ``common_inertia_sd_frac``, ``axis_sd_deg``),
-    ``[telemetry_knowledge]`` (``time_tag_sd_s``) and ``[torque_knowledge]`` (``sd_nm``,
-    ``rate_sd_nm_per_h``). The defaults are conservative engineering values, not numbers from
-    the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
+    ``[telemetry_knowledge]`` (``time_tag_sd_s``, ``regular_clock``) and ``[torque_knowledge]``
+    (``sd_nm``, ``rate_sd_nm_per_h``). The defaults are conservative engineering values, not
+    numbers from the papers: a gyro bias of 5e-7 rad/s (0.1 deg/h) per axis, a gyro
     scale-factor error of 5e-4 (500 ppm) per axis, a spin-inertia error of 0.5 % per wheel (each
     wheel independently; a ``[[wheel]]`` table's ``inertia_sd_frac`` overrides it for that
     wheel) plus 0.5 % shared by every wheel (one calibration method, test stand and temperature;
@@ -68,7 +68,9 @@ class Knowledge:
     rests on it; 0 removes it), a wheel spin-axis misalignment of 0.2 deg per tilt component
     (Brown §III.A finds the re-articulated RWA4 0.53 deg from its nominal axis; the fixed wheels
     are known better) and a white time-tag error of 10 ms per telemetry sample (the papers give
-    no figure; 1 % of Cassini's 1 s sample period).
+    no figure; 1 % of Cassini's 1 s sample period). ``regular_clock``: the telemetry is sampled
+    on a regular clock and only its labels carry that error, which the thrust fit then puts on
+    their grid (:mod:`cassini_bayes.inference.thrust.clock`); off by default.
     External torques (the robust models' body-fixed and inertial torques): 15 µN m per axis, the
     Feldman & Lee App. A bound for March 2000 taken as one sd, and a rate of change of 15 µN m
     per hour (solar and RTG torques change as the slews turn the sun line). Where the torques the
@@ -91,6 +93,7 @@ class Knowledge:
     flex_share_sd: float = 0.01
     flex_freq_hz: tuple[float, float] = (0.05, 1.0)
     flex_damping: tuple[float, float] = (0.002, 0.05)
+    regular_clock: bool = False
 
 
 @dataclass(frozen=True)
@@ -284,7 +287,8 @@ class Spacecraft:
                                 "common_inertia_sd_frac":
                                     self.knowledge.wheel_common_inertia_sd_frac,
                                 "axis_sd_deg": self.knowledge.wheel_axis_sd_deg},
-            "telemetry_knowledge": {"time_tag_sd_s": self.knowledge.time_tag_sd_s},
+            "telemetry_knowledge": {"time_tag_sd_s": self.knowledge.time_tag_sd_s,
+                                    "regular_clock": self.knowledge.regular_clock},
             "torque_knowledge": {"sd_nm": self.knowledge.torque_sd_nm,
                                  "rate_sd_nm_per_h": self.knowledge.torque_rate_sd_nm_per_h},
         }

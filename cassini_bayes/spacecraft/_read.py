@@ -39,6 +39,7 @@ _WHEEL_KNOWLEDGE_KEYS = {"inertia_sd_frac": "wheel_inertia_sd_frac",
                          "common_inertia_sd_frac": "wheel_common_inertia_sd_frac",
                          "axis_sd_deg": "wheel_axis_sd_deg"}
 _TELEMETRY_KNOWLEDGE_KEYS = {"time_tag_sd_s": "time_tag_sd_s"}
+_FLAGS = {"telemetry_knowledge": {"regular_clock"}}
 _TORQUE_KNOWLEDGE_KEYS = {"sd_nm": "torque_sd_nm", "rate_sd_nm_per_h": "torque_rate_sd_nm_per_h"}
 _INERTIA_KEYS = {"Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz", "moi_uncertainty", "poi_uncertainty"}
 _WHEEL_KEYS = {"name", "axis", "inertia", "inertia_sd_frac", "max_speed_rpm", "max_torque_nm",
@@ -318,7 +319,7 @@ def _knowledge(top: TomlTable, capacity_nms: float) -> Knowledge:
     for section, keys in (("gyro", _GYRO_KEYS), ("wheel_knowledge", _WHEEL_KNOWLEDGE_KEYS),
                           ("telemetry_knowledge", _TELEMETRY_KNOWLEDGE_KEYS),
                           ("torque_knowledge", _TORQUE_KNOWLEDGE_KEYS)):
-        table = top.sub(section, set(keys))
+        table = top.sub(section, set(keys) | _FLAGS.get(section, set()))
         for key, attr in keys.items():
             v = table.num(key, getattr(base, attr))
             if v < 0:
@@ -349,6 +350,8 @@ def _knowledge(top: TomlTable, capacity_nms: float) -> Knowledge:
     if kw["time_tag_sd_s"] > 1.0:
         raise InputError("'telemetry_knowledge.time_tag_sd_s' is a time-tag error in seconds "
                          f"(<= 1), got {kw['time_tag_sd_s']}", path=src)
+    kw["regular_clock"] = top.sub("telemetry_knowledge", set(_TELEMETRY_KNOWLEDGE_KEYS)
+                                  | _FLAGS["telemetry_knowledge"]).flag("regular_clock", False)
     return Knowledge(**kw, **_flex_knowledge(top, src))
 
 

@@ -15,8 +15,10 @@ from cassini_bayes.inference.inertia.knowledge import InertiaGaussian, inertia_m
 from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
-from cassini_bayes.inference.nuisance import (nuisance_layout, with_time_tag_steps,
-                                              without_common_scale)
+from cassini_bayes.inference.nuisance import (nuisance_layout, with_clock_errors,
+                                              with_time_tag_steps, without_common_scale)
+from cassini_bayes.inference.thrust.clock import (ClockGrid, events_clock_columns,
+                                                  events_on_grid)
 from cassini_bayes.inference.thrust.columns import nuisance_columns, wheel_momentum
 from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
                                                   rise_deficit)
@@ -127,6 +129,8 @@ class ThrustProblem(NamedTuple):
         ``thruster``, else ``None``.
     flex_mode : the search for a flexible mode (:class:`~cassini_bayes.inference.thrust.flex.
         ModeSearch`; robust model), else ``None``.
+    clock : each event's labels on their grid (:class:`~cassini_bayes.inference.thrust.clock.
+        ClockGrid`) where the model file states a regular clock (robust model), else ``None``.
     """
 
     data: ThrustData
@@ -145,6 +149,7 @@ class ThrustProblem(NamedTuple):
     thrusters: tuple[str, ...] = ()
     design: ThrustDesign | None = None
     flex_mode: ModeSearch | None = None
+    clock: tuple[ClockGrid, ...] | None = None
 
     @property
     def n_f(self) -> int:
@@ -346,11 +351,16 @@ def _with_laplace(data: ThrustData, mode: str, sample_inertia: bool) -> ThrustDa
 
 
 def _time_tag_terms(kw: dict, layout, layout_e: PulseLayout, steps: dict, rates, q_f, tau,
-                    i_lin, noise, time_tag_sd):
+                    i_lin, noise, time_tag_sd, grids=None):
     """The robust model's time-tag terms (:mod:`~cassini_bayes.inference.thrust.time_tags`):
-    the walk's columns appended to ``kw["nu_cols"]`` and to the nuisance ``layout``, and the
+    a regular clock's columns (``grids`` given, :mod:`~cassini_bayes.inference.thrust.clock`)
+    and the walk's appended to ``kw["nu_cols"]`` and to the nuisance ``layout``, and the
     rank-one rows with their rates and gyroscopic terms; the rank-one rows alone where
-    ``time_tag_sd`` is ``None`` (the idealised model)."""
+    ``time_tag_sd`` is ``None`` and no clock is given (the idealised model)."""
+    if grids is not None:
+        cols, clock_sd = events_clock_columns(kw, layout_e, i_lin, q_f, tau, steps, grids)
+        kw["nu_cols"] = np.concatenate([kw["nu_cols"], cols], 1)
+        layout = with_clock_errors(layout, clock_sd)
     gyro = np.zeros((len(kw["t"]), 3, kw["t"].shape[1]))
     if time_tag_sd is not None:
         sens = events_tag_sensitivity(kw, layout_e, i_lin, q_f, tau, steps)
@@ -359,6 +369,19 @@ def _time_tag_terms(kw: dict, layout, layout_e: PulseLayout, steps: dict, rates,
         layout = with_time_tag_steps(layout, cols.shape[1], time_tag_sd)
         gyro = gyro_tag_terms(sens, kw, i_lin, noise, time_tag_sd)
     return layout, rank_one_rows(rates, gyro, kw, q_f, noise, i_lin, _PULSE_BUCKET)
+
+
+def _prior_fields(kw: dict, q_mat, tp: TauPrior, mode: str, thrust_pred, inertia,
+                  i_fixed) -> dict:
+    """:class:`ThrustData`'s fields of the thrusters' geometry and the priors."""
+    n_thr = q_mat.shape[1]
+    i_mean, i_tril = inertia_mean_tril(inertia, i_fixed)
+    return dict(
+        q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
+        a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
+        f_mu=np.log(thrust_pred), f_index=thrust_index(mode, n_thr), inertia_mean=i_mean,
+        bit_width=bit_widths(kw["width"], kw["thruster"], thrust_index(mode, n_thr)),
+        inertia_tril=i_tril)
 
 
 def _column_statistics(nu_cols, mask) -> ColumnStatistics:
@@ -376,7 +399,8 @@ def _scale_free(robust: bool, inertia) -> bool:
 def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spacecraft, *,
                    mode: str = "mean", inertia: InertiaGaussian | None = None,
                    robust: bool = False, wheel_errors: str = "per_wheel",
-                   noise_hat=None, flex="check") -> ThrustProblem:
+                   noise_hat=None, flex="check", clock_sd_s: float | None = None
+                   ) -> ThrustProblem:
     """Prepare the thrust problem from ``(telemetry, pulse log)`` pairs, one per biasing event.
 
     ``robust`` adds the nuisance parameters of the module docstring (sensor and wheel errors,
@@ -386,7 +410,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     ``flex`` (robust model): ``"check"`` searches the events for a flexible mode (the result on
     ``problem.flex_mode``, judged by the adequacy checks), ``"model"`` also integrates its
     momentum out where they show one (:mod:`~cassini_bayes.inference.thrust.flex`), ``"off"``
-    does neither, ``(freq_hz, damping)`` puts a mode there without a search.
+    does neither, ``(freq_hz, damping)`` puts a mode there without a search. ``clock_sd_s``:
+    a regular clock's label sd (s) in place of their scatter (:mod:`.clock`).
 
     Raises
     ------
@@ -397,6 +422,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     names = thrust_names(mode)
     spacecraft.require_thrusters("thrust calibration", eq16=(mode == "branch"))
     tels, logs = _checked_events(events)
+    tels, grids = events_on_grid(tels, robust and spacecraft.knowledge.regular_clock, clock_sd_s)
     n_ev, n_thr = len(tels), len(spacecraft.thrusters)
     i_fixed = np.asarray(spacecraft.inertia, float)
     i_lin = i_fixed if inertia is None else np.asarray(inertia_matrix(jnp.asarray(inertia.mean)))
@@ -410,8 +436,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     q_mat = spacecraft.moment_matrix
     thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
-    i_mean, i_tril = inertia_mean_tril(inertia, i_fixed)
-    sd_t = spacecraft.knowledge.time_tag_sd_s if robust else 0.0
+    sd_t = spacecraft.knowledge.time_tag_sd_s if robust and grids is None else 0.0
     k_slots = kw.pop("k_slots")
     b_covs = noise_covariances(i_lin, noise, kw["wheel_cov"])
     layout_e = with_tag_expectation(_pulse_layouts(kw, k_slots, n_thr), q_mat * thrust_pred,
@@ -427,7 +452,7 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
             inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
     layout, (rank_one, tag_rates, tag_gyro) = _time_tag_terms(
         kw, layout, layout_e, steps, rates, q_mat * thrust_pred, tp.median(), i_lin, noise,
-        sd_t if robust else None)
+        sd_t if robust and sd_t > 0.0 else None, grids)
     design, extra = (_per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
                                           thrust_pred, fired) if mode == "thruster" else (None, {}))
     nu_cols = kw.pop("nu_cols")
@@ -438,11 +463,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     # one device_put of everything, not jnp.asarray (a compiled one-operation program per
     # shape, every process; Python numbers stay weakly typed either way)
     kw, derived, rest = jax.device_put((kw, derived, dict(
-        q_matrix=q_mat, tau_delay_scale=tp.delay_scale, tau_mu=tp.log_mean, tau_sd=tp.log_sd,
-        a_mu=float(rise_deficit(*tp.median()[:2])), c_mu=float(long_pulse_excess(*tp.median())),
-        f_mu=np.log(thrust_pred), f_index=thrust_index(mode, n_thr), inertia_mean=i_mean,
-        bit_width=bit_widths(kw["width"], kw["thruster"], thrust_index(mode, n_thr)),
-        inertia_tril=i_tril, nu_sd=layout.sd if robust else np.zeros(0), **extra, **tags)))
+        **_prior_fields(kw, q_mat, tp, mode, thrust_pred, inertia, i_fixed),
+        nu_sd=layout.sd if robust else np.zeros(0), **extra, **tags)))
     events = EventData(**{f: kw.pop(f) for f in EventData._fields if f not in derived},
                        **derived)
     data = _with_laplace(ThrustData(events=events, **kw, **rest), mode, inertia is not None)
@@ -452,7 +474,8 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
         sources=tuple((t.source, lg.source) for t, lg in zip(tels, logs)),
         n_samples=np.array([t.n for t in tels]), n_pulses=np.array([len(lg.t_on) for lg in logs]),
         fired=fired, noise_hat=noise, layout=layout if robust else None,
-        thrusters=spacecraft.thruster_names, design=design, flex_mode=mode_search)
+        thrusters=spacecraft.thruster_names, design=design, flex_mode=mode_search,
+        clock=None if grids is None else tuple(grids))
 
 
 def _per_thruster_design(layout_e, tau_med, noise, i_lin, kw, spacecraft: Spacecraft,

@@ -41,7 +41,7 @@ from cassini_bayes.physics.impulse import impulse_lhs, rate_step_correction
 from cassini_bayes.physics.pulse import thrust_profile
 
 __all__ = ["TAG_VARIANCE_SHARE", "TAG_NODES", "with_tag_expectation", "with_pre_command_rates",
-           "TagSensitivity",
+           "TagSensitivity", "left_side_at_times",
            "tag_sensitivity", "events_tag_sensitivity", "tag_step_columns", "events_tag_steps",
            "gyro_tag_terms", "rank_one_rows", "tag_scale_fields"]
 
@@ -128,15 +128,15 @@ class TagSensitivity(NamedTuple):
     step: np.ndarray    # (n, 3) ∂V_k/∂t_i for every k > i (0 at the last sample)
 
 
-def tag_sensitivity(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, omega_mid,
-                    h_mid) -> TagSensitivity:
-    """:class:`TagSensitivity` of one event's left side as the model computes it: the
-    trapezoidal ``ΔG`` (Feldman & Lee Eq 15) with its first-order correction across the pulses'
-    rate steps (:func:`~cassini_bayes.physics.impulse.rate_step_correction`), which places each
-    pulse inside its interval by the tags; ``layout`` one event's :class:`PulseLayout`, ``q_f``
-    (3, M) N m the thrusters' torques at the predicted thrust, ``tau`` (3,) s the prior's time
-    constants, ``omega_mid``/``h_mid`` (3, n) the intervals' means. An interval's increment
-    depends on its two ends only, so two derivatives (even and odd samples) give them all."""
+def left_side_at_times(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, omega_mid,
+                       h_mid):
+    """``tt -> (V (n, 3) N m s, layout)``: one event's left side of Eq 17 as the model computes
+    it, with its samples at the times ``tt`` (n,) s instead of ``t``: the trapezoidal ``ΔG``
+    (Feldman & Lee Eq 15) with its first-order correction across the pulses' rate steps
+    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`), which places each pulse
+    inside its interval by the times; and ``layout`` with the samples moved (its ``dt`` and
+    ``dt_prev``). ``q_f`` (3, M) N m the thrusters' torques, ``tau`` (3,) s the time constants,
+    ``omega_mid``/``h_mid`` (3, n) the intervals' means; differentiable in ``tt``."""
     t = np.asarray(t, float)
     n = t.size
     rows = np.where(layout.at < q_f.shape[1] * n, layout.at % n, 0)
@@ -145,13 +145,31 @@ def tag_sensitivity(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, 
     prev_ok = ((first >= 1) & (on[:, 0] > 0)).astype(float)
     prev = np.maximum(first - 1, 0)
 
-    def increments(tt):
+    def left(tt):
         moved = tt - t
         lay = layout._replace(dt=layout.dt + moved[rows] * on,
                               dt_prev=layout.dt_prev + prev_ok * moved[prev]
                               + (1.0 - prev_ok) * moved[rows[:, 0]] * on[:, 0])
         v = impulse_lhs(tt, omega, inertia, h_wheels) + rate_step_correction(
             inertia, jump_area(lay, q_f, *tau), omega_mid, h_mid).T
+        return v, lay
+
+    return left
+
+
+def tag_sensitivity(t, omega, h_wheels, layout: PulseLayout, inertia, q_f, tau, omega_mid,
+                    h_mid) -> TagSensitivity:
+    """:class:`TagSensitivity` of one event's left side as the model computes it
+    (:func:`left_side_at_times`); ``layout`` one event's :class:`PulseLayout`, ``q_f`` (3, M)
+    N m the thrusters' torques at the predicted thrust, ``tau`` (3,) s the prior's time
+    constants, ``omega_mid``/``h_mid`` (3, n) the intervals' means. An interval's increment
+    depends on its two ends only, so two derivatives (even and odd samples) give them all."""
+    t = np.asarray(t, float)
+    n = t.size
+    left = left_side_at_times(t, omega, h_wheels, layout, inertia, q_f, tau, omega_mid, h_mid)
+
+    def increments(tt):
+        v = left(tt)[0]
         return jnp.diff(v, axis=0, prepend=v[:1])
 
     parity = np.arange(n) % 2
