@@ -197,7 +197,7 @@ def tolerances(summary: dict, idata) -> dict:
     for key, value in summary.items():
         if key in _CONFIG:
             out[key] = _exact(1e-9)
-        elif key in ("baseline", "windows", "wheel"):
+        elif key in ("baseline", "windows", "wheel", "clock"):
             out[key] = _same_shape(value, _exact(1e-9))
         elif key in ("parameters", "nuisance"):
             out[key] = {label: _stat_rules(entry, mcse[label]) for label, entry in value.items()}

@@ -41,6 +41,8 @@ def test_the_grid_is_the_labels_least_squares_line():
     assert g.offset_sd_s == pytest.approx(g.scatter_s / np.sqrt(t.size))
     assert g.period_sd_s == pytest.approx(g.scatter_s / np.sqrt(np.sum(g.index**2)))
     assert clock_grid(labels, sd_s=0.02).offset_sd_s == pytest.approx(0.02 / np.sqrt(t.size))
+    d = g.to_dict()
+    assert d["period_s"] == pytest.approx(0.5, abs=1e-4) and d["scatter_s"] == g.scatter_s
 
 
 def test_labels_off_a_regular_clock_are_a_one_line_error():
@@ -149,3 +151,19 @@ def test_the_model_file_states_the_clock(tmp_path):
     path.write_text(text + "\n[telemetry_knowledge]\nregular_clock = 1\n")
     with pytest.raises(InputError, match="regular_clock.*true or false"):
         load_spacecraft(path)
+
+
+def test_a_plan_states_the_grids_errors_at_the_model_files_tag_sd():
+    """Noise-free labels have no scatter; the plan's prediction takes the grid's errors at the
+    model file's ``time_tag_sd_s`` instead (10 ms for the ESPA bus)."""
+    from cassini_bayes.plan.thrust import noise_free_problem
+    from cassini_bayes.simulate import load_scenario
+
+    s = load_scenario("biasing_espa_bus")
+    prior = replace(s.prior, knowledge=replace(s.prior.knowledge, regular_clock=True))
+    _, problem, _ = noise_free_problem(replace(s, prior=prior), "thruster")
+    (grid,) = problem.clock
+    n = grid.t.size
+    assert grid.offset_sd_s == pytest.approx(0.01 / np.sqrt(n))
+    assert np.allclose(problem.layout.sd[problem.layout.slices["clock"]],
+                       [0.01 / np.sqrt(n), 0.01 / np.sqrt(np.sum(grid.index**2))])

@@ -174,6 +174,9 @@ def thrust_summary(post, *, seed: int, mode: str, robust: bool, wheel_errors: st
     summary["wheel_errors"] = wheel_errors if robust else None
     search = post.problem.flex_mode
     summary["flex_mode"] = None if search is None else search.to_dict()
+    clock = post.problem.clock
+    summary["clock"] = None if clock is None else [
+        {"telemetry": src[0], **grid.to_dict()} for src, grid in zip(post.problem.sources, clock)]
     if search is not None and search.found and search.modelled:
         summary["warnings"].append(
             f"the events ring with a flexible or slosh mode at {search.freq_hz:.4g} Hz (damping "

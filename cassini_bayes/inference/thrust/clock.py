@@ -45,6 +45,12 @@ class ClockGrid(NamedTuple):
     offset_sd_s: float       # the grid's offset error at ``ī``, σ/√n
     period_sd_s: float       # its period error, σ/√S (s per sample)
 
+    def to_dict(self) -> dict:
+        """The grid's period (s), the labels' scatter removed and the errors integrated out."""
+        span = float(self.index[-1] - self.index[0])
+        return {"period_s": float(self.t[-1] - self.t[0]) / span, "scatter_s": self.scatter_s,
+                "offset_sd_s": self.offset_sd_s, "period_sd_s": self.period_sd_s}
+
 
 def clock_grid(t, source: str = "<telemetry>", sd_s: float | None = None) -> ClockGrid:
     """:class:`ClockGrid` of labels ``t`` (n,) s on a regular clock: each sample's place the
