@@ -323,18 +323,21 @@ _PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",
                "far": "the {n} 0.2 s or more from a pulse's command or end",
                "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end",
                "grid": "every sample, the labels then on their fitted grid (its error: mean "
-                       "{mean:.2f}, largest {largest:.1f} ms)"}
+                       "{mean:.2f}, largest {largest:.1f} ms)",
+               "clock": "every sample, the model file stating a regular clock (the fit's grid, "
+                        "its offset and period errors integrated out)"}
 
 
 @kind("thrust_mode_probe")
 def thrust_mode_probe(args: list[Records]) -> str:
     """The thrust fit's Laplace mode on one open-world flight (benchmarks/thrust_mode_probe.py
-    records): the time constants and the tag scale, per variant of the effects and the samples
-    that keep their time-tag errors."""
+    records): the time constants (± their Laplace sd where the record has it) and the tag scale,
+    per variant of the effects and the samples that keep their time-tag errors."""
     from cassini_bayes.simulate.open_world import EFFECTS_OFF
 
     rows = ["| case, seed | time tags kept on (largest) | other open-world effects | "
-            "τd, τr, τf at the mode, ms (truth) | tag scale |", "|---|---|---|---|---|"]
+            "τd, τr, τf at the mode [± Laplace sd], ms (truth) | tag scale |",
+            "|---|---|---|---|---|"]
     for path in (p for group in args for p in group):
         rec = read_json(path)
         for r in rec["results"]:
@@ -346,7 +349,9 @@ def thrust_mode_probe(args: list[Records]) -> str:
             if r["tags"] not in ("none", "grid"):
                 factor = "" if r["tag_factor"] == 1.0 else f" × {r['tag_factor']:g}"
                 tags += f"{factor} ({1e3 * r['largest_tag_s']:.1f} ms)"
-            tau = ", ".join(f"{1e3 * m:.1f}" for m in r["tau_mode_s"])
+            sds = r.get("tau_laplace_sd_s", [None] * 3)
+            tau = ", ".join(f"{1e3 * m:.1f}" + ("" if d is None else f" ± {1e3 * d:.1f}")
+                            for m, d in zip(r["tau_mode_s"], sds))
             truth = ", ".join(f"{1e3 * x:g}" for x in r["tau_truth_s"])
             rows.append(f"| `{_scenario_label(rec['case'].rsplit(':', 1)[0])}`, {r['seed']} | "
                         f"{tags} | {others} | {tau} ({truth}) | {r['tag_scale_mode']:.2g} |")
