@@ -324,8 +324,8 @@ _PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",
                "start": "the {n} at a pulse's command", "end": "the {n} at a pulse's end",
                "grid": "every sample, the labels then on their fitted grid (its error: mean "
                        "{mean:.2f}, largest {largest:.1f} ms)",
-               "clock": "every sample, the model file stating a regular clock (the fit's grid, "
-                        "its offset and period errors integrated out)"}
+               "clock": "every sample, on a stated regular clock (the grid's errors integrated "
+                        "out)"}
 
 
 @kind("thrust_mode_probe")
@@ -354,5 +354,6 @@ def thrust_mode_probe(args: list[Records]) -> str:
                             for m, d in zip(r["tau_mode_s"], sds))
             truth = ", ".join(f"{1e3 * x:g}" for x in r["tau_truth_s"])
             rows.append(f"| `{_scenario_label(rec['case'].rsplit(':', 1)[0])}`, {r['seed']} | "
-                        f"{tags} | {others} | {tau} ({truth}) | {r['tag_scale_mode']:.2g} |")
+                        f"{tags} | {others} | {tau} ({truth}) | "
+                        + ("— |" if r["tags"] == "clock" else f"{r['tag_scale_mode']:.2g} |"))
     return "\n".join(rows)
