@@ -9,7 +9,14 @@ from _tables import Records, kind, read_json, share_cell
 
 
 def _results(args: list[Records]) -> list[dict]:
-    return [r for group in args for path in group for r in read_json(path)["results"]]
+    """Every result of the records, each marked ``regular_clock`` where its record's settings
+    state the clock regular (``plan_thrust.py --regular-clock``)."""
+    out = []
+    for path in (p for group in args for p in group):
+        rec = read_json(path)
+        clock = bool(rec.get("settings", {}).get("regular_clock"))
+        out += [{**r, "regular_clock": True} if clock else r for r in rec["results"]]
+    return out
 
 
 def _ratios(result: dict) -> list[float]:
@@ -84,7 +91,8 @@ def plan_thrust(args: list[Records]) -> str:
         within = f"{k}/{len(med)}"
         cov = r["sites"]
         rows.append(
-            f"| `{r['scenario']}` | {_ratio(f['ratio_median'])} ({_ratio(f['ratio_min'])}–"
+            f"| `{r['scenario']}`{', regular clock' if r.get('regular_clock') else ''} | "
+            f"{_ratio(f['ratio_median'])} ({_ratio(f['ratio_min'])}–"
             f"{_ratio(f['ratio_max'])}) | "
             + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")) + " | "
             + " | ".join(f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
@@ -125,7 +133,8 @@ def plan_thrust_thruster(args: list[Records]) -> str:
         tags = [f["tag_sd_learned_s"] / f["tag_sd_flown_s"] for f in r["fits"]
                 if f.get("tag_sd_flown_s")]
         tag = f"{median(tags):.2f}" if tags else "—"
-        truths = r["truths"].replace("_", "-") + "".join(f", no {e}" for e in r.get("without", []))
+        truths = (r["truths"].replace("_", "-") + "".join(f", no {e}" for e in r.get("without", []))
+                  + (", regular clock" if r.get("regular_clock") else ""))
         rows.append(f"| `{_scenario_label(r['scenario'])}` | {truths}, {r['seeds']} | "
                     + " | ".join(cells)
                     + f" | {f'**{within}**' if k == len(sites) else within} | "
