@@ -91,7 +91,9 @@ def plan_thrust(args: list[Records]) -> str:
         within = f"{k}/{len(med)}"
         cov = r["sites"]
         rows.append(
-            f"| `{r['scenario']}`{', regular clock' if r.get('regular_clock') else ''} | "
+            f"| `{r['scenario']}`{', regular clock' if r.get('regular_clock') else ''}"
+            + (f", median over {r['predicted_over_truths'] + 1} truths"
+               if r.get("predicted_over_truths") else "") + " | "
             f"{_ratio(f['ratio_median'])} ({_ratio(f['ratio_min'])}–"
             f"{_ratio(f['ratio_max'])}) | "
             + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")) + " | "
