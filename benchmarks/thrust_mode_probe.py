@@ -89,6 +89,14 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
     at = physical(p.data.centre, p.data, p.n_f, p.n_c, True)
     jac = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, True).tau)(
         p.data.centre)) @ np.asarray(p.data.tril)
+    com = {}
+    if p.n_c:                                   # mode thruster: the centre-of-mass offset too
+        j_com = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, True).com)(
+            p.data.centre)) @ np.asarray(p.data.tril)
+        com = {"com_mode_m": np.asarray(at.com, float).tolist(),
+               "com_laplace_sd_m": np.sqrt(np.sum(j_com**2, 1)).tolist(),
+               "com_truth_m": (np.asarray(si.truth.com_m, float)
+                               - np.asarray(prior.com_m, float)).tolist()}
     return {"seed": seed, "without": sorted(off), "tags": tags, "tag_factor": factor,
             "tagged": int(keep.sum()),
             "largest_tag_s": float(np.max(np.abs(np.asarray(tel.t, float) - t))),
@@ -96,7 +104,7 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
             "samples": int(t.size), "tau_mode_s": np.asarray(at.tau, float).tolist(),
             "tau_laplace_sd_s": np.sqrt(np.sum(jac**2, 1)).tolist(),
             "tau_truth_s": np.asarray(sim.params.tau_s, float).tolist(),
-            "tag_scale_mode": float(at.tag_scale), "seconds": time.perf_counter() - t0}
+            "tag_scale_mode": float(at.tag_scale), **com, "seconds": time.perf_counter() - t0}
 
 
 def main(argv=None) -> None:
@@ -132,7 +140,10 @@ def main(argv=None) -> None:
         print(f"seed {a.seed}, without {','.join(r['without']) or 'none'}, tags on {tags} "
               f"({r['tagged']}/{r['samples']}, largest {1e3 * r['largest_tag_s']:.3g} ms): "
               f"tau_delay, rise, fall at the mode ± Laplace sd (truth) ms "
-              f"{ms}; tag scale {r['tag_scale_mode']:.3g} ({r['seconds']:.0f} s)", flush=True)
+              f"{ms}; tag scale {r['tag_scale_mode']:.3g} ({r['seconds']:.0f} s)"
+              + ("" if "com_mode_m" not in r else "; com at the mode ± sd (truth) mm " + ", ".join(
+                  f"{1e3 * m:.3f} ± {1e3 * d:.3f} ({1e3 * x:.3f})" for m, d, x in
+                  zip(r["com_mode_m"], r["com_laplace_sd_m"], r["com_truth_m"]))), flush=True)
         if a.json:
             write_text(a.json, json.dumps({"case": a.case, "results": out}, indent=1))
 
