@@ -163,8 +163,8 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
 * or, where the model file states a regular clock (``Knowledge.regular_clock``), in place of
   the white tags: each event's labels put on their least-squares grid, and the grid's offset
   and period error, two columns of ``ν`` per event (:mod:`~cassini_bayes.inference.thrust.
-  clock`): the white tags on the samples at a pulse's edge took a mixed-width event's time
-  constants tens of sds off, and the grid alone left its offset in the delay.
+  clock`): white tags at a pulse's edge are far from linear, and the grid alone leaves its
+  offset in the delay (docs/planning.md, "A regular clock").
 
 ``ν`` enters the residuals linearly with a Gaussian prior, so it is **integrated out exactly**
 rather than sampled (as in the robust RWA4 model): per event the offset is removed

@@ -6,8 +6,8 @@ then replaces each event's labels by their least-squares line in the sample inde
 ``t̂_i = t̂₀ + P̂ (i − ī)``, which leaves no error per sample: what the grid keeps of the labels'
 errors ``ε_i`` (sd ``σ``) is an offset ``a`` (sd ``σ/√n``) and a period error ``b`` (sd
 ``σ/√S``, ``S = Σ (i − ī)²``), independent of each other. Both shift every sample against the
-pulse commands, which the delay ``τd`` alone would otherwise absorb (a grid 0.5 ms off moved the
-ESPA bus's ``τd`` by 2 sds, docs/planning.md). They are two robust nuisance columns per event,
+pulse commands, which the delay ``τd`` alone would otherwise absorb as a shift (docs/planning.md,
+"A regular clock"). They are two robust nuisance columns per event,
 ``∂r/∂a = Σ_i ∂r/∂t_i`` and ``∂r/∂b = Σ_i (i − ī) ∂r/∂t_i`` of the residual of Feldman & Lee
 Eq 17 (the thrusters' impulse and the left side's trapezoid, at the prior's thrust, time
 constants and inertia), integrated out with the others; ``σ`` is the labels' scatter about the
