@@ -19,6 +19,10 @@ keys) with the effects ``OFF`` switched off (comma-separated, ``open_world.EFFEC
   (``[telemetry_knowledge] regular_clock``): the fit puts the labels on their grid itself and
   integrates the grid's offset and period errors out.
 
+``--knowledge-factor`` multiplies the fit's prior sds of the robust nuisance (the model file's
+gyro, wheel-scale, wheel-tilt and torque knowledge; the open world is drawn from the file's own);
+``--inertia truth`` fixes the inertia at the flight's true one in place of sampling it.
+
 It prints the time constants and the time tags' learned scale at the mode of the fit's density
 (the Laplace mode its preparation finds, ``ThrustProblem.data.centre``), with the fit's default
 model (robust, inertia sampled). The mode moves as the posterior does; where the posterior is
@@ -55,7 +59,40 @@ def _kept(t, pulses, which: str):
             "far": ~near, "start": gap["start"] < 1e-6, "end": gap["end"] < 1e-6}[which]
 
 
-def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> dict:
+_KNOWLEDGE = ("gyro_bias_sd_rad_s", "gyro_scale_factor_sd", "wheel_inertia_sd_frac",
+              "wheel_common_inertia_sd_frac", "wheel_axis_sd_deg", "torque_sd_nm",
+              "torque_rate_sd_nm_per_h")
+_NUISANCE = {"gyro_scale": ("gyro_scale_factor", 1.0),
+             "wheel_inertia": ("wheel_inertia_errors", 1.0),
+             "wheel_axes": ("wheel_axis_tilt_deg", 57.29577951308232)}
+
+
+def _nuisance_at_mode(p, at, record: dict) -> dict:
+    """Per block of ``ν`` (gyro scale, wheel scales, wheel tilts in degrees): its conditional
+    mean and sd at the mode, and the open world's draw."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from cassini_bayes.inference.gaussian import nuisance_marginal
+    from cassini_bayes.inference.thrust.model import _event_stats, nuisance_sd
+
+    st = _event_stats(at, p.data)
+    sd = nuisance_sd(at, p.data)
+    _, mean, chol = nuisance_marginal(jnp.sum(st.info, 0), jnp.sum(st.score, 0), sd)
+    cov = jax.scipy.linalg.cho_solve((chol, True), jnp.eye(chol.shape[0]))
+    nu, nu_sd = np.asarray(sd * mean), np.asarray(sd) * np.sqrt(np.diag(np.asarray(cov)))
+    out = {}
+    for block, (effect, unit) in _NUISANCE.items():
+        sl = p.layout.slices[block]
+        out[block] = {"mode": (unit * nu[sl]).tolist(), "sd": (unit * nu_sd[sl]).tolist(),
+                      "prior_sd": (unit * np.asarray(sd)[sl]).tolist(),
+                      "truth": np.ravel(record.get(effect, {}).get("values", [])).tolist()}
+    return out
+
+
+def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0,
+          knowledge_factor: float = 1.0, inertia: str = "sampled") -> dict:
     """One variant: the mode's time constants (s) and tag scale, the truth's, the kept count."""
     import jax
     import numpy as np
@@ -81,23 +118,31 @@ def probe(case: str, seed: int, off: tuple, tags: str, factor: float = 1.0) -> d
     prior = s.prior
     if tags == "clock":
         prior = replace(prior, knowledge=replace(prior.knowledge, regular_clock=True))
+    kn = prior.knowledge
+    prior = replace(prior, knowledge=replace(kn, **{k: knowledge_factor * getattr(kn, k)
+                                                    for k in _KNOWLEDGE}))
+    sample = inertia == "sampled"
+    if not sample:
+        prior = replace(prior, inertia=np.asarray(si.truth.inertia, float))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         p = prepare_thrust([(tel, sim.pulses)], prior, mode=mode, robust=True,
-                           inertia=resolve_inertia(None, prior, True))
-    at = physical(p.data.centre, p.data, p.n_f, p.n_c, True)
-    jac = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, True).tau)(
+                           inertia=resolve_inertia(None, prior, sample))
+    at = physical(p.data.centre, p.data, p.n_f, p.n_c, sample)
+    jac = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, sample).tau)(
         p.data.centre)) @ np.asarray(p.data.tril)
     com = {}
     if p.n_c:                                   # mode thruster: the centre-of-mass offset too
-        j_com = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, True).com)(
+        j_com = np.asarray(jax.jacfwd(lambda x: physical(x, p.data, p.n_f, p.n_c, sample).com)(
             p.data.centre)) @ np.asarray(p.data.tril)
         com = {"com_mode_m": np.asarray(at.com, float).tolist(),
                "com_laplace_sd_m": np.sqrt(np.sum(j_com**2, 1)).tolist(),
                "com_truth_m": (np.asarray(si.truth.com_m, float)
                                - np.asarray(prior.com_m, float)).tolist()}
     return {"seed": seed, "without": sorted(off), "tags": tags, "tag_factor": factor,
+            "knowledge_factor": knowledge_factor, "inertia": inertia,
+            "nuisance": _nuisance_at_mode(p, at, ow.record),
             "tagged": int(keep.sum()),
             "largest_tag_s": float(np.max(np.abs(np.asarray(tel.t, float) - t))),
             "mean_tag_s": float(np.mean(np.asarray(tel.t, float) - t)),
@@ -114,6 +159,9 @@ def main(argv=None) -> None:
     ap.add_argument("--variant", nargs="+", default=["flex:all"], metavar="OFF:TAGS")
     ap.add_argument("--tag-factor", type=float, default=1.0,
                     help="the kept time-tag errors times this factor")
+    ap.add_argument("--knowledge-factor", type=float, default=1.0,
+                    help="the fit's nuisance prior sds times this factor")
+    ap.add_argument("--inertia", choices=("sampled", "truth"), default="sampled")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args(argv)
     variants = []
@@ -133,7 +181,7 @@ def main(argv=None) -> None:
     cassini_bayes.setup_jax()
     out = []
     for off, tags in variants:
-        r = probe(a.case, a.seed, off, tags, a.tag_factor)
+        r = probe(a.case, a.seed, off, tags, a.tag_factor, a.knowledge_factor, a.inertia)
         out.append(r)
         ms = ", ".join(f"{1e3 * m:.2f} ± {1e3 * d:.2f} ({1e3 * x:g})" for m, d, x in
                        zip(r["tau_mode_s"], r["tau_laplace_sd_s"], r["tau_truth_s"]))
