@@ -368,3 +368,33 @@ def thrust_mode_probe(args: list[Records]) -> str:
                         f"{tags} | {others} | {tau} ({truth}) | "
                         + ("— |" if r["tags"] == "clock" else f"{r['tag_scale_mode']:.2g} |"))
     return "\n".join(rows)
+
+
+@kind("thrust_probe_com")
+def thrust_probe_com(args: list[Records]) -> str:
+    """The centre of mass at the thrust fit's Laplace mode, per set of open-world effects left
+    on (benchmarks/thrust_mode_probe.py records with ``com_mode_m``), with the fit's nuisance
+    prior factor and inertia, and its mode of the first gyro-scale and wheel-tilt terms."""
+    import numpy as np
+
+    from cassini_bayes.simulate.open_world import EFFECTS_OFF
+
+    rows = ["| seed | open-world effects on | fit's nuisance priors, inertia | com x, y, z at the "
+            "mode ± Laplace sd, mm (truth) | largest \\|error\\|/sd | gyro scale y at the mode "
+            "(truth) | wheel 1 tilt at the mode, ° (truth) |",
+            "|---|---|---|---|---|---|---|"]
+    for path in (p for group in args for p in group):
+        for r in read_json(path)["results"]:
+            on = [e for e in EFFECTS_OFF if e not in r["without"]]
+            m, d, x = (1e3 * np.asarray(r[k], float) for k in
+                       ("com_mode_m", "com_laplace_sd_m", "com_truth_m"))
+            com = ", ".join(f"{a:.1f} ± {b:.1f}" for a, b in zip(m, d))
+            nu = r["nuisance"]
+            tilt = ", ".join(f"{a:.2f}" for a in nu["wheel_axes"]["mode"][:2])
+            tilt_t = ", ".join(f"{a:.2f}" for a in nu["wheel_axes"]["truth"][:2])
+            rows.append(f"| {r['seed']} | {', '.join(on) or 'none'} | "
+                        f"× {r['knowledge_factor']:g}, {r['inertia']} | {com} "
+                        f"({', '.join(f'{a:.1f}' for a in x)}) | {np.max(np.abs(m - x) / d):.1f} | "
+                        f"{1e3 * nu['gyro_scale']['mode'][1]:.1f}e-3 "
+                        f"({1e3 * nu['gyro_scale']['truth'][1]:.1f}e-3) | {tilt} ({tilt_t}) |")
+    return "\n".join(rows)

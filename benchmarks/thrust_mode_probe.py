@@ -62,14 +62,14 @@ def _kept(t, pulses, which: str):
 _KNOWLEDGE = ("gyro_bias_sd_rad_s", "gyro_scale_factor_sd", "wheel_inertia_sd_frac",
               "wheel_common_inertia_sd_frac", "wheel_axis_sd_deg", "torque_sd_nm",
               "torque_rate_sd_nm_per_h")
-_NUISANCE = {"gyro_scale": ("gyro_scale_factor", 1.0),
-             "wheel_inertia": ("wheel_inertia_errors", 1.0),
-             "wheel_axes": ("wheel_axis_tilt_deg", 57.29577951308232)}
+_NUISANCE = {"gyro_scale": ("gyro_scale_factor", 1.0, "gyro"),
+             "wheel_inertia": ("wheel_inertia_errors", 1.0, "wheels"),
+             "wheel_axes": ("wheel_axis_tilt_deg", 57.29577951308232, "tilts")}
 
 
 def _nuisance_at_mode(p, at, record: dict) -> dict:
     """Per block of ``ν`` (gyro scale, wheel scales, wheel tilts in degrees): its conditional
-    mean and sd at the mode, and the open world's draw."""
+    mean and sd at the mode, and the open world's draw (zeros where that effect is off)."""
     import jax
     import jax.numpy as jnp
     import numpy as np
@@ -83,11 +83,12 @@ def _nuisance_at_mode(p, at, record: dict) -> dict:
     cov = jax.scipy.linalg.cho_solve((chol, True), jnp.eye(chol.shape[0]))
     nu, nu_sd = np.asarray(sd * mean), np.asarray(sd) * np.sqrt(np.diag(np.asarray(cov)))
     out = {}
-    for block, (effect, unit) in _NUISANCE.items():
+    for block, (effect, unit, switch) in _NUISANCE.items():
         sl = p.layout.slices[block]
+        drawn = np.ravel(record.get(effect, {}).get("values", []))
         out[block] = {"mode": (unit * nu[sl]).tolist(), "sd": (unit * nu_sd[sl]).tolist(),
                       "prior_sd": (unit * np.asarray(sd)[sl]).tolist(),
-                      "truth": np.ravel(record.get(effect, {}).get("values", [])).tolist()}
+                      "truth": (0.0 * drawn if switch in record.get("off", ()) else drawn).tolist()}
     return out
 
 

@@ -4,15 +4,19 @@ Eq 17, one event at a time (the effects and their signs: :mod:`cassini_bayes.inf
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 
+from cassini_bayes.estimators.leak import interval_means
 from cassini_bayes.frames import skew
-from cassini_bayes.inference.nuisance import NuisanceLayout, wheel_scale_columns
+from cassini_bayes.inference.nuisance import (NuisanceLayout, wheel_scale_columns,
+                                              without_common_scale)
+from cassini_bayes.inference.thrust.likelihood import PulseLayout, jump_area
 from cassini_bayes.physics.quadrature import cumulative_trapezoid
 from cassini_bayes.spacecraft import Spacecraft
 from cassini_bayes.telemetry import Telemetry
 
-__all__ = ["wheel_momentum", "nuisance_columns"]
+__all__ = ["wheel_momentum", "nuisance_columns", "rotation_errors", "events_nuisance_columns"]
 
 
 def wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
@@ -31,10 +35,13 @@ def wheel_momentum(tel: Telemetry, spacecraft: Spacecraft):
 
 
 def nuisance_columns(layout: NuisanceLayout, e: int, t: np.ndarray, omega: np.ndarray,
-                     inertia: np.ndarray, h: np.ndarray, per_wheel: dict) -> np.ndarray:
+                     inertia: np.ndarray, h: np.ndarray, per_wheel: dict,
+                     d_theta: np.ndarray | None = None) -> np.ndarray:
     """(n, 3, R) columns of ``ν`` in the predicted left side of event ``e``: sample times ``t``
     (n,) s, measured rates ``omega`` (n, 3) rad/s, the linearisation inertia (3, 3) kg m² and
-    the wheels' momentum ``h``, ``per_wheel`` of :func:`wheel_momentum`."""
+    the wheels' momentum ``h``, ``per_wheel`` of :func:`wheel_momentum`. ``d_theta`` (3, n)
+    rad: the trapezoid's rotation error per interval across the pulses' rate steps
+    (:func:`rotation_errors`), through which a wheel error also moves the left side."""
     n = t.shape[0]
     cols = np.zeros((n, 3, layout.size))
     sl = layout.slices
@@ -50,7 +57,7 @@ def nuisance_columns(layout: NuisanceLayout, e: int, t: np.ndarray, omega: np.nd
             for j in range(2):
                 cols[:, :, a0 + 2 * k + j] = -per_wheel[name][:, None] * layout.tilt_u[k, j]
     wheel = np.r_[np.arange(layout.size)[layout.wheel_block], np.arange(a0, sl["wheel_axes"].stop)]
-    cols[:, :, wheel] = _with_gyroscopic(cols[:, :, wheel], omega, t)
+    cols[:, :, wheel] = _with_gyroscopic(cols[:, :, wheel], omega, t, d_theta)
     t0 = sl["body_torque"].start + 3 * e
     cols[:, :, t0:t0 + 3] = dt[:, :, None] * np.eye(3)[None]              # T_e (t − t_0)
     if "torque_rate" in sl:
@@ -59,10 +66,47 @@ def nuisance_columns(layout: NuisanceLayout, e: int, t: np.ndarray, omega: np.nd
     return cols
 
 
-def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray) -> np.ndarray:
+def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray,
+                     d_theta: np.ndarray | None = None) -> np.ndarray:
     """(n, 3, W) wheel-momentum columns ``δH`` plus their gyroscopic impulse ``∫ ω × δH dt``
     (Feldman & Lee Eq 15, the cumulative trapezoid of
-    :func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`): a wheel's momentum enters the
-    left side of Eq 17 through ``H`` and through ``ΔG``, so an error in it does both."""
+    :func:`~cassini_bayes.physics.impulse.gyroscopic_impulse`) and, given ``d_theta`` (3, n),
+    that trapezoid's correction across the rate steps, ``Σ δθ × δH_m``
+    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`, linear in the intervals' mean
+    momentum ``H_m``): a wheel's momentum enters the left side of Eq 17 through ``H`` and
+    through ``ΔG``, so an error in it does both."""
     f = np.einsum("nij,njw->niw", np.asarray(skew(omega)), momentum)     # ω × δH
-    return momentum + cumulative_trapezoid(f, t)
+    out = momentum + cumulative_trapezoid(f, t)
+    if d_theta is not None:
+        mid = np.moveaxis(interval_means(np.moveaxis(momentum, -1, 0)), 0, -1)   # (3, n, W)
+        step = np.cross(np.asarray(d_theta)[:, :, None], mid, axis=0)
+        out += np.cumsum(step, 1).transpose(1, 0, 2)
+    return out
+
+
+def rotation_errors(layouts: PulseLayout, q_f, tau, inertia) -> np.ndarray:
+    """(E, 3, n) rad: every event's ``δθ = I⁻¹ Q (F ⊙ ε)`` per interval, the trapezoid's error
+    of the thrusters' rotation across the pulses' rate steps
+    (:func:`~cassini_bayes.physics.impulse.rate_step_correction`) at the torques ``q_f`` (3, M)
+    N m, the time constants ``tau`` (3,) s and the inertia (3, 3) kg m²."""
+    area = jax.vmap(jump_area, in_axes=(0, None, None, None, None))(layouts, q_f, *tau)
+    return np.einsum("ij,ejn->ein", np.linalg.inv(inertia), np.asarray(area))
+
+
+def events_nuisance_columns(tels: list[Telemetry], spacecraft: Spacecraft,
+                            layout: NuisanceLayout | None, inertia: np.ndarray,
+                            d_theta: np.ndarray, scale_free: bool) -> np.ndarray:
+    """(E, R, 3, n) every event's :func:`nuisance_columns` (zero on padding; R = 0 without a
+    ``layout``, the idealised model), ``d_theta`` (E, 3, n) of :func:`rotation_errors` on the
+    padded samples, the wheels' common scale taken out where ``scale_free``
+    (:func:`~cassini_bayes.inference.nuisance.without_common_scale`)."""
+    n_max = np.shape(d_theta)[-1]
+    out = np.zeros((len(tels), n_max, 3, 0 if layout is None else layout.size))
+    if layout is None:
+        return np.ascontiguousarray(out.transpose(0, 3, 2, 1))
+    for e, tel in enumerate(tels):
+        h, _, per_wheel = wheel_momentum(tel, spacecraft)
+        cols = nuisance_columns(layout, e, np.asarray(tel.t, float), np.asarray(tel.omega, float),
+                                inertia, h, per_wheel, d_theta[e, :, :tel.n])
+        out[e, :tel.n] = without_common_scale(cols, layout) if scale_free else cols
+    return np.ascontiguousarray(out.transpose(0, 3, 2, 1))

@@ -16,10 +16,11 @@ from cassini_bayes.inference.gaussian import ColumnStatistics, column_statistics
 from cassini_bayes.inference.laplace import laplace
 from cassini_bayes.inference.noise import pulse_bent, rate_noise_levels
 from cassini_bayes.inference.nuisance import (nuisance_layout, with_clock_errors,
-                                              with_time_tag_steps, without_common_scale)
+                                              with_time_tag_steps)
 from cassini_bayes.inference.thrust.clock import (ClockGrid, events_clock_columns,
                                                   events_on_grid)
-from cassini_bayes.inference.thrust.columns import nuisance_columns, wheel_momentum
+from cassini_bayes.inference.thrust.columns import (events_nuisance_columns, rotation_errors,
+                                                    wheel_momentum)
 from cassini_bayes.inference.thrust.coords import (bit_widths, long_pulse_excess, n_tag,
                                                   rise_deficit)
 from cassini_bayes.inference.thrust.design import ThrustDesign, thrust_design
@@ -238,12 +239,9 @@ def _check_torque_span(tel: Telemetry, log: PulseLog, spacecraft: Spacecraft,
 
 
 def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spacecraft,
-                   layout, i_lin: np.ndarray, robust: bool,
-                   noise_hat=None, scale_free: bool = False) -> tuple[dict, np.ndarray, np.ndarray]:
+                   noise_hat=None) -> tuple[dict, np.ndarray, np.ndarray]:
     """The events' arrays padded to common lengths (the first half of ``ThrustData``), the
-    thrusters that fired (M,) and the data noise levels (E, 2). ``i_lin`` (3, 3) kg m² is the
-    inertia the robust columns are linear around; ``scale_free``: the wheels' common scale is
-    taken out of them (:attr:`ThrustProblem.scale_free`)."""
+    thrusters that fired (M,) and the data noise levels (E, 2)."""
     n_max = max(t.n for t in tels)
     # pulse arrays padded to a multiple of _PULSE_BUCKET: events whose pulse counts differ a
     # little (seeds of one scenario, SBC replicates) share shapes, so one compiled sampler
@@ -264,17 +262,10 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
     wcov = np.zeros((n_ev, 3, 3))
     noise = np.zeros((n_ev, 2))
     fired = np.zeros(len(spacecraft.thrusters), bool)
-    n_nu = layout.size if robust else 0
-    nu_cols = np.zeros((n_ev, n_max, 3, n_nu))
     for e, (tel, log) in enumerate(zip(tels, logs)):
         n, m = tel.n, len(log.t_on)
         t = np.asarray(tel.t, float)
-        h, wc, per_wheel = wheel_momentum(tel, spacecraft)
-        if robust:
-            nu_cols[e, :n] = nuisance_columns(layout, e, t, np.asarray(tel.omega, float), i_lin,
-                                              h, per_wheel)
-            if scale_free:
-                nu_cols[e, :n] = without_common_scale(nu_cols[e, :n], layout)
+        h, wc, _ = wheel_momentum(tel, spacecraft)
         # pad by repeating the last sample: Δt = 0 adds nothing to ΔG; masked out anyway
         t_a[e] = np.r_[t, np.full(n_max - n, t[-1])]
         w_a[e] = np.r_[tel.omega, np.repeat(tel.omega[-1:], n_max - n, 0)]
@@ -291,8 +282,7 @@ def _padded_events(tels: list[Telemetry], logs: list[PulseLog], spacecraft: Spac
 
     kw = dict(t=t_a, omega=w_a, h_wheels=h_a, mask=mask, t_on=ton, thruster=thr, width=wid,
               slot=slot, k_slots=k_slots, wheel_cov=wcov,
-              log_noise_hat=np.log(noise),
-              nu_cols=np.ascontiguousarray(nu_cols.transpose(0, 3, 2, 1)))
+              log_noise_hat=np.log(noise))
     return kw, fired, noise
 
 
@@ -431,29 +421,29 @@ def prepare_thrust(events: Sequence[tuple[Telemetry, PulseLog]], spacecraft: Spa
     wheels = sorted({w for tel in tels for w in tel.active_wheels()})
     layout = nuisance_layout(spacecraft, n_ev, wheels if robust else (),
                              wheel_errors=wheel_errors, torque_rate=robust)
-    kw, fired, noise = _padded_events(tels, logs, spacecraft, layout, i_lin, robust, noise_hat,
-                                      scale_free=_scale_free(robust, inertia))
+    kw, fired, noise = _padded_events(tels, logs, spacecraft, noise_hat)
     q_mat = spacecraft.moment_matrix
     thrust_pred = spacecraft.thrust_per_thruster if mode == "thruster" else float(spacecraft.thrust)
     tp = tau_prior(spacecraft)
+    q_f, tau0 = q_mat * thrust_pred, tp.median()
     sd_t = spacecraft.knowledge.time_tag_sd_s if robust and grids is None else 0.0
     k_slots = kw.pop("k_slots")
     b_covs = noise_covariances(i_lin, noise, kw["wheel_cov"])
-    layout_e = with_tag_expectation(_pulse_layouts(kw, k_slots, n_thr), q_mat * thrust_pred,
-                                    tp.median(), b_covs, sd_t)
-    basis = _lhs_basis_events(kw)
-    steps = _rate_steps(kw, k_slots, n_thr, tp.median())
-    rates = with_pre_command_rates(events_time_tag_rates(layout_e, tp.median(), sd_t, n_thr),
-                                   layout_e, q_mat * thrust_pred, tp.median(), b_covs, sd_t)
+    layout_e = with_tag_expectation(_pulse_layouts(kw, k_slots, n_thr), q_f, tau0, b_covs, sd_t)
+    basis, steps = _lhs_basis_events(kw), _rate_steps(kw, k_slots, n_thr, tau0)
+    kw["nu_cols"] = events_nuisance_columns(tels, spacecraft, layout if robust else None, i_lin,
+                                            rotation_errors(layout_e, q_f, tau0, i_lin),
+                                            _scale_free(robust, inertia))
+    rates = with_pre_command_rates(events_time_tag_rates(layout_e, tau0, sd_t, n_thr),
+                                   layout_e, q_f, tau0, b_covs, sd_t)
     mode_search = None
     if robust and flex != "off":
         mode_search, kw["nu_cols"], layout = flex_mode_columns(
             flex, kw, steps, basis, layout_e, tels, logs, spacecraft, thrust_pred, tp, i_lin,
-            inertia, noise, layout, np.einsum("am,emn->ean", q_mat * thrust_pred, rates))
+            inertia, noise, layout, np.einsum("am,emn->ean", q_f, rates))
     layout, (rank_one, tag_rates, tag_gyro) = _time_tag_terms(
-        kw, layout, layout_e, steps, rates, q_mat * thrust_pred, tp.median(), i_lin, noise,
-        sd_t if robust and sd_t > 0.0 else None, grids)
-    design, extra = (_per_thruster_design(layout_e, tp.median(), noise, i_lin, kw, spacecraft,
+        kw, layout, layout_e, steps, rates, q_f, tau0, i_lin, noise, sd_t or None, grids)
+    design, extra = (_per_thruster_design(layout_e, tau0, noise, i_lin, kw, spacecraft,
                                           thrust_pred, fired) if mode == "thruster" else (None, {}))
     nu_cols = kw.pop("nu_cols")
     tags = tag_scale_fields(layout, sd_t) if robust and sd_t > 0.0 else {}
