@@ -130,15 +130,18 @@ the robust inertia model), each entering the predicted left side of Eq 17 linear
   ``+ ½ Ṫ_e (t − t_0)²``: a small spacecraft's environment torque changes within an event, and
   unmodelled its drift moves the centre of mass and the inertia;
 * gyro bias ``b_e`` (rad/s, per event): the integrated gyroscopic term gains
-  ``∫ b × H_w dt = −[C_t]_× b``, ``C_t = ∫_{t_0}^{t} H_w ds`` (the constant ``I b`` is absorbed by
-  the offset);
-* gyro scale factors ``s``: ``+ I diag(ω_meas) s``;
+  ``∫ (b × (I ω + H_w) + ω × I b) dt`` (the constant ``I b`` is absorbed by the offset);
+* gyro scale factors ``s``: ``+ I δω`` and the same ``ΔG`` terms, ``δω = s ∘ ω_meas``; both
+  with the rate-step correction's part (:mod:`~cassini_bayes.inference.thrust.columns`), so
+  every column is the derivative of the left side as the model computes it;
 * wheel spin-inertia errors ``c_k``, one per active wheel (``wheel_errors="per_wheel"``, the
   default): the true wheel momentum is ``H_w + Σ_k c_k J_k ρ_k g_k``, so the left side computed
   with the model's wheels is ``Q F j − Σ_k c_k (J_k ρ_k g_k + ∫ ω × J_k ρ_k g_k dt)`` (the wheel
-  momentum enters ``ΔG``, Eq 15, too); ``"common"``: one ``c`` for all, ``− c (H_w + ∫ ω × H_w
-  dt)``;
-* wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj (J_k ρ_k u_kj + ∫ ω × J_k ρ_k u_kj dt)``;
+  momentum enters ``ΔG``, Eq 15, too, and the trapezoid's correction across the pulses' rate
+  steps, ``Σ δθ × δH_m``, :func:`~cassini_bayes.inference.thrust.columns.rotation_errors`);
+  ``"common"``: one ``c`` for all, ``− c (H_w + ∫ ω × H_w dt)``, and its rate-step term;
+* wheel spin-axis tilts ``a_k``: ``− Σ_j a_kj (J_k ρ_k u_kj + ∫ ω × J_k ρ_k u_kj dt)``, and its
+  rate-step term;
 * telemetry time-tag errors (white, sd ``σ_t``: ``Knowledge.time_tag_sd_s``, 10 ms by default,
   times a scale the sampler learns, log-normal-like with median 1 and log sds 1.5 below and 0.5
   above, :data:`~cassini_bayes.inference.thrust.prior.TAG_SCALE_LOG_SD`; posterior site

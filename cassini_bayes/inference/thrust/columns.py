@@ -46,10 +46,12 @@ def nuisance_columns(layout: NuisanceLayout, e: int, t: np.ndarray, omega: np.nd
     cols = np.zeros((n, 3, layout.size))
     sl = layout.slices
     dt = (t - t[0])[:, None]
-    c_t = cumulative_trapezoid(h, t)
     b0 = sl["gyro_bias"].start + 3 * e
-    cols[:, :, b0:b0 + 3] = -np.asarray(skew(c_t))                        # ∫ b × H_w dt
-    cols[:, :, sl["gyro_scale"]] = inertia[None] * omega[:, None, :]      # I diag(ω) s
+    unit = np.broadcast_to(np.eye(3)[None], (n, 3, 3))                    # δω = b: e_a
+    cols[:, :, b0:b0 + 3] = _rate_error_columns(unit, omega, t, inertia, h, d_theta)
+    scale = omega[:, :, None] * np.eye(3)[None]                           # δω = s ∘ ω: ω_a e_a
+    cols[:, :, sl["gyro_scale"]] = (np.einsum("ij,nja->nia", inertia, scale)
+                                    + _rate_error_columns(scale, omega, t, inertia, h, d_theta))
     cols[:, :, layout.wheel_block] = -wheel_scale_columns(layout, h, per_wheel)  # −J_k ρ_k g_k
     a0 = sl["wheel_axes"].start
     for k, name in enumerate(layout.wheels):
@@ -64,6 +66,28 @@ def nuisance_columns(layout: NuisanceLayout, e: int, t: np.ndarray, omega: np.nd
         r0 = sl["torque_rate"].start + 3 * e
         cols[:, :, r0:r0 + 3] = 0.5 * dt[:, :, None]**2 * np.eye(3)[None]  # ½ Ṫ_e (t − t_0)²
     return cols
+
+
+def _rate_error_columns(d_omega: np.ndarray, omega: np.ndarray, t: np.ndarray,
+                        inertia: np.ndarray, h: np.ndarray, d_theta: np.ndarray | None
+                        ) -> np.ndarray:
+    """(n, 3, A) what a gyro error ``ω = ω_meas − δω`` (``d_omega`` (n, 3, A), one error per
+    column) moves in the left side's ``ΔG`` (Feldman & Lee Eq 15):
+    ``∫ (δω × (I ω + H_w) + ω × I δω) dt`` and, given ``d_theta``, the rate-step correction's
+    ``Σ (δθ × I δω_m + δω_m × I δθ)``; the ``I δω`` of Eq 17 is the caller's (a bias's is a
+    constant, which the event's offset takes)."""
+    i_dw = np.einsum("ij,nja->nia", inertia, d_omega)
+    total = omega @ inertia.T + h
+    f = np.cross(d_omega, total[:, :, None], axis=1) + np.cross(omega[:, :, None], i_dw, axis=1)
+    out = cumulative_trapezoid(f, t)
+    if d_theta is not None:
+        mid = np.moveaxis(interval_means(np.moveaxis(d_omega, -1, 0)), 0, -1)     # (3, n, A)
+        d_theta = np.asarray(d_theta)
+        area = (inertia @ d_theta)[:, :, None]                                    # I δθ
+        step = (np.cross(d_theta[:, :, None], np.einsum("ij,jna->ina", inertia, mid), axis=0)
+                + np.cross(mid, area, axis=0))
+        out = out + np.cumsum(step, 1).transpose(1, 0, 2)
+    return out
 
 
 def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray,
