@@ -390,11 +390,13 @@ def thrust_probe_com(args: list[Records]) -> str:
                        ("com_mode_m", "com_laplace_sd_m", "com_truth_m"))
             com = ", ".join(f"{a:.1f} ± {b:.1f}" for a, b in zip(m, d))
             nu = r["nuisance"]
-            tilt = ", ".join(f"{a:.2f}" for a in nu["wheel_axes"]["mode"][:2])
-            tilt_t = ", ".join(f"{a:.2f}" for a in nu["wheel_axes"]["truth"][:2])
+            gyro = [nu["gyro_scale"][k][1] * ("gyro" in on or k == "mode") + 0.0
+                    for k in ("mode", "truth")]
+            tilt = [", ".join(f"{a * ('tilts' in on or k == 'mode') + 0.0:.2f}"
+                              for a in nu["wheel_axes"][k][:2]) for k in ("mode", "truth")]
             rows.append(f"| {r['seed']} | {', '.join(on) or 'none'} | "
                         f"× {r['knowledge_factor']:g}, {r['inertia']} | {com} "
                         f"({', '.join(f'{a:.1f}' for a in x)}) | {np.max(np.abs(m - x) / d):.1f} | "
-                        f"{1e3 * nu['gyro_scale']['mode'][1]:.1f}e-3 "
-                        f"({1e3 * nu['gyro_scale']['truth'][1]:.1f}e-3) | {tilt} ({tilt_t}) |")
+                        f"{1e3 * gyro[0]:.1f}e-3 ({1e3 * gyro[1]:.1f}e-3) | "
+                        f"{tilt[0]} ({tilt[1]}) |")
     return "\n".join(rows)
