@@ -81,12 +81,7 @@ def _rate_error_columns(d_omega: np.ndarray, omega: np.ndarray, t: np.ndarray,
     f = np.cross(d_omega, total[:, :, None], axis=1) + np.cross(omega[:, :, None], i_dw, axis=1)
     out = cumulative_trapezoid(f, t)
     if d_theta is not None:
-        mid = np.moveaxis(interval_means(np.moveaxis(d_omega, -1, 0)), 0, -1)     # (3, n, A)
-        d_theta = np.asarray(d_theta)
-        area = (inertia @ d_theta)[:, :, None]                                    # I δθ
-        step = (np.cross(d_theta[:, :, None], np.einsum("ij,jna->ina", inertia, mid), axis=0)
-                + np.cross(mid, area, axis=0))
-        out = out + np.cumsum(step, 1).transpose(1, 0, 2)
+        out = out + _rate_step_change(d_theta, inertia, d_omega=d_omega)
     return out
 
 
@@ -102,10 +97,27 @@ def _with_gyroscopic(momentum: np.ndarray, omega: np.ndarray, t: np.ndarray,
     f = np.einsum("nij,njw->niw", np.asarray(skew(omega)), momentum)     # ω × δH
     out = momentum + cumulative_trapezoid(f, t)
     if d_theta is not None:
-        mid = np.moveaxis(interval_means(np.moveaxis(momentum, -1, 0)), 0, -1)   # (3, n, W)
-        step = np.cross(np.asarray(d_theta)[:, :, None], mid, axis=0)
-        out += np.cumsum(step, 1).transpose(1, 0, 2)
+        out += _rate_step_change(d_theta, None, d_h=momentum)
     return out
+
+
+def _rate_step_change(d_theta, inertia, d_omega=None, d_h=None) -> np.ndarray:
+    """(n, 3, A) the change of :func:`~cassini_bayes.physics.impulse.rate_step_correction`
+    (``Σ δθ × (I ω_m + H_m) + ω_m × I δθ``) when the rates move by ``d_omega`` or the wheel
+    momentum by ``d_h`` (n, 3, A) per column, at the rotation errors ``d_theta`` (3, n)."""
+    d_theta = np.asarray(d_theta)
+    if d_h is not None:
+        step = np.cross(d_theta[:, :, None], _mid(d_h), axis=0)
+    else:
+        mid = _mid(d_omega)
+        step = (np.cross(d_theta[:, :, None], np.einsum("ij,jna->ina", inertia, mid), axis=0)
+                + np.cross(mid, (inertia @ d_theta)[:, :, None], axis=0))
+    return np.cumsum(step, 1).transpose(1, 0, 2)
+
+
+def _mid(x: np.ndarray) -> np.ndarray:
+    """(3, n, A): :func:`interval_means` of each column of ``x`` (n, 3, A)."""
+    return np.moveaxis(interval_means(np.moveaxis(x, -1, 0)), 0, -1)
 
 
 def rotation_errors(layouts: PulseLayout, q_f, tau, inertia) -> np.ndarray:
