@@ -311,7 +311,8 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
     from cassini_bayes.physics.pulse import (pulse_impulse_area, pulse_impulse_until,
                                              thrust_profile)
     from cassini_bayes.physics.rate_step_moments import (interval_moments,
-                                                         second_order_correction, step_pairs)
+                                                         second_order_correction, step_pairs,
+                                                         curvature_correction)
 
     # host copies: data, not traced (a jitted function's captured arrays are traced)
     ev = jax.tree.map(np.asarray, problem.data.events)
@@ -359,6 +360,10 @@ def _dense_loglik(problem, tau_median, time_tag_sd, pi, f8, tau, log_sigma):
             inertia, q * f8[None, :], m2, step_pairs(p2),
             np.diff(ev.omega[e][:n], axis=0, prepend=0.0).T,
             np.diff(ev.h_wheels[e][:n], axis=0, prepend=0.0).T, np.diff(t, prepend=t[0]))
+        second = second + curvature_correction(
+            inertia, q * f8[None, :], m2, np.diff(ev.omega[e][:n], axis=0, prepend=0.0).T,
+            np.diff(ev.h_wheels[e][:n], axis=0, prepend=0.0).T, np.diff(t, prepend=t[0]),
+            w_m.T, h_m.T)
         v = v + jnp.cumsum(step, 0) + jnp.cumsum(second, 1).T
         r = v - (j * f8[None, :]) @ q.T
         rates = time_tag_sd * expected(thrust_profile, *tau_median) @ one_hot

@@ -80,7 +80,8 @@ def test_term_is_the_thrust_likelihoods(espa_truth):
     constants and the model's thrusts), equal to 1e-9 of its largest value."""
     from cassini_bayes.inference.thrust import tau_prior
     from cassini_bayes.inference.thrust.data import prepare_thrust
-    from cassini_bayes.physics.rate_step_moments import StepPairs, second_order_correction
+    from cassini_bayes.physics.rate_step_moments import (StepPairs, second_order_correction,
+                                                         curvature_correction)
 
     sim, sc, _ = espa_truth
     tel, log = sim.telemetry, sim.pulses
@@ -93,7 +94,10 @@ def test_term_is_the_thrust_likelihoods(espa_truth):
     n = np.size(tel.t)
     want = np.cumsum(np.asarray(second_order_correction(
         sc.inertia, q_f, ev.step_moments[0], StepPairs(*(x[0] for x in ev.step_pairs)),
-        ev.d_omega[0], ev.d_h[0], ev.dt[0])), axis=1).T[:n]
+        ev.d_omega[0], ev.d_h[0], ev.dt[0]) + curvature_correction(
+        sc.inertia, q_f, ev.step_moments[0], ev.d_omega[0], ev.d_h[0], ev.dt[0],
+        ev.omega_mid[0], ev.h_mid[0])),
+        axis=1).T[:n]
     scale = np.max(np.abs(want))
     assert scale > 0
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-9 * scale)
@@ -101,8 +105,9 @@ def test_term_is_the_thrust_likelihoods(espa_truth):
 
 def test_no_pulse_leaves_the_trapezoid_of_two_lines():
     """Without a pulse the term is the trapezoid's error on the product of two lines,
-    ``−(Δ/6) Δω × (I Δω + ΔH)`` per interval (rate_step_moments module docstring),
-    accumulated; a constant rate and momentum give zero."""
+    ``−(Δ/6) Δω × (I Δω + ΔH)`` per interval, and the secant's bend by Euler's equation
+    (``κ_s``; rate_step_moments module docstring), accumulated; a constant rate and momentum
+    give zero."""
     inertia = np.diag([27.0, 22.0, 20.0])
     t = np.arange(5.0)
     omega = np.outer(t, [1e-3, -2e-3, 5e-4])
@@ -111,8 +116,15 @@ def test_no_pulse_leaves_the_trapezoid_of_two_lines():
     got = rate_step_second_order(t, omega, inertia, h, (np.zeros(0), np.zeros(0, int),
                                                         np.zeros(0)), (0.005, 0.02, 0.065), q_f)
     dw, dh = omega[1] - omega[0], h[1] - h[0]
-    step = -np.cross(dw, inertia @ dw + dh) / 6.0
-    np.testing.assert_allclose(got, np.arange(5.0)[:, None] * step[None, :], rtol=1e-12)
+    want = [np.zeros(3)]
+    for i in range(1, 5):
+        w_m = 0.5 * (omega[i] + omega[i - 1])
+        big_l = inertia @ w_m + 0.5 * (h[i] + h[i - 1])
+        kappa = np.linalg.solve(inertia, (np.cross(dw, big_l)
+                                          + np.cross(w_m, inertia @ dw + dh)) / 12.0)
+        bend = np.cross(kappa, big_l) + np.cross(w_m, inertia @ kappa)
+        want.append(want[-1] - np.cross(dw, inertia @ dw + dh) / 6.0 + bend)
+    np.testing.assert_allclose(got, np.array(want), rtol=1e-10, atol=1e-16)
     flat = rate_step_second_order(t, np.ones((5, 3)), inertia, np.ones((5, 3)),
                                   (np.zeros(0), np.zeros(0, int), np.zeros(0)),
                                   (0.005, 0.02, 0.065), q_f)

@@ -19,7 +19,7 @@ import numpy as np
 from cassini_bayes.physics.impulse import (angular_impulse, impulse_lhs, jump_areas,
                                            rate_step_correction)
 from cassini_bayes.physics.rate_step_moments import (interval_moments, second_order_correction,
-                                                     step_pairs)
+                                                     step_pairs, curvature_correction)
 
 __all__ = ["residual_momentum", "rate_step_columns", "rate_step_units",
            "rate_step_second_order", "leak_torque",
@@ -125,7 +125,12 @@ def _slots(t: np.ndarray, t_on: np.ndarray, width: np.ndarray, tau) -> tuple[np.
 _BUCKET = 128
 """Pulses, samples and pulse pairs are padded to multiples of this (padding adds nothing): events
 and stretches of similar size share one compiled program."""
-_second_order = jax.jit(second_order_correction)
+
+
+@jax.jit
+def _second_order(inertia, q_f, m, pairs, d_omega, d_h, dt, omega_mid, h_mid):
+    return (second_order_correction(inertia, q_f, m, pairs, d_omega, d_h, dt)
+            + curvature_correction(inertia, q_f, m, d_omega, d_h, dt, omega_mid, h_mid))
 
 
 def _bucket(n: int) -> int:
@@ -136,8 +141,9 @@ def rate_step_second_order(t_s, omega_rad_s, inertia, h_wheels_body, pulses, tau
                            q_f) -> np.ndarray:
     """(n, 3) N m s: what the trapezoidal ``ΔG`` (Feldman & Lee Eq 15) and
     :func:`rate_step_columns` miss at second order across the pulses' rate steps, accumulated to
-    each sample (:func:`~cassini_bayes.physics.rate_step_moments.second_order_correction`); add
-    it to Eq 17's left side.
+    each sample (:func:`~cassini_bayes.physics.rate_step_moments.second_order_correction` and
+    :func:`~cassini_bayes.physics.rate_step_moments.curvature_correction`); add it to
+    Eq 17's left side.
 
     Evaluated at the thrusts ``q_f = Q diag(F)`` (3, M) N m and the time constants ``tau`` (3,)
     s given, as a known offset: the term is quadratic in the thrusts, which a linear
@@ -167,9 +173,13 @@ def rate_step_second_order(t_s, omega_rad_s, inertia, h_wheels_body, pulses, tau
         x = np.asarray(x, float)
         return np.pad(np.diff(x, axis=0, prepend=x[:1]).T, ((0, 0), (0, size - n)))
 
+    def mean(x):
+        return np.pad(interval_means(x), ((0, 0), (0, size - n)))
+
     c = _second_order(np.asarray(inertia, float), q_f, np.pad(m, ((0, 0), (0, size - n))), pairs,
                       change(omega_rad_s), change(h_wheels_body),
-                      np.pad(np.diff(t, prepend=t[0]), (0, size - n)))
+                      np.pad(np.diff(t, prepend=t[0]), (0, size - n)),
+                      mean(omega_rad_s), mean(h_wheels_body))
     return np.cumsum(np.asarray(c)[:, :n], axis=1).T
 
 

@@ -17,6 +17,17 @@ across the interval), through the moments ``m_k = ∫ e_k (s − ½) dt`` and ``
 (:func:`interval_moments`). A pulse steps the rate by ``b/I``; these terms grow as ``b² / I`` and
 ``b ΔH``, so they vanish against the sample noise on a large spacecraft and not on a small one
 whose wheels change by a fraction of a newton-metre-second per sample.
+
+Euler's equation bends the rate inside each interval away from the line the samples draw:
+``I ω̈ = −(ω̇ × L + ω × L̇)`` with ``L = I ω + H``, to first order in the bend. Integrated twice
+over the interval, the bend of the samples' secant (``ω̇ = Δω/Δ``, ``L̇ = (I Δω + ΔH)/Δ``) is
+``κ_s = (Δ²/12) I⁻¹ (Δω × L_m + ω_m × (I Δω + ΔH))`` and the body's answer to the steps'
+deviation ``δω`` is ``κ_μ = I⁻¹ (Δ μ × L_m + ω_m × I Δ μ)`` (rad; ``ω_m``, ``L_m`` the
+interval's means), and ``ΔG`` misses ``κ × L_m + ω_m × I κ``, ``κ = κ_s + κ_μ``
+(:func:`curvature_correction`). It grows as ``b L² / I²``: negligible on a large spacecraft, and
+as large as the gyro noise per interval on a small bus whose wheels hold newton-metre-seconds
+and whose dead-band pulses fire every second, where ``κ_μ`` accumulates over an event (``κ_s``
+largely cancels from one interval to the next).
 """
 
 from __future__ import annotations
@@ -29,7 +40,8 @@ from typing import NamedTuple
 
 from cassini_bayes.physics.pulse import pulse_impulse_until
 
-__all__ = ["StepPairs", "interval_moments", "second_order_correction", "step_pairs"]
+__all__ = ["StepPairs", "interval_moments", "second_order_correction", "step_pairs",
+           "curvature_correction"]
 
 SUBSTEPS = 64
 """Simpson panels per interval for the moments: a pulse's rise and fall (tens of ms) against a
@@ -110,3 +122,20 @@ def second_order_correction(inertia: Array, q_f: Array, m: Array, pairs: StepPai
     pair = jnp.cross(a, q_f[:, pairs.l], axis=0) * pairs.value[None, :]
     return trap + first + jnp.zeros_like(trap).at[:, pairs.at].add(pair)
 
+
+
+def curvature_correction(inertia: Array, q_f: Array, m: Array, d_omega: Array, d_h: Array,
+                         dt: Array, omega_mid: Array, h_mid: Array) -> Array:
+    """(3, n) N m s per interval (not accumulated): what the trapezoidal ``ΔG`` misses through
+    the rate's bend inside each interval by Euler's equation (module docstring). ``q_f``, ``m``,
+    ``d_omega``, ``d_h`` and ``dt`` as :func:`second_order_correction`; ``omega_mid`` (3, n)
+    rad/s and ``h_mid`` (3, n) N m s the interval's mean rate and wheel momentum."""
+    i_mat = jnp.asarray(inertia)
+    i_inv = jnp.linalg.inv(i_mat)
+    w_m, d_omega, dt = jnp.asarray(omega_mid), jnp.asarray(d_omega), jnp.asarray(dt)[None, :]
+    big_l = i_mat @ w_m + jnp.asarray(h_mid)                               # (3, n) N m s
+    secant = (dt**2 / 12.0) * (jnp.cross(d_omega, big_l, axis=0)
+                               + jnp.cross(w_m, i_mat @ d_omega + d_h, axis=0))
+    k = dt * (i_inv @ (q_f @ m))                                           # Δ μ (3, n) rad s
+    kappa = i_inv @ (secant + jnp.cross(k, big_l, axis=0) + jnp.cross(w_m, i_mat @ k, axis=0))
+    return jnp.cross(kappa, big_l, axis=0) + jnp.cross(w_m, i_mat @ kappa, axis=0)

@@ -14,7 +14,8 @@ import numpy as np
 from cassini_bayes.inference.gaussian import ColumnStatistics, RankOneRows, offset_marginal
 from cassini_bayes.physics.momentum import inertia_matrix
 from cassini_bayes.physics.impulse import rate_step_correction
-from cassini_bayes.physics.rate_step_moments import StepPairs, second_order_correction
+from cassini_bayes.physics.rate_step_moments import (StepPairs, second_order_correction,
+                                                     curvature_correction)
 from cassini_bayes.physics.pulse import (pulse_impulse, pulse_impulse_area, pulse_impulse_until,
                                          thrust_profile)
 
@@ -161,11 +162,15 @@ def _jump_correction(inertia, q_f, tau, ev: EventData):
     diag(F)`` (3, M) and the time constants ``tau``: first order
     (:func:`~cassini_bayes.physics.impulse.rate_step_correction`) and second
     (:func:`~cassini_bayes.physics.rate_step_moments.second_order_correction`, its moments at
-    the prior's time constants: a change of ``τ`` moves this small term by less still)."""
+    the prior's time constants: a change of ``τ`` moves this small term by less still), and the
+    rate's bend inside each interval by Euler's equation
+    (:func:`~cassini_bayes.physics.rate_step_moments.curvature_correction`)."""
     first = rate_step_correction(inertia, jump_area(ev.pulses, q_f, *tau), ev.omega_mid,
                                  ev.h_mid)
     second = second_order_correction(inertia, q_f, ev.step_moments, ev.step_pairs, ev.d_omega,
                                      ev.d_h, ev.dt)
+    second = second + curvature_correction(inertia, q_f, ev.step_moments, ev.d_omega, ev.d_h,
+                                           ev.dt, ev.omega_mid, ev.h_mid)
     return first + jnp.cumsum(second, 1)
 
 
