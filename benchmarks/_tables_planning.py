@@ -295,19 +295,24 @@ def plan_weak_z(args: list[Records]) -> str:
 
 @kind("plan_thrust_truths")
 def plan_thrust_truths(args: list[Records]) -> str:
-    """Fitted over predicted sd (median over the open-world seeds) against three predictions
-    of benchmarks/plan_thrust.py's records made with ``--truths`` (and ``--matched``): at the
+    """Fitted over predicted sd (median over the open-world seeds) against the predictions
+    of benchmarks/plan_thrust.py's records made with ``--truths`` and ``--matched``: at the
     nominal truth, the median over the nominal and the drawn knowledge truths (what a plan can
-    know before it flies), and at each seed's own truth."""
+    know before it flies; a record made without ``--truths`` has none), and at each seed's own
+    truth. Mode ``thruster`` records add the centre of mass (x / y / z)."""
     from statistics import median
 
-    rows = ["| scenario, seeds | prediction | F | tau_delay | tau_rise | tau_fall | Ixx…Izz | "
-            "Ixy…Iyz | sites within ±25 % |", "|" + "---|" * 9]
+    with_com = any("com_x" in r["sites"] for r in _results(args))
+    rows = ["| scenario, seeds | prediction | F | " + ("com | " if with_com else "")
+            + "tau_delay | tau_rise | tau_fall | Ixx…Izz | Ixy…Iyz | sites within ±25 % |",
+            "|" + "---|" * (10 if with_com else 9)]
     for r in _results(args):
         names, sites, fits = list(r["sites"]), r["sites"], r["fits"]
-        preds = {"nominal truth": [[sites[n]["predicted_nominal"] for n in names]] * len(fits),
-                 f"median over {r['predicted_over_truths'] + 1} truths":
-                     [[sites[n]["predicted"] for n in names]] * len(fits)}
+        preds = {"nominal truth": [[sites[n].get("predicted_nominal", sites[n]["predicted"])
+                                    for n in names]] * len(fits)}
+        if r["predicted_over_truths"]:
+            preds[f"median over {r['predicted_over_truths'] + 1} truths"] = \
+                [[sites[n]["predicted"] for n in names]] * len(fits)
         if all("predicted_matched" in f for f in fits):
             preds["each seed's own truth"] = [f["predicted_matched"] for f in fits]
         for label, pred in preds.items():
@@ -319,9 +324,12 @@ def plan_thrust_truths(args: list[Records]) -> str:
             f_cell = (_ratio(med[thrusts[0]]) if len(thrusts) == 1 else
                       f"{_ratio(min(med[n] for n in thrusts))}–"
                       f"{_ratio(max(med[n] for n in thrusts))}")
+            com = ([" / ".join(_ratio(med[c]) if c in med else "—"
+                               for c in ("com_x", "com_y", "com_z"))] if with_com else [])
             rows.append(
-                f"| `{r['scenario']}`, {len(fits)} | {label} | {f_cell} | "
-                + " | ".join(_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall"))
+                f"| `{_scenario_label(r['scenario'])}`, {len(fits)} | {label} | "
+                + " | ".join([f_cell, *com]
+                             + [_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")])
                 + " | " + " | ".join(
                     f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
                     for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))

@@ -47,9 +47,12 @@ gyro term on the shipped scenarios (|H_RWA| ≤ 30 N m s, 1 µrad/s gyro noise);
 exact for rates linear between samples; a pulse steps the rate between two samples, and the
 likelihood adds back what the trapezoid misses across each step
 (:func:`~cassini_bayes.physics.impulse.rate_step_correction`: linear in ``F``, at the pulses'
-centroids for the prior-median time constants). Without it a spacecraft whose wheels hold
+centroids for the prior-median time constants), and at second order the steps' moments and
+the rate's bend inside each interval by Euler's equation
+(:mod:`~cassini_bayes.physics.rate_step_moments`). Without them a spacecraft whose wheels hold
 newton-metre-seconds while its dead band fires has residuals far above its sensor noise, and
-its thrusts, noise levels and wheel scales absorb them (docs/thrust_any_layout.md).
+its thrusts, centre of mass, noise levels and wheel scales absorb them
+(docs/thrust_any_layout.md).
 ``b_e`` has a flat prior and is integrated out analytically:
 
     log p(V_e | θ) = Σ_i log N(r_i − r̄; 0, B_e) + (3/2) log 2π + ½ log|B_e| − (3/2) log n_e.
