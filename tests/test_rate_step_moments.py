@@ -21,6 +21,15 @@ W0, W_DOT = np.array([1e-3, -2e-3, 5e-4]), np.array([8e-4, -3e-4, 2e-4])
 H0, DH = np.array([0.5, -0.3, 0.2]), np.array([0.02, 0.01, -0.015])
 
 
+def _trapezoid_errors():
+    """(3,) s²: each pulse's ``∫ j dt`` over the interval less the trapezoid of its ends."""
+    ends = np.array([[pulse_impulse_until(x - a, w, *TAU) for x in (0.0, 1.0)]
+                     for a, w in zip(T_ON, WIDTH)])
+    areas = np.array([[pulse_impulse_area(x - a, w, *TAU) for x in (0.0, 1.0)]
+                      for a, w in zip(T_ON, WIDTH)])
+    return (areas[:, 1] - areas[:, 0]) - 0.5 * (ends[:, 0] + ends[:, 1])
+
+
 def _errors():
     """(exact − trapezoid − first order, and the same less the second-order term) N m s."""
     cassini_bayes.setup_jax()
@@ -32,11 +41,7 @@ def _errors():
     f = np.cross(omega, omega @ INERTIA + h)
     exact = np.trapezoid(f, tf, axis=0)
     trap = 0.5 * (f[0] + f[-1])
-    ends = np.array([[pulse_impulse_until(x - a, w, *TAU) for x in (0.0, 1.0)]
-                     for a, w in zip(T_ON, WIDTH)])
-    areas = np.array([[pulse_impulse_area(x - a, w, *TAU) for x in (0.0, 1.0)]
-                      for a, w in zip(T_ON, WIDTH)])
-    eps = (areas[:, 1] - areas[:, 0]) - 0.5 * (ends[:, 0] + ends[:, 1])
+    eps = _trapezoid_errors()
     w_m, h_m = 0.5 * (omega[0] + omega[-1]), 0.5 * (h[0] + h[-1])
     first = np.asarray(rate_step_correction(INERTIA, (Q @ eps)[:, None], w_m[:, None],
                                             h_m[:, None]))[:, 0]
@@ -80,11 +85,7 @@ def _euler_flight(h_wheels, omega0):
         m1 = m1 + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + rhs(m1 + dt * k3, 2 * i + 2))
     l0, l1 = m0 + qj[0], m1 + qj[-1]
     w0, w1 = i_inv @ (l0 - h_wheels), i_inv @ (l1 - h_wheels)
-    ends = np.array([[pulse_impulse_until(x - a, w, *TAU) for x in (0.0, 1.0)]
-                     for a, w in zip(T_ON, WIDTH)])
-    areas = np.array([[pulse_impulse_area(x - a, w, *TAU) for x in (0.0, 1.0)]
-                      for a, w in zip(T_ON, WIDTH)])
-    eps = (areas[:, 1] - areas[:, 0]) - 0.5 * (ends[:, 0] + ends[:, 1])
+    eps = _trapezoid_errors()
     w_m = 0.5 * (w0 + w1)
     first = np.asarray(rate_step_correction(INERTIA, (Q @ eps)[:, None], w_m[:, None],
                                             h_wheels[:, None]))[:, 0]

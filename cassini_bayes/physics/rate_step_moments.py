@@ -123,7 +123,6 @@ def second_order_correction(inertia: Array, q_f: Array, m: Array, pairs: StepPai
     return trap + first + jnp.zeros_like(trap).at[:, pairs.at].add(pair)
 
 
-
 def curvature_correction(inertia: Array, q_f: Array, m: Array, d_omega: Array, d_h: Array,
                          dt: Array, omega_mid: Array, h_mid: Array) -> Array:
     """(3, n) N m s per interval (not accumulated): what the trapezoidal ``ΔG`` misses through
@@ -138,4 +137,5 @@ def curvature_correction(inertia: Array, q_f: Array, m: Array, d_omega: Array, d
                                + jnp.cross(w_m, i_mat @ d_omega + d_h, axis=0))
     k = dt * (i_inv @ (q_f @ m))                                           # Δ μ (3, n) rad s
     kappa = i_inv @ (secant + jnp.cross(k, big_l, axis=0) + jnp.cross(w_m, i_mat @ k, axis=0))
+    # Feldman & Lee Eq 15: the bend's change of ∫ ω × (I ω + H) dt, to first order in κ
     return jnp.cross(kappa, big_l, axis=0) + jnp.cross(w_m, i_mat @ kappa, axis=0)
