@@ -218,7 +218,8 @@ def test_plan_evaluate_cli_on_a_biasing_event(run_cli, tmp_path):
 
 def test_knowledge_truths_stay_inside_the_model_files_knowledge():
     """Each drawn truth has its inertia in the model file's knowledge box, its time constants in
-    the manufacturer's ranges, wheel errors and torques at the stated sds; fixed per seed."""
+    the manufacturer's ranges, wheel errors, torques and centre of mass at the stated sds (6 sd:
+    a false failure ~1e-8 a draw); fixed per seed."""
     from cassini_bayes.plan.truths import knowledge_truths
 
     s = scenario_from_dict(_small_event())
@@ -235,6 +236,9 @@ def test_knowledge_truths_stay_inside_the_model_files_knowledge():
             assert lo <= getattr(t.truth.pulse, k) <= hi
         assert len(t.wheel_inertia_errors) == len(s.truth.wheel_names)
         assert np.all(np.abs(t.external_torque_body_nm) < 6 * prior.knowledge.torque_sd_nm)
+    com = np.array([t.truth.com_m - prior.com_m for t in ts])
+    assert prior.com_sd_m > 0 and np.all(np.abs(com) < 6 * prior.com_sd_m)
+    assert np.all(np.std(com, axis=0) > 0.2 * prior.com_sd_m)
     again = knowledge_truths(s, 6, seed=0)
     assert all(np.array_equal(a.truth.inertia, b.truth.inertia) for a, b in zip(ts, again))
     assert not np.array_equal(knowledge_truths(s, 1, seed=1)[0].truth.inertia,

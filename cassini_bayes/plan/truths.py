@@ -11,7 +11,11 @@ prior model says it knows:
   (:func:`~cassini_bayes.simulate.open_world.inertia_from_knowledge`);
 - the valve time constants uniform on the model file's test ranges (Feldman & Lee §V);
 - each wheel's spin-inertia error Normal at its ``[wheel_knowledge]`` sd;
-- the external torques, body and inertial, Normal at the ``[torque_knowledge]`` sd per axis.
+- the external torques, body and inertial, Normal at the ``[torque_knowledge]`` sd per axis;
+- the centre of mass Normal about the model file's at its ``[center_of_mass] sd_m`` per axis (a
+  fit that cannot hold it, modes ``mean`` and ``branch``, flies the model file's instead:
+  :func:`~cassini_bayes.plan.thrust.representable`); its own stream, so the other draws are
+  those of a file without thrusters.
 
 Sensor errors, the thrusts and everything the model file does not state stay as the scenario
 has them.
@@ -34,6 +38,7 @@ def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
     """``n`` copies of ``s`` whose truths are drawn from its prior model's stated knowledge
     (module docstring), by a fixed stream of ``seed``."""
     rng = np.random.default_rng([seed, 3301])
+    rng_com = np.random.default_rng([seed, 3302])
     prior, kn = s.prior, s.prior.knowledge
     known = {w.name: w.inertia_sd_frac for w in prior.wheels if w.inertia_sd_frac is not None}
     sd_j = np.array([known.get(w, kn.wheel_inertia_sd_frac) for w in s.truth.wheel_names])
@@ -44,7 +49,8 @@ def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
         pulse = replace(s.truth.pulse, **{k: float(rng.uniform(*getattr(prior.pulse, f"{k}_range")))
                                           for k in TAU_NAMES})
         torques = rng.normal(0.0, kn.torque_sd_nm, (2, 3))
-        out.append(replace(s, truth=replace(s.truth, inertia=inertia, pulse=pulse),
+        com = np.asarray(prior.com_m, float) + rng_com.normal(0.0, prior.com_sd_m, 3)
+        out.append(replace(s, truth=replace(s.truth, inertia=inertia, pulse=pulse, com_m=com),
                            wheel_inertia_errors=tuple(rng.normal(0.0, sd_j).tolist()),
                            external_torque_body_nm=tuple(torques[0].tolist()),
                            external_torque_inertial_nm=tuple(torques[1].tolist())))
