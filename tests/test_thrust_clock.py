@@ -48,7 +48,8 @@ def test_the_grid_is_the_labels_least_squares_line():
 def test_labels_off_a_regular_clock_are_a_one_line_error():
     t, labels = _labels(sd=0.0)
     labels[123] += 0.2
-    with pytest.raises(InputError, match=r"tel.csv: row 124's time is 19. ms off .*regular_clock"):
+    with pytest.raises(InputError, match=r"tel.csv: the sample labelled t = 166.7 s is 19. ms "
+                                         r"off .*regular_clock"):
         clock_grid(labels, "tel.csv")
     with pytest.raises(InputError, match="3 or more samples"):
         clock_grid(t[:2])

@@ -76,9 +76,10 @@ def clock_grid(t, source: str = "<telemetry>", sd_s: float | None = None) -> Clo
     resid = t - grid
     worst = int(np.argmax(np.abs(resid)))
     if abs(resid[worst]) > GRID_TOLERANCE * slope:
-        raise InputError(f"{source}: row {worst + 1}'s time is {resid[worst] * 1e3:.3g} ms off "
-                         f"the regular {slope:.6g}-s clock the model file states; remove "
-                         "[telemetry_knowledge] regular_clock for telemetry sampled irregularly")
+        raise InputError(f"{source}: the sample labelled t = {t[worst]:.10g} s is "
+                         f"{resid[worst] * 1e3:.3g} ms off the regular {slope:.6g}-s clock the "
+                         "model file states; remove [telemetry_knowledge] regular_clock for "
+                         "telemetry sampled irregularly")
     sigma = float(np.sqrt(np.sum(resid**2) / (t.size - 2))) if sd_s is None else float(sd_s)
     return ClockGrid(grid, idx, sigma, sigma / np.sqrt(t.size), sigma / np.sqrt(s))
 
