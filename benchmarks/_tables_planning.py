@@ -299,7 +299,8 @@ def plan_thrust_truths(args: list[Records]) -> str:
     of benchmarks/plan_thrust.py's records made with ``--truths`` and ``--matched``: at the
     nominal truth, the median over the nominal and the drawn knowledge truths (what a plan can
     know before it flies; a record made without ``--truths`` has none), and at each seed's own
-    truth. Mode ``thruster`` records add the centre of mass (x / y / z)."""
+    truth. Mode ``thruster`` records add the centre of mass (x / y / z); a row that repeats one
+    above (the nominal truth of records joining the same fits) is shown once."""
     from statistics import median
 
     with_com = any("com_x" in r["sites"] for r in _results(args))
@@ -326,7 +327,7 @@ def plan_thrust_truths(args: list[Records]) -> str:
                       f"{_ratio(max(med[n] for n in thrusts))}")
             com = ([" / ".join(_ratio(med[c]) if c in med else "—"
                                for c in ("com_x", "com_y", "com_z"))] if with_com else [])
-            rows.append(
+            row = (
                 f"| `{_scenario_label(r['scenario'])}`, {len(fits)} | {label} | "
                 + " | ".join([f_cell, *com]
                              + [_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")])
@@ -334,6 +335,8 @@ def plan_thrust_truths(args: list[Records]) -> str:
                     f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
                     for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
                 + f" | {f'**{within}**' if k == len(med) else within} |")
+            if row not in rows:
+                rows.append(row)
     return "\n".join(rows)
 
 

@@ -189,7 +189,9 @@ def _summary(case, s, mode, pred, t_pred, names, fits, nominal=False, off=()) ->
     hits = np.array([f["hit90"] for f in fits], float)
     sites = {n: {"predicted": float(pred.site_sd[i]), "prior": float(pred.site_prior_sd[i]),
                  **({"predicted_nominal": float(pred.site_sd_nominal[i]),
-                     "predicted_range": [float(x[i]) for x in pred.site_sd_range]}
+                     "predicted_range": [float(x[i]) for x in pred.site_sd_range],
+                     "predicted_truths": pred.site_sd_truths[:, i].tolist(),
+                     "predicted_interval90": [float(x[i]) for x in pred.site_sd_interval]}
                     if pred.truths else {}),
                  "budget": float(pred.budget[i]),
                  "fitted_median": float(np.median(sd[:, i])),

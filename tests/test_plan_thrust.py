@@ -260,6 +260,8 @@ def test_evaluate_thrust_over_truths_is_the_median_beside_the_nominal():
     assert np.all(lo <= p.site_sd) and np.all(p.site_sd <= hi)
     assert np.all(lo <= p.site_sd_nominal) and np.all(p.site_sd_nominal <= hi)
     assert np.any(hi > 1.01 * lo)           # the truths' flights tell different amounts
+    assert p.site_sd_truths.shape == (3, len(p.sites))
+    assert np.isnan(p.site_sd_interval[0]).all()        # 3 truths: no interval reaches 90 %
 
 
 def test_truths_are_refused_where_they_mean_nothing(tmp_path):
@@ -290,3 +292,19 @@ def test_one_pulse_width_leaves_a_ridge_that_is_not_gaussian():
     day028 = evaluate_thrust(load_scenario("biasing_day028"), "mean")
     assert len(day028.pulse_widths_s) > 1 and day028.non_gaussian == ()
     assert np.all(np.abs(day028.sd_mode_ratio - 1) < 0.1)
+
+
+def test_the_median_interval_is_the_binomial_order_statistics():
+    """Over 17 truths the ≥ 90 % interval of the median is the 5th to the 13th value (coverage
+    1 − 2 P(Bin(17, ½) ≤ 4) = 0.951; the 6th–12th cover 0.857); over 9 the 2nd to the 8th;
+    below 5 no interval reaches 90 % (NaN)."""
+    from cassini_bayes.plan.truths import median_interval
+
+    x = np.arange(17.0)[::-1, None] * np.array([1.0, 2.0])
+    lo, hi = median_interval(x)
+    np.testing.assert_array_equal(lo, [4.0, 8.0])
+    np.testing.assert_array_equal(hi, [12.0, 24.0])
+    lo, hi = median_interval(np.arange(9.0))
+    assert (lo, hi) == (1.0, 7.0)
+    assert np.isnan(median_interval(np.arange(4.0))[0])
+    assert median_interval(np.arange(5.0)) == (0.0, 4.0)

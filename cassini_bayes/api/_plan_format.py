@@ -126,10 +126,11 @@ def thrust_block(p: Any) -> dict:
             out["sites"][n]["sd_at_mode"] = float(sd)
     out["non_gaussian"] = list(p.non_gaussian)
     if p.truths:
-        lo, hi = p.site_sd_range
+        (lo, hi), (m_lo, m_hi) = p.site_sd_range, p.site_sd_interval
         for i, n in enumerate(p.sites):
             out["sites"][n].update(sd_nominal=float(p.site_sd_nominal[i]),
-                                   sd_range=[float(lo[i]), float(hi[i])])
+                                   sd_range=[float(lo[i]), float(hi[i])],
+                                   sd_median_interval90=[float(m_lo[i]), float(m_hi[i])])
     out.update(usage_fields(p.usage, tol=1e-9))
     return out
 

@@ -84,7 +84,7 @@ class ThrustPrediction(NamedTuple):
     where not checked); see :attr:`non_gaussian`.
     truths : the truths drawn from the model file's knowledge besides the nominal one
     (:func:`evaluate_thrust`); site_sd is the median over them and the nominal truth,
-    site_sd_nominal the nominal truth's, site_sd_range the least and largest.
+    site_sd_nominal the nominal truth's, site_sd_truths (truths + 1, sites) each one's.
     """
 
     mode: str
@@ -109,8 +109,24 @@ class ThrustPrediction(NamedTuple):
     floored: int = 0
     truths: int = 0
     site_sd_nominal: np.ndarray | None = None
-    site_sd_range: tuple[np.ndarray, np.ndarray] | None = None
+    site_sd_truths: np.ndarray | None = None
     site_sd_mode: np.ndarray | None = None
+
+    @property
+    def site_sd_range(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Each site's least and largest sd over the truths (``None`` where not kept)."""
+        if self.site_sd_truths is None:
+            return None
+        return self.site_sd_truths.min(axis=0), self.site_sd_truths.max(axis=0)
+
+    @property
+    def site_sd_interval(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Each site's interval of the median sd over the truths' population, at least 90 %
+        (:func:`~cassini_bayes.plan.truths.median_interval`: NaN below 5 truths; ``None``
+        where not kept): how far :attr:`site_sd` may be from the median of more truths."""
+        from cassini_bayes.plan.truths import median_interval
+
+        return None if self.site_sd_truths is None else median_interval(self.site_sd_truths)
 
     @property
     def sd_mode_ratio(self) -> np.ndarray | None:
@@ -359,7 +375,7 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
     knowledge (:func:`~cassini_bayes.plan.truths.knowledge_truths`, stream ``seed``), each flown
     by its own controller, and each site's sd is the median over them and the nominal truth (a
     closed-loop event's pulses, and so what it tells, follow the truth); ``site_sd_nominal`` and
-    ``site_sd_range`` keep the nominal and the spread. ``check_mode``: also the sd at the
+    ``site_sd_truths`` keep the nominal and every truth's. ``check_mode``: also the sd at the
     noise-free posterior's mode (module docstring, step 7; one more mode search)."""
     from cassini_bayes.plan.truths import knowledge_truths
 
@@ -400,7 +416,7 @@ def evaluate_thrust(s: Scenario, mode: str = "mean", limits: Limits | None = Non
         pulse_width=np.asarray(log.width, float),
         pulse_thruster=tuple(log.thruster_names[i] for i in np.asarray(log.thruster)),
         floored=lap.floored, truths=truths, site_sd_nominal=sds[0],
-        site_sd_range=(sd_all.min(axis=0), sd_all.max(axis=0)), site_sd_mode=sd_mode)
+        site_sd_truths=sd_all, site_sd_mode=sd_mode)
 
 
 def sd_at_mode(problem, sig) -> np.ndarray | None:

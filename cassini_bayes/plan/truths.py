@@ -24,6 +24,7 @@ has them.
 from __future__ import annotations
 
 from dataclasses import replace
+from math import comb
 
 import numpy as np
 
@@ -31,7 +32,10 @@ from cassini_bayes.names import TAU_NAMES
 from cassini_bayes.simulate.open_world import inertia_from_knowledge
 from cassini_bayes.simulate.scenario import Scenario
 
-__all__ = ["knowledge_truths"]
+__all__ = ["knowledge_truths", "median_interval"]
+
+MEDIAN_LEVEL = 0.9
+"""Least coverage of :func:`median_interval`."""
 
 
 def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
@@ -55,3 +59,19 @@ def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
                            external_torque_body_nm=tuple(torques[0].tolist()),
                            external_torque_inertial_nm=tuple(torques[1].tolist())))
     return out
+
+
+def median_interval(x, level: float = MEDIAN_LEVEL) -> tuple[np.ndarray, np.ndarray]:
+    """Distribution-free interval of the population median of each column of ``x`` (n, ...):
+    the order statistics ``x₍ₖ₎ … x₍ₙ₋ₖ₊₁₎`` with the largest ``k`` whose coverage
+    ``1 − 2 P(Bin(n, ½) < k)`` is at least ``level`` (NaN where even ``k = 1`` falls short,
+    n < 5 at 0.9): a median over a few truths is itself an estimate."""
+    x = np.sort(np.asarray(x, float), axis=0)
+    n = x.shape[0]
+    below = np.cumsum([comb(n, j) for j in range(n + 1)]) / 2.0**n   # P(Bin(n, ½) ≤ j)
+    ks = [k for k in range(1, n // 2 + 1) if 1.0 - 2.0 * below[k - 1] >= level]
+    if not ks:
+        nan = np.full(x.shape[1:], np.nan)
+        return nan, nan.copy()
+    k = max(ks)
+    return x[k - 1], x[n - k]
