@@ -298,46 +298,78 @@ def plan_thrust_truths(args: list[Records]) -> str:
     """Fitted over predicted sd (median over the open-world seeds) against the predictions
     of benchmarks/plan_thrust.py's records made with ``--truths`` and ``--matched``: at the
     nominal truth, the median over the nominal and the drawn knowledge truths (what a plan can
-    know before it flies; a record made without ``--truths`` has none), and at each seed's own
-    truth. Mode ``thruster`` records add the centre of mass (x / y / z); a row that repeats one
-    above (the nominal truth of records joining the same fits) is shown once."""
-    from statistics import median
-
+    know before it flies; a record made without ``--truths`` has none), that median's ≥ 90 %
+    interval where the record keeps it and, against that median, the fits' own median's over
+    the seeds (a site counts when its interval reaches ±25 %), and at each seed's own truth.
+    Mode ``thruster`` records add the centre of mass (x / y / z); a row that repeats one above
+    (the nominal truth of records joining the same fits) is shown once."""
     with_com = any("com_x" in r["sites"] for r in _results(args))
     rows = ["| scenario, seeds | prediction | F | " + ("com | " if with_com else "")
             + "tau_delay | tau_rise | tau_fall | Ixx…Izz | Ixy…Iyz | sites within ±25 % |",
             "|" + "---|" * (10 if with_com else 9)]
     for r in _results(args):
-        names, sites, fits = list(r["sites"]), r["sites"], r["fits"]
-        preds = {"nominal truth": [[sites[n].get("predicted_nominal", sites[n]["predicted"])
-                                    for n in names]] * len(fits)}
-        if r["predicted_over_truths"]:
-            preds[f"median over {r['predicted_over_truths'] + 1} truths"] = \
-                [[sites[n]["predicted"] for n in names]] * len(fits)
-        if all("predicted_matched" in f for f in fits):
-            preds["each seed's own truth"] = [f["predicted_matched"] for f in fits]
-        for label, pred in preds.items():
-            med = {n: median(f["sd"][i] / p[i] for f, p in zip(fits, pred))
-                   for i, n in enumerate(names)}
-            k = sum(abs(m - 1.0) <= 0.25 for m in med.values())
-            within = f"{k}/{len(med)}"
-            thrusts = [n for n in names if n == "F" or n.startswith("F[")]
-            f_cell = (_ratio(med[thrusts[0]]) if len(thrusts) == 1 else
-                      f"{_ratio(min(med[n] for n in thrusts))}–"
-                      f"{_ratio(max(med[n] for n in thrusts))}")
-            com = ([" / ".join(_ratio(med[c]) if c in med else "—"
-                               for c in ("com_x", "com_y", "com_z"))] if with_com else [])
-            row = (
-                f"| `{_scenario_label(r['scenario'])}`, {len(fits)} | {label} | "
-                + " | ".join([f_cell, *com]
-                             + [_ratio(med[t]) for t in ("tau_delay", "tau_rise", "tau_fall")])
-                + " | " + " | ".join(
-                    f"{_ratio(min(med[e] for e in es))}–{_ratio(max(med[e] for e in es))}"
-                    for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz")))
-                + f" | {f'**{within}**' if k == len(med) else within} |")
+        for label, span in _truth_rows(r).items():
+            row = f"| `{_scenario_label(r['scenario'])}`, {len(r['fits'])} | {label} | " \
+                + _span_cells(span, with_com)
             if row not in rows:
                 rows.append(row)
     return "\n".join(rows)
+
+
+def _truth_rows(r: dict) -> dict[str, dict[str, tuple[float, float]]]:
+    """Each prediction of record ``r`` (label → site → (low, high) fitted/predicted median;
+    equal but for the median's interval)."""
+    from statistics import median
+
+    from cassini_bayes.plan.truths import median_interval
+
+    names, sites, fits = list(r["sites"]), r["sites"], r["fits"]
+    preds = {"nominal truth": [[sites[n].get("predicted_nominal", sites[n]["predicted"])
+                                for n in names]] * len(fits)}
+    if r["predicted_over_truths"]:
+        preds[f"median over {r['predicted_over_truths'] + 1} truths"] = \
+            [[sites[n]["predicted"] for n in names]] * len(fits)
+    if all("predicted_matched" in f for f in fits):
+        preds["each seed's own truth"] = [f["predicted_matched"] for f in fits]
+    out = {}
+    for label, pred in preds.items():
+        med = {n: median(f["sd"][i] / p[i] for f, p in zip(fits, pred))
+               for i, n in enumerate(names)}
+        out[label] = {n: (m, m) for n, m in med.items()}
+    if r["predicted_over_truths"] and all("predicted_interval90" in sites[n] for n in names):
+        out["that median's 90 % interval"] = {
+            n: tuple(median(f["sd"][i] for f in fits) / p
+                     for p in sites[n]["predicted_interval90"][::-1])
+            for i, n in enumerate(names)}
+        lo, hi = median_interval([f["sd"] for f in fits])
+        out["the fits' median's 90 % interval, against that median"] = {
+            n: (lo[i] / sites[n]["predicted"], hi[i] / sites[n]["predicted"])
+            for i, n in enumerate(names)}
+    return out
+
+
+def _span_cells(span: dict[str, tuple[float, float]], with_com: bool) -> str:
+    """The cells of one :func:`plan_thrust_truths` row from its sites' (low, high) ratios."""
+    def cell(lo: float, hi: float) -> str:
+        return _ratio(lo) if lo == hi else f"{_ratio(lo)}–{_ratio(hi)}"
+
+    def group(names) -> str:
+        los, his = [span[n][0] for n in names], [span[n][1] for n in names]
+        if len(names) == 1:
+            return cell(*span[names[0]])
+        if all(lo == hi for lo, hi in zip(los, his)):
+            return f"{_ratio(min(los))}–{_ratio(max(los))}"
+        return cell(min(los), max(his))
+
+    k = sum(lo <= 1.25 and hi >= 0.75 for lo, hi in span.values())
+    thrusts = [n for n in span if n == "F" or n.startswith("F[")]
+    com = ([" / ".join(cell(*span[c]) if c in span else "—" for c in ("com_x", "com_y", "com_z"))]
+           if with_com else [])
+    within = f"{k}/{len(span)}"
+    return " | ".join([group(thrusts), *com]
+                      + [cell(*span[t]) for t in ("tau_delay", "tau_rise", "tau_fall")]
+                      + [group(es) for es in (("Ixx", "Iyy", "Izz"), ("Ixy", "Ixz", "Iyz"))]
+                      + [f"**{within}**" if k == len(span) else within]) + " |"
 
 
 _PROBE_TAGS = {"all": "every sample", "none": "none (the true times)",

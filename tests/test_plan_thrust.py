@@ -308,3 +308,22 @@ def test_the_median_interval_is_the_binomial_order_statistics():
     assert (lo, hi) == (1.0, 7.0)
     assert np.isnan(median_interval(np.arange(4.0))[0])
     assert median_interval(np.arange(5.0)) == (0.0, 4.0)
+
+
+def test_the_printed_prediction_gives_the_medians_interval_from_five_truths():
+    """With 5 or more truths the table adds each site's ≥ 90 % interval of the median."""
+    from cassini_bayes.api._plan_format import format_thrust_table
+    from cassini_bayes.plan.thrust import ThrustPrediction
+
+    sd = np.array([0.01, 0.001])
+    p = ThrustPrediction(
+        mode="mean", sites=("F", "tau_delay"), site_sd=sd, site_prior_sd=np.ones(2),
+        budget=np.array([0.1, 0.003]), truth=np.ones(2), combinations={}, noise=np.ones(2),
+        usage={}, n_pulses=3, pulse_widths_s=(0.125,), duration_s=1.0, t=np.zeros(1),
+        omega=np.zeros((1, 3)), wheel_rpm=np.zeros((1, 1)), wheel_names=("RW1",),
+        pulse_t=np.zeros(1), pulse_width=np.zeros(1), pulse_thruster=("A1",), truths=5,
+        site_sd_truths=np.linspace(0.5, 1.5, 6)[:, None] * sd)
+    text = format_thrust_table(p, "plan")
+    assert "median, 90 % interval" in text and "0.005–0.015" in text
+    short = format_thrust_table(p._replace(truths=3, site_sd_truths=p.site_sd_truths[:4]), "p")
+    assert "interval" not in short

@@ -142,12 +142,16 @@ def format_thrust_table(p: Any, title: str) -> str:
     if p.truths:
         lines.append(f"predicted sd: the median over the nominal truth and {p.truths} drawn from "
                      "the model file's knowledge (each flown by its own controller)")
+    span = p.site_sd_interval if p.truths else None
+    span = span if span is not None and np.isfinite(span[0]).all() else None
     lines.append(f"{'':10s} {'predicted sd':>13s} {'sd/budget':>10s} {'budget':>10s} "
-                 f"{'prior sd':>10s} {'sd/prior':>9s}   (N, s, m, kg m^2)")
-    for n, sd, pr, b in zip(p.sites, p.site_sd, p.site_prior_sd, p.budget):
+                 f"{'prior sd':>10s} {'sd/prior':>9s}"
+                 + (f" {'median, 90 % interval':>23s}" if span else "") + "   (N, s, m, kg m^2)")
+    for i, (n, sd, pr, b) in enumerate(zip(p.sites, p.site_sd, p.site_prior_sd, p.budget)):
         r = f"{sd / b:10.3f}" if np.isfinite(b) else f"{'-':>10s}"
         bs = f"{b:10.4g}" if np.isfinite(b) else f"{'-':>10s}"
-        lines.append(f"{n:10s} {sd:13.4g} {r} {bs} {pr:10.4g} {sd / pr:9.3f}")
+        interval = f" {f'{span[0][i]:.4g}–{span[1][i]:.4g}':>23s}" if span else ""
+        lines.append(f"{n:10s} {sd:13.4g} {r} {bs} {pr:10.4g} {sd / pr:9.3f}{interval}")
     for k, (sd, pr, b) in p.combinations.items():
         lines.append(f"{k:10s} {sd:13.4g} {sd / b:10.3f} {b:10.4g} {pr:10.4g} {sd / pr:9.3f}")
     if p.floored:
