@@ -345,6 +345,9 @@ def _truth_rows(r: dict) -> dict[str, dict[str, tuple[float, float]]]:
         out["the fits' median's 90 % interval, against that median"] = {
             n: (lo[i] / sites[n]["predicted"], hi[i] / sites[n]["predicted"])
             for i, n in enumerate(names)}
+    if "predicted_tag_sd_s" in r:
+        tags = f", the file's tag sd taken as {r['predicted_tag_sd_s'] * 1e3:g} ms"
+        out = {label + tags: v for label, v in out.items()}
     return out
 
 
