@@ -14,8 +14,8 @@ prior model says it knows:
 - the external torques, body and inertial, Normal at the ``[torque_knowledge]`` sd per axis;
 - the centre of mass Normal about the model file's at its ``[center_of_mass] sd_m`` per axis (a
   fit that cannot hold it, modes ``mean`` and ``branch``, flies the model file's instead:
-  :func:`~cassini_bayes.plan.thrust.representable`); its own stream, so the other draws are
-  those of a file without thrusters.
+  :func:`~cassini_bayes.plan.thrust.representable`), on its own stream, so the other draws
+  stay what they were before it was drawn.
 
 Sensor errors, the thrusts and everything the model file does not state stay as the scenario
 has them.
