@@ -24,7 +24,6 @@ has them.
 from __future__ import annotations
 
 from dataclasses import replace
-from math import comb
 
 import numpy as np
 
@@ -63,15 +62,12 @@ def knowledge_truths(s: Scenario, n: int, seed: int = 0) -> list[Scenario]:
 
 def median_interval(x, level: float = MEDIAN_LEVEL) -> tuple[np.ndarray, np.ndarray]:
     """Distribution-free interval of the population median of each column of ``x`` (n, ...):
-    the order statistics ``x₍ₖ₎ … x₍ₙ₋ₖ₊₁₎`` with the largest ``k`` whose coverage
-    ``1 − 2 P(Bin(n, ½) < k)`` is at least ``level`` (NaN where even ``k = 1`` falls short,
-    n < 5 at 0.9): a median over a few truths is itself an estimate."""
-    x = np.sort(np.asarray(x, float), axis=0)
-    n = x.shape[0]
-    below = np.cumsum([comb(n, j) for j in range(n + 1)]) / 2.0**n   # P(Bin(n, ½) ≤ j)
-    ks = [k for k in range(1, n // 2 + 1) if 1.0 - 2.0 * below[k - 1] >= level]
-    if not ks:
-        nan = np.full(x.shape[1:], np.nan)
-        return nan, nan.copy()
-    k = max(ks)
-    return x[k - 1], x[n - k]
+    the order statistics of SciPy's ``quantile_test`` at coverage ``level`` or more (NaN where
+    no pair reaches it, n < 5 at 0.9): a median over a few truths is itself an estimate."""
+    from scipy.stats import quantile_test
+
+    x = np.asarray(x, float)
+    cols = x.reshape(x.shape[0], -1).T
+    ends = np.array([tuple(quantile_test(c, q=np.median(c), p=0.5).confidence_interval(level))
+                     for c in cols]).T
+    return ends[0].reshape(x.shape[1:]), ends[1].reshape(x.shape[1:])
